@@ -1,0 +1,1 @@
+//! The pure CiA 402 layer: no I/O, no clocks.

@@ -1,0 +1,1 @@
+//! Typed views over EtherCAT frames and datagrams.

@@ -1,0 +1,1 @@
+//! Typed views over mailbox, CoE, SDO, SDO information and emergency messages.

@@ -1,0 +1,1 @@
+//! ESI (EtherCAT Slave Information, ETG.2000) XML parsing.

@@ -1,0 +1,35 @@
+//! # ecdrive
+//!
+//! An EtherCAT master for CiA 402 servo drives, built on [`ethercrab`], with a software EtherCAT
+//! slave that emulates the drives on the wire.
+//!
+//! The layers, from the wire up (data flows one way: wire → slave/master → process image →
+//! cia402 → application):
+//!
+//! | module | what it is |
+//! |---|---|
+//! | [`ec`] | EtherCAT protocol definitions shared by master and slave: frames, datagrams, registers, AL states and codes, mailbox and CoE headers, as typed views over byte buffers |
+//! | [`od`] | CANopen object dictionary types: addresses, data types, access, object descriptions, SDO abort codes |
+//! | [`pdo`] | PDO mapping model, layout into the process image, limits, and the SDO sequence that remaps a drive |
+//! | [`cia402`] | the pure CiA 402 layer: control/status words, states, modes, the transition planner and the per-cycle axis engine. No I/O, no clocks |
+//! | [`esi`] | ESI (ETG.2000) XML parsing |
+//! | [`drives`] | one file per drive: identity, defaults, quirks and alarm tables, as data |
+//! | [`link`] | Ethernet frame I/O: raw `AF_PACKET` sockets and the in-process link |
+//! | [`sim`] | the software EtherCAT slave: ESC registers, SII, mailbox/CoE, DC and emulated drives |
+//! | [`master`] | the ethercrab integration: start-up, PDO and DC configuration, the cyclic loop |
+//! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
+//! | [`canopen`] | the same CiA 402 layer over CANopen |
+#![warn(missing_docs)]
+#![deny(unsafe_op_in_unsafe_fn)]
+
+pub mod canopen;
+pub mod cia402;
+pub mod drives;
+pub mod ec;
+pub mod esi;
+pub mod link;
+pub mod master;
+pub mod od;
+pub mod pdo;
+pub mod rt;
+pub mod sim;

@@ -1,0 +1,1 @@
+//! Ethernet frame I/O shared by the master and the software slave.

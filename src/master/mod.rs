@@ -1,0 +1,1 @@
+//! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic loop.

@@ -1,0 +1,18 @@
+//! CANopen / CoE object dictionary types (CiA 301, ETG.1000.6): object addresses, data types,
+//! access rights, static object descriptions, runtime values, and SDO abort codes.
+//!
+//! These types are shared by the drive profiles (which describe what a drive's dictionary holds),
+//! the software slave (which serves a dictionary over CoE) and the master (which reads and writes
+//! one).
+
+mod abort;
+mod address;
+mod desc;
+mod types;
+mod value;
+
+pub use abort::SdoAbortCode;
+pub use address::{AddressParseError, ObjectAddress};
+pub use desc::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc};
+pub use types::DataType;
+pub use value::{ConstValue, Value, ValueError};

@@ -1,0 +1,1 @@
+//! Real-time support: thread set-up, absolute-time sleeping, cycle statistics.
