@@ -1,0 +1,198 @@
+//! The distributed-clock unit: local clock, system time with offset and delay, the drift
+//! control loop, and the SYNC0 generator.
+//!
+//! Model:
+//! - **local time** = host clock + configured offset + configured drift (parts per billion of
+//!   the host time), i.e. each slave's own oscillator;
+//! - **system time** = local time + offset register (0x0920) + trim, where the trim is what the
+//!   control loop has corrected so far (a step part and a rate part);
+//! - a write to 0x0910 (FRMW/ARMW from the reference clock, or a BWR) is a **control-loop
+//!   input**: `e = own system time − (received + delay 0x0928)`; 0x092C shows `e` filtered
+//!   (filter depth 0x0934) in sign-magnitude; the loop removes `e` with a proportional step of
+//!   at most 1000 ppm of the elapsed time and integrates the rate error;
+//! - a write to 0x0930 or 0x0934 resets the loop (trim, rate and filter);
+//! - **SYNC0**: when 0x0981 bits 0 and 1 are set, pulses start at the start time (0x0990) and
+//!   repeat every 0x09A0 ns of system time (0 = a single pulse). A start time in the past
+//!   starts at the next whole cycle after now and sets 0x0984 bit 2.
+
+/// Proportional gain of the drift loop, as a right shift (1/4).
+const KP_SHIFT: i64 = 2;
+/// Integral gain of the drift loop (1/20 of the observed rate error per update).
+const KI_DIV: i64 = 20;
+/// Rate corrections are only learned from updates at least this far apart (ns); closer updates
+/// (static drift compensation sends them back to back) only correct the step.
+const KI_MIN_INTERVAL_NS: u64 = 50_000;
+/// Largest rate correction in ppb (±1000 ppm).
+const MAX_RATE_PPB: i64 = 1_000_000;
+/// Smallest per-update step limit in ns.
+const MIN_STEP_NS: i64 = 200;
+
+/// The DC unit state of one ESC.
+#[derive(Debug, Clone)]
+pub struct DcUnit {
+    /// Local clock offset from the host clock.
+    pub offset_ns: i64,
+    /// Local clock drift against the host clock in ppb.
+    pub drift_ppb: i64,
+    trim_ns: i64,
+    rate_ppb: i64,
+    anchor_local: u64,
+    last_input_local: Option<u64>,
+    filtered: i64,
+    /// SYNC0 generation.
+    pub sync: SyncGen,
+}
+
+/// The SYNC0 generator.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SyncGen {
+    /// Cyclic operation with SYNC0 is running.
+    pub active: bool,
+    /// System time of the next SYNC0 pulse.
+    pub next: u64,
+    /// SYNC0 cycle in ns (0: single shot).
+    pub cycle: u32,
+    /// Pulses delivered since activation.
+    pub count: u64,
+}
+
+impl DcUnit {
+    /// A DC unit with the given local clock offset and drift.
+    pub fn new(offset_ns: i64, drift_ppb: i64) -> Self {
+        Self {
+            offset_ns,
+            drift_ppb,
+            trim_ns: 0,
+            rate_ppb: 0,
+            anchor_local: 0,
+            last_input_local: None,
+            filtered: 0,
+            sync: SyncGen::default(),
+        }
+    }
+
+    /// Local time at host time `host_ns`.
+    pub fn local(&self, host_ns: u64) -> u64 {
+        let h = i128::from(host_ns);
+        let v = h + i128::from(self.offset_ns) + h * i128::from(self.drift_ppb) / 1_000_000_000;
+        v.clamp(0, i128::from(u64::MAX)) as u64
+    }
+
+    fn trim_at(&self, local: u64) -> i64 {
+        let since = i128::from(local.saturating_sub(self.anchor_local));
+        let rate = since * i128::from(self.rate_ppb) / 1_000_000_000;
+        (i128::from(self.trim_ns) + rate).clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
+    }
+
+    /// System time at host time `host_ns`, given the offset register value.
+    pub fn system(&self, host_ns: u64, offset_reg: u64) -> u64 {
+        let local = self.local(host_ns);
+        local
+            .wrapping_add(offset_reg)
+            .wrapping_add(self.trim_at(local) as u64)
+    }
+
+    /// Reset the control loop (write to 0x0930 or 0x0934).
+    pub fn reset_loop(&mut self) {
+        self.trim_ns = 0;
+        self.rate_ppb = 0;
+        self.anchor_local = 0;
+        self.last_input_local = None;
+        self.filtered = 0;
+    }
+
+    /// A control-loop input at host time `host_ns`: `e` = own system time − delay − received
+    /// (positive: this clock is ahead). `filter_depth` is 0x0934 bits 0–3. Returns the filtered
+    /// difference for 0x092C.
+    pub fn loop_input(&mut self, host_ns: u64, e: i64, filter_depth: u8) -> i64 {
+        let local = self.local(host_ns);
+        // Fold the rate part accumulated so far into the step part, re-anchoring at `local`.
+        self.trim_ns = self.trim_at(local);
+        self.anchor_local = local;
+        let dt = self
+            .last_input_local
+            .map(|l| local.saturating_sub(l))
+            .unwrap_or(0);
+        self.last_input_local = Some(local);
+
+        let limit = ((dt / 1000) as i64).max(MIN_STEP_NS);
+        let step = (e >> KP_SHIFT).clamp(-limit, limit);
+        // A tiny error still gets corrected by at least one nanosecond.
+        let step = if step == 0 { e.signum() } else { step };
+        self.trim_ns = self.trim_ns.saturating_sub(step);
+        if dt >= KI_MIN_INTERVAL_NS {
+            let observed_ppb = i128::from(e) * 1_000_000_000 / i128::from(dt);
+            let adj = (observed_ppb / i128::from(KI_DIV))
+                .clamp(i128::from(-MAX_RATE_PPB), i128::from(MAX_RATE_PPB))
+                as i64;
+            self.rate_ppb = (self.rate_ppb - adj).clamp(-MAX_RATE_PPB, MAX_RATE_PPB);
+        }
+        let depth = u32::from(filter_depth & 0x0F);
+        self.filtered = if depth == 0 || self.filtered == 0 {
+            e
+        } else {
+            self.filtered + ((e - self.filtered) >> depth)
+        };
+        self.filtered
+    }
+
+    /// Encode a difference as register 0x092C: bit 31 set when the local copy is greater than
+    /// or equal to the received time, bits 0–30 the magnitude (saturated).
+    pub fn encode_difference(e: i64) -> u32 {
+        let mag = e.unsigned_abs().min(0x7FFF_FFFF) as u32;
+        if e >= 0 { mag | 0x8000_0000 } else { mag }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn local_time_offset_and_drift() {
+        let dc = DcUnit::new(1_000, 50_000); // +1 µs, +50 ppm
+        assert_eq!(dc.local(0), 1_000);
+        assert_eq!(dc.local(1_000_000_000), 1_000_000_000 + 1_000 + 50_000);
+    }
+
+    #[test]
+    fn loop_converges_on_drift() {
+        // A slave running 80 ppm fast against a reference, compared every millisecond.
+        let mut dc = DcUnit::new(0, 80_000);
+        let reference = DcUnit::new(0, 0);
+        let offset = 0u64;
+        let mut t = 1_000_000_000u64;
+        let mut last = 0i64;
+        for _ in 0..3000 {
+            t += 1_000_000;
+            let own = dc.system(t, offset) as i64;
+            let received = reference.system(t, offset) as i64;
+            last = dc.loop_input(t, own - received, 0);
+        }
+        assert!(last.abs() < 20, "residual difference {last} ns");
+    }
+
+    #[test]
+    fn loop_removes_initial_offset_back_to_back() {
+        let mut dc = DcUnit::new(0, 0);
+        let mut t = 5_000_000u64;
+        // 600 ns behind the reference, 100 comparisons 30 µs apart.
+        let base = dc.system(t, 0) as i64 + 600;
+        let mut e = 0;
+        for i in 0..100u64 {
+            t += 30_000;
+            let own = dc.system(t, 0) as i64;
+            let received = base + (30_000 * (i + 1)) as i64;
+            e = dc.loop_input(t, own - received, 0);
+        }
+        assert!(e.abs() <= 1, "residual {e}");
+    }
+
+    #[test]
+    fn difference_encoding() {
+        assert_eq!(DcUnit::encode_difference(5), 0x8000_0005);
+        assert_eq!(DcUnit::encode_difference(0), 0x8000_0000);
+        assert_eq!(DcUnit::encode_difference(-5), 5);
+        assert_eq!(DcUnit::encode_difference(i64::MIN), 0x7FFF_FFFF);
+    }
+}
