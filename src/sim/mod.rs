@@ -14,6 +14,7 @@ pub mod clock;
 pub mod device;
 pub mod devices;
 pub mod esc;
+pub mod probe;
 pub mod segment;
 pub mod sii;
 pub mod transport;
