@@ -48,8 +48,18 @@ fn u64le(d: &[u8]) -> u64 {
 /// SM and FMMU setup of an IoDevice (SM0 outputs 2 bytes at 0x1000, SM1 inputs 4 bytes at
 /// 0x1800) mapping outputs to logical `out` and inputs to logical `inp`.
 fn configure_io(p: &mut Probe, station: u16, out: u32, inp: u32) {
-    assert_eq!(p.fpwr(station, 0x0800, &[0x00, 0x10, 2, 0, 0x64, 0, 1, 0]).unwrap().wkc, 1);
-    assert_eq!(p.fpwr(station, 0x0808, &[0x00, 0x18, 4, 0, 0x20, 0, 1, 0]).unwrap().wkc, 1);
+    assert_eq!(
+        p.fpwr(station, 0x0800, &[0x00, 0x10, 2, 0, 0x64, 0, 1, 0])
+            .unwrap()
+            .wkc,
+        1
+    );
+    assert_eq!(
+        p.fpwr(station, 0x0808, &[0x00, 0x18, 4, 0, 0x20, 0, 1, 0])
+            .unwrap()
+            .wkc,
+        1
+    );
     let mut f0 = [0u8; 16];
     f0[0..4].copy_from_slice(&out.to_le_bytes());
     f0[4..6].copy_from_slice(&2u16.to_le_bytes());
@@ -141,7 +151,11 @@ fn broadcast_read_write_returns_old_or_and_writes_new() {
     }
     let r = p.physical(Command::Brw, 0, 0x0F80, &[0x80]).unwrap();
     assert_eq!(r.wkc, 9, "BRW: +1 read +2 write per slave");
-    assert_eq!(r.data, vec![0x87], "old contents ORed into the written value");
+    assert_eq!(
+        r.data,
+        vec![0x87],
+        "old contents ORed into the written value"
+    );
     // Each slave writes the data as it arrives there, i.e. ORed by the slaves before it.
     for (i, v) in [0x80u8, 0x81, 0x83].into_iter().enumerate() {
         assert_eq!(p.fprd(0x1000 + i as u16, 0x0F80, 1).unwrap().data, vec![v]);
@@ -236,8 +250,8 @@ fn nop_and_reserved_commands_pass_untouched() {
     assert_eq!((r.wkc, r.adp, r.data), (0, 0x1234, vec![1, 2]));
     // A reserved command code (0x20).
     let mut buf = [0u8; 64];
-    let mut b = ecdrive::ec::frame::FrameBuilder::new(&mut buf, ecdrive::sim::probe::PROBE_MAC)
-        .unwrap();
+    let mut b =
+        ecdrive::ec::frame::FrameBuilder::new(&mut buf, ecdrive::sim::probe::PROBE_MAC).unwrap();
     b.push_raw(0x20, 1, 0x0010_0000, &[5, 6]).unwrap();
     let n = b.finish();
     let orig = buf;
@@ -270,9 +284,7 @@ fn logical_commands_map_through_fmmus() {
         p.fpwr(station, 0x1500, &[station as u8, 0xB, 0xC, 0xD])
             .unwrap();
     }
-    let r = p
-        .logical(Command::Lwr, 0x10, &[1, 2, 3, 4])
-        .unwrap();
+    let r = p.logical(Command::Lwr, 0x10, &[1, 2, 3, 4]).unwrap();
     assert_eq!(r.wkc, 2);
     assert_eq!(p.fprd(0x1000, 0x1400, 2).unwrap().data, vec![1, 2]);
     assert_eq!(p.fprd(0x1001, 0x1400, 2).unwrap().data, vec![3, 4]);
@@ -335,9 +347,13 @@ fn write_masks_protect_read_only_bits() {
     let before = p.read_u16(0x1000, 0x0502).unwrap().0;
     assert_eq!(before & 0x0040, 0x0040, "8-byte reads supported");
     p.fpwr(0x1000, 0x0502, &[0x00, 0x00]).unwrap();
-    assert_eq!(p.read_u16(0x1000, 0x0502).unwrap().0 & 0x00E0, before & 0x00E0);
+    assert_eq!(
+        p.read_u16(0x1000, 0x0502).unwrap().0 & 0x00E0,
+        before & 0x00E0
+    );
     // SM status and PDI control bytes are read-only from ECAT.
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 2, 0, 0x64, 0xFF, 0, 0xFF]).unwrap();
+    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 2, 0, 0x64, 0xFF, 0, 0xFF])
+        .unwrap();
     let r = p.fprd(0x1000, 0x0800, 8).unwrap();
     assert_eq!(r.data[5], 0x00);
     assert_eq!(r.data[7] & 0x01, 0x01, "PDI keeps SM0 deactivated in INIT");
@@ -354,7 +370,9 @@ fn write_masks_protect_read_only_bits() {
 #[test]
 fn dl_status_reflects_position() {
     let (mut p, _) = io_segment(3);
-    let dl: Vec<u16> = (0..3).map(|i| p.read_u16(0x1000 + i, 0x0110).unwrap().0).collect();
+    let dl: Vec<u16> = (0..3)
+        .map(|i| p.read_u16(0x1000 + i, 0x0110).unwrap().0)
+        .collect();
     // First and middle: ports 0 and 1 with link and communication, 2/3 loop closed.
     assert_eq!(dl[0], 0x5A33);
     assert_eq!(dl[1], 0x5A33);
@@ -489,12 +507,15 @@ fn process_data_configuration_is_checked_at_safeop() {
     // No SMs configured: invalid output configuration.
     assert_eq!(to_state(&mut p, 0x1000, 0x0004), (0x0012, 0x001D));
     // Outputs right, inputs with the wrong length.
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 2, 0, 0x64, 0, 1, 0]).unwrap();
-    p.fpwr(0x1000, 0x0808, &[0x00, 0x18, 3, 0, 0x20, 0, 1, 0]).unwrap();
+    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 2, 0, 0x64, 0, 1, 0])
+        .unwrap();
+    p.fpwr(0x1000, 0x0808, &[0x00, 0x18, 3, 0, 0x20, 0, 1, 0])
+        .unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0014), (0x0012, 0x001E));
     // Outputs with the wrong direction.
     p.fpwr(0x1000, 0x0806, &[0]).unwrap();
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 2, 0, 0x20, 0, 1, 0]).unwrap();
+    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 2, 0, 0x20, 0, 1, 0])
+        .unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0014), (0x0012, 0x001D));
     // Everything right.
     p.fpwr(0x1000, 0x0806, &[0]).unwrap();
@@ -505,7 +526,10 @@ fn process_data_configuration_is_checked_at_safeop() {
     // Changing the SM while in OP drops to PREOP with the error.
     p.fpwr(0x1000, 0x080E, &[0]).unwrap();
     let r = p.fprd(0x1000, 0x0130, 6).unwrap();
-    assert_eq!((u16le(&r.data[0..2]), u16le(&r.data[4..6])), (0x0012, 0x001E));
+    assert_eq!(
+        (u16le(&r.data[0..2]), u16le(&r.data[4..6])),
+        (0x0012, 0x001E)
+    );
 }
 
 #[test]
@@ -514,12 +538,24 @@ fn mailbox_configuration_is_checked_at_preop() {
     p.assign_addresses(0x1000).unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0002), (0x0011, 0x0016));
     // Wrong length of SM1.
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 64, 0, 0x22, 0, 1, 0])
-        .unwrap();
+    p.fpwr(
+        0x1000,
+        0x0800,
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 64, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0012), (0x0011, 0x0016));
     p.bwr(0x0800, &[0; 16]).unwrap();
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0])
-        .unwrap();
+    p.fpwr(
+        0x1000,
+        0x0800,
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0012), (0x0002, 0x0000));
     // Disabling SM0 in PREOP drops the slave to INIT with the error.
     p.fpwr(0x1000, 0x0806, &[0]).unwrap();
@@ -539,7 +575,11 @@ fn device_can_refuse_a_transition() {
     let seen = &p.segment.device::<IoDevice>(0).unwrap().seen;
     assert_eq!(
         seen.transitions.last(),
-        Some(&(AlState::SafeOp, AlState::SafeOp, Some(AlStatusCode::NO_VALID_OUTPUTS)))
+        Some(&(
+            AlState::SafeOp,
+            AlState::SafeOp,
+            Some(AlStatusCode::NO_VALID_OUTPUTS)
+        ))
     );
 }
 
@@ -592,7 +632,10 @@ fn sm_watchdog_drops_op_to_safeop() {
     clock.advance(101_000_000);
     p.segment.poll();
     let r = p.fprd(0x1000, 0x0130, 6).unwrap();
-    assert_eq!((u16le(&r.data[0..2]), u16le(&r.data[4..6])), (0x0014, 0x001B));
+    assert_eq!(
+        (u16le(&r.data[0..2]), u16le(&r.data[4..6])),
+        (0x0014, 0x001B)
+    );
     assert_eq!(p.read_u16(0x1000, 0x0440).unwrap().0 & 1, 0);
     assert_eq!(p.fprd(0x1000, 0x0442, 1).unwrap().data, vec![1]);
     // Acknowledge and go back to OP.
@@ -611,8 +654,14 @@ fn sm_watchdog_drops_op_to_safeop() {
 fn echo_preop() -> (Probe, ManualClock) {
     let (mut p, c) = probe_with(vec![Box::new(EchoMailbox::new())], EscConfig::default());
     p.assign_addresses(0x1000).unwrap();
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0])
-        .unwrap();
+    p.fpwr(
+        0x1000,
+        0x0800,
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0002), (0x0002, 0));
     (p, c)
 }
@@ -632,8 +681,16 @@ fn mailbox_handshake() {
     assert_eq!(p.fprd(0x1000, 0x1080, 128).unwrap().wkc, 0);
     // Write a request: accepted; the firmware answers after the frame.
     assert_eq!(p.fpwr(0x1000, 0x1000, &mbx(1, b"hello")).unwrap().wkc, 1);
-    assert_eq!(p.fprd(0x1000, 0x080D, 1).unwrap().data[0] & 0x08, 0x08, "SM1 full");
-    assert_eq!(p.fprd(0x1000, 0x0805, 1).unwrap().data[0] & 0x08, 0, "SM0 consumed");
+    assert_eq!(
+        p.fprd(0x1000, 0x080D, 1).unwrap().data[0] & 0x08,
+        0x08,
+        "SM1 full"
+    );
+    assert_eq!(
+        p.fprd(0x1000, 0x0805, 1).unwrap().data[0] & 0x08,
+        0,
+        "SM0 consumed"
+    );
     // A second request while the reply is unread stays in SM0 …
     assert_eq!(p.fpwr(0x1000, 0x1000, &mbx(2, b"again")).unwrap().wkc, 1);
     assert_eq!(p.fprd(0x1000, 0x0805, 1).unwrap().data[0] & 0x08, 0x08);
@@ -665,12 +722,18 @@ fn mailbox_repeat_reposts_the_last_reply() {
     let act = p.fprd(0x1000, 0x080E, 1).unwrap().data[0];
     assert_eq!(p.fpwr(0x1000, 0x080E, &[act ^ 0x02]).unwrap().wkc, 1);
     // Repeat acknowledged in PDI control bit 1, reply posted again.
-    assert_eq!(p.fprd(0x1000, 0x080F, 1).unwrap().data[0] & 0x02, (act ^ 0x02) & 0x02);
+    assert_eq!(
+        p.fprd(0x1000, 0x080F, 1).unwrap().data[0] & 0x02,
+        (act ^ 0x02) & 0x02
+    );
     let r = p.fprd(0x1000, 0x1080, 128).unwrap();
     assert_eq!((r.wkc, &r.data[6..11]), (1, &b"first"[..]));
     // Toggling back acknowledges again.
     p.fpwr(0x1000, 0x080E, &[act]).unwrap();
-    assert_eq!(p.fprd(0x1000, 0x080F, 1).unwrap().data[0] & 0x02, act & 0x02);
+    assert_eq!(
+        p.fprd(0x1000, 0x080F, 1).unwrap().data[0] & 0x02,
+        act & 0x02
+    );
 }
 
 #[test]
@@ -699,8 +762,14 @@ fn mailbox_is_reset_on_init_and_sm_reconfiguration() {
     assert_eq!(p.fpwr(0x1000, 0x1000, &mbx(2, b"y")).unwrap().wkc, 0);
     // Disable/enable SMs and go back to PREOP: the old reply is gone.
     p.bwr(0x0800, &[0; 16]).unwrap();
-    p.fpwr(0x1000, 0x0800, &[0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0])
-        .unwrap();
+    p.fpwr(
+        0x1000,
+        0x0800,
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
     assert_eq!(to_state(&mut p, 0x1000, 0x0002), (0x0002, 0));
     assert_eq!(p.fprd(0x1000, 0x1080, 128).unwrap().wkc, 0);
 }
@@ -712,7 +781,9 @@ fn receive_time_latch_orders_ports_along_the_line() {
     let (mut p, clock) = io_segment(3);
     clock.advance(12_345);
     assert_eq!(p.bwr(0x0900, &[0; 4]).unwrap().wkc, 3);
-    let t: Vec<Vec<u8>> = (0..3).map(|i| p.fprd(0x1000 + i, 0x0900, 16).unwrap().data).collect();
+    let t: Vec<Vec<u8>> = (0..3)
+        .map(|i| p.fprd(0x1000 + i, 0x0900, 16).unwrap().data)
+        .collect();
     let p0: Vec<u32> = t.iter().map(|d| u32le(&d[0..4])).collect();
     let p1: Vec<u32> = t.iter().map(|d| u32le(&d[4..8])).collect();
     assert!(p0[0] < p0[1] && p0[1] < p0[2]);
@@ -761,7 +832,8 @@ fn system_time_offset_and_drift_loop() {
     for i in 0..3u16 {
         let off = master_now.wrapping_sub(rx[i as usize]);
         p.fpwr(0x1000 + i, 0x0920, &off.to_le_bytes()).unwrap();
-        p.fpwr(0x1000 + i, 0x0928, &(u32::from(i) * 300).to_le_bytes()).unwrap();
+        p.fpwr(0x1000 + i, 0x0928, &(u32::from(i) * 300).to_le_bytes())
+            .unwrap();
     }
     // A read of 0x0910 is local time + offset.
     let st = u64le(&p.fprd(0x1001, 0x0910, 8).unwrap().data);
@@ -769,7 +841,12 @@ fn system_time_offset_and_drift_loop() {
     // Drift compensation: FRMW every ms for 4 s; the followers' 0x092C ends up small.
     for _ in 0..4000 {
         clock.advance(1_000_000);
-        assert_eq!(p.physical(Command::Frmw, 0x1000, 0x0910, &[0; 8]).unwrap().wkc, 3);
+        assert_eq!(
+            p.physical(Command::Frmw, 0x1000, 0x0910, &[0; 8])
+                .unwrap()
+                .wkc,
+            3
+        );
     }
     for i in 1..3u16 {
         let diff = p.fprd(0x1000 + i, 0x092C, 4).unwrap();
@@ -792,7 +869,8 @@ fn system_time_offset_and_drift_loop() {
 fn activate_sync0(p: &mut Probe, station: u16, start: u64, cycle: u32) {
     p.fpwr(station, 0x0981, &[0]).unwrap();
     p.fpwr(station, 0x0990, &start.to_le_bytes()).unwrap();
-    p.fpwr(station, 0x09A0, &u64::from(cycle).to_le_bytes()).unwrap();
+    p.fpwr(station, 0x09A0, &u64::from(cycle).to_le_bytes())
+        .unwrap();
     p.fpwr(station, 0x0981, &[0x03]).unwrap();
 }
 
@@ -810,8 +888,14 @@ fn sync0_events_are_delivered_exactly_and_report_missing_outputs() {
     // 10 cycles, each with one LRW half-way through the cycle.
     clock.advance(1_500_000);
     for _ in 0..10 {
-        p.logical(Command::Lrw, 0, &[0xAA, 0x55, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0])
-            .unwrap();
+        p.logical(
+            Command::Lrw,
+            0,
+            &[
+                0xAA, 0x55, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+            ],
+        )
+        .unwrap();
         clock.advance(1_000_000);
     }
     p.segment.poll();
@@ -835,7 +919,10 @@ fn sync0_events_are_delivered_exactly_and_report_missing_outputs() {
     p.fpwr(0x1000, 0x0981, &[0]).unwrap();
     clock.advance(5_000_000);
     p.segment.poll();
-    assert_eq!(p.segment.device::<IoDevice>(0).unwrap().seen.sync0_events, 12);
+    assert_eq!(
+        p.segment.device::<IoDevice>(0).unwrap().seen.sync0_events,
+        12
+    );
 }
 
 #[test]

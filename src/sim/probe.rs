@@ -206,11 +206,7 @@ impl Probe {
 
     /// Request an AL state on one slave (FPWR 0x0120) and return the AL status and code read
     /// back.
-    pub fn request_state(
-        &mut self,
-        station: u16,
-        control: u16,
-    ) -> Result<(u16, u16), ProbeError> {
+    pub fn request_state(&mut self, station: u16, control: u16) -> Result<(u16, u16), ProbeError> {
         self.fpwr(station, 0x0120, &control.to_le_bytes())?;
         let r = self.fprd(station, 0x0130, 6)?;
         let g = |i: usize| {

@@ -1,0 +1,225 @@
+//! Acceptance: plain ethercrab (no ecdrive master code in between) against emulated segments,
+//! in-process through `PduTx`/`PduRx` and over a veth pair with raw sockets.
+//!
+//! Each scenario: discover three devices, read identity, names and the EEPROM, bring them to
+//! OP with DC SYNC0, exchange process data and check the working counter and the echoed data.
+
+use ecdrive::link::netns::{VethPair, require_root};
+use ecdrive::sim::devices::IoDevice;
+use ecdrive::sim::transport::{EthercrabLink, RawServer};
+use ecdrive::sim::{EscConfig, HostClock, Segment};
+use ethercrab::std::ethercat_now;
+use ethercrab::subdevice_group::DcConfiguration;
+use ethercrab::{DcSync, MainDevice, MainDeviceConfig, PduStorage, RegisterAddress, Timeouts};
+use std::sync::Arc;
+use std::time::Duration;
+
+const N: usize = 3;
+const MAX_SUBDEVICES: usize = 8;
+const MAX_PDI: usize = 64;
+const DATA: usize = PduStorage::element_size(1100);
+
+fn storage() -> &'static PduStorage<16, DATA> {
+    Box::leak(Box::new(PduStorage::new()))
+}
+
+fn timeouts() -> Timeouts {
+    Timeouts {
+        // Generous: CI machines stall.
+        pdu: Duration::from_millis(2000),
+        state_transition: Duration::from_secs(10),
+        eeprom: Duration::from_millis(500),
+        mailbox_response: Duration::from_secs(2),
+        wait_loop_delay: Duration::from_millis(1),
+        ..Timeouts::default()
+    }
+}
+
+fn segment() -> Segment {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for i in 0..N {
+        seg.push(
+            Box::new(IoDevice::new(2, 4).with_serial(100 + i as u32)),
+            EscConfig {
+                // The SM watchdog stays at its reset value except that scheduling hiccups
+                // on a loaded CI machine must not drop the devices out of OP.
+                sm_watchdog: 0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+    seg
+}
+
+/// What the scenario learned, checked against the segment afterwards.
+struct Outcome {
+    eeprom: Vec<Vec<u8>>,
+}
+
+async fn scenario(md: &MainDevice<'static>) -> Outcome {
+    let mut group = md
+        .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(ethercat_now)
+        .await
+        .expect("init");
+    assert_eq!(group.len(), N);
+
+    let mut eeprom = Vec::new();
+    for (i, sd) in group.iter(md).enumerate() {
+        let id = sd.identity();
+        assert_eq!(id.vendor_id, 0x0000_0ECD);
+        assert_eq!(id.product_id, 0x0000_0101);
+        assert_eq!(id.revision, 0x0001_0000);
+        assert_eq!(id.serial, 100 + i as u32);
+        assert_eq!(sd.name(), "ECD-IO");
+        assert_eq!(sd.configured_address(), 0x1000 + i as u16);
+        assert!(sd.dc_support().any());
+        let desc = sd.description().await.expect("description");
+        assert_eq!(desc.as_deref(), Some("ecdrive generic I/O 2/4"));
+        let size = sd.eeprom_size(md).await.expect("eeprom size");
+        assert_eq!(size, 2048);
+        let mut buf = vec![0u8; 256];
+        let n = sd
+            .eeprom_read_raw(md, 0, &mut buf)
+            .await
+            .expect("eeprom read");
+        buf.truncate(n);
+        eeprom.push(buf);
+    }
+    // The first device is the reference clock; all others got a propagation delay.
+    let delays: Vec<u32> = group.iter(md).map(|sd| sd.propagation_delay()).collect();
+    assert_eq!(delays[0], 0);
+    assert!(delays[1] > 0 && delays[2] > delays[1], "{delays:?}");
+
+    for mut sd in group.iter_mut(md) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
+    for sd in group.iter(md) {
+        let io = sd.io_raw();
+        assert_eq!((io.inputs().len(), io.outputs().len()), (4, 2));
+    }
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_millis(20),
+                sync0_period: Duration::from_millis(1),
+                sync0_shift: Duration::from_micros(500),
+            },
+        )
+        .await
+        .expect("DC sync");
+    let group = group.into_safe_op(md).await.expect("SAFE-OP");
+    let group = group.request_into_op(md).await.expect("request OP");
+
+    // Cycle until every device is in OP.
+    let mut in_op = false;
+    for _ in 0..5_000 {
+        let r = group.tx_rx_dc(md).await.expect("tx_rx_dc");
+        if r.all_op() {
+            in_op = true;
+            break;
+        }
+        tokio::time::sleep(r.extra.next_cycle_wait).await;
+    }
+    assert!(in_op, "devices did not reach OP");
+
+    // In OP: WKC = 3 per device (outputs written +2, inputs read +1). Every device echoes its
+    // outputs into inputs 2..4 at SYNC0; the value shows up after a few cycles.
+    let mut echoed = [false; N];
+    for cycle in 0..2_000u32 {
+        for (i, sd) in group.iter(md).enumerate() {
+            let mut o = sd.outputs_raw_mut();
+            o.copy_from_slice(&[0xA0 + i as u8, 0x5A]);
+        }
+        let r = group.tx_rx_dc(md).await.expect("tx_rx_dc");
+        assert_eq!(r.working_counter, 3 * N as u16, "cycle {cycle}");
+        assert!(r.all_op());
+        for (i, sd) in group.iter(md).enumerate() {
+            let inp = sd.inputs_raw();
+            if inp[2..4] == [0xA0 + i as u8, 0x5A] {
+                echoed[i] = true;
+            }
+        }
+        if echoed.iter().all(|e| *e) && cycle >= 20 {
+            break;
+        }
+        tokio::time::sleep(r.extra.next_cycle_wait).await;
+    }
+    assert_eq!(echoed, [true; N], "outputs echoed back through the devices");
+
+    // The devices are synchronised: their system time difference is small.
+    for sd in group.iter(md) {
+        let diff: u32 = sd
+            .register_read(RegisterAddress::DcSystemTimeDifference)
+            .await
+            .expect("0x092C");
+        assert!(diff & 0x7FFF_FFFF < 100_000, "0x092C = {diff:#x}");
+    }
+
+    let group = group.into_safe_op(md).await.expect("back to SAFE-OP");
+    let group = group.into_pre_op(md).await.expect("back to PRE-OP");
+    let _ = group.into_init(md).await.expect("back to INIT");
+    Outcome { eeprom }
+}
+
+fn check_segment(seg: &Segment, outcome: &Outcome) {
+    for (i, ee) in outcome.eeprom.iter().enumerate() {
+        let slave = seg.slave(i).unwrap();
+        assert_eq!(
+            &slave.esc.sii().bytes()[..ee.len()],
+            &ee[..],
+            "EEPROM of device {i}"
+        );
+        let dev = seg.device::<IoDevice>(i).unwrap();
+        assert!(dev.seen.sync0_events > 20, "device {i} saw SYNC0");
+        assert_eq!(dev.seen.sync0_cycle_ns, 1_000_000);
+        assert_eq!(dev.seen.last_outputs, vec![0xA0 + i as u8, 0x5A]);
+        assert_eq!(slave.esc.al_state(), ecdrive::ec::AlState::Init);
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ethercrab_in_process_dc_op() {
+    let (tx, rx, pdu_loop) = storage().try_split().unwrap();
+    let link = EthercrabLink::spawn(segment(), tx, rx).unwrap();
+    let md = Box::leak(Box::new(MainDevice::new(
+        pdu_loop,
+        timeouts(),
+        MainDeviceConfig {
+            dc_static_sync_iterations: 200,
+            ..MainDeviceConfig::default()
+        },
+    )));
+    let outcome = scenario(md).await;
+    let seg = link.stop();
+    check_segment(&seg, &outcome);
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn ethercrab_over_veth_dc_op() {
+    if !require_root("sim_ethercrab::ethercrab_over_veth_dc_op") {
+        return;
+    }
+    let veth = VethPair::create().expect("veth pair");
+    let server =
+        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), segment()).expect("server");
+    let (tx, rx, pdu_loop) = storage().try_split().unwrap();
+    let task = ethercrab::std::tx_rx_task(veth.host(), tx, rx).expect("tx/rx task");
+    let handle = tokio::spawn(task);
+    let md = Box::leak(Box::new(MainDevice::new(
+        pdu_loop,
+        timeouts(),
+        MainDeviceConfig {
+            dc_static_sync_iterations: 200,
+            ..MainDeviceConfig::default()
+        },
+    )));
+    let outcome = scenario(md).await;
+    handle.abort();
+    let (seg, result) = server.stop();
+    let stats = result.expect("server ran without I/O errors");
+    assert!(stats.frames > 100);
+    check_segment(&seg, &outcome);
+}
