@@ -309,9 +309,10 @@ impl Segment {
             let k = usize::from(k);
             let hop = self.hop(k, now);
             if let Some(s) = self.slaves.get_mut(k) {
-                s.esc.end_of_frame(hop, s.device.as_mut());
-                if let Some(d) = s.esc.next_deadline(hop.forward_ns) {
-                    self.earliest = Some(self.earliest.map_or(d, |e| e.min(d)));
+                if s.esc.end_of_frame(hop, s.device.as_mut()) {
+                    if let Some(d) = s.esc.next_deadline(hop.forward_ns) {
+                        self.earliest = Some(self.earliest.map_or(d, |e| e.min(d)));
+                    }
                 }
             }
             if let Some(m) = self.dirty_mark.get_mut(k) {

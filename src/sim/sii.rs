@@ -49,7 +49,7 @@ pub const SII_CRC: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::Algorithm {
     refin: false,
     refout: false,
     xorout: 0x00,
-    check: 0x80,
+    check: 0xFB,
     residue: 0x00,
 });
 
@@ -858,8 +858,8 @@ mod tests {
             }
             crc
         }
-        assert_eq!(SII_CRC.checksum(b"123456789"), 0x80);
-        assert_eq!(bitwise(b"123456789"), 0x80);
+        assert_eq!(bitwise(b"123456789"), 0xFB);
+        assert_eq!(SII_CRC.checksum(b"123456789"), 0xFB);
         let header = [
             0x80, 0x0C, 0x00, 0xCC, 0x88, 0x13, 0xFF, 0x00, 0, 0, 0, 0, 0, 0,
         ];

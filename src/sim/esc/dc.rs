@@ -26,16 +26,36 @@ const KI_MIN_INTERVAL_NS: u64 = 50_000;
 const MAX_RATE_PPB: i64 = 1_000_000;
 /// Smallest per-update step limit in ns.
 const MIN_STEP_NS: i64 = 200;
+/// Fixed-point shift for rates: a rate in ppb is kept as `ppb · 2^40 / 10^9`, so applying it is
+/// a multiplication and a shift instead of a 128-bit division.
+const Q: u32 = 40;
+
+fn ppb_to_q(ppb: i64) -> i64 {
+    match ppb.checked_shl(Q).filter(|v| v >> Q == ppb) {
+        Some(v) => v / 1_000_000_000,
+        None => ((i128::from(ppb) << Q) / 1_000_000_000)
+            .clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64,
+    }
+}
+
+/// `x · q / 2^Q`, rounded to nearest.
+fn apply_q(x: u64, q: i64) -> i128 {
+    if q == 0 {
+        return 0;
+    }
+    (i128::from(x) * i128::from(q) + (1i128 << (Q - 1))) >> Q
+}
 
 /// The DC unit state of one ESC.
 #[derive(Debug, Clone)]
 pub struct DcUnit {
     /// Local clock offset from the host clock.
     pub offset_ns: i64,
-    /// Local clock drift against the host clock in ppb.
-    pub drift_ppb: i64,
+    drift_ppb: i64,
+    drift_q: i64,
     trim_ns: i64,
     rate_ppb: i64,
+    rate_q: i64,
     anchor_local: u64,
     last_input_local: Option<u64>,
     filtered: i64,
@@ -62,8 +82,10 @@ impl DcUnit {
         Self {
             offset_ns,
             drift_ppb,
+            drift_q: ppb_to_q(drift_ppb),
             trim_ns: 0,
             rate_ppb: 0,
+            rate_q: 0,
             anchor_local: 0,
             last_input_local: None,
             filtered: 0,
@@ -71,16 +93,19 @@ impl DcUnit {
         }
     }
 
+    /// Local clock drift against the host clock in ppb.
+    pub fn drift_ppb(&self) -> i64 {
+        self.drift_ppb
+    }
+
     /// Local time at host time `host_ns`.
     pub fn local(&self, host_ns: u64) -> u64 {
-        let h = i128::from(host_ns);
-        let v = h + i128::from(self.offset_ns) + h * i128::from(self.drift_ppb) / 1_000_000_000;
+        let v = i128::from(host_ns) + i128::from(self.offset_ns) + apply_q(host_ns, self.drift_q);
         v.clamp(0, i128::from(u64::MAX)) as u64
     }
 
     fn trim_at(&self, local: u64) -> i64 {
-        let since = i128::from(local.saturating_sub(self.anchor_local));
-        let rate = since * i128::from(self.rate_ppb) / 1_000_000_000;
+        let rate = apply_q(local.saturating_sub(self.anchor_local), self.rate_q);
         (i128::from(self.trim_ns) + rate).clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64
     }
 
@@ -96,6 +121,7 @@ impl DcUnit {
     pub fn reset_loop(&mut self) {
         self.trim_ns = 0;
         self.rate_ppb = 0;
+        self.rate_q = 0;
         self.anchor_local = 0;
         self.last_input_local = None;
         self.filtered = 0;
@@ -120,12 +146,17 @@ impl DcUnit {
         // A tiny error still gets corrected by at least one nanosecond.
         let step = if step == 0 { e.signum() } else { step };
         self.trim_ns = self.trim_ns.saturating_sub(step);
-        if dt >= KI_MIN_INTERVAL_NS {
-            let observed_ppb = i128::from(e) * 1_000_000_000 / i128::from(dt);
-            let adj = (observed_ppb / i128::from(KI_DIV))
-                .clamp(i128::from(-MAX_RATE_PPB), i128::from(MAX_RATE_PPB))
-                as i64;
+        if dt >= KI_MIN_INTERVAL_NS && e != 0 {
+            let dt = i64::try_from(dt).unwrap_or(i64::MAX);
+            let observed_ppb = match e.checked_mul(1_000_000_000) {
+                Some(x) => x / dt,
+                None => (i128::from(e) * 1_000_000_000 / i128::from(dt))
+                    .clamp(i128::from(i64::MIN), i128::from(i64::MAX))
+                    as i64,
+            };
+            let adj = (observed_ppb / KI_DIV).clamp(-MAX_RATE_PPB, MAX_RATE_PPB);
             self.rate_ppb = (self.rate_ppb - adj).clamp(-MAX_RATE_PPB, MAX_RATE_PPB);
+            self.rate_q = ppb_to_q(self.rate_ppb);
         }
         let depth = u32::from(filter_depth & 0x0F);
         self.filtered = if depth == 0 || self.filtered == 0 {

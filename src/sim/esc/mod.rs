@@ -794,52 +794,27 @@ impl Esc {
         self.put(0x0040, &[self.reset_step]);
     }
 
-    /// Split `[a, b)` of RAM into runs covered by one SM (or none) and call `f` on each run.
-    fn walk_ram(&self, a: usize, b: usize, mut f: impl FnMut(usize, usize, Option<SmView>)) {
-        let mut pos = a;
-        while pos < b {
-            // The SM covering `pos`, or the start of the next SM after it.
-            let mut covering = None;
-            let mut next_start = b;
-            for sm in &self.sms {
-                if sm.start <= pos && pos < sm.end {
-                    covering = Some(*sm);
-                    break;
-                }
-                if sm.start > pos && sm.start < next_start {
-                    next_start = sm.start;
-                }
+    /// The run of RAM starting at `pos` (before `b`) that is covered by one SM, or by none:
+    /// returns its end and the SM.
+    fn next_run(&self, pos: usize, b: usize) -> (usize, Option<SmView>) {
+        let mut next_start = b;
+        for sm in &self.sms {
+            if sm.start <= pos && pos < sm.end {
+                return (sm.end.min(b), Some(*sm));
             }
-            match covering {
-                Some(sm) => {
-                    let end = sm.end.min(b);
-                    f(pos, end, Some(sm));
-                    pos = end;
-                }
-                None => {
-                    f(pos, next_start, None);
-                    pos = next_start;
-                }
+            if sm.start > pos && sm.start < next_start {
+                next_start = sm.start;
             }
         }
+        (next_start, None)
     }
 
     fn ram_read(&mut self, a: usize, out: &mut [u8], or: bool) -> bool {
         let b = (a + out.len()).min(self.mem.len());
-        if a >= b {
-            return false;
-        }
-        let mut runs: [(usize, usize, Option<SmView>); 2 * MAX_SM + 1] =
-            [(0, 0, None); 2 * MAX_SM + 1];
-        let mut n = 0;
-        self.walk_ram(a, b, |lo, hi, sm| {
-            if let Some(r) = runs.get_mut(n) {
-                *r = (lo, hi, sm);
-                n += 1;
-            }
-        });
         let mut ok = false;
-        for &(lo, hi, sm) in runs.iter().take(n) {
+        let mut lo = a;
+        while lo < b {
+            let (hi, sm) = self.next_run(lo, b);
             let allowed = match sm {
                 None => true,
                 Some(sm) => {
@@ -852,50 +827,40 @@ impl Esc {
                     }
                 }
             };
-            if !allowed {
-                continue;
-            }
-            let (Some(src), Some(dst)) = (self.mem.get(lo..hi), out.get_mut(lo - a..hi - a)) else {
-                continue;
-            };
-            if or {
-                for (d, s) in dst.iter_mut().zip(src) {
-                    *d |= *s;
-                }
-            } else {
-                dst.copy_from_slice(src);
-            }
-            ok = true;
-            if let Some(sm) = sm {
-                if hi == sm.end {
-                    if sm.mailbox {
-                        self.mailbox_read_done(sm.idx);
+            if allowed {
+                if let (Some(src), Some(dst)) = (self.mem.get(lo..hi), out.get_mut(lo - a..hi - a))
+                {
+                    if or {
+                        for (d, s) in dst.iter_mut().zip(src) {
+                            *d |= *s;
+                        }
                     } else {
-                        self.buffer_done(sm.idx);
-                        self.pending |= pending::PD_ACCESS;
+                        dst.copy_from_slice(src);
+                    }
+                    ok = true;
+                    if let Some(sm) = sm {
+                        if hi == sm.end {
+                            if sm.mailbox {
+                                self.mailbox_read_done(sm.idx);
+                            } else {
+                                self.buffer_done(sm.idx);
+                                self.pending |= pending::PD_ACCESS;
+                            }
+                        }
                     }
                 }
             }
+            lo = hi;
         }
         ok
     }
 
     fn ram_write(&mut self, a: usize, data: &[u8], hop: Hop) -> bool {
         let b = (a + data.len()).min(self.mem.len());
-        if a >= b {
-            return false;
-        }
-        let mut runs: [(usize, usize, Option<SmView>); 2 * MAX_SM + 1] =
-            [(0, 0, None); 2 * MAX_SM + 1];
-        let mut n = 0;
-        self.walk_ram(a, b, |lo, hi, sm| {
-            if let Some(r) = runs.get_mut(n) {
-                *r = (lo, hi, sm);
-                n += 1;
-            }
-        });
         let mut ok = false;
-        for &(lo, hi, sm) in runs.iter().take(n) {
+        let mut lo = a;
+        while lo < b {
+            let (hi, sm) = self.next_run(lo, b);
             let allowed = match sm {
                 None => true,
                 Some(sm) => {
@@ -908,30 +873,29 @@ impl Esc {
                     }
                 }
             };
-            if !allowed {
-                continue;
-            }
-            let (Some(dst), Some(src)) = (self.mem.get_mut(lo..hi), data.get(lo - a..hi - a))
-            else {
-                continue;
-            };
-            dst.copy_from_slice(src);
-            ok = true;
-            if let Some(sm) = sm {
-                if hi == sm.end {
-                    if sm.mailbox {
-                        self.set_sm_full(sm.idx, true);
-                        self.set_bits(Self::sm_base(sm.idx) + 5, 0x01, true);
-                        self.pending |= pending::MBX_WRITTEN;
-                    } else {
-                        self.buffer_done(sm.idx);
-                        if Some(sm.idx) == self.sm_out_pd {
-                            self.outputs_completed(sm, hop);
+            if allowed {
+                if let (Some(dst), Some(src)) = (self.mem.get_mut(lo..hi), data.get(lo - a..hi - a))
+                {
+                    dst.copy_from_slice(src);
+                    ok = true;
+                    if let Some(sm) = sm {
+                        if hi == sm.end {
+                            if sm.mailbox {
+                                self.set_sm_full(sm.idx, true);
+                                self.set_bits(Self::sm_base(sm.idx) + 5, 0x01, true);
+                                self.pending |= pending::MBX_WRITTEN;
+                            } else {
+                                self.buffer_done(sm.idx);
+                                if Some(sm.idx) == self.sm_out_pd {
+                                    self.outputs_completed(sm, hop);
+                                }
+                                self.pending |= pending::PD_ACCESS;
+                            }
                         }
-                        self.pending |= pending::PD_ACCESS;
                     }
                 }
             }
+            lo = hi;
         }
         ok
     }
@@ -1600,8 +1564,10 @@ impl Esc {
     }
 
     /// The PDI reacts to what the frame did: mailbox requests and repeats, SM changes, and
-    /// (without DC sync) a process-data cycle.
-    pub fn end_of_frame(&mut self, hop: Hop, dev: &mut dyn Device) {
+    /// (without DC sync) a process-data cycle. Returns whether
+    /// [`next_deadline`](Self::next_deadline) may have moved earlier (SYNC0 activated, OP
+    /// entered).
+    pub fn end_of_frame(&mut self, hop: Hop, dev: &mut dyn Device) -> bool {
         let p = core::mem::take(&mut self.pending);
         if p & pending::SM_CHANGED != 0 {
             self.check_sm_change(dev);
@@ -1625,6 +1591,9 @@ impl Esc {
         if self.mailbox.running {
             self.service_mailbox(dev);
         }
+        let moved = (p | self.pending) & pending::DEADLINE != 0;
+        self.pending &= !pending::DEADLINE;
+        moved
     }
 
     fn check_sm_change(&mut self, dev: &mut dyn Device) {
