@@ -1,1 +1,4 @@
 //! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic loop.
+
+pub mod exec;
+pub mod io;
