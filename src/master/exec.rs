@@ -81,46 +81,49 @@ pub fn run<L: FrameLink, F: Future>(
     let waker = Waker::from(tw.clone());
     let mut cx = Context::from_waker(&waker);
     pump.register_waker(&waker);
-    let mut fut = pin!(fut);
-    let result = loop {
-        tw.notified.store(false, Ordering::Release);
-        if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
-            break Ok(v);
-        }
-        let link_err = |source| ExecError::Link {
-            what: what(),
-            source,
-        };
-        if let Err(e) = pump.send_pending() {
-            break Err(link_err(e));
-        }
-        let now = monotonic_ns();
-        if now >= deadline {
-            break Err(ExecError::Timeout {
+    // The future lives in this block: leaving it drops the future (releasing, if it did not
+    // complete, its frames in ethercrab) before the pump forgets them below.
+    let result = {
+        let mut fut = pin!(fut);
+        loop {
+            tw.notified.store(false, Ordering::Release);
+            if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
+                break Ok(v);
+            }
+            let link_err = |source| ExecError::Link {
                 what: what(),
-                timeout_ms: timeout.as_millis() as u64,
-            });
-        }
-        if pump.outstanding() > 0 {
-            let until = deadline.min(now + pump.policy().frame_timeout_ns / 4 + 1);
-            if let Err(e) = pump.receive_until(until) {
+                source,
+            };
+            if let Err(e) = pump.send_pending() {
                 break Err(link_err(e));
             }
-            match pump.check_timeouts() {
-                Ok(0) => {}
-                Ok(lost) => {
-                    break Err(ExecError::FrameLost { what: what(), lost });
-                }
-                Err(e) => break Err(link_err(e)),
+            let now = monotonic_ns();
+            if now >= deadline {
+                break Err(ExecError::Timeout {
+                    what: what(),
+                    timeout_ms: timeout.as_millis() as u64,
+                });
             }
-        } else if !tw.notified.load(Ordering::Acquire) {
-            let slice = PARK_SLICE_NS.min(deadline.saturating_sub(now));
-            std::thread::park_timeout(Duration::from_nanos(slice));
+            if pump.outstanding() > 0 {
+                let until = deadline.min(now + pump.policy().frame_timeout_ns / 4 + 1);
+                if let Err(e) = pump.receive_until(until) {
+                    break Err(link_err(e));
+                }
+                match pump.check_timeouts() {
+                    Ok(0) => {}
+                    Ok(lost) => {
+                        break Err(ExecError::FrameLost { what: what(), lost });
+                    }
+                    Err(e) => break Err(link_err(e)),
+                }
+            } else if !tw.notified.load(Ordering::Acquire) {
+                let slice = PARK_SLICE_NS.min(deadline.saturating_sub(now));
+                std::thread::park_timeout(Duration::from_nanos(slice));
+            }
         }
     };
-    // Dropping the future (when it did not complete) releases its frames in ethercrab; forget
-    // them here too so late replies are counted as stale, not handed to a reused slot.
-    drop(fut);
+    // Forget the dropped future's frames so late replies count as stale and are not handed to a
+    // reused slot.
     if result.is_err() {
         pump.clear_all();
     } else {
