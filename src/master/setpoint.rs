@@ -187,7 +187,7 @@ impl Move {
         let (mut t, mut p, mut v, mut a) = (0.0, start, 0.0, 0.0);
         let mut n = 0;
         for &(dur, jerk, a_start) in plan {
-            if !(dur > 0.0) {
+            if dur.is_nan() || dur <= 0.0 {
                 continue;
             }
             if !a_start.is_nan() {
