@@ -4,6 +4,7 @@
 //! (never a relative sleep, never a tokio timer), so a late wake-up does not shift the following
 //! cycles.
 
+pub mod audit;
 pub mod clock;
 pub mod host;
 pub mod stats;
