@@ -253,6 +253,15 @@ pub fn alloc_window_end() -> AllocCounts {
     }
 }
 
+/// For tests that need privileges: print a loud skip line, or fail when `ECDRIVE_CI` is set
+/// (CI runs as root and must run them).
+pub fn skip_or_fail(why: &str) {
+    if std::env::var_os("ECDRIVE_CI").is_some() {
+        panic!("ECDRIVE_CI is set but this test cannot run: {why}");
+    }
+    eprintln!("\n*** SKIPPED: {why} ***\n");
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -279,13 +288,4 @@ mod tests {
         assert_eq!(n.outside - base.outside, 1, "{n:?} base {base:?}");
         assert_eq!(n.all - base.all, 101, "{n:?} base {base:?}");
     }
-}
-
-/// For tests that need privileges: print a loud skip line, or fail when `ECDRIVE_CI` is set
-/// (CI runs as root and must run them).
-pub fn skip_or_fail(why: &str) {
-    if std::env::var_os("ECDRIVE_CI").is_some() {
-        panic!("ECDRIVE_CI is set but this test cannot run: {why}");
-    }
-    eprintln!("\n*** SKIPPED: {why} ***\n");
 }
