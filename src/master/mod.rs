@@ -2,4 +2,5 @@
 
 pub mod exec;
 pub mod io;
+pub mod program;
 pub mod setpoint;
