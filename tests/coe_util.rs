@@ -14,6 +14,12 @@ pub struct Rig {
     pub state: AlState,
 }
 
+impl Default for Rig {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
 impl Rig {
     /// Default configuration (complete access and SDO info on), 128-byte mailboxes, PRE-OP.
     pub fn new() -> Self {

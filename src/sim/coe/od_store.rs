@@ -299,14 +299,14 @@ impl Dictionary {
     }
 
     /// The descriptor of object `index`.
-    pub fn object(&self, index: u16) -> Option<&'static ObjectDesc> {
+    pub fn object_desc(&self, index: u16) -> Option<&'static ObjectDesc> {
         self.position(index)
             .and_then(|p| self.objects.get(p).copied())
     }
 
     /// The descriptor of one entry.
-    pub fn entry(&self, addr: ObjectAddress) -> Option<&'static EntryDesc> {
-        self.object(addr.index).and_then(|o| o.entry(addr.sub))
+    pub fn entry_desc(&self, addr: ObjectAddress) -> Option<&'static EntryDesc> {
+        self.object_desc(addr.index).and_then(|o| o.entry(addr.sub))
     }
 
     /// All objects in index order.
@@ -332,7 +332,7 @@ impl Dictionary {
     /// type's size; strings up to the entry size). No access rights, ranges or hooks. Does not
     /// allocate for fixed-size entries, nor for strings (their capacity is reserved).
     pub fn set_raw(&mut self, addr: ObjectAddress, bytes: &[u8]) -> Result<(), SdoAbortCode> {
-        let e = self.entry(addr).ok_or_else(|| self.missing(addr))?;
+        let e = self.entry_desc(addr).ok_or_else(|| self.missing(addr))?;
         check_len(e, bytes)?;
         let slot = self
             .slot(addr)
@@ -348,7 +348,7 @@ impl Dictionary {
     }
 
     fn missing(&self, addr: ObjectAddress) -> SdoAbortCode {
-        if self.object(addr.index).is_some() {
+        if self.object_desc(addr.index).is_some() {
             SdoAbortCode::NO_SUBINDEX
         } else {
             SdoAbortCode::NO_OBJECT
@@ -357,14 +357,14 @@ impl Dictionary {
 
     /// The current value, decoded.
     pub fn value(&self, addr: ObjectAddress) -> Option<Value> {
-        let e = self.entry(addr)?;
+        let e = self.entry_desc(addr)?;
         Value::decode(e.data_type, self.raw(addr)?).ok()
     }
 
     /// Set a value as the device itself (see [`Dictionary::set_raw`]); the value must fit the
     /// data type (0x06090030 otherwise).
     pub fn set_value(&mut self, addr: ObjectAddress, v: &Value) -> Result<(), SdoAbortCode> {
-        let e = self.entry(addr).ok_or_else(|| self.missing(addr))?;
+        let e = self.entry_desc(addr).ok_or_else(|| self.missing(addr))?;
         if e.data_type.is_string() {
             let bytes = v
                 .encode(e.data_type)
@@ -380,7 +380,7 @@ impl Dictionary {
 
     /// An unsigned, boolean or bit entry's value. `None` for other types.
     pub fn uint(&self, addr: ObjectAddress) -> Option<u64> {
-        let e = self.entry(addr)?;
+        let e = self.entry_desc(addr)?;
         if !e.data_type.is_unsigned() {
             return None;
         }
@@ -422,7 +422,7 @@ impl Dictionary {
     fn assigned(&self, dir: Direction) -> Result<Vec<Pdo>, MappingError> {
         let ai = dir.assign_index();
         let mut out = Vec::new();
-        if self.object(ai).is_none() {
+        if self.object_desc(ai).is_none() {
             return Ok(out);
         }
         let n = self.count(ai);
@@ -432,7 +432,7 @@ impl Dictionary {
                 address,
                 reason: "sub 0 counts an assignment entry that does not exist",
             })? as u16;
-            if !pdo_index_in(dir, pdo) || self.object(pdo).is_none() {
+            if !pdo_index_in(dir, pdo) || self.object_desc(pdo).is_none() {
                 return Err(MappingError {
                     address,
                     reason: "the assigned PDO does not exist in this direction",
@@ -494,7 +494,9 @@ impl Dictionary {
         if pe.is_padding() {
             return Ok(());
         }
-        let e = self.entry(pe.address()).ok_or(SdoAbortCode::NOT_MAPPABLE)?;
+        let e = self
+            .entry_desc(pe.address())
+            .ok_or(SdoAbortCode::NOT_MAPPABLE)?;
         let flag = match dir {
             Direction::Rx => EntryAccess::RXPDO,
             Direction::Tx => EntryAccess::TXPDO,
@@ -563,7 +565,7 @@ impl Dictionary {
                     }
                     PdoObject::Assign(dir) => {
                         let p = v as u16;
-                        if p != 0 && (!pdo_index_in(dir, p) || self.object(p).is_none()) {
+                        if p != 0 && (!pdo_index_in(dir, p) || self.object_desc(p).is_none()) {
                             return Err(SdoAbortCode::VALUE_RANGE);
                         }
                     }
@@ -599,7 +601,7 @@ impl Dictionary {
                     if p == 0 {
                         return Err(SdoAbortCode::VALUE_TOO_HIGH);
                     }
-                    if !pdo_index_in(dir, p) || self.object(p).is_none() {
+                    if !pdo_index_in(dir, p) || self.object_desc(p).is_none() {
                         return Err(SdoAbortCode::VALUE_RANGE);
                     }
                 }
@@ -789,7 +791,10 @@ impl OdStore {
     }
 
     fn lookup(&self, index: u16, sub: u8) -> Result<&'static EntryDesc, SdoAbortCode> {
-        let obj = self.dict.object(index).ok_or(SdoAbortCode::NO_OBJECT)?;
+        let obj = self
+            .dict
+            .object_desc(index)
+            .ok_or(SdoAbortCode::NO_OBJECT)?;
         obj.entry(sub).ok_or(SdoAbortCode::NO_SUBINDEX)
     }
 }
@@ -810,7 +815,7 @@ impl DerefMut for OdStore {
 
 impl ObjectStore for OdStore {
     fn object(&self, index: u16) -> Option<ObjectInfo> {
-        let o = self.dict.object(index)?;
+        let o = self.dict.object_desc(index)?;
         let max_sub = o.entries.iter().map(|e| e.sub).max().unwrap_or(0);
         let data_type = match o.code {
             ObjectCode::Var => o.entry(0).map_or(0, |e| e.data_type.code()),
@@ -880,7 +885,10 @@ impl ObjectStore for OdStore {
         state: AlState,
         data: &[u8],
     ) -> Result<(), SdoAbortCode> {
-        let obj = self.dict.object(index).ok_or(SdoAbortCode::NO_OBJECT)?;
+        let obj = self
+            .dict
+            .object_desc(index)
+            .ok_or(SdoAbortCode::NO_OBJECT)?;
         let e = obj.entry(sub).ok_or(SdoAbortCode::NO_SUBINDEX)?;
         if !e.access.writable() {
             return Err(SdoAbortCode::READ_ONLY);
