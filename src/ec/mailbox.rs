@@ -841,6 +841,56 @@ fn expedited_word(data: &[u8]) -> Result<[u8; 4], Error> {
 }
 
 impl<'a> SdoRequest<'a> {
+    /// The request that starts downloading `data` through a mailbox (SM0) of `mailbox_size`
+    /// bytes, and how many bytes of `data` it carries: expedited for 1–4 bytes, otherwise normal
+    /// with as much as fits (`mailbox_size − 16`). Send the rest with
+    /// [`SdoRequest::download_segment`], starting with toggle 0.
+    pub fn initiate_download(
+        index: u16,
+        sub: u8,
+        complete_access: bool,
+        data: &'a [u8],
+        mailbox_size: usize,
+    ) -> (Self, usize) {
+        if (1..=4).contains(&data.len()) {
+            return (
+                Self::DownloadExpedited {
+                    index,
+                    sub,
+                    complete_access,
+                    data,
+                },
+                data.len(),
+            );
+        }
+        let n = data.len().min(normal_data_capacity(mailbox_size));
+        (
+            Self::DownloadNormal {
+                index,
+                sub,
+                complete_access,
+                complete_size: u32::try_from(data.len()).unwrap_or(u32::MAX),
+                data: data.get(..n).unwrap_or(&[]),
+            },
+            n,
+        )
+    }
+
+    /// The next download segment for the `rest` of the data through a mailbox of
+    /// `mailbox_size` bytes (at most `mailbox_size − 9` bytes per segment), and how many bytes
+    /// of `rest` it carries. It is the last segment when that is all of `rest`.
+    pub fn download_segment(rest: &'a [u8], toggle: bool, mailbox_size: usize) -> (Self, usize) {
+        let n = rest.len().min(segment_data_capacity(mailbox_size).max(1));
+        (
+            Self::DownloadSegment {
+                toggle,
+                last: n == rest.len(),
+                data: rest.get(..n).unwrap_or(&[]),
+            },
+            n,
+        )
+    }
+
     /// Parse the SDO bytes of a request (the CoE payload, exactly `length − 2` bytes).
     pub fn parse(sdo: &'a [u8]) -> Result<Self, Error> {
         let v = Sdo::new_checked(sdo)?;
@@ -1852,6 +1902,36 @@ mod tests {
             MailboxMessage::parse(&buf[..n]).unwrap().1,
             MailboxMessage::SdoResponse(resp)
         );
+    }
+
+    #[test]
+    fn download_helpers_split_as_soem_does() {
+        let data: Vec<u8> = (0..16).collect();
+        // SM0 of 20 bytes: 4 bytes in the initiate, then segments of 11.
+        let (init, n) = SdoRequest::initiate_download(0x2004, 0, false, &data, 20);
+        assert_eq!(n, 4);
+        let mut buf = [0u8; 20];
+        assert_eq!(init.emit_mailbox(1, &mut buf).unwrap(), 20);
+        assert_eq!(
+            buf[..12],
+            [14, 0, 0, 0, 0, 0x13, 0, 0x20, 0x21, 0x04, 0x20, 0]
+        );
+        assert_eq!(buf[12..16], [16, 0, 0, 0]);
+        let (seg, k) = SdoRequest::download_segment(&data[n..], false, 20);
+        assert_eq!(k, 11);
+        assert!(matches!(
+            seg,
+            SdoRequest::DownloadSegment { last: false, .. }
+        ));
+        let (seg, k) = SdoRequest::download_segment(&data[n + 11..], true, 20);
+        assert_eq!(k, 1);
+        assert_eq!(seg.emit_mailbox(3, &mut buf).unwrap(), 16);
+        // 0x00 | t<<4 | (7 − 1)<<1 | c
+        assert_eq!(buf[8], 0x1D);
+        // 1–4 bytes go expedited.
+        let (init, n) = SdoRequest::initiate_download(0x6040, 0, false, &data[..2], 20);
+        assert_eq!(n, 2);
+        assert!(matches!(init, SdoRequest::DownloadExpedited { .. }));
     }
 
     #[test]

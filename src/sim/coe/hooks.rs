@@ -174,6 +174,8 @@ impl OdHooks for Mirror {
             d.copy_from_slice(s);
         }
         // Same type by construction; a mismatch (bad profile data) leaves `to` unchanged.
-        let _ = dict.set_raw(to, buf.get(..n).unwrap_or(&[]));
+        if let Err(code) = dict.set_raw(to, buf.get(..n).unwrap_or(&[])) {
+            tracing::warn!(%from, %to, %code, "mirror hook: entries of different types");
+        }
     }
 }

@@ -27,7 +27,6 @@ mod store;
 pub use crate::ec::mailbox::Emergency;
 pub use od_store::{
     Dictionary, MappingError, NoHooks, OdError, OdHooks, OdStore, PdoDirectionLimits, PdoRules,
-    RECORD_DATA_TYPE,
 };
 pub use store::{ListType, ObjectInfo, ObjectStore};
 
@@ -39,6 +38,27 @@ use crate::ec::mailbox::{
 };
 use crate::od::{ConstValue, EntryDesc, SdoAbortCode};
 use std::collections::VecDeque;
+
+// ---------------------------------------------------------------------------------------------
+// Our choices where neither the standards nor the manuals give a value (\[REC\]), in one place.
+
+/// \[REC\] Data type index reported in SDO information for RECORD objects, which have no
+/// structure type in our descriptor tables. ETG.1000.6 wants the index of the record's structure
+/// definition; 0 says "none defined" (SOEM and ethercrab only print it).
+pub const RECORD_DATA_TYPE: u16 = 0x0000;
+
+/// \[REC\] Largest string a string entry declared without a size (`bit_len` 0) accepts, unless
+/// its default is longer.
+pub const MAX_UNSIZED_STRING: usize = 255;
+
+/// \[REC\] Default [`CoeConfig::max_object_size`]: larger than any object of the emulated
+/// drives (the MR-J4-TM manual states 1486 bytes of SDO data at most).
+pub const DEFAULT_MAX_OBJECT_SIZE: usize = 4096;
+
+/// \[REC\] Default [`CoeConfig::emergency_queue_len`].
+pub const DEFAULT_EMERGENCY_QUEUE_LEN: usize = 16;
+
+// ---------------------------------------------------------------------------------------------
 
 /// What the emulated device supports, and the server's bounds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -57,15 +77,14 @@ pub struct CoeConfig {
 }
 
 impl Default for CoeConfig {
-    /// Complete access and SDO information on, 16 queued emergencies, 4096-byte objects
-    /// (**[REC]**: larger than any object of the emulated drives; MR-J4-TM states 1486 bytes of
-    /// SDO data at most).
+    /// Complete access and SDO information on, [`DEFAULT_EMERGENCY_QUEUE_LEN`] queued
+    /// emergencies, objects up to [`DEFAULT_MAX_OBJECT_SIZE`] bytes.
     fn default() -> Self {
         Self {
             complete_access: true,
             sdo_info: true,
-            emergency_queue_len: 16,
-            max_object_size: 4096,
+            emergency_queue_len: DEFAULT_EMERGENCY_QUEUE_LEN,
+            max_object_size: DEFAULT_MAX_OBJECT_SIZE,
         }
     }
 }

@@ -10,13 +10,7 @@ use crate::od::{
 use crate::pdo::{Direction, Mapping, Pdo, PdoEntry};
 use core::ops::{Deref, DerefMut};
 
-/// Data type index reported for RECORD objects in SDO information, which have no structure
-/// type in our descriptor tables. **[REC]**: ETG.1000.6 wants the index of the record's
-/// structure definition; 0 says "none defined" (SOEM and ethercrab only print it).
-pub const RECORD_DATA_TYPE: u16 = 0x0000;
-
-/// Largest string an entry with `bit_len` 0 accepts beyond its default length. **[REC]**.
-const MAX_UNSIZED_STRING: usize = 255;
+use super::{MAX_UNSIZED_STRING, RECORD_DATA_TYPE};
 
 /// Why a descriptor table cannot be served.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -510,8 +504,8 @@ impl Dictionary {
         Ok(())
     }
 
-    /// Check the sizes of direction `dir` if PDO `pdo` had `n` entries (or, for `pdo` = 0,
-    /// the assignment `assign` of `n` PDOs).
+    /// Whether the PDOs `assigned` to direction `dir` stay within the limits, with PDO
+    /// `changed.0` counted with `changed.1` entries instead of its current sub-0 value.
     fn check_limits(&self, dir: Direction, assigned: &[u16], changed: Option<(u16, u8)>) -> bool {
         let lim = self.rules.limits(dir);
         let (mut bits, mut entries) = (0u64, 0u64);
