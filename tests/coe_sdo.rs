@@ -696,3 +696,34 @@ fn write_then_read_back_across_states() {
         Some(hex("0A 00 00 00 00 33  00 30  43 03 20 00  07 00 00 00"))
     );
 }
+
+#[test]
+fn segmented_downloads_that_cannot_succeed_are_refused_at_the_start() {
+    let config = CoeConfig {
+        max_object_size: 32,
+        ..CoeConfig::default()
+    };
+    let mut rig = Rig::with(config, 20, 20);
+    // Unknown object: 0x06020000 before any segment.
+    assert_eq!(
+        rig.send(&hex(
+            "0E 00 00 00 00 13  00 20  21 55 55 00  10 00 00 00  30 31 32 33"
+        )),
+        Some(abort_reply(1, 0x5555, 0, 0x0602_0000))
+    );
+    // Unknown sub-index: 0x06090011.
+    assert_eq!(
+        rig.send(&hex(
+            "0E 00 00 00 00 23  00 20  21 18 10 09  10 00 00 00  30 31 32 33"
+        )),
+        Some(abort_reply(2, 0x1018, 9, 0x0609_0011))
+    );
+    // More than the server transfers: 0x06070012.
+    assert_eq!(
+        rig.send(&hex(
+            "0E 00 00 00 00 33  00 20  21 04 20 00  00 01 00 00  30 31 32 33"
+        )),
+        Some(abort_reply(3, 0x2004, 0, 0x0607_0012))
+    );
+    assert!(!rig.server.transfer_in_progress());
+}
