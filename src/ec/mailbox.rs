@@ -1661,6 +1661,23 @@ pub enum MailboxErrorDetail {
     InvalidSize = 8,
 }
 
+impl fmt::Display for MailboxErrorReply {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let text = match MailboxErrorDetail::from_code(self.detail) {
+            Some(MailboxErrorDetail::Syntax) => "syntax of the mailbox header",
+            Some(MailboxErrorDetail::UnsupportedProtocol) => "mailbox protocol not supported",
+            Some(MailboxErrorDetail::InvalidChannel) => "invalid channel",
+            Some(MailboxErrorDetail::ServiceNotSupported) => "service not supported",
+            Some(MailboxErrorDetail::InvalidHeader) => "invalid protocol header",
+            Some(MailboxErrorDetail::SizeTooShort) => "mailbox data too short",
+            Some(MailboxErrorDetail::NoMemory) => "no memory",
+            Some(MailboxErrorDetail::InvalidSize) => "inconsistent data length",
+            None => "unknown detail",
+        };
+        write!(f, "detail {} ({text})", self.detail)
+    }
+}
+
 impl MailboxErrorDetail {
     /// Decode a detail code.
     pub const fn from_code(code: u16) -> Option<Self> {
