@@ -142,7 +142,11 @@ fn bdhde_default_images_are_23_bytes_with_unaligned_fields() {
 #[test]
 fn bdhde_default_entry_values_are_the_manual_decimals() {
     // Chapter 7 prints the default mapping entries in decimal.
-    let rx: Vec<u32> = bdhde::RX_PDO_1600.entries.iter().map(|e| e.to_u32()).collect();
+    let rx: Vec<u32> = bdhde::RX_PDO_1600
+        .entries
+        .iter()
+        .map(|e| e.to_u32())
+        .collect();
     assert_eq!(
         rx,
         vec![
@@ -150,7 +154,11 @@ fn bdhde_default_entry_values_are_the_manual_decimals() {
             1619197984
         ]
     );
-    let tx: Vec<u32> = bdhde::TX_PDO_1A00.entries.iter().map(|e| e.to_u32()).collect();
+    let tx: Vec<u32> = bdhde::TX_PDO_1A00
+        .entries
+        .iter()
+        .map(|e| e.to_u32())
+        .collect();
     assert_eq!(
         tx,
         vec![
@@ -247,9 +255,15 @@ fn multi_pdo_layout_is_bit_packed_in_assignment_order() {
     assert_eq!(layout.bytes(Direction::Rx), 5);
     assert_eq!(layout.bytes(Direction::Tx), 1);
     // First occurrence wins; padding is never found.
-    let first = layout.find(Direction::Rx, ObjectAddress::new(0x7000, 1)).unwrap();
+    let first = layout
+        .find(Direction::Rx, ObjectAddress::new(0x7000, 1))
+        .unwrap();
     assert_eq!((first.pdo, first.bit_position), (0x1601, 0));
-    assert!(layout.find(Direction::Rx, ObjectAddress::new(0, 0)).is_none());
+    assert!(
+        layout
+            .find(Direction::Rx, ObjectAddress::new(0, 0))
+            .is_none()
+    );
     let second = layout.rx().find(ObjectAddress::new(0x7000, 2)).unwrap();
     assert_eq!((second.byte_offset(), second.bit_offset()), (0, 4));
     assert_eq!(layout.rx().pdo_bits(0x1600), Some(16..33));

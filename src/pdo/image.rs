@@ -133,6 +133,20 @@ impl Field {
             .end()
             .and_then(|end| image.get(self.byte_offset..end))
             .ok_or_else(|| self.out_of_bounds(image.len()))?;
+        // Fast paths: byte-aligned whole-byte fields, the common case.
+        if self.bit_offset == 0 {
+            match *bytes {
+                [a] if self.bits == 8 => return Ok(u64::from(a)),
+                [a, b] if self.bits == 16 => return Ok(u64::from(u16::from_le_bytes([a, b]))),
+                [a, b, c, d] if self.bits == 32 => {
+                    return Ok(u64::from(u32::from_le_bytes([a, b, c, d])));
+                }
+                [a, b, c, d, e, f, g, h] if self.bits == 64 => {
+                    return Ok(u64::from_le_bytes([a, b, c, d, e, f, g, h]));
+                }
+                _ => {}
+            }
+        }
         let mut le = [0u8; 16];
         if let Some(dst) = le.get_mut(..span) {
             dst.copy_from_slice(bytes);
@@ -152,6 +166,28 @@ impl Field {
             None => None,
         }
         .ok_or_else(|| self.out_of_bounds(len))?;
+        // Fast paths: byte-aligned whole-byte fields, the common case.
+        if self.bit_offset == 0 {
+            match (self.bits, &mut *bytes) {
+                (8, [a]) => {
+                    *a = raw as u8;
+                    return Ok(());
+                }
+                (16, dst @ [_, _]) => {
+                    dst.copy_from_slice(&(raw as u16).to_le_bytes());
+                    return Ok(());
+                }
+                (32, dst @ [_, _, _, _]) => {
+                    dst.copy_from_slice(&(raw as u32).to_le_bytes());
+                    return Ok(());
+                }
+                (64, dst @ [_, _, _, _, _, _, _, _]) => {
+                    dst.copy_from_slice(&raw.to_le_bytes());
+                    return Ok(());
+                }
+                _ => {}
+            }
+        }
         let mut le = [0u8; 16];
         if let Some(src) = le.get_mut(..span) {
             src.copy_from_slice(bytes);

@@ -364,7 +364,7 @@ pub enum MappingError {
     /// A mapping index of the other direction (or of neither) in an assignment.
     #[error(
         "0x{index:04X} is not {} ({dir}s are 0x{:04X}–0x{:04X}); it cannot be assigned to SM{} (0x{:04X})",
-        a_dir(*dir), dir.mapping_range().0, dir.mapping_range().1, dir.sync_manager(), dir.assign_index()
+        dir.with_article(), dir.mapping_range().0, dir.mapping_range().1, dir.sync_manager(), dir.assign_index()
     )]
     WrongDirection {
         /// The SyncManager's direction.
@@ -373,7 +373,10 @@ pub enum MappingError {
         index: u16,
     },
     /// A PDO the drive does not have.
-    #[error("{dir} 0x{index:04X} does not exist on the {drive} (its {dir}s are {})", list(available))]
+    #[error(
+        "{dir} 0x{index:04X} does not exist on the {drive} (its {dir}s are {})",
+        list(available)
+    )]
     UnknownPdo {
         /// Drive name.
         drive: &'static str,
@@ -471,7 +474,9 @@ pub enum MappingError {
         addr: ObjectAddress,
     },
     /// An object mapped with a length other than its own.
-    #[error("{addr} is {object_bits} bits, mapped with {mapped} (entry {sub} of {dir} 0x{pdo:04X})")]
+    #[error(
+        "{addr} is {object_bits} bits, mapped with {mapped} (entry {sub} of {dir} 0x{pdo:04X})"
+    )]
     BitLengthMismatch {
         /// Direction.
         dir: Direction,
@@ -487,7 +492,7 @@ pub enum MappingError {
         mapped: u8,
     },
     /// A mode of operation needs an object the mapping lacks.
-    #[error("{mode_name} (mode {mode}) on the {drive} needs {addr} in {}; the mapping does not have it", a_dir(*dir))]
+    #[error("{mode_name} (mode {mode}) on the {drive} needs {addr} in {}; the mapping does not have it", dir.with_article())]
     MissingObject {
         /// Drive name.
         drive: &'static str,
@@ -500,14 +505,6 @@ pub enum MappingError {
         /// The object.
         addr: ObjectAddress,
     },
-}
-
-/// "an RxPDO" / "a TxPDO".
-fn a_dir(dir: Direction) -> &'static str {
-    match dir {
-        Direction::Rx => "an RxPDO",
-        Direction::Tx => "a TxPDO",
-    }
 }
 
 fn list(ranges: &[PdoRange]) -> String {

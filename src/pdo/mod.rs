@@ -119,6 +119,14 @@ impl Direction {
         }
     }
 
+    /// `"an RxPDO"` or `"a TxPDO"`, for messages.
+    pub const fn with_article(self) -> &'static str {
+        match self {
+            Self::Rx => "an RxPDO",
+            Self::Tx => "a TxPDO",
+        }
+    }
+
     /// Both directions, Rx first (the order of the remap sequence and of the images).
     pub const ALL: [Direction; 2] = [Self::Rx, Self::Tx];
 
@@ -246,7 +254,10 @@ impl Mapping {
 
     /// The assigned PDO with mapping index `index`, in either direction.
     pub fn pdo(&self, index: u16) -> Option<&Pdo> {
-        self.rx.iter().chain(self.tx.iter()).find(|p| p.index == index)
+        self.rx
+            .iter()
+            .chain(self.tx.iter())
+            .find(|p| p.index == index)
     }
 
     /// Whether `addr` is mapped in `dir`.

@@ -186,7 +186,10 @@ pub fn remap_sequence(
             out.push(SdoWrite::count(
                 ObjectAddress::new(dir.assign_index(), 0),
                 count,
-                format!("SM{sm} has {count} PDO{}", if count == 1 { "" } else { "s" }),
+                format!(
+                    "SM{sm} has {count} PDO{}",
+                    if count == 1 { "" } else { "s" }
+                ),
             ));
         }
     }
@@ -236,9 +239,10 @@ fn describe(e: PdoEntry, names: Option<&Dictionary<'_>>) -> String {
             format!("{}: {}", o.name, en.name)
         }
     });
+    let unit = if e.bits == 1 { "bit" } else { "bits" };
     match name {
-        Some(n) => format!("map {} {n}, {} bits", e.address(), e.bits),
-        None => format!("map {}, {} bits", e.address(), e.bits),
+        Some(n) => format!("map {} {n}, {} {unit}", e.address(), e.bits),
+        None => format!("map {}, {} {unit}", e.address(), e.bits),
     }
 }
 
@@ -289,7 +293,8 @@ impl<E: fmt::Display> fmt::Display for ReadbackError<E> {
                 let (lo, hi) = dir.mapping_range();
                 write!(
                     f,
-                    "{address} assigns 0x{index:04X}, which is not a {dir} index (0x{lo:04X}–0x{hi:04X})"
+                    "{address} assigns 0x{index:04X}, which is not {} index (0x{lo:04X}–0x{hi:04X})",
+                    dir.with_article()
                 )
             }
         }
