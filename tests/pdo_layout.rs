@@ -312,3 +312,33 @@ fn resolving_fields_checks_direction_type_and_length() {
     let raw = layout.raw_field(Direction::Tx, addr(0x6077), true).unwrap();
     assert_eq!((raw.byte_offset(), raw.bits()), (21, 16));
 }
+
+#[test]
+fn resolving_with_a_dictionary_takes_the_type_from_it() {
+    use ecdrive::od::{Dictionary, EntryAccess, EntryDesc, ObjectCode, ObjectDesc};
+    const OBJECTS: &[ObjectDesc] = &[ObjectDesc {
+        index: 0x6077,
+        name: "Torque actual value",
+        code: ObjectCode::Var,
+        entries: &[EntryDesc::new(
+            0,
+            "Torque actual value",
+            DataType::Integer16,
+            EntryAccess::RO.union(EntryAccess::TXPDO),
+        )],
+    }];
+    let dict = Dictionary::new(OBJECTS);
+    let layout = Layout::new(&mr_j4_tm::DEFAULT_MAPPING);
+    let torque = layout.resolve(Direction::Tx, addr(0x6077), &dict).unwrap();
+    assert!(torque.is_signed());
+    let mut img = vec![0u8; layout.bytes(Direction::Tx)];
+    torque.write(&mut img, -25i16).unwrap();
+    assert_eq!(&img[21..23], &(-25i16).to_le_bytes());
+    let err = layout
+        .resolve(Direction::Tx, addr(0x6041), &dict)
+        .unwrap_err();
+    assert_eq!(
+        err.to_string(),
+        "0x6041:00 is not in the drive's dictionary, so its type is unknown"
+    );
+}

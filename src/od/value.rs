@@ -104,7 +104,8 @@ pub(crate) fn int_range(dt: DataType) -> Option<(i128, i128)> {
     let bits = dt.bit_len()? as u32;
     if dt.is_signed() {
         Some((-(1i128 << (bits - 1)), (1i128 << (bits - 1)) - 1))
-    } else if dt.is_unsigned() {
+    } else if dt.is_unsigned() || matches!(dt, DataType::TimeOfDay | DataType::TimeDifference) {
+        // TIME_OF_DAY / TIME_DIFFERENCE are handled as their raw 48-bit little-endian value.
         Some((0, (1i128 << bits) - 1))
     } else {
         None
@@ -428,6 +429,10 @@ mod tests {
         assert_eq!(b.len(), 5);
         assert_eq!(Value::decode(DataType::Integer40, &b).unwrap(), v);
         assert!(Value::Uint(1 << 48).encode(DataType::Unsigned48).is_err());
+        // What decode produces for a TIME_OF_DAY, encode accepts back.
+        let raw = [1, 2, 3, 4, 5, 6];
+        let t = Value::decode(DataType::TimeOfDay, &raw).unwrap();
+        assert_eq!(t.encode(DataType::TimeOfDay).unwrap(), raw);
     }
 
     #[test]

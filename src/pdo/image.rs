@@ -297,6 +297,83 @@ impl fmt::Display for Field {
     }
 }
 
+/// A typed view over one process image (smoltcp style): a buffer checked once against the
+/// layout's size, then read and written by [`Field`] handle.
+///
+/// ```
+/// use ecdrive::pdo::{Field, ImageView};
+/// let statusword = Field::unsigned(8, 16).unwrap();
+/// let mut view = ImageView::new_checked([0u8; 4], 3).unwrap();
+/// view.write(statusword, 0x0237u16).unwrap();
+/// assert_eq!(view.read::<u16>(statusword).unwrap(), 0x0237);
+/// assert_eq!(view.as_bytes(), &[0x00, 0x37, 0x02, 0x00]);
+/// ```
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ImageView<T: AsRef<[u8]>> {
+    buffer: T,
+}
+
+impl<T: AsRef<[u8]>> ImageView<T> {
+    /// Wrap `buffer` without a length check (every access is still bounds-checked).
+    pub const fn new_unchecked(buffer: T) -> Self {
+        Self { buffer }
+    }
+
+    /// Wrap `buffer`, checking it holds at least `len` bytes (the image size of a
+    /// [`Layout`](super::Layout) direction).
+    pub fn new_checked(buffer: T, len: usize) -> Result<Self, ImageError> {
+        let have = buffer.as_ref().len();
+        if have < len {
+            return Err(ImageError::TooShort {
+                len: have,
+                needed: len,
+            });
+        }
+        Ok(Self { buffer })
+    }
+
+    /// The buffer.
+    pub fn into_inner(self) -> T {
+        self.buffer
+    }
+
+    /// The image bytes.
+    pub fn as_bytes(&self) -> &[u8] {
+        self.buffer.as_ref()
+    }
+
+    /// Read `field` as `V`.
+    #[inline]
+    pub fn read<V: FieldValue>(&self, field: Field) -> Result<V, ImageError> {
+        field.read(self.buffer.as_ref())
+    }
+
+    /// Read `field`'s raw bits.
+    #[inline]
+    pub fn read_raw(&self, field: Field) -> Result<u64, ImageError> {
+        field.read_raw(self.buffer.as_ref())
+    }
+}
+
+impl<T: AsRef<[u8]> + AsMut<[u8]>> ImageView<T> {
+    /// Write `value` to `field`, range-checked.
+    #[inline]
+    pub fn write<V: FieldValue>(&mut self, field: Field, value: V) -> Result<(), ImageError> {
+        field.write(self.buffer.as_mut(), value)
+    }
+
+    /// Write the low bits of `raw` to `field`.
+    #[inline]
+    pub fn write_raw(&mut self, field: Field, raw: u64) -> Result<(), ImageError> {
+        field.write_raw(self.buffer.as_mut(), raw)
+    }
+
+    /// The image bytes, mutably.
+    pub fn as_bytes_mut(&mut self) -> &mut [u8] {
+        self.buffer.as_mut()
+    }
+}
+
 /// A Rust type a [`Field`] can be read into and written from: the primitive integers and `bool`.
 pub trait FieldValue: Copy + sealed::Sealed {
     /// Type name for error messages.
@@ -371,6 +448,14 @@ pub enum ImageError {
         needed: usize,
         /// Actual image length.
         len: usize,
+    },
+    /// A buffer shorter than the image it should hold.
+    #[error("the process image needs {needed} bytes; the buffer has {len}")]
+    TooShort {
+        /// Buffer length.
+        len: usize,
+        /// Image size.
+        needed: usize,
     },
     /// A value written does not fit the field.
     #[error("{value} does not fit a {bits}-bit {} field", if *signed { "signed" } else { "unsigned" })]
@@ -489,6 +574,20 @@ mod tests {
         );
         assert!(u8f.read::<bool>(&img).is_err());
         assert!(u8f.read_f32(&img).is_err());
+    }
+
+    #[test]
+    fn views_check_their_length_once() {
+        assert_eq!(
+            ImageView::new_checked(&[0u8; 2][..], 3),
+            Err(ImageError::TooShort { len: 2, needed: 3 })
+        );
+        let f = Field::signed(4, 12).unwrap();
+        let mut v = ImageView::new_checked(vec![0u8; 2], 2).unwrap();
+        v.write(f, -2048i16).unwrap();
+        assert_eq!(v.read::<i16>(f).unwrap(), -2048);
+        assert_eq!(v.read_raw(f).unwrap(), 0x800);
+        assert_eq!(v.into_inner(), vec![0x00, 0x80]);
     }
 
     #[test]

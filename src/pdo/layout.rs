@@ -10,7 +10,7 @@
 
 use super::image::{Field, ImageError};
 use super::{Direction, Mapping, PdoEntry};
-use crate::od::{DataType, ObjectAddress};
+use crate::od::{DataType, Dictionary, ObjectAddress};
 use core::ops::Range;
 
 /// One entry of a process image, with its position.
@@ -228,6 +228,19 @@ impl Layout {
         e.field(data_type.is_signed()).map_err(|_| unsupported)
     }
 
+    /// [`Layout::field`] with the type taken from the drive's dictionary.
+    pub fn resolve(
+        &self,
+        dir: Direction,
+        addr: ObjectAddress,
+        dictionary: &Dictionary<'_>,
+    ) -> Result<Field, FieldError> {
+        let data_type = dictionary
+            .data_type(addr)
+            .ok_or(FieldError::NotInDictionary { addr })?;
+        self.field(dir, addr, data_type)
+    }
+
     /// Resolve `addr` to a field of whatever length it is mapped with, for raw access.
     pub fn raw_field(
         &self,
@@ -255,6 +268,12 @@ pub enum FieldError {
     NotMapped {
         /// Direction searched.
         dir: Direction,
+        /// The object.
+        addr: ObjectAddress,
+    },
+    /// The object is not in the dictionary used to resolve it.
+    #[error("{addr} is not in the drive's dictionary, so its type is unknown")]
+    NotInDictionary {
         /// The object.
         addr: ObjectAddress,
     },

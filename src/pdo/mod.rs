@@ -20,7 +20,7 @@ pub mod layout;
 pub mod limits;
 pub mod remap;
 
-pub use image::{Field, FieldValue, ImageError};
+pub use image::{Field, FieldValue, ImageError, ImageView};
 pub use layout::{FieldError, ImageLayout, Layout, MappedEntry};
 pub use limits::{
     DirectionLimits, MappingError, PdoLimits, PdoRange, RequiredObjects, validate, validate_all,
@@ -183,7 +183,9 @@ impl Pdo {
 
     /// Total size in bits.
     pub fn bits(&self) -> u32 {
-        self.entries.iter().map(|e| e.bits as u32).sum()
+        self.entries
+            .iter()
+            .fold(0u32, |acc, e| acc.saturating_add(u32::from(e.bits)))
     }
 
     /// Number of entries (padding included), i.e. the value of the mapping object's sub-index 0.
@@ -239,7 +241,9 @@ impl Mapping {
 
     /// Total size in bits of one direction.
     pub fn bits(&self, dir: Direction) -> u32 {
-        self.pdos(dir).iter().map(Pdo::bits).sum()
+        self.pdos(dir)
+            .iter()
+            .fold(0u32, |acc, p| acc.saturating_add(p.bits()))
     }
 
     /// Size in bytes of one direction's SyncManager (bits rounded up).
@@ -281,6 +285,17 @@ mod tests {
             PdoEntry::from_u32(0x607A_0020),
             PdoEntry::new(0x607A, 0, 32)
         );
+    }
+
+    #[test]
+    fn directions_of_mapping_indices() {
+        assert_eq!(Direction::of_pdo_index(0x1600), Some(Direction::Rx));
+        assert_eq!(Direction::of_pdo_index(0x17FF), Some(Direction::Rx));
+        assert_eq!(Direction::of_pdo_index(0x1800), None);
+        assert_eq!(Direction::of_pdo_index(0x1A00), Some(Direction::Tx));
+        assert_eq!(Direction::of_pdo_index(0x1BFF), Some(Direction::Tx));
+        assert_eq!(Direction::of_pdo_index(0x1C12), None);
+        assert_eq!(Direction::Tx.to_string(), "TxPDO");
     }
 
     #[test]
