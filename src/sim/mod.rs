@@ -7,10 +7,12 @@
 //! - [`segment::Segment`]: a line of slaves processing frames in place;
 //! - [`transport`]: serving a segment on a raw socket, to ethercrab's `PduTx`/`PduRx`
 //!   in-process, or as a synchronous [`link::FrameLink`](crate::link::FrameLink);
+//! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
 //! - [`devices`]: ready-made test devices;
 //! - [`clock`]: host and manual time sources.
 
 pub mod clock;
+pub mod coe;
 pub mod device;
 pub mod devices;
 pub mod esc;
