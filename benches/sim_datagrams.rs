@@ -35,8 +35,10 @@ fn segment_in_op(n: u16) -> (Segment, ManualClock, Vec<u8>, usize) {
     let inputs = u32::from(n) * u32::from(IN);
     for i in 0..n {
         let st = 0x1000 + i;
-        p.fpwr(st, 0x0800, &[0x00, 0x10, OUT as u8, 0, 0x64, 0, 1, 0]).expect("SM0");
-        p.fpwr(st, 0x0808, &[0x00, 0x18, IN as u8, 0, 0x20, 0, 1, 0]).expect("SM1");
+        p.fpwr(st, 0x0800, &[0x00, 0x10, OUT as u8, 0, 0x64, 0, 1, 0])
+            .expect("SM0");
+        p.fpwr(st, 0x0808, &[0x00, 0x18, IN as u8, 0, 0x20, 0, 1, 0])
+            .expect("SM1");
         let fmmu = |log: u32, len: u16, phys: u16, ty: u8| {
             let mut f = [0u8; 16];
             f[0..4].copy_from_slice(&log.to_le_bytes());
@@ -48,9 +50,14 @@ fn segment_in_op(n: u16) -> (Segment, ManualClock, Vec<u8>, usize) {
             f
         };
         let out_log = inputs + u32::from(i) * u32::from(OUT);
-        p.fpwr(st, 0x0600, &fmmu(out_log, OUT, 0x1000, 2)).expect("FMMU0");
-        p.fpwr(st, 0x0610, &fmmu(u32::from(i) * u32::from(IN), IN, 0x1800, 1))
-            .expect("FMMU1");
+        p.fpwr(st, 0x0600, &fmmu(out_log, OUT, 0x1000, 2))
+            .expect("FMMU0");
+        p.fpwr(
+            st,
+            0x0610,
+            &fmmu(u32::from(i) * u32::from(IN), IN, 0x1800, 1),
+        )
+        .expect("FMMU1");
         p.fpwr(st, 0x0120, &[0x02, 0]).expect("PREOP");
         let now = p.fprd(st, 0x0910, 8).expect("time").data;
         let start = u64::from_le_bytes(now[..8].try_into().unwrap_or([0; 8])) + CYCLE;
@@ -70,8 +77,13 @@ fn segment_in_op(n: u16) -> (Segment, ManualClock, Vec<u8>, usize) {
         .expect("FRMW");
     b.push(Command::Lrw, 1, 0, &image).expect("LRW");
     for i in 0..n {
-        b.push(Command::Fprd, 2, physical_address(0x1000 + i, 0x0130), &[0; 2])
-            .expect("FPRD");
+        b.push(
+            Command::Fprd,
+            2,
+            physical_address(0x1000 + i, 0x0130),
+            &[0; 2],
+        )
+        .expect("FPRD");
     }
     let len = b.finish();
     let datagrams = 2 + usize::from(n);

@@ -286,11 +286,17 @@ async fn coe_scenario(md: &MainDevice<'static>) -> Outcome {
         sd.sdo_write_array(0x1601, [0x6040_0010u32, 0x60FF_0020, 0x6060_0008])
             .await
             .expect("map 0x1601");
-        sd.sdo_write_array(0x1C12, [0x1601u16]).await.expect("assign Rx");
-        sd.sdo_write_array(0x1C13, [0x1A01u16]).await.expect("assign Tx");
+        sd.sdo_write_array(0x1C12, [0x1601u16])
+            .await
+            .expect("assign Rx");
+        sd.sdo_write_array(0x1C13, [0x1A01u16])
+            .await
+            .expect("assign Tx");
         sd.sdo_write(0x6060, 0, 9i8).await.expect("csv");
         sd.sdo_write(0x1C32, 1, 2u16).await.expect("DC SYNC0 mode");
-        sd.sdo_write(0x1C32, 2, 1_000_000u32).await.expect("cycle time");
+        sd.sdo_write(0x1C32, 2, 1_000_000u32)
+            .await
+            .expect("cycle time");
         // A PDO object cannot be remapped while assigned: sub 0 must be 0 first.
         let e = sd.sdo_write(0x1601, 1, 0x6040_0010u32).await.unwrap_err();
         assert!(format!("{e:?}").contains("Abort"), "{e:?}");
@@ -392,7 +398,11 @@ async fn coe_scenario(md: &MainDevice<'static>) -> Outcome {
 fn check_coe_segment(seg: &Segment, outcome: &Outcome) {
     for (i, ee) in outcome.eeprom.iter().enumerate() {
         let slave = seg.slave(i).unwrap();
-        assert_eq!(&slave.esc.sii().bytes()[..ee.len()], &ee[..], "EEPROM of device {i}");
+        assert_eq!(
+            &slave.esc.sii().bytes()[..ee.len()],
+            &ee[..],
+            "EEPROM of device {i}"
+        );
         let dev = seg.device::<GenericCoeDevice>(i).unwrap();
         assert!(dev.seen.sync0_events > 0, "device {i} saw SYNC0");
         assert_eq!(dev.seen.sync0_cycle_ns, 1_000_000);

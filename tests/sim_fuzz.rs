@@ -30,7 +30,9 @@ fn fresh_probe() -> (Probe, ManualClock) {
     p.fpwr(
         0x1001,
         0x0800,
-        &[0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0],
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
     )
     .unwrap();
     p.fpwr(0x1001, 0x0120, &[0x02, 0]).unwrap();
@@ -56,7 +58,10 @@ fn still_sane(p: &mut Probe) {
         // Re-assign the address (random writes may have changed it) and read it back.
         p.apwr(pos, 0x0010, &(0x3000 + pos).to_le_bytes()).unwrap();
         let r = p.fprd(0x3000 + pos, 0x0010, 2).unwrap();
-        assert_eq!((r.wkc, r.data.clone()), (1, (0x3000 + pos).to_le_bytes().to_vec()));
+        assert_eq!(
+            (r.wkc, r.data.clone()),
+            (1, (0x3000 + pos).to_le_bytes().to_vec())
+        );
     }
 }
 

@@ -8,7 +8,10 @@
 //! synchronisation checks a drive makes at SAFE-OP→OP.
 
 use crate::ec::{AlState, AlStatusCode};
-use crate::od::{ConstValue, DataType, EntryAccess, EntryDesc, ObjectAddress, ObjectCode, ObjectDesc, SdoAbortCode};
+use crate::od::{
+    ConstValue, DataType, EntryAccess, EntryDesc, ObjectAddress, ObjectCode, ObjectDesc,
+    SdoAbortCode,
+};
 use crate::pdo::{Direction, Mapping};
 use crate::sim::coe::hooks::{AllowedValues, Chain, Mirror};
 use crate::sim::coe::{CoeConfig, CoeServer, Emergency, OdError, OdStore};
@@ -77,7 +80,16 @@ static RXPDO2: [EntryDesc; 9] =
     map_entries([0x6040_0010, 0x60FF_0020, 0x6060_0008, 0, 0, 0, 0, 0], 3);
 static TXPDO1: [EntryDesc; 9] = map_entries([0x6041_0010, 0x6064_0020, 0, 0, 0, 0, 0, 0], 2);
 static TXPDO2: [EntryDesc; 9] = map_entries(
-    [0x6041_0010, 0x6064_0020, 0x606C_0020, 0x6061_0008, 0, 0, 0, 0],
+    [
+        0x6041_0010,
+        0x6064_0020,
+        0x606C_0020,
+        0x6061_0008,
+        0,
+        0,
+        0,
+        0,
+    ],
     4,
 );
 
@@ -121,19 +133,28 @@ pub static OBJECTS: &[ObjectDesc] = &[
         index: 0x1009,
         name: "Manufacturer hardware version",
         code: ObjectCode::Var,
-        entries: &[
-            EntryDesc::new(0, "Manufacturer hardware version", DataType::VisibleString, RO)
-                .default(ConstValue::Str("emulated")),
-        ],
+        entries: &[EntryDesc::new(
+            0,
+            "Manufacturer hardware version",
+            DataType::VisibleString,
+            RO,
+        )
+        .default(ConstValue::Str("emulated"))],
     },
     ObjectDesc {
         index: 0x100A,
         name: "Manufacturer software version",
         code: ObjectCode::Var,
-        entries: &[
-            EntryDesc::new(0, "Manufacturer software version", DataType::VisibleString, RO)
-                .default(ConstValue::Str(concat!("ecdrive ", env!("CARGO_PKG_VERSION")))),
-        ],
+        entries: &[EntryDesc::new(
+            0,
+            "Manufacturer software version",
+            DataType::VisibleString,
+            RO,
+        )
+        .default(ConstValue::Str(concat!(
+            "ecdrive ",
+            env!("CARGO_PKG_VERSION")
+        )))],
     },
     ObjectDesc {
         index: 0x1018,
@@ -430,15 +451,18 @@ impl GenericCoeDevice {
     }
 
     fn i32(&self, a: ObjectAddress) -> i32 {
-        self.od.dict().int(a).and_then(|v| i32::try_from(v).ok()).unwrap_or(0)
+        self.od
+            .dict()
+            .int(a)
+            .and_then(|v| i32::try_from(v).ok())
+            .unwrap_or(0)
     }
 
     fn application(&mut self, event: &SyncEvent) {
         let cw = self.od.dict().uint(CONTROLWORD).unwrap_or(0) as u16;
         let mut power = if event.outputs_enabled {
             self.power.next(cw, self.prev_cw)
-        } else if self.power == PowerState::OperationEnabled
-            || self.power == PowerState::SwitchedOn
+        } else if self.power == PowerState::OperationEnabled || self.power == PowerState::SwitchedOn
         {
             // Outputs invalid (SAFE-OP): a drive drops its power stage.
             PowerState::SwitchOnDisabled
@@ -447,7 +471,10 @@ impl GenericCoeDevice {
         };
         if event.outputs_enabled && event.kind == SyncKind::Sync0 && !event.outputs_fresh() {
             let missed = self.od.dict().uint(MISSED).unwrap_or(0);
-            let _ = self.od.dict_mut().set_uint(MISSED, (missed + 1).min(0xFFFF));
+            let _ = self
+                .od
+                .dict_mut()
+                .set_uint(MISSED, (missed + 1).min(0xFFFF));
         }
         self.prev_cw = cw;
         let mode = self.i32(MODE);
@@ -496,7 +523,10 @@ impl GenericCoeDevice {
 fn copy_bits(src: &[u8], from: usize, dst: &mut [u8], to: usize, bits: usize) {
     if from % 8 == 0 && to % 8 == 0 && bits % 8 == 0 {
         let n = bits / 8;
-        if let (Some(s), Some(d)) = (src.get(from / 8..from / 8 + n), dst.get_mut(to / 8..to / 8 + n)) {
+        if let (Some(s), Some(d)) = (
+            src.get(from / 8..from / 8 + n),
+            dst.get_mut(to / 8..to / 8 + n),
+        ) {
             d.copy_from_slice(s);
         }
         return;
@@ -649,7 +679,12 @@ impl Device for GenericCoeDevice {
         }
     }
 
-    fn mailbox_request(&mut self, state: AlState, request: &[u8], reply: &mut [u8]) -> Option<usize> {
+    fn mailbox_request(
+        &mut self,
+        state: AlState,
+        request: &[u8],
+        reply: &mut [u8],
+    ) -> Option<usize> {
         self.coe.handle(request, state, &mut self.od, reply)
     }
 
