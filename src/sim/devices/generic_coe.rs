@@ -251,7 +251,21 @@ pub static OBJECTS: &[ObjectDesc] = &[
     // Supported drive modes: csp (bit 7), csv (bit 8).
     var!(0x6502, "Supported drive modes", U32, RO, u(0x0000_0180)),
     var!(0x2000, "User parameter", U32, RW, u(0)),
+    ObjectDesc {
+        index: 0x2001,
+        name: "User text",
+        code: ObjectCode::Var,
+        entries: &[
+            EntryDesc::new(0, "User text", DataType::VisibleString, RW)
+                .bits(USER_TEXT_LEN as u16 * 8)
+                .default(ConstValue::Str("")),
+        ],
+    },
 ];
+
+/// Size of the writable string 0x2001 in bytes: larger than one mailbox, so that transfers of
+/// it are segmented in both directions.
+pub const USER_TEXT_LEN: usize = 300;
 
 const CONTROLWORD: ObjectAddress = ObjectAddress::new(0x6040, 0);
 const STATUSWORD: ObjectAddress = ObjectAddress::new(0x6041, 0);
