@@ -935,3 +935,80 @@ fn sync0_start_time_in_the_past_starts_at_the_next_cycle() {
     assert_eq!((next - (now - 2_500_000)) % 1_000_000, 0);
     assert_eq!(p.fprd(0x1000, 0x0984, 1).unwrap().data[0] & 0x04, 0x04);
 }
+
+#[test]
+fn late_outputs_are_reported_at_the_next_pulse() {
+    let (mut p, clock) = io_segment(1);
+    configure_io(&mut p, 0x1000, 0, 0x10);
+    to_state(&mut p, 0x1000, 0x0002);
+    let now = u64le(&p.fprd(0x1000, 0x0910, 8).unwrap().data);
+    activate_sync0(&mut p, 0x1000, now + 1_000_000, 1_000_000);
+    to_state(&mut p, 0x1000, 0x0004);
+    to_state(&mut p, 0x1000, 0x0008);
+    // Cycle k's frame arrives after SYNC0 k (late), so pulse k sees none and pulse k+1 two.
+    clock.advance(1_500_000); // 0.5 ms after pulse 0
+    p.logical(Command::Lrw, 0, &[1; 0x14]).unwrap();
+    clock.advance(700_000); // 0.2 ms after pulse 1: the frame for cycle 1 is late
+    p.logical(Command::Lrw, 0, &[2; 0x14]).unwrap();
+    clock.advance(500_000);
+    p.logical(Command::Lrw, 0, &[3; 0x14]).unwrap(); // 0.7 ms after pulse 1
+    clock.advance(600_000); // past pulse 2
+    p.segment.poll();
+    let seen = &p.segment.device::<IoDevice>(0).unwrap().seen;
+    // Pulse 0: nothing yet; pulse 1: one buffer; pulse 2: two buffers (one late).
+    assert_eq!(seen.sync0_events, 3);
+    assert_eq!(seen.missed_in_op, 1);
+    assert_eq!(seen.late_outputs, 1);
+    assert_eq!(seen.last_outputs, vec![3, 3]);
+}
+
+#[test]
+fn without_dc_every_process_data_frame_is_a_cycle() {
+    let (mut p, _) = io_segment(1);
+    configure_io(&mut p, 0x1000, 0, 0x10);
+    to_state(&mut p, 0x1000, 0x0002);
+    to_state(&mut p, 0x1000, 0x0004);
+    // SAFE-OP: inputs only; the device runs after each frame that read them.
+    p.logical(Command::Lrd, 0x10, &[0; 4]).unwrap();
+    p.logical(Command::Lrd, 0x10, &[0; 4]).unwrap();
+    let cycles = p.segment.device::<IoDevice>(0).unwrap().seen.cycles;
+    assert_eq!(cycles, 2);
+    // A frame that does not touch process data is no cycle.
+    p.brd(0x0130, 2).unwrap();
+    assert_eq!(p.segment.device::<IoDevice>(0).unwrap().seen.cycles, 2);
+    // The counter in the inputs advances with each cycle.
+    let r = p.logical(Command::Lrd, 0x10, &[0; 4]).unwrap();
+    assert_eq!(u16le(&r.data), 2);
+}
+
+#[test]
+fn segment_link_is_a_synchronous_frame_link() {
+    use ecdrive::ec::frame::{EthercatFrame, EthernetFrame, FrameBuilder, physical_address};
+    use ecdrive::link::FrameLink;
+    use ecdrive::sim::transport::SegmentLink;
+    let (p, _) = io_segment(2);
+    let mut link = SegmentLink::new(p.segment);
+    let mut buf = [0u8; 64];
+    let mut b = FrameBuilder::new(&mut buf, ecdrive::sim::probe::PROBE_MAC).unwrap();
+    b.push(Command::Brd, 9, physical_address(0, 0x0000), &[0])
+        .unwrap();
+    let n = b.finish();
+    // Two frames in flight, replies in order.
+    link.send(&buf[..n]).unwrap();
+    buf[14 + 2 + 1] = 10; // second frame: index 10
+    link.send(&buf[..n]).unwrap();
+    let mut rx = [0u8; 1600];
+    for idx in [9u8, 10] {
+        let len = link.recv(&mut rx, None).unwrap().expect("reply");
+        assert_eq!(len, n);
+        let eth = EthernetFrame::new_checked(&rx[..len]).unwrap();
+        let ec = EthercatFrame::new_checked(eth.payload()).unwrap();
+        let d = ec.datagrams().next().unwrap().unwrap();
+        assert_eq!((d.index(), d.wkc(), d.adp()), (idx, 2, 2));
+    }
+    // Nothing in flight: an immediate timeout.
+    assert_eq!(link.recv(&mut rx, None).unwrap(), None);
+    // A malformed frame is dropped like on a wire.
+    link.send(&[0u8; 20]).unwrap();
+    assert_eq!(link.recv(&mut rx, None).unwrap(), None);
+}

@@ -452,3 +452,72 @@ async fn ethercrab_over_veth_coe_remap_dc_op() {
     result.expect("server ran without I/O errors");
     check_coe_segment(&seg, &outcome);
 }
+
+/// A line of 128 I/O devices: discovery, OP and process data with the right working counter.
+/// (ethercrab keeps its 128-slave group on the stack, hence the big thread stack.)
+#[test]
+fn ethercrab_in_process_128_slaves() {
+    std::thread::Builder::new()
+        .stack_size(256 << 20)
+        .spawn(|| {
+            tokio::runtime::Builder::new_multi_thread()
+                .worker_threads(2)
+                .thread_stack_size(256 << 20)
+                .enable_all()
+                .build()
+                .unwrap()
+                .block_on(run_128_slaves())
+        })
+        .unwrap()
+        .join()
+        .unwrap();
+}
+
+async fn run_128_slaves() {
+    const M: usize = 128;
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for i in 0..M {
+        seg.push(
+            Box::new(IoDevice::new(2, 4).with_serial(i as u32)),
+            EscConfig {
+                sm_watchdog: 0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+    let (tx, rx, pdu_loop) = storage().try_split().unwrap();
+    let link = EthercrabLink::spawn(seg, tx, rx).unwrap();
+    let md = Box::leak(Box::new(MainDevice::new(
+        pdu_loop,
+        timeouts(),
+        MainDeviceConfig {
+            dc_static_sync_iterations: 10,
+            ..MainDeviceConfig::default()
+        },
+    )));
+    let group = md
+        .init_single_group::<M, 1024>(ethercat_now)
+        .await
+        .expect("init");
+    assert_eq!(group.len(), M);
+    for (i, sd) in group.iter(md).enumerate() {
+        assert_eq!(sd.identity().serial, i as u32);
+    }
+    let group = group.into_op(md).await.expect("OP");
+    for cycle in 0..5 {
+        for (i, sd) in group.iter(md).enumerate() {
+            sd.outputs_raw_mut().copy_from_slice(&[i as u8, cycle]);
+        }
+        let r = group.tx_rx(md).await.expect("tx_rx");
+        assert_eq!(r.working_counter, 3 * M as u16);
+        assert!(r.all_op());
+    }
+    let _ = group.into_safe_op(md).await.expect("SAFE-OP");
+    let seg = link.stop();
+    // Without DC sync each frame is a cycle: the last outputs reached every device.
+    for i in 0..M {
+        let dev = seg.device::<IoDevice>(i).unwrap();
+        assert_eq!(dev.seen.last_outputs, vec![i as u8, 4]);
+    }
+}

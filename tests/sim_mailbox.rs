@@ -16,14 +16,19 @@ const ST: u16 = 0x1000;
 
 fn preop() -> Probe {
     let mut seg = Segment::new(Arc::new(ManualClock::new(1_000_000)));
-    seg.push(Box::new(GenericCoeDevice::new(5).unwrap()), EscConfig::default())
-        .unwrap();
+    seg.push(
+        Box::new(GenericCoeDevice::new(5).unwrap()),
+        EscConfig::default(),
+    )
+    .unwrap();
     let mut p = Probe::new(seg);
     p.assign_addresses(ST).unwrap();
     p.fpwr(
         ST,
         0x0800,
-        &[0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0],
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
     )
     .unwrap();
     assert_eq!(p.request_state(ST, 0x0002).unwrap(), (0x0002, 0));
@@ -37,7 +42,11 @@ struct Master {
 
 impl Master {
     fn next_counter(&mut self) -> u8 {
-        self.counter = if self.counter >= 7 { 1 } else { self.counter + 1 };
+        self.counter = if self.counter >= 7 {
+            1
+        } else {
+            self.counter + 1
+        };
         self.counter
     }
 
@@ -72,14 +81,23 @@ fn sdo_response(reply: &[u8]) -> SdoResponse<'_> {
 
 #[test]
 fn expedited_download_and_upload() {
-    let mut m = Master { p: preop(), counter: 0 };
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
     let r = m.sdo(&SdoRequest::DownloadExpedited {
         index: 0x2000,
         sub: 0,
         complete_access: false,
         data: &0xDEAD_BEEFu32.to_le_bytes(),
     });
-    assert_eq!(sdo_response(&r), SdoResponse::Download { index: 0x2000, sub: 0 });
+    assert_eq!(
+        sdo_response(&r),
+        SdoResponse::Download {
+            index: 0x2000,
+            sub: 0
+        }
+    );
     let r = m.sdo(&SdoRequest::Upload {
         index: 0x2000,
         sub: 0,
@@ -95,13 +113,22 @@ fn expedited_download_and_upload() {
 
 #[test]
 fn segmented_download_and_upload() {
-    let mut m = Master { p: preop(), counter: 0 };
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
     let text: Vec<u8> = (0..USER_TEXT_LEN).map(|i| b'a' + (i % 26) as u8).collect();
     // Download: initiate with as much as fits, then segments with alternating toggles.
     let (req, mut sent) = SdoRequest::initiate_download(0x2001, 0, false, &text, MBX);
     assert!(sent < text.len(), "needs segments");
     let r = m.sdo(&req);
-    assert_eq!(sdo_response(&r), SdoResponse::Download { index: 0x2001, sub: 0 });
+    assert_eq!(
+        sdo_response(&r),
+        SdoResponse::Download {
+            index: 0x2001,
+            sub: 0
+        }
+    );
     let mut toggle = false;
     let mut segments = 0;
     while sent < text.len() {
@@ -154,21 +181,33 @@ fn segmented_download_and_upload() {
 
 #[test]
 fn wrong_toggle_aborts_the_transfer() {
-    let mut m = Master { p: preop(), counter: 0 };
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
     let text = vec![b'x'; USER_TEXT_LEN];
     let (req, sent) = SdoRequest::initiate_download(0x2001, 0, false, &text, MBX);
     m.sdo(&req);
     let (req, _) = SdoRequest::download_segment(&text[sent..], true, MBX);
     let r = m.sdo(&req);
     assert!(
-        matches!(sdo_response(&r), SdoResponse::Abort { code: 0x0503_0000, .. }),
+        matches!(
+            sdo_response(&r),
+            SdoResponse::Abort {
+                code: 0x0503_0000,
+                ..
+            }
+        ),
         "toggle bit not alternated"
     );
 }
 
 #[test]
 fn aborts_name_the_reason() {
-    let mut m = Master { p: preop(), counter: 0 };
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
     let cases: [(u16, u8, u32); 3] = [
         (0x5555, 0, 0x0602_0000), // no object
         (0x1018, 9, 0x0609_0011), // no sub-index
@@ -190,7 +229,10 @@ fn aborts_name_the_reason() {
 
 #[test]
 fn emergency_waits_for_a_free_sm1_and_never_replaces_a_reply() {
-    let mut m = Master { p: preop(), counter: 0 };
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
     let emcy = Emergency {
         error_code: 0x2310,
         error_register: 0x03,
@@ -234,7 +276,10 @@ fn emergency_waits_for_a_free_sm1_and_never_replaces_a_reply() {
 
 #[test]
 fn lost_reply_is_repeated_and_duplicates_are_not_executed() {
-    let mut m = Master { p: preop(), counter: 0 };
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
     let mut msg = vec![0u8; MBX];
     SdoRequest::Upload {
         index: 0x1018,
@@ -247,7 +292,10 @@ fn lost_reply_is_repeated_and_duplicates_are_not_executed() {
     // The reply was "lost": toggle the repeat request; the same reply is posted again.
     let act = m.p.fprd(ST, 0x080E, 1).unwrap().data[0];
     m.p.fpwr(ST, 0x080E, &[act ^ 0x02]).unwrap();
-    assert_eq!(m.p.fprd(ST, 0x080F, 1).unwrap().data[0] & 0x02, (act ^ 0x02) & 0x02);
+    assert_eq!(
+        m.p.fprd(ST, 0x080F, 1).unwrap().data[0] & 0x02,
+        (act ^ 0x02) & 0x02
+    );
     let again = m.p.fprd(ST, 0x1080, MBX).unwrap();
     assert_eq!((again.wkc, &again.data), (1, &first));
     // A request repeated with the same counter is not executed again: no reply.

@@ -255,11 +255,9 @@ pub static OBJECTS: &[ObjectDesc] = &[
         index: 0x2001,
         name: "User text",
         code: ObjectCode::Var,
-        entries: &[
-            EntryDesc::new(0, "User text", DataType::VisibleString, RW)
-                .bits(USER_TEXT_LEN as u16 * 8)
-                .default(ConstValue::Str("")),
-        ],
+        entries: &[EntryDesc::new(0, "User text", DataType::VisibleString, RW)
+            .bits(USER_TEXT_LEN as u16 * 8)
+            .default(ConstValue::Str(""))],
     },
 ];
 

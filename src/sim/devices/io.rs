@@ -23,6 +23,9 @@ pub struct IoObservations {
     pub cycles_without_outputs: u64,
     /// SYNC0 events in OP at which no fresh outputs had arrived.
     pub missed_in_op: u64,
+    /// SYNC0 events at which more than one output buffer had arrived since the previous one
+    /// (an earlier cycle's outputs came late).
+    pub late_outputs: u64,
     /// Outputs as of the last cycle in OP.
     pub last_outputs: Vec<u8>,
     /// System time of the last SYNC0 event.
@@ -197,6 +200,9 @@ impl Device for IoDevice {
             self.seen.sync0_events += 1;
             self.seen.last_sync0_ns = Some(event.time_ns);
             self.seen.sync0_cycle_ns = event.cycle_time_ns;
+            if event.outputs_received > 1 {
+                self.seen.late_outputs += 1;
+            }
             if !event.outputs_fresh() {
                 self.seen.cycles_without_outputs += 1;
                 if event.state == AlState::Op {
