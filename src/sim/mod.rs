@@ -17,6 +17,7 @@ pub mod device;
 pub mod devices;
 pub mod esc;
 pub mod probe;
+pub mod rec;
 pub mod run;
 pub mod segment;
 pub mod sii;

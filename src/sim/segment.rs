@@ -35,7 +35,9 @@ pub struct SegmentConfig {
 
 impl Default for SegmentConfig {
     fn default() -> Self {
-        Self { hop_delay_ns: 300 }
+        Self {
+            hop_delay_ns: super::rec::HOP_DELAY_NS,
+        }
     }
 }
 

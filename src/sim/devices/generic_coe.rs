@@ -112,8 +112,8 @@ const fn sync_params() -> [EntryDesc; 10] {
 static SYNC_OUT: [EntryDesc; 10] = sync_params();
 static SYNC_IN: [EntryDesc; 10] = sync_params();
 
-/// \[REC\] Smallest SYNC0 cycle the generic device accepts (0x1C32:05), in ns.
-pub const MIN_CYCLE_NS: u32 = 125_000;
+/// Smallest SYNC0 cycle the generic device accepts (0x1C32:05), in ns.
+pub const MIN_CYCLE_NS: u32 = crate::sim::rec::GENERIC_COE_MIN_CYCLE_NS;
 
 /// The object dictionary of the generic CoE device.
 pub static OBJECTS: &[ObjectDesc] = &[

@@ -7,10 +7,7 @@ use crate::sim::sii::{
     SmType,
 };
 
-/// Vendor ID used by ecdrive's generic test devices.
-///
-/// [REC] not an ETG-assigned vendor ID: 0x00000ECD is chosen for the emulation only.
-pub const TEST_VENDOR_ID: u32 = 0x0000_0ECD;
+pub use crate::sim::rec::TEST_VENDOR_ID;
 
 /// What an [`IoDevice`] has seen, for tests.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]

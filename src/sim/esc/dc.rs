@@ -15,17 +15,11 @@
 //!   repeat every 0x09A0 ns of system time (0 = a single pulse). A start time in the past
 //!   starts at the next whole cycle after now and sets 0x0984 bit 2.
 
-/// Proportional gain of the drift loop, as a right shift (1/4).
-const KP_SHIFT: i64 = 2;
-/// Integral gain of the drift loop (1/20 of the observed rate error per update).
-const KI_DIV: i64 = 20;
-/// Rate corrections are only learned from updates at least this far apart (ns); closer updates
-/// (static drift compensation sends them back to back) only correct the step.
-const KI_MIN_INTERVAL_NS: u64 = 50_000;
-/// Largest rate correction in ppb (±1000 ppm).
-const MAX_RATE_PPB: i64 = 1_000_000;
-/// Smallest per-update step limit in ns.
-const MIN_STEP_NS: i64 = 200;
+use crate::sim::rec::{
+    DC_KI_DIV as KI_DIV, DC_KI_MIN_INTERVAL_NS as KI_MIN_INTERVAL_NS, DC_KP_SHIFT as KP_SHIFT,
+    DC_MAX_RATE_PPB as MAX_RATE_PPB, DC_MIN_STEP_NS as MIN_STEP_NS,
+};
+
 /// Fixed-point shift for rates: a rate in ppb is kept as `ppb · 2^40 / 10^9`, so applying it is
 /// a multiplication and a shift instead of a 128-bit division.
 const Q: u32 = 40;

@@ -16,6 +16,7 @@ pub use dc::{DcUnit, SyncGen};
 pub use regs::{IMPLEMENTED, REG_SPACE, RegisterMap, TRIGGER};
 
 use super::device::{DcSyncStatus, Device, StateRequest, SyncEvent, SyncKind};
+use super::rec;
 use super::sii::{self, DeviceDescription, SiiError, SiiImage, SmType};
 use crate::ec::{AlState, AlStatusCode, Command};
 
@@ -78,12 +79,12 @@ pub struct EscConfig {
 impl Default for EscConfig {
     fn default() -> Self {
         Self {
-            esc_type: 0x04,
-            revision: 0x01,
-            build: 0x0001,
-            fmmu_count: 8,
-            sm_count: 8,
-            ram_kib: 8,
+            esc_type: rec::ESC_TYPE,
+            revision: rec::ESC_REVISION,
+            build: rec::ESC_BUILD,
+            fmmu_count: rec::FMMU_COUNT,
+            sm_count: rec::SM_COUNT,
+            ram_kib: rec::RAM_KIB,
             port_descriptor: 0x0F,
             dc: DcSupport::Bits64,
             watchdog_divider: 0x09C2,
