@@ -6,7 +6,7 @@ use ecdrive::ec::Command;
 use ecdrive::ec::frame::{
     EthercatFrame, EthernetFrame, FrameBuilder, MAX_FRAME_LEN, physical_address,
 };
-use ecdrive::sim::devices::{EchoMailbox, IoDevice};
+use ecdrive::sim::devices::{EchoMailbox, GenericCoeDevice, IoDevice};
 use ecdrive::sim::probe::{PROBE_MAC, Probe};
 use ecdrive::sim::{Device, EscConfig, ManualClock, Segment};
 use proptest::prelude::*;
@@ -19,6 +19,7 @@ fn fresh_probe() -> (Probe, ManualClock) {
         Box::new(IoDevice::new(2, 4)),
         Box::new(EchoMailbox::new()),
         Box::new(IoDevice::new(1, 1)),
+        Box::new(GenericCoeDevice::new(4).unwrap()),
     ];
     for d in devs {
         seg.push(d, EscConfig::default()).unwrap();
@@ -36,6 +37,16 @@ fn fresh_probe() -> (Probe, ManualClock) {
     )
     .unwrap();
     p.fpwr(0x1001, 0x0120, &[0x02, 0]).unwrap();
+    p.fpwr(
+        0x1003,
+        0x0800,
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
+    p.fpwr(0x1003, 0x0120, &[0x02, 0]).unwrap();
+    assert_eq!(p.read_u16(0x1003, 0x0130).unwrap().0, 0x0002);
     let mut f = [0u8; 16];
     f[4] = 8;
     f[7] = 7;
@@ -110,7 +121,7 @@ fn datagram() -> impl Strategy<Value = (u8, u32, Vec<u8>)> {
         0x0900u16..0x09B0,
         0x1000u16..0x1100,
     ];
-    let adp = prop_oneof![any::<u16>(), 0x1000u16..0x1004, 0xFFFDu16..=0xFFFF, 0u16..3];
+    let adp = prop_oneof![any::<u16>(), 0x1000u16..0x1004, 0xFFFCu16..=0xFFFF, 0u16..4];
     (
         cmd,
         adp,
@@ -201,6 +212,51 @@ fn garbage_between_good_frames_does_not_change_answers() {
     assert!(p.segment.process(&mut junk).is_err());
     assert_eq!(p.fprd(0x1000, 0x0300, 1).unwrap().data[0], before + 1);
     let r = p.physical(Command::Brd, 0, 0x0130, &[0, 0]).unwrap();
-    assert_eq!(r.wkc, 3);
+    assert_eq!(r.wkc, 4);
     assert_eq!(p.segment.stats().invalid_frames, 1);
+}
+
+proptest! {
+    /// Random mailbox content written into the CoE device's SM0: the CoE server behind the
+    /// ESC never panics, and a valid SDO upload still gets its answer afterwards.
+    #[test]
+    fn random_mailboxes_into_the_coe_device(
+        msgs in prop::collection::vec(prop::collection::vec(any::<u8>(), 0..128), 1..6),
+    ) {
+        let (mut p, _) = fresh_probe();
+        for m in &msgs {
+            let mut full = vec![0u8; 128];
+            full[..m.len()].copy_from_slice(m);
+            p.fpwr(0x1003, 0x1000, &full).unwrap();
+            // Drain whatever reply came.
+            p.fprd(0x1003, 0x1080, 128).unwrap();
+        }
+        // Drain unsolicited messages (SDO info fragments) until SM1 stays empty.
+        for _ in 0..64 {
+            if p.fprd(0x1003, 0x080D, 1).unwrap().data[0] & 0x08 == 0 {
+                break;
+            }
+            p.fprd(0x1003, 0x1080, 128).unwrap();
+        }
+        // A fresh, valid upload of 0x1018:01 (counter 7, unlikely to repeat the last one;
+        // send twice with different counters to be sure one is new).
+        let mut answered = false;
+        for counter in [6u8, 7] {
+            let mut req = vec![0u8; 128];
+            req[0] = 10;
+            req[5] = 0x03 | counter << 4;
+            req[6..8].copy_from_slice(&0x2000u16.to_le_bytes());
+            req[8] = 0x40;
+            req[9..11].copy_from_slice(&0x1018u16.to_le_bytes());
+            req[11] = 1;
+            prop_assert_eq!(p.fpwr(0x1003, 0x1000, &req).unwrap().wkc, 1);
+            let r = p.fprd(0x1003, 0x1080, 128).unwrap();
+            if r.wkc == 1 && r.data[8] == 0x43 {
+                prop_assert_eq!(&r.data[12..16], &0x0ECDu32.to_le_bytes()[..]);
+                answered = true;
+            }
+        }
+        prop_assert!(answered);
+        still_sane(&mut p);
+    }
 }
