@@ -224,7 +224,12 @@ impl VethPair {
     pub fn create() -> Result<Self, NetnsError> {
         let ns = Netns::create()?;
         let n = COUNTER.fetch_add(1, Ordering::Relaxed);
-        let stem = format!("ec{}x{}", base36(std::process::id()), base36(n));
+        // At most 2 + 5 + 1 + 4 + 1 = 13 bytes (IFNAMSIZ allows 15).
+        let stem = format!(
+            "ec{}x{}",
+            base36(std::process::id()),
+            base36(n % (36 * 36 * 36 * 36))
+        );
         let host = format!("{stem}m");
         let peer = format!("{stem}s");
         ip(&["link", "add", &host, "type", "veth", "peer", "name", &peer])?;
@@ -288,7 +293,8 @@ mod tests {
         assert_eq!(base36(0), "0");
         assert_eq!(base36(35), "z");
         assert_eq!(base36(36), "10");
-        let stem = format!("ec{}x{}", base36(4_194_304), base36(u32::MAX));
+        // Largest Linux PID (4194304) and the largest counter value used.
+        let stem = format!("ec{}x{}", base36(4_194_304), base36(36 * 36 * 36 * 36 - 1));
         assert!(stem.len() + 1 < 16, "{stem}");
     }
 
