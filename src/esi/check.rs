@@ -103,8 +103,16 @@ impl Device {
                 Direction::Tx => SmKind::Inputs,
             };
             for (i, p) in pdos.iter().enumerate() {
-                if pdos.get(..i).unwrap_or_default().iter().any(|q| q.index == p.index) {
-                    issue(p.position, format!("{d} 0x{:04X} is described twice", p.index));
+                if pdos
+                    .get(..i)
+                    .unwrap_or_default()
+                    .iter()
+                    .any(|q| q.index == p.index)
+                {
+                    issue(
+                        p.position,
+                        format!("{d} 0x{:04X} is described twice", p.index),
+                    );
                 }
                 for x in &p.excludes {
                     let known = self.pdo(Direction::Rx, *x).is_some()
@@ -112,7 +120,10 @@ impl Device {
                     if !known {
                         issue(
                             p.position,
-                            format!("{d} 0x{:04X} excludes 0x{x:04X}, which is not described", p.index),
+                            format!(
+                                "{d} 0x{:04X} excludes 0x{x:04X}, which is not described",
+                                p.index
+                            ),
                         );
                     }
                     if p.is_default() && pdos.iter().any(|q| q.index == *x && q.is_default()) {
@@ -138,7 +149,10 @@ impl Device {
                         ),
                         None => issue(
                             p.position,
-                            format!("{d} 0x{:04X} is assigned to SM{sm}, which does not exist", p.index),
+                            format!(
+                                "{d} 0x{:04X} is assigned to SM{sm}, which does not exist",
+                                p.index
+                            ),
                         ),
                     }
                 }
@@ -149,8 +163,11 @@ impl Device {
             }
             // Default assignment vs 0x1C12 / 0x1C13 defaults.
             if let Some(o) = object(dir.assign_index()) {
-                let defaults: Vec<u16> =
-                    pdos.iter().filter(|p| p.is_default()).map(|p| p.index).collect();
+                let defaults: Vec<u16> = pdos
+                    .iter()
+                    .filter(|p| p.is_default())
+                    .map(|p| p.index)
+                    .collect();
                 let pos = self
                     .dictionary()
                     .and_then(|dd| dd.object(o.index))
@@ -187,7 +204,11 @@ impl Device {
             }
             // SyncManager size vs default mapping.
             if let Some(sm) = self.sync_manager(want_sm) {
-                let bits: u32 = pdos.iter().filter(|p| p.is_default()).map(EsiPdo::bits).sum();
+                let bits: u32 = pdos
+                    .iter()
+                    .filter(|p| p.is_default())
+                    .map(EsiPdo::bits)
+                    .sum();
                 let bytes = bits.div_ceil(8);
                 if let Some(size) = sm.default_size {
                     if u32::from(size) != bytes {
@@ -230,8 +251,17 @@ impl Device {
             }
         }
         for (i, m) in self.dc.iter().enumerate() {
-            if self.dc.get(..i).unwrap_or_default().iter().any(|x| x.name == m.name) {
-                issue(m.position, format!("DC <OpMode> {:?} is described twice", m.name));
+            if self
+                .dc
+                .get(..i)
+                .unwrap_or_default()
+                .iter()
+                .any(|x| x.name == m.name)
+            {
+                issue(
+                    m.position,
+                    format!("DC <OpMode> {:?} is described twice", m.name),
+                );
             }
         }
         out
@@ -248,9 +278,15 @@ impl Device {
         let d = dir.name();
         let has_dict = self.dictionary().is_some();
         for e in &p.entries {
-            let at = format!("{d} 0x{:04X} entry 0x{:04X}:{:02X}", p.index, e.index, e.sub);
+            let at = format!(
+                "{d} 0x{:04X} entry 0x{:04X}:{:02X}",
+                p.index, e.index, e.sub
+            );
             if e.bit_len == 0 || e.bit_len > 255 {
-                issue(e.position, format!("{at} has BitLen {} (1..=255 allowed)", e.bit_len));
+                issue(
+                    e.position,
+                    format!("{at} has BitLen {} (1..=255 allowed)", e.bit_len),
+                );
             }
             if let Some(dt) = e.data_type() {
                 if let Some(bits) = dt.bit_len() {
@@ -259,7 +295,10 @@ impl Device {
                     if bits != e.bit_len {
                         issue(
                             e.position,
-                            format!("{at} has BitLen {} but DataType {dt} is {bits} bits", e.bit_len),
+                            format!(
+                                "{at} has BitLen {} but DataType {dt} is {bits} bits",
+                                e.bit_len
+                            ),
                         );
                     }
                 }
@@ -274,7 +313,10 @@ impl Device {
             if entry.bit_len != u32::from(e.bit_len) {
                 issue(
                     e.position,
-                    format!("{at} has BitLen {} but the dictionary says {}", e.bit_len, entry.bit_len),
+                    format!(
+                        "{at} has BitLen {} but the dictionary says {}",
+                        e.bit_len, entry.bit_len
+                    ),
                 );
             }
             let flag = match dir {

@@ -122,7 +122,11 @@ impl Device {
                     .pdo(dir, index)
                     .ok_or(EsiConvertError::UnknownPdo { dir: d, index })?;
                 if let Some(&b) = p.excludes.iter().find(|x| chosen.contains(x)) {
-                    return Err(EsiConvertError::Excluded { dir: d, a: index, b });
+                    return Err(EsiConvertError::Excluded {
+                        dir: d,
+                        a: index,
+                        b,
+                    });
                 }
                 out.push(p.to_pdo(dir)?);
             }

@@ -162,14 +162,11 @@ impl Dictionary {
 
     /// The data type definition named `name` (exact match, then case-insensitive).
     pub fn data_type(&self, name: &str) -> Option<&EsiDataType> {
-        self.data_types
-            .iter()
-            .find(|d| d.name == name)
-            .or_else(|| {
-                self.data_types
-                    .iter()
-                    .find(|d| d.name.eq_ignore_ascii_case(name))
-            })
+        self.data_types.iter().find(|d| d.name == name).or_else(|| {
+            self.data_types
+                .iter()
+                .find(|d| d.name.eq_ignore_ascii_case(name))
+        })
     }
 
     /// Resolve the object `index` into entries with types, access and values.
@@ -180,7 +177,10 @@ impl Dictionary {
     /// Resolve every object, in file order. Stops at the first object that cannot be
     /// resolved.
     pub fn resolve_all(&self) -> Result<Vec<ResolvedObject>, EsiError> {
-        self.objects.iter().map(|o| self.resolve_object(o)).collect()
+        self.objects
+            .iter()
+            .map(|o| self.resolve_object(o))
+            .collect()
     }
 
     /// Resolve one object: expand its data type into sub-indices, attach the per-entry info
@@ -208,7 +208,10 @@ impl Dictionary {
                 let mut other = 0usize;
                 for si in &dt.sub_items {
                     let flags = si.flags.unwrap_or(obj_flags);
-                    match self.data_type(&si.type_name).and_then(|t| t.array.map(|a| (t, a))) {
+                    match self
+                        .data_type(&si.type_name)
+                        .and_then(|t| t.array.map(|a| (t, a)))
+                    {
                         Some((arr, info)) => {
                             let base = arr.base_type.as_deref().unwrap_or("");
                             let elem_bits = match self.data_type(base) {
@@ -295,7 +298,10 @@ impl Dictionary {
                     },
                 });
                 for i in 0..info.elements.min(255) {
-                    let Some(sub) = info.lbound.checked_add(i).and_then(|s| u8::try_from(s).ok())
+                    let Some(sub) = info
+                        .lbound
+                        .checked_add(i)
+                        .and_then(|s| u8::try_from(s).ok())
                     else {
                         return Err(err("array elements run past sub-index 255".into()));
                     };
@@ -522,12 +528,17 @@ fn access_text(a: EntryAccess) -> String {
         s.push(if a.contains(w) { 'w' } else { '-' });
         s.push(' ');
     }
-    s.push_str(match (a.contains(EntryAccess::RXPDO), a.contains(EntryAccess::TXPDO)) {
-        (true, true) => "RT",
-        (true, false) => "R",
-        (false, true) => "T",
-        (false, false) => "-",
-    });
+    s.push_str(
+        match (
+            a.contains(EntryAccess::RXPDO),
+            a.contains(EntryAccess::TXPDO),
+        ) {
+            (true, true) => "RT",
+            (true, false) => "R",
+            (false, true) => "T",
+            (false, false) => "-",
+        },
+    );
     s
 }
 
@@ -574,12 +585,7 @@ impl ResolvedObject {
         }
         for e in &self.entries {
             let Some(d) = desc.entry(e.sub) else {
-                out.push(diff(
-                    Some(e.sub),
-                    "entry",
-                    e.name.clone(),
-                    "missing".into(),
-                ));
+                out.push(diff(Some(e.sub), "entry", e.name.clone(), "missing".into()));
                 continue;
             };
             if e.data_type != Some(d.data_type) {

@@ -53,7 +53,7 @@ pub use dictionary::{
 };
 pub use error::{EsiError, EsiErrorKind, Position};
 pub use model::{
-    CoeDetails, CycleTimes, DcOpMode, DcSm, Device, DeviceType, EepromCategory, Eeprom, EsiFile,
+    CoeDetails, CycleTimes, DcOpMode, DcSm, Device, DeviceType, Eeprom, EepromCategory, EsiFile,
     EsiPdo, EsiPdoEntry, Fmmu, FmmuUsage, Group, InitCmd, LCID_ENGLISH, LocalizedText, Mailbox,
     MailboxProtocols, Profile, SmKind, SyncManager, Transition, Vendor, preferred_text,
 };
@@ -79,8 +79,12 @@ impl EsiFile {
     pub fn from_path(path: impl AsRef<Path>) -> Result<Self, EsiError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|e| {
-            EsiError::new(EsiErrorKind::Io, Position::default(), format!("cannot read: {e}"))
-                .with_path(path)
+            EsiError::new(
+                EsiErrorKind::Io,
+                Position::default(),
+                format!("cannot read: {e}"),
+            )
+            .with_path(path)
         })?;
         Self::parse_bytes(&bytes).map_err(|e| e.with_path(path))
     }

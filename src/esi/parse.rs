@@ -52,16 +52,14 @@ pub(crate) fn decode_bytes(bytes: &[u8]) -> R<String> {
         });
         char::decode_utf16(units)
             .map(|c| {
-                c.ok()
-                    .filter(|_| rest.len() % 2 == 0)
-                    .ok_or_else(|| {
-                        EsiError::new(
-                            EsiErrorKind::Encoding,
-                            Position::default(),
-                            "the file starts with a UTF-16 byte-order mark but is not valid \
+                c.ok().filter(|_| rest.len() % 2 == 0).ok_or_else(|| {
+                    EsiError::new(
+                        EsiErrorKind::Encoding,
+                        Position::default(),
+                        "the file starts with a UTF-16 byte-order mark but is not valid \
                              UTF-16",
-                        )
-                    })
+                    )
+                })
             })
             .collect()
     };
@@ -121,9 +119,16 @@ fn declared_latin1(bytes: &[u8]) -> bool {
         .map(|&b| char::from(b).to_ascii_lowercase())
         .collect();
     decl.starts_with("<?xml")
-        && ["iso-8859-1", "iso8859-1", "latin1", "latin-1", "windows-1252", "cp1252"]
-            .iter()
-            .any(|enc| decl.contains(enc))
+        && [
+            "iso-8859-1",
+            "iso8859-1",
+            "latin1",
+            "latin-1",
+            "windows-1252",
+            "cp1252",
+        ]
+        .iter()
+        .any(|enc| decl.contains(enc))
 }
 
 struct P<'a, 'input> {
@@ -179,7 +184,12 @@ impl<'a, 'input> P<'a, 'input> {
         EsiError::new(EsiErrorKind::Missing, self.node_pos(node), msg)
     }
 
-    fn req_child(&self, node: Node<'a, 'input>, name: &'static str, scope: &str) -> R<Node<'a, 'input>> {
+    fn req_child(
+        &self,
+        node: Node<'a, 'input>,
+        name: &'static str,
+        scope: &str,
+    ) -> R<Node<'a, 'input>> {
         child(node, name).ok_or_else(|| self.missing(node, format!("{scope} has no <{name}>")))
     }
 
@@ -193,9 +203,8 @@ impl<'a, 'input> P<'a, 'input> {
 
     fn num_text<T: EsiInt>(&self, el: Node, name: &str, scope: &str) -> R<T> {
         let t = text_of(el);
-        num::parse_num::<T>(&t).map_err(|m| {
-            self.invalid(self.text_pos(el), format!("{scope} has {name} {t:?}: {m}"))
-        })
+        num::parse_num::<T>(&t)
+            .map_err(|m| self.invalid(self.text_pos(el), format!("{scope} has {name} {t:?}: {m}")))
     }
 
     fn req_num_child<T: EsiInt>(&self, node: Node, name: &'static str, scope: &str) -> R<T> {
@@ -345,9 +354,7 @@ impl<'a, 'input> P<'a, 'input> {
                 _ => {
                     return Err(self.invalid(
                         self.text_pos(f),
-                        format!(
-                            "{s} has usage {text:?}: expected Outputs, Inputs or MBoxState"
-                        ),
+                        format!("{s} has usage {text:?}: expected Outputs, Inputs or MBoxState"),
                     ));
                 }
             };
@@ -361,7 +368,10 @@ impl<'a, 'input> P<'a, 'input> {
         let mut sync_managers = Vec::new();
         for (i, sm) in children(n, "Sm").enumerate() {
             let index = u8::try_from(i).map_err(|_| {
-                self.invalid(self.node_pos(sm), format!("{scope} has more than 256 <Sm>s"))
+                self.invalid(
+                    self.node_pos(sm),
+                    format!("{scope} has more than 256 <Sm>s"),
+                )
             })?;
             let s = format!("<Sm> {i} in {scope}");
             let text = text_of(sm);
@@ -381,9 +391,9 @@ impl<'a, 'input> P<'a, 'input> {
                     ));
                 }
             };
-            let start_address = self.attr_num::<u16>(sm, "StartAddress", &s)?.ok_or_else(|| {
-                self.missing(sm, format!("{s} has no StartAddress attribute"))
-            })?;
+            let start_address = self
+                .attr_num::<u16>(sm, "StartAddress", &s)?
+                .ok_or_else(|| self.missing(sm, format!("{s} has no StartAddress attribute")))?;
             sync_managers.push(SyncManager {
                 position: self.node_pos(sm),
                 index,
@@ -392,9 +402,9 @@ impl<'a, 'input> P<'a, 'input> {
                 default_size: self.attr_num(sm, "DefaultSize", &s)?,
                 min_size: self.attr_num(sm, "MinSize", &s)?,
                 max_size: self.attr_num(sm, "MaxSize", &s)?,
-                control_byte: self.attr_num(sm, "ControlByte", &s)?.ok_or_else(|| {
-                    self.missing(sm, format!("{s} has no ControlByte attribute"))
-                })?,
+                control_byte: self
+                    .attr_num(sm, "ControlByte", &s)?
+                    .ok_or_else(|| self.missing(sm, format!("{s} has no ControlByte attribute")))?,
                 enable: self.attr_num::<u8>(sm, "Enable", &s)?.unwrap_or(0) != 0,
                 virtual_: self.flag(sm, "Virtual", &s)?,
                 op_only: self.flag(sm, "OpOnly", &s)?,
@@ -446,8 +456,8 @@ impl<'a, 'input> P<'a, 'input> {
     }
 
     fn pdo(&self, n: Node, tag: &str) -> R<EsiPdo> {
-        let idx_el = child(n, "Index")
-            .ok_or_else(|| self.missing(n, format!("<{tag}> has no <Index>")))?;
+        let idx_el =
+            child(n, "Index").ok_or_else(|| self.missing(n, format!("<{tag}> has no <Index>")))?;
         let index: u16 = self.num_text(idx_el, "Index", &format!("<{tag}>"))?;
         let scope = format!("<{tag}> 0x{index:04X}");
         let names = self.names(n, "Name", &scope)?;
@@ -621,7 +631,9 @@ impl<'a, 'input> P<'a, 'input> {
                 && c.tag_name().namespace() == Some(ECDRIVE_NAMESPACE)
                 && c.tag_name().name() == "CycleTimes"
         };
-        let Some(ct) = children(n, "VendorSpecific").flat_map(|v| v.children()).find(ours)
+        let Some(ct) = children(n, "VendorSpecific")
+            .flat_map(|v| v.children())
+            .find(ours)
         else {
             return Ok(None);
         };
@@ -714,9 +726,7 @@ impl<'a, 'input> P<'a, 'input> {
                         type_name: text_of(self.req_child(si, "Type", &s)?),
                         bit_size: self.req_num_child(si, "BitSize", &s)?,
                         bit_offs: self.num_child(si, "BitOffs", &s)?.unwrap_or(0),
-                        flags: child(si, "Flags")
-                            .map(|f| self.flags(f, &s))
-                            .transpose()?,
+                        flags: child(si, "Flags").map(|f| self.flags(f, &s)).transpose()?,
                     });
                 }
                 data_types.push(EsiDataType {
@@ -745,7 +755,9 @@ impl<'a, 'input> P<'a, 'input> {
                         Some(i) => self.info(i, &scope)?,
                         None => ObjectInfo::default(),
                     },
-                    flags: child(o, "Flags").map(|f| self.flags(f, &scope)).transpose()?,
+                    flags: child(o, "Flags")
+                        .map(|f| self.flags(f, &scope))
+                        .transpose()?,
                 });
             }
         }
