@@ -62,6 +62,26 @@ fn bad_number_in_element_points_at_the_value() {
 }
 
 #[test]
+fn values_with_entities_and_cdata() {
+    // Character references and CDATA around a bad value: the position is the text's start.
+    let e = err(&with_device(
+        "<RxPdo><Index>&#x20;\u{3000}\u{3000}x</Index></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    let e = err(&with_device(
+        "<RxPdo><Index><![CDATA[  zz]]></Index></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    // Entities are decoded in values.
+    let f = EsiFile::parse(&with_device(
+        "<Name>A &amp; B</Name><Sm StartAddress=\"&#x31;\" ControlByte=\"0\">Inputs</Sm>",
+    ))
+    .unwrap();
+    assert_eq!(f.devices[0].name, "A & B");
+    assert_eq!(f.devices[0].sync_managers[0].start_address, 1);
+}
+
+#[test]
 fn out_of_range_numbers() {
     let e = err(&with_device("<TxPdo><Index>#x10000</Index></TxPdo>"));
     assert_eq!((e.line(), e.column()), (5, 15));

@@ -15,7 +15,7 @@ const FILES: [&str; 3] = [
 ];
 
 /// Replacement values for element texts and attribute values.
-const TOKENS: [&str; 24] = [
+const TOKENS: [&str; 27] = [
     "",
     "0",
     "-1",
@@ -40,6 +40,9 @@ const TOKENS: [&str; 24] = [
     "UINT",
     "STRING(0)",
     "  12  ",
+    "&#x20;\u{3000}\u{3000}x",
+    "<![CDATA[ #x10 ]]>",
+    "&amp;",
 ];
 
 /// Replacement structures, inserted at element boundaries.

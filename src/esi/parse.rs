@@ -156,7 +156,13 @@ fn text_of(node: Node) -> String {
 
 impl<'a, 'input> P<'a, 'input> {
     fn pos(&self, byte: usize) -> Position {
-        let p = self.doc.text_pos_at(byte);
+        // roxmltree slices the input at `byte`: keep it on a character boundary.
+        let text = self.doc.input_text();
+        let mut b = byte.min(text.len());
+        while b > 0 && !text.is_char_boundary(b) {
+            b -= 1;
+        }
+        let p = self.doc.text_pos_at(b);
         Position::new(p.row, p.col)
     }
 
@@ -169,7 +175,11 @@ impl<'a, 'input> P<'a, 'input> {
         for c in node.children() {
             if let (true, Some(t)) = (c.is_text(), c.text()) {
                 if let Some(off) = t.find(|ch: char| !ch.is_whitespace()) {
-                    return self.pos(c.range().start + off);
+                    // The offset is into the unescaped text; use it only when the source
+                    // text is the same (no entities, no CDATA markup).
+                    let start = c.range().start;
+                    let raw = self.doc.input_text().get(c.range());
+                    return self.pos(if raw == Some(t) { start + off } else { start });
                 }
             }
         }
