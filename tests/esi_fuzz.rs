@@ -170,9 +170,8 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
     }
 }
 
+// 256 cases each by default; set PROPTEST_CASES for a longer run.
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
-
     #[test]
     fn mutated_files_never_panic(
         file in 0..FILES.len(),
