@@ -155,15 +155,15 @@ pub struct AxisConfig {
     pub stop_ramp: StopRampConfig,
 }
 
-/// Time-based defaults of [`AxisConfig::for_cycle_time`]. **[REC]**: our choice, not vendor data.
+/// Time-based defaults of [`AxisConfig::for_cycle_time`]. **\[REC\]**: our choice, not vendor data.
 pub mod axis_defaults {
     use core::time::Duration;
 
-    /// **[REC]** Stop ramp before a zero-speed mode switch.
+    /// **\[REC\]** Stop ramp before a zero-speed mode switch.
     pub const STOP_RAMP: Duration = Duration::from_millis(200);
-    /// **[REC]** Time allowed for each mode-switch phase.
+    /// **\[REC\]** Time allowed for each mode-switch phase.
     pub const MODE_SWITCH_TIMEOUT: Duration = Duration::from_secs(2);
-    /// **[REC]** How long the standstill condition must hold.
+    /// **\[REC\]** How long the standstill condition must hold.
     pub const STANDSTILL_TIME: Duration = Duration::from_millis(3);
 }
 

@@ -16,14 +16,14 @@
 //! | [`ErrorCode`] | 0x603F decoding by CiA ranges plus per-drive tables |
 //! | [`object`] | the object addresses this layer reads and writes |
 
-mod axis;
+pub mod axis;
 mod bits;
 mod caps;
 mod command;
 pub mod device;
 mod error_code;
 mod mode;
-mod planner;
+pub mod planner;
 mod state;
 
 pub use axis::{

@@ -28,22 +28,38 @@
 //! * **Faults** are never reset implicitly. In Fault the planner sends Disable voltage and reports
 //!   [`PlannerError::Faulted`] until [`Planner::request_fault_reset`] is called; then it makes a
 //!   rising edge on bit 7 (one cycle low, `fault_reset_hold_cycles` high, the same number low)
-//!   and repeats it while the drive stays in Fault, until the timeout. A fault seen while the
-//!   target is Operation enabled or Switched on **cancels** that target (the error is latched,
-//!   see below): after the reset the drive stays in Switch on disabled until the next
+//!   and repeats it while the drive stays in Fault, until the timeout.
+//! * **A fault cancels an energising target.** A fault seen while the target is Operation enabled
+//!   or Switched on latches [`PlannerError::Faulted`] and replaces the target by Switch on
+//!   disabled. After the reset the drive stays in Switch on disabled until the next
 //!   [`Planner::set_target`].
 //! * **Timeout**: if the observed state does not change for `timeout_cycles` cycles while the
 //!   target is not reached, the planner fails with [`PlannerError::Timeout`], naming the state it
 //!   is stuck in and the likely cause ([`StallCause`]).
 //! * **Dropping out**: once Operation enabled or Switched on was reached, a later change to
 //!   another (non-fault) state that the planner did not command, e.g. a quick stop from a drive
-//!   input, fails with [`PlannerError::LeftTarget`]; the planner does not re-enable on its own.
-//! * **Latched failures** (timeout, invalid statusword, fault during enable, dropping out) hold
-//!   until [`Planner::set_target`]. While latched the planner still sends safe commands: what the
-//!   target asks for if that does not energise the drive further (e.g. Disable voltage), else the
-//!   command that keeps the current state. A statusword that decodes to no state makes it send
-//!   Disable voltage if the fault bit is set, else repeat the last command (a transient glitch must
-//!   not disable a running axis).
+//!   input, latches [`PlannerError::LeftTarget`] and replaces the target by Quick stop (if the
+//!   drive is in Quick stop active) or Switch on disabled: the planner does not re-enable on its
+//!   own.
+//! * **Latched failures** (timeout, invalid statusword, fault during enable, dropping out) are
+//!   reported as [`Progress::Failed`] until [`Planner::set_target`] (timeouts also until
+//!   [`Planner::request_fault_reset`], which starts a new attempt). While latched the planner
+//!   still sends safe commands: what the target asks for if that does not energise the drive
+//!   further (e.g. Disable voltage, Quick stop), else the command that keeps the current state;
+//!   fault-reset edges only while a reset is requested.
+//! * A statusword that decodes to no state makes the planner send Disable voltage if the fault
+//!   bit is set, else repeat the last command (a transient glitch must not disable a running
+//!   axis); it fails with [`PlannerError::InvalidStatusWord`] after `timeout_cycles`.
+//!
+//! # Cycle bound
+//!
+//! Without faults and with a drive that reacts within `L` cycles to each command, a target is
+//! reached in at most `(transitions + 1) × (L + 1)` cycles plus the time the drive spends in
+//! automatic states (initialisation, quick-stop ramp, fault reaction); the longest path has 4
+//! transitions (Quick stop active → Switch on disabled → Ready to switch on → Switched on →
+//! Operation enabled). A fault reset adds at most `2 × fault_reset_hold_cycles + 1` cycles per
+//! edge the drive needs. The property tests check this bound against the [`device`](super::device)
+//! model.
 
 use core::fmt;
 use core::time::Duration;
@@ -206,7 +222,7 @@ impl Step {
     }
 }
 
-/// Defaults of [`PlannerConfig::for_cycle_time`], in time units. **[REC]**: recommendations,
+/// Defaults of [`PlannerConfig::for_cycle_time`], in time units. **\[REC\]**: recommendations,
 /// not vendor data, except where noted.
 pub mod defaults {
     use core::time::Duration;
@@ -214,7 +230,7 @@ pub mod defaults {
     /// How long bit 7 is held high for a fault reset: MR-J4-TM §5.1 note, "hold bit 7 = 1 for at
     /// least 10 ms" on an unreliable link (vendor fact).
     pub const FAULT_RESET_HOLD: Duration = Duration::from_millis(10);
-    /// **[REC]** How long a drive may stay in one state before the planner gives up. Must cover
+    /// **\[REC\]** How long a drive may stay in one state before the planner gives up. Must cover
     /// the longest quick-stop ramp and fault reaction (MR-J4-TM 0x6085 allows up to 20 s; its
     /// default is 100 ms).
     pub const STALL_TIMEOUT: Duration = Duration::from_secs(5);
