@@ -217,7 +217,7 @@ fn blv_r_quick_stop_codes() {
         for _ in 0..3 {
             step(&mut d, Command::QuickStop);
         }
-        let expected = if code < 0 || code >= 5 {
+        let expected = if !(0..5).contains(&code) {
             State::QuickStopActive
         } else {
             State::SwitchOnDisabled

@@ -216,7 +216,10 @@ fn persistent_fault_times_out() {
     );
     d.fault = true;
     p.set_target(Target::SwitchOnDisabled);
-    p.request_fault_reset();
+    assert!(!p.request_fault_reset(), "no fault seen yet: ignored");
+    let s = p.next(d.seen(), true);
+    d.apply(s.controlword());
+    assert!(p.request_fault_reset());
     let (sent, progress) = run(&mut p, &mut d, 100);
     let edges = sent
         .windows(2)
@@ -244,7 +247,7 @@ fn persistent_fault_times_out() {
     }
     // A new request is a new attempt; this time the fault is gone.
     d.fault = false;
-    p.request_fault_reset();
+    assert!(p.request_fault_reset());
     assert_eq!(run(&mut p, &mut d, 20).1, Progress::Reached);
     assert_eq!(d.device.state(), State::SwitchOnDisabled);
 }
@@ -593,21 +596,21 @@ proptest! {
         let mut spent = 0;
         if start.is_fault() {
             // A fault never leads to enabling by itself: an energising target is refused …
-            if matches!(target, Target::OperationEnabled | Target::SwitchedOn) {
-                p.set_target(target);
-                let s = p.next(d.seen(), d.standstill());
-                prop_assert!(
-                    matches!(s.progress, Progress::Failed(PlannerError::Faulted { .. })),
-                    "{:?}", s.progress
-                );
-                prop_assert_eq!(s.command, Command::DisableVoltage);
-            }
+            let energising = matches!(target, Target::OperationEnabled | Target::SwitchedOn);
+            p.set_target(if energising { target } else { Target::SwitchOnDisabled });
+            let s = p.next(d.seen(), d.standstill());
+            prop_assert!(
+                matches!(s.progress, Progress::Failed(PlannerError::Faulted { .. })),
+                "{:?}", s.progress
+            );
+            prop_assert_eq!(s.command, Command::DisableVoltage);
+            d.apply(s.controlword());
             // … so the caller resets first (as the axis engine does), then asks again.
             p.set_target(Target::SwitchOnDisabled);
-            p.request_fault_reset();
-            let (sent, progress) = run(&mut p, &mut d, limit + 1);
+            prop_assert!(p.request_fault_reset());
+            let (sent, progress) = run(&mut p, &mut d, limit);
             prop_assert_eq!(progress, Progress::Reached);
-            spent = sent.len();
+            spent = sent.len() + 1;
         }
         p.set_target(target);
         let (_, progress) = run(&mut p, &mut d, limit + 1 - spent.min(limit));
@@ -666,14 +669,15 @@ proptest! {
             if cycle == clear_at {
                 d.fault = false;
             }
+            let seen = d.seen();
+            let s = p.next(seen, d.standstill());
+            d.apply(s.controlword());
             if !reset_requested && cycle >= clear_at + reset_delay
-                && d.seen().state().is_some_and(State::is_fault)
+                && seen.state().is_some_and(State::is_fault)
             {
-                p.request_fault_reset();
+                prop_assert!(p.request_fault_reset());
                 reset_requested = true;
             }
-            let s = p.next(d.seen(), d.standstill());
-            d.apply(s.controlword());
             if faulted_at_log.is_none() && d.device.state() == State::FaultReactionActive {
                 faulted_at_log = Some(d.log.len());
             }
@@ -706,12 +710,12 @@ proptest! {
     ) {
         let mut p = planner(&drives::BLV_R, -1, 20, 2);
         p.set_target(TARGETS[target]);
-        if reset {
-            p.request_fault_reset();
-        }
         for w in words {
             let sw = StatusWord::from_raw(w);
             let s = p.next(sw, standstill);
+            if reset {
+                p.request_fault_reset();
+            }
             // A statusword with the fault bit never gets an energising command.
             if sw.contains(StatusWord::FAULT) {
                 prop_assert!(

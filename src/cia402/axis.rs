@@ -631,12 +631,16 @@ impl Axis {
 
     /// Reset the fault: rising edges on bit 7 while the drive is in Fault (see [`Planner`]).
     /// The target becomes Switch on disabled; enabling again needs [`Axis::request_enable`]
-    /// after [`Event::FaultCleared`]. Harmless without a fault.
-    pub fn request_fault_reset(&mut self) {
+    /// after [`Event::FaultCleared`]. Ignored (returns `false`) unless the last step saw a fault:
+    /// a reset must answer a fault the application has seen, never one that comes later.
+    pub fn request_fault_reset(&mut self) -> bool {
+        if !self.fault {
+            return false;
+        }
         if self.planner.target() != Target::SwitchOnDisabled {
             self.set_target(Target::SwitchOnDisabled);
         }
-        self.planner.request_fault_reset();
+        self.planner.request_fault_reset()
     }
 
     /// Change the mode of operation (see the module documentation for the procedure).
@@ -863,6 +867,14 @@ impl Axis {
         if self.fault {
             return Err(AxisError::Faulted {
                 error_code: self.error.map(|e| e.code),
+            });
+        }
+        if self.state != Some(State::OperationEnabled)
+            || self.planner.target() != Target::OperationEnabled
+        {
+            return Err(AxisError::NotStreaming {
+                state: self.state,
+                phase: self.phase(),
             });
         }
         if let ModeSwitch::Stopping { to, .. } | ModeSwitch::Requested { to, .. } = self.switch {

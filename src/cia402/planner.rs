@@ -53,13 +53,17 @@
 //!
 //! # Cycle bound
 //!
-//! Without faults and with a drive that reacts within `L` cycles to each command, a target is
-//! reached in at most `(transitions + 1) × (L + 1)` cycles plus the time the drive spends in
-//! automatic states (initialisation, quick-stop ramp, fault reaction); the longest path has 4
-//! transitions (Quick stop active → Switch on disabled → Ready to switch on → Switched on →
-//! Operation enabled). A fault reset adds at most `2 × fault_reset_hold_cycles + 1` cycles per
-//! edge the drive needs. The property tests check this bound against the [`device`](super::device)
-//! model.
+//! Take a drive that reacts to each command in the cycle it receives it and whose statusword
+//! reaches the master `L` cycles later, that spends `init` cycles initialising and at most `ramp`
+//! cycles in a quick-stop ramp or fault reaction, and that resets a cleared fault on the first
+//! edge. Then every target is reached, or reported unreachable, within
+//! `init + ramp + 5 × (L + 1) + 4` cycles. The longest paths have 5 observed transitions, e.g.
+//! Fault reaction active → Fault → Switch on disabled → Ready to switch on → Switched on →
+//! Operation enabled. (From a fault the caller first asks for Switch on disabled with a fault
+//! reset and then for its target; the bound covers both together.) Each further reset edge a
+//! drive needs costs `2 × fault_reset_hold_cycles` cycles. The property tests check the bound
+//! against the [`device`](super::device) model for every start state, target, quick-stop code,
+//! with and without state skipping and transition 16, and `L` up to 3.
 
 use core::fmt;
 use core::time::Duration;
@@ -308,6 +312,7 @@ pub struct Planner {
     target: Target,
     reached: bool,
     reset_requested: bool,
+    seen_fault: bool,
     pulse: Pulse,
     edges_sent: u32,
     observed: Option<Option<State>>,
@@ -345,6 +350,7 @@ impl Planner {
             target: Target::SwitchOnDisabled,
             reached: false,
             reset_requested: false,
+            seen_fault: false,
             pulse: Pulse::Idle,
             edges_sent: 0,
             observed: None,
@@ -379,7 +385,14 @@ impl Planner {
     /// clears a latched timeout or invalid-statusword failure (a new attempt), but not a latched
     /// [`PlannerError::Faulted`] or [`PlannerError::LeftTarget`]: those need
     /// [`Planner::set_target`].
-    pub fn request_fault_reset(&mut self) {
+    ///
+    /// The request is **ignored** unless the last statusword given to [`Planner::next`] showed a
+    /// fault (bit 3, Fault reaction active or Fault): a reset asked for without a visible fault
+    /// must not clear a fault that appears later. Returns whether the request was taken.
+    pub fn request_fault_reset(&mut self) -> bool {
+        if !self.seen_fault {
+            return false;
+        }
         self.reset_requested = true;
         self.pulse = Pulse::Idle;
         self.edges_sent = 0;
@@ -390,6 +403,7 @@ impl Planner {
         ) {
             self.latched = None;
         }
+        true
     }
 
     /// A fault reset has been requested and the drive has not left Fault yet.
@@ -408,6 +422,7 @@ impl Planner {
             self.stall = 0;
         }
         let faulted = state.is_some_and(State::is_fault);
+        self.seen_fault = faulted || statusword.contains(StatusWord::FAULT);
 
         if let Some(s) = state {
             if !s.is_fault() && self.reset_requested {
