@@ -682,6 +682,12 @@ proptest! {
                 faulted_at_log = Some(d.log.len());
             }
         }
+        for (cw, st, r) in &d.log {
+            prop_assert!(
+                !matches!(r, Reaction::Ignored),
+                "{st} ignored controlword 0x{:04X}", cw.raw()
+            );
+        }
         let first_fault = faulted_at_log.expect("the fault was injected");
         for (_, _, r) in &d.log[first_fault..] {
             prop_assert!(

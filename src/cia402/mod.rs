@@ -1,7 +1,12 @@
 //! The pure CiA 402 layer: no I/O, no clocks.
 //!
 //! Everything here works on values: a statusword in, a controlword out, once per cycle. Time is
-//! counted in cycles. Nothing blocks, allocates in the cyclic path, or panics on any input.
+//! counted in cycles. Nothing blocks, allocates in the cyclic path, or panics on any input. The
+//! layer depends only on [`crate::od`] (for object addresses).
+//!
+//! Per-drive behaviour enters only as data, a [`DriveCaps`] value. Values that are our choice
+//! rather than vendor facts are marked \[REC\] and live in [`planner::defaults`] and
+//! [`axis::axis_defaults`].
 //!
 //! | module | what |
 //! |---|---|
@@ -10,9 +15,9 @@
 //! | [`Command`] | shutdown, switch on, enable operation, … encoded into bits 0–3 and 7 |
 //! | [`OperationMode`], [`SupportedModes`] | 0x6060 / 0x6061 values (vendor values kept) and 0x6502 |
 //! | [`DriveCaps`] | per-drive rules as data: state skipping, quick-stop codes, transition 16, zero-speed mode switching, remote gating, error table |
-//! | [`Planner`] | master side: which controlword takes the drive to a [`Target`] |
+//! | [`planner`] ([`Planner`]) | master side: which controlword takes the drive to a [`Target`] |
 //! | [`device`] | drive side: how a drive reacts to a controlword (reference model, emulator core) |
-//! | [`Axis`] | the per-cycle engine: enable/disable, quick stop, fault reset, mode switching, set-points |
+//! | [`axis`] ([`Axis`]) | the per-cycle engine: enable/disable, quick stop, fault reset, mode switching, set-points |
 //! | [`ErrorCode`] | 0x603F decoding by CiA ranges plus per-drive tables |
 //! | [`object`] | the object addresses this layer reads and writes |
 

@@ -708,7 +708,8 @@ impl Planner {
                     }),
                     StallCause::NoResponse,
                 ),
-                ReadyToSwitchOn | SwitchedOn => (C::QuickStop, InProgress, gate),
+                // Quick stop acts even with remote = 0 (BLV-R §6.1).
+                ReadyToSwitchOn | SwitchedOn => (C::QuickStop, InProgress, StallCause::NoResponse),
                 OperationEnabled => (C::QuickStop, InProgress, StallCause::NoResponse),
                 QuickStopActive => (C::QuickStop, Reached, StallCause::NoResponse),
                 FaultReactionActive | Fault => wait,
