@@ -323,6 +323,10 @@ fn supported_modes_of_the_drives() {
     assert!(!mr.contains(Velocity));
     assert!(!mr.contains(InterpolatedPosition));
     assert_eq!(mr.unmapped_vendor_bits(), 0);
+    assert!(drives::MR_J4_TM.is_position_mode(Vendor(-101)));
+    assert!(drives::MR_J4_TM.is_position_mode(Homing));
+    assert!(!drives::MR_J4_TM.is_position_mode(Vendor(-100)));
+    assert!(!drives::MR_J4_TM.is_position_mode(CyclicSyncTorque));
 
     let bd = drives::BDHDE.supported_modes;
     assert_eq!(bd.raw(), 941);

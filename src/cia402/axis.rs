@@ -36,7 +36,7 @@
 //!
 //! [`Axis::request_mode`] checks the mode against [`DriveCaps::supported_modes`] (0x6502). Then:
 //! 1. If [`DriveCaps::position_mode_switch_needs_zero_speed`] and the old or the new mode is a
-//!    position mode, the engine first **brings the axis to standstill** (phase
+//!    position mode ([`DriveCaps::is_position_mode`]), the engine first **brings the axis to standstill** (phase
 //!    [`ModeSwitchPhase::Stopping`]): in csp it ramps the per-cycle position increment down to 0,
 //!    in csv it ramps the target velocity to 0, in cst/cstca the target torque to 0, each in
 //!    [`StopRampConfig::cycles`] cycles (linear); in every other mode it sets Halt (bit 8) so the
@@ -665,7 +665,7 @@ impl Axis {
             return Ok(());
         }
         let needs_stop = self.caps.position_mode_switch_needs_zero_speed
-            && (mode.is_position_mode() || self.active_mode.is_position_mode());
+            && (self.caps.is_position_mode(mode) || self.caps.is_position_mode(self.active_mode));
         if needs_stop {
             let n = self.config.stop_ramp.cycles.max(1);
             self.switch = ModeSwitch::Stopping {

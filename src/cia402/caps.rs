@@ -6,7 +6,7 @@
 use core::fmt;
 
 use super::error_code::ErrorEntry;
-use super::mode::SupportedModes;
+use super::mode::{OperationMode, SupportedModes};
 
 /// How the drive brakes during a quick stop (or another stop reaction).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -146,6 +146,10 @@ pub struct DriveCaps {
     /// Switching 0x6060 to or from a position mode (pp, hm, ip, csp) only works at zero speed;
     /// otherwise the drive ignores the request (MR-J4-TM §5.4.2).
     pub position_mode_switch_needs_zero_speed: bool,
+    /// Vendor modes (negative 0x6060 values) that count as position modes for
+    /// [`DriveCaps::position_mode_switch_needs_zero_speed`] (the standard ones are pp, hm, ip,
+    /// csp; see [`OperationMode::is_position_mode`]).
+    pub vendor_position_modes: &'static [i8],
     /// While statusword bit 9 (remote) is 0 the drive ignores every controlword command except
     /// quick stop, fault reset and halt (BLV-R §6.1). Used to report *why* a transition stalls.
     pub remote_gates_controlword: bool,
@@ -165,10 +169,20 @@ impl DriveCaps {
         quick_stop_options: &QuickStopOption::STANDARD,
         default_quick_stop_option: QuickStopOption::QUICK_STOP_RAMP,
         position_mode_switch_needs_zero_speed: false,
+        vendor_position_modes: &[],
         remote_gates_controlword: false,
         supported_modes: SupportedModes::ALL_STANDARD,
         error_table: &[],
     };
+
+    /// Whether `mode` is a position mode on this drive: the standard ones, plus the listed
+    /// vendor modes.
+    pub fn is_position_mode(&self, mode: OperationMode) -> bool {
+        match mode {
+            OperationMode::Vendor(v) => self.vendor_position_modes.contains(&v),
+            m => m.is_position_mode(),
+        }
+    }
 
     /// The option with 0x605A value `code`, if the drive accepts it. When the drive has no
     /// 0x605A (empty list), only the default's code is accepted.

@@ -46,6 +46,9 @@ pub const MR_J4_TM: DriveCaps = DriveCaps {
     quick_stop_options: &[QuickStopOption::QUICK_STOP_RAMP],
     default_quick_stop_option: QuickStopOption::QUICK_STOP_RAMP,
     position_mode_switch_needs_zero_speed: true,
+    // pt (point table) and idx (indexer) position the axis; jg (jog) does not. Our reading:
+    // §5.4.2 only says "position mode".
+    vendor_position_modes: &[-101, -103],
     remote_gates_controlword: false,
     supported_modes: SupportedModes::from_raw(0x000B_03AD).with_vendor_bits(MR_J4_VENDOR_BITS),
     error_table: MR_J4_ERRORS,
@@ -73,6 +76,7 @@ pub const BDHDE: DriveCaps = DriveCaps {
     ],
     default_quick_stop_option: QuickStopOption::DISABLE_DRIVE,
     position_mode_switch_needs_zero_speed: false,
+    vendor_position_modes: &[],
     remote_gates_controlword: true,
     supported_modes: SupportedModes::from_raw(0x0000_03AD),
     error_table: BDHDE_ERRORS,
@@ -105,6 +109,7 @@ pub const BLV_R: DriveCaps = DriveCaps {
     ],
     default_quick_stop_option: QuickStopOption::QUICK_STOP_RAMP,
     position_mode_switch_needs_zero_speed: false,
+    vendor_position_modes: &[],
     remote_gates_controlword: true,
     supported_modes: SupportedModes::from_raw(0x0000_002D),
     error_table: BLV_R_ERRORS,

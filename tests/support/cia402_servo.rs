@@ -91,7 +91,8 @@ impl SimServo {
         if !self.caps.supported_modes.contains(requested) {
             return; // ignored, 0x6061 keeps the old mode
         }
-        let position_involved = requested.is_position_mode() || self.mode.is_position_mode();
+        let position_involved =
+            self.caps.is_position_mode(requested) || self.caps.is_position_mode(self.mode);
         let moving = self.velocity != 0;
         if self.caps.position_mode_switch_needs_zero_speed && position_involved && moving {
             self.refused_mode_writes += 1;
