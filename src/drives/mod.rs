@@ -1,1 +1,12 @@
 //! Drive profiles: one file per drive, identity, defaults, quirks and alarm tables as data.
+//!
+//! Each profile is data plus rustdoc, no logic: the generic layers (`pdo`, `cia402`, `master`,
+//! `sim`) read these constants. Every value a manual does not state is labelled **MANUAL GAP**
+//! or **\[REC\]** where it is declared, and **DISCREPANCY** marks where a manual contradicts
+//! itself, with the reading used.
+//!
+//! - [`mr_j4_tm`]: Mitsubishi MR-J4-_TM_ (EtherCAT).
+//! - [`bdhde`]: Servotronix BDHDE (EtherCAT, EB models).
+
+pub mod bdhde;
+pub mod mr_j4_tm;

@@ -1,1 +1,8 @@
 //! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic loop.
+
+pub mod coe;
+pub mod error;
+pub mod exec;
+pub mod io;
+pub mod program;
+pub mod setpoint;

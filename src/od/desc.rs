@@ -12,6 +12,33 @@ pub enum ObjectCode {
     Record = 9,
 }
 
+impl ObjectCode {
+    /// Decode an object code as carried in SDO information; `None` for codes this crate does not
+    /// model (NULL, DOMAIN, DEFTYPE, DEFSTRUCT).
+    pub const fn from_code(code: u8) -> Option<Self> {
+        match code {
+            7 => Some(Self::Var),
+            8 => Some(Self::Array),
+            9 => Some(Self::Record),
+            _ => None,
+        }
+    }
+
+    /// The numeric code.
+    pub const fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// `VAR`, `ARRAY` or `RECORD`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Var => "VAR",
+            Self::Array => "ARRAY",
+            Self::Record => "RECORD",
+        }
+    }
+}
+
 bitflags::bitflags! {
     /// Entry access rights and flags, in the bit layout of the ETG.1000.6 SDO information
     /// "entry description" (ObjAccess): read and write per EtherCAT state, PDO mappability,
@@ -157,8 +184,9 @@ pub struct ObjectDesc {
 
 impl ObjectDesc {
     /// The entry with sub-index `sub`.
-    pub fn entry(&self, sub: u8) -> Option<&EntryDesc> {
-        self.entries.iter().find(|e| e.sub == sub)
+    pub fn entry(&self, sub: u8) -> Option<&'static EntryDesc> {
+        let entries: &'static [EntryDesc] = self.entries;
+        entries.iter().find(|e| e.sub == sub)
     }
 
     /// The address of one of its entries.

@@ -1,5 +1,6 @@
 //! CANopen / CoE object dictionary types (CiA 301, ETG.1000.6): object addresses, data types,
-//! access rights, static object descriptions, runtime values, and SDO abort codes.
+//! access rights, static object descriptions and a [`Dictionary`] view over them, runtime values,
+//! and SDO abort codes.
 //!
 //! These types are shared by the drive profiles (which describe what a drive's dictionary holds),
 //! the software slave (which serves a dictionary over CoE) and the master (which reads and writes
@@ -8,11 +9,13 @@
 mod abort;
 mod address;
 mod desc;
+mod dictionary;
 mod types;
 mod value;
 
 pub use abort::SdoAbortCode;
 pub use address::{AddressParseError, ObjectAddress};
 pub use desc::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc};
+pub use dictionary::{Dictionary, DictionaryError};
 pub use types::DataType;
 pub use value::{ConstValue, Value, ValueError};

@@ -104,7 +104,8 @@ pub(crate) fn int_range(dt: DataType) -> Option<(i128, i128)> {
     let bits = dt.bit_len()? as u32;
     if dt.is_signed() {
         Some((-(1i128 << (bits - 1)), (1i128 << (bits - 1)) - 1))
-    } else if dt.is_unsigned() {
+    } else if dt.is_unsigned() || matches!(dt, DataType::TimeOfDay | DataType::TimeDifference) {
+        // TIME_OF_DAY / TIME_DIFFERENCE are handled as their raw 48-bit little-endian value.
         Some((0, (1i128 << bits) - 1))
     } else {
         None
@@ -135,7 +136,9 @@ impl Value {
         }
     }
 
-    /// Decode the little-endian bytes of an SDO transfer as `dt`.
+    /// Decode the little-endian bytes of an SDO transfer as `dt`. Too few bytes are an error;
+    /// bytes beyond the type's size are ignored (a segmented upload may pad), so a server that
+    /// must reject over-long downloads checks the length itself.
     pub fn decode(dt: DataType, bytes: &[u8]) -> Result<Self, ValueError> {
         if dt.is_string() {
             return Ok(match dt {
@@ -265,17 +268,26 @@ impl Value {
         match dt {
             DataType::VisibleString | DataType::UnicodeString => Ok(Self::Str(text.to_string())),
             DataType::OctetString | DataType::Domain => {
-                let hex: String = t
-                    .trim_start_matches("0x")
-                    .chars()
-                    .filter(|c| !c.is_whitespace())
+                let digits = t
+                    .strip_prefix("0x")
+                    .or_else(|| t.strip_prefix("0X"))
+                    .unwrap_or(t);
+                let hex: Vec<u8> = digits
+                    .bytes()
+                    .filter(|c| !c.is_ascii_whitespace())
                     .collect();
                 if hex.len() % 2 != 0 {
                     return Err(nan());
                 }
-                (0..hex.len())
-                    .step_by(2)
-                    .map(|i| u8::from_str_radix(&hex[i..i + 2], 16).map_err(|_| nan()))
+                hex.chunks_exact(2)
+                    .map(|pair| match pair {
+                        [hi, lo] => {
+                            let hi = (*hi as char).to_digit(16).ok_or_else(nan)?;
+                            let lo = (*lo as char).to_digit(16).ok_or_else(nan)?;
+                            Ok((hi * 16 + lo) as u8)
+                        }
+                        _ => Err(nan()),
+                    })
                     .collect::<Result<Vec<_>, _>>()
                     .map(Self::Bytes)
             }
@@ -288,13 +300,17 @@ impl Value {
                     _ => {
                         let (neg, mag) = match lower.strip_prefix('-') {
                             Some(m) => (true, m),
-                            None => (false, lower.as_str()),
+                            None => (false, lower.strip_prefix('+').unwrap_or(&lower)),
                         };
-                        let mag = match mag.strip_prefix("0x") {
-                            Some(h) => i128::from_str_radix(h, 16),
-                            None => mag.parse::<i128>(),
+                        let (radix, digits) = match mag.strip_prefix("0x") {
+                            Some(h) => (16, h),
+                            None => (10, mag),
+                        };
+                        // Digits only: `from_str_radix` would also accept a second sign.
+                        if digits.is_empty() || !digits.chars().all(|c| c.is_digit(radix)) {
+                            return Err(nan());
                         }
-                        .map_err(|_| nan())?;
+                        let mag = i128::from_str_radix(digits, radix).map_err(|_| nan())?;
                         if neg { -mag } else { mag }
                     }
                 };
@@ -369,6 +385,54 @@ mod tests {
             Value::parse("-128", DataType::Integer8).unwrap(),
             Value::Int(-128)
         );
+        for bad in ["--5", "-+5", "0x-5", "+-5", "", "-", "0x"] {
+            assert!(
+                matches!(
+                    Value::parse(bad, DataType::Integer32),
+                    Err(ValueError::NotANumber { .. })
+                ),
+                "{bad:?}"
+            );
+        }
+        assert_eq!(
+            Value::parse("+7", DataType::Integer8).unwrap(),
+            Value::Int(7)
+        );
+    }
+
+    #[test]
+    fn octet_strings_parse_hex_and_reject_other_text_without_panicking() {
+        assert_eq!(
+            Value::parse("0x0102ff", DataType::OctetString).unwrap(),
+            Value::Bytes(vec![1, 2, 0xff])
+        );
+        assert_eq!(
+            Value::parse("01 02 FF", DataType::OctetString).unwrap(),
+            Value::Bytes(vec![1, 2, 0xff])
+        );
+        // Multi-byte characters must not split a char boundary.
+        for bad in ["a\u{e9}b", "\u{e9}\u{e9}", "0g", "123"] {
+            assert!(
+                matches!(
+                    Value::parse(bad, DataType::OctetString),
+                    Err(ValueError::NotANumber { .. })
+                ),
+                "{bad:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn wide_types_encode_and_decode() {
+        let v = Value::Int(-(1i64 << 39));
+        let b = v.encode(DataType::Integer40).unwrap();
+        assert_eq!(b.len(), 5);
+        assert_eq!(Value::decode(DataType::Integer40, &b).unwrap(), v);
+        assert!(Value::Uint(1 << 48).encode(DataType::Unsigned48).is_err());
+        // What decode produces for a TIME_OF_DAY, encode accepts back.
+        let raw = [1, 2, 3, 4, 5, 6];
+        let t = Value::decode(DataType::TimeOfDay, &raw).unwrap();
+        assert_eq!(t.encode(DataType::TimeOfDay).unwrap(), raw);
     }
 
     #[test]

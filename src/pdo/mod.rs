@@ -4,8 +4,34 @@
 //! RxPDOs, master → drive) and the input SyncManager (SM3, 0x1C13, TxPDOs, drive → master), and
 //! which object entries each PDO carries. The same type holds a drive's static default mapping
 //! (borrowed) and a user's mapping read from a configuration file (owned).
+//!
+//! Around the model:
+//! - [`layout`]: where every mapped entry sits in the output and input images (bit-packed, as
+//!   EtherCAT does), and resolution of object addresses to [`Field`] handles at start-up;
+//! - [`image`]: allocation-free, panic-free typed reads and writes of a [`Field`] in a process
+//!   image — what the cyclic loop uses every cycle;
+//! - [`limits`]: what a drive accepts ([`PdoLimits`]) and [`validate`], whose errors name the
+//!   limit and the offending PDO or entry;
+//! - [`remap`]: the SDO download sequence that installs a mapping in PRE-OP, and the read-back
+//!   that rebuilds a [`Mapping`] from a drive's 0x1C12/0x1C13 and 0x16xx/0x1Axx.
+
+pub mod image;
+pub mod layout;
+pub mod limits;
+pub mod remap;
+
+pub use image::{Field, FieldValue, ImageError, ImageView};
+pub use layout::{FieldError, ImageLayout, Layout, MappedEntry};
+pub use limits::{
+    DirectionLimits, MappingError, PdoLimits, PdoRange, RequiredObjects, validate, validate_all,
+};
+pub use remap::{
+    ReadbackError, RemapError, RemapOptions, SdoWrite, read_mapping, read_mapping_sync,
+    remap_sequence,
+};
 
 use crate::od::ObjectAddress;
+use core::fmt;
 use std::borrow::Cow;
 
 /// One mapped object entry: index, sub-index and size in bits. Index 0 is padding.
@@ -92,6 +118,41 @@ impl Direction {
             Self::Tx => "TxPDO",
         }
     }
+
+    /// `"an RxPDO"` or `"a TxPDO"`, for messages.
+    pub const fn with_article(self) -> &'static str {
+        match self {
+            Self::Rx => "an RxPDO",
+            Self::Tx => "a TxPDO",
+        }
+    }
+
+    /// Both directions, Rx first (the order of the remap sequence and of the images).
+    pub const ALL: [Direction; 2] = [Self::Rx, Self::Tx];
+
+    /// The index range of this direction's mapping objects (CiA 301 / ETG.1000.6):
+    /// 0x1600–0x17FF for Rx, 0x1A00–0x1BFF for Tx.
+    pub const fn mapping_range(self) -> (u16, u16) {
+        match self {
+            Self::Rx => (0x1600, 0x17FF),
+            Self::Tx => (0x1A00, 0x1BFF),
+        }
+    }
+
+    /// The direction a mapping-object index belongs to, or `None` outside both ranges.
+    pub const fn of_pdo_index(index: u16) -> Option<Self> {
+        match index {
+            0x1600..=0x17FF => Some(Self::Rx),
+            0x1A00..=0x1BFF => Some(Self::Tx),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Direction {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// One PDO: its mapping object index (0x16xx or 0x1Axx) and its entries in order.
@@ -122,7 +183,25 @@ impl Pdo {
 
     /// Total size in bits.
     pub fn bits(&self) -> u32 {
-        self.entries.iter().map(|e| e.bits as u32).sum()
+        self.entries
+            .iter()
+            .fold(0u32, |acc, e| acc.saturating_add(u32::from(e.bits)))
+    }
+
+    /// Number of entries (padding included), i.e. the value of the mapping object's sub-index 0.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether the PDO maps nothing.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The direction its index belongs to (0x16xx Rx, 0x1Axx Tx), or `None` for an index outside
+    /// both ranges.
+    pub const fn direction(&self) -> Option<Direction> {
+        Direction::of_pdo_index(self.index)
     }
 }
 
@@ -144,6 +223,14 @@ impl Mapping {
         }
     }
 
+    /// A mapping from runtime data.
+    pub fn owned(rx: Vec<Pdo>, tx: Vec<Pdo>) -> Self {
+        Self {
+            rx: Cow::Owned(rx),
+            tx: Cow::Owned(tx),
+        }
+    }
+
     /// The PDOs of one direction.
     pub fn pdos(&self, dir: Direction) -> &[Pdo] {
         match dir {
@@ -154,12 +241,27 @@ impl Mapping {
 
     /// Total size in bits of one direction.
     pub fn bits(&self, dir: Direction) -> u32 {
-        self.pdos(dir).iter().map(Pdo::bits).sum()
+        self.pdos(dir)
+            .iter()
+            .fold(0u32, |acc, p| acc.saturating_add(p.bits()))
     }
 
     /// Size in bytes of one direction's SyncManager (bits rounded up).
     pub fn bytes(&self, dir: Direction) -> usize {
         (self.bits(dir) as usize).div_ceil(8)
+    }
+
+    /// Number of entries (padding included) of one direction.
+    pub fn entry_count(&self, dir: Direction) -> usize {
+        self.pdos(dir).iter().map(Pdo::len).sum()
+    }
+
+    /// The assigned PDO with mapping index `index`, in either direction.
+    pub fn pdo(&self, index: u16) -> Option<&Pdo> {
+        self.rx
+            .iter()
+            .chain(self.tx.iter())
+            .find(|p| p.index == index)
     }
 
     /// Whether `addr` is mapped in `dir`.
@@ -183,6 +285,17 @@ mod tests {
             PdoEntry::from_u32(0x607A_0020),
             PdoEntry::new(0x607A, 0, 32)
         );
+    }
+
+    #[test]
+    fn directions_of_mapping_indices() {
+        assert_eq!(Direction::of_pdo_index(0x1600), Some(Direction::Rx));
+        assert_eq!(Direction::of_pdo_index(0x17FF), Some(Direction::Rx));
+        assert_eq!(Direction::of_pdo_index(0x1800), None);
+        assert_eq!(Direction::of_pdo_index(0x1A00), Some(Direction::Tx));
+        assert_eq!(Direction::of_pdo_index(0x1BFF), Some(Direction::Tx));
+        assert_eq!(Direction::of_pdo_index(0x1C12), None);
+        assert_eq!(Direction::Tx.to_string(), "TxPDO");
     }
 
     #[test]

@@ -1,0 +1,307 @@
+//! Mitsubishi MELSERVO MR-J4-_TM_ servo amplifier with the EtherCAT network module
+//! (HMS ABCC-M40-ECT).
+//!
+//! Source: *MR-J4-_TM_ Servo Amplifier Instruction Manual (EtherCAT)*, SH(NA)030208ENG rev. A–E;
+//! `§x.y` below cite its sections. Values the manual does not state are labelled **MANUAL GAP**
+//! or **\[REC\]** (our choice) where they are declared; **DISCREPANCY** marks places where the
+//! manual contradicts itself, with the reading used.
+//!
+//! Sections of this file:
+//! - PDO mapping: limits, the power-on contents of every mapping object, the default assignment,
+//!   the recommended cyclic mapping, and the objects each mode needs.
+
+use crate::od::ObjectAddress;
+use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
+
+// ============================================================================================
+// PDO mapping (§1.3, §3.3, §3.4, §3.5, §7.3.2, §7.3.3)
+// ============================================================================================
+
+/// Mapping objects of the RxPDOs: four tables 0x1600–0x1603, each up to 32 entries
+/// (§3.4; §7.3.2 sub 0 range 00h–20h).
+const RX_RANGES: &[PdoRange] = &[PdoRange::new(0x1600, 0x1603, 32)];
+
+/// Mapping objects of the TxPDOs: four tables 0x1A00–0x1A03, each up to 32 entries.
+const TX_RANGES: &[PdoRange] = &[PdoRange::new(0x1A00, 0x1A03, 32)];
+
+/// The PDO rules of the MR-J4-TM.
+///
+/// - Per direction at most 32 mapped objects and 64 bytes (§1.3, §3.4).
+/// - Mapping and assignment are writable in PRE-OP only (§3.4 POINT; for the assignment the
+///   PRE-OP restriction is DERIVED, not stated) and are not stored: they are back at the
+///   defaults after every power-up, so the master writes them at every start.
+/// - At most **1** PDO per SyncManager. DISCREPANCY: §7.3.3 gives 0x1C12/0x1C13 sub 0 the range
+///   0–4 with four assignment entries, while §3.4 shows a read-only one-entry array and §1.3
+///   says "RxPDO: 1 channel, TxPDO: 1 channel". \[REC\] assign exactly one PDO per direction.
+pub const PDO_LIMITS: PdoLimits = PdoLimits {
+    drive: "MR-J4-TM",
+    rx: DirectionLimits {
+        pdos: RX_RANGES,
+        max_assigned: 1,
+        max_entries: 32,
+        max_bytes: 64,
+    },
+    tx: DirectionLimits {
+        pdos: TX_RANGES,
+        max_assigned: 1,
+        max_entries: 32,
+        max_bytes: 64,
+    },
+    assignment_writable: true,
+};
+
+// --- Power-on contents of the mapping objects ------------------------------------------------
+//
+// §3.3 lists the objects of each default table; only the first entry value of 0x1600 and 0x1A00
+// is printed (60600008h / 60610008h). The entry values below are DERIVED as
+// index << 16 | sub << 8 | bits with sub 0 and the bit length of each object's type (§7.3).
+//
+// DISCREPANCY (default entry counts): §3.4 gives 0x1600 = 12, 0x1601 = 16, 0x1602 = 10,
+// 0x1603 = 0, 0x1A00 = 14, 0x1A01 = 19, 0x1A02 = 0x1A03 = 0; §7.3.2 gives 0x1600 = 8,
+// 0x1A00 = 9 and 0 for the rest. The §3 counts match the listed objects and the stated map
+// sizes (29 and 41 bytes) and are used here.
+
+/// 0x1600, 1st RxPDO map (assigned at power-on): csp/csv/cst/hm with speed limit (cst), torque
+/// limits and touch probe. 12 entries, 29 bytes.
+///
+/// Beware (§3.3 notes 1–2): 0x2D20 = 0 limits the speed to 0 and 0x60E0/0x60E1 = 0 produce no
+/// torque, so a master using this map must send sensible values from the first cycle.
+pub const RX_PDO_1600: Pdo = Pdo::fixed(
+    0x1600,
+    &[
+        PdoEntry::new(0x6060, 0, 8),  // Modes of operation, I8
+        PdoEntry::new(0x6040, 0, 16), // Controlword, U16
+        PdoEntry::new(0x2D01, 0, 16), // Control DI 1, U16
+        PdoEntry::new(0x2D02, 0, 16), // Control DI 2, U16
+        PdoEntry::new(0x2D03, 0, 16), // Control DI 3, U16
+        PdoEntry::new(0x607A, 0, 32), // Target position, I32
+        PdoEntry::new(0x60FF, 0, 32), // Target velocity, I32
+        // Velocity limit value: U32 per §7.3.7, I32 per §5.4.5 (DISCREPANCY); 32 bits either way.
+        PdoEntry::new(0x2D20, 0, 32),
+        PdoEntry::new(0x6071, 0, 16), // Target torque, I16
+        PdoEntry::new(0x60E0, 0, 16), // Positive torque limit value, U16
+        PdoEntry::new(0x60E1, 0, 16), // Negative torque limit value, U16
+        PdoEntry::new(0x60B8, 0, 16), // Touch probe function, U16
+    ],
+);
+
+/// 0x1601, 2nd RxPDO map: pp/pv/tq/hm. 16 entries, 45 bytes.
+pub const RX_PDO_1601: Pdo = Pdo::fixed(
+    0x1601,
+    &[
+        PdoEntry::new(0x6060, 0, 8),  // Modes of operation
+        PdoEntry::new(0x6040, 0, 16), // Controlword
+        PdoEntry::new(0x2D01, 0, 16), // Control DI 1
+        PdoEntry::new(0x2D02, 0, 16), // Control DI 2
+        PdoEntry::new(0x2D03, 0, 16), // Control DI 3
+        PdoEntry::new(0x607A, 0, 32), // Target position
+        PdoEntry::new(0x60FF, 0, 32), // Target velocity
+        PdoEntry::new(0x2D20, 0, 32), // Velocity limit value
+        PdoEntry::new(0x6071, 0, 16), // Target torque
+        PdoEntry::new(0x6081, 0, 32), // Profile velocity, U32
+        PdoEntry::new(0x6083, 0, 32), // Profile acceleration, U32
+        PdoEntry::new(0x6084, 0, 32), // Profile deceleration, U32
+        PdoEntry::new(0x6087, 0, 32), // Torque slope, U32
+        PdoEntry::new(0x60E0, 0, 16), // Positive torque limit value
+        PdoEntry::new(0x60E1, 0, 16), // Negative torque limit value
+        PdoEntry::new(0x60B8, 0, 16), // Touch probe function
+    ],
+);
+
+/// 0x1602, 3rd RxPDO map: pt/idx/jg/hm (software version B2 or later). 10 entries, 25 bytes.
+pub const RX_PDO_1602: Pdo = Pdo::fixed(
+    0x1602,
+    &[
+        PdoEntry::new(0x6060, 0, 8),  // Modes of operation
+        PdoEntry::new(0x6040, 0, 16), // Controlword
+        PdoEntry::new(0x2D01, 0, 16), // Control DI 1
+        PdoEntry::new(0x2D02, 0, 16), // Control DI 2
+        PdoEntry::new(0x2D03, 0, 16), // Control DI 3
+        PdoEntry::new(0x2D60, 0, 16), // Target point table, I16 [B2+]
+        PdoEntry::new(0x6081, 0, 32), // Profile velocity
+        PdoEntry::new(0x6083, 0, 32), // Profile acceleration
+        PdoEntry::new(0x6084, 0, 32), // Profile deceleration
+        PdoEntry::new(0x60B8, 0, 16), // Touch probe function
+    ],
+);
+
+/// 0x1603, 4th RxPDO map: empty at power-on.
+pub const RX_PDO_1603: Pdo = Pdo::fixed(0x1603, &[]);
+
+/// 0x1A00, 1st TxPDO map (assigned at power-on): csp/csv/cst/hm and pp/pv/tq/hm with touch-probe
+/// latches. 14 entries, 41 bytes.
+pub const TX_PDO_1A00: Pdo = Pdo::fixed(
+    0x1A00,
+    &[
+        PdoEntry::new(0x6061, 0, 8),  // Modes of operation display, I8
+        PdoEntry::new(0x6041, 0, 16), // Statusword, U16
+        PdoEntry::new(0x2D11, 0, 16), // Status DO 1, U16
+        PdoEntry::new(0x2D12, 0, 16), // Status DO 2, U16
+        PdoEntry::new(0x2D13, 0, 16), // Status DO 3, U16
+        PdoEntry::new(0x6064, 0, 32), // Position actual value, I32
+        PdoEntry::new(0x606C, 0, 32), // Velocity actual value, I32
+        PdoEntry::new(0x60F4, 0, 32), // Following error actual value, I32
+        // Torque actual value: I16 per §7.3.11, I32 per the §5 tables (DISCREPANCY); 16 bits
+        // gives the stated 41-byte map size.
+        PdoEntry::new(0x6077, 0, 16),
+        PdoEntry::new(0x60B9, 0, 16), // Touch probe status, U16
+        PdoEntry::new(0x60BA, 0, 32), // Touch probe pos1 pos value, I32
+        PdoEntry::new(0x60BB, 0, 32), // Touch probe pos1 neg value, I32
+        PdoEntry::new(0x60BC, 0, 32), // Touch probe pos2 pos value, I32
+        PdoEntry::new(0x60BD, 0, 32), // Touch probe pos2 neg value, I32
+    ],
+);
+
+/// 0x1A01, 2nd TxPDO map: pt/idx/jg/hm (B2 or later). 19 entries.
+///
+/// DISCREPANCY: §3.3 states a map size of 54 bytes; the listed objects with their §7 types add
+/// up to 50 bytes, which is what this table gives. Verify on hardware.
+pub const TX_PDO_1A01: Pdo = Pdo::fixed(
+    0x1A01,
+    &[
+        PdoEntry::new(0x6061, 0, 8),  // Modes of operation display
+        PdoEntry::new(0x6041, 0, 16), // Statusword
+        PdoEntry::new(0x2D11, 0, 16), // Status DO 1
+        PdoEntry::new(0x2D12, 0, 16), // Status DO 2
+        PdoEntry::new(0x2D13, 0, 16), // Status DO 3
+        PdoEntry::new(0x2D15, 0, 16), // Status DO 5, U16
+        PdoEntry::new(0x2D17, 0, 16), // Status DO 7, U16
+        PdoEntry::new(0x6064, 0, 32), // Position actual value
+        PdoEntry::new(0x606C, 0, 32), // Velocity actual value
+        PdoEntry::new(0x60F4, 0, 32), // Following error actual value
+        PdoEntry::new(0x6077, 0, 16), // Torque actual value
+        PdoEntry::new(0x2D68, 0, 16), // Point demand value, I16 [B2+]
+        PdoEntry::new(0x2D69, 0, 16), // Point actual value, I16 [B2+]
+        PdoEntry::new(0x2D6A, 0, 8),  // M code actual value, U8 [B2+]
+        PdoEntry::new(0x60B9, 0, 16), // Touch probe status
+        PdoEntry::new(0x60BA, 0, 32), // Touch probe pos1 pos value
+        PdoEntry::new(0x60BB, 0, 32), // Touch probe pos1 neg value
+        PdoEntry::new(0x60BC, 0, 32), // Touch probe pos2 pos value
+        PdoEntry::new(0x60BD, 0, 32), // Touch probe pos2 neg value
+    ],
+);
+
+/// 0x1A02, 3rd TxPDO map: empty at power-on.
+pub const TX_PDO_1A02: Pdo = Pdo::fixed(0x1A02, &[]);
+
+/// 0x1A03, 4th TxPDO map: empty at power-on.
+pub const TX_PDO_1A03: Pdo = Pdo::fixed(0x1A03, &[]);
+
+/// Power-on contents of every RxPDO mapping object, in index order (what an emulated drive
+/// resets to).
+pub const RX_PDOS: &[Pdo] = &[RX_PDO_1600, RX_PDO_1601, RX_PDO_1602, RX_PDO_1603];
+
+/// Power-on contents of every TxPDO mapping object, in index order.
+pub const TX_PDOS: &[Pdo] = &[TX_PDO_1A00, TX_PDO_1A01, TX_PDO_1A02, TX_PDO_1A03];
+
+/// The power-on assignment: 0x1C12:01 = 0x1600 and 0x1C13:01 = 0x1A00, one PDO each
+/// (§3.4, §7.3.3). Output image 29 bytes, input image 41 bytes.
+pub const DEFAULT_MAPPING: Mapping = Mapping::fixed(DEFAULT_RX, DEFAULT_TX);
+const DEFAULT_RX: &[Pdo] = &[RX_PDO_1600];
+const DEFAULT_TX: &[Pdo] = &[TX_PDO_1A00];
+
+/// \[REC\] Recommended mapping for cyclic synchronous operation (csp, csv, cst, switchable through
+/// 0x6060), our choice, not the manual's. Output 13 bytes, input 19 bytes.
+///
+/// It carries what the cycle writes and reads every cycle, and nothing that is dangerous when
+/// left at zero: unlike the default 0x1600 it leaves out the velocity limit 0x2D20 and the torque
+/// limits 0x60E0/0x60E1 (0 in the process image means "speed 0" / "no torque", §3.3 notes); set
+/// those by SDO in PRE-OP if needed (0x60E0/0x60E1 default to [Pr. PA11]/[Pr. PA12]). It adds
+/// the error code 0x603F, which no default map carries. It keeps 32-bit fields on even byte
+/// offsets. Not included, though §3.5 recommends them for csp/csv/cst: the watch-dog counters
+/// 0x2D23/0x2D24 (mapping 0x2D23 arms [AL. 86.2] unless the master increments it every cycle),
+/// Control DI 1/2, Status DO 1–3.
+pub const CYCLIC_MAPPING: Mapping = Mapping::fixed(CYCLIC_RX, CYCLIC_TX);
+const CYCLIC_RX: &[Pdo] = &[Pdo::fixed(
+    0x1600,
+    &[
+        PdoEntry::new(0x6040, 0, 16), // Controlword, byte 0
+        PdoEntry::new(0x607A, 0, 32), // Target position, byte 2
+        PdoEntry::new(0x60FF, 0, 32), // Target velocity, byte 6
+        PdoEntry::new(0x6071, 0, 16), // Target torque, byte 10
+        PdoEntry::new(0x6060, 0, 8),  // Modes of operation, byte 12
+    ],
+)];
+const CYCLIC_TX: &[Pdo] = &[Pdo::fixed(
+    0x1A00,
+    &[
+        PdoEntry::new(0x6041, 0, 16), // Statusword, byte 0
+        PdoEntry::new(0x6064, 0, 32), // Position actual value, byte 2
+        PdoEntry::new(0x606C, 0, 32), // Velocity actual value, byte 6
+        PdoEntry::new(0x6077, 0, 16), // Torque actual value, byte 10
+        PdoEntry::new(0x60F4, 0, 32), // Following error actual value, byte 12
+        PdoEntry::new(0x603F, 0, 16), // Error code, byte 16
+        PdoEntry::new(0x6061, 0, 8),  // Modes of operation display, byte 18
+    ],
+)];
+
+const CONTROLWORD: ObjectAddress = ObjectAddress::new(0x6040, 0);
+const STATUSWORD: ObjectAddress = ObjectAddress::new(0x6041, 0);
+const SW_ONLY: &[ObjectAddress] = &[STATUSWORD];
+
+/// Objects each mode of operation must have mapped: the "mapping required" (⊙) marks of §3.5.
+/// Modes of operation (0x6060) is in no row: the mode can also be set by SDO. The touch-probe
+/// function (0x60B8 Rx / 0x60B9 Tx, required when touch probe is used) is not a mode and is not
+/// listed here. pt, jg and idx need software version B2 or later.
+pub const REQUIRED_OBJECTS: &[RequiredObjects] = &[
+    RequiredObjects {
+        mode: 8,
+        mode_name: "csp",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x607A, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 9,
+        mode_name: "csv",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x60FF, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 10,
+        mode_name: "cst",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x6071, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 1,
+        mode_name: "pp",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x607A, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 3,
+        mode_name: "pv",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x60FF, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 4,
+        mode_name: "tq",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x6071, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 6,
+        mode_name: "hm",
+        rx: &[CONTROLWORD],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: -101,
+        mode_name: "pt",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x2D60, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: -100,
+        mode_name: "jg",
+        rx: &[CONTROLWORD],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: -103,
+        mode_name: "idx",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x2D60, 0)],
+        tx: SW_ONLY,
+    },
+];

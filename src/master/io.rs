@@ -1,0 +1,338 @@
+//! Frame I/O for ethercrab, driven by ecdrive itself.
+//!
+//! ethercrab queues frames in its `PduStorage`; somebody must send them and hand the replies back
+//! (`PduTx` / `PduRx`). ethercrab's own drivers do this on a separate thread or task, and time out
+//! each frame with an `async_io::Timer`, which registers with async-io's reactor thread on every
+//! poll (a syscall and a queue shared with a non-real-time thread). ecdrive instead runs ethercrab
+//! with the PDU timeout set to "never" and moves the frames itself with a [`Pump`]: during start-up
+//! the [`exec`](super::exec) executor pumps between polls; in the cycle the cycle thread pumps
+//! inline, so frame I/O and the sleep are its only syscalls. Lost frames are detected here, by
+//! age, retransmitted a bounded number of times, and finally reported so the caller drops the
+//! waiting future (ethercrab releases the frame slot on drop).
+
+use crate::rt::monotonic_ns;
+use ethercrab::{PduRx, PduTx};
+use std::task::Waker;
+
+/// Largest Ethernet frame (without FCS) the pump handles.
+pub const MAX_FRAME: usize = 1514;
+
+/// Something that carries EtherCAT frames to a segment and brings the replies back: a raw socket
+/// on a network interface, or the in-process software slave.
+pub trait FrameLink: Send {
+    /// Transmit one Ethernet frame.
+    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError>;
+
+    /// Receive one frame into `buf`, waiting at most until the `CLOCK_MONOTONIC` instant
+    /// `deadline_ns`. `Ok(None)` when nothing arrived in time.
+    fn recv(&mut self, buf: &mut [u8], deadline_ns: u64) -> Result<Option<usize>, LinkError>;
+
+    /// A short name for messages: the interface name, or "in-process".
+    fn name(&self) -> &str;
+}
+
+/// A link failure.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{link}: {reason}")]
+pub struct LinkError {
+    /// The link's name.
+    pub link: String,
+    /// What failed.
+    pub reason: String,
+}
+
+/// Counters of everything the pump saw. Read by telemetry; plain integers, no allocation.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct PumpStats {
+    /// Frames sent (first transmissions).
+    pub sent: u64,
+    /// Replies handed to ethercrab.
+    pub received: u64,
+    /// Retransmissions after a frame got no reply in time.
+    pub retransmitted: u64,
+    /// Frames given up on after the last retransmission.
+    pub lost: u64,
+    /// Replies that matched no frame in flight (late replies to frames already given up on).
+    pub stale: u64,
+    /// Frames on the link that were not EtherCAT replies or that ethercrab rejected.
+    pub rejected: u64,
+}
+
+#[derive(Clone, Copy)]
+struct InFlight {
+    /// Index of the first PDU: ethercrab maps a reply back to its frame by it.
+    first_idx: u8,
+    len: usize,
+    sent_at: u64,
+    retries: u8,
+    lost: bool,
+}
+
+/// Timing policy for lost frames.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LossPolicy {
+    /// A frame with no reply after this many nanoseconds is retransmitted (or given up on).
+    pub frame_timeout_ns: u64,
+    /// Retransmissions before a frame counts as lost.
+    pub retries: u8,
+}
+
+impl Default for LossPolicy {
+    fn default() -> Self {
+        Self {
+            frame_timeout_ns: 30_000_000,
+            retries: 2,
+        }
+    }
+}
+
+/// Offset of the first PDU's index byte in an EtherCAT frame: Ethernet header (14), EtherCAT
+/// header (2), command (1).
+const FIRST_IDX_OFFSET: usize = 14 + 2 + 1;
+
+/// Moves frames between ethercrab and a [`FrameLink`]. See the module documentation.
+pub struct Pump<'sto, L: FrameLink> {
+    tx: PduTx<'sto>,
+    rx: PduRx<'sto>,
+    link: L,
+    inflight: Vec<Option<InFlight>>,
+    /// Copies of the frames in flight, for retransmission (one slot per storage frame).
+    copies: Vec<[u8; MAX_FRAME]>,
+    rx_buf: Box<[u8; MAX_FRAME + 4]>,
+    stats: PumpStats,
+    policy: LossPolicy,
+    link_error: Option<LinkError>,
+}
+
+impl<'sto, L: FrameLink> Pump<'sto, L> {
+    /// A pump over ethercrab's TX/RX handles and a link. Allocates its buffers once, here.
+    pub fn new(tx: PduTx<'sto>, rx: PduRx<'sto>, link: L, policy: LossPolicy) -> Self {
+        let n = tx.capacity();
+        Self {
+            tx,
+            rx,
+            link,
+            inflight: vec![None; n],
+            copies: vec![[0u8; MAX_FRAME]; n],
+            rx_buf: Box::new([0u8; MAX_FRAME + 4]),
+            stats: PumpStats::default(),
+            policy,
+            link_error: None,
+        }
+    }
+
+    /// The link.
+    pub fn link(&self) -> &L {
+        &self.link
+    }
+
+    /// The link, mutably (e.g. to inject faults into an in-process segment).
+    pub fn link_mut(&mut self) -> &mut L {
+        &mut self.link
+    }
+
+    /// The counters.
+    pub fn stats(&self) -> PumpStats {
+        self.stats
+    }
+
+    /// The loss policy in force.
+    pub fn policy(&self) -> LossPolicy {
+        self.policy
+    }
+
+    /// Change the loss policy (start-up tolerates slower replies than the cycle).
+    pub fn set_policy(&mut self, policy: LossPolicy) {
+        self.policy = policy;
+    }
+
+    /// Register the waker ethercrab wakes when it queues a frame.
+    pub fn register_waker(&self, waker: &Waker) {
+        self.tx.replace_waker(waker);
+    }
+
+    /// Number of frames sent and neither answered nor given up on.
+    pub fn outstanding(&self) -> usize {
+        self.inflight
+            .iter()
+            .filter(|f| matches!(f, Some(f) if !f.lost))
+            .count()
+    }
+
+    /// Send every frame ethercrab has queued. Returns how many were sent.
+    pub fn send_pending(&mut self) -> Result<usize, LinkError> {
+        let mut n = 0;
+        while let Some(frame) = self.tx.next_sendable_frame() {
+            let mut slot_free = None;
+            for (i, f) in self.inflight.iter().enumerate() {
+                if f.is_none() {
+                    slot_free = Some(i);
+                    break;
+                }
+            }
+            let link = &mut self.link;
+            let copies = &mut self.copies;
+            let mut record = None;
+            let mut err = None;
+            let res = frame.send_blocking(|bytes| {
+                if let Err(e) = link.send(bytes) {
+                    err = Some(e);
+                    return Err(ethercrab::error::Error::SendFrame);
+                }
+                if let (Some(i), Some(first)) = (slot_free, bytes.get(FIRST_IDX_OFFSET)) {
+                    let len = bytes.len().min(MAX_FRAME);
+                    if let Some(copy) = copies.get_mut(i) {
+                        copy[..len].copy_from_slice(&bytes[..len]);
+                    }
+                    record = Some((i, *first, len));
+                }
+                Ok(bytes.len())
+            });
+            if let Some(e) = err {
+                self.link_error = Some(e.clone());
+                return Err(e);
+            }
+            if res.is_ok() {
+                n += 1;
+                self.stats.sent += 1;
+                if let Some((i, first_idx, len)) = record
+                    && let Some(slot) = self.inflight.get_mut(i)
+                {
+                    *slot = Some(InFlight {
+                        first_idx,
+                        len,
+                        sent_at: monotonic_ns(),
+                        retries: 0,
+                        lost: false,
+                    });
+                }
+            }
+        }
+        Ok(n)
+    }
+
+    /// Receive replies until nothing is outstanding or `deadline_ns` passes, handing each to
+    /// ethercrab. Returns the number of replies handed over.
+    pub fn receive_until(&mut self, deadline_ns: u64) -> Result<usize, LinkError> {
+        let mut n = 0;
+        while self.outstanding() > 0 {
+            let got = match self.link.recv(&mut self.rx_buf[..], deadline_ns) {
+                Ok(Some(len)) => len,
+                Ok(None) => break,
+                Err(e) => {
+                    self.link_error = Some(e.clone());
+                    return Err(e);
+                }
+            };
+            if self.accept(got) {
+                n += 1;
+            }
+        }
+        Ok(n)
+    }
+
+    /// Receive whatever has already arrived, without waiting.
+    pub fn receive_ready(&mut self) -> Result<usize, LinkError> {
+        self.receive_until(0)
+    }
+
+    fn accept(&mut self, len: usize) -> bool {
+        let Some(frame) = self.rx_buf.get(..len) else {
+            self.stats.rejected += 1;
+            return false;
+        };
+        let Some(&first) = frame.get(FIRST_IDX_OFFSET) else {
+            self.stats.rejected += 1;
+            return false;
+        };
+        let slot = self
+            .inflight
+            .iter()
+            .position(|f| matches!(f, Some(f) if f.first_idx == first));
+        let Some(slot) = slot else {
+            self.stats.stale += 1;
+            return false;
+        };
+        let was_lost = matches!(self.inflight.get(slot), Some(Some(f)) if f.lost);
+        if let Some(s) = self.inflight.get_mut(slot) {
+            *s = None;
+        }
+        if was_lost {
+            // The caller already gave up on this frame and dropped its future.
+            self.stats.stale += 1;
+            return false;
+        }
+        match self.rx.receive_frame(frame) {
+            Ok(ethercrab::ReceiveAction::Processed) => {
+                self.stats.received += 1;
+                true
+            }
+            _ => {
+                self.stats.rejected += 1;
+                false
+            }
+        }
+    }
+
+    /// Retransmit frames that got no reply within the policy's timeout; mark those out of
+    /// retries as lost. Returns the number newly lost. The caller must drop the futures waiting
+    /// for lost frames (ethercrab then frees their slots).
+    pub fn check_timeouts(&mut self) -> Result<usize, LinkError> {
+        let now = monotonic_ns();
+        let mut lost = 0;
+        for i in 0..self.inflight.len() {
+            let Some(Some(f)) = self.inflight.get(i).copied() else {
+                continue;
+            };
+            if f.lost || now.saturating_sub(f.sent_at) < self.policy.frame_timeout_ns {
+                continue;
+            }
+            if f.retries < self.policy.retries {
+                if let Some(copy) = self.copies.get(i)
+                    && let Err(e) = self.link.send(&copy[..f.len])
+                {
+                    self.link_error = Some(e.clone());
+                    return Err(e);
+                }
+                self.stats.retransmitted += 1;
+                if let Some(Some(s)) = self.inflight.get_mut(i) {
+                    s.retries += 1;
+                    s.sent_at = now;
+                }
+            } else {
+                self.stats.lost += 1;
+                lost += 1;
+                if let Some(Some(s)) = self.inflight.get_mut(i) {
+                    s.lost = true;
+                }
+            }
+        }
+        Ok(lost)
+    }
+
+    /// Forget frames marked lost, once their futures have been dropped.
+    pub fn clear_lost(&mut self) {
+        for f in self.inflight.iter_mut() {
+            if matches!(f, Some(x) if x.lost) {
+                *f = None;
+            }
+        }
+    }
+
+    /// Forget every frame in flight (after the futures waiting for them were dropped).
+    pub fn clear_all(&mut self) {
+        for f in self.inflight.iter_mut() {
+            *f = None;
+        }
+    }
+
+    /// The last link error, if the link failed.
+    pub fn link_error(&self) -> Option<&LinkError> {
+        self.link_error.as_ref()
+    }
+
+    /// Take the TX/RX handles and the link back.
+    pub fn into_parts(self) -> (PduTx<'sto>, PduRx<'sto>, L) {
+        (self.tx, self.rx, self.link)
+    }
+}

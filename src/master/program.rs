@@ -1,0 +1,642 @@
+//! Set-point programs: what an axis does once it is enabled, as a sequence of steps.
+//!
+//! A program is planned step by step: when a step starts it is planned from the current
+//! set-point (so consecutive steps join without a jump) and then sampled once per cycle by the
+//! cycle thread, allocation-free. Positions are in drive position units (counts), velocities in
+//! counts per second, torques in the drive's torque unit; the cycle converts velocities to the
+//! drive's velocity object unit with the drive profile.
+
+use super::setpoint::{Jog, Move, ProfileError, Sample, Sine, TorqueStep, VelocityRamp};
+use serde::{Deserialize, Serialize};
+
+/// The cyclic synchronous modes a program can run in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CyclicMode {
+    /// Cyclic synchronous position (0x6060 = 8): the program streams target positions.
+    Csp,
+    /// Cyclic synchronous velocity (0x6060 = 9): the program streams target velocities.
+    Csv,
+    /// Cyclic synchronous torque (0x6060 = 10): the program streams target torques.
+    Cst,
+}
+
+impl CyclicMode {
+    /// The 0x6060 value.
+    pub const fn code(self) -> i8 {
+        match self {
+            Self::Csp => 8,
+            Self::Csv => 9,
+            Self::Cst => 10,
+        }
+    }
+
+    /// The mode for a 0x6060/0x6061 value, if it is a cyclic synchronous mode.
+    pub const fn from_code(code: i8) -> Option<Self> {
+        match code {
+            8 => Some(Self::Csp),
+            9 => Some(Self::Csv),
+            10 => Some(Self::Cst),
+            _ => None,
+        }
+    }
+
+    /// `"csp"`, `"csv"` or `"cst"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Csp => "csp",
+            Self::Csv => "csv",
+            Self::Cst => "cst",
+        }
+    }
+}
+
+/// Where a move goes.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Target {
+    /// An absolute position.
+    To(f64),
+    /// A distance from the position where the step starts.
+    By(f64),
+}
+
+/// One step of a program.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Step {
+    /// Switch the mode of operation while enabled (no jump: the new mode starts from the
+    /// actual values).
+    Mode {
+        /// The new mode.
+        mode: CyclicMode,
+    },
+    /// A point-to-point move (csp: positions; csv: the profile's velocities).
+    Move {
+        /// Destination.
+        #[serde(flatten)]
+        target: Target,
+        /// Velocity limit (counts/s).
+        velocity: f64,
+        /// Acceleration limit (counts/s²).
+        acceleration: f64,
+        /// Jerk limit (counts/s³); without it the profile is trapezoidal.
+        #[serde(default)]
+        jerk: Option<f64>,
+    },
+    /// A sine around the position where the step starts (csp: positions; csv: velocities).
+    Sine {
+        /// Amplitude (counts).
+        amplitude: f64,
+        /// Frequency (Hz).
+        frequency: f64,
+        /// Number of periods.
+        periods: f64,
+    },
+    /// A velocity ramp from the current velocity set-point to `velocity`, then held.
+    Ramp {
+        /// Final velocity (counts/s).
+        velocity: f64,
+        /// Acceleration (counts/s²).
+        acceleration: f64,
+        /// Time to hold the final velocity (s).
+        #[serde(default)]
+        hold: f64,
+    },
+    /// Jog at a velocity for a time, then stop, with an acceleration limit.
+    Jog {
+        /// Jog velocity (counts/s).
+        velocity: f64,
+        /// Acceleration (counts/s²).
+        acceleration: f64,
+        /// Time at the jog velocity before stopping (s).
+        seconds: f64,
+    },
+    /// A torque profile (cst): ramp to `torque`, hold, ramp back to zero.
+    Torque {
+        /// Torque level (drive torque units).
+        torque: f64,
+        /// Slope (torque units per second); absent = a true step.
+        #[serde(default)]
+        slope: Option<f64>,
+        /// Hold time (s).
+        hold: f64,
+    },
+    /// Hold the current set-point for a time.
+    Dwell {
+        /// Seconds.
+        seconds: f64,
+    },
+}
+
+impl Step {
+    /// A short description for logs and summaries.
+    pub fn describe(&self) -> String {
+        match self {
+            Self::Mode { mode } => format!("switch to {}", mode.name()),
+            Self::Move { target, .. } => match target {
+                Target::To(p) => format!("move to {p}"),
+                Target::By(d) => format!("move by {d}"),
+            },
+            Self::Sine {
+                amplitude,
+                frequency,
+                ..
+            } => format!("sine ±{amplitude} at {frequency} Hz"),
+            Self::Ramp { velocity, .. } => format!("ramp to {velocity}/s"),
+            Self::Jog { velocity, .. } => format!("jog at {velocity}/s"),
+            Self::Torque { torque, .. } => format!("torque {torque}"),
+            Self::Dwell { seconds } => format!("dwell {seconds} s"),
+        }
+    }
+
+    /// The modes this step can run in.
+    pub fn runs_in(&self, mode: CyclicMode) -> bool {
+        match self {
+            Self::Mode { .. } | Self::Dwell { .. } => true,
+            Self::Move { .. } | Self::Sine { .. } | Self::Ramp { .. } | Self::Jog { .. } => {
+                mode != CyclicMode::Cst
+            }
+            Self::Torque { .. } => mode == CyclicMode::Cst,
+        }
+    }
+}
+
+/// A program that cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ProgramError {
+    /// A step does not fit the mode it would run in.
+    #[error("step {index} ({what}) cannot run in {mode}: {why}")]
+    WrongMode {
+        /// Step number (0-based).
+        index: usize,
+        /// The step.
+        what: String,
+        /// The mode at that point of the program.
+        mode: &'static str,
+        /// Why.
+        why: &'static str,
+    },
+    /// A step's parameters are invalid.
+    #[error("step {index} ({what}): {source}")]
+    Profile {
+        /// Step number (0-based).
+        index: usize,
+        /// The step.
+        what: String,
+        /// The parameter problem.
+        source: ProfileError,
+    },
+}
+
+/// Check that every step runs in the mode the program is in at that point. `start` is the mode
+/// the axis starts in.
+pub fn validate(steps: &[Step], start: CyclicMode) -> Result<(), ProgramError> {
+    let mut mode = start;
+    for (index, s) in steps.iter().enumerate() {
+        if let Step::Mode { mode: m } = s {
+            mode = *m;
+            continue;
+        }
+        if !s.runs_in(mode) {
+            return Err(ProgramError::WrongMode {
+                index,
+                what: s.describe(),
+                mode: mode.name(),
+                why: match s {
+                    Step::Torque { .. } => "torque steps need cst",
+                    _ => "position and velocity steps need csp or csv",
+                },
+            });
+        }
+        // Plan it once from a neutral state to check the parameters.
+        plan(s, &Sample::default()).map_err(|source| ProgramError::Profile {
+            index,
+            what: s.describe(),
+            source,
+        })?;
+    }
+    Ok(())
+}
+
+/// A planned step, sampled per cycle.
+// Boxing the large variant would allocate when a step starts, which happens in the cycle.
+#[allow(clippy::large_enum_variant)]
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Planned {
+    Move(Move),
+    Sine(Sine),
+    Ramp(VelocityRamp),
+    Jog { jog: Jog, until: f64 },
+    Torque(TorqueStep),
+    Dwell { hold: Sample, seconds: f64 },
+    Mode,
+}
+
+fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
+    Ok(match *step {
+        Step::Mode { .. } => Planned::Mode,
+        Step::Move {
+            target,
+            velocity,
+            acceleration,
+            jerk,
+        } => {
+            let end = match target {
+                Target::To(p) => p,
+                Target::By(d) => from.pos + d,
+            };
+            Planned::Move(match jerk {
+                Some(j) => Move::double_s(from.pos, end, velocity, acceleration, j)?,
+                None => Move::trapezoid(from.pos, end, velocity, acceleration)?,
+            })
+        }
+        Step::Sine {
+            amplitude,
+            frequency,
+            periods,
+        } => Planned::Sine(Sine::new(from.pos, amplitude, frequency, periods)?),
+        Step::Ramp {
+            velocity,
+            acceleration,
+            hold,
+        } => Planned::Ramp(VelocityRamp::new(
+            from.pos,
+            from.vel,
+            velocity,
+            acceleration,
+            hold,
+        )?),
+        Step::Jog {
+            velocity,
+            acceleration,
+            seconds,
+        } => {
+            let mut jog = Jog::new(from.pos, acceleration)?;
+            jog.set_target(velocity);
+            if !(seconds.is_finite() && seconds >= 0.0) {
+                return Err(ProfileError::NotFinite {
+                    name: "seconds",
+                    value: seconds,
+                });
+            }
+            Planned::Jog {
+                jog,
+                until: seconds + velocity.abs() / acceleration,
+            }
+        }
+        Step::Torque {
+            torque,
+            slope,
+            hold,
+        } => Planned::Torque(TorqueStep::new(
+            from.torque,
+            torque,
+            slope.unwrap_or(f64::INFINITY),
+            hold,
+        )?),
+        Step::Dwell { seconds } => {
+            if !(seconds.is_finite() && seconds >= 0.0) {
+                return Err(ProfileError::NotFinite {
+                    name: "seconds",
+                    value: seconds,
+                });
+            }
+            Planned::Dwell {
+                hold: Sample {
+                    vel: 0.0,
+                    acc: 0.0,
+                    done: false,
+                    ..*from
+                },
+                seconds,
+            }
+        }
+    })
+}
+
+/// What the runner wants this cycle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tick {
+    /// Stream this set-point.
+    Setpoint(Sample),
+    /// Switch to this mode, then call [`Runner::mode_switched`] once the drive confirms it.
+    SwitchMode(CyclicMode),
+    /// The program is finished; hold the last set-point.
+    Finished(Sample),
+}
+
+/// Runs a program on one axis. Built before the cycle starts; [`Runner::tick`] does not
+/// allocate.
+#[derive(Debug, Clone)]
+pub struct Runner {
+    steps: Vec<Step>,
+    index: usize,
+    planned: Option<Planned>,
+    started_at: f64,
+    /// Time within the running step at the previous tick (for the stateful jog).
+    step_t: f64,
+    last: Sample,
+    waiting_for_mode: bool,
+    failed: Option<(usize, ProfileError)>,
+}
+
+impl Runner {
+    /// A runner for validated steps.
+    pub fn new(steps: Vec<Step>) -> Self {
+        Self {
+            steps,
+            index: 0,
+            planned: None,
+            started_at: 0.0,
+            step_t: 0.0,
+            last: Sample::default(),
+            waiting_for_mode: false,
+            failed: None,
+        }
+    }
+
+    /// The steps.
+    pub fn steps(&self) -> &[Step] {
+        &self.steps
+    }
+
+    /// The index of the step running (equal to the number of steps when finished).
+    pub fn step_index(&self) -> usize {
+        self.index
+    }
+
+    /// Whether every step has run.
+    pub fn finished(&self) -> bool {
+        self.index >= self.steps.len()
+    }
+
+    /// A step that could not be planned at run time (its index and why); the runner holds the
+    /// last set-point after it.
+    pub fn failure(&self) -> Option<&(usize, ProfileError)> {
+        self.failed.as_ref()
+    }
+
+    /// Restart the running step from the actual state (position, velocity, torque), e.g. after
+    /// enabling. Steps are planned from this state.
+    pub fn seed(&mut self, actual: Sample) {
+        self.last = Sample {
+            done: false,
+            ..actual
+        };
+        self.planned = None;
+    }
+
+    /// The drive confirmed the mode switch the runner asked for; continue with the next step
+    /// from `actual`.
+    pub fn mode_switched(&mut self, actual: Sample) {
+        if self.waiting_for_mode {
+            self.waiting_for_mode = false;
+            self.index += 1;
+            self.seed(actual);
+        }
+    }
+
+    /// The set-point at time `now` (seconds, any monotonic origin).
+    pub fn tick(&mut self, now: f64) -> Tick {
+        loop {
+            let Some(step) = self.steps.get(self.index).filter(|_| self.failed.is_none()) else {
+                return Tick::Finished(Sample {
+                    vel: 0.0,
+                    acc: 0.0,
+                    done: true,
+                    ..self.last
+                });
+            };
+            if let Step::Mode { mode } = step {
+                self.waiting_for_mode = true;
+                return Tick::SwitchMode(*mode);
+            }
+            let planned = match self.planned {
+                Some(p) => p,
+                None => match plan(step, &self.last) {
+                    Ok(p) => {
+                        self.planned = Some(p);
+                        self.started_at = now;
+                        self.step_t = 0.0;
+                        p
+                    }
+                    Err(e) => {
+                        self.failed = Some((self.index, e));
+                        continue;
+                    }
+                },
+            };
+            let t = (now - self.started_at).max(0.0);
+            let s = match planned {
+                Planned::Move(m) => m.sample(t),
+                Planned::Sine(s) => s.sample(t),
+                Planned::Ramp(r) => r.sample(t),
+                Planned::Jog { mut jog, until } => {
+                    if t >= until {
+                        jog.set_target(0.0);
+                    }
+                    let s = jog.advance(t - self.step_t);
+                    self.planned = Some(Planned::Jog { jog, until });
+                    Sample {
+                        done: s.done && t >= until,
+                        ..s
+                    }
+                }
+                Planned::Torque(ts) => ts.sample(t),
+                Planned::Dwell { hold, seconds } => Sample {
+                    done: t >= seconds,
+                    ..hold
+                },
+                Planned::Mode => Sample {
+                    done: true,
+                    ..self.last
+                },
+            };
+            self.step_t = t;
+            self.last = Sample { done: false, ..s };
+            if s.done && self.index + 1 < self.steps.len() {
+                // The next step starts in this same cycle from this final sample.
+                self.index += 1;
+                self.planned = None;
+                continue;
+            }
+            if s.done {
+                self.index += 1;
+                self.planned = None;
+            }
+            return Tick::Setpoint(s);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run(steps: Vec<Step>, dt: f64, seconds: f64) -> (Runner, Vec<Tick>) {
+        let mut r = Runner::new(steps);
+        r.seed(Sample::default());
+        let mut out = vec![];
+        let mut t = 0.0;
+        while t <= seconds {
+            let tick = r.tick(t);
+            if let Tick::SwitchMode(_) = tick {
+                r.mode_switched(r.last);
+            }
+            out.push(tick);
+            t += dt;
+        }
+        (r, out)
+    }
+
+    #[test]
+    fn steps_join_without_jumps_and_finish() {
+        let steps = vec![
+            Step::Move {
+                target: Target::By(1000.0),
+                velocity: 2000.0,
+                acceleration: 10_000.0,
+                jerk: None,
+            },
+            Step::Dwell { seconds: 0.05 },
+            Step::Sine {
+                amplitude: 100.0,
+                frequency: 5.0,
+                periods: 1.0,
+            },
+            Step::Move {
+                target: Target::To(0.0),
+                velocity: 2000.0,
+                acceleration: 10_000.0,
+                jerk: Some(1e6),
+            },
+        ];
+        validate(&steps, CyclicMode::Csp).unwrap();
+        let (r, ticks) = run(steps, 0.001, 3.0);
+        assert!(r.finished());
+        let mut prev = 0.0;
+        for t in &ticks {
+            let p = match t {
+                Tick::Setpoint(s) | Tick::Finished(s) => s.pos,
+                Tick::SwitchMode(_) => continue,
+            };
+            // The fastest step is the sine: 100 · 2π · 5 ≈ 3142 counts/s.
+            let vmax = 2000.0f64.max(100.0 * 2.0 * std::f64::consts::PI * 5.0);
+            assert!(
+                (p - prev).abs() <= vmax * 0.001 * 1.01 + 1e-6,
+                "jump {prev} -> {p}"
+            );
+            prev = p;
+        }
+        assert_eq!(prev, 0.0);
+    }
+
+    #[test]
+    fn mode_switch_waits_for_confirmation() {
+        let mut r = Runner::new(vec![
+            Step::Mode {
+                mode: CyclicMode::Csv,
+            },
+            Step::Ramp {
+                velocity: 100.0,
+                acceleration: 1000.0,
+                hold: 0.0,
+            },
+        ]);
+        r.seed(Sample::default());
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csv));
+        // Until the drive confirms, the runner keeps asking.
+        assert_eq!(r.tick(0.001), Tick::SwitchMode(CyclicMode::Csv));
+        r.mode_switched(Sample {
+            pos: 42.0,
+            ..Sample::default()
+        });
+        match r.tick(0.002) {
+            Tick::Setpoint(s) => assert_eq!(s.pos, 42.0),
+            t => panic!("{t:?}"),
+        }
+    }
+
+    #[test]
+    fn validation_names_the_step_and_mode() {
+        let e = validate(
+            &[Step::Torque {
+                torque: 100.0,
+                slope: None,
+                hold: 1.0,
+            }],
+            CyclicMode::Csp,
+        )
+        .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "step 0 (torque 100) cannot run in csp: torque steps need cst"
+        );
+        let e = validate(
+            &[Step::Move {
+                target: Target::By(1.0),
+                velocity: -1.0,
+                acceleration: 1.0,
+                jerk: None,
+            }],
+            CyclicMode::Csp,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("velocity must be a positive"), "{e}");
+    }
+
+    #[test]
+    fn jog_runs_for_its_time_then_stops() {
+        let (r, ticks) = run(
+            vec![Step::Jog {
+                velocity: 1000.0,
+                acceleration: 10_000.0,
+                seconds: 0.5,
+            }],
+            0.001,
+            1.0,
+        );
+        assert!(r.finished());
+        let peak = ticks
+            .iter()
+            .filter_map(|t| match t {
+                Tick::Setpoint(s) => Some(s.vel),
+                _ => None,
+            })
+            .fold(0.0f64, f64::max);
+        assert!((peak - 1000.0).abs() < 1e-6);
+        match ticks.last() {
+            Some(Tick::Finished(s)) => {
+                assert_eq!(s.vel, 0.0);
+                // 0.1 s ramp up (50), 0.5 s at speed (500), 0.1 s ramp down (50).
+                assert!((s.pos - 600.0).abs() < 2.0, "{}", s.pos);
+            }
+            t => panic!("{t:?}"),
+        }
+    }
+
+    #[test]
+    fn steps_deserialize_from_toml() {
+        #[derive(Deserialize)]
+        struct P {
+            steps: Vec<Step>,
+        }
+        let p: P = toml::from_str(
+            r#"
+            steps = [
+              { step = "move", by = 1000, velocity = 500, acceleration = 2000 },
+              { step = "mode", mode = "csv" },
+              { step = "ramp", velocity = 100, acceleration = 1000, hold = 0.5 },
+              { step = "dwell", seconds = 1 },
+            ]"#,
+        )
+        .unwrap();
+        assert_eq!(p.steps.len(), 4);
+        assert!(matches!(p.steps[0], Step::Move { target: Target::By(d), .. } if d == 1000.0));
+        let bad = toml::from_str::<P>(
+            r#"steps = [{ step = "move", by = 1, velocity = 1, acceleration = 1, speed = 3 }]"#,
+        );
+        assert!(bad.is_err());
+    }
+}
