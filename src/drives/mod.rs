@@ -10,3 +10,9 @@
 
 pub mod bdhde;
 pub mod mr_j4_tm;
+pub mod profile;
+
+pub use profile::{
+    CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,
+    StartupSdo, StartupWhen, SyncSpec, Units,
+};

@@ -1,0 +1,150 @@
+//! Conversions from ESI PDO descriptions into the crate's [`Pdo`] / [`Mapping`].
+
+use super::model::{Device, EsiPdo};
+use crate::pdo::{Direction, Mapping, Pdo, PdoEntry};
+use std::borrow::Cow;
+
+/// Why ESI PDOs could not be turned into a [`Mapping`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum EsiConvertError {
+    /// An entry is longer than a PDO mapping entry can describe (255 bits).
+    #[error(
+        "{dir} 0x{pdo:04X}: entry 0x{index:04X}:{sub:02X} has BitLen {bits}, more than the 255 \
+         bits a mapping entry can hold"
+    )]
+    EntryTooLong {
+        /// The PDO's direction (`RxPDO`/`TxPDO`).
+        dir: &'static str,
+        /// PDO index.
+        pdo: u16,
+        /// Entry index.
+        index: u16,
+        /// Entry sub-index.
+        sub: u8,
+        /// Its bit length.
+        bits: u16,
+    },
+    /// A requested PDO is not in the ESI.
+    #[error("the device offers no {dir} 0x{index:04X}")]
+    UnknownPdo {
+        /// `RxPDO`/`TxPDO`.
+        dir: &'static str,
+        /// The requested index.
+        index: u16,
+    },
+    /// A PDO is requested twice.
+    #[error("{dir} 0x{index:04X} is assigned twice")]
+    Duplicate {
+        /// `RxPDO`/`TxPDO`.
+        dir: &'static str,
+        /// The index.
+        index: u16,
+    },
+    /// Two selected PDOs exclude each other (`<Exclude>`).
+    #[error("{dir} 0x{a:04X} excludes 0x{b:04X}: they cannot be assigned together")]
+    Excluded {
+        /// `RxPDO`/`TxPDO`.
+        dir: &'static str,
+        /// The PDO carrying the `<Exclude>`.
+        a: u16,
+        /// The excluded PDO.
+        b: u16,
+    },
+    /// A mandatory PDO is not selected.
+    #[error("{dir} 0x{index:04X} is mandatory and must be assigned")]
+    MissingMandatory {
+        /// `RxPDO`/`TxPDO`.
+        dir: &'static str,
+        /// The index.
+        index: u16,
+    },
+}
+
+impl EsiPdo {
+    /// This PDO as the crate's [`Pdo`]: index and entries (gaps become padding entries).
+    /// `dir` only names the PDO in errors.
+    pub fn to_pdo(&self, dir: Direction) -> Result<Pdo, EsiConvertError> {
+        let entries = self
+            .entries
+            .iter()
+            .map(|e| {
+                let bits = u8::try_from(e.bit_len).map_err(|_| EsiConvertError::EntryTooLong {
+                    dir: dir.name(),
+                    pdo: self.index,
+                    index: e.index,
+                    sub: e.sub,
+                    bits: e.bit_len,
+                })?;
+                Ok(if e.is_padding() {
+                    PdoEntry::padding(bits)
+                } else {
+                    PdoEntry::new(e.index, e.sub, bits)
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Pdo::owned(self.index, entries))
+    }
+}
+
+impl Device {
+    /// The default PDO assignment as a [`Mapping`].
+    ///
+    /// Rule (ETG.2000): a PDO is assigned by default when it has an `Sm` attribute; a
+    /// `Mandatory` PDO is always assigned, with or without one. PDOs keep their file order.
+    /// Exclusions are not checked here (a vendor file may be inconsistent; see
+    /// [`Device::check`]).
+    pub fn default_mapping(&self) -> Result<Mapping, EsiConvertError> {
+        let pick = |dir: Direction| -> Result<Vec<Pdo>, EsiConvertError> {
+            self.pdos(dir)
+                .iter()
+                .filter(|p| p.is_default())
+                .map(|p| p.to_pdo(dir))
+                .collect()
+        };
+        Ok(Mapping {
+            rx: Cow::Owned(pick(Direction::Rx)?),
+            tx: Cow::Owned(pick(Direction::Tx)?),
+        })
+    }
+
+    /// A [`Mapping`] of the chosen PDOs (by index, in the order given), with their ESI
+    /// entries. Checks that each exists, none is chosen twice, no two chosen PDOs exclude each
+    /// other, and every mandatory PDO is chosen.
+    pub fn mapping(&self, rx: &[u16], tx: &[u16]) -> Result<Mapping, EsiConvertError> {
+        let pick = |dir: Direction, chosen: &[u16]| -> Result<Vec<Pdo>, EsiConvertError> {
+            let d = dir.name();
+            let mut out = Vec::with_capacity(chosen.len());
+            for (i, &index) in chosen.iter().enumerate() {
+                if chosen.get(..i).unwrap_or_default().contains(&index) {
+                    return Err(EsiConvertError::Duplicate { dir: d, index });
+                }
+                let p = self
+                    .pdo(dir, index)
+                    .ok_or(EsiConvertError::UnknownPdo { dir: d, index })?;
+                if let Some(&b) = p.excludes.iter().find(|x| chosen.contains(x)) {
+                    return Err(EsiConvertError::Excluded {
+                        dir: d,
+                        a: index,
+                        b,
+                    });
+                }
+                out.push(p.to_pdo(dir)?);
+            }
+            if let Some(m) = self
+                .pdos(dir)
+                .iter()
+                .find(|p| p.mandatory && !chosen.contains(&p.index))
+            {
+                return Err(EsiConvertError::MissingMandatory {
+                    dir: d,
+                    index: m.index,
+                });
+            }
+            Ok(out)
+        };
+        Ok(Mapping {
+            rx: Cow::Owned(pick(Direction::Rx, rx)?),
+            tx: Cow::Owned(pick(Direction::Tx, tx)?),
+        })
+    }
+}

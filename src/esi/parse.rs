@@ -1,0 +1,895 @@
+//! The parser: roxmltree document → [`EsiFile`].
+//!
+//! Elements are matched by local name (namespaces are ignored except for this project's own
+//! vendor-specific extension). Unknown elements and attributes are skipped; a missing element
+//! the schema requires, or a value that is not allowed, is an [`EsiError`] with the position of
+//! the offending text.
+
+use super::dictionary::{
+    ArrayInfo, Category, Dictionary, EsiDataType, EsiObject, EsiSubItem, EsiValue, Flags,
+    ObjectInfo,
+};
+use super::error::{EsiError, EsiErrorKind, Position};
+use super::model::*;
+use super::num::{self, EsiInt};
+use crate::od::EntryAccess;
+use roxmltree::{Document, Node};
+
+/// The XML namespace of this project's vendor-specific elements.
+pub const ECDRIVE_NAMESPACE: &str = "urn:ecdrive:esi";
+
+type R<T> = Result<T, EsiError>;
+
+/// Parse ESI text.
+pub(crate) fn parse_str(text: &str) -> R<EsiFile> {
+    let opts = roxmltree::ParsingOptions {
+        allow_dtd: false,
+        ..Default::default()
+    };
+    let doc = Document::parse_with_options(text, opts).map_err(|e| {
+        let p = e.pos();
+        EsiError::new(
+            EsiErrorKind::Xml,
+            Position::new(p.row, p.col),
+            format!("malformed XML: {e}"),
+        )
+    })?;
+    P { doc: &doc }.file()
+}
+
+/// Decode the bytes of an ESI file into text: UTF-8 (with or without BOM), UTF-16 with BOM,
+/// or — when the bytes are not UTF-8 — ISO-8859-1 if the XML declaration says so (many
+/// vendor files are Latin-1).
+pub(crate) fn decode_bytes(bytes: &[u8]) -> R<String> {
+    if let Some(rest) = bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
+        return utf8(rest);
+    }
+    let utf16 = |le: bool, rest: &[u8]| -> R<String> {
+        let units = rest.chunks(2).map(|c| match (c, le) {
+            ([a, b], true) => u16::from_le_bytes([*a, *b]),
+            ([a, b], false) => u16::from_be_bytes([*a, *b]),
+            _ => 0xFFFF,
+        });
+        char::decode_utf16(units)
+            .map(|c| {
+                c.ok().filter(|_| rest.len() % 2 == 0).ok_or_else(|| {
+                    EsiError::new(
+                        EsiErrorKind::Encoding,
+                        Position::default(),
+                        "the file starts with a UTF-16 byte-order mark but is not valid \
+                             UTF-16",
+                    )
+                })
+            })
+            .collect()
+    };
+    if let Some(rest) = bytes.strip_prefix(&[0xFF, 0xFE]) {
+        return utf16(true, rest);
+    }
+    if let Some(rest) = bytes.strip_prefix(&[0xFE, 0xFF]) {
+        return utf16(false, rest);
+    }
+    match std::str::from_utf8(bytes) {
+        Ok(s) => Ok(s.to_string()),
+        Err(e) => {
+            if declared_latin1(bytes) {
+                Ok(bytes.iter().map(|&b| char::from(b)).collect())
+            } else {
+                Err(utf8_error(bytes, e))
+            }
+        }
+    }
+}
+
+fn utf8(bytes: &[u8]) -> R<String> {
+    std::str::from_utf8(bytes)
+        .map(str::to_string)
+        .map_err(|e| utf8_error(bytes, e))
+}
+
+fn utf8_error(bytes: &[u8], e: std::str::Utf8Error) -> EsiError {
+    let good = bytes.get(..e.valid_up_to()).unwrap_or_default();
+    let line = good.iter().filter(|&&b| b == b'\n').count() as u32 + 1;
+    let line_start = good
+        .iter()
+        .rposition(|&b| b == b'\n')
+        .map(|p| p + 1)
+        .unwrap_or(0);
+    let col = std::str::from_utf8(good.get(line_start..).unwrap_or_default())
+        .map(|s| s.chars().count())
+        .unwrap_or(0) as u32
+        + 1;
+    EsiError::new(
+        EsiErrorKind::Encoding,
+        Position::new(line, col),
+        "not valid UTF-8, and the XML declaration does not name ISO-8859-1",
+    )
+}
+
+/// Whether the XML declaration names a Latin-1 encoding.
+fn declared_latin1(bytes: &[u8]) -> bool {
+    let head = bytes.get(..bytes.len().min(200)).unwrap_or_default();
+    let Some(end) = head.windows(2).position(|w| w == b"?>") else {
+        return false;
+    };
+    let decl: String = head
+        .get(..end)
+        .unwrap_or_default()
+        .iter()
+        .map(|&b| char::from(b).to_ascii_lowercase())
+        .collect();
+    decl.starts_with("<?xml")
+        && [
+            "iso-8859-1",
+            "iso8859-1",
+            "latin1",
+            "latin-1",
+            "windows-1252",
+            "cp1252",
+        ]
+        .iter()
+        .any(|enc| decl.contains(enc))
+}
+
+struct P<'a, 'input> {
+    doc: &'a Document<'input>,
+}
+
+fn children<'a, 'i>(node: Node<'a, 'i>, name: &'static str) -> impl Iterator<Item = Node<'a, 'i>> {
+    node.children()
+        .filter(move |c| c.is_element() && c.tag_name().name() == name)
+}
+
+fn child<'a, 'i>(node: Node<'a, 'i>, name: &'static str) -> Option<Node<'a, 'i>> {
+    children(node, name).next()
+}
+
+/// The text of an element (its direct text children), trimmed.
+fn text_of(node: Node) -> String {
+    let s: String = node
+        .children()
+        .filter(|c| c.is_text())
+        .filter_map(|c| c.text())
+        .collect();
+    s.trim().to_string()
+}
+
+impl<'a, 'input> P<'a, 'input> {
+    fn pos(&self, byte: usize) -> Position {
+        // roxmltree slices the input at `byte`: keep it on a character boundary.
+        let text = self.doc.input_text();
+        let mut b = byte.min(text.len());
+        while b > 0 && !text.is_char_boundary(b) {
+            b -= 1;
+        }
+        let p = self.doc.text_pos_at(b);
+        Position::new(p.row, p.col)
+    }
+
+    fn node_pos(&self, node: Node) -> Position {
+        self.pos(node.range().start)
+    }
+
+    /// Position of an element's value: its first non-blank text character, or the element.
+    fn text_pos(&self, node: Node) -> Position {
+        for c in node.children() {
+            if let (true, Some(t)) = (c.is_text(), c.text()) {
+                if let Some(off) = t.find(|ch: char| !ch.is_whitespace()) {
+                    // The offset is into the unescaped text; use it only when the source
+                    // text is the same (no entities, no CDATA markup).
+                    let start = c.range().start;
+                    let raw = self.doc.input_text().get(c.range());
+                    return self.pos(if raw == Some(t) { start + off } else { start });
+                }
+            }
+        }
+        self.node_pos(node)
+    }
+
+    fn invalid(&self, pos: Position, msg: String) -> EsiError {
+        EsiError::new(EsiErrorKind::Invalid, pos, msg)
+    }
+
+    fn missing(&self, node: Node, msg: String) -> EsiError {
+        EsiError::new(EsiErrorKind::Missing, self.node_pos(node), msg)
+    }
+
+    fn req_child(
+        &self,
+        node: Node<'a, 'input>,
+        name: &'static str,
+        scope: &str,
+    ) -> R<Node<'a, 'input>> {
+        child(node, name).ok_or_else(|| self.missing(node, format!("{scope} has no <{name}>")))
+    }
+
+    /// A number in child element `name`, if present.
+    fn num_child<T: EsiInt>(&self, node: Node, name: &'static str, scope: &str) -> R<Option<T>> {
+        match child(node, name) {
+            None => Ok(None),
+            Some(c) => self.num_text(c, name, scope).map(Some),
+        }
+    }
+
+    fn num_text<T: EsiInt>(&self, el: Node, name: &str, scope: &str) -> R<T> {
+        let t = text_of(el);
+        num::parse_num::<T>(&t)
+            .map_err(|m| self.invalid(self.text_pos(el), format!("{scope} has {name} {t:?}: {m}")))
+    }
+
+    fn req_num_child<T: EsiInt>(&self, node: Node, name: &'static str, scope: &str) -> R<T> {
+        self.num_child(node, name, scope)?
+            .ok_or_else(|| self.missing(node, format!("{scope} has no <{name}>")))
+    }
+
+    fn attr_num<T: EsiInt>(&self, node: Node, name: &'static str, scope: &str) -> R<Option<T>> {
+        let Some(a) = node.attributes().find(|a| a.name() == name) else {
+            return Ok(None);
+        };
+        num::parse_num::<T>(a.value()).map(Some).map_err(|m| {
+            self.invalid(
+                self.pos(a.range_value().start),
+                format!("{scope} has {name}=\"{}\": {m}", a.value()),
+            )
+        })
+    }
+
+    fn attr_bool(&self, node: Node, name: &'static str, scope: &str) -> R<Option<bool>> {
+        let Some(a) = node.attributes().find(|a| a.name() == name) else {
+            return Ok(None);
+        };
+        num::parse_bool(a.value()).map(Some).map_err(|m| {
+            self.invalid(
+                self.pos(a.range_value().start),
+                format!("{scope} has {name}=\"{}\": {m}", a.value()),
+            )
+        })
+    }
+
+    fn flag(&self, node: Node, name: &'static str, scope: &str) -> R<bool> {
+        Ok(self.attr_bool(node, name, scope)?.unwrap_or(false))
+    }
+
+    fn hex_child(&self, node: Node, name: &'static str, scope: &str) -> R<Option<Vec<u8>>> {
+        match child(node, name) {
+            None => Ok(None),
+            Some(c) => {
+                let t = text_of(c);
+                num::parse_hex_bytes(&t).map(Some).map_err(|m| {
+                    self.invalid(self.text_pos(c), format!("{scope} has {name} {t:?}: {m}"))
+                })
+            }
+        }
+    }
+
+    /// All `<name>` children as localized texts.
+    fn names(&self, node: Node, name: &'static str, scope: &str) -> R<Vec<LocalizedText>> {
+        children(node, name)
+            .map(|n| {
+                Ok(LocalizedText {
+                    lcid: self.attr_num::<u32>(n, "LcId", scope)?,
+                    text: text_of(n),
+                })
+            })
+            .collect()
+    }
+
+    fn file(&self) -> R<EsiFile> {
+        let root = self.doc.root_element();
+        if root.tag_name().name() != "EtherCATInfo" {
+            return Err(self.invalid(
+                self.node_pos(root),
+                format!(
+                    "the root element is <{}>, expected <EtherCATInfo> (is this an ESI file?)",
+                    root.tag_name().name()
+                ),
+            ));
+        }
+        let vendor = self.vendor(self.req_child(root, "Vendor", "<EtherCATInfo>")?)?;
+        let desc = self.req_child(root, "Descriptions", "<EtherCATInfo>")?;
+        let mut groups = Vec::new();
+        if let Some(g) = child(desc, "Groups") {
+            for n in children(g, "Group") {
+                let scope = "<Group>";
+                let t = self.req_child(n, "Type", scope)?;
+                let names = self.names(n, "Name", scope)?;
+                groups.push(Group {
+                    type_: text_of(t),
+                    name: preferred_text(&names).to_string(),
+                    names,
+                });
+            }
+        }
+        let devs = self.req_child(desc, "Devices", "<Descriptions>")?;
+        let devices = children(devs, "Device")
+            .map(|d| self.device(d))
+            .collect::<R<Vec<_>>>()?;
+        Ok(EsiFile {
+            version: root.attribute("Version").map(str::to_string),
+            vendor,
+            groups,
+            devices,
+        })
+    }
+
+    fn vendor(&self, n: Node) -> R<Vendor> {
+        let scope = "<Vendor>";
+        let id_el = self.req_child(n, "Id", scope)?;
+        let t = text_of(id_el);
+        let id = num::parse_u32_wrapping(&t).map_err(|m| {
+            self.invalid(self.text_pos(id_el), format!("{scope} has Id {t:?}: {m}"))
+        })?;
+        let names = self.names(n, "Name", scope)?;
+        Ok(Vendor {
+            id,
+            name: preferred_text(&names).to_string(),
+            names,
+        })
+    }
+
+    fn device(&self, n: Node<'a, 'input>) -> R<Device> {
+        let t = self.req_child(n, "Type", "<Device>")?;
+        let type_text = text_of(t);
+        let scope = format!("<Device> {type_text:?}");
+        let ident = |attr: &'static str| -> R<Option<u32>> {
+            let Some(a) = t.attributes().find(|a| a.name() == attr) else {
+                return Ok(None);
+            };
+            num::parse_u32_wrapping(a.value()).map(Some).map_err(|m| {
+                self.invalid(
+                    self.pos(a.range_value().start),
+                    format!("{scope} has {attr}=\"{}\": {m}", a.value()),
+                )
+            })
+        };
+        let product_code = ident("ProductCode")?.ok_or_else(|| {
+            self.missing(t, format!("<Type> of {scope} has no ProductCode attribute"))
+        })?;
+        let revision_no = ident("RevisionNo")?;
+        let names = self.names(n, "Name", &scope)?;
+        let name = match preferred_text(&names) {
+            "" => type_text.clone(),
+            s => s.to_string(),
+        };
+
+        let mut fmmus = Vec::new();
+        for f in children(n, "Fmmu") {
+            let s = format!("<Fmmu> in {scope}");
+            let text = text_of(f);
+            let usage = match text.to_ascii_lowercase().as_str() {
+                "outputs" => FmmuUsage::Outputs,
+                "inputs" => FmmuUsage::Inputs,
+                "mboxstate" => FmmuUsage::MBoxState,
+                "" => FmmuUsage::Unused,
+                _ => {
+                    return Err(self.invalid(
+                        self.text_pos(f),
+                        format!("{s} has usage {text:?}: expected Outputs, Inputs or MBoxState"),
+                    ));
+                }
+            };
+            fmmus.push(Fmmu {
+                usage,
+                sm: self.attr_num(f, "Sm", &s)?,
+                op_only: self.flag(f, "OpOnly", &s)?,
+            });
+        }
+
+        let mut sync_managers = Vec::new();
+        for (i, sm) in children(n, "Sm").enumerate() {
+            let index = u8::try_from(i).map_err(|_| {
+                self.invalid(
+                    self.node_pos(sm),
+                    format!("{scope} has more than 256 <Sm>s"),
+                )
+            })?;
+            let s = format!("<Sm> {i} in {scope}");
+            let text = text_of(sm);
+            let kind = match text.to_ascii_lowercase().as_str() {
+                "mboxout" | "mbxout" => SmKind::MBoxOut,
+                "mboxin" | "mbxin" => SmKind::MBoxIn,
+                "outputs" => SmKind::Outputs,
+                "inputs" => SmKind::Inputs,
+                "" => SmKind::Unused,
+                _ => {
+                    return Err(self.invalid(
+                        self.text_pos(sm),
+                        format!(
+                            "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
+                             Inputs"
+                        ),
+                    ));
+                }
+            };
+            let start_address = self
+                .attr_num::<u16>(sm, "StartAddress", &s)?
+                .ok_or_else(|| self.missing(sm, format!("{s} has no StartAddress attribute")))?;
+            sync_managers.push(SyncManager {
+                position: self.node_pos(sm),
+                index,
+                kind,
+                start_address,
+                default_size: self.attr_num(sm, "DefaultSize", &s)?,
+                min_size: self.attr_num(sm, "MinSize", &s)?,
+                max_size: self.attr_num(sm, "MaxSize", &s)?,
+                control_byte: self
+                    .attr_num(sm, "ControlByte", &s)?
+                    .ok_or_else(|| self.missing(sm, format!("{s} has no ControlByte attribute")))?,
+                enable: self.attr_num::<u8>(sm, "Enable", &s)?.unwrap_or(0) != 0,
+                virtual_: self.flag(sm, "Virtual", &s)?,
+                op_only: self.flag(sm, "OpOnly", &s)?,
+            });
+        }
+
+        let rx_pdos = children(n, "RxPdo")
+            .map(|p| self.pdo(p, "RxPdo"))
+            .collect::<R<Vec<_>>>()?;
+        let tx_pdos = children(n, "TxPdo")
+            .map(|p| self.pdo(p, "TxPdo"))
+            .collect::<R<Vec<_>>>()?;
+        let mailbox = child(n, "Mailbox")
+            .map(|m| self.mailbox(m, &scope))
+            .transpose()?;
+        let dc = match child(n, "Dc") {
+            Some(dc) => children(dc, "OpMode")
+                .map(|m| self.op_mode(m, &scope))
+                .collect::<R<Vec<_>>>()?,
+            None => Vec::new(),
+        };
+        let eeprom = child(n, "Eeprom")
+            .map(|e| self.eeprom(e, &scope))
+            .transpose()?;
+        let profiles = children(n, "Profile")
+            .map(|p| self.profile(p, &scope))
+            .collect::<R<Vec<_>>>()?;
+
+        Ok(Device {
+            position: self.node_pos(n),
+            type_: DeviceType {
+                product_code,
+                revision_no,
+                name_text: type_text,
+            },
+            name,
+            names,
+            group_type: child(n, "GroupType").map(text_of),
+            physics: n.attribute("Physics").map(str::to_string),
+            fmmus,
+            sync_managers,
+            rx_pdos,
+            tx_pdos,
+            mailbox,
+            dc,
+            eeprom,
+            profiles,
+        })
+    }
+
+    fn pdo(&self, n: Node, tag: &str) -> R<EsiPdo> {
+        let idx_el =
+            child(n, "Index").ok_or_else(|| self.missing(n, format!("<{tag}> has no <Index>")))?;
+        let index: u16 = self.num_text(idx_el, "Index", &format!("<{tag}>"))?;
+        let scope = format!("<{tag}> 0x{index:04X}");
+        let names = self.names(n, "Name", &scope)?;
+        let excludes = children(n, "Exclude")
+            .map(|e| self.num_text::<u16>(e, "Exclude", &scope))
+            .collect::<R<Vec<_>>>()?;
+        let mut entries = Vec::new();
+        for e in children(n, "Entry") {
+            let s = format!("<Entry> in {scope}");
+            let index: u16 = self.req_num_child(e, "Index", &s)?;
+            let names = self.names(e, "Name", &s)?;
+            entries.push(EsiPdoEntry {
+                position: self.node_pos(e),
+                index,
+                sub: self.num_child(e, "SubIndex", &s)?.unwrap_or(0),
+                bit_len: self.req_num_child(e, "BitLen", &s)?,
+                name: preferred_text(&names).to_string(),
+                data_type_name: child(e, "DataType").map(text_of),
+            });
+        }
+        Ok(EsiPdo {
+            position: self.node_pos(n),
+            index,
+            name: preferred_text(&names).to_string(),
+            sm: self.attr_num(n, "Sm", &scope)?,
+            fixed: self.flag(n, "Fixed", &scope)?,
+            mandatory: self.flag(n, "Mandatory", &scope)?,
+            virtual_: self.flag(n, "Virtual", &scope)?,
+            excludes,
+            entries,
+        })
+    }
+
+    fn mailbox(&self, n: Node, dev: &str) -> R<Mailbox> {
+        let scope = format!("<Mailbox> in {dev}");
+        let mut protocols = MailboxProtocols::empty();
+        for (tag, bit) in [
+            ("AoE", MailboxProtocols::AOE),
+            ("EoE", MailboxProtocols::EOE),
+            ("CoE", MailboxProtocols::COE),
+            ("FoE", MailboxProtocols::FOE),
+            ("SoE", MailboxProtocols::SOE),
+            ("VoE", MailboxProtocols::VOE),
+        ] {
+            if children(n, tag).next().is_some() {
+                protocols |= bit;
+            }
+        }
+        let mut coe = None;
+        let mut init_cmds = Vec::new();
+        if let Some(c) = child(n, "CoE") {
+            let s = format!("<CoE> in {dev}");
+            coe = Some(CoeDetails {
+                sdo_info: self.flag(c, "SdoInfo", &s)?,
+                pdo_assign: self.flag(c, "PdoAssign", &s)?,
+                pdo_config: self.flag(c, "PdoConfig", &s)?,
+                pdo_upload: self.flag(c, "PdoUpload", &s)?,
+                complete_access: self.flag(c, "CompleteAccess", &s)?,
+                segmented_sdo: self.attr_bool(c, "SegmentedSdo", &s)?.unwrap_or(true),
+                diag_history: self.flag(c, "DiagHistory", &s)?,
+                eds_file: c.attribute("EdsFile").map(str::to_string),
+            });
+            for ic in children(c, "InitCmd") {
+                let s = format!("<InitCmd> in <CoE> of {dev}");
+                let mut transitions = Vec::new();
+                for t in children(ic, "Transition") {
+                    let text = text_of(t);
+                    transitions.push(Transition::parse(&text).ok_or_else(|| {
+                        self.invalid(
+                            self.text_pos(t),
+                            format!(
+                                "{s} has Transition {text:?}: expected IP, PS, SO, SP, OS, OP, \
+                                 PI, SI, OI, IB, BI or II"
+                            ),
+                        )
+                    })?);
+                }
+                if transitions.is_empty() {
+                    return Err(self.missing(ic, format!("{s} has no <Transition>")));
+                }
+                let index: u16 = self.req_num_child(ic, "Index", &s)?;
+                let s = format!("<InitCmd> 0x{index:04X} in <CoE> of {dev}");
+                init_cmds.push(InitCmd {
+                    position: self.node_pos(ic),
+                    transitions,
+                    index,
+                    sub: self.num_child(ic, "SubIndex", &s)?.unwrap_or(0),
+                    data: self
+                        .hex_child(ic, "Data", &s)?
+                        .ok_or_else(|| self.missing(ic, format!("{s} has no <Data>")))?,
+                    comment: child(ic, "Comment").map(text_of).unwrap_or_default(),
+                    complete_access: self.flag(ic, "CompleteAccess", &s)?,
+                    fixed: self.flag(ic, "Fixed", &s)?,
+                });
+            }
+        }
+        Ok(Mailbox {
+            protocols,
+            data_link_layer: self.flag(n, "DataLinkLayer", &scope)?,
+            coe,
+            init_cmds,
+        })
+    }
+
+    fn op_mode(&self, n: Node, dev: &str) -> R<DcOpMode> {
+        let name_el = self.req_child(n, "Name", &format!("<OpMode> in {dev}"))?;
+        let name = text_of(name_el);
+        let scope = format!("<OpMode> {name:?} in {dev}");
+        let assign_activate = self.req_num_child::<u16>(n, "AssignActivate", &scope)?;
+        let timed = |tag: &'static str| -> R<(Option<Node>, Option<i32>)> {
+            match child(n, tag) {
+                None => Ok((None, None)),
+                Some(c) => Ok((Some(c), self.attr_num::<i32>(c, "Factor", &scope)?)),
+            }
+        };
+        let (c0, c0f) = timed("CycleTimeSync0")?;
+        let (s0, s0f) = timed("ShiftTimeSync0")?;
+        let (c1, c1f) = timed("CycleTimeSync1")?;
+        let cycle = |el: Option<Node>, tag: &str| -> R<u32> {
+            el.map(|e| self.num_text::<u32>(e, tag, &scope))
+                .transpose()
+                .map(Option::unwrap_or_default)
+        };
+        let shift = |el: Option<Node>, tag: &str| -> R<i32> {
+            el.map(|e| self.num_text::<i32>(e, tag, &scope))
+                .transpose()
+                .map(Option::unwrap_or_default)
+        };
+        let mut sms = Vec::new();
+        for sm in children(n, "Sm") {
+            let no = self
+                .attr_num::<u8>(sm, "No", &scope)?
+                .ok_or_else(|| self.missing(sm, format!("<Sm> in {scope} has no No attribute")))?;
+            let s = format!("<Sm> {no} in {scope}");
+            sms.push(DcSm {
+                no,
+                sync_type: self.num_child(sm, "SyncType", &s)?,
+                cycle_time: self.num_child(sm, "CycleTime", &s)?,
+                shift_time: self.num_child(sm, "ShiftTime", &s)?,
+                pdos: children(sm, "Pdo")
+                    .map(|p| self.num_text::<u16>(p, "Pdo", &s))
+                    .collect::<R<Vec<_>>>()?,
+            });
+        }
+        Ok(DcOpMode {
+            position: self.node_pos(n),
+            desc: child(n, "Desc").map(text_of).unwrap_or_default(),
+            assign_activate,
+            cycle_time_sync0: cycle(c0, "CycleTimeSync0")?,
+            cycle_time_sync0_factor: c0f,
+            shift_time_sync0: shift(s0, "ShiftTimeSync0")?,
+            shift_time_sync0_factor: s0f,
+            shift_time_sync0_input: match s0 {
+                Some(e) => self.flag(e, "Input", &scope)?,
+                None => false,
+            },
+            cycle_time_sync1: cycle(c1, "CycleTimeSync1")?,
+            cycle_time_sync1_factor: c1f,
+            shift_time_sync1: shift(child(n, "ShiftTimeSync1"), "ShiftTimeSync1")?,
+            sms,
+            allowed_cycle_times: self.cycle_times(n, &scope)?,
+            name,
+        })
+    }
+
+    /// This project's extension: `<VendorSpecific><ecdrive:CycleTimes>` with
+    /// `<ecdrive:CycleTime>` values or one `<ecdrive:CycleTimeRange Min= Max= Step=/>`.
+    fn cycle_times(&self, n: Node, scope: &str) -> R<Option<CycleTimes>> {
+        let ours = |c: &Node| {
+            c.is_element()
+                && c.tag_name().namespace() == Some(ECDRIVE_NAMESPACE)
+                && c.tag_name().name() == "CycleTimes"
+        };
+        let Some(ct) = children(n, "VendorSpecific")
+            .flat_map(|v| v.children())
+            .find(ours)
+        else {
+            return Ok(None);
+        };
+        let s = format!("<ecdrive:CycleTimes> in {scope}");
+        let mut list = Vec::new();
+        for c in ct.children().filter(|c| c.is_element()) {
+            match c.tag_name().name() {
+                "CycleTime" => list.push(self.num_text::<u32>(c, "CycleTime", &s)?),
+                "CycleTimeRange" => {
+                    let req = |a: &'static str| -> R<u32> {
+                        self.attr_num::<u32>(c, a, &s)?.ok_or_else(|| {
+                            self.missing(c, format!("<CycleTimeRange> in {s} has no {a}"))
+                        })
+                    };
+                    let (min, max) = (req("Min")?, req("Max")?);
+                    if min > max {
+                        return Err(self.invalid(
+                            self.node_pos(c),
+                            format!("<CycleTimeRange> in {s} has Min {min} > Max {max}"),
+                        ));
+                    }
+                    return Ok(Some(CycleTimes::Range {
+                        min,
+                        max,
+                        step: self.attr_num::<u32>(c, "Step", &s)?.unwrap_or(0),
+                    }));
+                }
+                _ => {}
+            }
+        }
+        if list.is_empty() {
+            return Err(self.missing(ct, format!("{s} lists no cycle time")));
+        }
+        Ok(Some(CycleTimes::List(list)))
+    }
+
+    fn eeprom(&self, n: Node, dev: &str) -> R<Eeprom> {
+        let scope = format!("<Eeprom> in {dev}");
+        let mut categories = Vec::new();
+        for c in children(n, "Category") {
+            let s = format!("<Category> in {scope}");
+            categories.push(EepromCategory {
+                cat_no: self.req_num_child(c, "CatNo", &s)?,
+                data: self.hex_child(c, "Data", &s)?.unwrap_or_default(),
+            });
+        }
+        Ok(Eeprom {
+            byte_size: self.num_child(n, "ByteSize", &scope)?,
+            config_data: self.hex_child(n, "ConfigData", &scope)?.unwrap_or_default(),
+            boot_strap: self.hex_child(n, "BootStrap", &scope)?.unwrap_or_default(),
+            data: self.hex_child(n, "Data", &scope)?.unwrap_or_default(),
+            categories,
+        })
+    }
+
+    fn profile(&self, n: Node, dev: &str) -> R<Profile> {
+        let scope = format!("<Profile> in {dev}");
+        Ok(Profile {
+            profile_no: self.num_child(n, "ProfileNo", &scope)?,
+            add_info: self.num_child(n, "AddInfo", &scope)?,
+            channel: self.attr_num(n, "Channel", &scope)?,
+            dictionary: child(n, "Dictionary")
+                .map(|d| self.dictionary(d, dev))
+                .transpose()?,
+        })
+    }
+
+    fn dictionary(&self, n: Node, dev: &str) -> R<Dictionary> {
+        let mut data_types = Vec::new();
+        if let Some(dts) = child(n, "DataTypes") {
+            for dt in children(dts, "DataType") {
+                let name = text_of(self.req_child(dt, "Name", &format!("<DataType> in {dev}"))?);
+                let scope = format!("<DataType> {name:?}");
+                let array = match child(dt, "ArrayInfo") {
+                    None => None,
+                    Some(a) => {
+                        let s = format!("<ArrayInfo> of {scope}");
+                        Some(ArrayInfo {
+                            lbound: self.req_num_child(a, "LBound", &s)?,
+                            elements: self.req_num_child(a, "Elements", &s)?,
+                        })
+                    }
+                };
+                let mut sub_items = Vec::new();
+                for si in children(dt, "SubItem") {
+                    let s = format!("<SubItem> of {scope}");
+                    sub_items.push(EsiSubItem {
+                        sub_idx: self.num_child(si, "SubIdx", &s)?,
+                        name: child(si, "Name").map(text_of).unwrap_or_default(),
+                        type_name: text_of(self.req_child(si, "Type", &s)?),
+                        bit_size: self.req_num_child(si, "BitSize", &s)?,
+                        bit_offs: self.num_child(si, "BitOffs", &s)?.unwrap_or(0),
+                        flags: child(si, "Flags").map(|f| self.flags(f, &s)).transpose()?,
+                    });
+                }
+                data_types.push(EsiDataType {
+                    position: self.node_pos(dt),
+                    base_type: child(dt, "BaseType").map(text_of),
+                    bit_size: self.req_num_child(dt, "BitSize", &scope)?,
+                    array,
+                    sub_items,
+                    name,
+                });
+            }
+        }
+        let mut objects = Vec::new();
+        if let Some(objs) = child(n, "Objects") {
+            for o in children(objs, "Object") {
+                let index: u16 = self.req_num_child(o, "Index", &format!("<Object> in {dev}"))?;
+                let scope = format!("<Object> 0x{index:04X}");
+                let names = self.names(o, "Name", &scope)?;
+                objects.push(EsiObject {
+                    position: self.node_pos(o),
+                    index,
+                    name: preferred_text(&names).to_string(),
+                    type_name: text_of(self.req_child(o, "Type", &scope)?),
+                    bit_size: self.num_child(o, "BitSize", &scope)?.unwrap_or(0),
+                    info: match child(o, "Info") {
+                        Some(i) => self.info(i, &scope)?,
+                        None => ObjectInfo::default(),
+                    },
+                    flags: child(o, "Flags")
+                        .map(|f| self.flags(f, &scope))
+                        .transpose()?,
+                });
+            }
+        }
+        Ok(Dictionary {
+            data_types,
+            objects,
+        })
+    }
+
+    fn info(&self, n: Node, scope: &str) -> R<ObjectInfo> {
+        let value = |data: &'static str, value: &'static str| -> R<Option<EsiValue>> {
+            if let Some(d) = self.hex_child(n, data, scope)? {
+                return Ok(Some(EsiValue::Data(d)));
+            }
+            Ok(child(n, value).map(|v| EsiValue::Value(text_of(v))))
+        };
+        let default = match value("DefaultData", "DefaultValue")? {
+            Some(v) => Some(v),
+            None => child(n, "DefaultString").map(|s| EsiValue::String(text_of(s))),
+        };
+        let mut sub_items = Vec::new();
+        for si in children(n, "SubItem") {
+            let name = child(si, "Name").map(text_of).unwrap_or_default();
+            let s = format!("<SubItem> {name:?} of {scope}");
+            let info = match child(si, "Info") {
+                Some(i) => self.info(i, &s)?,
+                None => ObjectInfo::default(),
+            };
+            sub_items.push((name, info));
+        }
+        Ok(ObjectInfo {
+            default,
+            min: value("MinData", "MinValue")?,
+            max: value("MaxData", "MaxValue")?,
+            unit: child(n, "Unit").map(text_of).filter(|u| !u.is_empty()),
+            sub_items,
+        })
+    }
+
+    fn flags(&self, n: Node, scope: &str) -> R<Flags> {
+        let s = format!("<Flags> of {scope}");
+        let mut flags = Flags::default();
+        if let Some(a) = child(n, "Access") {
+            let text = text_of(a);
+            let (read, write) = match text.to_ascii_lowercase().as_str() {
+                "ro" => (true, false),
+                "rw" => (true, true),
+                "wo" => (false, true),
+                _ => {
+                    return Err(self.invalid(
+                        self.text_pos(a),
+                        format!("{s} has Access {text:?}: expected ro, rw or wo"),
+                    ));
+                }
+            };
+            let states = |attr: &'static str| -> R<(bool, bool, bool)> {
+                let Some(at) = a.attributes().find(|x| x.name() == attr) else {
+                    return Ok((true, true, true));
+                };
+                let v = at.value().trim().to_ascii_lowercase();
+                let set = match v.as_str() {
+                    "preop" => (true, false, false),
+                    "safeop" => (false, true, false),
+                    "op" => (false, false, true),
+                    "preop_safeop" => (true, true, false),
+                    "preop_op" => (true, false, true),
+                    "safeop_op" => (false, true, true),
+                    _ => {
+                        return Err(self.invalid(
+                            self.pos(at.range_value().start),
+                            format!(
+                                "{s} has {attr}=\"{}\": expected PreOP, SafeOP, OP, \
+                                 PreOP_SafeOP, PreOP_OP or SafeOP_OP",
+                                at.value()
+                            ),
+                        ));
+                    }
+                };
+                Ok(set)
+            };
+            let (rp, rs, ro) = states("ReadRestrictions")?;
+            let (wp, ws, wo) = states("WriteRestrictions")?;
+            let mut acc = EntryAccess::empty();
+            acc.set(EntryAccess::READ_PREOP, read && rp);
+            acc.set(EntryAccess::READ_SAFEOP, read && rs);
+            acc.set(EntryAccess::READ_OP, read && ro);
+            acc.set(EntryAccess::WRITE_PREOP, write && wp);
+            acc.set(EntryAccess::WRITE_SAFEOP, write && ws);
+            acc.set(EntryAccess::WRITE_OP, write && wo);
+            flags.access = Some(acc);
+        }
+        if let Some(p) = child(n, "PdoMapping") {
+            let text = text_of(p);
+            flags.pdo_mapping = match text.to_ascii_uppercase().as_str() {
+                "R" => EntryAccess::RXPDO,
+                "T" => EntryAccess::TXPDO,
+                "RT" | "TR" => EntryAccess::RXPDO | EntryAccess::TXPDO,
+                "" => EntryAccess::empty(),
+                _ => {
+                    return Err(self.invalid(
+                        self.text_pos(p),
+                        format!("{s} has PdoMapping {text:?}: expected R, T or RT"),
+                    ));
+                }
+            };
+        }
+        if let Some(c) = child(n, "Category") {
+            let text = text_of(c);
+            flags.category = Some(match text.as_str() {
+                "m" | "M" => Category::Mandatory,
+                "o" | "O" => Category::Optional,
+                "c" | "C" => Category::Conditional,
+                _ => {
+                    return Err(self.invalid(
+                        self.text_pos(c),
+                        format!("{s} has Category {text:?}: expected m, o or c"),
+                    ));
+                }
+            });
+        }
+        flags.backup = self.num_child::<u8>(n, "Backup", &s)?.unwrap_or(0) != 0;
+        flags.setting = self.num_child::<u8>(n, "Setting", &s)?.unwrap_or(0) != 0;
+        Ok(flags)
+    }
+}

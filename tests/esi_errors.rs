@@ -1,0 +1,420 @@
+//! ESI parser errors: kind, exact line/column and message on small inputs; and the consistency
+//! checks on small contradicting inputs.
+
+use ecdrive::esi::*;
+
+/// A minimal file around one device body (the body starts on line 5).
+fn with_device(body: &str) -> String {
+    format!(
+        "<EtherCATInfo>\n\
+         <Vendor><Id>#x2</Id><Name>V</Name></Vendor>\n\
+         <Descriptions><Devices>\n\
+         <Device><Type ProductCode=\"#x10\" RevisionNo=\"1\">D</Type>\n\
+         {body}\n\
+         </Device>\n\
+         </Devices></Descriptions>\n\
+         </EtherCATInfo>\n"
+    )
+}
+
+fn err(text: &str) -> EsiError {
+    match EsiFile::parse(text) {
+        Ok(_) => panic!("expected an error for:\n{text}"),
+        Err(e) => e,
+    }
+}
+
+#[test]
+fn minimal_file_parses() {
+    let f = EsiFile::parse(&with_device("")).unwrap();
+    assert_eq!(f.vendor.id, 2);
+    assert_eq!(f.devices[0].type_.product_code, 0x10);
+    assert_eq!(f.devices[0].type_.revision_no, Some(1));
+    assert_eq!(f.devices[0].name, "D", "no <Name>: the type text");
+    assert_eq!(f.devices[0].position, Position::new(4, 1));
+}
+
+#[test]
+fn bad_number_in_element_points_at_the_value() {
+    let text = with_device(
+        "<RxPdo><Index>#x1600</Index>\n\
+         <Entry><Index>#x6040</Index><BitLen>x</BitLen></Entry></RxPdo>",
+    );
+    let e = err(&text);
+    assert_eq!(e.kind, EsiErrorKind::Invalid);
+    // Line 6: `<Entry><Index>#x6040</Index><BitLen>` is 36 characters, the `x` is column 37.
+    assert_eq!((e.line(), e.column()), (6, 37));
+    assert_eq!(
+        e.to_string(),
+        "line 6, column 37: <Entry> in <RxPdo> 0x1600 has BitLen \"x\": not a number"
+    );
+
+    // Blanks around the value: the position is the first non-blank character.
+    let e = err(&with_device(
+        "<RxPdo><Index>#x1600</Index>\n\
+         <Entry><Index>#x6040</Index><BitLen>\n   12a </BitLen></Entry></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (7, 4));
+    assert!(
+        e.message.ends_with("has BitLen \"12a\": not a number"),
+        "{e}"
+    );
+}
+
+#[test]
+fn values_with_entities_and_cdata() {
+    // Character references and CDATA around a bad value: the position is the text's start.
+    let e = err(&with_device(
+        "<RxPdo><Index>&#x20;\u{3000}\u{3000}x</Index></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    let e = err(&with_device(
+        "<RxPdo><Index><![CDATA[  zz]]></Index></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    // Entities are decoded in values.
+    let f = EsiFile::parse(&with_device(
+        "<Name>A &amp; B</Name><Sm StartAddress=\"&#x31;\" ControlByte=\"0\">Inputs</Sm>",
+    ))
+    .unwrap();
+    assert_eq!(f.devices[0].name, "A & B");
+    assert_eq!(f.devices[0].sync_managers[0].start_address, 1);
+}
+
+#[test]
+fn out_of_range_numbers() {
+    let e = err(&with_device("<TxPdo><Index>#x10000</Index></TxPdo>"));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    assert_eq!(
+        e.message,
+        "<TxPdo> has Index \"#x10000\": out of range, expected a 16-bit unsigned number \
+         (0..=65535)"
+    );
+    let e = err(&with_device(
+        "<RxPdo><Index>#x1600</Index><Entry><Index>#x6040</Index><SubIndex>256</SubIndex>\
+         <BitLen>8</BitLen></Entry></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 67));
+    assert!(e.message.contains("SubIndex \"256\": out of range"), "{e}");
+}
+
+#[test]
+fn bad_attribute_points_at_the_value() {
+    let e = err(&with_device(
+        "<Sm StartAddress=\"#xZZ\" ControlByte=\"#x26\" Enable=\"1\">MBoxOut</Sm>",
+    ));
+    assert_eq!(e.kind, EsiErrorKind::Invalid);
+    // `<Sm StartAddress="` is 18 characters.
+    assert_eq!((e.line(), e.column()), (5, 19));
+    assert_eq!(
+        e.message,
+        "<Sm> 0 in <Device> \"D\" has StartAddress=\"#xZZ\": not a hex number"
+    );
+
+    let e = err(&with_device(
+        "<RxPdo Fixed=\"yes\"><Index>#x1600</Index></RxPdo>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    assert_eq!(
+        e.message,
+        "<RxPdo> 0x1600 has Fixed=\"yes\": not a boolean (expected 1, 0, true or false)"
+    );
+}
+
+#[test]
+fn missing_mandatory_parts() {
+    // No ProductCode: at the <Type> element.
+    let text = "<EtherCATInfo>\n<Vendor><Id>1</Id></Vendor>\n<Descriptions><Devices>\n  \
+                <Device>\n    <Type>D</Type>\n  </Device>\n</Devices></Descriptions>\n\
+                </EtherCATInfo>";
+    let e = err(text);
+    assert_eq!(e.kind, EsiErrorKind::Missing);
+    assert_eq!((e.line(), e.column()), (5, 5));
+    assert_eq!(
+        e.message,
+        "<Type> of <Device> \"D\" has no ProductCode attribute"
+    );
+
+    // No <Vendor>: at the root element.
+    let e = err("<?xml version=\"1.0\"?>\n<EtherCATInfo><Descriptions/></EtherCATInfo>");
+    assert_eq!(e.kind, EsiErrorKind::Missing);
+    assert_eq!((e.line(), e.column()), (2, 1));
+    assert_eq!(e.message, "<EtherCATInfo> has no <Vendor>");
+
+    // A PDO entry without BitLen: at the <Entry>.
+    let e = err(&with_device(
+        "<RxPdo><Index>#x1600</Index>\n  <Entry><Index>#x6040</Index></Entry></RxPdo>",
+    ));
+    assert_eq!(
+        (e.kind, e.line(), e.column()),
+        (EsiErrorKind::Missing, 6, 3)
+    );
+    assert_eq!(e.message, "<Entry> in <RxPdo> 0x1600 has no <BitLen>");
+
+    // A DC mode without AssignActivate.
+    let e = err(&with_device("<Dc><OpMode><Name>DC</Name></OpMode></Dc>"));
+    assert_eq!((e.line(), e.column()), (5, 5));
+    assert_eq!(
+        e.message,
+        "<OpMode> \"DC\" in <Device> \"D\" has no <AssignActivate>"
+    );
+
+    // An InitCmd without a transition.
+    let e = err(&with_device(
+        "<Mailbox><CoE><InitCmd><Index>#x1C12</Index><Data>00</Data></InitCmd></CoE></Mailbox>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 15));
+    assert_eq!(
+        e.message,
+        "<InitCmd> in <CoE> of <Device> \"D\" has no <Transition>"
+    );
+}
+
+#[test]
+fn unknown_keywords() {
+    let e = err(&with_device(
+        "<Sm StartAddress=\"0\" ControlByte=\"0\">Mailbox</Sm>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 38));
+    assert_eq!(
+        e.message,
+        "<Sm> 0 in <Device> \"D\" has type \"Mailbox\": expected MBoxOut, MBoxIn, Outputs or \
+         Inputs"
+    );
+    let e = err(&with_device(
+        "<Mailbox><CoE><InitCmd><Transition>XY</Transition><Index>1</Index><Data>00</Data>\
+         </InitCmd></CoE></Mailbox>",
+    ));
+    assert_eq!((e.line(), e.column()), (5, 36));
+    assert!(e.message.contains("has Transition \"XY\""), "{e}");
+    let e = err(&with_device(
+        "<Profile><Dictionary><Objects><Object><Index>#x6040</Index><Name>CW</Name>\
+         <Type>UINT</Type><BitSize>16</BitSize><Flags><Access>rx</Access></Flags></Object>\
+         </Objects></Dictionary></Profile>",
+    ));
+    assert_eq!(e.column(), 128);
+    assert_eq!(
+        e.message,
+        "<Flags> of <Object> 0x6040 has Access \"rx\": expected ro, rw or wo"
+    );
+    let e = err(&with_device(
+        "<Profile><Dictionary><Objects><Object><Index>#x6040</Index><Name>CW</Name>\
+         <Type>UINT</Type><BitSize>16</BitSize><Flags><Access WriteRestrictions=\"Init\">rw\
+         </Access></Flags></Object></Objects></Dictionary></Profile>",
+    ));
+    assert!(e.message.contains("WriteRestrictions=\"Init\""), "{e}");
+}
+
+#[test]
+fn not_an_esi_file() {
+    let e = err("<Foo/>");
+    assert_eq!(
+        (e.kind, e.line(), e.column()),
+        (EsiErrorKind::Invalid, 1, 1)
+    );
+    assert!(e.message.contains("root element is <Foo>"), "{e}");
+}
+
+#[test]
+fn malformed_xml_gives_the_xml_position() {
+    let e = err("<EtherCATInfo>\n  <Vendor>\n</EtherCATInfo>");
+    assert_eq!(e.kind, EsiErrorKind::Xml);
+    assert_eq!((e.line(), e.column()), (3, 1));
+    assert!(e.message.starts_with("malformed XML: "), "{e}");
+
+    let e = err("<EtherCATInfo a=\"1\" a=\"2\"/>");
+    assert_eq!(e.kind, EsiErrorKind::Xml);
+    assert_eq!(e.line(), 1);
+
+    let e = err("");
+    assert_eq!(e.kind, EsiErrorKind::Xml);
+    let e = err("<!DOCTYPE x [<!ENTITY a \"b\">]><EtherCATInfo/>");
+    assert_eq!(e.kind, EsiErrorKind::Xml);
+}
+
+#[test]
+fn encoding_errors_and_latin1() {
+    // Not UTF-8 and no Latin-1 declaration: position of the bad byte.
+    let mut bytes = b"<EtherCATInfo>\n<Ven".to_vec();
+    bytes.push(0xE4);
+    bytes.extend_from_slice(b"dor/>\n</EtherCATInfo>");
+    let e = EsiFile::parse_bytes(&bytes).unwrap_err();
+    assert_eq!(
+        (e.kind, e.line(), e.column()),
+        (EsiErrorKind::Encoding, 2, 5)
+    );
+
+    // Declared ISO-8859-1: decoded.
+    let mut bytes = b"<?xml version=\"1.0\" encoding=\"ISO-8859-1\"?>\n<EtherCATInfo>\
+        <Vendor><Id>1</Id><Name>M"
+        .to_vec();
+    bytes.push(0xFC); // ü
+    bytes.extend_from_slice(
+        b"ller</Name></Vendor><Descriptions><Devices/></Descriptions></EtherCATInfo>",
+    );
+    let f = EsiFile::parse_bytes(&bytes).unwrap();
+    assert_eq!(f.vendor.name, "Müller");
+
+    // UTF-16 LE with BOM.
+    let text = "<EtherCATInfo><Vendor><Id>#x5</Id></Vendor><Descriptions><Devices/>\
+                </Descriptions></EtherCATInfo>";
+    let mut bytes = vec![0xFF, 0xFE];
+    for u in text.encode_utf16() {
+        bytes.extend_from_slice(&u.to_le_bytes());
+    }
+    assert_eq!(EsiFile::parse_bytes(&bytes).unwrap().vendor.id, 5);
+    bytes.push(0x00);
+    assert_eq!(
+        EsiFile::parse_bytes(&bytes).unwrap_err().kind,
+        EsiErrorKind::Encoding
+    );
+}
+
+#[test]
+fn errors_from_files_name_the_file() {
+    let dir = std::env::temp_dir().join(format!("ecdrive-esi-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("bad.xml");
+    std::fs::write(&path, with_device("<RxPdo><Index>zz</Index></RxPdo>")).unwrap();
+    let e = EsiFile::from_path(&path).unwrap_err();
+    assert_eq!(e.path.as_deref(), Some(path.as_path()));
+    assert_eq!(
+        e.to_string(),
+        format!(
+            "{}: line 5, column 15: <RxPdo> has Index \"zz\": not a number",
+            path.display()
+        )
+    );
+    let missing = dir.join("missing.xml");
+    let e = EsiFile::from_path(&missing).unwrap_err();
+    assert_eq!(e.kind, EsiErrorKind::Io);
+    assert!(
+        e.to_string()
+            .starts_with(&format!("{}: cannot read: ", missing.display()))
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn unknown_elements_and_namespaces_are_ignored() {
+    let text = "<e:EtherCATInfo xmlns:e=\"urn:x\" xmlns:v=\"urn:vendor\">\
+        <e:Vendor><e:Id>7</e:Id><v:Logo>abc</v:Logo></e:Vendor>\
+        <e:Descriptions><e:Devices><e:Device><e:Type ProductCode=\"3\">T</e:Type>\
+        <v:Whatever><e:Sm>junk</e:Sm></v:Whatever><Info><Anything/></Info>\
+        </e:Device></e:Devices></e:Descriptions></e:EtherCATInfo>";
+    let f = EsiFile::parse(text).unwrap();
+    assert_eq!(f.vendor.id, 7);
+    assert!(f.devices[0].sync_managers.is_empty());
+}
+
+#[test]
+fn identity_numbers_accept_negative_decimals() {
+    let text = "<EtherCATInfo><Vendor><Id>-1</Id></Vendor><Descriptions><Devices>\
+                <Device><Type ProductCode=\"-2\" RevisionNo=\"0x10\">T</Type></Device>\
+                </Devices></Descriptions></EtherCATInfo>";
+    let f = EsiFile::parse(text).unwrap();
+    assert_eq!(f.vendor.id, 0xFFFF_FFFF);
+    assert_eq!(f.devices[0].type_.product_code, 0xFFFF_FFFE);
+    assert_eq!(f.devices[0].type_.revision_no, Some(0x10));
+}
+
+fn issues(body: &str) -> Vec<String> {
+    let f = EsiFile::parse(&with_device(body)).unwrap_or_else(|e| panic!("{e}"));
+    f.check().into_iter().map(|i| i.to_string()).collect()
+}
+
+#[test]
+fn check_finds_contradictions() {
+    let sm = "<Fmmu>Outputs</Fmmu><Fmmu>Inputs</Fmmu>\
+              <Sm StartAddress=\"#x1100\" ControlByte=\"#x64\" Enable=\"1\" DefaultSize=\"3\">Outputs</Sm>\
+              <Sm StartAddress=\"#x1180\" ControlByte=\"#x20\" Enable=\"1\">Inputs</Sm>";
+    let entry = |i: &str, bits: u8, dt: &str| {
+        format!(
+            "<Entry><Index>{i}</Index><SubIndex>0</SubIndex><BitLen>{bits}</BitLen>\
+             <DataType>{dt}</DataType></Entry>"
+        )
+    };
+    // Consistent: no issues.
+    let ok = format!(
+        "{sm}<RxPdo Sm=\"0\"><Index>#x1600</Index>{}{}</RxPdo>",
+        entry("#x6040", 16, "UINT"),
+        entry("#x6060", 8, "SINT")
+    );
+    assert_eq!(issues(&ok), Vec::<String>::new());
+
+    // Two default PDOs excluding each other, a PDO on the wrong SM, a size that disagrees with
+    // its data type, an exclude of an unknown PDO, an SM size that disagrees with the mapping.
+    let bad = format!(
+        "{sm}<RxPdo Sm=\"0\"><Index>#x1600</Index><Exclude>#x1601</Exclude>{}</RxPdo>\
+         <RxPdo Sm=\"0\"><Index>#x1601</Index><Exclude>#x1605</Exclude>{}</RxPdo>\
+         <TxPdo Sm=\"0\"><Index>#x1A00</Index>{}</TxPdo>",
+        entry("#x6040", 16, "UINT"),
+        entry("#x6060", 16, "SINT"),
+        entry("#x6041", 16, "UINT"),
+    );
+    let got = issues(&bad);
+    let want = [
+        "RxPDO 0x1600 and 0x1601 are both assigned by default but exclude each other",
+        "RxPDO 0x1601 excludes 0x1605, which is not described",
+        "RxPDO 0x1601 entry 0x6060:00 has BitLen 16 but DataType INTEGER8 is 8 bits",
+        "SM0 DefaultSize 3 differs from the 4 bytes of the default RxPDOs",
+        "TxPDO 0x1A00 is assigned to SM0, which is Outputs, not Inputs",
+    ];
+    for w in want {
+        assert!(
+            got.iter().any(|g| g.contains(w)),
+            "missing {w:?} in {got:#?}"
+        );
+    }
+    assert_eq!(got.len(), want.len(), "{got:#?}");
+
+    // Process data without an FMMU, a mailbox without mailbox SyncManagers.
+    let got = issues(
+        "<Sm StartAddress=\"#x1100\" ControlByte=\"#x64\" Enable=\"1\">Outputs</Sm>\
+         <RxPdo><Index>#x1600</Index></RxPdo><Mailbox><CoE/></Mailbox>",
+    );
+    assert_eq!(got.len(), 3, "{got:#?}");
+    assert!(got[0].contains("has RxPDOs but no <Fmmu>Outputs</Fmmu>"));
+    assert!(got[1].contains("has a <Mailbox> but no <Sm>MBoxOut</Sm>"));
+}
+
+#[test]
+fn check_compares_pdos_with_the_dictionary() {
+    let dict = "<Profile><Dictionary><DataTypes>\
+        <DataType><Name>DT1600</Name><BitSize>48</BitSize>\
+          <SubItem><SubIdx>0</SubIdx><Name>SubIndex 000</Name><Type>USINT</Type><BitSize>8</BitSize><BitOffs>0</BitOffs></SubItem>\
+          <SubItem><SubIdx>1</SubIdx><Name>SubIndex 001</Name><Type>UDINT</Type><BitSize>32</BitSize><BitOffs>16</BitOffs></SubItem>\
+        </DataType></DataTypes><Objects>\
+        <Object><Index>#x1018</Index><Name>Identity</Name><Type>DT1600</Type><BitSize>48</BitSize>\
+          <Info><SubItem><Name>SubIndex 001</Name><Info><DefaultData>03000000</DefaultData></Info></SubItem></Info></Object>\
+        <Object><Index>#x1600</Index><Name>RxPDO</Name><Type>DT1600</Type><BitSize>48</BitSize>\
+          <Info><SubItem><Name>SubIndex 000</Name><Info><DefaultValue>2</DefaultValue></Info></SubItem>\
+          <SubItem><Name>SubIndex 001</Name><Info><DefaultValue>#x60400010</DefaultValue></Info></SubItem></Info></Object>\
+        <Object><Index>#x6040</Index><Name>Controlword</Name><Type>UINT</Type><BitSize>16</BitSize>\
+          <Flags><Access>rw</Access></Flags></Object>\
+        <Object><Index>#x6071</Index><Name>Target torque</Name><Type>INT</Type><BitSize>16</BitSize>\
+          <Flags><Access>rw</Access><PdoMapping>R</PdoMapping></Flags></Object>\
+        </Objects></Dictionary></Profile>";
+    let body = format!(
+        "{dict}<Fmmu>Outputs</Fmmu><Sm StartAddress=\"#x1100\" ControlByte=\"#x64\" Enable=\"1\">Outputs</Sm>\
+         <RxPdo Sm=\"0\"><Index>#x1600</Index>\
+         <Entry><Index>#x6040</Index><SubIndex>0</SubIndex><BitLen>16</BitLen></Entry>\
+         <Entry><Index>#x6071</Index><SubIndex>0</SubIndex><BitLen>32</BitLen></Entry>\
+         <Entry><Index>#x607A</Index><SubIndex>0</SubIndex><BitLen>32</BitLen></Entry></RxPdo>"
+    );
+    let got = issues(&body);
+    let want = [
+        "0x1018:01 default 0x00000003 differs from the vendor <Id> 0x00000002",
+        "RxPDO 0x1600 entry 0x6040:00: the dictionary does not mark it mappable as RxPDO",
+        "RxPDO 0x1600 entry 0x6071:00 has BitLen 32 but the dictionary says 16",
+        "RxPDO 0x1600 entry 0x607A:00 is not in the object dictionary",
+        "RxPDO 0x1600 lists 3 entries but 0x1600:00 defaults to 2",
+    ];
+    for w in want {
+        assert!(
+            got.iter().any(|g| g.contains(w)),
+            "missing {w:?} in {got:#?}"
+        );
+    }
+    assert_eq!(got.len(), want.len(), "{got:#?}");
+}
