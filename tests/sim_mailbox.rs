@@ -315,3 +315,74 @@ fn lost_reply_is_repeated_and_duplicates_are_not_executed() {
         other => panic!("{other:?}"),
     }
 }
+
+/// The generic CoE device's own checks at SAFE-OP→OP in DC mode (0x1C32:01 = 2), each with its
+/// AL status code, and the OP it reaches once the SYNC unit is set up right.
+#[test]
+fn dc_mode_is_checked_at_safeop_to_op() {
+    let mut m = Master {
+        p: preop(),
+        counter: 0,
+    };
+    let write = |m: &mut Master, index: u16, sub: u8, data: &[u8]| {
+        let r = m.sdo(&SdoRequest::DownloadExpedited {
+            index,
+            sub,
+            complete_access: false,
+            data,
+        });
+        assert_eq!(sdo_response(&r), SdoResponse::Download { index, sub });
+    };
+    write(&mut m, 0x1C32, 1, &2u16.to_le_bytes());
+    write(&mut m, 0x1C32, 2, &1_000_000u32.to_le_bytes());
+    // Mirrored into the input side.
+    let r = m.sdo(&SdoRequest::Upload {
+        index: 0x1C33,
+        sub: 1,
+        complete_access: false,
+    });
+    assert!(matches!(
+        sdo_response(&r),
+        SdoResponse::UploadExpedited { data: [2, 0], .. }
+    ));
+    // Process data SMs for the default mapping (6 bytes each way).
+    let p = &mut m.p;
+    p.fpwr(ST, 0x0810, &[0x00, 0x11, 6, 0, 0x64, 0, 1, 0])
+        .unwrap();
+    p.fpwr(ST, 0x0818, &[0x00, 0x14, 6, 0, 0x20, 0, 1, 0])
+        .unwrap();
+    assert_eq!(p.request_state(ST, 0x0004).unwrap(), (0x0004, 0));
+    // No SYNC0: invalid DC sync configuration.
+    assert_eq!(p.request_state(ST, 0x0008).unwrap(), (0x0014, 0x0030));
+    let sync0 = |p: &mut Probe, cycle: u32| {
+        p.fpwr(ST, 0x0981, &[0]).unwrap();
+        let now = p.fprd(ST, 0x0910, 8).unwrap().data;
+        let start = u64::from_le_bytes(now[..8].try_into().unwrap()) + 10_000_000;
+        p.fpwr(ST, 0x0990, &start.to_le_bytes()).unwrap();
+        p.fpwr(ST, 0x09A0, &cycle.to_le_bytes()).unwrap();
+        p.fpwr(ST, 0x0981, &[0x03]).unwrap();
+    };
+    // Below the minimum cycle time (0x1C32:05 = 125 µs).
+    sync0(p, 100_000);
+    assert_eq!(p.request_state(ST, 0x0018).unwrap(), (0x0014, 0x0035));
+    // Not the cycle time the master wrote into 0x1C32:02.
+    sync0(p, 500_000);
+    assert_eq!(p.request_state(ST, 0x0018).unwrap(), (0x0014, 0x0036));
+    // Right.
+    sync0(p, 1_000_000);
+    assert_eq!(p.request_state(ST, 0x0018).unwrap(), (0x0008, 0));
+    // PDO objects cannot be written outside PRE-OP.
+    let r = m.sdo(&SdoRequest::DownloadExpedited {
+        index: 0x1C12,
+        sub: 0,
+        complete_access: false,
+        data: &[0],
+    });
+    assert!(matches!(
+        sdo_response(&r),
+        SdoResponse::Abort {
+            code: 0x0800_0022,
+            ..
+        }
+    ));
+}
