@@ -1012,3 +1012,62 @@ fn segment_link_is_a_synchronous_frame_link() {
     link.send(&[0u8; 20]).unwrap();
     assert_eq!(link.recv(&mut rx, None).unwrap(), None);
 }
+
+/// A device with a bootstrap mailbox (64-byte SMs) next to its standard one; its firmware
+/// echoes mailboxes in both.
+struct BootDevice(EchoMailbox);
+
+impl Device for BootDevice {
+    fn description(&self) -> ecdrive::sim::DeviceDescription {
+        let mut d = EchoMailbox::new().description();
+        if let Some(m) = d.mailbox.as_mut() {
+            m.bootstrap = Some([0x1000, 64, 0x1080, 64]);
+        }
+        d
+    }
+    fn process_data_sizes(&self) -> ecdrive::sim::ProcessDataSizes {
+        Default::default()
+    }
+    fn mailbox_request(&mut self, state: AlState, req: &[u8], reply: &mut [u8]) -> Option<usize> {
+        self.0.mailbox_request(state, req, reply)
+    }
+}
+
+#[test]
+fn bootstrap_state_checks_its_own_mailbox() {
+    let dev = BootDevice(EchoMailbox::new());
+    let (mut p, _) = probe_with(vec![Box::new(dev)], EscConfig::default());
+    p.assign_addresses(0x1000).unwrap();
+    assert_eq!(to_state(&mut p, 0x1000, 0x0003), (0x0011, 0x0015));
+    // The standard mailbox configuration is not the bootstrap one.
+    p.fpwr(
+        0x1000,
+        0x0800,
+        &[
+            0x00, 0x10, 128, 0, 0x26, 0, 1, 0, 0x80, 0x10, 128, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
+    assert_eq!(to_state(&mut p, 0x1000, 0x0013), (0x0011, 0x0015));
+    p.bwr(0x0800, &[0; 16]).unwrap();
+    p.fpwr(
+        0x1000,
+        0x0800,
+        &[
+            0x00, 0x10, 64, 0, 0x26, 0, 1, 0, 0x80, 0x10, 64, 0, 0x22, 0, 1, 0,
+        ],
+    )
+    .unwrap();
+    assert_eq!(to_state(&mut p, 0x1000, 0x0013), (0x0003, 0));
+    // The bootstrap mailbox works with its own (64-byte) buffers.
+    let mut m = vec![0u8; 64];
+    m[0] = 4;
+    m[5] = 0x1F;
+    m[6..10].copy_from_slice(b"boot");
+    assert_eq!(p.fpwr(0x1000, 0x1000, &m).unwrap().wkc, 1);
+    let r = p.fprd(0x1000, 0x1080, 64).unwrap();
+    assert_eq!((r.wkc, &r.data[6..10]), (1, &b"boot"[..]));
+    // From BOOT only INIT is allowed.
+    assert_eq!(to_state(&mut p, 0x1000, 0x0002), (0x0013, 0x0011));
+    assert_eq!(to_state(&mut p, 0x1000, 0x0001), (0x0001, 0));
+}

@@ -671,7 +671,7 @@ impl Esc {
             }
         }
         // The master polls the read mailbox's status: let the firmware post queued messages.
-        if let Some(m) = self.mbx {
+        if let Some(m) = self.active_mbx() {
             let st = Self::sm_base(m.sm_in) + 5;
             if overlaps(a, b, st, st + 1) {
                 self.pending |= pending::MBX_POLL;
@@ -933,8 +933,17 @@ impl Esc {
         }
     }
 
+    /// The mailbox layout in use: the bootstrap mailbox in BOOT, the standard one otherwise.
+    fn active_mbx(&self) -> Option<MbxLayout> {
+        if self.state == AlState::Bootstrap {
+            self.boot_mbx
+        } else {
+            self.mbx
+        }
+    }
+
     fn mailbox_read_done(&mut self, n: u8) {
-        if let Some(m) = self.mbx {
+        if let Some(m) = self.active_mbx() {
             if n == m.sm_in {
                 let (s, e) = (
                     usize::from(m.in_start),
@@ -1409,10 +1418,15 @@ impl Esc {
         Ok(())
     }
 
-    fn start_mailbox(&mut self, dev: &mut dyn Device) {
+    fn start_mailbox(&mut self, layout: Option<MbxLayout>, dev: &mut dyn Device) {
         self.mailbox.running = true;
         self.mailbox.backup_valid = false;
-        if let Some(m) = self.mbx {
+        if let Some(m) = layout {
+            // Buffers sized for this mailbox (allocates only when the size changes, at a state
+            // transition).
+            self.mailbox.request.resize(usize::from(m.out_len), 0);
+            self.mailbox.reply.resize(usize::from(m.in_len), 0);
+            self.mailbox.backup.resize(usize::from(m.in_len), 0);
             // The repeat toggle starts in sync with what the master has.
             let act = self.byte(Self::sm_base(m.sm_in) + 6);
             self.set_bits(Self::sm_base(m.sm_in) + 7, 0x02, act & 0x02 != 0);
@@ -1502,7 +1516,12 @@ impl Esc {
             && matches!(new_state, PreOp | Bootstrap)
             && from != new_state
         {
-            self.start_mailbox(dev);
+            let layout = if new_state == Bootstrap {
+                self.boot_mbx
+            } else {
+                self.mbx
+            };
+            self.start_mailbox(layout, dev);
         }
         if new_state == Op && from != Op {
             self.wd_deadline = self.watchdog_ns().map(|w| hop.forward_ns.saturating_add(w));
@@ -1615,7 +1634,7 @@ impl Esc {
     }
 
     fn mailbox_repeat(&mut self) {
-        let Some(m) = self.mbx else { return };
+        let Some(m) = self.active_mbx() else { return };
         let base = Self::sm_base(m.sm_in);
         let req = self.byte(base + 6) & 0x02;
         if self.mailbox.running && !self.sm_full(m.sm_in) && self.mailbox.backup_valid {
@@ -1629,7 +1648,7 @@ impl Esc {
     }
 
     fn service_mailbox(&mut self, dev: &mut dyn Device) {
-        let Some(m) = self.mbx else { return };
+        let Some(m) = self.active_mbx() else { return };
         let state = self.state;
         if self.sm_full(m.sm_in) || !self.sm_enabled(m.sm_in) {
             return;
