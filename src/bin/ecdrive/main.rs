@@ -65,9 +65,8 @@ fn sim(
     sm_watchdog: Option<u16>,
     list_devices: bool,
 ) -> ExitCode {
-    use ecdrive::sim::devices::DEVICE_NAMES;
     if list_devices {
-        for (name, what) in DEVICE_NAMES {
+        for (name, what) in ecdrive::sim::devices::device_names() {
             println!("{name:14} {what}");
         }
         return ExitCode::SUCCESS;
