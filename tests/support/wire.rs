@@ -545,3 +545,55 @@ pub fn remap(w: &mut Wire, pos: usize, mapping: &ecdrive::pdo::Mapping) {
             .unwrap_or_else(|c| panic!("{}: abort 0x{c:08X} ({})", s.address, s.description));
     }
 }
+
+impl Wire {
+    /// Every drive of the segment in OP with the recommended cyclic mapping, the profile's
+    /// start-up SDOs and synchronisation writes, DC SYNC0 at `cycle_ns`, outputs zero.
+    pub fn op_cyclic(profiles: &[&DriveProfile], cycle_ns: u32) -> Self {
+        let mut w = Self::drives(profiles);
+        for (pos, p) in profiles.iter().enumerate() {
+            w.preop(pos);
+            remap(&mut w, pos, &p.cyclic_mapping);
+            for s in p.startup {
+                let e = p.od().entry(s.address).unwrap();
+                let bytes = s.value.to_value().unwrap().encode(e.data_type).unwrap();
+                w.download(pos, s.address.index, s.address.sub, &bytes)
+                    .unwrap_or_else(|c| panic!("{}: {} abort 0x{c:08X}", p.name, s.address));
+            }
+            for s in p.sync_writes(cycle_ns, true).unwrap() {
+                let e = p.od().entry(s.address).unwrap();
+                let bytes = ecdrive::od::Value::Int(s.value)
+                    .encode(e.data_type)
+                    .unwrap();
+                w.download(pos, s.address.index, s.address.sub, &bytes)
+                    .unwrap_or_else(|c| panic!("{}: {} abort 0x{c:08X}", p.name, s.address));
+            }
+        }
+        let sizes: Vec<(usize, usize)> =
+            profiles.iter().map(|_| (cyclic::OUT, cyclic::IN)).collect();
+        w.configure_pd(&sizes);
+        for pos in 0..profiles.len() {
+            assert_eq!(w.request(pos, 0x0004), (0x0004, 0), "SAFE-OP");
+        }
+        w.activate_dc(cycle_ns);
+        for pos in 0..profiles.len() {
+            assert_eq!(w.request(pos, 0x0008), (0x0008, 0), "OP");
+        }
+        w.cycle();
+        w
+    }
+
+    /// Set the controlword of `pos`, run two cycles (the drive acts at the first SYNC0, the
+    /// second frame reads the result) and return the statusword.
+    pub fn command(&mut self, pos: usize, cw: u16) -> u16 {
+        cyclic::set_cw(self.outputs_mut(pos), cw);
+        self.cycle();
+        self.cycle();
+        cyclic::sw(self.inputs(pos))
+    }
+
+    /// The CiA 402 state from the statusword of `pos`.
+    pub fn state(&self, pos: usize) -> ecdrive::cia402::State {
+        ecdrive::cia402::State::from_statusword(cyclic::sw(self.inputs(pos))).unwrap()
+    }
+}
