@@ -22,7 +22,7 @@
 use super::spec::{
     AlarmDef, CommandCheck, Condition, DriveSpec, EmcyData, ErrorReporting, FollowingErrorSpec,
     LossDetection, LossLimit, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData, PowerOnValue,
-    Quantity, Scaling, StatusBit, TorqueLimits, WriteRule,
+    Quantity, Scaling, StatusBit, TorqueLimits, TorqueSlopeUnit, WriteRule,
 };
 use crate::drives::bdhde::PROFILE;
 use crate::ec::AlStatusCode;
@@ -179,6 +179,7 @@ pub static SPEC: DriveSpec = DriveSpec {
         max: Some(a(0x6072, 0)),
         speed_limit: None,
     },
+    torque_slope: TorqueSlopeUnit::MilliNewtonMetrePerSecond,
     torque_mode_quick_stop_immediate: false,
     halt_in_cyclic_modes: true,
     modes: ModeRules {

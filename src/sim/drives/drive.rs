@@ -2,7 +2,8 @@
 
 use super::motor::{Drive, Limits, Motor};
 use super::spec::{
-    AlarmDef, Condition, DriveSpec, EmcyData, PowerOnData, Quantity, Scaling, WriteRule,
+    AlarmDef, Condition, DriveSpec, EmcyData, PowerOnData, Quantity, Scaling, TorqueSlopeUnit,
+    WriteRule,
 };
 use crate::cia402::device::{Device as Fsa, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{ControlWord, OperationMode, QuickStopOption, State, StatusWord, StopRamp};
@@ -189,6 +190,8 @@ pub struct EmulatedDrive {
     pp: ProfilePosition,
     homing: Homing,
     prev_cw: u16,
+    /// Time inside the position window / velocity window / velocity threshold so far (0:
+    /// outside).
     in_window_ns: u64,
     speed_window_ns: u64,
     speed_zero_ns: u64,
@@ -206,6 +209,7 @@ pub struct EmulatedDrive {
     main_power: bool,
     remote: bool,
     last_emcy: Option<Emergency>,
+    last_dt_ns: u32,
     stats: DriveStats,
 }
 
@@ -313,6 +317,7 @@ impl EmulatedDrive {
             main_power: true,
             remote: true,
             last_emcy: None,
+            last_dt_ns: 1_000_000,
             stats: DriveStats::default(),
         };
         d.power_on();
@@ -620,8 +625,6 @@ impl EmulatedDrive {
             last_target: actual,
             ..ProfilePosition::default()
         };
-        self.fe_over_ns = 0;
-        self.fe_flag = false;
     }
 
     fn raise(&mut self, a: &'static AlarmDef) {
@@ -937,10 +940,17 @@ impl EmulatedDrive {
                     self.int(obj::TARGET_TORQUE) as f64
                 };
                 let slope = self.od.dict().uint(obj::TORQUE_SLOPE).unwrap_or(0) as f64;
+                // As ‰ of the rated torque per second.
+                let slope = match self.spec.torque_slope {
+                    TorqueSlopeUnit::PermillePerSecond => slope,
+                    TorqueSlopeUnit::MilliNewtonMetrePerSecond => {
+                        slope / (self.spec.motor.rated_torque_nm * 1000.0) * 1000.0
+                    }
+                };
                 self.torque_demand_permille = if slope == 0.0 {
                     target
                 } else {
-                    approach(self.torque_demand_permille, target, slope / 10.0 * dt)
+                    approach(self.torque_demand_permille, target, slope * dt)
                 };
                 self.demand = self.actual_units();
                 self.plan = Drive::Torque {
@@ -1012,12 +1022,11 @@ impl EmulatedDrive {
         }
     }
 
-    fn plan_position(&mut self, dt: f64) {
+    fn plan_position(&mut self, _dt: f64) {
         let upr = self.units_per_rev();
-        let end_speed = (self.demand - self.demand_prev) / upr / dt.max(1e-9);
         self.plan = Drive::Position {
-            target_rev: (self.demand - self.offset_units) / upr,
-            end_speed_rev_s: end_speed,
+            from_rev: (self.demand_prev - self.offset_units) / upr,
+            to_rev: (self.demand - self.offset_units) / upr,
         };
     }
 
@@ -1087,14 +1096,17 @@ impl EmulatedDrive {
             1 => {
                 let window = self.od.dict().uint(obj::POSITION_WINDOW).unwrap_or(0);
                 let within = window == u64::from(u32::MAX)
-                    || (self.pp.last_target - actual).abs() <= window as f64;
+                    || (self.pp.last_target - actual.round()).abs() <= window as f64;
                 if within && self.pp.target.is_none() {
                     self.in_window_ns = self.in_window_ns.saturating_add(u64::from(dt_ns));
                 } else {
                     self.in_window_ns = 0;
                 }
                 let halted = self.prev_cw & ControlWord::HALT.bits() != 0 && self.motor.stopped();
-                if halted || self.in_window_ns >= ms(obj::POSITION_WINDOW_TIME, self) {
+                if halted
+                    || self.in_window_ns > 0
+                        && self.in_window_ns >= ms(obj::POSITION_WINDOW_TIME, self)
+                {
                     sw |= StatusWord::TARGET_REACHED.bits();
                 }
                 if self.pp.ack {
@@ -1112,7 +1124,9 @@ impl EmulatedDrive {
                 } else {
                     self.speed_window_ns = 0;
                 }
-                if self.speed_window_ns >= ms(obj::VELOCITY_WINDOW_TIME, self) {
+                if self.speed_window_ns > 0
+                    && self.speed_window_ns >= ms(obj::VELOCITY_WINDOW_TIME, self)
+                {
                     sw |= StatusWord::TARGET_REACHED.bits();
                 }
                 let threshold = self.od.dict().uint(obj::VELOCITY_THRESHOLD).unwrap_or(0) as f64;
@@ -1121,7 +1135,9 @@ impl EmulatedDrive {
                 } else {
                     self.speed_zero_ns = 0;
                 }
-                if self.speed_zero_ns >= ms(obj::VELOCITY_THRESHOLD_TIME, self) {
+                if self.speed_zero_ns > 0
+                    && self.speed_zero_ns >= ms(obj::VELOCITY_THRESHOLD_TIME, self)
+                {
                     sw |= StatusWord::SPEED_ZERO.bits();
                 }
             }
@@ -1178,11 +1194,10 @@ impl EmulatedDrive {
         let i32r = (i64::from(i32::MIN), i64::from(i32::MAX));
         let i16r = (i64::from(i16::MIN), i64::from(i16::MAX));
         let _ = d.set_int(obj::VELOCITY_ACTUAL, sat(speed * vpr, i32r.0, i32r.1));
+        let dt = f64::from(self.last_dt_ns.max(1)) / 1e9;
         let vd = match self.plan {
             Drive::Velocity { target_rev_s } => target_rev_s,
-            Drive::Position {
-                end_speed_rev_s, ..
-            } => end_speed_rev_s,
+            Drive::Position { from_rev, to_rev } => (to_rev - from_rev) / dt,
             _ => 0.0,
         };
         let _ = d.set_int(obj::VELOCITY_DEMAND, sat(vd * vpr, i32r.0, i32r.1));
@@ -1234,6 +1249,7 @@ impl EmulatedDrive {
             self.free_run_cycle_ns()
         };
         // 1. The motion of the cycle that just ended.
+        self.last_dt_ns = dt_ns;
         self.integrate(dt_ns);
         // 2. The outputs of this cycle.
         let op = event.outputs_enabled && self.al == AlState::Op;

@@ -29,7 +29,7 @@
 use super::spec::{
     AlarmDef, CommandCheck, Condition, DriveSpec, EmcyData, ErrorReporting, FollowingErrorSpec,
     LossDetection, LossLimit, ModeGroup, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData,
-    PowerOnValue, Quantity, Scaling, StatusBit, TorqueLimits, WriteRule,
+    PowerOnValue, Quantity, Scaling, StatusBit, TorqueLimits, TorqueSlopeUnit, WriteRule,
 };
 use crate::drives::mr_j4_tm::{COUNTS_PER_REV, CYCLE_TIMES_NS, PROFILE};
 use crate::ec::AlStatusCode;
@@ -192,6 +192,7 @@ pub static SPEC: DriveSpec = DriveSpec {
         max: None,
         speed_limit: Some(a(0x2D20, 0)),
     },
+    torque_slope: TorqueSlopeUnit::PermillePerSecond,
     torque_mode_quick_stop_immediate: true,
     halt_in_cyclic_modes: false,
     modes: ModeRules {

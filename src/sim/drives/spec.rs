@@ -187,6 +187,15 @@ pub struct TorqueLimits {
     pub speed_limit: Option<ObjectAddress>,
 }
 
+/// The unit of the torque slope 0x6087.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TorqueSlopeUnit {
+    /// ‰ of the rated torque per second (MR-J4-TM: 0.1 %/s).
+    PermillePerSecond,
+    /// mN·m per second (BDHDE §9 6087h), converted with the rated torque.
+    MilliNewtonMetrePerSecond,
+}
+
 /// Which physical quantity an object shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Quantity {
@@ -343,6 +352,8 @@ pub struct DriveSpec {
     pub command: CommandCheck,
     /// Torque and speed limits.
     pub torque_limits: TorqueLimits,
+    /// The unit of 0x6087.
+    pub torque_slope: TorqueSlopeUnit,
     /// In cst/tq the quick stop switches the power stage off at once (MR-J4-TM §5.6: dynamic
     /// brake) instead of ramping.
     pub torque_mode_quick_stop_immediate: bool,
