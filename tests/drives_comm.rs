@@ -94,16 +94,25 @@ fn dropped_outputs_count_like_lost_frames() {
     assert_eq!(w.drive(0).alarm().map(|a| a.id), Some("AL.86.1"));
 }
 
-/// The BDHDE's packet-loss fault 0x818D after three consecutive cycles without data (\[REC\]).
+/// The BDHDE's packet-loss fault 0x818D after 7 ms of consecutive cycles without data
+/// (\[REC\]), at 500 µs: 14 misses.
 #[test]
 fn bdhde_packet_loss() {
-    let mut w = enabled(BD, 1_000_000);
-    w.skip_cycle();
-    w.skip_cycle();
+    let mut w = enabled(BD, 500_000);
+    for _ in 0..13 {
+        w.skip_cycle();
+    }
     assert!(w.drive(0).alarm().is_none());
-    w.cycle();
-    w.skip_cycle();
-    w.skip_cycle();
+    assert_eq!(w.drive(0).sync_error_counter(), 39);
+    // 39 good cycles bring the counter back to 0; then the 14th miss in a row raises it.
+    for _ in 0..39 {
+        w.cycle();
+    }
+    assert_eq!(w.drive(0).sync_error_counter(), 0);
+    for _ in 0..13 {
+        w.skip_cycle();
+    }
+    assert!(w.drive(0).alarm().is_none());
     w.skip_cycle();
     assert_eq!(w.drive(0).alarm().map(|a| a.id), Some("Fb8"));
     w.cycle();

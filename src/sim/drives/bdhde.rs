@@ -298,11 +298,11 @@ pub const REC_POWER_ON: &[PowerOnValue] = &[
 
 /// \[REC\] Loss of cyclic data (MANUAL GAP: the manual names the fault, not the rule): the
 /// ETG.1020 error counter, +3 per SYNC0 without data, −1 per cycle with data; 0x818D "EtherCAT
-/// Packet Loss" when it reaches 9 (three consecutive misses).
+/// Packet Loss" after 7 ms of consecutive misses, the MR-J4-TM's automatic threshold.
 pub const REC_LOSS: LossDetection = LossDetection {
     increment: 3,
     decrement: 1,
-    limit: LossLimit::Counter(9),
+    limit: LossLimit::Milliseconds(7),
     alarm: "Fb8",
 };
 

@@ -205,6 +205,7 @@ pub struct EmulatedDrive {
     pending: Option<&'static AlarmDef>,
     // Fault injection and environment.
     drop_outputs: u32,
+    loss_detection: bool,
     forced_fe: Option<i32>,
     main_power: bool,
     remote: bool,
@@ -313,6 +314,7 @@ impl EmulatedDrive {
             alarm: None,
             pending: None,
             drop_outputs: 0,
+            loss_detection: true,
             forced_fe: None,
             main_power: true,
             remote: true,
@@ -510,6 +512,21 @@ impl EmulatedDrive {
     /// previous outputs and counts them as missing.
     pub fn drop_outputs(&mut self, cycles: u32) {
         self.drop_outputs = self.drop_outputs.saturating_add(cycles);
+    }
+
+    /// Switch the loss-of-data supervision ([`DriveSpec::loss`]) and the cycle-counter check on
+    /// or off (on at power-on). Off is what the MR-J4-TM does with [Pr. PN06] = 1___ and
+    /// [Pr. PN02] = 0; tests with a master that is not real-time use it.
+    pub fn set_loss_detection(&mut self, on: bool) {
+        self.loss_detection = on;
+        self.loss_counter = 0;
+    }
+
+    /// The same drive with the loss-of-data supervision off (see
+    /// [`EmulatedDrive::set_loss_detection`]).
+    pub fn without_loss_detection(mut self) -> Self {
+        self.set_loss_detection(false);
+        self
     }
 
     /// Main-circuit (DC bus) power present (statusword bit 4; losing it in Operation enabled is
@@ -1271,7 +1288,7 @@ impl EmulatedDrive {
         if op && !fresh {
             self.stats.missed_outputs += 1;
         }
-        if op && dc {
+        if op && dc && self.loss_detection {
             self.supervise_cycle(fresh, dt_ns);
         }
         if let Some(a) = self.pending.take() {
