@@ -1,5 +1,6 @@
 //! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic loop.
 
+pub mod bus;
 pub mod coe;
 pub mod error;
 pub mod exec;
