@@ -74,6 +74,9 @@ pub enum BusError {
     /// The PDU storage could not be split (an internal error).
     #[error("internal error: the PDU storage could not be split")]
     Storage,
+    /// The session thread could not be started.
+    #[error("cannot start the session thread: {0}")]
+    Thread(String),
 }
 
 /// A live bus session. See [`with_bus`].
@@ -113,6 +116,28 @@ pub fn with_bus<L: FrameLink, R>(
     let r = f(&mut bus);
     let (_, _, link) = bus.pump.into_parts();
     Ok((r, link))
+}
+
+/// Stack size of session threads: ethercrab's group is held inline in futures.
+pub const SESSION_STACK: usize = 16 * 1024 * 1024;
+
+/// Like [`with_bus`], on a dedicated thread with a stack large enough for ethercrab's group
+/// (see [`SESSION_STACK`]). Returns when `f` does.
+pub fn run_session<L, R, F>(link: L, opts: BusOptions, f: F) -> Result<(R, L), BusError>
+where
+    L: FrameLink + Send + 'static,
+    R: Send + 'static,
+    F: FnOnce(&mut Bus<'_, L>) -> R + Send + 'static,
+{
+    let h = std::thread::Builder::new()
+        .name("ecdrive-session".into())
+        .stack_size(SESSION_STACK)
+        .spawn(move || with_bus(link, opts, f))
+        .map_err(|e| BusError::Thread(e.to_string()))?;
+    match h.join() {
+        Ok(r) => r,
+        Err(p) => std::panic::resume_unwind(p),
+    }
 }
 
 impl<'sto, L: FrameLink> Bus<'sto, L> {

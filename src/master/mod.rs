@@ -7,3 +7,4 @@ pub mod exec;
 pub mod io;
 pub mod program;
 pub mod setpoint;
+pub mod startup;
