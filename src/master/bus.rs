@@ -90,14 +90,16 @@ pub struct Bus<'sto, L: FrameLink> {
 }
 
 /// Open a session on `link` and run `f` with it. The storage and the link live as long as the
-/// call; the link is returned with `f`'s result.
+/// call; the link is returned with `f`'s result (or with the error).
 pub fn with_bus<L: FrameLink, R>(
     link: L,
     opts: BusOptions,
     f: impl FnOnce(&mut Bus<'_, L>) -> R,
-) -> Result<(R, L), BusError> {
+) -> Result<(R, L), (BusError, L)> {
     let storage = Box::new(Storage::new());
-    let (tx, rx, pdu_loop) = storage.try_split().map_err(|_| BusError::Storage)?;
+    let Ok((tx, rx, pdu_loop)) = storage.try_split() else {
+        return Err((BusError::Storage, link));
+    };
     let md = MainDevice::new(
         pdu_loop,
         opts.timeouts(),
@@ -123,19 +125,37 @@ pub const SESSION_STACK: usize = 16 * 1024 * 1024;
 
 /// Like [`with_bus`], on a dedicated thread with a stack large enough for ethercrab's group
 /// (see [`SESSION_STACK`]). Returns when `f` does.
-pub fn run_session<L, R, F>(link: L, opts: BusOptions, f: F) -> Result<(R, L), BusError>
+pub fn run_session<L, R, F>(link: L, opts: BusOptions, f: F) -> Result<(R, L), (BusError, L)>
 where
     L: FrameLink + Send + 'static,
     R: Send + 'static,
     F: FnOnce(&mut Bus<'_, L>) -> R + Send + 'static,
 {
+    // The link goes to the thread only once it runs, so a failed spawn can give it back.
+    let (link_tx, link_rx) = std::sync::mpsc::channel::<L>();
     let h = std::thread::Builder::new()
         .name("ecdrive-session".into())
         .stack_size(SESSION_STACK)
-        .spawn(move || with_bus(link, opts, f))
-        .map_err(|e| BusError::Thread(e.to_string()))?;
+        .spawn(move || {
+            let link = link_rx
+                .recv()
+                .map_err(|_| BusError::Thread("no link".into()));
+            link.map(|l| with_bus(l, opts, f))
+        });
+    let h = match h {
+        Ok(h) => h,
+        Err(e) => return Err((BusError::Thread(e.to_string()), link)),
+    };
+    if let Err(std::sync::mpsc::SendError(link)) = link_tx.send(link) {
+        return Err((
+            BusError::Thread("the session thread ended at once".into()),
+            link,
+        ));
+    }
     match h.join() {
-        Ok(r) => r,
+        Ok(Ok(r)) => r,
+        // The thread received the link; it cannot fail to receive it.
+        Ok(Err(_)) => unreachable!("the link was sent before joining"),
         Err(p) => std::panic::resume_unwind(p),
     }
 }

@@ -134,6 +134,42 @@ pub fn run<L: FrameLink, F: Future>(
     result
 }
 
+/// Run `fut` on the calling thread while **another** thread pumps the frames (the cycle
+/// thread, during OP): poll, park until woken or a short slice passes, repeat, within
+/// `timeout`. For supervisory work during the cycle (mailbox polling for emergencies, SDOs).
+pub fn run_remote<F: Future>(
+    what: &dyn Fn() -> String,
+    timeout: Duration,
+    fut: F,
+) -> Result<F::Output, ExecError> {
+    let deadline = monotonic_ns().saturating_add(timeout.as_nanos() as u64);
+    let tw = Arc::new(ThreadWaker {
+        thread: std::thread::current(),
+        notified: AtomicBool::new(false),
+    });
+    let waker = Waker::from(tw.clone());
+    let mut cx = Context::from_waker(&waker);
+    let mut fut = Box::pin(fut);
+    loop {
+        tw.notified.store(false, Ordering::Release);
+        if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
+            return Ok(v);
+        }
+        let now = monotonic_ns();
+        if now >= deadline {
+            return Err(ExecError::Timeout {
+                what: what(),
+                timeout_ms: timeout.as_millis() as u64,
+            });
+        }
+        if !tw.notified.load(Ordering::Acquire) {
+            std::thread::park_timeout(Duration::from_nanos(
+                (1_000_000u64).min(deadline.saturating_sub(now)),
+            ));
+        }
+    }
+}
+
 /// How one cyclic exchange ended, when it did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum ExchangeError {

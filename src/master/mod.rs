@@ -2,9 +2,12 @@
 
 pub mod bus;
 pub mod coe;
+pub mod cycle;
 pub mod error;
 pub mod exec;
 pub mod io;
 pub mod program;
+pub mod session;
 pub mod setpoint;
 pub mod startup;
+pub mod telemetry;
