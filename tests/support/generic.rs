@@ -97,3 +97,32 @@ pub fn generic_segment(n: usize) -> Segment {
     }
     seg
 }
+
+/// A link whose cable can be pulled: while pulled, frames go nowhere and nothing comes back.
+pub struct PullableLink<L> {
+    pub inner: L,
+    pub pulled: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for PullableLink<L> {
+    fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive::link::LinkError> {
+        if self.pulled.load(std::sync::atomic::Ordering::Relaxed) {
+            return Ok(());
+        }
+        self.inner.send(frame)
+    }
+
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Option<std::time::Duration>,
+    ) -> Result<Option<usize>, ecdrive::link::LinkError> {
+        if self.pulled.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Some(t) = timeout {
+                std::thread::sleep(t.min(std::time::Duration::from_millis(1)));
+            }
+            return Ok(None);
+        }
+        self.inner.recv(buf, timeout)
+    }
+}
