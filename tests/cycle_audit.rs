@@ -9,6 +9,8 @@
 mod support {
     pub mod generic;
 }
+use ecdrive::link::FrameLink;
+use ecdrive::link::netns::{VethPair, require_root};
 use ecdrive::master::cycle::CycleHooks;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
@@ -16,7 +18,7 @@ use ecdrive::master::telemetry::StopKind;
 use ecdrive::rt::audit::{
     self, AllocCounts, CountingAlloc, SyscallCounter, SyscallCounts, skip_or_fail,
 };
-use ecdrive::sim::transport::SegmentLink;
+use ecdrive::sim::transport::{RawServer, SegmentLink};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use support::generic::{GENERIC_TEST, generic_segment};
@@ -24,8 +26,8 @@ use support::generic::{GENERIC_TEST, generic_segment};
 #[global_allocator]
 static ALLOC: CountingAlloc = CountingAlloc;
 
-#[derive(Default)]
 struct Audit {
+    allowed: &'static [libc::c_long],
     counter: Mutex<Option<SyscallCounter>>,
     base: Mutex<SyscallCounts>,
     result: Mutex<Option<(AllocCounts, SyscallCounts)>>,
@@ -34,7 +36,7 @@ struct Audit {
 
 impl CycleHooks for Audit {
     fn steady_begin(&self) {
-        match SyscallCounter::for_current_thread(&[libc::SYS_clock_nanosleep]) {
+        match SyscallCounter::for_current_thread(self.allowed) {
             Ok(c) => {
                 if let Ok(b) = c.overhead() {
                     *self.base.lock().unwrap() = b;
@@ -64,20 +66,33 @@ impl CycleHooks for Audit {
     }
 }
 
-#[test]
-fn steady_cycle_allocates_nothing_and_only_sleeps() {
-    let audit = Arc::new(Audit::default());
+impl Audit {
+    fn new(allowed: &'static [libc::c_long]) -> Self {
+        Self {
+            allowed,
+            counter: Mutex::default(),
+            base: Mutex::default(),
+            result: Mutex::default(),
+            error: Mutex::default(),
+        }
+    }
+}
+
+/// Run two devices to OP on `link`, audit 300 steady cycles, stop; check the counts.
+fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_long], what: &str) {
+    let audit = Arc::new(Audit::new(allowed));
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
     // No supervisory mailbox traffic during the window: its replies wake another thread.
     cfg.emergency_poll = None;
     cfg.hooks = Some(audit.clone());
+    cfg.cycle.segment_lost_after = 50;
     for p in 0..2 {
         cfg.startup.drives.push(DriveSetup {
             profile: Some(&GENERIC_TEST),
             ..DriveSetup::new(Selector::Position(p))
         });
     }
-    let mut m = Master::start(SegmentLink::new(generic_segment(2)), cfg).unwrap();
+    let mut m = Master::start(link, cfg).unwrap();
     m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
         .unwrap();
     let c0 = m.telemetry().cycle.cycle;
@@ -97,10 +112,10 @@ fn steady_cycle_allocates_nothing_and_only_sleeps() {
     assert_eq!(
         allocs,
         AllocCounts::default(),
-        "the cycle allocated in steady state"
+        "{what}: the cycle allocated in steady state"
     );
     if let Some(e) = audit.error.lock().unwrap().take() {
-        skip_or_fail(&format!("syscall audit of the cycle: {e}"));
+        skip_or_fail(&format!("syscall audit of the cycle ({what}): {e}"));
         return;
     }
     let base = *audit.base.lock().unwrap();
@@ -108,8 +123,45 @@ fn steady_cycle_allocates_nothing_and_only_sleeps() {
     let all = sys.all - base.all;
     assert_eq!(
         outside, 0,
-        "syscalls other than clock_nanosleep: {sys:?} (base {base:?})"
+        "{what}: syscalls outside {allowed:?}: {sys:?} (base {base:?})"
     );
-    // One sleep per cycle: at least the 300 cycles we waited for.
-    assert!(all >= 300, "{sys:?}");
+    // At least one sleep per cycle: at least the 300 cycles we waited for.
+    assert!(all >= 300, "{what}: {sys:?}");
+}
+
+/// In-process: the frame I/O is a function call, so the only syscall is the sleep.
+#[test]
+fn steady_cycle_in_process_allocates_nothing_and_only_sleeps() {
+    audit_run(
+        SegmentLink::new(generic_segment(2)),
+        &[libc::SYS_clock_nanosleep],
+        "in-process",
+    );
+}
+
+/// Over a veth pair: the sleep and the raw socket's send, receive and poll.
+#[test]
+fn steady_cycle_over_veth_allocates_nothing_and_only_does_frame_io_and_sleeps() {
+    if !require_root("cycle_audit::steady_cycle_over_veth") {
+        return;
+    }
+    let veth = VethPair::create().expect("veth pair");
+    let server = RawServer::spawn(
+        veth.open_peer_socket().expect("peer socket"),
+        generic_segment(2),
+    )
+    .expect("server");
+    audit_run(
+        veth.open_host_socket().expect("host socket"),
+        &[
+            libc::SYS_clock_nanosleep,
+            libc::SYS_sendto,
+            libc::SYS_recvfrom,
+            libc::SYS_poll,
+            libc::SYS_ppoll,
+        ],
+        "veth",
+    );
+    let (_, served) = server.stop();
+    served.expect("server");
 }
