@@ -92,6 +92,8 @@ pub struct CycleIo {
     pub events: rtrb::Producer<Event>,
     /// Telemetry out.
     pub telemetry: triple_buffer::Input<Telemetry>,
+    /// Where the cycle reports what its real-time set-up got, before the loop starts.
+    pub rt_report: Option<std::sync::mpsc::Sender<RtReport>>,
 }
 
 /// The supervisory ends of the channels.
@@ -118,6 +120,7 @@ pub fn channels(axes: usize) -> (CycleIo, SupervisorIo) {
             commands: crx,
             events: etx,
             telemetry: tin,
+            rt_report: None,
         },
         SupervisorIo {
             commands: ctx,
@@ -254,6 +257,9 @@ pub fn run<L: FrameLink>(
     hooks: Option<&dyn CycleHooks>,
 ) -> CycleReport {
     let rt = settings.rt.apply_to_current_thread();
+    if let Some(tx) = io.rt_report.take() {
+        let _ = tx.send(rt.clone());
+    }
     let cycle_ns = settings.cycle.as_nanos() as u64;
     let dt = settings.cycle.as_secs_f64();
     let n = drives.len();

@@ -18,7 +18,7 @@ use super::telemetry::{Command, Event, EventKind, StopKind, Telemetry};
 use crate::cia402::{self, ErrorCode, ErrorEntry};
 use crate::ec::register;
 use crate::pdo::Direction;
-use crate::rt::monotonic_ns;
+use crate::rt::{RtReport, monotonic_ns};
 use ethercrab::Command as EcCommand;
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex};
@@ -121,6 +121,7 @@ impl<L> std::fmt::Display for StartFailure<L> {
 
 struct Shared {
     history: Mutex<Vec<HistoryEntry>>,
+    rt: Mutex<Option<RtReport>>,
 }
 
 /// A running master. See the module documentation.
@@ -263,6 +264,7 @@ impl<L: FrameLink + Send + 'static> Master<L> {
         let (cycle_io, sup) = cycle::channels(n_hint);
         let shared = Arc::new(Shared {
             history: Mutex::new(Vec::new()),
+            rt: Mutex::new(None),
         });
         let (tx, rx) = mpsc::channel::<Result<Vec<DriveSummary>, MasterError>>();
         let shared2 = shared.clone();
@@ -375,6 +377,12 @@ impl<L: FrameLink + Send + 'static> Master<L> {
             .unwrap_or_default()
     }
 
+    /// What the cycle thread's real-time set-up got (priority, CPU, locked memory, warnings),
+    /// once the cycle has started.
+    pub fn rt_report(&self) -> Option<RtReport> {
+        self.shared.rt.lock().ok().and_then(|r| r.clone())
+    }
+
     /// Whether the session (and its cycle) still runs.
     pub fn is_running(&self) -> bool {
         self.thread.as_ref().is_some_and(|t| !t.is_finished())
@@ -447,7 +455,7 @@ impl<L: FrameLink + Send + 'static> Drop for Master<L> {
 fn session<L: FrameLink + Send>(
     bus: &mut super::bus::Bus<'_, L>,
     cfg: &MasterConfig,
-    cycle_io: cycle::CycleIo,
+    mut cycle_io: cycle::CycleIo,
     events: &mut rtrb::Consumer<Event>,
     shared: &Shared,
     started_tx: &mpsc::Sender<Result<Vec<DriveSummary>, MasterError>>,
@@ -510,6 +518,8 @@ fn session<L: FrameLink + Send>(
         }
     };
 
+    let (rt_tx, rt_rx) = mpsc::channel();
+    cycle_io.rt_report = Some(rt_tx);
     let hooks = cfg.hooks.clone();
     let drives = &started.drives;
     let group = &started.group;
@@ -542,6 +552,21 @@ fn session<L: FrameLink + Send>(
         };
         let mut next_poll = monotonic_ns();
         let mut counters = vec![0u8; addrs.len()];
+        if let Ok(rt) = rt_rx.recv_timeout(Duration::from_secs(5)) {
+            for w in &rt.warnings {
+                tracing::warn!("{w}");
+                push_history(HistoryEntry {
+                    time_ns: monotonic_ns(),
+                    cycle: None,
+                    drive: None,
+                    error: false,
+                    text: format!("warning: {w}"),
+                });
+            }
+            if let Ok(mut r) = shared.rt.lock() {
+                *r = Some(rt);
+            }
+        }
         while !h.is_finished() {
             while let Ok(e) = events.pop() {
                 if let Some(entry) = decoder.entry(&e) {
