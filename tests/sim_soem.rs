@@ -19,6 +19,14 @@ import json, struct, sys, time
 import pysoem
 
 ifname = sys.argv[1]
+# Generous timeouts (µs): a loaded CI machine stalls for milliseconds.
+t = pysoem.settings.timeouts
+t.ret = 50_000
+t.safe = 200_000
+t.eeprom = 200_000
+t.tx_mailbox = 200_000
+t.rx_mailbox = 2_000_000
+t.state = 5_000_000
 out = {}
 m = pysoem.Master()
 m.open(ifname)
@@ -146,7 +154,6 @@ fn soem_brings_devices_to_op() {
         output.status.success(),
         "pysoem failed:\n{stderr}\n{stdout}"
     );
-    eprintln!("pysoem: {stdout}");
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON from pysoem");
 
     assert_eq!(v["count"], 3);
