@@ -64,13 +64,13 @@ try:
     out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
     # Keep process data flowing while requesting OP, as SOEM applications do.
     m.send_processdata()
-    m.receive_processdata(10_000)
+    m.receive_processdata(200_000)
     m.state = pysoem.OP_STATE
     m.write_state()
     op = False
     for _ in range(2000):
         m.send_processdata()
-        m.receive_processdata(10_000)
+        m.receive_processdata(200_000)
         if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
             op = True
             break
@@ -90,7 +90,7 @@ try:
             cw = {0x40: 6, 0x60: 6, 0x21: 7, 0x23: 15}.get(status & 0x6F, 15)
             s.output = struct.pack("<HiB", cw, 500_000, 9)
         m.send_processdata()
-        wkcs.append(m.receive_processdata(10_000))
+        wkcs.append(m.receive_processdata(200_000))
         if io.input[2:3] == bytes([0x42]):
             echo = True
         if echo and all(enabled) and cycle > 50:
