@@ -32,6 +32,7 @@ fn timeouts() -> Timeouts {
         state_transition: Duration::from_secs(10),
         eeprom: Duration::from_millis(500),
         mailbox_response: Duration::from_secs(2),
+        mailbox_echo: Duration::from_secs(2),
         wait_loop_delay: Duration::from_millis(1),
         ..Timeouts::default()
     }
@@ -335,6 +336,7 @@ async fn coe_scenario(md: &MainDevice<'static>) -> Outcome {
     let mut enabled = [false; N];
     let mut start_pos = [None::<i32>; N];
     let mut moved = [false; N];
+    let mut mode_seen = [false; N];
     for cycle in 0..3_000u32 {
         for (i, sd) in group.iter(md).enumerate() {
             let status = {
@@ -361,12 +363,11 @@ async fn coe_scenario(md: &MainDevice<'static>) -> Outcome {
             let inp = sd.inputs_raw();
             let pos = i32::from_le_bytes(inp[2..6].try_into().unwrap());
             let vel = i32::from_le_bytes(inp[6..10].try_into().unwrap());
-            if inp[0..2] == [0, 0] {
-                // No SYNC0 pulse yet: the first one comes after the start delay, and OP can be
-                // reached before it (as on a real drive); the inputs are still zero.
-                continue;
+            // Until the outputs written here have reached the drive (at its next SYNC0), its
+            // inputs reflect the zero outputs of the first OP cycles (mode 0) or nothing yet.
+            if inp[10] as i8 == 9 {
+                mode_seen[i] = true;
             }
-            assert_eq!(inp[10] as i8, 9, "mode display");
             if enabled[i] {
                 match start_pos[i] {
                     None => start_pos[i] = Some(pos),
@@ -382,6 +383,10 @@ async fn coe_scenario(md: &MainDevice<'static>) -> Outcome {
         }
         tokio::time::sleep(r.extra.next_cycle_wait).await;
     }
+    assert_eq!(
+        mode_seen, [true; N],
+        "mode display follows the mode of operation"
+    );
     assert_eq!(enabled, [true; N], "drives reached operation enabled");
     assert_eq!(moved, [true; N], "drives move at the commanded velocity");
     // An SDO read in OP agrees with the process data.
