@@ -11,6 +11,9 @@
 pub mod bdhde;
 pub mod mr_j4_tm;
 pub mod profile;
+mod registry;
+
+pub use registry::{all, by_identity, by_key};
 
 pub use profile::{
     CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,

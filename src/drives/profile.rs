@@ -224,3 +224,10 @@ pub struct DriveProfile {
     /// The drive's ESI file (XML text).
     pub esi: &'static str,
 }
+
+impl PartialEq for DriveProfile {
+    /// Profiles are equal when they are for the same drive type (same key).
+    fn eq(&self, other: &Self) -> bool {
+        self.key == other.key
+    }
+}
