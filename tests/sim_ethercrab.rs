@@ -34,7 +34,6 @@ fn timeouts() -> Timeouts {
         mailbox_response: Duration::from_secs(2),
         mailbox_echo: Duration::from_secs(2),
         wait_loop_delay: Duration::from_millis(1),
-        ..Timeouts::default()
     }
 }
 
