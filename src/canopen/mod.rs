@@ -1,3 +1,13 @@
 //! CANopen (CiA 301) master and the CANopen drives, through the same [`crate::cia402`] layer.
 //!
-//! Not implemented yet: see issue 9.
+//! Work in progress (issue 9).
+
+pub mod emcy;
+pub mod frame;
+pub mod nmt;
+pub mod profile;
+pub mod sdo;
+pub mod transport;
+
+pub use frame::{CanFrame, FrameError, NodeId, Service};
+pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};

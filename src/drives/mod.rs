@@ -10,3 +10,4 @@
 
 pub mod bdhde;
 pub mod mr_j4_tm;
+pub mod blv_r;
