@@ -412,9 +412,18 @@ mod tests {
         assert_eq!(Service::classify(0x000), Service::Nmt);
         assert_eq!(Service::classify(0x080), Service::Sync);
         assert_eq!(Service::classify(0x085), Service::Emcy(5));
-        assert_eq!(Service::classify(0x1A0), Service::Tpdo { pdo: 1, node: 0x20 });
-        assert_eq!(Service::classify(0x4C1), Service::Tpdo { pdo: 4, node: 0x41 });
-        assert_eq!(Service::classify(0x57F), Service::Rpdo { pdo: 4, node: 0x7F });
+        assert_eq!(
+            Service::classify(0x1A0),
+            Service::Tpdo { pdo: 1, node: 0x20 }
+        );
+        assert_eq!(
+            Service::classify(0x4C1),
+            Service::Tpdo { pdo: 4, node: 0x41 }
+        );
+        assert_eq!(
+            Service::classify(0x57F),
+            Service::Rpdo { pdo: 4, node: 0x7F }
+        );
         assert_eq!(Service::classify(0x5FF), Service::SdoTx(0x7F));
         assert_eq!(Service::classify(0x641), Service::SdoRx(0x41));
         assert_eq!(Service::classify(0x701), Service::ErrorControl(1));

@@ -217,8 +217,8 @@ impl ErrorControl {
                 len: frame.data().len(),
             });
         };
-        let state =
-            NmtState::from_code(*byte).ok_or(ErrorControlError::UnknownState { node, byte: *byte })?;
+        let state = NmtState::from_code(*byte)
+            .ok_or(ErrorControlError::UnknownState { node, byte: *byte })?;
         Ok(Self {
             node,
             state,
@@ -245,7 +245,10 @@ mod tests {
             assert_eq!(NmtCommand::parse(&f), Some((c, 0x41)));
         }
         assert_eq!(NmtCommand::Start.frame(0).data(), &[0x01, 0x00]);
-        assert_eq!(NmtCommand::parse(&CanFrame::new(0, &[0x03, 1]).unwrap()), None);
+        assert_eq!(
+            NmtCommand::parse(&CanFrame::new(0, &[0x03, 1]).unwrap()),
+            None
+        );
         assert_eq!(NmtCommand::parse(&CanFrame::new(0, &[0x01]).unwrap()), None);
         assert!(NmtCommand::ResetCommunication.disturbs_enabled_drive());
         assert!(!NmtCommand::EnterPreOperational.disturbs_enabled_drive());

@@ -129,7 +129,10 @@ impl Transmission {
 
     /// Whether SYNC paces this PDO (types 0–240 and 252).
     pub const fn is_synchronous(self) -> bool {
-        matches!(self, Self::SyncAcyclic | Self::SyncCyclic(_) | Self::RtrSync)
+        matches!(
+            self,
+            Self::SyncAcyclic | Self::SyncCyclic(_) | Self::RtrSync
+        )
     }
 }
 

@@ -73,7 +73,10 @@ impl<T: AsRef<[u8]>> SdoFrame<T> {
 
     /// Bytes 1–2 and 3 of an initiate or abort frame: the object address.
     pub fn address(&self) -> ObjectAddress {
-        ObjectAddress::new(u16::from_le_bytes([self.byte(1), self.byte(2)]), self.byte(3))
+        ObjectAddress::new(
+            u16::from_le_bytes([self.byte(1), self.byte(2)]),
+            self.byte(3),
+        )
     }
 
     /// Initiate: e (bit 1), expedited transfer.
@@ -453,16 +456,9 @@ pub enum ClientStep {
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum ClientState {
     UploadInit,
-    UploadSegments {
-        toggle: bool,
-        size: Option<u32>,
-    },
-    DownloadInit {
-        segmented: bool,
-    },
-    DownloadSegments {
-        toggle: bool,
-    },
+    UploadSegments { toggle: bool, size: Option<u32> },
+    DownloadInit { segmented: bool },
+    DownloadSegments { toggle: bool },
     Done,
 }
 
@@ -600,7 +596,9 @@ impl ClientTransfer {
                     last,
                 } => {
                     if t != toggle {
-                        return Err(self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT));
+                        return Err(
+                            self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT)
+                        );
                     }
                     self.buf.extend_from_slice(data.get(..len).unwrap_or(&[]));
                     if self.buf.len() > MAX_TRANSFER {
@@ -626,10 +624,7 @@ impl ClientTransfer {
                     };
                     Ok(ClientStep::Send(SdoRequest::upload_segment(!toggle)))
                 }
-                _ => Err(self.fail(
-                    "expected an upload segment",
-                    SdoAbortCode::INVALID_COMMAND,
-                )),
+                _ => Err(self.fail("expected an upload segment", SdoAbortCode::INVALID_COMMAND)),
             },
             ClientState::DownloadInit { segmented } => match resp {
                 SdoResponse::DownloadInitiated { addr } if addr == self.addr => {
@@ -651,7 +646,9 @@ impl ClientTransfer {
             ClientState::DownloadSegments { toggle } => match resp {
                 SdoResponse::DownloadSegment { toggle: t } => {
                     if t != toggle {
-                        return Err(self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT));
+                        return Err(
+                            self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT)
+                        );
                     }
                     if self.pos >= self.buf.len() {
                         self.state = ClientState::Done;
@@ -759,9 +756,7 @@ impl SdoServer {
                 self.reset();
                 None
             }
-            SdoRequest::Unsupported { addr, .. } => {
-                self.abort(addr, SdoAbortCode::INVALID_COMMAND)
-            }
+            SdoRequest::Unsupported { addr, .. } => self.abort(addr, SdoAbortCode::INVALID_COMMAND),
             SdoRequest::InitiateDownload {
                 addr,
                 expedited,
@@ -874,8 +869,11 @@ impl SdoServer {
                 }
                 let end = (pos + 7).min(self.buf.len());
                 let last = end >= self.buf.len();
-                let frame =
-                    SdoResponse::upload_segment(toggle, self.buf.get(pos..end).unwrap_or(&[]), last);
+                let frame = SdoResponse::upload_segment(
+                    toggle,
+                    self.buf.get(pos..end).unwrap_or(&[]),
+                    last,
+                );
                 if last {
                     self.reset();
                 } else {
@@ -985,9 +983,15 @@ mod tests {
             0x23
         );
         assert_eq!(SdoRequest::expedited_download(a, &[1]).unwrap()[0], 0x2F);
-        assert_eq!(SdoRequest::initiate_upload(a), [0x40, 0x40, 0x60, 0, 0, 0, 0, 0]);
+        assert_eq!(
+            SdoRequest::initiate_upload(a),
+            [0x40, 0x40, 0x60, 0, 0, 0, 0, 0]
+        );
         assert_eq!(SdoRequest::upload_segment(true)[0], 0x70);
-        assert_eq!(SdoRequest::download_segment(false, &[1, 2, 3], true)[0], 0x09);
+        assert_eq!(
+            SdoRequest::download_segment(false, &[1, 2, 3], true)[0],
+            0x09
+        );
         assert_eq!(
             abort_frame(a, SdoAbortCode::NO_OBJECT),
             [0x80, 0x40, 0x60, 0, 0, 0, 0x02, 0x06]
@@ -1015,7 +1019,8 @@ mod tests {
         );
         // A segment with the wrong toggle bit is aborted with 0503 0000h.
         let a = ObjectAddress::new(0x2000, 9);
-        s.handle(&SdoRequest::segmented_download(a, 10), &mut st).unwrap();
+        s.handle(&SdoRequest::segmented_download(a, 10), &mut st)
+            .unwrap();
         let r = s
             .handle(&SdoRequest::download_segment(true, &[0; 7], false), &mut st)
             .unwrap();
@@ -1039,7 +1044,8 @@ mod tests {
         assert_eq!(s.handle(&[0x40, 0, 0x10], &mut st), None);
         // A client that sees a bad toggle aborts with 0503 0000h.
         let (mut t, _) = ClientTransfer::upload(a);
-        t.on_response(&SdoResponse::segmented_upload(a, 10)).unwrap();
+        t.on_response(&SdoResponse::segmented_upload(a, 10))
+            .unwrap();
         let e = t
             .on_response(&SdoResponse::upload_segment(true, &[0; 7], false))
             .unwrap_err();

@@ -321,7 +321,8 @@ mod tests {
         let t = std::thread::spawn(move || {
             // Echo one frame with id + 1; a missing frame fails the test through the join.
             let f = b.recv(5_000_000).unwrap().unwrap();
-            b.send(&CanFrame::new(f.id() + 1, f.data()).unwrap()).unwrap();
+            b.send(&CanFrame::new(f.id() + 1, f.data()).unwrap())
+                .unwrap();
         });
         a.send(&CanFrame::new(0x600, &[9]).unwrap()).unwrap();
         let r = a.recv(5_000_000).unwrap().unwrap();

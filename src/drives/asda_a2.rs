@@ -28,8 +28,8 @@ use crate::canopen::profile::od::{
 };
 use crate::canopen::profile::{
     AccelUnit, Alarm, Bit3Enable, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat,
-    EmulationQuirks, EnableConditions, EnabledNmtReaction, HomingSupport, Identity,
-    ParamSetting, PdoDefault, TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,
+    EmulationQuirks, EnableConditions, EnabledNmtReaction, HomingSupport, Identity, ParamSetting,
+    PdoDefault, TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,
 };
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes};
 use crate::od::{EntryDesc, ObjectAddress, ObjectCode, ObjectDesc};
@@ -124,55 +124,158 @@ pub const ALARMS: &[Alarm] = &[
     al(0x0020, 0x7520, "AL020", "serial communication time out"),
     al(0x0022, 0x3130, "AL022", "input power phase loss"),
     warn(0x0023, 0x3231, "AL023", "pre-overload warning"),
-    al(0x0024, 0x7305, "AL024", "encoder initial magnetic field error"),
+    al(
+        0x0024,
+        0x7305,
+        "AL024",
+        "encoder initial magnetic field error",
+    ),
     al(0x0025, 0x7305, "AL025", "encoder internal error"),
     al(0x0026, 0x7305, "AL026", "encoder internal error"),
     al(0x0027, 0x7305, "AL027", "encoder data error"),
     al(0x0030, 0x7121, "AL030", "motor protection error"),
     al(0x0031, 0x3300, "AL031", "U,V,W wiring error"),
-    al(0x0040, 0x8610, "AL040", "full closed-loop excessive deviation"),
+    al(
+        0x0040,
+        0x8610,
+        "AL040",
+        "full closed-loop excessive deviation",
+    ),
     al(0x0099, 0x5500, "AL099", "DSP firmware upgrade"),
-    al(0x0111, 0x8110, "AL111", "CANopen SDO receive buffer overrun (two SDOs within 1 ms)"),
-    al(0x0112, 0x8110, "AL112", "CANopen PDO receive buffer overrun (two PDOs on one COB-ID within 1 ms)"),
+    al(
+        0x0111,
+        0x8110,
+        "AL111",
+        "CANopen SDO receive buffer overrun (two SDOs within 1 ms)",
+    ),
+    al(
+        0x0112,
+        0x8110,
+        "AL112",
+        "CANopen PDO receive buffer overrun (two PDOs on one COB-ID within 1 ms)",
+    ),
     al(0x0121, 0x8200, "AL121", "PDO object index does not exist"),
-    al(0x0122, 0x8200, "AL122", "PDO object sub-index does not exist"),
+    al(
+        0x0122,
+        0x8200,
+        "AL122",
+        "PDO object sub-index does not exist",
+    ),
     al(0x0123, 0x8200, "AL123", "PDO data type (size) error"),
     al(0x0124, 0x8200, "AL124", "PDO data range error"),
     al(0x0125, 0x8200, "AL125", "PDO object is read-only"),
     al(0x0126, 0x8200, "AL126", "object does not support PDO"),
-    al(0x0127, 0x8200, "AL127", "PDO object is write-protected while servo on"),
-    al(0x0128, 0x8200, "AL128", "error reading CANopen objects from EEPROM"),
-    al(0x0129, 0x8200, "AL129", "error writing CANopen objects to EEPROM"),
+    al(
+        0x0127,
+        0x8200,
+        "AL127",
+        "PDO object is write-protected while servo on",
+    ),
+    al(
+        0x0128,
+        0x8200,
+        "AL128",
+        "error reading CANopen objects from EEPROM",
+    ),
+    al(
+        0x0129,
+        0x8200,
+        "AL129",
+        "error writing CANopen objects to EEPROM",
+    ),
     al(0x0130, 0x8200, "AL130", "EEPROM invalid address range"),
     al(0x0131, 0x8200, "AL131", "EEPROM checksum error"),
     al(0x0132, 0x8200, "AL132", "password / EEPROM zone error"),
-    al(0x0170, 0x8130, "AL170", "node guarding or heartbeat error (servo on)"),
-    al(0x0180, 0x8130, "AL180", "node guarding or heartbeat error (servo off)"),
-    warn(0x0185, 0x8120, "AL185", "CAN bus error (warning: Tx error counter > 128)"),
+    al(
+        0x0170,
+        0x8130,
+        "AL170",
+        "node guarding or heartbeat error (servo on)",
+    ),
+    al(
+        0x0180,
+        0x8130,
+        "AL180",
+        "node guarding or heartbeat error (servo off)",
+    ),
+    warn(
+        0x0185,
+        0x8120,
+        "AL185",
+        "CAN bus error (warning: Tx error counter > 128)",
+    ),
     al(0x0186, 0x8100, "AL186", "CAN bus-off"),
-    al(0x0201, 0x6310, "AL201", "CANopen data initial error / 1010h-1011h load-save error"),
+    al(
+        0x0201,
+        0x6310,
+        "AL201",
+        "CANopen data initial error / 1010h-1011h load-save error",
+    ),
     al(0x0283, 0x5444, "AL283", "forward software limit"),
     al(0x0285, 0x5445, "AL285", "reverse software limit"),
     al(0x0301, 0x6200, "AL301", "CANopen SYNC failed (servo on)"),
-    al(0x0302, 0x6200, "AL302", "CANopen SYNC received too early (servo on)"),
+    al(
+        0x0302,
+        0x6200,
+        "AL302",
+        "CANopen SYNC received too early (servo on)",
+    ),
     al(0x0303, 0x6200, "AL303", "CANopen SYNC time out (servo on)"),
-    al(0x0304, 0x6200, "AL304", "CANopen ip command failed (servo on)"),
-    al(0x0305, 0x6200, "AL305", "SYNC period 1006h invalid (servo on)"),
+    al(
+        0x0304,
+        0x6200,
+        "AL304",
+        "CANopen ip command failed (servo on)",
+    ),
+    al(
+        0x0305,
+        0x6200,
+        "AL305",
+        "SYNC period 1006h invalid (servo on)",
+    ),
     al(0x03E1, 0x6200, "AL3E1", "CANopen SYNC failed (servo off)"),
-    al(0x03E2, 0x6200, "AL3E2", "CANopen SYNC received too early (servo off)"),
+    al(
+        0x03E2,
+        0x6200,
+        "AL3E2",
+        "CANopen SYNC received too early (servo off)",
+    ),
     al(0x03E3, 0x6200, "AL3E3", "CANopen SYNC time out (servo off)"),
-    al(0x03E4, 0x6200, "AL3E4", "CANopen ip command failed (servo off)"),
-    al(0x03E5, 0x6200, "AL3E5", "SYNC period 1006h invalid (servo off)"),
-    al(0x0401, 0x8100, "AL401", "CANopen state error: NMT reset or stop received while enabled"),
+    al(
+        0x03E4,
+        0x6200,
+        "AL3E4",
+        "CANopen ip command failed (servo off)",
+    ),
+    al(
+        0x03E5,
+        0x6200,
+        "AL3E5",
+        "SYNC period 1006h invalid (servo off)",
+    ),
+    al(
+        0x0401,
+        0x8100,
+        "AL401",
+        "CANopen state error: NMT reset or stop received while enabled",
+    ),
 ];
 
 /// 603Fh names. 603Fh holds only the CiA code, which several alarms share (7305h = AL011,
 /// AL024–AL027): the EMCY's bytes 3–4 tell them apart ([`ALARMS`]).
 pub const ERROR_TABLE: &[ErrorEntry] = &[
     ErrorEntry::exact(0x7305, "AL011/AL024-AL027", "encoder error"),
-    ErrorEntry::exact(0x8110, "AL111/AL112", "CANopen SDO or PDO receive buffer overrun"),
+    ErrorEntry::exact(
+        0x8110,
+        "AL111/AL112",
+        "CANopen SDO or PDO receive buffer overrun",
+    ),
     ErrorEntry::exact(0x8130, "AL170/AL180", "node guarding or heartbeat error"),
-    ErrorEntry::exact(0x8100, "AL186/AL401", "CAN bus-off or NMT stop/reset while enabled"),
+    ErrorEntry::exact(
+        0x8100,
+        "AL186/AL401",
+        "CAN bus-off or NMT stop/reset while enabled",
+    ),
     ErrorEntry::exact(0x8200, "AL121-AL132", "CANopen PDO object or EEPROM error"),
     ErrorEntry::exact(0x6200, "AL301-AL3E5", "CANopen SYNC or ip error"),
     ErrorEntry::exact(0x6310, "AL201", "CANopen data initial / load-save error"),
@@ -342,10 +445,7 @@ pub static DICTIONARY: &[ObjectDesc] = &[
         0x1016,
         "Consumer heartbeat time",
         ARRAY,
-        &[
-            count(1, RO),
-            e(1, "Consumer heartbeat time", U32, RW, u(0)),
-        ]
+        &[count(1, RO), e(1, "Consumer heartbeat time", U32, RW, u(0)),]
     ),
     var!(0x1017, "Producer heartbeat time", U16, RW, u(0)),
     rec!(
@@ -392,15 +492,39 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     rec!(0x1A02, "Transmit PDO mapping 3", RECORD, &MAP_EMPTY),
     rec!(0x1A03, "Transmit PDO mapping 4", RECORD, &MAP_EMPTY),
     // --- drive parameters (§2.2, §4.4: every Px-yy is an object 2xxxh) -----------------------
-    var!(0x2101, "P1-01 Control mode", I16, RW_RT, i(EMU_P1_01 as i64)),
-    var!(0x212C, "P1-44 Electronic gear numerator", I32, RW_RT, i(128)),
-    var!(0x212D, "P1-45 Electronic gear denominator", I32, RW_RT, i(10)),
+    var!(
+        0x2101,
+        "P1-01 Control mode",
+        I16,
+        RW_RT,
+        i(EMU_P1_01 as i64)
+    ),
+    var!(
+        0x212C,
+        "P1-44 Electronic gear numerator",
+        I32,
+        RW_RT,
+        i(128)
+    ),
+    var!(
+        0x212D,
+        "P1-45 Electronic gear denominator",
+        I32,
+        RW_RT,
+        i(10)
+    ),
     var!(0x2300, "P3-00 Node ID", I16, RW_RT, i(0x7F)),
     var!(0x2301, "P3-01 Bit rate", I16, RW_RT, i(0x0203)),
     var!(0x2309, "P3-09 SYNC correction", I16, RW_RT, i(0x5055)),
     var!(0x230A, "P3-10 CANopen protocol setting", I16, RW_RT, i(0)),
     var!(0x230B, "P3-11 CANopen saving options", I16, RW_RT, i(0)),
-    var!(0x230C, "P3-12 CANopen quick stop settings", I16, RW_RT, i(0)),
+    var!(
+        0x230C,
+        "P3-12 CANopen quick stop settings",
+        I16,
+        RW_RT,
+        i(0)
+    ),
     // --- 6000h group -------------------------------------------------------------------------
     var!(0x603F, "Error code", U16, RO_T, u(0)),
     var!(0x6040, "Controlword", U16, RW_R, u(0x0004)),
@@ -410,7 +534,13 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     var!(0x6060, "Modes of operation", I8, RW_R, i(0)),
     var!(0x6061, "Modes of operation display", I8, RO_T, i(0)),
     var!(0x6062, "Position demand value", I32, RO_T, i(0)),
-    var!(0x6063, "Position actual value (increments)", I32, RO_T, i(0)),
+    var!(
+        0x6063,
+        "Position actual value (increments)",
+        I32,
+        RO_T,
+        i(0)
+    ),
     var!(0x6064, "Position actual value", I32, RO_T, i(0)),
     var!(0x6065, "Following error window", U32, RW_R, u(3_840_000)),
     var!(0x6067, "Position window", U32, RW_R, u(100)),
@@ -422,8 +552,20 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     var!(0x606F, "Velocity threshold", U16, RW_R, u(100)),
     var!(0x6071, "Target torque", I16, RW_R, i(0)),
     var!(0x6074, "Torque demand value", I16, RO_T, i(0)),
-    var!(0x6075, "Motor rated current", U32, RO_T, u(EMU_RATED_CURRENT_MA as u64)),
-    var!(0x6076, "Motor rated torque", U32, RO_T, u(EMU_RATED_TORQUE as u64)),
+    var!(
+        0x6075,
+        "Motor rated current",
+        U32,
+        RO_T,
+        u(EMU_RATED_CURRENT_MA as u64)
+    ),
+    var!(
+        0x6076,
+        "Motor rated torque",
+        U32,
+        RO_T,
+        u(EMU_RATED_TORQUE as u64)
+    ),
     var!(0x6077, "Torque actual value", I16, RO_T, i(0)),
     var!(0x6078, "Current actual value", I16, RO_T, i(0)),
     var!(0x607A, "Target position", I32, RW_R, i(0)),
@@ -438,8 +580,20 @@ pub static DICTIONARY: &[ObjectDesc] = &[
             e(2, "Max position limit", I32, RW_R, i(i32::MAX as i64)),
         ]
     ),
-    var!(0x607F, "Max profile velocity", U32, RW_R, u(EMU_MAX_SPEED_RPM as u64 * 10)),
-    var!(0x6080, "Max motor speed", U32, RW_R, u(EMU_MAX_SPEED_RPM as u64)),
+    var!(
+        0x607F,
+        "Max profile velocity",
+        U32,
+        RW_R,
+        u(EMU_MAX_SPEED_RPM as u64 * 10)
+    ),
+    var!(
+        0x6080,
+        "Max motor speed",
+        U32,
+        RW_R,
+        u(EMU_MAX_SPEED_RPM as u64)
+    ),
     var!(0x6081, "Profile velocity", U32, RW_R, u(10_000)),
     var!(0x6083, "Profile acceleration", U32, RW_R, u(200)),
     var!(0x6084, "Profile deceleration", U32, RW_R, u(200)),
@@ -498,7 +652,13 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     var!(0x60C6, "Max deceleration", U32, RW_R, u(200)),
     var!(0x60F2, "Positioning option code", U16, RW_R, u(0)),
     var!(0x60F4, "Following error actual value", I32, RO_T, i(0)),
-    var!(0x60FC, "Position demand value (increments)", I32, RO_T, i(0)),
+    var!(
+        0x60FC,
+        "Position demand value (increments)",
+        I32,
+        RO_T,
+        i(0)
+    ),
     var!(0x60FD, "Digital inputs", U32, RO_T, u(0)),
     var!(0x60FF, "Target velocity", I32, RW_R, i(0)),
     var!(0x6502, "Supported drive modes", U32, RO_T, u(0x0000_006D)),
@@ -551,10 +711,7 @@ pub const ENABLE: EnableConditions = EnableConditions {
                   controlword bit 3 alone)",
         },
     ],
-    targets_cleared_on_enable: &[
-        ObjectAddress::new(0x60FF, 0),
-        ObjectAddress::new(0x6071, 0),
-    ],
+    targets_cleared_on_enable: &[ObjectAddress::new(0x60FF, 0), ObjectAddress::new(0x6071, 0)],
     notes: "60FFh/6071h are also cleared on mode change, servo off and quick stop",
 };
 
@@ -574,7 +731,10 @@ pub const VENDOR_ABORT_CODES: &[(u32, &str)] = &[
     (0x0800_00A2, "Object error when writing to EEPROM"),
     (0x0800_00A3, "Invalid range when accessing EEPROM"),
     (0x0800_00A4, "Checksum error when accessing EEPROM"),
-    (0x0800_00A5, "Password error when writing the encrypted zone"),
+    (
+        0x0800_00A5,
+        "Password error when writing the encrypted zone",
+    ),
 ];
 
 /// Communication: guarding and heartbeat (1016h one entry), SYNC consumer only, 1006h, 5
@@ -673,7 +833,11 @@ mod tests {
     #[test]
     fn alarm_numbers_are_unique() {
         for (k, a) in ALARMS.iter().enumerate() {
-            assert!(ALARMS.iter().skip(k + 1).all(|b| b.number != a.number), "{}", a.name);
+            assert!(
+                ALARMS.iter().skip(k + 1).all(|b| b.number != a.number),
+                "{}",
+                a.name
+            );
         }
     }
 }

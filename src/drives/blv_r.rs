@@ -19,20 +19,19 @@
 //! Every value the manual does not give is in the **MANUAL GAP / \[REC\]** section at the end.
 
 use crate::canopen::profile::od::{
-    I8, I16, I32, RO, RO_T, RW, RW_R, STR, U8, U16, U32, count, e, error_history, i,
-    pdo_comm, pdo_map, store_record, u,
+    I8, I16, I32, RO, RO_T, RW, RW_R, STR, U8, U16, U32, count, e, error_history, i, pdo_comm,
+    pdo_map, store_record, u,
 };
 use crate::canopen::profile::{
-    AccelUnit, Alarm, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat,
-    EmulationQuirks, EnableConditions, EnabledNmtReaction, HomingSupport, Identity, PdoDefault,
-    TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,
+    AccelUnit, Alarm, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat, EmulationQuirks,
+    EnableConditions, EnabledNmtReaction, HomingSupport, Identity, PdoDefault, TorqueSlopeUnit,
+    TransmissionTypes, Units, VelocityUnit,
 };
 use crate::cia402::{
     DriveCaps, ErrorEntry, QuickStopEnd, QuickStopOption, StopRamp, SupportedModes,
 };
 use crate::od::{EntryDesc, ObjectCode, ObjectDesc};
 use crate::pdo::{DirectionLimits, PdoEntry, PdoLimits, PdoRange};
-
 
 // ============================================================================================
 // Identity (§8.1, §8.3)
@@ -81,7 +80,11 @@ pub const ALARMS: &[Alarm] = &[
     alarm(0xFF4A, "alarm 4Ah", "return-to-home incomplete"),
     alarm(0xFF50, "alarm 50h", "electromagnetic brake overcurrent"),
     alarm(0xFF53, "alarm 53h", "HWTO input circuit error"),
-    alarm(0xFF55, "alarm 55h", "electromagnetic brake connection error"),
+    alarm(
+        0xFF55,
+        "alarm 55h",
+        "electromagnetic brake connection error",
+    ),
     alarm(0xFF60, "alarm 60h", "±LS both sides active"),
     alarm(0xFF61, "alarm 61h", "reverse ±LS connection"),
     alarm(0xFF62, "alarm 62h", "return-to-home operation error"),
@@ -90,7 +93,11 @@ pub const ALARMS: &[Alarm] = &[
     alarm(0xFF66, "alarm 66h", "hardware overtravel"),
     alarm(0xFF67, "alarm 67h", "software overtravel"),
     alarm(0xFF68, "alarm 68h", "HWTO input detection"),
-    alarm(0xFF6A, "alarm 6Ah", "return-to-home additional operation error"),
+    alarm(
+        0xFF6A,
+        "alarm 6Ah",
+        "return-to-home additional operation error",
+    ),
     alarm(0xFF70, "alarm 70h", "operation data error"),
     alarm(0xFF71, "alarm 71h", "unit setting error"),
     alarm(0xFF81, "alarm 81h", "network bus error"),
@@ -420,7 +427,13 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     var!(0x415F, "JOG/HOME torque limit", U16, RW_R, u(10_000)),
     var!(0x4160, "(HOME) Homing mode", U8, RW_R, u(1)),
     var!(0x4163, "(HOME) Starting velocity", U32, RW_R, u(30)),
-    var!(0x4169, "(HOME) Backward steps in 2-sensor homing", U32, RW_R, u(18_000)),
+    var!(
+        0x4169,
+        "(HOME) Backward steps in 2-sensor homing",
+        U32,
+        RW_R,
+        u(18_000)
+    ),
     var!(0x4186, "Stopping timeout at alarm", U16, RW_R, u(3_000)),
     var!(0x41CA, "WRAP setting", U8, RW_R, u(1)),
     // --- §8.3 device-profile objects --------------------------------------------------------

@@ -97,14 +97,50 @@ const fn al(number: u16, code: u16, register: u8, text: &'static str, fault: boo
 pub const ALARMS: &[Alarm] = &[
     al(0x8110, 0x8110, 0x11, "CAN overrun", false),
     al(0x8120, 0x8120, 0x11, "CAN error passive", false),
-    al(alarm::GUARDING, 0x8130, 0x11, "life guard or heartbeat error", true),
+    al(
+        alarm::GUARDING,
+        0x8130,
+        0x11,
+        "life guard or heartbeat error",
+        true,
+    ),
     al(0x8140, 0x8140, 0x11, "recovered from bus-off", false),
     al(0x8141, 0x8141, 0x11, "bus-off occurred", true),
-    al(0x8210, 0x8210, 0x11, "PDO not processed, length error", false),
-    al(alarm::OVER_TEMPERATURE, 0x4210, 0x09, "over-temperature error", true),
-    al(0x0016, 0x4210, 0x09, "pending over-temperature warning", false),
-    al(alarm::STALL, 0xFF01, 0x81, "motor idle during commanded move", true),
-    al(0x0002, 0xFF01, 0x81, "motor should be idle (additional info 2h-8h)", true),
+    al(
+        0x8210,
+        0x8210,
+        0x11,
+        "PDO not processed, length error",
+        false,
+    ),
+    al(
+        alarm::OVER_TEMPERATURE,
+        0x4210,
+        0x09,
+        "over-temperature error",
+        true,
+    ),
+    al(
+        0x0016,
+        0x4210,
+        0x09,
+        "pending over-temperature warning",
+        false,
+    ),
+    al(
+        alarm::STALL,
+        0xFF01,
+        0x81,
+        "motor idle during commanded move",
+        true,
+    ),
+    al(
+        0x0002,
+        0xFF01,
+        0x81,
+        "motor should be idle (additional info 2h-8h)",
+        true,
+    ),
     al(0x0009, 0xFF01, 0x81, "undershot warning", false),
     al(
         alarm::NMT_WHILE_ENABLED,
@@ -119,7 +155,11 @@ pub const ALARMS: &[Alarm] = &[
 pub const ERROR_TABLE: &[ErrorEntry] = &[
     ErrorEntry::exact(0x8141, "bus-off", "bus-off occurred"),
     ErrorEntry::exact(0x4210, "temperature", "over-temperature (2018h/2019h)"),
-    ErrorEntry::exact(0xFF01, "motion", "motor idle during move / should be idle / undershot"),
+    ErrorEntry::exact(
+        0xFF01,
+        "motion",
+        "motor idle during move / should be idle / undershot",
+    ),
 ];
 
 // ============================================================================================
@@ -190,7 +230,12 @@ pub const PDO_LIMITS: PdoLimits = PdoLimits {
 const CW: PdoEntry = PdoEntry::new(0x6040, 0, 16);
 const SW: PdoEntry = PdoEntry::new(0x6041, 0, 16);
 
-const fn pdo(number: u8, cob_id: u32, event_timer: u16, mapping: &'static [PdoEntry]) -> PdoDefault {
+const fn pdo(
+    number: u8,
+    cob_id: u32,
+    event_timer: u16,
+    mapping: &'static [PdoEntry],
+) -> PdoDefault {
     PdoDefault {
         number,
         cob_id,

@@ -11,8 +11,8 @@
 //! - [`asda_a2`]: Delta ASDA-A2 (CANopen).
 //! - [`lexium_mdrive`]: Schneider Electric Lexium MDrive (CANopen).
 
-pub mod bdhde;
-pub mod mr_j4_tm;
-pub mod blv_r;
 pub mod asda_a2;
+pub mod bdhde;
+pub mod blv_r;
 pub mod lexium_mdrive;
+pub mod mr_j4_tm;
