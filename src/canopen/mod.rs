@@ -3,8 +3,11 @@
 //! Work in progress (issue 9).
 
 pub mod emcy;
+pub mod emu;
+pub mod error;
 pub mod frame;
 pub mod nmt;
+pub mod pdo_plan;
 pub mod profile;
 pub mod sdo;
 pub mod transport;

@@ -504,6 +504,9 @@ pub struct EmulationQuirks {
     /// Alarm raised for two frames on one RPDO COB-ID within
     /// [`CommSupport::rpdo_min_interval_us`] (ASDA-A2 AL112).
     pub rpdo_overrun_alarm: Option<u16>,
+    /// Alarm raised for an RPDO shorter than its mapping (BLV-R, Lexium: EMCY 8210h; ASDA-A2
+    /// AL123).
+    pub pdo_length_alarm: Option<u16>,
     /// Alarm raised when life guarding or the heartbeat consumer times out (ASDA-A2 AL170; the
     /// others report EMCY 8130h).
     pub guarding_alarm: Option<u16>,

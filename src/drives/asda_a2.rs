@@ -781,6 +781,7 @@ pub const PROFILE: CanDriveProfile = CanDriveProfile {
         }),
         operational_required: false,
         sdo_overrun_alarm: Some(alarm::SDO_OVERRUN),
+        pdo_length_alarm: Some(alarm::PDO_LENGTH),
         rpdo_overrun_alarm: Some(alarm::PDO_OVERRUN),
         guarding_alarm: Some(alarm::GUARDING_SERVO_ON),
         ip_needs_enable_bit: false,

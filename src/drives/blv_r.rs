@@ -643,6 +643,7 @@ pub const PROFILE: CanDriveProfile = CanDriveProfile {
         bit3_enable: None,
         operational_required: true,
         sdo_overrun_alarm: None,
+        pdo_length_alarm: Some(0x8210),
         rpdo_overrun_alarm: None,
         guarding_alarm: None,
         ip_needs_enable_bit: true,

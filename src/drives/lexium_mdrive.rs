@@ -584,6 +584,7 @@ const QUIRKS: EmulationQuirks = EmulationQuirks {
     bit3_enable: None,
     operational_required: false,
     sdo_overrun_alarm: None,
+    pdo_length_alarm: Some(0x8210),
     rpdo_overrun_alarm: None,
     guarding_alarm: Some(alarm::GUARDING),
     ip_needs_enable_bit: true,
