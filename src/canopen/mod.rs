@@ -2,10 +2,12 @@
 //!
 //! Work in progress (issue 9).
 
+pub mod drive;
 pub mod emcy;
 pub mod emu;
 pub mod error;
 pub mod frame;
+pub mod master;
 pub mod nmt;
 pub mod pdo_plan;
 pub mod profile;
