@@ -227,10 +227,22 @@ impl CanDrive {
                 let _ = field.write_int(img, v);
             }
         };
-        w(&mut self.rx, f.controlword, i128::from(out.controlword.raw()));
+        w(
+            &mut self.rx,
+            f.controlword,
+            i128::from(out.controlword.raw()),
+        );
         w(&mut self.rx, f.mode, i128::from(out.mode.as_i8()));
-        w(&mut self.rx, f.target_position, i128::from(out.target_position));
-        w(&mut self.rx, f.target_velocity, i128::from(out.target_velocity));
+        w(
+            &mut self.rx,
+            f.target_position,
+            i128::from(out.target_position),
+        );
+        w(
+            &mut self.rx,
+            f.target_velocity,
+            i128::from(out.target_velocity),
+        );
         w(&mut self.rx, f.target_torque, i128::from(out.target_torque));
         w(&mut self.rx, f.ip_position, i128::from(out.target_position));
         self.last_output = Some(out);

@@ -215,10 +215,16 @@ impl fmt::Display for MasterEvent {
             ),
             MasterEvent::HeartbeatResumed { node } => write!(f, "node {node}: heartbeat resumed"),
             MasterEvent::GuardingLost { node, missed } => {
-                write!(f, "{node}: node guarding lost ({missed} requests unanswered)")
+                write!(
+                    f,
+                    "{node}: node guarding lost ({missed} requests unanswered)"
+                )
             }
             MasterEvent::GuardingToggle { node } => {
-                write!(f, "node {node}: guarding reply with the toggle bit not alternated")
+                write!(
+                    f,
+                    "node {node}: guarding reply with the toggle bit not alternated"
+                )
             }
             MasterEvent::Emergency(e) => write!(f, "{e}"),
             MasterEvent::RemoteOff { node } => write!(
@@ -526,10 +532,7 @@ impl<T: CanTransport> Master<T> {
             let wait = until.saturating_sub(now).max(1);
             let got = self.t.recv(wait).map_err(|e| {
                 CanError::new(
-                    NodeRef {
-                        id: 0,
-                        drive: None,
-                    },
+                    NodeRef { id: 0, drive: None },
                     None,
                     CanErrorKind::Transport(e),
                 )
@@ -821,7 +824,10 @@ impl<T: CanTransport> Master<T> {
         let s = self.slot(node);
         let v = s
             .and_then(|s| s.sdo_interval_override)
-            .or_else(|| s.and_then(|s| s.profile).map(|p| p.comm.sdo_min_interval_us))
+            .or_else(|| {
+                s.and_then(|s| s.profile)
+                    .map(|p| p.comm.sdo_min_interval_us)
+            })
             .unwrap_or(self.cfg.unknown_sdo_interval_us);
         u64::from(v)
     }
@@ -907,6 +913,20 @@ impl<T: CanTransport> Master<T> {
     ) -> Result<(), CanError> {
         self.check_node(node)?;
         let (t, first) = ClientTransfer::download(addr, data.to_vec())
+            .map_err(|e| self.err(node, Some(addr), CanErrorKind::Sdo(e)))?;
+        self.run_transfer(node, t, first).map(|_| ())
+    }
+
+    /// Download `data` to `addr` of `node` with the segmented protocol even if it would fit an
+    /// expedited transfer.
+    pub fn sdo_download_segmented(
+        &mut self,
+        node: u8,
+        addr: ObjectAddress,
+        data: &[u8],
+    ) -> Result<(), CanError> {
+        self.check_node(node)?;
+        let (t, first) = ClientTransfer::download_segmented(addr, data.to_vec())
             .map_err(|e| self.err(node, Some(addr), CanErrorKind::Sdo(e)))?;
         self.run_transfer(node, t, first).map(|_| ())
     }
@@ -1205,7 +1225,12 @@ impl<T: CanTransport> Master<T> {
         if let Some(code) = setup.quick_stop_option
             && dict.object(0x605A).is_some()
         {
-            self.download_value(node, ObjectAddress::new(0x605A, 0), &Value::Int(code.into()), None)?;
+            self.download_value(
+                node,
+                ObjectAddress::new(0x605A, 0),
+                &Value::Int(code.into()),
+                None,
+            )?;
         }
         self.download_value(
             node,
@@ -1216,22 +1241,34 @@ impl<T: CanTransport> Master<T> {
         if self.cfg.sync_producer && p.comm.has_cycle_period {
             let g = u64::from(p.comm.cycle_period_granularity_us);
             if g == 0 || cycle % g == 0 {
-                self.write_uint(node, ObjectAddress::new(0x1006, 0), cycle, DataType::Unsigned32)?;
+                self.write_uint(
+                    node,
+                    ObjectAddress::new(0x1006, 0),
+                    cycle,
+                    DataType::Unsigned32,
+                )?;
             }
         }
         if dict.object(0x60C2).is_some() && cycle % 1000 == 0 && (1000..=20_000).contains(&cycle) {
             // ip period in ms (ASDA-A2 60C2h:01, 1–20 ms).
-            self.write_uint(node, ObjectAddress::new(0x60C2, 1), cycle / 1000, DataType::Unsigned8)?;
+            self.write_uint(
+                node,
+                ObjectAddress::new(0x60C2, 1),
+                cycle / 1000,
+                DataType::Unsigned8,
+            )?;
         }
         for (addr, v) in &setup.settings {
             self.download_value(node, *addr, v, None)?;
         }
         let axis_cfg = match setup.axis {
             Some(c) => c,
-            None => AxisConfig::for_cycle_time(&caps, Duration::from_micros(cycle), setup.initial_mode),
+            None => {
+                AxisConfig::for_cycle_time(&caps, Duration::from_micros(cycle), setup.initial_mode)
+            }
         };
-        let axis = Axis::new(caps, axis_cfg)
-            .map_err(|e| self.err(node, None, CanErrorKind::Axis(e)))?;
+        let axis =
+            Axis::new(caps, axis_cfg).map_err(|e| self.err(node, None, CanErrorKind::Axis(e)))?;
         let drive = CanDrive::new(node, p, setup.plan, axis);
         // Replace a previous configuration of this node.
         if let Some(old) = self.slot(node).and_then(|s| s.drive) {
@@ -1296,9 +1333,7 @@ impl<T: CanTransport> Master<T> {
                 continue;
             };
             let node = d.node();
-            if d.last_output().is_none()
-                || self.nmt_state(node) != Some(NmtState::Operational)
-            {
+            if d.last_output().is_none() || self.nmt_state(node) != Some(NmtState::Operational) {
                 continue;
             }
             for k in 0..d.rpdos().len() {
@@ -1383,7 +1418,11 @@ impl<T: CanTransport> Master<T> {
         loop {
             self.cycle_step(|_| {})?;
             let Some(d) = self.drive_mut(node) else {
-                return Err(self.err(node, None, CanErrorKind::NotReady("not a configured drive".into())));
+                return Err(self.err(
+                    node,
+                    None,
+                    CanErrorKind::NotReady("not a configured drive".into()),
+                ));
             };
             let mut failure = None;
             while let Some(e) = d.axis_mut().poll_event() {
@@ -1427,12 +1466,26 @@ impl<T: CanTransport> Master<T> {
     /// [`CanErrorKind::RemoteOff`] if the drive needs the remote bit and it is 0, and on a
     /// fault or planner failure.
     pub fn enable(&mut self, node: u8, timeout_us: u64) -> Result<(), CanError> {
-        let d = self
-            .drive_mut(node)
-            .ok_or_else(|| CanError::new(NodeRef { id: node, drive: None }, None, CanErrorKind::NotReady("not a configured drive".into())))?;
-        d.axis_mut()
-            .request_enable()
-            .map_err(|e| CanError::new(NodeRef { id: node, drive: Some(d.profile().name) }, None, CanErrorKind::Axis(e)))?;
+        let d = self.drive_mut(node).ok_or_else(|| {
+            CanError::new(
+                NodeRef {
+                    id: node,
+                    drive: None,
+                },
+                None,
+                CanErrorKind::NotReady("not a configured drive".into()),
+            )
+        })?;
+        d.axis_mut().request_enable().map_err(|e| {
+            CanError::new(
+                NodeRef {
+                    id: node,
+                    drive: Some(d.profile().name),
+                },
+                None,
+                CanErrorKind::Axis(e),
+            )
+        })?;
         self.run_axis_until(
             node,
             timeout_us,
@@ -1444,9 +1497,16 @@ impl<T: CanTransport> Master<T> {
 
     /// Disable `node`'s drive: run cycles until Switch on disabled.
     pub fn disable(&mut self, node: u8, timeout_us: u64) -> Result<(), CanError> {
-        let d = self
-            .drive_mut(node)
-            .ok_or_else(|| CanError::new(NodeRef { id: node, drive: None }, None, CanErrorKind::NotReady("not a configured drive".into())))?;
+        let d = self.drive_mut(node).ok_or_else(|| {
+            CanError::new(
+                NodeRef {
+                    id: node,
+                    drive: None,
+                },
+                None,
+                CanErrorKind::NotReady("not a configured drive".into()),
+            )
+        })?;
         d.axis_mut().request_disable();
         self.run_axis_until(
             node,
@@ -1467,12 +1527,26 @@ impl<T: CanTransport> Master<T> {
         mode: OperationMode,
         timeout_us: u64,
     ) -> Result<(), CanError> {
-        let d = self
-            .drive_mut(node)
-            .ok_or_else(|| CanError::new(NodeRef { id: node, drive: None }, None, CanErrorKind::NotReady("not a configured drive".into())))?;
-        d.axis_mut()
-            .request_mode(mode)
-            .map_err(|e| CanError::new(NodeRef { id: node, drive: Some(d.profile().name) }, None, CanErrorKind::Axis(e)))?;
+        let d = self.drive_mut(node).ok_or_else(|| {
+            CanError::new(
+                NodeRef {
+                    id: node,
+                    drive: None,
+                },
+                None,
+                CanErrorKind::NotReady("not a configured drive".into()),
+            )
+        })?;
+        d.axis_mut().request_mode(mode).map_err(|e| {
+            CanError::new(
+                NodeRef {
+                    id: node,
+                    drive: Some(d.profile().name),
+                },
+                None,
+                CanErrorKind::Axis(e),
+            )
+        })?;
         self.run_axis_until(
             node,
             timeout_us,

@@ -2,6 +2,8 @@
 //!
 //! Work in progress (issue 9).
 
+pub mod can_socket;
+pub mod demo;
 pub mod drive;
 pub mod emcy;
 pub mod emu;
@@ -12,7 +14,9 @@ pub mod nmt;
 pub mod pdo_plan;
 pub mod profile;
 pub mod sdo;
+pub mod tools;
 pub mod transport;
+pub mod unix_bus;
 
 pub use frame::{CanFrame, FrameError, NodeId, Service};
 pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};

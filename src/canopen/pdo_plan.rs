@@ -343,11 +343,19 @@ impl PdoPlan {
                 if let Some(c) = p.cob_id
                     && (c == 0 || c > 0x7FF)
                 {
-                    return Err(PdoPlanError::CobId { dir, number, cob: c });
+                    return Err(PdoPlanError::CobId {
+                        dir,
+                        number,
+                        cob: c,
+                    });
                 }
             }
         }
-        crate::pdo::validate(&self.mapping(), &profile.pdo.limits, Some(profile.dictionary))?;
+        crate::pdo::validate(
+            &self.mapping(),
+            &profile.pdo.limits,
+            Some(profile.dictionary),
+        )?;
         Ok(())
     }
 
@@ -364,14 +372,13 @@ impl PdoPlan {
                 let comm = comm_index(dir, number);
                 let map = map_index(dir, number);
                 let no_rtr = if dir == Direction::Tx { 0x4000_0000 } else { 0 };
-                let w = |addr: ObjectAddress, value: u32, dt: DataType, what: &'static str| {
-                    PdoWrite {
+                let w =
+                    |addr: ObjectAddress, value: u32, dt: DataType, what: &'static str| PdoWrite {
                         addr,
                         value,
                         data_type: dt,
                         what,
-                    }
-                };
+                    };
                 match self.pdos(dir).iter().find(|p| p.number == number) {
                     None => {
                         let default_cob = defaults
@@ -468,19 +475,34 @@ mod tests {
             assert_eq!(plan.validate(p), Ok(()), "{}", p.name);
             let m = plan.mapping();
             for a in [0x6040u16, 0x6060, 0x607A, 0x60FF] {
-                assert!(m.contains(Direction::Rx, ObjectAddress::new(a, 0)), "{} {a:04X}", p.name);
+                assert!(
+                    m.contains(Direction::Rx, ObjectAddress::new(a, 0)),
+                    "{} {a:04X}",
+                    p.name
+                );
             }
             for a in [0x6041u16, 0x6061, 0x6064, 0x606C] {
-                assert!(m.contains(Direction::Tx, ObjectAddress::new(a, 0)), "{} {a:04X}", p.name);
+                assert!(
+                    m.contains(Direction::Tx, ObjectAddress::new(a, 0)),
+                    "{} {a:04X}",
+                    p.name
+                );
             }
         }
         let blv = PdoPlan::standard(&blv_r::PROFILE);
         assert!(blv.rpdos.iter().all(|p| p.entries.len() <= 4));
         assert!(blv.rpdos.iter().all(|p| p.transmission_type == 0));
         let delta = PdoPlan::standard(&asda_a2::PROFILE);
-        assert!(delta.mapping().contains(Direction::Rx, ObjectAddress::new(0x60C1, 1)));
+        assert!(
+            delta
+                .mapping()
+                .contains(Direction::Rx, ObjectAddress::new(0x60C1, 1))
+        );
         let lex = PdoPlan::standard(&lexium_mdrive::PROFILE);
-        assert!(!lex.mapping().contains(Direction::Rx, ObjectAddress::new(0x6071, 0)));
+        assert!(
+            !lex.mapping()
+                .contains(Direction::Rx, ObjectAddress::new(0x6071, 0))
+        );
     }
 
     #[test]
@@ -488,7 +510,10 @@ mod tests {
         let mut plan = PdoPlan::standard(&blv_r::PROFILE);
         plan.rpdos[0].transmission_type = 1;
         let e = plan.validate(&blv_r::PROFILE).unwrap_err();
-        assert!(matches!(e, PdoPlanError::TransmissionType { ttype: 1, .. }), "{e}");
+        assert!(
+            matches!(e, PdoPlanError::TransmissionType { ttype: 1, .. }),
+            "{e}"
+        );
         assert!(e.to_string().contains("BLV-R"));
         let mut plan = PdoPlan::standard(&blv_r::PROFILE);
         plan.tpdos[0].entries = vec![
@@ -499,16 +524,28 @@ mod tests {
             PdoEntry::new(0x6061, 0, 8),
         ];
         let e = plan.validate(&blv_r::PROFILE).unwrap_err();
-        assert!(matches!(e, PdoPlanError::Mapping(MappingError::TooManyEntriesInPdo { max: 4, .. })), "{e}");
+        assert!(
+            matches!(
+                e,
+                PdoPlanError::Mapping(MappingError::TooManyEntriesInPdo { max: 4, .. })
+            ),
+            "{e}"
+        );
         let mut plan = PdoPlan::standard(&asda_a2::PROFILE);
         plan.rpdos[0].entries.push(PdoEntry::new(0x60FF, 0, 32));
         plan.rpdos[0].entries.push(PdoEntry::new(0x60FF, 0, 32));
         let e = plan.validate(&asda_a2::PROFILE).unwrap_err();
-        assert!(matches!(e, PdoPlanError::TooManyBytes { max: 8, .. }), "{e}");
+        assert!(
+            matches!(e, PdoPlanError::TooManyBytes { max: 8, .. }),
+            "{e}"
+        );
         let mut plan = PdoPlan::standard(&lexium_mdrive::PROFILE);
         plan.tpdos[0].entries = vec![PdoEntry::new(0x6041, 0, 16), PdoEntry::new(0x6040, 0, 16)];
         let e = plan.validate(&lexium_mdrive::PROFILE).unwrap_err();
-        assert!(matches!(e, PdoPlanError::Mapping(MappingError::NotMappable { .. })), "{e}");
+        assert!(
+            matches!(e, PdoPlanError::Mapping(MappingError::NotMappable { .. })),
+            "{e}"
+        );
     }
 
     #[test]
@@ -520,13 +557,24 @@ mod tests {
         assert_eq!(w[0].value, 0x8000_0205);
         assert_eq!((w[1].addr, w[1].value), (ObjectAddress::new(0x1600, 0), 0));
         assert_eq!(w[2].value, 0x6040_0010);
-        let valid = w.iter().position(|x| x.addr == ObjectAddress::new(0x1400, 1) && x.value == 0x205);
+        let valid = w
+            .iter()
+            .position(|x| x.addr == ObjectAddress::new(0x1400, 1) && x.value == 0x205);
         assert!(valid.is_some());
         // Unused RPDO4 is disabled.
-        assert!(w.iter().any(|x| x.addr == ObjectAddress::new(0x1403, 1) && x.value == 0x8000_0505));
+        assert!(
+            w.iter()
+                .any(|x| x.addr == ObjectAddress::new(0x1403, 1) && x.value == 0x8000_0505)
+        );
         // TPDOs get bit 30 (no RTR) and an inhibit time written while invalid.
-        let inhibit = w.iter().position(|x| x.addr == ObjectAddress::new(0x1800, 3)).unwrap();
-        let valid_t = w.iter().position(|x| x.addr == ObjectAddress::new(0x1800, 1) && x.value == 0x4000_0185).unwrap();
+        let inhibit = w
+            .iter()
+            .position(|x| x.addr == ObjectAddress::new(0x1800, 3))
+            .unwrap();
+        let valid_t = w
+            .iter()
+            .position(|x| x.addr == ObjectAddress::new(0x1800, 1) && x.value == 0x4000_0185)
+            .unwrap();
         assert!(inhibit < valid_t);
         assert_eq!(w[1].bytes(), vec![0]);
         assert_eq!(w[0].bytes().len(), 4);

@@ -517,6 +517,31 @@ impl ClientTransfer {
         ))
     }
 
+    /// Start a segmented download of `data` even if it would fit an expedited one (for servers
+    /// that need it, and for tests of the segmented protocol).
+    pub fn download_segmented(
+        addr: ObjectAddress,
+        data: Vec<u8>,
+    ) -> Result<(Self, [u8; 8]), SdoError> {
+        if data.is_empty() {
+            return Err(SdoError::Empty);
+        }
+        if data.len() > MAX_TRANSFER {
+            return Err(SdoError::TooLarge(data.len()));
+        }
+        let first = SdoRequest::segmented_download(addr, data.len() as u32);
+        Ok((
+            Self {
+                addr,
+                state: ClientState::DownloadInit { segmented: true },
+                buf: data,
+                pos: 0,
+                abort_code: None,
+            },
+            first,
+        ))
+    }
+
     /// The object being transferred.
     pub const fn address(&self) -> ObjectAddress {
         self.addr
@@ -691,6 +716,17 @@ pub trait SdoObjects {
         data: &[u8],
         size_known: bool,
     ) -> Result<(), SdoAbortCode>;
+    /// Whether a segmented download of `size` bytes (if indicated) to `addr` can start: checked
+    /// at the initiate request so a missing or read-only object is refused before any segment
+    /// moves. The default accepts everything (the write itself still checks).
+    fn sdo_prepare_write(
+        &mut self,
+        addr: ObjectAddress,
+        size: Option<u32>,
+    ) -> Result<(), SdoAbortCode> {
+        let _ = (addr, size);
+        Ok(())
+    }
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -774,6 +810,9 @@ impl SdoServer {
                     && s as usize > MAX_TRANSFER
                 {
                     return self.abort(addr, SdoAbortCode::LENGTH_TOO_HIGH);
+                }
+                if let Err(code) = objects.sdo_prepare_write(addr, size) {
+                    return self.abort(addr, code);
                 }
                 self.state = ServerState::Downloading {
                     addr,

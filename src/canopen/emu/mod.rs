@@ -92,10 +92,7 @@ impl SimBus {
 
     /// The node with `id`, mutably (fault injection, inputs).
     pub fn node_mut(&mut self, id: u8) -> Option<&mut EmulatedNode> {
-        self.nodes
-            .iter_mut()
-            .map(|(_, n)| n)
-            .find(|n| n.id() == id)
+        self.nodes.iter_mut().map(|(_, n)| n).find(|n| n.id() == id)
     }
 
     /// Every node.

@@ -94,10 +94,7 @@ pub struct Params {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum HomingRun {
     Idle,
-    Running {
-        reference: f64,
-        stopping: bool,
-    },
+    Running { reference: f64, stopping: bool },
     Done,
     Error,
     Interrupted,
@@ -358,7 +355,8 @@ impl Motion {
                 bits = self.homing(dt, cw, p, &profile.homing);
             }
             OperationMode::InterpolatedPosition => {
-                let enabled = !profile.quirks.ip_needs_enable_bit || cw.contains(ControlWord::NEW_SET_POINT);
+                let enabled =
+                    !profile.quirks.ip_needs_enable_bit || cw.contains(ControlWord::NEW_SET_POINT);
                 let sync_ok = self
                     .ip_sync_us
                     .is_some_and(|t| now_us.saturating_sub(t) <= 2 * self.ip_period_us.max(1));
@@ -423,7 +421,13 @@ impl Motion {
             self.pos += self.vel * dt;
             return self.stopped();
         };
-        let arrived = self.move_to(target, p.profile_velocity, p.acceleration, p.deceleration, dt);
+        let arrived = self.move_to(
+            target,
+            p.profile_velocity,
+            p.acceleration,
+            p.deceleration,
+            dt,
+        );
         if arrived {
             self.pp_active = self.pp_buffer.take();
             return self.pp_active.is_none()
@@ -493,9 +497,7 @@ impl Motion {
                 _ => HomingRun::Error,
             };
         }
-        if !bit4
-            && let HomingRun::Running { reference, .. } = self.hm
-        {
+        if !bit4 && let HomingRun::Running { reference, .. } = self.hm {
             self.hm = HomingRun::Running {
                 reference,
                 stopping: true,
@@ -503,7 +505,10 @@ impl Motion {
         }
         let halt = cw.contains(ControlWord::HALT);
         match self.hm {
-            HomingRun::Running { reference, stopping } => {
+            HomingRun::Running {
+                reference,
+                stopping,
+            } => {
                 if stopping || halt {
                     let d = p.homing_acceleration;
                     self.vel = approach(self.vel, 0.0, d, d, dt);

@@ -127,7 +127,11 @@ pub struct EmulatedNode {
 fn adjust_node_ids(d: &mut Dictionary, id: u8) {
     let addrs: Vec<ObjectAddress> = d
         .objects()
-        .flat_map(|o| o.entries.iter().map(move |e| ObjectAddress::new(o.index, e.sub)))
+        .flat_map(|o| {
+            o.entries
+                .iter()
+                .map(move |e| ObjectAddress::new(o.index, e.sub))
+        })
         .filter(|a| od::node_relative(*a))
         .collect();
     for a in addrs {
@@ -172,7 +176,10 @@ impl EmulatedNode {
         adjust_node_ids(&mut od, id);
         let stored = od.clone();
         let caps = profile.caps;
-        let device = Device::new(DeviceConfig::from_caps(&caps, caps.default_quick_stop_option));
+        let device = Device::new(DeviceConfig::from_caps(
+            &caps,
+            caps.default_quick_stop_option,
+        ));
         Ok(Self {
             id,
             profile,
@@ -520,8 +527,7 @@ impl EmulatedNode {
         };
         let min = u64::from(self.profile.comm.rpdo_min_interval_us);
         let too_soon = min > 0
-            && p
-                .last_rx_us
+            && p.last_rx_us
                 .is_some_and(|t| self.now_us.saturating_sub(t) < min);
         if let Some(r) = self.rpdo.get_mut(k) {
             r.last_rx_us = Some(self.now_us);
@@ -740,7 +746,12 @@ impl EmulatedNode {
     }
 
     /// Check the mapping of `map` with `n` entries: existence, mappability, lengths, 64 bits.
-    fn check_mapping(&self, map: u16, n: u8, values: Option<(u8, u32)>) -> Result<(), SdoAbortCode> {
+    fn check_mapping(
+        &self,
+        map: u16,
+        n: u8,
+        values: Option<(u8, u32)>,
+    ) -> Result<(), SdoAbortCode> {
         let rx = (0x1600..0x1800).contains(&map);
         let mut bits = 0u32;
         for s in 1..=n {
@@ -824,8 +835,12 @@ impl EmulatedNode {
             vendor: self.profile.emcy.vendor_bytes(a.number),
         };
         self.push_history(self.profile.emcy.history_entry(a.code, a.number));
-        let _ = self.od.set_uint(ObjectAddress::new(0x603F, 0), u64::from(a.code));
-        let _ = self.od.set_uint(ObjectAddress::new(0x1001, 0), u64::from(a.register));
+        let _ = self
+            .od
+            .set_uint(ObjectAddress::new(0x603F, 0), u64::from(a.code));
+        let _ = self
+            .od
+            .set_uint(ObjectAddress::new(0x1001, 0), u64::from(a.register));
         if a.fault {
             self.alarm = Some(a);
         } else {
@@ -835,7 +850,10 @@ impl EmulatedNode {
     }
 
     fn send_emcy(&mut self, e: Emergency) {
-        let cob = self.od.uint(ObjectAddress::new(0x1014, 0)).unwrap_or(0x80 + u64::from(self.id));
+        let cob = self
+            .od
+            .uint(ObjectAddress::new(0x1014, 0))
+            .unwrap_or(0x80 + u64::from(self.id));
         if cob & 0x8000_0000 != 0 {
             return;
         }
@@ -853,7 +871,9 @@ impl EmulatedNode {
                 let _ = self.od.set_uint(ObjectAddress::new(0x1003, s + 1), v);
             }
         }
-        let _ = self.od.set_uint(ObjectAddress::new(0x1003, 1), u64::from(entry));
+        let _ = self
+            .od
+            .set_uint(ObjectAddress::new(0x1003, 1), u64::from(entry));
         let n = self.od.uint(ObjectAddress::new(0x1003, 0)).unwrap_or(0);
         let _ = self
             .od
@@ -950,9 +970,8 @@ impl EmulatedNode {
         self.sync_producer();
 
         // Device state machine.
-        let raw_cw = ControlWord::from_raw(
-            self.od.uint(ObjectAddress::new(0x6040, 0)).unwrap_or(0) as u16,
-        );
+        let raw_cw =
+            ControlWord::from_raw(self.od.uint(ObjectAddress::new(0x6040, 0)).unwrap_or(0) as u16);
         let cw = if self.bit3_mode() && raw_cw.contains(ControlWord::ENABLE_OPERATION) {
             // ASDA-A2 P3-12 X = 0: servo on with bit 3 alone.
             raw_cw | ControlWord::from_raw(0x0007)
@@ -982,9 +1001,8 @@ impl EmulatedNode {
         }
 
         // Mode.
-        let requested = OperationMode::from_i8(
-            self.od.int(ObjectAddress::new(0x6060, 0)).unwrap_or(0) as i8,
-        );
+        let requested =
+            OperationMode::from_i8(self.od.int(ObjectAddress::new(0x6060, 0)).unwrap_or(0) as i8);
         let mode = if requested == OperationMode::NoMode
             || self.profile.caps.supported_modes.contains(requested)
         {
@@ -997,8 +1015,7 @@ impl EmulatedNode {
             .set_int(ObjectAddress::new(0x6061, 0), i64::from(mode.as_i8()));
 
         let p = self.params();
-        let immediate = (matches!(qs.ramp, StopRamp::Immediate)
-            && after == State::QuickStopActive)
+        let immediate = (matches!(qs.ramp, StopRamp::Immediate) && after == State::QuickStopActive)
             || (after == State::FaultReactionActive
                 && self.od.int(ObjectAddress::new(0x605E, 0)) == Some(0));
         let (bits, _stopped) =
@@ -1023,7 +1040,11 @@ impl EmulatedNode {
         set(&mut self.od, 0x606B, vel_units.round() as i64);
         set(&mut self.od, 0x6077, self.motion.torque.round() as i64);
         set(&mut self.od, 0x6074, self.motion.torque.round() as i64);
-        set(&mut self.od, 0x60FD, i64::from(self.motion.digital_inputs()));
+        set(
+            &mut self.od,
+            0x60FD,
+            i64::from(self.motion.digital_inputs()),
+        );
 
         // Event-driven TPDOs.
         if self.nmt == NmtState::Operational {
@@ -1031,12 +1052,16 @@ impl EmulatedNode {
                 let Some(p) = self.tpdo.get(k).copied() else {
                     continue;
                 };
-                if !p.valid || p.n == 0 || !matches!(Transmission::from_u8(p.ttype), Transmission::Event(_)) {
+                if !p.valid
+                    || p.n == 0
+                    || !matches!(Transmission::from_u8(p.ttype), Transmission::Event(_))
+                {
                     continue;
                 }
                 let data = self.tpdo_data(&p);
                 let since = now.saturating_sub(p.last_sent_us);
-                let changed = p.last_sent != Some(data) && (p.last_sent.is_none() || since >= p.inhibit_us);
+                let changed =
+                    p.last_sent != Some(data) && (p.last_sent.is_none() || since >= p.inhibit_us);
                 let timer = p.event_us > 0 && since >= p.event_us;
                 if changed || timer {
                     self.send_tpdo(k, data);
@@ -1114,10 +1139,9 @@ impl EmulatedNode {
     fn restart_sync_producer(&mut self) {
         let cob_id = self.od.uint(ObjectAddress::new(0x1005, 0)).unwrap_or(0x80);
         let period = self.od.uint(ObjectAddress::new(0x1006, 0)).unwrap_or(0);
-        self.sync_next_us = (self.profile.comm.sync_producer
-            && cob_id & 0x4000_0000 != 0
-            && period > 0)
-            .then(|| self.now_us + period);
+        self.sync_next_us =
+            (self.profile.comm.sync_producer && cob_id & 0x4000_0000 != 0 && period > 0)
+                .then(|| self.now_us + period);
     }
 
     fn sync_producer(&mut self) {
@@ -1154,7 +1178,12 @@ impl EmulatedNode {
     }
 
     /// Device-specific write rules; `v` is the new value as an unsigned number where it is one.
-    fn check_write(&self, addr: ObjectAddress, v: Option<u64>, sv: Option<i64>) -> Result<(), SdoAbortCode> {
+    fn check_write(
+        &self,
+        addr: ObjectAddress,
+        v: Option<u64>,
+        sv: Option<i64>,
+    ) -> Result<(), SdoAbortCode> {
         let i = addr.index;
         match (i, addr.sub) {
             (0x1003, 0) => {
@@ -1232,7 +1261,12 @@ impl EmulatedNode {
                 }
             }
             (0x605A, 0) => {
-                if self.profile.caps.quick_stop_option(sv.unwrap_or(0) as i16).is_none() {
+                if self
+                    .profile
+                    .caps
+                    .quick_stop_option(sv.unwrap_or(0) as i16)
+                    .is_none()
+                {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
             }
@@ -1246,7 +1280,11 @@ fn copy_range(from: &Dictionary, to: &mut Dictionary, lo: u16, hi: u16) {
     let addrs: Vec<ObjectAddress> = from
         .objects()
         .filter(|o| (lo..=hi).contains(&o.index))
-        .flat_map(|o| o.entries.iter().map(move |e| ObjectAddress::new(o.index, e.sub)))
+        .flat_map(|o| {
+            o.entries
+                .iter()
+                .map(move |e| ObjectAddress::new(o.index, e.sub))
+        })
         .collect();
     for a in addrs {
         if let Some(raw) = from.raw(a) {
@@ -1276,6 +1314,31 @@ impl SdoObjects for EmulatedNode {
         }
         out.clear();
         out.extend_from_slice(self.od.raw(addr).unwrap_or(&[]));
+        Ok(())
+    }
+
+    fn sdo_prepare_write(
+        &mut self,
+        addr: ObjectAddress,
+        size: Option<u32>,
+    ) -> Result<(), SdoAbortCode> {
+        let e = self.od.entry_desc(addr).ok_or_else(|| {
+            if self.od.object_desc(addr.index).is_some() {
+                SdoAbortCode::NO_SUBINDEX
+            } else {
+                SdoAbortCode::NO_OBJECT
+            }
+        })?;
+        if !e.access.writable() {
+            return Err(SdoAbortCode::READ_ONLY);
+        }
+        let cap = usize::from(e.bit_len).div_ceil(8);
+        if let Some(s) = size
+            && cap > 0
+            && s as usize > cap
+        {
+            return Err(SdoAbortCode::LENGTH_TOO_HIGH);
+        }
         Ok(())
     }
 
