@@ -253,8 +253,8 @@ pub fn run_pv<T: CanTransport>(
     Ok(seen)
 }
 
-/// Run tq at `torque` (‰) on `node` until torque reached, then ramp back to 0. Returns the
-/// torque reported when reached.
+/// Run tq at `torque` (‰) on `node` until torque reached, then ramp back to 0 and wait for
+/// standstill. Returns the torque reported when reached.
 pub fn run_tq<T: CanTransport>(
     m: &mut Master<T>,
     node: u8,
@@ -285,7 +285,11 @@ pub fn run_tq<T: CanTransport>(
                 phase = 1;
                 tq.set_target(0);
             } else if phase == 1 && fb_t == 0 {
-                break;
+                // Torque off: wait for the load to coast to standstill too.
+                let still = m.drive(node).and_then(|d| d.feedback().velocity) == Some(0);
+                if still {
+                    break;
+                }
             }
         }
         if m.now_us() > deadline {

@@ -345,6 +345,9 @@ impl Motion {
                 let v_ss = self.torque / 1000.0 * TORQUE_SPEED_REV_S * self.ppr;
                 let k = (dt / TORQUE_TIME_CONSTANT_S).min(1.0);
                 self.vel += (v_ss - self.vel) * k;
+                if self.torque == 0.0 && self.stopped() {
+                    self.vel = 0.0;
+                }
                 self.pos += self.vel * dt;
                 bits.set(
                     StatusWord::TARGET_REACHED,
