@@ -352,6 +352,10 @@ impl<T: CanTransport> fmt::Debug for Master<T> {
     }
 }
 
+/// **\[REC\]** Cycles after an enable request before a remote bit of 0 counts as the reason
+/// for not enabling: the round trip of the request and of a fresh statusword, plus one.
+pub const REMOTE_GRACE_CYCLES: u32 = 3;
+
 /// Nodes 0–127 (0 unused).
 const SLOTS: usize = 128;
 
@@ -1415,8 +1419,10 @@ impl<T: CanTransport> Master<T> {
         remote_matters: bool,
     ) -> Result<(), CanError> {
         let deadline = self.t.now_us().saturating_add(timeout_us);
+        let mut cycles = 0u32;
         loop {
             self.cycle_step(|_| {})?;
+            cycles = cycles.saturating_add(1);
             let Some(d) = self.drive_mut(node) else {
                 return Err(self.err(
                     node,
@@ -1440,7 +1446,8 @@ impl<T: CanTransport> Master<T> {
             if done(d) {
                 return Ok(());
             }
-            if remote_matters && self.remote_off(node) {
+            // A statusword older than the request may still show the old remote bit.
+            if remote_matters && cycles > REMOTE_GRACE_CYCLES && self.remote_off(node) {
                 return Err(self.err(node, None, CanErrorKind::RemoteOff));
             }
             if let Some(f) = failure {

@@ -10,13 +10,20 @@
 //! with 6087h; halt = 1 ramps the torque to 0.
 //!
 //! Both helpers drive an [`Axis`] through [`Axis::set_velocity`] / [`Axis::set_torque`] and
-//! [`Axis::set_mode_bits`] (bit 8). The axis accepts set-points only while streaming, i.e. in
+//! [`Axis::set_mode_bits`] (bit 8). Bit 10 refers to the target the drive *has*: right after a
+//! new target (or the start of streaming) the statusword still describes the old one, so the
+//! helpers report "reached" only [`SETTLE_CYCLES`] cycles after the last change. The axis accepts set-points only while streaming, i.e. in
 //! Operation enabled: this is what the ASDA-A2 needs, which clears 60FFh and 6071h when it
 //! enables (§3.4.2, §3.5.2) — a value written before would be lost.
 
 use super::axis::Axis;
 use super::bits::{ControlWord, StatusWord};
 use super::mode::OperationMode;
+
+/// **\[REC\]** Cycles after a target change before bit 10 counts: the round trip of the new
+/// target to the drive and of its statusword back (RPDO at one SYNC, TPDO at the next), plus
+/// one.
+pub const SETTLE_CYCLES: u32 = 3;
 
 /// The pv status bits.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -37,6 +44,7 @@ pub struct ProfileVelocity {
     zero_speed_bit: bool,
     target: i32,
     halt: bool,
+    since_change: u32,
 }
 
 impl ProfileVelocity {
@@ -46,11 +54,15 @@ impl ProfileVelocity {
             zero_speed_bit,
             target: 0,
             halt: false,
+            since_change: 0,
         }
     }
 
     /// The target velocity (60FFh, drive units), applied while the axis streams in pv.
     pub fn set_target(&mut self, velocity: i32) {
+        if velocity != self.target {
+            self.since_change = 0;
+        }
         self.target = velocity;
     }
 
@@ -61,6 +73,9 @@ impl ProfileVelocity {
 
     /// Halt (bit 8): decelerate per 605Dh and hold zero; clearing it resumes the target.
     pub fn set_halt(&mut self, halt: bool) {
+        if halt != self.halt {
+            self.since_change = 0;
+        }
         self.halt = halt;
     }
 
@@ -68,6 +83,11 @@ impl ProfileVelocity {
     pub fn step(&mut self, axis: &mut Axis, sw: StatusWord) -> PvStatus {
         let st = axis.status();
         let active = st.streaming && st.active_mode == OperationMode::ProfileVelocity;
+        self.since_change = if active {
+            self.since_change.saturating_add(1)
+        } else {
+            0
+        };
         if active {
             let _ = axis.set_velocity(self.target);
             let bits = if self.halt {
@@ -78,7 +98,8 @@ impl ProfileVelocity {
             axis.set_mode_bits(bits);
         }
         PvStatus {
-            target_reached: sw.contains(StatusWord::TARGET_REACHED),
+            target_reached: sw.contains(StatusWord::TARGET_REACHED)
+                && self.since_change > SETTLE_CYCLES,
             zero_speed: self
                 .zero_speed_bit
                 .then(|| sw.contains(StatusWord::SPEED_ZERO)),
@@ -102,6 +123,7 @@ pub struct TqStatus {
 pub struct ProfileTorque {
     target: i16,
     halt: bool,
+    since_change: u32,
 }
 
 impl ProfileTorque {
@@ -110,16 +132,23 @@ impl ProfileTorque {
         Self {
             target: 0,
             halt: false,
+            since_change: 0,
         }
     }
 
     /// The target torque (6071h, per mille of rated torque on the three CANopen drives).
     pub fn set_target(&mut self, torque: i16) {
+        if torque != self.target {
+            self.since_change = 0;
+        }
         self.target = torque;
     }
 
     /// Halt (bit 8): ramp the torque to 0.
     pub fn set_halt(&mut self, halt: bool) {
+        if halt != self.halt {
+            self.since_change = 0;
+        }
         self.halt = halt;
     }
 
@@ -127,6 +156,11 @@ impl ProfileTorque {
     pub fn step(&mut self, axis: &mut Axis, sw: StatusWord) -> TqStatus {
         let st = axis.status();
         let active = st.streaming && st.active_mode == OperationMode::ProfileTorque;
+        self.since_change = if active {
+            self.since_change.saturating_add(1)
+        } else {
+            0
+        };
         if active {
             let _ = axis.set_torque(self.target);
             let bits = if self.halt {
@@ -137,7 +171,8 @@ impl ProfileTorque {
             axis.set_mode_bits(bits);
         }
         TqStatus {
-            target_reached: sw.contains(StatusWord::TARGET_REACHED),
+            target_reached: sw.contains(StatusWord::TARGET_REACHED)
+                && self.since_change > SETTLE_CYCLES,
             streaming: active,
         }
     }
@@ -163,6 +198,14 @@ mod tests {
         assert!(!o.controlword.contains(ControlWord::HALT));
         pv.set_halt(true);
         rig.extra = StatusWord::TARGET_REACHED;
+        let s = rig.statusword();
+        let st = pv.step(&mut rig.axis, s);
+        assert!(!st.target_reached, "bit 10 still describes the old target");
+        for _ in 0..SETTLE_CYCLES {
+            let s = rig.statusword();
+            pv.step(&mut rig.axis, s);
+            rig.cycle();
+        }
         let s = rig.statusword();
         let st = pv.step(&mut rig.axis, s);
         assert!(st.target_reached);
@@ -209,6 +252,11 @@ mod tests {
         let mut tq = ProfileTorque::new();
         tq.set_target(-250);
         rig.extra = StatusWord::TARGET_REACHED;
+        for _ in 0..SETTLE_CYCLES {
+            let s = rig.statusword();
+            assert!(!tq.step(&mut rig.axis, s).target_reached);
+            rig.cycle();
+        }
         let s = rig.statusword();
         let st = tq.step(&mut rig.axis, s);
         assert!(st.target_reached && st.streaming);

@@ -331,6 +331,9 @@ impl EmulatedNode {
         self.restart_heartbeat();
         self.restart_sync_producer();
         self.rebuild_pdos();
+        // The status objects describe the device from the first moment, not the stored zeros.
+        self.last_tick_us = Some(self.now_us);
+        self.tick(self.now_us);
     }
 
     fn reload(&mut self, lo: u16, hi: u16) {
