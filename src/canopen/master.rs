@@ -1469,20 +1469,19 @@ impl<T: CanTransport> Master<T> {
         }
     }
 
-    /// Enable `node`'s drive: run cycles until Operation enabled. Fails at once with
+    /// Enable `node`'s drive: run cycles until Operation enabled. Like [`Master::disable`] and
+    /// [`Master::switch_mode`] it consumes the axis' events (older ones are discarded first).
+    /// Fails at once with
     /// [`CanErrorKind::RemoteOff`] if the drive needs the remote bit and it is 0, and on a
     /// fault or planner failure.
     pub fn enable(&mut self, node: u8, timeout_us: u64) -> Result<(), CanError> {
-        let d = self.drive_mut(node).ok_or_else(|| {
-            CanError::new(
-                NodeRef {
-                    id: node,
-                    drive: None,
-                },
-                None,
-                CanErrorKind::NotReady("not a configured drive".into()),
-            )
-        })?;
+        let missing = self.err(
+            node,
+            None,
+            CanErrorKind::NotReady("not a configured drive".into()),
+        );
+        let d = self.drive_mut(node).ok_or(missing)?;
+        while d.axis_mut().poll_event().is_some() {}
         d.axis_mut().request_enable().map_err(|e| {
             CanError::new(
                 NodeRef {
@@ -1504,16 +1503,13 @@ impl<T: CanTransport> Master<T> {
 
     /// Disable `node`'s drive: run cycles until Switch on disabled.
     pub fn disable(&mut self, node: u8, timeout_us: u64) -> Result<(), CanError> {
-        let d = self.drive_mut(node).ok_or_else(|| {
-            CanError::new(
-                NodeRef {
-                    id: node,
-                    drive: None,
-                },
-                None,
-                CanErrorKind::NotReady("not a configured drive".into()),
-            )
-        })?;
+        let missing = self.err(
+            node,
+            None,
+            CanErrorKind::NotReady("not a configured drive".into()),
+        );
+        let d = self.drive_mut(node).ok_or(missing)?;
+        while d.axis_mut().poll_event().is_some() {}
         d.axis_mut().request_disable();
         self.run_axis_until(
             node,
@@ -1534,16 +1530,13 @@ impl<T: CanTransport> Master<T> {
         mode: OperationMode,
         timeout_us: u64,
     ) -> Result<(), CanError> {
-        let d = self.drive_mut(node).ok_or_else(|| {
-            CanError::new(
-                NodeRef {
-                    id: node,
-                    drive: None,
-                },
-                None,
-                CanErrorKind::NotReady("not a configured drive".into()),
-            )
-        })?;
+        let missing = self.err(
+            node,
+            None,
+            CanErrorKind::NotReady("not a configured drive".into()),
+        );
+        let d = self.drive_mut(node).ok_or(missing)?;
+        while d.axis_mut().poll_event().is_some() {}
         d.axis_mut().request_mode(mode).map_err(|e| {
             CanError::new(
                 NodeRef {
