@@ -24,7 +24,7 @@ struct Case {
     alarm_name: &'static str,
 }
 
-fn node<'a>(m: &'a Master<SimBus>, id: u8) -> &'a EmulatedNode {
+fn node(m: &Master<SimBus>, id: u8) -> &EmulatedNode {
     m.transport().node(id).unwrap()
 }
 

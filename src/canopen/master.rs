@@ -1030,9 +1030,9 @@ impl<T: CanTransport> Master<T> {
             }
             let dt = match super::sdo::SdoResponse::parse(&data) {
                 Ok(super::sdo::SdoResponse::UploadInitiated {
-                    expedited: Some((d, len)),
+                    expedited: Some((d, 4)),
                     ..
-                }) if len == 4 => Some(u32::from_le_bytes(d)),
+                }) => Some(u32::from_le_bytes(d)),
                 _ => None,
             };
             if let Some(s) = self.slot_mut(n) {

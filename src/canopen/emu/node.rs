@@ -650,10 +650,8 @@ impl EmulatedNode {
                 }
                 let data = self.tpdo_data(&p);
                 match Transmission::from_u8(p.ttype) {
-                    Transmission::SyncAcyclic => {
-                        if p.last_sent != Some(data) {
-                            self.send_tpdo(k, data);
-                        }
+                    Transmission::SyncAcyclic if p.last_sent != Some(data) => {
+                        self.send_tpdo(k, data);
                     }
                     Transmission::SyncCyclic(n) => {
                         let c = p.sync_count.saturating_add(1);
@@ -1189,11 +1187,7 @@ impl EmulatedNode {
     ) -> Result<(), SdoAbortCode> {
         let i = addr.index;
         match (i, addr.sub) {
-            (0x1003, 0) => {
-                if v != Some(0) {
-                    return Err(SdoAbortCode::VALUE_RANGE);
-                }
-            }
+            (0x1003, 0) if v != Some(0) => return Err(SdoAbortCode::VALUE_RANGE),
             (0x1005, 0) => {
                 let v = v.unwrap_or(0);
                 if v & 0x4000_0000 != 0 && !self.profile.comm.sync_producer {
@@ -1219,15 +1213,11 @@ impl EmulatedNode {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
             }
-            (0x1400..=0x15FF, 2) => {
-                if !self.profile.pdo.rpdo_types.allows(v.unwrap_or(0) as u8) {
-                    return Err(SdoAbortCode::VALUE_RANGE);
-                }
+            (0x1400..=0x15FF, 2) if !self.profile.pdo.rpdo_types.allows(v.unwrap_or(0) as u8) => {
+                return Err(SdoAbortCode::VALUE_RANGE);
             }
-            (0x1800..=0x19FF, 2) => {
-                if !self.profile.pdo.tpdo_types.allows(v.unwrap_or(0) as u8) {
-                    return Err(SdoAbortCode::VALUE_RANGE);
-                }
+            (0x1800..=0x19FF, 2) if !self.profile.pdo.tpdo_types.allows(v.unwrap_or(0) as u8) => {
+                return Err(SdoAbortCode::VALUE_RANGE);
             }
             (0x1800..=0x19FF, 3) => {
                 let valid = self.od.uint(ObjectAddress::new(i, 1)).unwrap_or(0) & 0x8000_0000 == 0;
@@ -1258,20 +1248,17 @@ impl EmulatedNode {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
             }
-            (0x6098, 0) => {
-                if !self.profile.homing.supports(sv.unwrap_or(0) as i8) {
-                    return Err(SdoAbortCode::VALUE_RANGE);
-                }
+            (0x6098, 0) if !self.profile.homing.supports(sv.unwrap_or(0) as i8) => {
+                return Err(SdoAbortCode::VALUE_RANGE);
             }
-            (0x605A, 0) => {
+            (0x605A, 0)
                 if self
                     .profile
                     .caps
                     .quick_stop_option(sv.unwrap_or(0) as i16)
-                    .is_none()
-                {
-                    return Err(SdoAbortCode::VALUE_RANGE);
-                }
+                    .is_none() =>
+            {
+                return Err(SdoAbortCode::VALUE_RANGE);
             }
             _ => {}
         }
