@@ -640,7 +640,7 @@ impl fmt::Display for DecodedEmcy {
 /// Access flags: CANopen has no SAFE-OP; [`EntryAccess::RW`](crate::od::EntryAccess::RW) means
 /// writable in Pre-operational and Operational, `RO` readable in both. Communication objects
 /// whose default depends on the node-ID hold the value for node-ID 0 (as EDS files write
-/// `$NODEID+0x180`); the node adds its ID ([`od::node_relative`](self::od::node_relative)).
+/// `$NODEID+0x180`); the node adds its ID ([`od::node_relative`]).
 pub mod od {
     use crate::od::{ConstValue, DataType, EntryAccess, EntryDesc, ObjectAddress};
 
