@@ -569,49 +569,50 @@ impl<T: CanTransport> Master<T> {
         next
     }
 
+    /// Heartbeat deadlines and guarding requests. Allocation-free (it runs every cycle).
     fn timers(&mut self, now: u64) -> Result<(), CanError> {
-        let mut lost = Vec::new();
-        let mut guard_requests = Vec::new();
-        for (id, s) in self.nodes.iter_mut().enumerate() {
-            if let (Some(t), Some(last)) = (s.hb_timeout_us, s.last_seen_us)
-                && !s.hb_lost
-                && now.saturating_sub(last) > t
-            {
-                s.hb_lost = true;
-                lost.push(MasterEvent::HeartbeatLost {
-                    node: NodeRef {
-                        id: id as u8,
-                        drive: s.profile.map(|p| p.name),
-                    },
-                    last_state: s.nmt,
-                    silent_us: now.saturating_sub(last),
-                });
-            }
-            if let Some(g) = &mut s.guard
-                && !g.lost
-                && now >= g.next_us
-            {
-                if g.outstanding >= g.life_factor.max(1) {
-                    g.lost = true;
-                    lost.push(MasterEvent::GuardingLost {
-                        node: NodeRef {
-                            id: id as u8,
-                            drive: s.profile.map(|p| p.name),
-                        },
-                        missed: g.outstanding,
+        for id in 0..SLOTS {
+            let mut event = None;
+            let mut guard_request = false;
+            if let Some(s) = self.nodes.get_mut(id) {
+                let node = NodeRef {
+                    id: id as u8,
+                    drive: s.profile.map(|p| p.name),
+                };
+                if let (Some(t), Some(last)) = (s.hb_timeout_us, s.last_seen_us)
+                    && !s.hb_lost
+                    && now.saturating_sub(last) > t
+                {
+                    s.hb_lost = true;
+                    event = Some(MasterEvent::HeartbeatLost {
+                        node,
+                        last_state: s.nmt,
+                        silent_us: now.saturating_sub(last),
                     });
-                } else {
-                    g.outstanding += 1;
-                    g.next_us = now.saturating_add(g.period_us.max(1));
-                    guard_requests.push(id as u8);
+                }
+                if let Some(g) = &mut s.guard
+                    && !g.lost
+                    && now >= g.next_us
+                {
+                    if g.outstanding >= g.life_factor.max(1) {
+                        g.lost = true;
+                        event = Some(MasterEvent::GuardingLost {
+                            node,
+                            missed: g.outstanding,
+                        });
+                    } else {
+                        g.outstanding += 1;
+                        g.next_us = now.saturating_add(g.period_us.max(1));
+                        guard_request = true;
+                    }
                 }
             }
-        }
-        for e in lost {
-            self.push_event(e);
-        }
-        for id in guard_requests {
-            self.send(&ErrorControl::guard_request(id))?;
+            if let Some(e) = event {
+                self.push_event(e);
+            }
+            if guard_request {
+                self.send(&ErrorControl::guard_request(id as u8))?;
+            }
         }
         Ok(())
     }
@@ -656,7 +657,14 @@ impl<T: CanTransport> Master<T> {
             self.stats.unhandled += 1;
             return;
         };
-        let mut events = Vec::new();
+        let mut events: [Option<MasterEvent>; 4] = [None; 4];
+        let mut n = 0usize;
+        let mut push = |e: MasterEvent| {
+            if let Some(slot) = events.get_mut(n) {
+                *slot = Some(e);
+                n += 1;
+            }
+        };
         let Some(s) = self.nodes.get_mut(usize::from(node)) else {
             return;
         };
@@ -664,11 +672,11 @@ impl<T: CanTransport> Master<T> {
         s.last_seen_us = Some(now);
         if s.hb_lost {
             s.hb_lost = false;
-            events.push(MasterEvent::HeartbeatResumed { node });
+            push(MasterEvent::HeartbeatResumed { node });
         }
         let state = if ec.state == NmtState::BootUp {
             s.boot_ups += 1;
-            events.push(MasterEvent::BootUp { node });
+            push(MasterEvent::BootUp { node });
             if let Some(g) = &mut s.guard {
                 g.toggle = None;
             }
@@ -682,19 +690,19 @@ impl<T: CanTransport> Master<T> {
             g.outstanding = 0;
             g.lost = false;
             if g.toggle.is_some_and(|t| t == ec.toggle) {
-                events.push(MasterEvent::GuardingToggle { node });
+                push(MasterEvent::GuardingToggle { node });
             }
             g.toggle = Some(ec.toggle);
         }
         if s.nmt != Some(state) {
-            events.push(MasterEvent::StateChanged {
+            push(MasterEvent::StateChanged {
                 node,
                 from: s.nmt,
                 to: state,
             });
             s.nmt = Some(state);
         }
-        for e in events {
+        for e in events.into_iter().flatten() {
             self.push_event(e);
         }
     }
@@ -1363,9 +1371,12 @@ impl<T: CanTransport> Master<T> {
         Ok(())
     }
 
+    /// Remote-bit events. Allocation-free (it runs every cycle).
     fn check_remote(&mut self) {
-        let mut events = Vec::new();
-        for d in &self.drives {
+        for i in 0..self.drives.len() {
+            let Some(d) = self.drives.get(i) else {
+                continue;
+            };
             if !d.profile().enable.remote_required || !d.has_feedback() {
                 continue;
             }
@@ -1373,24 +1384,21 @@ impl<T: CanTransport> Master<T> {
             let wants = d.axis().status().target == Target::OperationEnabled;
             let off = !d.statusword().contains(StatusWord::REMOTE);
             let was = self.slot(node).is_some_and(|s| s.remote_off);
-            if off && wants && !was {
-                events.push((node, true));
-            } else if !off && was {
-                events.push((node, false));
-            }
-        }
-        for (node, off) in events {
-            if let Some(s) = self.slot_mut(node) {
-                s.remote_off = off;
-            }
-            let e = if off {
-                MasterEvent::RemoteOff {
+            let event = if off && wants && !was {
+                Some(MasterEvent::RemoteOff {
                     node: self.node_ref(node),
-                }
+                })
+            } else if !off && was {
+                Some(MasterEvent::RemoteOn { node })
             } else {
-                MasterEvent::RemoteOn { node }
+                None
             };
-            self.push_event(e);
+            if let Some(e) = event {
+                if let Some(s) = self.slot_mut(node) {
+                    s.remote_off = off;
+                }
+                self.push_event(e);
+            }
         }
     }
 
