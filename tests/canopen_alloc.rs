@@ -31,7 +31,8 @@ fn master_cycle_allocates_nothing() {
         .unwrap();
     }
     for k in 0..4 {
-        pp.push(SetPoint::relative(-9_000 * (k + 1)).queued()).unwrap();
+        pp.push(SetPoint::relative(-9_000 * (k + 1)).queued())
+            .unwrap();
     }
     while m.poll_event().is_some() {}
     alloc_window_begin();

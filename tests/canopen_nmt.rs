@@ -321,6 +321,17 @@ fn node_guarding_both_ways() {
         "heartbeat off while guarding"
     );
 
+    // A reply whose toggle bit did not alternate (a repeat from a foreign device) is reported.
+    m.pump(60_000).unwrap();
+    // Replies alternate from toggle 0: after n replies the last one had toggle (n - 1) odd.
+    let replies = m.transport().node(2).unwrap().stats().guard_replies;
+    let last_toggle = (replies - 1) % 2 == 1;
+    let byte = 0x05 | if last_toggle { 0x80 } else { 0 };
+    m.transport_mut()
+        .inject(&ecdrive::canopen::CanFrame::new(0x702, &[byte]).unwrap());
+    m.pump(1_000).unwrap();
+    assert!(events(&mut m).contains(&MasterEvent::GuardingToggle { node: 2 }));
+
     // The node's side: the master goes quiet (time passes without guarding requests); the
     // Lexium's life time expires → Fault; the BLV-R sends EMCY 8130h.
     m.enable(0x41, T).unwrap();

@@ -108,6 +108,15 @@ impl SimBus {
         Some(node)
     }
 
+    /// Put `frame` on the bus from a device outside the simulation (a foreign node, a faulty
+    /// one): the master and every node receive it.
+    pub fn inject(&mut self, frame: &CanFrame) {
+        let outsider = self.hub.attach();
+        self.hub.send(outsider, frame);
+        self.hub.detach(outsider);
+        self.deliver();
+    }
+
     /// Record every frame the master sends (for timing checks).
     pub fn set_trace(&mut self, on: bool) {
         self.trace = on.then(Vec::new);
