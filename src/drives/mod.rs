@@ -16,3 +16,12 @@ pub mod bdhde;
 pub mod blv_r;
 pub mod lexium_mdrive;
 pub mod mr_j4_tm;
+pub mod profile;
+mod registry;
+
+pub use registry::{all, by_identity, by_key};
+
+pub use profile::{
+    CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,
+    StartupSdo, StartupWhen, SyncSpec, Units,
+};

@@ -9,7 +9,7 @@
 use super::io::{FrameLink, LinkError, Pump};
 use crate::rt::monotonic_ns;
 use std::future::Future;
-use std::pin::{Pin, pin};
+use std::pin::Pin;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::task::{Context, Poll, Wake, Waker};
@@ -17,7 +17,7 @@ use std::thread::Thread;
 use std::time::Duration;
 
 /// Why a future run by the executor did not complete.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum ExecError {
     /// The overall deadline passed.
     #[error("{what}: no result within {timeout_ms} ms")]
@@ -82,9 +82,10 @@ pub fn run<L: FrameLink, F: Future>(
     let mut cx = Context::from_waker(&waker);
     pump.register_waker(&waker);
     // The future lives in this block: leaving it drops the future (releasing, if it did not
-    // complete, its frames in ethercrab) before the pump forgets them below.
+    // complete, its frames in ethercrab) before the pump forgets them below. It is boxed:
+    // start-up futures hold ethercrab's group (tens of KiB), and this is not the cyclic path.
     let result = {
-        let mut fut = pin!(fut);
+        let mut fut = Box::pin(fut);
         loop {
             tw.notified.store(false, Ordering::Release);
             if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
@@ -133,8 +134,44 @@ pub fn run<L: FrameLink, F: Future>(
     result
 }
 
+/// Run `fut` on the calling thread while **another** thread pumps the frames (the cycle
+/// thread, during OP): poll, park until woken or a short slice passes, repeat, within
+/// `timeout`. For supervisory work during the cycle (mailbox polling for emergencies, SDOs).
+pub fn run_remote<F: Future>(
+    what: &dyn Fn() -> String,
+    timeout: Duration,
+    fut: F,
+) -> Result<F::Output, ExecError> {
+    let deadline = monotonic_ns().saturating_add(timeout.as_nanos() as u64);
+    let tw = Arc::new(ThreadWaker {
+        thread: std::thread::current(),
+        notified: AtomicBool::new(false),
+    });
+    let waker = Waker::from(tw.clone());
+    let mut cx = Context::from_waker(&waker);
+    let mut fut = Box::pin(fut);
+    loop {
+        tw.notified.store(false, Ordering::Release);
+        if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
+            return Ok(v);
+        }
+        let now = monotonic_ns();
+        if now >= deadline {
+            return Err(ExecError::Timeout {
+                what: what(),
+                timeout_ms: timeout.as_millis() as u64,
+            });
+        }
+        if !tw.notified.load(Ordering::Acquire) {
+            std::thread::park_timeout(Duration::from_nanos(
+                (1_000_000u64).min(deadline.saturating_sub(now)),
+            ));
+        }
+    }
+}
+
 /// How one cyclic exchange ended, when it did not complete.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum ExchangeError {
     /// The reply did not arrive before the cycle's deadline. The future was dropped and its
     /// frame released; a reply arriving later is discarded as stale.
@@ -179,6 +216,7 @@ mod tests {
     use crate::master::io::{LossPolicy, MAX_FRAME};
     use ethercrab::{Command, MainDevice, MainDeviceConfig, PduStorage, Timeouts};
     use std::collections::VecDeque;
+    use std::pin::pin;
 
     /// A link whose "segment" is two slaves that answer every BRD by OR-ing 0x11 into the data
     /// and adding 2 to the working counter. It can swallow frames to simulate loss.
@@ -225,21 +263,24 @@ mod tests {
             Ok(())
         }
 
-        fn recv(&mut self, buf: &mut [u8], deadline_ns: u64) -> Result<Option<usize>, LinkError> {
+        fn recv(
+            &mut self,
+            buf: &mut [u8],
+            timeout: Option<Duration>,
+        ) -> Result<Option<usize>, LinkError> {
             match self.replies.pop_front() {
                 Some(f) => {
                     buf[..f.len()].copy_from_slice(&f);
                     Ok(Some(f.len()))
                 }
                 None => {
-                    crate::rt::sleep_until_ns(deadline_ns.min(monotonic_ns() + 100_000));
+                    let wait = timeout
+                        .unwrap_or(Duration::from_millis(1))
+                        .min(Duration::from_micros(100));
+                    std::thread::sleep(wait);
                     Ok(None)
                 }
             }
-        }
-
-        fn name(&self) -> &str {
-            "fake"
         }
     }
 
@@ -333,7 +374,7 @@ mod tests {
         {
             let fut = pin!(Command::brd(0).with_wkc(2).receive::<u8>(&md));
             let r = exchange(&mut pump, fut, monotonic_ns() + 1_000_000);
-            assert_eq!(r.unwrap_err(), ExchangeError::Late);
+            assert!(matches!(r.unwrap_err(), ExchangeError::Late));
         }
         // The held reply now arrives, after the future was dropped.
         let held = pump.link_mut().held.take().unwrap();

@@ -13,33 +13,12 @@
 use crate::rt::monotonic_ns;
 use ethercrab::{PduRx, PduTx};
 use std::task::Waker;
+use std::time::Duration;
+
+pub use crate::link::{FrameLink, LinkError};
 
 /// Largest Ethernet frame (without FCS) the pump handles.
 pub const MAX_FRAME: usize = 1514;
-
-/// Something that carries EtherCAT frames to a segment and brings the replies back: a raw socket
-/// on a network interface, or the in-process software slave.
-pub trait FrameLink: Send {
-    /// Transmit one Ethernet frame.
-    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError>;
-
-    /// Receive one frame into `buf`, waiting at most until the `CLOCK_MONOTONIC` instant
-    /// `deadline_ns`. `Ok(None)` when nothing arrived in time.
-    fn recv(&mut self, buf: &mut [u8], deadline_ns: u64) -> Result<Option<usize>, LinkError>;
-
-    /// A short name for messages: the interface name, or "in-process".
-    fn name(&self) -> &str;
-}
-
-/// A link failure.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{link}: {reason}")]
-pub struct LinkError {
-    /// The link's name.
-    pub link: String,
-    /// What failed.
-    pub reason: String,
-}
 
 /// Counters of everything the pump saw. Read by telemetry; plain integers, no allocation.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
@@ -101,7 +80,7 @@ pub struct Pump<'sto, L: FrameLink> {
     rx_buf: Box<[u8; MAX_FRAME + 4]>,
     stats: PumpStats,
     policy: LossPolicy,
-    link_error: Option<LinkError>,
+    link_error: Option<String>,
 }
 
 impl<'sto, L: FrameLink> Pump<'sto, L> {
@@ -124,6 +103,11 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     /// The link.
     pub fn link(&self) -> &L {
         &self.link
+    }
+
+    /// The link's name for messages.
+    pub fn link_name(&self) -> String {
+        self.link.describe()
     }
 
     /// The link, mutably (e.g. to inject faults into an in-process segment).
@@ -189,7 +173,7 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
                 Ok(bytes.len())
             });
             if let Some(e) = err {
-                self.link_error = Some(e.clone());
+                self.link_error = Some(e.to_string());
                 return Err(e);
             }
             if res.is_ok() {
@@ -216,11 +200,12 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     pub fn receive_until(&mut self, deadline_ns: u64) -> Result<usize, LinkError> {
         let mut n = 0;
         while self.outstanding() > 0 {
-            let got = match self.link.recv(&mut self.rx_buf[..], deadline_ns) {
+            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(monotonic_ns()));
+            let got = match self.link.recv(&mut self.rx_buf[..], Some(timeout)) {
                 Ok(Some(len)) => len,
                 Ok(None) => break,
                 Err(e) => {
-                    self.link_error = Some(e.clone());
+                    self.link_error = Some(e.to_string());
                     return Err(e);
                 }
             };
@@ -291,7 +276,7 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
                 if let Some(copy) = self.copies.get(i)
                     && let Err(e) = self.link.send(&copy[..f.len])
                 {
-                    self.link_error = Some(e.clone());
+                    self.link_error = Some(e.to_string());
                     return Err(e);
                 }
                 self.stats.retransmitted += 1;
@@ -327,8 +312,8 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     }
 
     /// The last link error, if the link failed.
-    pub fn link_error(&self) -> Option<&LinkError> {
-        self.link_error.as_ref()
+    pub fn link_error(&self) -> Option<&str> {
+        self.link_error.as_deref()
     }
 
     /// Take the TX/RX handles and the link back.

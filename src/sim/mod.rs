@@ -1,4 +1,47 @@
 //! The software EtherCAT slave: emulated slave controllers (ESC) with SII, SyncManagers, FMMUs,
-//! mailbox CoE and distributed clocks, and emulated CiA 402 drives behind them.
+//! mailbox, distributed clocks and the device applications behind them.
+//!
+//! - [`esc::Esc`]: one slave controller, register-accurate on the wire;
+//! - [`device::Device`]: the firmware behind it (state checks, mailbox, process data at SYNC0);
+//! - [`sii`]: the SII EEPROM image, built from a [`sii::DeviceDescription`];
+//! - [`segment::Segment`]: a line of slaves processing frames in place;
+//! - [`transport`]: serving a segment on a raw socket, to ethercrab's `PduTx`/`PduRx`
+//!   in-process, or as a synchronous [`link::FrameLink`](crate::link::FrameLink);
+//! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
+//! - [`devices`]: ready-made test devices (generic CoE servo, EEPROM-only I/O, mailbox echo);
+//! - [`clock`]: host and manual time sources;
+//! - [`probe`]: a minimal datagram sender for tests and tools;
+//! - [`run`]: serving named devices on an interface (`ecdrive sim`);
+//! - [`rec`]: the emulation's own choices (\[REC\]) in one place.
+//!
+//! ```
+//! use ecdrive::ec::Command;
+//! use ecdrive::sim::{ManualClock, Segment, devices::IoDevice, probe::Probe};
+//! use std::sync::Arc;
+//!
+//! let mut segment = Segment::new(Arc::new(ManualClock::new(0)));
+//! for _ in 0..3 {
+//!     segment.push_device(Box::new(IoDevice::new(2, 4))).unwrap();
+//! }
+//! let mut probe = Probe::new(segment);
+//! let reply = probe.brd(0x0000, 1).unwrap(); // count the slaves, as masters do
+//! assert_eq!((reply.wkc, reply.adp), (3, 3));
+//! ```
 
+pub mod clock;
 pub mod coe;
+pub mod device;
+pub mod devices;
+pub mod esc;
+pub mod probe;
+pub mod rec;
+pub mod run;
+pub mod segment;
+pub mod sii;
+pub mod transport;
+
+pub use clock::{Clock, HostClock, ManualClock};
+pub use device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
+pub use esc::{DcSupport, Esc, EscConfig};
+pub use segment::{Segment, SegmentConfig, SegmentError, Slave};
+pub use sii::DeviceDescription;

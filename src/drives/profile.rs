@@ -1,0 +1,233 @@
+//! The drive-profile model: everything the generic layers need to know about one drive type,
+//! as static data.
+//!
+//! A [`DriveProfile`] is read by the master (what to configure at start-up, how to decode
+//! faults), by the software slave (how the emulated drive answers), by the CLI (type inference,
+//! names) and by the tests. Quirks are fields here, not `if vendor == …` in the logic.
+
+use crate::cia402::DriveCaps;
+use crate::od::{ConstValue, ObjectAddress, ObjectDesc};
+use crate::pdo::{Mapping, PdoLimits, RequiredObjects};
+
+/// Vendor ID and product code as 0x1018:01/02 and the SII report them. Any revision matches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct IdentityMatch {
+    /// Vendor ID (0x1018:01).
+    pub vendor_id: u32,
+    /// Product code (0x1018:02).
+    pub product_code: u32,
+}
+
+impl IdentityMatch {
+    /// Whether a device with this vendor ID and product code is this drive type.
+    pub const fn matches(&self, vendor_id: u32, product_code: u32) -> bool {
+        self.vendor_id == vendor_id && self.product_code == product_code
+    }
+}
+
+/// The SYNC0 / PDO cycle times a drive accepts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CycleTimes {
+    /// Exactly these (ns).
+    List(&'static [u32]),
+    /// From `min_ns` to `max_ns` in steps of `step_ns` (ns).
+    Range {
+        /// Shortest cycle.
+        min_ns: u32,
+        /// Longest cycle.
+        max_ns: u32,
+        /// Granularity.
+        step_ns: u32,
+    },
+}
+
+impl CycleTimes {
+    /// Whether `ns` is allowed.
+    pub fn contains(&self, ns: u32) -> bool {
+        match *self {
+            Self::List(l) => l.contains(&ns),
+            Self::Range {
+                min_ns,
+                max_ns,
+                step_ns,
+            } => (min_ns..=max_ns).contains(&ns) && step_ns != 0 && (ns - min_ns) % step_ns == 0,
+        }
+    }
+
+    /// A human description: `250, 500, 1000, 2000 µs` or `1000–16000 µs in 250 µs steps`.
+    pub fn describe(&self) -> String {
+        match *self {
+            Self::List(l) => {
+                let v: Vec<String> = l.iter().map(|n| (n / 1000).to_string()).collect();
+                format!("{} µs", v.join(", "))
+            }
+            Self::Range {
+                min_ns,
+                max_ns,
+                step_ns,
+            } => format!(
+                "{}–{} µs in {} µs steps",
+                min_ns / 1000,
+                max_ns / 1000,
+                step_ns / 1000
+            ),
+        }
+    }
+}
+
+/// How the drive learns the cycle time over CoE.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CycleTimeObject {
+    /// The cycle in ns goes into this object (MR-J4-TM: 0x1C32:02).
+    Nanoseconds(ObjectAddress),
+    /// 0x60C2 interpolation time period: `:01 = cycle / unit` with `:02` fixed at `index` and
+    /// read-only (BDHDE: 250 µs units, `:02 = -4`).
+    InterpolationFixedIndex {
+        /// The time unit of `:01`, ns.
+        unit_ns: u32,
+        /// The fixed value of `:02`.
+        index: i8,
+    },
+    /// 0x60C2 in the standard CiA 402 form `:01 × 10^(:02)` s.
+    InterpolationStandard,
+}
+
+/// Synchronisation the drive supports, and what the master must write for it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SyncSpec {
+    /// Free run (no DC) supported for the cyclic synchronous modes.
+    pub free_run: bool,
+    /// DC SYNC0 supported.
+    pub dc_sync0: bool,
+    /// Allowed cycle times.
+    pub cycle_times: CycleTimes,
+    /// ESI AssignActivate value for DC SYNC0 (written to 0x0980/0x0981 by the DC set-up).
+    pub assign_activate: u16,
+    /// Where the synchronisation type is written (0x1C32:01 = 2 for DC SYNC0), if at all.
+    pub sync_type_object: Option<ObjectAddress>,
+    /// Where the cycle time is written, if at all.
+    pub cycle_time_object: Option<CycleTimeObject>,
+}
+
+/// When a start-up SDO is written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StartupWhen {
+    /// Always.
+    Always,
+    /// Only if the object is not mapped in the RxPDO (drives refuse SDO writes to mapped objects).
+    IfNotMapped,
+}
+
+/// An SDO the master writes in PRE-OP for a safe start.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StartupSdo {
+    /// The object.
+    pub address: ObjectAddress,
+    /// The value (typed by the dictionary entry).
+    pub value: ConstValue,
+    /// Why (shown in logs and errors).
+    pub why: &'static str,
+    /// When to write it.
+    pub when: StartupWhen,
+}
+
+/// A value the master must put into a mapped output from the first cycle on, because the
+/// drive's default of 0 would be unsafe or stop it (MR-J4-TM: 0x2D20 speed limit, 0x60E0/0x60E1
+/// torque limits — zeros mean no speed / no torque).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutputDefault {
+    /// The mapped object.
+    pub address: ObjectAddress,
+    /// The value to send.
+    pub value: i64,
+    /// Why.
+    pub why: &'static str,
+}
+
+/// A counter the master must advance every cycle when it is mapped, and the drive's echo
+/// (MR-J4-TM: 0x2D23 DL counter, 0x2D24 UL = DL + 1; a wrong update raises AL.86.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CycleCounter {
+    /// The master's counter (RxPDO).
+    pub output: ObjectAddress,
+    /// The drive's echo (TxPDO), if any.
+    pub echo: Option<ObjectAddress>,
+}
+
+/// Units of the drive's position, velocity and torque objects.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Units {
+    /// Position counts per motor revolution with the default scaling (MR-J4-TM: 4 194 304 in
+    /// the cyclic modes).
+    pub counts_per_rev: f64,
+    /// Name of the position unit ("pulse", "count").
+    pub position_unit: &'static str,
+    /// One velocity unit in counts per second (MR-J4-TM: 0.01 r/min = 4 194 304 / 6000 counts/s).
+    pub velocity_unit_counts_per_s: f64,
+    /// Name of the velocity unit ("0.01 r/min").
+    pub velocity_unit: &'static str,
+    /// Name of the torque unit ("0.1 % of rated torque").
+    pub torque_unit: &'static str,
+}
+
+impl Units {
+    /// A velocity in counts/s as drive velocity units (rounded, saturating).
+    pub fn velocity_to_drive(&self, counts_per_s: f64) -> i32 {
+        let v = (counts_per_s / self.velocity_unit_counts_per_s).round();
+        v.clamp(i32::MIN as f64, i32::MAX as f64) as i32
+    }
+
+    /// A drive velocity as counts/s.
+    pub fn velocity_from_drive(&self, v: i32) -> f64 {
+        v as f64 * self.velocity_unit_counts_per_s
+    }
+}
+
+/// Everything ecdrive knows about one drive type. Profiles are `static`s; use them by
+/// reference.
+#[derive(Debug, Clone)]
+pub struct DriveProfile {
+    /// Short name used on the command line and in messages (`"MR-J4-TM"`).
+    pub name: &'static str,
+    /// The `--device` key (`"mr-j4-tm"`).
+    pub key: &'static str,
+    /// Vendor name.
+    pub vendor: &'static str,
+    /// Identity.
+    pub identity: IdentityMatch,
+    /// Revision reported by the emulated drive (and expected from real ones, informational).
+    pub revision: u32,
+    /// CiA 402 behaviour: state skipping, quick-stop options, mode rules, alarm table.
+    pub caps: DriveCaps,
+    /// PDO limits.
+    pub pdo_limits: PdoLimits,
+    /// Power-on mapping.
+    pub default_mapping: Mapping,
+    /// Recommended mapping for csp/csv/cst.
+    pub cyclic_mapping: Mapping,
+    /// Objects each mode needs mapped.
+    pub required_objects: &'static [RequiredObjects],
+    /// The object dictionary as the manual lists it.
+    pub dictionary: &'static [ObjectDesc],
+    /// SDOs written in PRE-OP for a safe start.
+    pub startup: &'static [StartupSdo],
+    /// Values mapped outputs must carry from the first cycle.
+    pub output_defaults: &'static [OutputDefault],
+    /// A counter to advance every cycle when mapped.
+    pub cycle_counter: Option<CycleCounter>,
+    /// Synchronisation.
+    pub sync: SyncSpec,
+    /// Units.
+    pub units: Units,
+    /// Whether SDO complete access works.
+    pub complete_access: bool,
+    /// The drive's ESI file (XML text).
+    pub esi: &'static str,
+}
+
+impl PartialEq for DriveProfile {
+    /// Profiles are equal when they are for the same drive type (same key).
+    fn eq(&self, other: &Self) -> bool {
+        self.key == other.key
+    }
+}

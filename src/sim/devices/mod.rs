@@ -1,0 +1,83 @@
+//! Ready-made emulated devices for tests, benchmarks and `ecdrive sim`.
+//!
+//! - [`IoDevice`]: a digital-I/O-like device without mailbox. Its PDOs come from the SII
+//!   (TxPDO/RxPDO categories), SyncManagers and FMMUs from the SII too: the path ethercrab and
+//!   SOEM take for EEPROM-only devices. Inputs echo the outputs behind a cycle counter, so a test
+//!   can see the process data round trip.
+//! - [`EchoMailbox`]: a device with a standard mailbox whose firmware returns every request
+//!   unchanged; it exercises the SyncManager mailbox handshake without any protocol.
+//!
+//! - [`GenericCoeDevice`]: a CiA 402-style servo with a CoE mailbox (SDO, SDO information,
+//!   complete access, emergencies), variable PDO mapping and DC synchronisation.
+//!
+//! [`by_name`] creates devices from the names `ecdrive sim --device` accepts.
+
+mod echo;
+pub mod generic_coe;
+mod io;
+
+pub use echo::EchoMailbox;
+pub use generic_coe::{CoeObservations, GenericCoeDevice};
+pub use io::{IoDevice, IoObservations, TEST_VENDOR_ID};
+
+use super::device::Device;
+
+/// Why [`by_name`] cannot create a device.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum DeviceError {
+    /// No device has that name.
+    #[error("unknown device {name:?}; known devices: {known}")]
+    Unknown {
+        /// The name asked for.
+        name: String,
+        /// The names accepted.
+        known: String,
+    },
+    /// The device's built-in data is inconsistent.
+    #[error("device {name:?} cannot be built: {reason}")]
+    Build {
+        /// The device.
+        name: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// Names accepted by [`by_name`], with a one-line description each.
+pub const DEVICE_NAMES: &[(&str, &str)] = &[
+    (
+        "generic-coe",
+        "CiA 402-style servo with CoE mailbox, variable PDO mapping (0x1600/0x1601, 0x1A00/0x1A01) and DC SYNC0",
+    ),
+    (
+        "generic-io",
+        "digital I/O without mailbox: 2 output bytes, 4 input bytes (counter + echo), DC capable",
+    ),
+    (
+        "echo-mailbox",
+        "mailbox device that returns every mailbox request unchanged (no process data)",
+    ),
+];
+
+/// Create a device by name (see [`DEVICE_NAMES`]). `position` makes serial numbers unique.
+pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
+    let serial = u32::try_from(position).unwrap_or(u32::MAX);
+    match name {
+        "generic-coe" => GenericCoeDevice::new(serial)
+            .map(|d| Box::new(d) as Box<dyn Device>)
+            .map_err(|e| DeviceError::Build {
+                name: name.into(),
+                reason: e.to_string(),
+            }),
+        "generic-io" => Ok(Box::new(IoDevice::new(2, 4).with_serial(serial))),
+        "echo-mailbox" => Ok(Box::new(EchoMailbox::new().with_serial(serial))),
+        _ => Err(DeviceError::Unknown {
+            name: name.into(),
+            known: DEVICE_NAMES
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
+    }
+}

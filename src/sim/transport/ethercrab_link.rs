@@ -1,0 +1,193 @@
+//! Serve a segment to an ethercrab `MainDevice` in the same process, through its `PduTx` /
+//! `PduRx` halves: no network, no root.
+
+use super::lock;
+use crate::sim::segment::Segment;
+use ethercrab::{PduRx, PduTx};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::task::{Wake, Waker};
+use std::thread::{self, JoinHandle, Thread};
+use std::time::Duration;
+
+/// Longest the pump thread sleeps without a wake-up (it still delivers SYNC0 events and notices
+/// watchdog expiry while the master is silent).
+const IDLE_PARK: Duration = Duration::from_millis(5);
+
+struct Shared {
+    segment: Mutex<Segment>,
+    stop: AtomicBool,
+    frames: AtomicU64,
+    dropped: AtomicU64,
+}
+
+struct Unpark(Thread);
+
+impl Wake for Unpark {
+    fn wake(self: Arc<Self>) {
+        self.0.unpark();
+    }
+
+    fn wake_by_ref(self: &Arc<Self>) {
+        self.0.unpark();
+    }
+}
+
+/// A thread moving frames between ethercrab's `PduTx`/`PduRx` and a [`Segment`]. The thread
+/// sleeps until ethercrab queues a frame (it registers itself as the TX waker), processes every
+/// sendable frame through the segment and hands the replies to `PduRx`.
+///
+/// ```no_run
+/// # use ecdrive::sim::{Segment, HostClock, devices::IoDevice, transport::EthercrabLink};
+/// # use std::sync::Arc;
+/// use ethercrab::PduStorage;
+/// static STORAGE: PduStorage<16, { PduStorage::element_size(1100) }> = PduStorage::new();
+/// let (tx, rx, pdu_loop) = STORAGE.try_split().unwrap();
+/// let mut segment = Segment::new(Arc::new(HostClock));
+/// segment.push_device(Box::new(IoDevice::new(2, 4))).unwrap();
+/// let link = EthercrabLink::spawn(segment, tx, rx).unwrap();
+/// // … MainDevice::new(pdu_loop, …), init, OP, tx_rx …
+/// let segment = link.stop();
+/// ```
+pub struct EthercrabLink {
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl core::fmt::Debug for EthercrabLink {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("EthercrabLink")
+            .field("frames", &self.frames())
+            .finish_non_exhaustive()
+    }
+}
+
+impl EthercrabLink {
+    /// Start serving `segment` to the master owning `tx`/`rx`.
+    pub fn spawn(
+        segment: Segment,
+        tx: PduTx<'static>,
+        rx: PduRx<'static>,
+    ) -> std::io::Result<Self> {
+        let shared = Arc::new(Shared {
+            segment: Mutex::new(segment),
+            stop: AtomicBool::new(false),
+            frames: AtomicU64::new(0),
+            dropped: AtomicU64::new(0),
+        });
+        let s = shared.clone();
+        let thread = thread::Builder::new()
+            .name("ecdrive-sim-ethercrab".into())
+            .spawn(move || pump(&s, tx, rx))?;
+        Ok(Self {
+            shared,
+            thread: Some(thread),
+        })
+    }
+
+    /// Lock the segment (e.g. to inspect a device). Frames wait while the guard is held.
+    pub fn segment(&self) -> MutexGuard<'_, Segment> {
+        lock(&self.shared.segment)
+    }
+
+    /// Frames processed so far.
+    pub fn frames(&self) -> u64 {
+        self.shared.frames.load(Ordering::Relaxed)
+    }
+
+    /// Frames the segment dropped (malformed) or ethercrab refused (e.g. after a timeout).
+    pub fn dropped(&self) -> u64 {
+        self.shared.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Stop the thread and give the segment back.
+    pub fn stop(mut self) -> Segment {
+        self.halt();
+        let shared = Arc::clone(&self.shared);
+        drop(self);
+        match Arc::try_unwrap(shared) {
+            Ok(s) => s.segment.into_inner().unwrap_or_else(|e| e.into_inner()),
+            // The thread has exited, so this cannot happen; keep an empty segment rather
+            // than panicking.
+            Err(s) => {
+                let clock = lock(&s.segment).clock().clone();
+                Segment::new(clock)
+            }
+        }
+    }
+
+    fn halt(&mut self) {
+        self.shared.stop.store(true, Ordering::Release);
+        if let Some(t) = self.thread.take() {
+            t.thread().unpark();
+            let _ = t.join();
+        }
+    }
+}
+
+impl Drop for EthercrabLink {
+    fn drop(&mut self) {
+        self.halt();
+    }
+}
+
+fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>) {
+    let waker = Waker::from(Arc::new(Unpark(thread::current())));
+    let mut buf: Vec<u8> = vec![0; 2048];
+    loop {
+        if shared.stop.load(Ordering::Acquire) || tx.should_exit() {
+            break;
+        }
+        tx.replace_waker(&waker);
+        let mut any = false;
+        while let Some(frame) = tx.next_sendable_frame() {
+            any = true;
+            let mut len = 0;
+            let sent = frame.send_blocking(|bytes| {
+                if bytes.len() > buf.len() {
+                    // Grows once to the largest frame ethercrab's storage can produce.
+                    buf.resize(bytes.len(), 0);
+                }
+                if let Some(dst) = buf.get_mut(..bytes.len()) {
+                    dst.copy_from_slice(bytes);
+                }
+                len = bytes.len();
+                Ok(bytes.len())
+            });
+            if sent.is_err() {
+                shared.dropped.fetch_add(1, Ordering::Relaxed);
+                continue;
+            }
+            let Some(frame) = buf.get_mut(..len) else {
+                continue;
+            };
+            let reply = lock(&shared.segment).process(frame);
+            match reply {
+                Ok(n) => {
+                    shared.frames.fetch_add(1, Ordering::Relaxed);
+                    let ok = buf
+                        .get(..n)
+                        .map(|f| rx.receive_frame(f).is_ok())
+                        .unwrap_or(false);
+                    if !ok {
+                        shared.dropped.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                Err(_) => {
+                    shared.dropped.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        }
+        if !any {
+            let timeout = {
+                let mut seg = lock(&shared.segment);
+                seg.poll();
+                let now = seg.clock().now_ns();
+                seg.next_deadline()
+                    .map(|d| Duration::from_nanos(d.saturating_sub(now)).min(IDLE_PARK))
+                    .unwrap_or(IDLE_PARK)
+            };
+            thread::park_timeout(timeout);
+        }
+    }
+}

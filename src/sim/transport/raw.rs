@@ -1,0 +1,155 @@
+//! Serve a segment on a raw socket.
+
+use super::lock;
+use crate::ec::frame::MAX_FRAME_LEN;
+use crate::link::{LinkError, RawSocket};
+use crate::sim::segment::Segment;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// Longest receive wait, so that `stop` is noticed and SYNC0 events and watchdogs run while
+/// no frames arrive (a pulled cable).
+const MAX_WAIT: Duration = Duration::from_millis(10);
+
+/// Counters of [`serve`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ServeStats {
+    /// Frames answered.
+    pub frames: u64,
+    /// Frames received but not answered (malformed, not EtherCAT, too large).
+    pub dropped: u64,
+}
+
+/// Answer EtherCAT frames arriving on `socket` with `segment` until `stop` is set. Between
+/// frames (at most every 10 ms, or at the next SYNC0 deadline) it polls the segment so that
+/// SYNC0 events and watchdogs are processed while the master is silent. One receive buffer is
+/// allocated up front.
+pub fn serve(
+    socket: &RawSocket,
+    segment: &Mutex<Segment>,
+    stop: &AtomicBool,
+) -> Result<ServeStats, LinkError> {
+    let mut stats = ServeStats::default();
+    let mut buf = vec![0u8; socket.max_frame_len().max(MAX_FRAME_LEN)];
+    while !stop.load(Ordering::Acquire) {
+        let timeout = {
+            let seg = lock(segment);
+            let now = seg.clock().now_ns();
+            seg.next_deadline()
+                .map(|d| Duration::from_nanos(d.saturating_sub(now)).min(MAX_WAIT))
+                .unwrap_or(MAX_WAIT)
+        };
+        match socket.recv(&mut buf, Some(timeout)) {
+            Ok(Some(n)) => {
+                let Some(frame) = buf.get_mut(..n) else {
+                    continue;
+                };
+                let reply = lock(segment).process(frame);
+                match reply {
+                    Ok(len) => {
+                        if let Some(f) = buf.get(..len) {
+                            socket.send(f)?;
+                            stats.frames += 1;
+                        }
+                    }
+                    Err(_) => stats.dropped += 1,
+                }
+            }
+            Ok(None) => lock(segment).poll(),
+            Err(LinkError::Truncated { .. }) => stats.dropped += 1,
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(stats)
+}
+
+struct Shared {
+    segment: Mutex<Segment>,
+    stop: AtomicBool,
+}
+
+/// A thread serving a segment on a raw socket ([`serve`]).
+pub struct RawServer {
+    shared: Arc<Shared>,
+    thread: Option<JoinHandle<Result<ServeStats, LinkError>>>,
+    interface: String,
+}
+
+impl core::fmt::Debug for RawServer {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("RawServer")
+            .field("interface", &self.interface)
+            .finish_non_exhaustive()
+    }
+}
+
+impl RawServer {
+    /// Serve `segment` on `socket` from a new thread.
+    pub fn spawn(socket: RawSocket, segment: Segment) -> std::io::Result<Self> {
+        let shared = Arc::new(Shared {
+            segment: Mutex::new(segment),
+            stop: AtomicBool::new(false),
+        });
+        let interface = socket.interface().to_owned();
+        let s = shared.clone();
+        let thread = std::thread::Builder::new()
+            .name(format!("ecdrive-sim {interface}"))
+            .spawn(move || serve(&socket, &s.segment, &s.stop))?;
+        Ok(Self {
+            shared,
+            thread: Some(thread),
+            interface,
+        })
+    }
+
+    /// The interface served.
+    pub fn interface(&self) -> &str {
+        &self.interface
+    }
+
+    /// Lock the segment (e.g. to inspect a device). Frames wait while the guard is held.
+    pub fn segment(&self) -> MutexGuard<'_, Segment> {
+        lock(&self.shared.segment)
+    }
+
+    /// Whether the serving thread has ended (an I/O error).
+    pub fn is_finished(&self) -> bool {
+        self.thread.as_ref().is_none_or(|t| t.is_finished())
+    }
+
+    /// Stop serving; returns the segment and what the thread reported.
+    pub fn stop(mut self) -> (Segment, Result<ServeStats, LinkError>) {
+        let result = self.halt();
+        let shared = Arc::clone(&self.shared);
+        drop(self);
+        let segment = match Arc::try_unwrap(shared) {
+            Ok(s) => s.segment.into_inner().unwrap_or_else(|e| e.into_inner()),
+            Err(s) => {
+                let clock = lock(&s.segment).clock().clone();
+                Segment::new(clock)
+            }
+        };
+        (segment, result)
+    }
+
+    fn halt(&mut self) -> Result<ServeStats, LinkError> {
+        self.shared.stop.store(true, Ordering::Release);
+        match self.thread.take() {
+            Some(t) => t.join().unwrap_or_else(|_| {
+                Err(LinkError::Peer(format!(
+                    "the thread serving {} panicked",
+                    self.interface
+                )))
+            }),
+            None => Ok(ServeStats::default()),
+        }
+    }
+}
+
+impl Drop for RawServer {
+    fn drop(&mut self) {
+        let _ = self.halt();
+    }
+}

@@ -1,0 +1,188 @@
+//! Conformance with a second master: SOEM 1.4 through pysoem, over a veth pair. Two generic
+//! CoE devices (PDOs remapped in PRE-OP from pysoem's `config_func`) and one EEPROM-only I/O
+//! device: `config_init`, `config_map`, `config_dc` + `dc_sync`, SAFE-OP and OP, process data
+//! with SOEM's expected working counter, SDO access and the object dictionary via SDO
+//! information, then back to INIT.
+//!
+//! Needs root and `pysoem` (`pip install pysoem`). Without pysoem the test prints a loud
+//! SKIPPED line, unless `ECDRIVE_REQUIRE_PYSOEM` is set, which makes it fail instead.
+
+use ecdrive::link::netns::{VethPair, require_root};
+use ecdrive::sim::devices::{GenericCoeDevice, IoDevice};
+use ecdrive::sim::transport::RawServer;
+use ecdrive::sim::{EscConfig, HostClock, Segment};
+use std::process::Command;
+use std::sync::Arc;
+
+const SCRIPT: &str = r#"
+import json, struct, sys, time
+import pysoem
+
+ifname = sys.argv[1]
+# Generous timeouts (µs): a loaded CI machine stalls for milliseconds.
+t = pysoem.settings.timeouts
+t.ret = 50_000
+t.safe = 200_000
+t.eeprom = 200_000
+t.tx_mailbox = 200_000
+t.rx_mailbox = 2_000_000
+t.state = 5_000_000
+out = {}
+m = pysoem.Master()
+m.open(ifname)
+try:
+    n = m.config_init()
+    out["count"] = n
+    out["slaves"] = [
+        {"name": s.name, "man": s.man, "id": s.id, "rev": s.rev} for s in m.slaves
+    ]
+
+    def remap(pos):
+        s = m.slaves[pos]
+        s.sdo_write(0x1C12, 0, bytes([0]))
+        s.sdo_write(0x1C13, 0, bytes([0]))
+        s.sdo_write(0x1C12, 1, struct.pack("<H", 0x1601))
+        s.sdo_write(0x1C12, 0, bytes([1]))
+        s.sdo_write(0x1C13, 1, struct.pack("<H", 0x1A01))
+        s.sdo_write(0x1C13, 0, bytes([1]))
+        s.sdo_write(0x6060, 0, struct.pack("<b", 9))
+        s.sdo_write(0x1C32, 1, struct.pack("<H", 2))
+
+    for i, s in enumerate(m.slaves):
+        if s.name.startswith("ecdrive generic CoE"):
+            s.config_func = remap
+
+    out["serial"] = struct.unpack("<I", m.slaves[1].sdo_read(0x1018, 4))[0]
+    out["device_name"] = m.slaves[0].sdo_read(0x1008, 0).decode()
+    iomap = m.config_map()
+    out["iomap"] = iomap
+    out["sizes"] = [[len(s.output), len(s.input)] for s in m.slaves]
+    out["expected_wkc"] = m.expected_wkc
+    m.config_dc()
+    for s in m.slaves:
+        s.dc_sync(True, 1_000_000)
+    out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+    # Keep process data flowing while requesting OP, as SOEM applications do.
+    m.send_processdata()
+    m.receive_processdata(200_000)
+    m.state = pysoem.OP_STATE
+    m.write_state()
+    op = False
+    for _ in range(2000):
+        m.send_processdata()
+        m.receive_processdata(200_000)
+        if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
+            op = True
+            break
+        time.sleep(0.001)
+    out["op"] = op
+    wkcs = []
+    echo = False
+    enabled = [False, False]
+    for cycle in range(3000):
+        io = m.slaves[2]
+        io.output = bytes([0x42, cycle & 0xFF])
+        for k in (0, 1):
+            s = m.slaves[k]
+            status = struct.unpack("<H", s.input[0:2])[0] if len(s.input) >= 2 else 0
+            if status & 0x6F == 0x27:
+                enabled[k] = True
+            cw = {0x40: 6, 0x60: 6, 0x21: 7, 0x23: 15}.get(status & 0x6F, 15)
+            s.output = struct.pack("<HiB", cw, 500_000, 9)
+        m.send_processdata()
+        wkcs.append(m.receive_processdata(200_000))
+        if io.input[2:3] == bytes([0x42]):
+            echo = True
+        if echo and all(enabled) and cycle > 50:
+            break
+        time.sleep(0.001)
+    out["wkc_last"] = wkcs[-20:]
+    out["echo"] = echo
+    out["enabled"] = enabled
+    out["missed"] = struct.unpack("<H", m.slaves[0].sdo_read(0x1C32, 11))[0]
+    out["od"] = sorted(o.index for o in m.slaves[0].od)[:6]
+    m.state = pysoem.INIT_STATE
+    m.write_state()
+    out["init"] = m.state_check(pysoem.INIT_STATE, 2_000_000)
+finally:
+    m.close()
+print(json.dumps(out))
+"#;
+
+fn pysoem_available() -> bool {
+    Command::new("python3")
+        .args(["-c", "import pysoem"])
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+#[test]
+fn soem_brings_devices_to_op() {
+    if !require_root("sim_soem::soem_brings_devices_to_op") {
+        return;
+    }
+    if !pysoem_available() {
+        if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
+            panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
+        }
+        eprintln!("\n*** SKIPPED (needs pysoem: pip install pysoem): sim_soem ***\n");
+        return;
+    }
+    let veth = VethPair::create().expect("veth pair");
+    let mut seg = Segment::new(Arc::new(HostClock));
+    let cfg = EscConfig {
+        sm_watchdog: 0,
+        ..Default::default()
+    };
+    seg.push(Box::new(GenericCoeDevice::new(11).unwrap()), cfg.clone())
+        .unwrap();
+    seg.push(Box::new(GenericCoeDevice::new(12).unwrap()), cfg.clone())
+        .unwrap();
+    seg.push(Box::new(IoDevice::new(2, 4).with_serial(13)), cfg)
+        .unwrap();
+    let server =
+        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), seg).expect("server");
+    let output = Command::new("python3")
+        .args(["-c", SCRIPT, veth.host()])
+        .output()
+        .expect("run python3");
+    let (seg, result) = server.stop();
+    result.expect("server ran without I/O errors");
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(
+        output.status.success(),
+        "pysoem failed:\n{stderr}\n{stdout}"
+    );
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON from pysoem");
+
+    assert_eq!(v["count"], 3);
+    assert_eq!(v["slaves"][0]["name"], "ecdrive generic CoE device");
+    assert_eq!(v["slaves"][0]["man"], 0x0ECD);
+    assert_eq!(v["slaves"][0]["id"], 0x0402);
+    assert_eq!(v["slaves"][2]["name"], "ecdrive generic I/O 2/4");
+    assert_eq!(v["serial"], 12);
+    assert_eq!(v["device_name"], "ecdrive generic CoE device");
+    // Remapped CoE devices: 7 output / 11 input bytes; the I/O device 2 / 4 from its SII.
+    assert_eq!(v["sizes"], serde_json::json!([[7, 11], [7, 11], [2, 4]]));
+    assert_eq!(v["iomap"], 2 * (7 + 11) + 2 + 4);
+    // SOEM's expectation: outputs ×2 + inputs, one each per device.
+    assert_eq!(v["expected_wkc"], 9);
+    assert_eq!(v["safeop"], 4);
+    assert_eq!(v["op"], true);
+    for w in v["wkc_last"].as_array().expect("wkcs") {
+        assert_eq!(w, 9, "working counter in OP");
+    }
+    assert_eq!(v["echo"], true, "I/O device echoed the outputs");
+    assert_eq!(v["enabled"], serde_json::json!([true, true]));
+    assert!(v["missed"].is_u64());
+    assert_eq!(
+        v["od"],
+        serde_json::json!([0x1000, 0x1001, 0x1008, 0x1009, 0x100A, 0x1018])
+    );
+    assert_eq!(v["init"], 1);
+    for i in 0..2 {
+        let dev = seg.device::<GenericCoeDevice>(i).expect("CoE device");
+        assert!(dev.seen.sync0_events > 0, "device {i} saw SYNC0");
+    }
+}
