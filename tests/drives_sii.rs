@@ -222,7 +222,7 @@ fn sii_follows_the_esi_text() {
     );
     assert_ne!(text, p.esi);
     let f = EsiFile::parse(&text).unwrap();
-    let d = ecdrive::sim::sii::DeviceDescription::from_esi(&f, &f.devices[0]).unwrap();
+    let d = ecdrive::sim::sii::from_esi(f.vendor.id, &f.devices[0], 9).unwrap();
     assert_eq!(d.mailbox.unwrap().rx_size, 256);
     let d = ecdrive::sim::drives::description(p, 9).unwrap();
     assert_eq!(d.mailbox.as_ref().unwrap().rx_size, 128);

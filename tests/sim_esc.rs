@@ -1071,3 +1071,53 @@ fn bootstrap_state_checks_its_own_mailbox() {
     assert_eq!(to_state(&mut p, 0x1000, 0x0002), (0x0013, 0x0011));
     assert_eq!(to_state(&mut p, 0x1000, 0x0001), (0x0001, 0));
 }
+
+/// The drive ESI files become SII images that a master reads back as the ESI says.
+#[test]
+fn sii_from_the_drive_esi_files() {
+    use ecdrive::esi::EsiFile;
+    use ecdrive::sim::sii::{self, category};
+    for path in [
+        "esi/Mitsubishi_MR-J4-TM.xml",
+        "esi/Servotronix_BDHDE.xml",
+        "tests/data/esi/Acme_Terminals.xml",
+    ] {
+        let file = EsiFile::from_path(path).unwrap();
+        for dev in &file.devices {
+            let desc = sii::from_esi(file.vendor.id, dev, 77).unwrap();
+            let img = sii::build(&desc).unwrap_or_else(|e| panic!("{path}: {e}"));
+            assert!(img.checksum_ok());
+            let id = img.identity();
+            assert_eq!(id.vendor_id, file.vendor.id);
+            assert_eq!(id.product_code, dev.type_.product_code);
+            assert_eq!(id.serial, 77);
+            let g = img.category(category::GENERAL).unwrap();
+            assert_eq!(img.string(g[3]), Some(dev.name.as_str()));
+            assert_eq!(img.string(g[2]), Some(dev.type_.name_text.as_str()));
+            let sm = img.category(category::SYNC_MANAGER).unwrap_or(&[]);
+            assert_eq!(sm.len(), 8 * dev.sync_managers.len());
+            let pdo_bits: u32 = dev.tx_pdos.iter().map(|p| p.bits()).sum();
+            if let Some(tx) = img.category(category::TXPDO) {
+                // Sum of entry bit lengths as the SII holds them.
+                let mut at = 0usize;
+                let mut bits = 0u32;
+                while at + 8 <= tx.len() {
+                    let n = usize::from(tx[at + 2]);
+                    for k in 0..n {
+                        bits += u32::from(tx[at + 8 + 8 * k + 5]);
+                    }
+                    at += 8 + 8 * n;
+                }
+                assert_eq!(bits, pdo_bits, "{}", dev.name);
+            } else {
+                assert_eq!(pdo_bits, 0);
+            }
+            // An ESC built on it accepts the mailbox configuration the SII advertises.
+            if let Some(m) = &desc.mailbox {
+                assert_eq!(img.word(0x18), m.rx_offset);
+                assert_eq!(img.word(0x1B), m.tx_size);
+                assert_ne!(img.word(0x1C) & 0x0004, 0, "CoE");
+            }
+        }
+    }
+}

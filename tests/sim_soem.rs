@@ -19,6 +19,14 @@ import json, struct, sys, time
 import pysoem
 
 ifname = sys.argv[1]
+# Generous timeouts (µs): a loaded CI machine stalls for milliseconds.
+t = pysoem.settings.timeouts
+t.ret = 50_000
+t.safe = 200_000
+t.eeprom = 200_000
+t.tx_mailbox = 200_000
+t.rx_mailbox = 2_000_000
+t.state = 5_000_000
 out = {}
 m = pysoem.Master()
 m.open(ifname)
@@ -56,13 +64,13 @@ try:
     out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
     # Keep process data flowing while requesting OP, as SOEM applications do.
     m.send_processdata()
-    m.receive_processdata(10_000)
+    m.receive_processdata(200_000)
     m.state = pysoem.OP_STATE
     m.write_state()
     op = False
     for _ in range(2000):
         m.send_processdata()
-        m.receive_processdata(10_000)
+        m.receive_processdata(200_000)
         if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
             op = True
             break
@@ -82,7 +90,7 @@ try:
             cw = {0x40: 6, 0x60: 6, 0x21: 7, 0x23: 15}.get(status & 0x6F, 15)
             s.output = struct.pack("<HiB", cw, 500_000, 9)
         m.send_processdata()
-        wkcs.append(m.receive_processdata(10_000))
+        wkcs.append(m.receive_processdata(200_000))
         if io.input[2:3] == bytes([0x42]):
             echo = True
         if echo and all(enabled) and cycle > 50:
@@ -146,7 +154,6 @@ fn soem_brings_devices_to_op() {
         output.status.success(),
         "pysoem failed:\n{stderr}\n{stdout}"
     );
-    eprintln!("pysoem: {stdout}");
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON from pysoem");
 
     assert_eq!(v["count"], 3);

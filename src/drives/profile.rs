@@ -361,3 +361,10 @@ impl DriveProfile {
         self.sync.writes(self.name, cycle_ns, dc)
     }
 }
+
+impl PartialEq for DriveProfile {
+    /// Profiles are equal when they are for the same drive type (same key).
+    fn eq(&self, other: &Self) -> bool {
+        self.key == other.key
+    }
+}

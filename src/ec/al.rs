@@ -104,7 +104,7 @@ impl fmt::Display for AlStatus {
 }
 
 /// An AL status code (register 0x0134), with its ETG.1000.6 meaning.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub struct AlStatusCode(pub u16);
 
 macro_rules! al_codes {

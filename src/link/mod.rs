@@ -91,4 +91,9 @@ pub trait FrameLink {
         buf: &mut [u8],
         timeout: Option<Duration>,
     ) -> Result<Option<usize>, LinkError>;
+
+    /// A short name for messages: the interface name, or "in-process segment".
+    fn describe(&self) -> String {
+        "link".into()
+    }
 }

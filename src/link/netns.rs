@@ -77,6 +77,16 @@ pub enum NetnsError {
     /// A link error inside the namespace.
     #[error(transparent)]
     Link(#[from] LinkError),
+    /// The veth pair did not come up.
+    #[error("veth pair {host}/{peer} has no carrier after {waited_ms} ms")]
+    NoCarrier {
+        /// The host end.
+        host: String,
+        /// The peer end.
+        peer: String,
+        /// How long we waited.
+        waited_ms: u64,
+    },
 }
 
 fn ip(args: &[&str]) -> Result<(), NetnsError> {
@@ -247,7 +257,25 @@ impl VethPair {
             disable_ipv6(&peer);
             ip(&["link", "set", &peer, "up"])
         })??;
-        Ok(())
+        // The carrier comes up asynchronously; frames sent before are silently dropped, which
+        // a master sees as a lost first frame. The host end has carrier only when both ends
+        // are up.
+        let carrier = format!("/sys/class/net/{}/carrier", self.host);
+        let start = std::time::Instant::now();
+        let limit = std::time::Duration::from_secs(5);
+        loop {
+            if std::fs::read_to_string(&carrier).is_ok_and(|c| c.trim() == "1") {
+                return Ok(());
+            }
+            if start.elapsed() > limit {
+                return Err(NetnsError::NoCarrier {
+                    host: self.host.clone(),
+                    peer: self.peer.clone(),
+                    waited_ms: limit.as_millis() as u64,
+                });
+            }
+            std::thread::sleep(std::time::Duration::from_millis(1));
+        }
     }
 
     /// The end in the current namespace.

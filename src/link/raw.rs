@@ -284,6 +284,10 @@ impl FrameLink for RawSocket {
         RawSocket::send(self, frame)
     }
 
+    fn describe(&self) -> String {
+        format!("interface {}", self.interface())
+    }
+
     fn recv(
         &mut self,
         buf: &mut [u8],

@@ -175,6 +175,19 @@ impl<'a> CoeClient<'a> {
         self
     }
 
+    /// Continue the mailbox counter sequence from `last` (the counter of the previous request
+    /// to this drive). A drive drops a request whose counter equals the previous one as a
+    /// repeat, so the sequence must continue across clients of one session.
+    pub fn with_counter(mut self, last: u8) -> Self {
+        self.counter = last % 8;
+        self
+    }
+
+    /// The counter of the last request sent.
+    pub fn counter(&self) -> u8 {
+        self.counter
+    }
+
     /// How long to wait for each reply (default 1 s).
     pub fn with_timeout(mut self, timeout: Duration) -> Self {
         self.timeout = timeout;

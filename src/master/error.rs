@@ -1,5 +1,7 @@
 //! Errors of the master, each naming the drive, the object or register, and the reason.
 
+use crate::ec::AlStatusCode;
+use crate::od::SdoAbortCode;
 use core::fmt;
 
 /// A drive as error messages name it: its position on the segment and its name.
@@ -15,4 +17,116 @@ impl fmt::Display for DriveRef {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(f, "drive {} ({})", self.position, self.name)
     }
+}
+
+/// What kind of failure, for callers that react differently (exit codes, retries).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum ErrorKind {
+    /// Nothing answered, or the segment does not look as configured.
+    Discovery,
+    /// A device no profile matches (and the generic profile was not allowed).
+    UnknownDevice,
+    /// The configuration is invalid (mapping over a limit, cycle time not allowed, …); found
+    /// before anything was written.
+    Config,
+    /// The drive aborted an SDO.
+    Sdo(SdoAbortCode),
+    /// The drive refused an EtherCAT state change.
+    AlState(AlStatusCode),
+    /// Distributed clocks did not settle.
+    DcSettle,
+    /// The bus did not answer in time.
+    Timeout,
+    /// The link (interface, socket) failed.
+    Link,
+    /// The drive reported a fault.
+    DriveFault,
+    /// Anything else ethercrab reported.
+    Bus,
+}
+
+/// A failed step of the master.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{}{step}: {reason}", .drive.as_ref().map(|d| format!("{d}: ")).unwrap_or_default())]
+pub struct MasterError {
+    /// The drive, if the step concerned one.
+    pub drive: Option<DriveRef>,
+    /// What was being done, naming the object or register ("writing 0x1C32:02 (cycle time)").
+    pub step: String,
+    /// Why it failed.
+    pub reason: String,
+    /// The kind of failure.
+    pub kind: ErrorKind,
+}
+
+impl MasterError {
+    /// An error.
+    pub fn new(
+        drive: Option<&DriveRef>,
+        step: impl Into<String>,
+        kind: ErrorKind,
+        reason: impl fmt::Display,
+    ) -> Self {
+        Self {
+            drive: drive.cloned(),
+            step: step.into(),
+            reason: reason.to_string(),
+            kind,
+        }
+    }
+}
+
+impl From<super::bus::SessionError> for MasterError {
+    fn from(e: super::bus::SessionError) -> Self {
+        use super::bus::SessionError;
+        match e {
+            SessionError::Coe(c) => {
+                let kind = match c.abort_code() {
+                    Some(code) => ErrorKind::Sdo(code),
+                    None => match c.kind {
+                        super::coe::CoeErrorKind::Timeout(_) => ErrorKind::Timeout,
+                        _ => ErrorKind::Bus,
+                    },
+                };
+                Self {
+                    drive: Some(c.drive.clone()),
+                    step: match c.address {
+                        Some(a) => format!("{a}"),
+                        None => "mailbox".into(),
+                    },
+                    reason: c.kind.to_string(),
+                    kind,
+                }
+            }
+            SessionError::Exec(x) => exec_error(None, x),
+        }
+    }
+}
+
+/// Convert an executor error, with the drive it concerned.
+pub fn exec_error(drive: Option<&DriveRef>, e: super::exec::ExecError) -> MasterError {
+    use super::exec::ExecError;
+    let (step, kind, reason) = match e {
+        ExecError::Timeout { what, timeout_ms } => (
+            what,
+            ErrorKind::Timeout,
+            format!("no result within {timeout_ms} ms"),
+        ),
+        ExecError::FrameLost { what, lost } => (
+            what,
+            ErrorKind::Timeout,
+            format!("the segment did not answer ({lost} frame(s) lost after retries)"),
+        ),
+        ExecError::Link { what, source } => (what, ErrorKind::Link, source.to_string()),
+    };
+    MasterError::new(drive, step, kind, reason)
+}
+
+/// Convert an ethercrab error from a step.
+pub fn bus_error(
+    drive: Option<&DriveRef>,
+    step: impl Into<String>,
+    e: ethercrab::error::Error,
+) -> MasterError {
+    MasterError::new(drive, step, ErrorKind::Bus, e)
 }

@@ -9,7 +9,7 @@
 use super::io::{FrameLink, LinkError, Pump};
 use crate::rt::monotonic_ns;
 use std::future::Future;
-use std::pin::{Pin, pin};
+use std::pin::Pin;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::task::{Context, Poll, Wake, Waker};
@@ -82,9 +82,10 @@ pub fn run<L: FrameLink, F: Future>(
     let mut cx = Context::from_waker(&waker);
     pump.register_waker(&waker);
     // The future lives in this block: leaving it drops the future (releasing, if it did not
-    // complete, its frames in ethercrab) before the pump forgets them below.
+    // complete, its frames in ethercrab) before the pump forgets them below. It is boxed:
+    // start-up futures hold ethercrab's group (tens of KiB), and this is not the cyclic path.
     let result = {
-        let mut fut = pin!(fut);
+        let mut fut = Box::pin(fut);
         loop {
             tw.notified.store(false, Ordering::Release);
             if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
@@ -133,6 +134,42 @@ pub fn run<L: FrameLink, F: Future>(
     result
 }
 
+/// Run `fut` on the calling thread while **another** thread pumps the frames (the cycle
+/// thread, during OP): poll, park until woken or a short slice passes, repeat, within
+/// `timeout`. For supervisory work during the cycle (mailbox polling for emergencies, SDOs).
+pub fn run_remote<F: Future>(
+    what: &dyn Fn() -> String,
+    timeout: Duration,
+    fut: F,
+) -> Result<F::Output, ExecError> {
+    let deadline = monotonic_ns().saturating_add(timeout.as_nanos() as u64);
+    let tw = Arc::new(ThreadWaker {
+        thread: std::thread::current(),
+        notified: AtomicBool::new(false),
+    });
+    let waker = Waker::from(tw.clone());
+    let mut cx = Context::from_waker(&waker);
+    let mut fut = Box::pin(fut);
+    loop {
+        tw.notified.store(false, Ordering::Release);
+        if let Poll::Ready(v) = fut.as_mut().poll(&mut cx) {
+            return Ok(v);
+        }
+        let now = monotonic_ns();
+        if now >= deadline {
+            return Err(ExecError::Timeout {
+                what: what(),
+                timeout_ms: timeout.as_millis() as u64,
+            });
+        }
+        if !tw.notified.load(Ordering::Acquire) {
+            std::thread::park_timeout(Duration::from_nanos(
+                (1_000_000u64).min(deadline.saturating_sub(now)),
+            ));
+        }
+    }
+}
+
 /// How one cyclic exchange ended, when it did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum ExchangeError {
@@ -179,6 +216,7 @@ mod tests {
     use crate::master::io::{LossPolicy, MAX_FRAME};
     use ethercrab::{Command, MainDevice, MainDeviceConfig, PduStorage, Timeouts};
     use std::collections::VecDeque;
+    use std::pin::pin;
 
     /// A link whose "segment" is two slaves that answer every BRD by OR-ing 0x11 into the data
     /// and adding 2 to the working counter. It can swallow frames to simulate loss.

@@ -105,6 +105,11 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         &self.link
     }
 
+    /// The link's name for messages.
+    pub fn link_name(&self) -> String {
+        self.link.describe()
+    }
+
     /// The link, mutably (e.g. to inject faults into an in-process segment).
     pub fn link_mut(&mut self) -> &mut L {
         &mut self.link

@@ -1,8 +1,13 @@
 //! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic loop.
 
+pub mod bus;
 pub mod coe;
+pub mod cycle;
 pub mod error;
 pub mod exec;
 pub mod io;
 pub mod program;
+pub mod session;
 pub mod setpoint;
+pub mod startup;
+pub mod telemetry;

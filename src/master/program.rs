@@ -356,6 +356,16 @@ impl Runner {
         }
     }
 
+    /// Start over from the first step (allocation-free). Call [`Runner::seed`] before the
+    /// next tick.
+    pub fn restart(&mut self) {
+        self.index = 0;
+        self.planned = None;
+        self.step_t = 0.0;
+        self.waiting_for_mode = false;
+        self.failed = None;
+    }
+
     /// The steps.
     pub fn steps(&self) -> &[Step] {
         &self.steps

@@ -1,7 +1,7 @@
 use core::fmt;
 
 /// An SDO abort code (CiA 301 §7.2.4.3.17, with the EtherCAT additions of ETG.1000.6).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub struct SdoAbortCode(pub u32);
 
 macro_rules! abort_codes {

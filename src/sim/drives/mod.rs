@@ -8,7 +8,7 @@
 //! that are ours (\[REC\]) in one labelled section.
 //!
 //! - **SII**: built from the drive's ESI file ([`description`], through
-//!   [`DeviceDescription::from_esi`]), so the EEPROM a master reads and the ESI a user reads
+//!   [`crate::sim::sii::from_esi`]), so the EEPROM a master reads and the ESI a user reads
 //!   cannot drift apart.
 //! - **CoE**: the profile's dictionary in an [`crate::sim::coe::OdStore`] with the drive's PDO
 //!   limits and write rules; complete access and SDO information as the ESI file says.
@@ -44,11 +44,9 @@ pub mod bdhde;
 mod drive;
 pub mod motor;
 pub mod mr_j4_tm;
-mod sii_esi;
 pub mod spec;
 
 pub use drive::{DriveStats, EmulatedDrive, UnknownAlarm};
-pub use sii_esi::EsiSiiError;
 pub use spec::DriveSpec;
 
 use super::device::Device;
@@ -110,7 +108,7 @@ pub enum DescriptionError {
     },
     /// The ESI device cannot be described in the SII.
     #[error(transparent)]
-    Sii(#[from] EsiSiiError),
+    Sii(#[from] crate::sim::sii::FromEsiError),
 }
 
 /// The SII description of the drive of `profile`, built from its ESI file, with serial number
@@ -132,7 +130,5 @@ pub fn description(
             drive: profile.name,
             product_code: profile.identity.product_code,
         })?;
-    let mut d = DeviceDescription::from_esi(&file, device)?;
-    d.identity.serial = serial;
-    Ok(d)
+    Ok(crate::sim::sii::from_esi(file.vendor.id, device, serial)?)
 }

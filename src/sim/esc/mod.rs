@@ -765,7 +765,7 @@ impl Esc {
             self.rebuild_fmmus();
         }
         if sm_touched {
-            self.sm_registers_written(&old_act, hop, dev);
+            self.sm_registers_written(&old_act, dev);
         }
         if self.cfg.dc.supported() && overlaps(a, b, 0x0900, 0x09B0) {
             self.dc_written(a, b, data, old_sys, old_activation, hop);
@@ -1133,7 +1133,7 @@ impl Esc {
 
     // ---------------------------------------------------------------- SM register side effects
 
-    fn sm_registers_written(&mut self, old_act: &[u8; MAX_SM], hop: Hop, dev: &mut dyn Device) {
+    fn sm_registers_written(&mut self, old_act: &[u8; MAX_SM], dev: &mut dyn Device) {
         let mut changed = false;
         for n in 0..self.cfg.sm_count {
             let base = Self::sm_base(n);
@@ -1171,7 +1171,6 @@ impl Esc {
         if changed {
             self.pending |= pending::SM_CHANGED;
         }
-        let _ = hop;
     }
 
     // ---------------------------------------------------------------- SII interface
@@ -1454,7 +1453,7 @@ impl Esc {
         }
         let Some(to) = AlState::from_bits(req_bits) else {
             let state = if from == AlState::Op {
-                self.leave_op(dev);
+                self.leave_op();
                 AlState::SafeOp
             } else {
                 from
@@ -1470,7 +1469,7 @@ impl Esc {
                     Err((Init, AlStatusCode::INVALID_MAILBOX_CONFIG))
                 }
                 _ => self
-                    .ask(dev, from, to, hop)
+                    .ask(dev, from, to)
                     .map(|_| PreOp)
                     .map_err(|c| (Init, c)),
             },
@@ -1480,21 +1479,18 @@ impl Esc {
                     Err((Init, AlStatusCode::INVALID_MAILBOX_CONFIG_BOOT))
                 }
                 Some(_) => self
-                    .ask(dev, from, to, hop)
+                    .ask(dev, from, to)
                     .map(|_| Bootstrap)
                     .map_err(|c| (Init, c)),
             },
             (PreOp, SafeOp) => match self.check_process_data(dev) {
                 Err(c) => Err((PreOp, c)),
                 Ok(()) => self
-                    .ask(dev, from, to, hop)
+                    .ask(dev, from, to)
                     .map(|_| SafeOp)
                     .map_err(|c| (PreOp, c)),
             },
-            (SafeOp, Op) => self
-                .ask(dev, from, to, hop)
-                .map(|_| Op)
-                .map_err(|c| (SafeOp, c)),
+            (SafeOp, Op) => self.ask(dev, from, to).map(|_| Op).map_err(|c| (SafeOp, c)),
             (_, Init) => Ok(Init),
             (Op, SafeOp) | (Op, PreOp) | (SafeOp, PreOp) => Ok(to),
             (Op, Bootstrap) => Err((SafeOp, AlStatusCode::INVALID_STATE_CHANGE)),
@@ -1507,7 +1503,7 @@ impl Esc {
         };
         // Leave states as needed.
         if from == Op && new_state != Op {
-            self.leave_op(dev);
+            self.leave_op();
         }
         if matches!(new_state, Init | Bootstrap) && from != new_state {
             self.stop_mailbox(dev);
@@ -1531,13 +1527,7 @@ impl Esc {
         self.finish_transition(from, new_state, error, dev);
     }
 
-    fn ask(
-        &self,
-        dev: &mut dyn Device,
-        from: AlState,
-        to: AlState,
-        _hop: Hop,
-    ) -> Result<(), AlStatusCode> {
+    fn ask(&self, dev: &mut dyn Device, from: AlState, to: AlState) -> Result<(), AlStatusCode> {
         dev.request_state(&StateRequest {
             from,
             to,
@@ -1545,7 +1535,7 @@ impl Esc {
         })
     }
 
-    fn leave_op(&mut self, _dev: &mut dyn Device) {
+    fn leave_op(&mut self) {
         self.wd_deadline = None;
     }
 
@@ -1568,7 +1558,7 @@ impl Esc {
     fn local_error(&mut self, to: AlState, code: AlStatusCode, dev: &mut dyn Device) {
         let from = self.state;
         if from == AlState::Op {
-            self.leave_op(dev);
+            self.leave_op();
         }
         if matches!(to, AlState::Init) {
             self.stop_mailbox(dev);

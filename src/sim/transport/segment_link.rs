@@ -54,6 +54,10 @@ impl SegmentLink {
 }
 
 impl FrameLink for SegmentLink {
+    fn describe(&self) -> String {
+        format!("the in-process segment of {} device(s)", self.segment.len())
+    }
+
     fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
         if frame.len() > MAX_FRAME_LEN {
             return Err(LinkError::FrameTooLarge {

@@ -1,0 +1,257 @@
+//! One bus session: the ethercrab `MainDevice`, its PDU storage, and the [`Pump`] that moves its
+//! frames over a link.
+//!
+//! A session owns its storage: [`with_bus`] creates it, lends the [`Bus`] to a closure, and
+//! frees everything when the closure returns. A new session (after a cable pull, say) gets fresh
+//! storage; nothing is leaked and nothing needs `unsafe` re-use of ethercrab's storage.
+
+use super::coe::{CoeClient, CoeError, EmergencyLog};
+use super::error::DriveRef;
+use super::exec::{self, ExecError};
+use super::io::{FrameLink, LossPolicy, MAX_FRAME, Pump};
+use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
+use std::collections::HashMap;
+use std::future::Future;
+use std::time::Duration;
+
+/// Frames ethercrab may have in flight at once.
+pub const MAX_FRAMES: usize = 16;
+/// Largest number of devices on one segment.
+pub const MAX_SUBDEVICES: usize = 128;
+/// Largest process image (inputs + outputs of every device), bytes.
+pub const MAX_PDI: usize = 16384;
+
+/// The PDU storage of one session.
+pub type Storage = PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME) }>;
+
+/// Timing of a session.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BusOptions {
+    /// Lost-frame policy during start-up and supervisory work.
+    pub loss: LossPolicy,
+    /// How long one mailbox reply may take.
+    pub mailbox_timeout: Duration,
+    /// ethercrab's state-transition timeout.
+    pub state_transition: Duration,
+    /// ethercrab's EEPROM timeout.
+    pub eeprom: Duration,
+    /// Static drift compensation iterations at init (ethercrab's default is 10 000).
+    pub dc_static_sync_iterations: u32,
+}
+
+impl Default for BusOptions {
+    fn default() -> Self {
+        Self {
+            loss: LossPolicy {
+                frame_timeout_ns: 50_000_000,
+                retries: 3,
+            },
+            mailbox_timeout: Duration::from_millis(2000),
+            state_transition: Duration::from_secs(10),
+            eeprom: Duration::from_millis(500),
+            dc_static_sync_iterations: 1000,
+        }
+    }
+}
+
+impl BusOptions {
+    fn timeouts(&self) -> Timeouts {
+        Timeouts {
+            // Never: ecdrive's pump detects lost frames itself (see `master::io`).
+            pdu: Duration::MAX,
+            state_transition: self.state_transition,
+            eeprom: self.eeprom,
+            mailbox_echo: self.mailbox_timeout,
+            mailbox_response: self.mailbox_timeout,
+            wait_loop_delay: Duration::ZERO,
+        }
+    }
+}
+
+/// Why a session could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum BusError {
+    /// The PDU storage could not be split (an internal error).
+    #[error("internal error: the PDU storage could not be split")]
+    Storage,
+    /// The session thread could not be started.
+    #[error("cannot start the session thread: {0}")]
+    Thread(String),
+}
+
+/// A live bus session. See [`with_bus`].
+pub struct Bus<'sto, L: FrameLink> {
+    md: MainDevice<'sto>,
+    pump: Pump<'sto, L>,
+    emergencies: EmergencyLog,
+    opts: BusOptions,
+    /// Last mailbox counter per configured address: the sequence continues across clients.
+    counters: HashMap<u16, u8>,
+}
+
+/// Open a session on `link` and run `f` with it. The storage and the link live as long as the
+/// call; the link is returned with `f`'s result (or with the error).
+pub fn with_bus<L: FrameLink, R>(
+    link: L,
+    opts: BusOptions,
+    f: impl FnOnce(&mut Bus<'_, L>) -> R,
+) -> Result<(R, L), (BusError, L)> {
+    let storage = Box::new(Storage::new());
+    let Ok((tx, rx, pdu_loop)) = storage.try_split() else {
+        return Err((BusError::Storage, link));
+    };
+    let md = MainDevice::new(
+        pdu_loop,
+        opts.timeouts(),
+        MainDeviceConfig {
+            dc_static_sync_iterations: opts.dc_static_sync_iterations,
+            retry_behaviour: RetryBehaviour::None,
+        },
+    );
+    let mut bus = Bus {
+        md,
+        pump: Pump::new(tx, rx, link, opts.loss),
+        emergencies: EmergencyLog::default(),
+        opts,
+        counters: HashMap::new(),
+    };
+    let r = f(&mut bus);
+    let (_, _, link) = bus.pump.into_parts();
+    Ok((r, link))
+}
+
+/// Stack size of session threads: ethercrab's group is held inline in futures.
+pub const SESSION_STACK: usize = 16 * 1024 * 1024;
+
+/// Like [`with_bus`], on a dedicated thread with a stack large enough for ethercrab's group
+/// (see [`SESSION_STACK`]). Returns when `f` does.
+pub fn run_session<L, R, F>(link: L, opts: BusOptions, f: F) -> Result<(R, L), (BusError, L)>
+where
+    L: FrameLink + Send + 'static,
+    R: Send + 'static,
+    F: FnOnce(&mut Bus<'_, L>) -> R + Send + 'static,
+{
+    // The link goes to the thread only once it runs, so a failed spawn can give it back.
+    let (link_tx, link_rx) = std::sync::mpsc::channel::<L>();
+    let h = std::thread::Builder::new()
+        .name("ecdrive-session".into())
+        .stack_size(SESSION_STACK)
+        .spawn(move || {
+            let link = link_rx
+                .recv()
+                .map_err(|_| BusError::Thread("no link".into()));
+            link.map(|l| with_bus(l, opts, f))
+        });
+    let h = match h {
+        Ok(h) => h,
+        Err(e) => return Err((BusError::Thread(e.to_string()), link)),
+    };
+    if let Err(std::sync::mpsc::SendError(link)) = link_tx.send(link) {
+        return Err((
+            BusError::Thread("the session thread ended at once".into()),
+            link,
+        ));
+    }
+    match h.join() {
+        Ok(Ok(r)) => r,
+        // The thread received the link; it cannot fail to receive it.
+        Ok(Err(_)) => unreachable!("the link was sent before joining"),
+        Err(p) => std::panic::resume_unwind(p),
+    }
+}
+
+impl<'sto, L: FrameLink> Bus<'sto, L> {
+    /// The ethercrab main device.
+    pub fn md(&self) -> &MainDevice<'sto> {
+        &self.md
+    }
+
+    /// The pump (statistics, the link).
+    pub fn pump(&self) -> &Pump<'sto, L> {
+        &self.pump
+    }
+
+    /// The pump, mutably.
+    pub fn pump_mut(&mut self) -> &mut Pump<'sto, L> {
+        &mut self.pump
+    }
+
+    /// Both halves at once: the main device to build futures on, the pump to run them.
+    pub fn split(&mut self) -> (&MainDevice<'sto>, &mut Pump<'sto, L>) {
+        (&self.md, &mut self.pump)
+    }
+
+    /// The session options.
+    pub fn options(&self) -> &BusOptions {
+        &self.opts
+    }
+
+    /// Every emergency received so far by any CoE client of this session.
+    pub fn emergencies(&self) -> &EmergencyLog {
+        &self.emergencies
+    }
+
+    /// Run the future `f` builds on the main device, pumping its frames, within `timeout`.
+    /// `what` names the step for the error message.
+    pub fn block_on<'a, F>(
+        &'a mut self,
+        what: &dyn Fn() -> String,
+        timeout: Duration,
+        f: impl FnOnce(&'a MainDevice<'sto>) -> F,
+    ) -> Result<F::Output, ExecError>
+    where
+        F: Future,
+    {
+        let fut = f(&self.md);
+        exec::run(&mut self.pump, what, timeout, fut)
+    }
+
+    /// Run `op` with a CoE client for the device at configured `address`. The client is
+    /// created for the call (it reads the mailbox configuration) and records emergencies into
+    /// the session's log.
+    pub fn with_coe<T>(
+        &mut self,
+        address: u16,
+        drive: DriveRef,
+        complete_access: bool,
+        timeout: Duration,
+        op: impl AsyncFnOnce(&mut CoeClient<'_>) -> Result<T, CoeError>,
+    ) -> Result<T, SessionError> {
+        let log = self.emergencies.clone();
+        let mbx_timeout = self.opts.mailbox_timeout;
+        let d = drive.clone();
+        let what = || format!("{d}: mailbox exchange");
+        let md = &self.md;
+        let last = self.counters.get(&address).copied().unwrap_or(0);
+        let mut counter = last;
+        let counter_out = &mut counter;
+        let fut = async move {
+            let mut c = CoeClient::new(md, address, drive, log)
+                .await?
+                .with_complete_access(complete_access)
+                .with_timeout(mbx_timeout)
+                .with_counter(last);
+            let r = op(&mut c).await;
+            *counter_out = c.counter();
+            r
+        };
+        let r = exec::run(&mut self.pump, &what, timeout, fut);
+        self.counters.insert(address, counter);
+        match r {
+            Ok(Ok(v)) => Ok(v),
+            Ok(Err(e)) => Err(SessionError::Coe(e)),
+            Err(e) => Err(SessionError::Exec(e)),
+        }
+    }
+}
+
+/// A failure of a supervisory operation.
+#[derive(Debug, thiserror::Error)]
+pub enum SessionError {
+    /// The CoE exchange failed (names drive, object and reason).
+    #[error(transparent)]
+    Coe(#[from] CoeError),
+    /// The bus did not answer in time, or the link failed.
+    #[error(transparent)]
+    Exec(#[from] ExecError),
+}

@@ -1,0 +1,991 @@
+//! The cycle: one thread, absolute-time sleeps on the DC-aligned cycle, one process-data
+//! exchange, one CiA 402 step per axis, every cycle.
+//!
+//! Per cycle: sleep until the instant (`clock_nanosleep`, absolute), exchange the process data
+//! (`tx_rx_dc`, pumped inline by [`exec::exchange`]: the frame I/O is this thread's own), check
+//! the working counter and every drive's AL state, read each drive's inputs through its
+//! resolved fields, take commands, run the set-point program, step the [`cia402::Axis`], write
+//! the outputs, publish telemetry and events. After start-up nothing here allocates, locks
+//! anything another thread takes, or makes a syscall other than the frame I/O and the sleep —
+//! `tests/cycle_audit.rs` proves it with a counting allocator and per-thread syscall counters.
+//!
+//! The cycle itself takes the drives from SAFE-OP to OP (after some cycles of valid outputs),
+//! and stops them in a controlled way on request, on a fault, on lost frames or when a drive
+//! leaves OP: ramp (or quick stop), then disable. Ending the cycle hands the bus back to the
+//! session, which takes the drives to INIT.
+
+use super::exec::{self, ExchangeError};
+use super::io::{FrameLink, Pump};
+use super::program::{CyclicMode, Runner, Tick};
+use super::setpoint::Sample;
+use super::startup::{ConfiguredDrive, DriveFields, Group};
+use super::telemetry::{
+    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
+};
+use crate::cia402::{
+    self, Axis, AxisConfig, ErrorCode, Feedback, OperationMode, State, StatusWord,
+};
+use crate::ec::register;
+use crate::pdo::Field;
+use crate::rt::{LatencyHistogram, RtReport, RtSettings, monotonic_ns, sleep_until_ns};
+use ethercrab::subdevice_group::{HasDc, SafeOp};
+use ethercrab::{Command as EcCommand, MainDevice, SubDeviceState};
+use std::pin::pin;
+use std::time::Duration;
+
+/// Settings of the cycle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CycleSettings {
+    /// The cycle time.
+    pub cycle: Duration,
+    /// Real-time thread settings.
+    pub rt: RtSettings,
+    /// Cycles of valid outputs in SAFE-OP before OP is requested.
+    pub safeop_cycles: u32,
+    /// How long the drives may take to reach OP.
+    pub op_timeout: Duration,
+    /// Consecutive cycles without a reply after which the segment counts as lost (the cycle
+    /// ends). The bound is three cycles.
+    pub segment_lost_after: u32,
+    /// Consecutive cycles with a wrong working counter before the axes are stopped.
+    pub wkc_errors_before_stop: u32,
+    /// Time to ramp a moving axis to standstill in a controlled stop.
+    pub stop_ramp: Duration,
+    /// Longest a controlled stop may take before the drives are disabled regardless.
+    pub stop_timeout: Duration,
+    /// How late, as a fraction of the cycle, the reply may arrive before the cycle counts it
+    /// as lost.
+    pub reply_budget: f64,
+}
+
+impl CycleSettings {
+    /// Defaults for a cycle time.
+    pub fn new(cycle: Duration) -> Self {
+        Self {
+            cycle,
+            rt: RtSettings::default(),
+            safeop_cycles: 20,
+            op_timeout: Duration::from_secs(5),
+            segment_lost_after: 3,
+            wkc_errors_before_stop: 3,
+            stop_ramp: Duration::from_millis(200),
+            stop_timeout: Duration::from_secs(3),
+            reply_budget: 0.8,
+        }
+    }
+}
+
+/// Hooks the cycle thread calls, for instrumentation (the audit tests count allocations and
+/// syscalls between them).
+pub trait CycleHooks: Sync {
+    /// Called on the cycle thread once every drive is in OP (steady state begins).
+    fn steady_begin(&self) {}
+    /// Called on the cycle thread when a stop command arrives or the cycle ends.
+    fn steady_end(&self) {}
+}
+
+/// The cycle's ends of the lock-free channels.
+pub struct CycleIo {
+    /// Commands in.
+    pub commands: rtrb::Consumer<Command>,
+    /// Events out.
+    pub events: rtrb::Producer<Event>,
+    /// Telemetry out.
+    pub telemetry: triple_buffer::Input<Telemetry>,
+    /// Where the cycle reports what its real-time set-up got, before the loop starts.
+    pub rt_report: Option<std::sync::mpsc::Sender<RtReport>>,
+}
+
+/// The supervisory ends of the channels.
+pub struct SupervisorIo {
+    /// Commands to the cycle.
+    pub commands: rtrb::Producer<Command>,
+    /// Events from the cycle.
+    pub events: rtrb::Consumer<Event>,
+    /// Telemetry from the cycle.
+    pub telemetry: triple_buffer::Output<Telemetry>,
+}
+
+/// Create both ends for `axes` axes.
+pub fn channels(axes: usize) -> (CycleIo, SupervisorIo) {
+    let (ctx, crx) = rtrb::RingBuffer::new(256);
+    let (etx, erx) = rtrb::RingBuffer::new(4096);
+    let initial = Telemetry {
+        cycle: CycleTelemetry::default(),
+        axes: vec![AxisTelemetry::default(); axes],
+    };
+    let (tin, tout) = triple_buffer::TripleBuffer::new(&initial).split();
+    (
+        CycleIo {
+            commands: crx,
+            events: etx,
+            telemetry: tin,
+            rt_report: None,
+        },
+        SupervisorIo {
+            commands: ctx,
+            events: erx,
+            telemetry: tout,
+        },
+    )
+}
+
+/// How the cycle ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub enum CycleEnd {
+    /// Stopped on request; every axis disabled.
+    Stopped,
+    /// The drives did not reach OP: this axis (its raw AL state).
+    OpFailed {
+        /// Axis index.
+        axis: u16,
+        /// AL state register value.
+        al_state: u8,
+    },
+    /// The segment stopped answering.
+    SegmentLost,
+    /// The link failed.
+    LinkFailed,
+}
+
+/// Timing histograms of a cycle run.
+#[derive(Debug, Clone, Default)]
+pub struct Timing {
+    /// Wake-up latency against the intended instant.
+    pub wake_latency: LatencyHistogram,
+    /// Period between wake-ups.
+    pub period: LatencyHistogram,
+    /// Frame round trip (send → reply handed to ethercrab).
+    pub exchange: LatencyHistogram,
+    /// Time the thread was awake per cycle (exchange + computation).
+    pub busy: LatencyHistogram,
+}
+
+/// What a cycle run produced.
+#[derive(Debug, Clone)]
+pub struct CycleReport {
+    /// How it ended.
+    pub end: CycleEnd,
+    /// Cycles run.
+    pub cycles: u64,
+    /// Cycles without a reply.
+    pub lost: u64,
+    /// Cycles whose wake-up was more than one cycle late.
+    pub overruns: u64,
+    /// The histograms.
+    pub timing: Timing,
+    /// What the RT set-up got.
+    pub rt: RtReport,
+    /// Per axis: the largest |following error| while enabled.
+    pub max_following_error: Vec<i64>,
+    /// Per axis: the modes it ran set-points in.
+    pub modes_run: Vec<Vec<CyclicMode>>,
+    /// Per axis: the states it went through, in order (consecutive duplicates removed).
+    pub states: Vec<Vec<State>>,
+}
+
+/// Controlled-stop progress of one axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Stopping {
+    No,
+    /// Ramping the set-point to standstill from this sample, started at this cycle.
+    Ramp {
+        from: Sample,
+        at: u64,
+    },
+    /// Quick stop requested at this cycle.
+    Quick {
+        at: u64,
+    },
+    /// Disable requested.
+    Disabling,
+}
+
+struct AxisRt {
+    axis: Axis,
+    fields: DriveFields,
+    velocity_unit: f64,
+    runner: Runner,
+    program: ProgramState,
+    /// Set-point held when no program runs (position/velocity/torque by mode).
+    hold: Sample,
+    mode: CyclicMode,
+    requested_mode: Option<CyclicMode>,
+    fe_limit: Option<u32>,
+    stopping: Stopping,
+    pos_raw: i32,
+    pos: i64,
+    pos_valid: bool,
+    demand_hist: [i64; 2],
+    counter: u8,
+    al_state: u8,
+    tel: AxisTelemetry,
+    last_state: Option<State>,
+    states: Vec<State>,
+    modes_run: Vec<CyclicMode>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ProgramState {
+    Idle,
+    Pending,
+    Running,
+}
+
+fn read_u(f: &Field, buf: &[u8]) -> u64 {
+    f.read_raw(buf).unwrap_or(0)
+}
+
+fn read_i(f: &Field, buf: &[u8]) -> i64 {
+    f.read_int(buf).map(|v| v as i64).unwrap_or(0)
+}
+
+fn write_i(f: &Field, buf: &mut [u8], v: i64) {
+    let _ = f.write_int(buf, v as i128);
+}
+
+/// Run the cycle until it ends. Call on the thread that is to be the cycle thread (the
+/// settings' RT priority, CPU and memory locking are applied to it).
+#[allow(clippy::too_many_arguments)]
+pub fn run<L: FrameLink>(
+    md: &MainDevice<'_>,
+    pump: &mut Pump<'_, L>,
+    group: &Group<SafeOp, HasDc>,
+    drives: &[ConfiguredDrive],
+    settings: &CycleSettings,
+    mut io: CycleIo,
+    hooks: Option<&dyn CycleHooks>,
+) -> CycleReport {
+    let rt = settings.rt.apply_to_current_thread();
+    if let Some(tx) = io.rt_report.take() {
+        let _ = tx.send(rt.clone());
+    }
+    let cycle_ns = settings.cycle.as_nanos() as u64;
+    let dt = settings.cycle.as_secs_f64();
+    let n = drives.len();
+
+    // ---- set-up (allocations allowed) ----------------------------------------------------
+    let mut axes: Vec<AxisRt> = Vec::with_capacity(n);
+    for d in drives {
+        let initial = OperationMode::from_i8(d.setup.mode.code());
+        let cfg = AxisConfig::for_cycle_time(&d.profile.caps, settings.cycle, initial);
+        let axis = match Axis::new(d.profile.caps, cfg) {
+            Ok(a) => a,
+            Err(_) => match Axis::new(
+                d.profile.caps,
+                AxisConfig::for_cycle_time(
+                    &d.profile.caps,
+                    settings.cycle,
+                    OperationMode::CyclicSyncPosition,
+                ),
+            ) {
+                Ok(a) => a,
+                Err(_) => continue,
+            },
+        };
+        axes.push(AxisRt {
+            axis,
+            fields: d.fields.clone(),
+            velocity_unit: d.profile.units.velocity_unit_counts_per_s,
+            runner: Runner::new(d.setup.program.clone()),
+            program: ProgramState::Idle,
+            hold: Sample::default(),
+            mode: d.setup.mode,
+            requested_mode: None,
+            fe_limit: d.setup.following_error_limit,
+            stopping: Stopping::No,
+            pos_raw: 0,
+            pos: 0,
+            pos_valid: false,
+            demand_hist: [0; 2],
+            counter: 0,
+            al_state: 0,
+            tel: AxisTelemetry::default(),
+            last_state: None,
+            states: Vec::with_capacity(64),
+            modes_run: Vec::with_capacity(8),
+        });
+    }
+    // Outputs that carry fixed values from the first cycle on.
+    for (i, a) in axes.iter().enumerate() {
+        if let Ok(sd) = group.subdevice(md, i) {
+            let mut io = sd.io_raw_mut();
+            let out = io.outputs();
+            for (f, v) in &a.fields.output_defaults {
+                write_i(f, out, *v);
+            }
+            write_i(&a.fields.controlword, out, 0);
+        }
+    }
+    {
+        let t = io.telemetry.input_buffer_mut();
+        t.axes.resize(axes.len(), AxisTelemetry::default());
+    }
+    let mut timing = Timing::default();
+    let wkc_expected: u16 = drives
+        .iter()
+        .map(|d| {
+            let rx = d.layout.bytes(crate::pdo::Direction::Rx) > 0;
+            let tx = d.layout.bytes(crate::pdo::Direction::Tx) > 0;
+            u16::from(rx) * 2 + u16::from(tx)
+        })
+        .sum();
+
+    // ---- the loop (no allocation from here on) -------------------------------------------
+    let mut cycle: u64 = 0;
+    let mut lost_total: u64 = 0;
+    let mut consecutive_lost: u32 = 0;
+    let mut wkc_errors: u32 = 0;
+    let mut overruns: u64 = 0;
+    let mut all_op = false;
+    let mut op_requested_at: Option<u64> = None;
+    let mut ending = false;
+    let mut steady = false;
+    let end;
+    let mut last_wake: u64 = 0;
+    let mut next_wake = monotonic_ns() + cycle_ns;
+    let mut dc_time: u64 = 0;
+    let stop_ramp_cycles = (settings.stop_ramp.as_nanos() as u64 / cycle_ns.max(1)).max(1);
+    let stop_timeout_cycles = (settings.stop_timeout.as_nanos() as u64 / cycle_ns.max(1)).max(1);
+
+    macro_rules! emit {
+        ($kind:expr) => {{
+            let _ = io.events.push(Event {
+                cycle,
+                time_ns: monotonic_ns(),
+                kind: $kind,
+            });
+        }};
+    }
+
+    loop {
+        sleep_until_ns(next_wake);
+        let woke = monotonic_ns();
+        let latency = woke.saturating_sub(next_wake);
+        timing.wake_latency.record(latency);
+        if last_wake != 0 {
+            timing.period.record(woke - last_wake);
+        }
+        if latency > cycle_ns {
+            overruns += 1;
+        }
+        last_wake = woke;
+        cycle += 1;
+
+        // 1. Exchange the process data.
+        let deadline = woke + (cycle_ns as f64 * settings.reply_budget) as u64;
+        let t_ex = monotonic_ns();
+        let result = {
+            let fut = pin!(group.tx_rx_dc(md));
+            exec::exchange(pump, fut, deadline)
+        };
+        let t_ex_done = monotonic_ns();
+        let mut next_wait: Option<u64> = None;
+        match result {
+            Ok(Ok(resp)) => {
+                timing.exchange.record(t_ex_done - t_ex);
+                if consecutive_lost > 0 {
+                    emit!(EventKind::FramesResumed {
+                        lost: consecutive_lost
+                    });
+                }
+                consecutive_lost = 0;
+                dc_time = resp.extra.dc_system_time;
+                next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
+                // AL states (state checks ride along with the LRW).
+                let mut missing: Option<u16> = None;
+                let mut every_op = true;
+                for (i, st) in resp.subdevice_states.iter().enumerate() {
+                    let raw: u8 = match st {
+                        SubDeviceState::None => 0,
+                        SubDeviceState::Init => 1,
+                        SubDeviceState::PreOp => 2,
+                        SubDeviceState::Bootstrap => 3,
+                        SubDeviceState::SafeOp => 4,
+                        SubDeviceState::Op => 8,
+                        SubDeviceState::Other(v) => *v,
+                    };
+                    if raw == 0 && missing.is_none() {
+                        missing = Some(i as u16);
+                    }
+                    if raw != 8 {
+                        every_op = false;
+                    }
+                    if let Some(a) = axes.get_mut(i)
+                        && a.al_state != raw
+                    {
+                        let was_op = a.al_state == 8;
+                        a.al_state = raw;
+                        emit!(EventKind::AlState {
+                            axis: i as u16,
+                            state: raw
+                        });
+                        if was_op && raw != 8 && !ending {
+                            // A drive left OP on its own: stop the others.
+                            emit!(EventKind::Stopping {
+                                reason: StopReason::DriveLeftOp { axis: i as u16 }
+                            });
+                            for a in axes.iter_mut() {
+                                begin_stop(a, StopKind::Ramp, cycle);
+                            }
+                        }
+                    }
+                }
+                if !all_op && every_op && !axes.is_empty() {
+                    all_op = true;
+                    emit!(EventKind::AllOp);
+                    if let Some(h) = hooks {
+                        h.steady_begin();
+                        steady = true;
+                    }
+                }
+                if all_op {
+                    if resp.working_counter != wkc_expected {
+                        wkc_errors += 1;
+                        emit!(EventKind::WorkingCounter {
+                            got: resp.working_counter,
+                            expected: wkc_expected,
+                            missing
+                        });
+                        if wkc_errors == settings.wkc_errors_before_stop && !ending {
+                            emit!(EventKind::Stopping {
+                                reason: StopReason::WorkingCounter
+                            });
+                            for a in axes.iter_mut() {
+                                begin_stop(a, StopKind::Ramp, cycle);
+                            }
+                        }
+                    } else {
+                        wkc_errors = 0;
+                    }
+                }
+            }
+            Ok(Err(_)) | Err(ExchangeError::Late) => {
+                lost_total += 1;
+                consecutive_lost += 1;
+                emit!(EventKind::FrameLost {
+                    consecutive: consecutive_lost
+                });
+                if consecutive_lost >= settings.segment_lost_after {
+                    emit!(EventKind::SegmentLost {
+                        cycles: consecutive_lost
+                    });
+                    end = CycleEnd::SegmentLost;
+                    break;
+                }
+            }
+            Err(ExchangeError::Link(_)) => {
+                end = CycleEnd::LinkFailed;
+                break;
+            }
+        }
+
+        // 2. OP: request it after some cycles of valid outputs, then wait for it.
+        if !all_op {
+            match op_requested_at {
+                None if cycle >= u64::from(settings.safeop_cycles) => {
+                    for d in drives {
+                        let addr = d.info.address;
+                        let fut =
+                            pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(md, 0x0008u16));
+                        let _ = exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 2);
+                    }
+                    op_requested_at = Some(cycle);
+                }
+                Some(at) if (cycle - at) * cycle_ns > settings.op_timeout.as_nanos() as u64 => {
+                    let (axis, al_state) = axes
+                        .iter()
+                        .enumerate()
+                        .find(|(_, a)| a.al_state != 8)
+                        .map(|(i, a)| (i as u16, a.al_state))
+                        .unwrap_or((0, 0));
+                    emit!(EventKind::OpTimeout { axis, al_state });
+                    end = CycleEnd::OpFailed { axis, al_state };
+                    break;
+                }
+                _ => {}
+            }
+        }
+
+        // 3. Commands.
+        while let Ok(cmd) = io.commands.pop() {
+            match cmd {
+                Command::Stop(kind) => {
+                    if let Some(h) = hooks
+                        && steady
+                    {
+                        h.steady_end();
+                        steady = false;
+                    }
+                    if !ending {
+                        ending = true;
+                        emit!(EventKind::Stopping {
+                            reason: StopReason::Requested
+                        });
+                        for a in axes.iter_mut() {
+                            begin_stop(a, kind, cycle);
+                        }
+                    }
+                }
+                other => {
+                    for (i, a) in axes.iter_mut().enumerate() {
+                        if let Some(why) = apply(a, &other, i) {
+                            emit!(EventKind::CommandRefused {
+                                axis: i as u16,
+                                why
+                            });
+                        }
+                    }
+                }
+            }
+        }
+
+        // 4. Per axis: inputs → program → engine → outputs.
+        let now_s = cycle as f64 * dt;
+        let mut any_energised = false;
+        for (i, a) in axes.iter_mut().enumerate() {
+            let Ok(sd) = group.subdevice(md, i) else {
+                continue;
+            };
+            // Inputs.
+            let fb = {
+                let io_r = sd.io_raw();
+                let inp = io_r.inputs();
+                let f = &a.fields;
+                let sw = read_u(&f.statusword, inp) as u16;
+                let pos = f.position.as_ref().map(|p| read_i(p, inp) as i32);
+                if let Some(p) = pos {
+                    if a.pos_valid {
+                        a.pos += i64::from(p.wrapping_sub(a.pos_raw));
+                    } else {
+                        a.pos = i64::from(p);
+                        a.pos_valid = true;
+                    }
+                    a.pos_raw = p;
+                }
+                a.tel.statusword = sw;
+                a.tel.position_actual = a.pos;
+                a.tel.velocity_actual = f.velocity.as_ref().map_or(0, |v| read_i(v, inp) as i32);
+                a.tel.torque_actual = f.torque.as_ref().map_or(0, |v| read_i(v, inp) as i16);
+                a.tel.mode_display = f.mode_display.as_ref().map_or(0, |v| read_i(v, inp) as i8);
+                a.tel.error_code = f.error_code.as_ref().map_or(0, |v| read_u(v, inp) as u16);
+                if let Some(fe) = &f.following_error {
+                    a.tel.following_error = read_i(fe, inp);
+                }
+                Feedback {
+                    statusword: StatusWord::from_raw(sw),
+                    mode_display: f
+                        .mode_display
+                        .as_ref()
+                        .map(|_| OperationMode::from_i8(a.tel.mode_display)),
+                    position: pos,
+                    velocity: f.velocity.as_ref().map(|_| a.tel.velocity_actual),
+                    torque: f.torque.as_ref().map(|_| a.tel.torque_actual),
+                    error_code: f.error_code.as_ref().map(|_| ErrorCode(a.tel.error_code)),
+                    zero_speed: None,
+                }
+            };
+
+            // Program and stop ramps → set-points.
+            let actual = Sample {
+                pos: a.pos as f64,
+                vel: a.tel.velocity_actual as f64 * a.velocity_unit,
+                acc: 0.0,
+                torque: f64::from(a.tel.torque_actual),
+                done: false,
+            };
+            let st = a.axis.status();
+            let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+            if a.program == ProgramState::Pending && enabled {
+                a.runner.seed(actual);
+                a.program = ProgramState::Running;
+                emit!(EventKind::ProgramStep {
+                    axis: i as u16,
+                    step: a.runner.step_index() as u16
+                });
+            }
+            let mut sp = a.hold;
+            match a.stopping {
+                Stopping::Ramp { from, at } => {
+                    let k = (cycle - at) as f64 / stop_ramp_cycles as f64;
+                    if k >= 1.0 || !enabled {
+                        a.axis.request_disable();
+                        a.stopping = Stopping::Disabling;
+                        sp = Sample {
+                            vel: 0.0,
+                            torque: 0.0,
+                            ..from
+                        };
+                    } else {
+                        // Linear velocity (and torque) ramp to zero; position integrates.
+                        let t = (cycle - at) as f64 * dt;
+                        let total = stop_ramp_cycles as f64 * dt;
+                        sp = Sample {
+                            pos: from.pos + from.vel * (t - t * t / (2.0 * total)),
+                            vel: from.vel * (1.0 - k),
+                            acc: 0.0,
+                            torque: from.torque * (1.0 - k),
+                            done: false,
+                        };
+                    }
+                    a.hold = sp;
+                }
+                Stopping::Quick { at } => {
+                    // Disable once the quick stop has run: the drive left Quick stop active
+                    // (option codes ending in Switch on disabled), or stands still in it.
+                    let in_qs = st.state == Some(State::QuickStopActive);
+                    let done = cycle - at > 2 && (!in_qs || st.standstill);
+                    if done || cycle - at > stop_timeout_cycles {
+                        a.axis.request_disable();
+                        a.stopping = Stopping::Disabling;
+                    }
+                }
+                Stopping::Disabling | Stopping::No => {}
+            }
+            if a.stopping == Stopping::No && a.program == ProgramState::Running && enabled {
+                match a.runner.tick(now_s) {
+                    Tick::Setpoint(s) => {
+                        sp = s;
+                        a.hold = s;
+                    }
+                    Tick::SwitchMode(m) => {
+                        if a.requested_mode != Some(m) {
+                            a.requested_mode = Some(m);
+                            if a.axis
+                                .request_mode(OperationMode::from_i8(m.code()))
+                                .is_err()
+                            {
+                                emit!(EventKind::CommandRefused {
+                                    axis: i as u16,
+                                    why: "the program's mode switch was refused"
+                                });
+                                a.program = ProgramState::Idle;
+                            }
+                        }
+                    }
+                    Tick::Finished(s) => {
+                        sp = s;
+                        a.hold = s;
+                        a.program = ProgramState::Idle;
+                        emit!(EventKind::ProgramDone { axis: i as u16 });
+                    }
+                }
+                let idx = a.runner.step_index() as u16;
+                if idx != a.tel.program_step {
+                    emit!(EventKind::ProgramStep {
+                        axis: i as u16,
+                        step: idx
+                    });
+                }
+            }
+            // Set-point into the engine, in the active mode.
+            if enabled {
+                let mode = CyclicMode::from_code(st.active_mode.as_i8()).unwrap_or(a.mode);
+                a.mode = mode;
+                let _ = match mode {
+                    CyclicMode::Csp => a.axis.set_position((sp.pos.round() as i64) as i32),
+                    CyclicMode::Csv => a.axis.set_velocity(
+                        (sp.vel / a.velocity_unit)
+                            .round()
+                            .clamp(i32::MIN as f64, i32::MAX as f64) as i32,
+                    ),
+                    CyclicMode::Cst => a.axis.set_torque(
+                        sp.torque.round().clamp(i16::MIN as f64, i16::MAX as f64) as i16,
+                    ),
+                };
+                if a.modes_run.last() != Some(&mode) && a.modes_run.len() < a.modes_run.capacity() {
+                    a.modes_run.push(mode);
+                }
+            } else if a.stopping == Stopping::No {
+                // Not enabled: track the actual values so enabling starts without a jump.
+                a.hold = actual;
+            }
+
+            let out = a.axis.step(&fb);
+
+            // Engine events.
+            while let Some(ev) = a.axis.poll_event() {
+                match ev {
+                    cia402::Event::ModeSwitched { to, .. } => {
+                        if let Some(m) = CyclicMode::from_code(to.as_i8()) {
+                            a.mode = m;
+                            if a.requested_mode == Some(m) {
+                                a.requested_mode = None;
+                                a.runner.mode_switched(actual);
+                            }
+                        }
+                    }
+                    cia402::Event::Fault { .. } if !ending => {
+                        a.program = ProgramState::Idle;
+                        emit!(EventKind::Axis {
+                            axis: i as u16,
+                            event: ev
+                        });
+                        // The other axes are stopped after this loop.
+                        emit!(EventKind::Stopping {
+                            reason: StopReason::DriveFault { axis: i as u16 }
+                        });
+                        continue;
+                    }
+                    _ => {}
+                }
+                emit!(EventKind::Axis {
+                    axis: i as u16,
+                    event: ev
+                });
+            }
+
+            // Outputs.
+            {
+                let mut io_w = sd.io_raw_mut();
+                let o = io_w.outputs();
+                let f = &a.fields;
+                write_i(&f.controlword, o, i64::from(out.controlword.raw()));
+                if let Some(m) = &f.mode {
+                    write_i(m, o, i64::from(out.mode.as_i8()));
+                }
+                if let Some(p) = &f.target_position {
+                    write_i(p, o, i64::from(out.target_position));
+                }
+                if let Some(v) = &f.target_velocity {
+                    write_i(v, o, i64::from(out.target_velocity));
+                }
+                if let Some(t) = &f.target_torque {
+                    write_i(t, o, i64::from(out.target_torque));
+                }
+                if let Some((c, _)) = &f.counter {
+                    a.counter = a.counter.wrapping_add(1);
+                    write_i(c, o, i64::from(a.counter));
+                }
+            }
+
+            // Following error and telemetry.
+            let demand = if a.pos_valid {
+                a.pos + i64::from(out.target_position.wrapping_sub(a.pos_raw))
+            } else {
+                i64::from(out.target_position)
+            };
+            let state = StatusWord::from_raw(a.tel.statusword).state();
+            let energised = state.is_some_and(State::is_energised);
+            any_energised |= energised;
+            if a.fields.following_error.is_none() {
+                // The actual value of this exchange answers the demand of two cycles ago.
+                a.tel.following_error = a.demand_hist[1] - a.pos;
+            }
+            a.demand_hist = [demand, a.demand_hist[0]];
+            if energised && a.mode == CyclicMode::Csp {
+                let fe = a.tel.following_error.abs();
+                if fe > a.tel.max_following_error {
+                    a.tel.max_following_error = fe;
+                }
+                if let Some(limit) = a.fe_limit
+                    && fe > i64::from(limit)
+                    && a.stopping == Stopping::No
+                {
+                    emit!(EventKind::FollowingError {
+                        axis: i as u16,
+                        value: fe,
+                        limit
+                    });
+                    emit!(EventKind::Stopping {
+                        reason: StopReason::FollowingError { axis: i as u16 }
+                    });
+                    a.stopping = Stopping::Quick { at: cycle };
+                    a.axis.request_quick_stop();
+                }
+            }
+            a.tel.controlword = out.controlword.raw();
+            a.tel.mode = out.mode.as_i8();
+            a.tel.position_demand = demand;
+            a.tel.velocity_demand = out.target_velocity;
+            a.tel.torque_demand = out.target_torque;
+            a.tel.state = state;
+            a.tel.al_state = a.al_state;
+            a.tel.program_step = a.runner.step_index() as u16;
+            a.tel.program_running = a.program == ProgramState::Running;
+            if state != a.last_state {
+                a.last_state = state;
+                if let Some(s) = state
+                    && a.states.last() != Some(&s)
+                    && a.states.len() < a.states.capacity()
+                {
+                    a.states.push(s);
+                }
+            }
+        }
+
+        // A drive that faulted: stop every other axis (outside the per-axis loop, so each
+        // axis sees the same decision).
+        if !ending {
+            let faulted = axes.iter().any(|a| a.axis.status().fault);
+            if faulted {
+                for a in axes.iter_mut() {
+                    if !a.axis.status().fault && a.stopping == Stopping::No {
+                        let st = a.axis.status();
+                        if st.state == Some(State::OperationEnabled) {
+                            begin_stop(a, StopKind::Ramp, cycle);
+                        }
+                    }
+                }
+            }
+        }
+        // A controlled stop that takes too long: disable regardless.
+        for a in axes.iter_mut() {
+            if let Stopping::Ramp { at, .. } | Stopping::Quick { at } = a.stopping
+                && cycle - at > stop_timeout_cycles
+            {
+                a.axis.request_disable();
+                a.stopping = Stopping::Disabling;
+            }
+            if a.stopping == Stopping::Disabling
+                && !a.axis.status().state.is_some_and(State::is_energised)
+                && !ending
+            {
+                a.stopping = Stopping::No;
+            }
+        }
+
+        // 5. Telemetry.
+        {
+            let t = io.telemetry.input_buffer_mut();
+            t.cycle = CycleTelemetry {
+                cycle,
+                dc_time,
+                wkc: t.cycle.wkc,
+                wkc_expected,
+                lost: lost_total,
+                overruns,
+                wake_latency_ns: latency,
+                exchange_ns: t_ex_done - t_ex,
+                busy_ns: monotonic_ns() - woke,
+                all_op,
+            };
+            for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
+                *slot = a.tel;
+            }
+            io.telemetry.publish();
+        }
+
+        if ending
+            && !any_energised
+            && axes
+                .iter()
+                .all(|a| !matches!(a.stopping, Stopping::Ramp { .. } | Stopping::Quick { .. }))
+        {
+            emit!(EventKind::Stopped);
+            end = CycleEnd::Stopped;
+            break;
+        }
+
+        timing.busy.record(monotonic_ns() - woke);
+        // 6. Next instant: DC-aligned when the reference clock answered, else one cycle on.
+        next_wake = match next_wait {
+            Some(w) => t_ex + w,
+            None => next_wake + cycle_ns,
+        };
+        if next_wake <= monotonic_ns() {
+            // Overrun: skip to the next instant rather than running back-to-back cycles.
+            next_wake = monotonic_ns() + cycle_ns / 2;
+        }
+    }
+    if let Some(h) = hooks
+        && steady
+    {
+        h.steady_end();
+    }
+    CycleReport {
+        end,
+        cycles: cycle,
+        lost: lost_total,
+        overruns,
+        timing,
+        rt,
+        max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
+        modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
+        states: axes.iter().map(|a| a.states.clone()).collect(),
+    }
+}
+
+fn begin_stop(a: &mut AxisRt, kind: StopKind, cycle: u64) {
+    a.program = ProgramState::Idle;
+    let st = a.axis.status();
+    if !st.state.is_some_and(State::is_energised) {
+        a.axis.request_disable();
+        a.stopping = Stopping::Disabling;
+        return;
+    }
+    a.stopping = match kind {
+        StopKind::Ramp => Stopping::Ramp {
+            from: a.hold,
+            at: cycle,
+        },
+        StopKind::QuickStop => {
+            a.axis.request_quick_stop();
+            Stopping::Quick { at: cycle }
+        }
+    };
+}
+
+/// Apply a command to one axis; `Some(reason)` if it was refused.
+fn apply(a: &mut AxisRt, cmd: &Command, i: usize) -> Option<&'static str> {
+    match *cmd {
+        Command::Enable(ax) if ax.includes(i) => {
+            a.stopping = Stopping::No;
+            a.axis
+                .request_enable()
+                .err()
+                .map(|_| "enable refused (fault present?)")
+        }
+        Command::Disable(ax) if ax.includes(i) => {
+            a.program = ProgramState::Idle;
+            a.axis.request_disable();
+            None
+        }
+        Command::QuickStop(ax) if ax.includes(i) => {
+            a.program = ProgramState::Idle;
+            a.axis.request_quick_stop();
+            None
+        }
+        Command::FaultReset(ax) if ax.includes(i) => {
+            if a.axis.request_fault_reset() {
+                None
+            } else {
+                Some("fault reset ignored: the drive shows no fault")
+            }
+        }
+        Command::Mode(ax, m) if ax.includes(i) => a
+            .axis
+            .request_mode(OperationMode::from_i8(m.code()))
+            .err()
+            .map(|_| "mode switch refused"),
+        Command::RunProgram(ax) if ax.includes(i) => {
+            if a.runner.steps().is_empty() {
+                return Some("the axis has no program");
+            }
+            a.runner.restart();
+            a.program = ProgramState::Pending;
+            None
+        }
+        Command::HoldProgram(ax) if ax.includes(i) => {
+            a.program = ProgramState::Idle;
+            None
+        }
+        Command::Setpoint(axis, v) if axis as usize == i => {
+            match a.mode {
+                CyclicMode::Csp => a.hold.pos = v,
+                CyclicMode::Csv => a.hold.vel = v,
+                CyclicMode::Cst => a.hold.torque = v,
+            }
+            None
+        }
+        _ => None,
+    }
+}
+
+/// Decode a drive's raw AL state for messages.
+pub fn al_state_name(raw: u8) -> String {
+    let s = crate::ec::AlStatus {
+        raw: u16::from(raw),
+    };
+    s.to_string()
+}

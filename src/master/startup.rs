@@ -1,0 +1,921 @@
+//! Start-up: from power-on to a group in SAFE-OP with DC running, ready for the cycle.
+//!
+//! 1. **Discover** the segment (ethercrab init: addresses, SII, DC delays, PRE-OP) and match
+//!    every device to a drive profile by identity. Unknown devices are reported with their
+//!    identity and only run with the generic CiA 402 profile when the configuration allows it.
+//! 2. **Validate** the whole configuration (mappings against each drive's limits and
+//!    dictionary, cycle time against each drive's allowed cycles) **before anything is
+//!    written**.
+//! 3. **Configure in PRE-OP** per drive over CoE: PDO assignment and mapping, synchronisation
+//!    type and cycle time (0x1C32 or 0x60C2, per profile), start-up SDOs, mode of operation.
+//! 4. **Process image**: ethercrab sizes SyncManagers and FMMUs from the mapping; ecdrive checks
+//!    each drive's image size against its mapping and resolves every field once.
+//! 5. **DC**: enable SYNC0, wait until every drive's system-time difference (0x092C) is below
+//!    the threshold (naming the drive that does not settle), start SYNC0, go to SAFE-OP.
+//!
+//! Every failure names the drive, the object or register, and the reason.
+
+use super::bus::{Bus, MAX_PDI, MAX_SUBDEVICES};
+use super::error::{DriveRef, ErrorKind, MasterError, bus_error, exec_error};
+use super::program::{CyclicMode, Step};
+use crate::drives::{CycleTimeObject, DriveProfile, StartupWhen};
+use crate::ec::{AlState, AlStatusCode, register};
+use crate::link::FrameLink;
+use crate::od::{self, DataType, ObjectAddress, Value};
+use crate::pdo::{self, Direction, Field, Layout, Mapping, RemapOptions};
+use ethercrab::subdevice_group::{DcConfiguration, HasDc, PreOp, SafeOp};
+use ethercrab::{Command, DcSync, DefaultLock, SubDeviceGroup};
+use std::time::Duration;
+
+/// The group in a given state.
+pub type Group<S, DC = ethercrab::subdevice_group::NoDc> =
+    SubDeviceGroup<MAX_SUBDEVICES, MAX_PDI, DefaultLock, S, DC>;
+
+/// How a configuration entry picks its device.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Selector {
+    /// By position on the segment (0 = first).
+    Position(u16),
+    /// By configured station alias (0x0012, from the SII).
+    Alias(u16),
+    /// The first not yet selected device with this vendor ID and product code.
+    Identity {
+        /// Vendor ID.
+        vendor_id: u32,
+        /// Product code.
+        product_code: u32,
+    },
+}
+
+/// How one drive is to be configured and run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveSetup {
+    /// Which device.
+    pub select: Selector,
+    /// Force a profile instead of matching by identity (e.g. the generic CiA 402 profile).
+    pub profile: Option<&'static DriveProfile>,
+    /// Mode of operation at start.
+    pub mode: CyclicMode,
+    /// PDO mapping; `None` = the profile's recommended cyclic mapping.
+    pub mapping: Option<Mapping>,
+    /// Extra start-up SDOs, written after the profile's.
+    pub sdos: Vec<(ObjectAddress, Value)>,
+    /// Master-side following-error limit (position units); `None` = no master-side check.
+    pub following_error_limit: Option<u32>,
+    /// The set-point program.
+    pub program: Vec<Step>,
+}
+
+impl DriveSetup {
+    /// The defaults for a device: csp, the profile's cyclic mapping, no program.
+    pub fn new(select: Selector) -> Self {
+        Self {
+            select,
+            profile: None,
+            mode: CyclicMode::Csp,
+            mapping: None,
+            sdos: Vec::new(),
+            following_error_limit: None,
+            program: Vec::new(),
+        }
+    }
+}
+
+/// Distributed-clock settings.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DcSettings {
+    /// Offset of the master's frame from SYNC0 (ethercrab sends `shift` after the SYNC0
+    /// instant).
+    pub shift: Duration,
+    /// Delay before the first SYNC0.
+    pub start_delay: Duration,
+    /// The system-time difference every drive must get below before SAFE-OP → OP, ns.
+    pub settle_threshold_ns: u32,
+    /// How long to wait for it.
+    pub settle_timeout: Duration,
+}
+
+impl Default for DcSettings {
+    fn default() -> Self {
+        Self {
+            shift: Duration::ZERO,
+            start_delay: Duration::from_millis(100),
+            settle_threshold_ns: 1000,
+            settle_timeout: Duration::from_secs(5),
+        }
+    }
+}
+
+/// The start-up configuration.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StartupConfig {
+    /// The cycle time.
+    pub cycle: Duration,
+    /// Distributed clocks. Required by drives whose profile has no free run.
+    pub dc: DcSettings,
+    /// Per-drive configuration. Devices without an entry run with the defaults of their
+    /// profile ([`DriveSetup::new`]).
+    pub drives: Vec<DriveSetup>,
+    /// Run unknown devices with the generic CiA 402 profile.
+    pub allow_generic: bool,
+    /// The profile unknown devices get when `allow_generic` is set.
+    pub generic: Option<&'static DriveProfile>,
+}
+
+impl StartupConfig {
+    /// Defaults: the given cycle, DC with default settings, all devices by profile.
+    pub fn new(cycle: Duration) -> Self {
+        Self {
+            cycle,
+            dc: DcSettings::default(),
+            drives: Vec::new(),
+            allow_generic: false,
+            generic: None,
+        }
+    }
+}
+
+/// What discovery learned about one device.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct DeviceInfo {
+    /// Position on the segment.
+    pub position: u16,
+    /// Configured station address (0x1000 + position).
+    pub address: u16,
+    /// Station alias.
+    pub alias: u16,
+    /// The SII name.
+    pub name: String,
+    /// Vendor ID.
+    pub vendor_id: u32,
+    /// Product code.
+    pub product_code: u32,
+    /// Revision.
+    pub revision: u32,
+    /// Serial number.
+    pub serial: u32,
+    /// Whether the ESC supports distributed clocks.
+    pub dc: bool,
+    /// The matched profile's name, if any.
+    pub profile: Option<&'static str>,
+}
+
+/// Resolved process-image fields of one drive. Outputs are in the drive's output (RxPDO)
+/// image, inputs in its input (TxPDO) image. Resolved once; used every cycle.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveFields {
+    /// 0x6040 controlword.
+    pub controlword: Field,
+    /// 0x6060 mode of operation.
+    pub mode: Option<Field>,
+    /// 0x607A target position.
+    pub target_position: Option<Field>,
+    /// 0x60FF target velocity.
+    pub target_velocity: Option<Field>,
+    /// 0x6071 target torque.
+    pub target_torque: Option<Field>,
+    /// 0x6041 statusword.
+    pub statusword: Field,
+    /// 0x6061 mode display.
+    pub mode_display: Option<Field>,
+    /// 0x6064 position actual value.
+    pub position: Option<Field>,
+    /// 0x606C velocity actual value.
+    pub velocity: Option<Field>,
+    /// 0x6077 torque actual value.
+    pub torque: Option<Field>,
+    /// 0x603F error code.
+    pub error_code: Option<Field>,
+    /// 0x60F4 following error actual value.
+    pub following_error: Option<Field>,
+    /// 0x60FD digital inputs.
+    pub digital_inputs: Option<Field>,
+    /// The profile's cycle counter (output) and its echo (input).
+    pub counter: Option<(Field, Option<Field>)>,
+    /// Outputs that carry a fixed value from the first cycle on.
+    pub output_defaults: Vec<(Field, i64)>,
+}
+
+/// One drive after start-up.
+#[derive(Debug, Clone)]
+pub struct ConfiguredDrive {
+    /// What discovery learned.
+    pub info: DeviceInfo,
+    /// How messages name it.
+    pub drive: DriveRef,
+    /// Its profile.
+    pub profile: &'static DriveProfile,
+    /// The mapping configured.
+    pub mapping: Mapping,
+    /// Its layout.
+    pub layout: Layout,
+    /// Resolved fields.
+    pub fields: DriveFields,
+    /// Its setup.
+    pub setup: DriveSetup,
+}
+
+/// The result of start-up: the group in SAFE-OP with DC running, and the drives.
+pub struct Started {
+    /// The group.
+    pub group: Group<SafeOp, HasDc>,
+    /// The drives, in segment order.
+    pub drives: Vec<ConfiguredDrive>,
+    /// Every device found, in segment order.
+    pub devices: Vec<DeviceInfo>,
+}
+
+const T_INIT: Duration = Duration::from_secs(30);
+const T_STEP: Duration = Duration::from_secs(10);
+
+/// Discover the segment: ethercrab init (addresses, SII, DC delays, mailboxes, PRE-OP), then
+/// each device's identity and matching profile.
+pub fn discover<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+) -> Result<(Group<PreOp>, Vec<DeviceInfo>), MasterError> {
+    let link = bus.pump().link_name();
+    let group = bus
+        .block_on(
+            &|| format!("discovering the segment on {link}"),
+            T_INIT,
+            |md| md.init_single_group::<MAX_SUBDEVICES, MAX_PDI>(ethercrab::std::ethercat_now),
+        )
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| {
+            let kind = if matches!(e, ethercrab::error::Error::NotFound { .. }) {
+                ErrorKind::Discovery
+            } else {
+                ErrorKind::Bus
+            };
+            MasterError::new(None, format!("discovering the segment on {link}"), kind, e)
+        })?;
+    if group.is_empty() {
+        return Err(MasterError::new(
+            None,
+            format!("discovering the segment on {link}"),
+            ErrorKind::Discovery,
+            "no EtherCAT device answered",
+        ));
+    }
+    let mut devices = Vec::with_capacity(group.len());
+    for (i, sd) in group.iter(bus.md()).enumerate() {
+        let id = sd.identity();
+        devices.push(DeviceInfo {
+            position: i as u16,
+            address: sd.configured_address(),
+            alias: sd.alias_address(),
+            name: sd.name().to_string(),
+            vendor_id: id.vendor_id,
+            product_code: id.product_id,
+            revision: id.revision,
+            serial: id.serial,
+            dc: sd.dc_support().any(),
+            profile: crate::drives::by_identity(id.vendor_id, id.product_id).map(|p| p.name),
+        });
+    }
+    Ok((group, devices))
+}
+
+/// Assign a setup and a profile to every device. Fails on unknown devices (unless allowed) and
+/// on setups that select nothing or the same device twice.
+pub fn plan(
+    devices: &[DeviceInfo],
+    cfg: &StartupConfig,
+) -> Result<Vec<(DriveSetup, &'static DriveProfile)>, MasterError> {
+    let mut chosen: Vec<Option<DriveSetup>> = vec![None; devices.len()];
+    for setup in &cfg.drives {
+        let pos = devices.iter().position(|d| {
+            chosen[d.position as usize].is_none()
+                && match setup.select {
+                    Selector::Position(p) => d.position == p,
+                    Selector::Alias(a) => d.alias == a && a != 0,
+                    Selector::Identity {
+                        vendor_id,
+                        product_code,
+                    } => d.vendor_id == vendor_id && d.product_code == product_code,
+                }
+        });
+        let Some(pos) = pos else {
+            return Err(MasterError::new(
+                None,
+                "matching the configuration to the segment",
+                ErrorKind::Config,
+                format!(
+                    "no device on the segment matches {:?} ({} device(s) found: {})",
+                    setup.select,
+                    devices.len(),
+                    devices
+                        .iter()
+                        .map(|d| format!("{} {:?}", d.position, d.name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        };
+        chosen[pos] = Some(setup.clone());
+    }
+    let mut out = Vec::with_capacity(devices.len());
+    for (d, setup) in devices.iter().zip(chosen) {
+        let setup = setup.unwrap_or_else(|| DriveSetup::new(Selector::Position(d.position)));
+        let profile = match setup
+            .profile
+            .or_else(|| crate::drives::by_identity(d.vendor_id, d.product_code))
+        {
+            Some(p) => p,
+            None if cfg.allow_generic && cfg.generic.is_some() => {
+                cfg.generic.ok_or_else(|| unknown(d))?
+            }
+            None => return Err(unknown(d)),
+        };
+        out.push((setup, profile));
+    }
+    Ok(out)
+}
+
+fn unknown(d: &DeviceInfo) -> MasterError {
+    MasterError::new(
+        Some(&DriveRef {
+            position: d.position,
+            name: d.name.clone(),
+        }),
+        "matching a drive profile",
+        ErrorKind::UnknownDevice,
+        format!(
+            "unknown device: vendor 0x{:08X}, product 0x{:08X}, revision 0x{:08X}, serial {}; \
+             no profile matches (allow the generic CiA 402 profile to run it anyway)",
+            d.vendor_id, d.product_code, d.revision, d.serial
+        ),
+    )
+}
+
+/// Check every drive's configuration against its profile before anything is written.
+pub fn validate(
+    devices: &[DeviceInfo],
+    plan: &[(DriveSetup, &'static DriveProfile)],
+    cfg: &StartupConfig,
+) -> Result<Vec<Mapping>, MasterError> {
+    let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
+    let mut mappings = Vec::with_capacity(plan.len());
+    for (d, (setup, profile)) in devices.iter().zip(plan) {
+        let drive = DriveRef {
+            position: d.position,
+            name: profile.name.to_string(),
+        };
+        if !profile.sync.cycle_times.contains(cycle_ns) {
+            return Err(MasterError::new(
+                Some(&drive),
+                "checking the cycle time",
+                ErrorKind::Config,
+                format!(
+                    "{} µs is not a cycle time the {} accepts ({})",
+                    cycle_ns / 1000,
+                    profile.name,
+                    profile.sync.cycle_times.describe()
+                ),
+            ));
+        }
+        if !profile.sync.dc_sync0 {
+            return Err(MasterError::new(
+                Some(&drive),
+                "checking the synchronisation",
+                ErrorKind::Config,
+                format!("the {} does not support DC SYNC0", profile.name),
+            ));
+        }
+        if !d.dc {
+            return Err(MasterError::new(
+                Some(&drive),
+                "checking the synchronisation",
+                ErrorKind::Config,
+                "the device's ESC reports no distributed-clock support",
+            ));
+        }
+        let mode = crate::cia402::OperationMode::from_i8(setup.mode.code());
+        if !profile.caps.supported_modes.contains(mode) {
+            return Err(MasterError::new(
+                Some(&drive),
+                "checking the mode of operation",
+                ErrorKind::Config,
+                format!(
+                    "the {} does not support {}",
+                    profile.name,
+                    setup.mode.name()
+                ),
+            ));
+        }
+        let mapping = setup
+            .mapping
+            .clone()
+            .unwrap_or_else(|| profile.cyclic_mapping.clone());
+        pdo::limits::validate(&mapping, &profile.pdo_limits, Some(profile.dictionary)).map_err(
+            |e| {
+                MasterError::new(
+                    Some(&drive),
+                    "checking the PDO mapping",
+                    ErrorKind::Config,
+                    e,
+                )
+            },
+        )?;
+        for (dir, addr, what) in [
+            (Direction::Rx, CW, "the controlword 0x6040"),
+            (Direction::Tx, SW, "the statusword 0x6041"),
+            (
+                Direction::Rx,
+                setpoint_object(setup.mode),
+                "the set-point of the mode",
+            ),
+        ] {
+            if !mapping.contains(dir, addr) {
+                return Err(MasterError::new(
+                    Some(&drive),
+                    "checking the PDO mapping",
+                    ErrorKind::Config,
+                    format!("{what} ({addr}) must be mapped in the {}", dir.name()),
+                ));
+            }
+        }
+        if Layout::new(&mapping).bytes(Direction::Rx) == 0 {
+            return Err(MasterError::new(
+                Some(&drive),
+                "checking the PDO mapping",
+                ErrorKind::Config,
+                "the RxPDO mapping is empty",
+            ));
+        }
+        super::program::validate(&setup.program, setup.mode).map_err(|e| {
+            MasterError::new(Some(&drive), "checking the program", ErrorKind::Config, e)
+        })?;
+        mappings.push(mapping);
+    }
+    Ok(mappings)
+}
+
+const CW: ObjectAddress = ObjectAddress::new(0x6040, 0);
+const SW: ObjectAddress = ObjectAddress::new(0x6041, 0);
+const MODE: ObjectAddress = ObjectAddress::new(0x6060, 0);
+
+fn setpoint_object(mode: CyclicMode) -> ObjectAddress {
+    match mode {
+        CyclicMode::Csp => ObjectAddress::new(0x607A, 0),
+        CyclicMode::Csv => ObjectAddress::new(0x60FF, 0),
+        CyclicMode::Cst => ObjectAddress::new(0x6071, 0),
+    }
+}
+
+/// Encode a value for an object using the profile's dictionary for the type.
+fn encode(profile: &DriveProfile, addr: ObjectAddress, v: &Value) -> Result<Vec<u8>, String> {
+    let dict = od::Dictionary::new(profile.dictionary);
+    let dt = dict
+        .data_type(addr)
+        .ok_or_else(|| format!("{addr} is not in the {} dictionary", profile.name))?;
+    v.encode(dt).map_err(|e| e.to_string())
+}
+
+/// Configure every drive in PRE-OP (mapping, sync, start-up SDOs, mode), build the process
+/// image, run DC to SAFE-OP. `devices`/`plan` come from [`discover`] and [`plan`].
+pub fn configure<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    mut group: Group<PreOp>,
+    devices: Vec<DeviceInfo>,
+    plan: Vec<(DriveSetup, &'static DriveProfile)>,
+    cfg: &StartupConfig,
+) -> Result<Started, MasterError> {
+    let mappings = validate(&devices, &plan, cfg)?;
+    let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
+
+    for ((d, (setup, profile)), mapping) in devices.iter().zip(&plan).zip(&mappings) {
+        let drive = DriveRef {
+            position: d.position,
+            name: profile.name.to_string(),
+        };
+        let mut writes: Vec<(ObjectAddress, Vec<u8>, String)> = Vec::new();
+        // PDO assignment and mapping.
+        let seq = pdo::remap_sequence(
+            mapping,
+            &RemapOptions::for_drive(
+                &profile.pdo_limits,
+                Some(od::Dictionary::new(profile.dictionary)),
+            ),
+        )
+        .map_err(|e| {
+            MasterError::new(Some(&drive), "building the PDO remap", ErrorKind::Config, e)
+        })?;
+        for w in seq {
+            writes.push((w.address, w.bytes(), w.description.clone()));
+        }
+        // Synchronisation type and cycle time.
+        if let Some(a) = profile.sync.sync_type_object {
+            writes.push((
+                a,
+                2u16.to_le_bytes().to_vec(),
+                "synchronisation type = DC SYNC0".into(),
+            ));
+        }
+        match profile.sync.cycle_time_object {
+            Some(CycleTimeObject::Nanoseconds(a)) => {
+                writes.push((
+                    a,
+                    cycle_ns.to_le_bytes().to_vec(),
+                    format!("cycle time = {cycle_ns} ns"),
+                ));
+            }
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index: _ }) => {
+                let v = cycle_ns / unit_ns.max(1);
+                let v = u8::try_from(v).map_err(|_| {
+                    MasterError::new(
+                        Some(&drive),
+                        "computing 0x60C2:01 (interpolation period)",
+                        ErrorKind::Config,
+                        format!("{cycle_ns} ns is {v} units of {unit_ns} ns, more than 255"),
+                    )
+                })?;
+                writes.push((
+                    ObjectAddress::new(0x60C2, 1),
+                    vec![v],
+                    format!("interpolation period = {v} × {} µs", unit_ns / 1000),
+                ));
+            }
+            Some(CycleTimeObject::InterpolationStandard) => {
+                // cycle = value × 10^index s, with the largest index that keeps value ≤ 255.
+                let (mut value, mut index) = (u64::from(cycle_ns), -9i8);
+                while value > 255 || (value % 10 == 0 && value > 0 && index < 0) {
+                    if value % 10 != 0 && value <= 255 {
+                        break;
+                    }
+                    value /= 10;
+                    index += 1;
+                }
+                writes.push((
+                    ObjectAddress::new(0x60C2, 1),
+                    vec![value as u8],
+                    "interpolation period value".into(),
+                ));
+                writes.push((
+                    ObjectAddress::new(0x60C2, 2),
+                    vec![index as u8],
+                    "interpolation period index".into(),
+                ));
+            }
+            None => {}
+        }
+        // Start-up SDOs of the profile, then the user's.
+        for s in profile.startup {
+            if s.when == StartupWhen::IfNotMapped && mapping.contains(Direction::Rx, s.address) {
+                continue;
+            }
+            let v = s.value.to_value().ok_or_else(|| {
+                MasterError::new(
+                    Some(&drive),
+                    format!("start-up SDO {}", s.address),
+                    ErrorKind::Config,
+                    "has no value",
+                )
+            })?;
+            let bytes = encode(profile, s.address, &v).map_err(|e| {
+                MasterError::new(
+                    Some(&drive),
+                    format!("start-up SDO {}", s.address),
+                    ErrorKind::Config,
+                    e,
+                )
+            })?;
+            writes.push((s.address, bytes, s.why.to_string()));
+        }
+        for (a, v) in &setup.sdos {
+            let bytes = encode(profile, *a, v).map_err(|e| {
+                MasterError::new(
+                    Some(&drive),
+                    format!("start-up SDO {a}"),
+                    ErrorKind::Config,
+                    e,
+                )
+            })?;
+            writes.push((*a, bytes, format!("user start-up value {v}")));
+        }
+        // Mode of operation: by SDO only when 0x6060 is not mapped.
+        if !mapping.contains(Direction::Rx, MODE) {
+            writes.push((
+                MODE,
+                vec![setup.mode.code() as u8],
+                format!("mode of operation = {}", setup.mode.name()),
+            ));
+        }
+
+        let complete_access = profile.complete_access;
+        bus.with_coe(
+            d.address,
+            drive.clone(),
+            complete_access,
+            T_STEP,
+            async |c| {
+                c.drain().await?;
+                for (addr, bytes, _why) in &writes {
+                    c.download(*addr, bytes, false).await?;
+                }
+                Ok(())
+            },
+        )
+        .map_err(|e| {
+            let mut e = MasterError::from(e);
+            // Name the purpose of the write that failed.
+            if let Some((_, _, why)) = writes.iter().find(|(a, _, _)| e.step == a.to_string()) {
+                e.step = format!("writing {} ({why})", e.step);
+            }
+            e
+        })?;
+        tracing::info!("{drive}: configured ({} SDO writes)", writes.len());
+    }
+
+    // SYNC0 on every DC drive; the SYNC0 start itself comes with `configure_dc_sync`.
+    for mut sd in group.iter_mut(bus.md()) {
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+
+    // Drain every mailbox: ethercrab reads the PDO configuration through its own SDO client,
+    // which panics if an emergency is waiting (ethercrab 0.7.1).
+    for (d, (_, profile)) in devices.iter().zip(&plan) {
+        let drive = DriveRef {
+            position: d.position,
+            name: profile.name.to_string(),
+        };
+        bus.with_coe(d.address, drive, false, T_STEP, async |c| {
+            c.drain().await.map(|_| ())
+        })?;
+    }
+
+    let group = bus
+        .block_on(
+            &|| "building the process image (PRE-OP)".into(),
+            T_STEP,
+            |md| group.into_pre_op_pdi(md),
+        )
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| bus_error(None, "building the process image (PRE-OP)", e))?;
+
+    // Resolve each drive's fields and check its image size against its mapping.
+    let mut drives = Vec::with_capacity(devices.len());
+    for ((d, (setup, profile)), mapping) in devices.iter().zip(plan).zip(mappings) {
+        let drive = DriveRef {
+            position: d.position,
+            name: profile.name.to_string(),
+        };
+        let layout = Layout::new(&mapping);
+        let sd = group
+            .subdevice(bus.md(), d.position as usize)
+            .map_err(|e| bus_error(Some(&drive), "reading the process image", e))?;
+        let io = sd.io_raw();
+        let (ni, no) = (io.inputs().len(), io.outputs().len());
+        drop(io);
+        if ni != layout.bytes(Direction::Tx) || no != layout.bytes(Direction::Rx) {
+            return Err(MasterError::new(
+                Some(&drive),
+                "checking the process image",
+                ErrorKind::Config,
+                format!(
+                    "the drive reports {no} output and {ni} input bytes, the configured mapping \
+                     needs {} and {}",
+                    layout.bytes(Direction::Rx),
+                    layout.bytes(Direction::Tx)
+                ),
+            ));
+        }
+        let fields = resolve_fields(&layout, profile).map_err(|e| {
+            MasterError::new(
+                Some(&drive),
+                "resolving the process image",
+                ErrorKind::Config,
+                e,
+            )
+        })?;
+        drives.push(ConfiguredDrive {
+            info: d.clone(),
+            drive,
+            profile,
+            mapping,
+            layout,
+            fields,
+            setup,
+        });
+    }
+
+    // DC: let the clocks settle, then start SYNC0 and go to SAFE-OP.
+    settle_dc(bus, &group, &drives, &cfg.dc)?;
+    let dc_conf = DcConfiguration {
+        start_delay: cfg.dc.start_delay,
+        sync0_period: cfg.cycle,
+        sync0_shift: cfg.dc.shift,
+    };
+    let group = bus
+        .block_on(&|| "starting SYNC0".into(), T_STEP, |md| {
+            group.configure_dc_sync(md, dc_conf)
+        })
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| bus_error(None, "starting SYNC0", e))?;
+    let addrs: Vec<(u16, DriveRef)> = drives
+        .iter()
+        .map(|d| (d.info.address, d.drive.clone()))
+        .collect();
+    let group = match bus.block_on(&|| "PRE-OP → SAFE-OP".into(), T_STEP, |md| {
+        group.into_safe_op(md)
+    }) {
+        Ok(Ok(g)) => g,
+        Ok(Err(e)) => {
+            return Err(explain_transition(
+                bus,
+                &addrs,
+                AlState::SafeOp,
+                bus_error(None, "PRE-OP → SAFE-OP", e),
+            ));
+        }
+        Err(e) => {
+            return Err(explain_transition(
+                bus,
+                &addrs,
+                AlState::SafeOp,
+                exec_error(None, e),
+            ));
+        }
+    };
+    Ok(Started {
+        group,
+        drives,
+        devices,
+    })
+}
+
+/// After a failed transition: find the drive that refused and say why (its AL status code).
+pub fn explain_transition<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    drives: &[(u16, DriveRef)],
+    target: AlState,
+    fallback: MasterError,
+) -> MasterError {
+    for (addr, drive) in drives {
+        let r = bus.block_on(
+            &|| format!("{drive}: reading AL status"),
+            Duration::from_secs(1),
+            |md| async move {
+                Command::fprd(*addr, register::AL_STATUS)
+                    .receive::<[u8; 6]>(md)
+                    .await
+            },
+        );
+        if let Ok(Ok(b)) = r {
+            let status = crate::ec::AlStatus {
+                raw: u16::from_le_bytes([b[0], b[1]]),
+            };
+            let code = AlStatusCode(u16::from_le_bytes([b[4], b[5]]));
+            if status.error() || status.state() != Some(target) {
+                return MasterError::new(
+                    Some(drive),
+                    format!(
+                        "{} → {target}",
+                        status.state().map_or("?".into(), |s| s.to_string())
+                    ),
+                    ErrorKind::AlState(code),
+                    format!("refused: AL status {status}, AL status code {code}"),
+                );
+            }
+        }
+    }
+    fallback
+}
+
+/// Standard data types of the CiA 402 objects, for drives whose dictionary lacks one.
+fn standard_type(addr: ObjectAddress) -> Option<DataType> {
+    Some(match addr.index {
+        // Error code, controlword, statusword.
+        0x603F..=0x6041 => DataType::Unsigned16,
+        0x6060 | 0x6061 => DataType::Integer8,
+        0x6064 | 0x606C | 0x607A | 0x60FF | 0x60F4 => DataType::Integer32,
+        0x6071 | 0x6077 => DataType::Integer16,
+        0x60FD => DataType::Unsigned32,
+        _ => return None,
+    })
+}
+
+fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields, String> {
+    let dict = od::Dictionary::new(profile.dictionary);
+    let get = |dir: Direction, addr: ObjectAddress| -> Result<Option<Field>, String> {
+        if layout.find(dir, addr).is_none() {
+            return Ok(None);
+        }
+        let dt = dict
+            .data_type(addr)
+            .or_else(|| standard_type(addr))
+            .ok_or_else(|| format!("{addr} is mapped but its type is unknown"))?;
+        layout
+            .field(dir, addr, dt)
+            .map(Some)
+            .map_err(|e| e.to_string())
+    };
+    let a = ObjectAddress::new;
+    let need = |f: Option<Field>, what: &str| f.ok_or_else(|| format!("{what} is not mapped"));
+    let counter = match profile.cycle_counter {
+        Some(c) => get(Direction::Rx, c.output)?
+            .map(|out| {
+                Ok::<_, String>((
+                    out,
+                    match c.echo {
+                        Some(e) => get(Direction::Tx, e)?,
+                        None => None,
+                    },
+                ))
+            })
+            .transpose()?,
+        None => None,
+    };
+    let mut output_defaults = Vec::new();
+    for d in profile.output_defaults {
+        if let Some(f) = get(Direction::Rx, d.address)? {
+            output_defaults.push((f, d.value));
+        }
+    }
+    Ok(DriveFields {
+        controlword: need(
+            get(Direction::Rx, a(0x6040, 0))?,
+            "the controlword 0x6040:00",
+        )?,
+        mode: get(Direction::Rx, a(0x6060, 0))?,
+        target_position: get(Direction::Rx, a(0x607A, 0))?,
+        target_velocity: get(Direction::Rx, a(0x60FF, 0))?,
+        target_torque: get(Direction::Rx, a(0x6071, 0))?,
+        statusword: need(
+            get(Direction::Tx, a(0x6041, 0))?,
+            "the statusword 0x6041:00",
+        )?,
+        mode_display: get(Direction::Tx, a(0x6061, 0))?,
+        position: get(Direction::Tx, a(0x6064, 0))?,
+        velocity: get(Direction::Tx, a(0x606C, 0))?,
+        torque: get(Direction::Tx, a(0x6077, 0))?,
+        error_code: get(Direction::Tx, a(0x603F, 0))?,
+        following_error: get(Direction::Tx, a(0x60F4, 0))?,
+        digital_inputs: get(Direction::Tx, a(0x60FD, 0))?,
+        counter,
+        output_defaults,
+    })
+}
+
+/// Exchange process data with system-time synchronisation until every DC drive's system-time
+/// difference (0x092C) is below the threshold.
+fn settle_dc<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    group: &Group<ethercrab::subdevice_group::PreOpPdi>,
+    drives: &[ConfiguredDrive],
+    dc: &DcSettings,
+) -> Result<(), MasterError> {
+    let deadline = crate::rt::monotonic_ns() + dc.settle_timeout.as_nanos() as u64;
+    loop {
+        bus.block_on(
+            &|| "synchronising distributed clocks".into(),
+            T_STEP,
+            |md| group.tx_rx_sync_system_time(md),
+        )
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| bus_error(None, "synchronising distributed clocks", e))?;
+        let mut worst: Option<(usize, u32)> = None;
+        for (i, d) in drives.iter().enumerate() {
+            let addr = d.info.address;
+            let raw: u32 = bus
+                .block_on(
+                    &|| format!("{}: reading 0x092C", d.drive),
+                    T_STEP,
+                    |md| async move {
+                        Command::fprd(addr, register::DC_SYSTEM_TIME_DIFFERENCE)
+                            .receive::<u32>(md)
+                            .await
+                    },
+                )
+                .map_err(|e| exec_error(Some(&d.drive), e))?
+                .map_err(|e| {
+                    bus_error(
+                        Some(&d.drive),
+                        "reading the DC system-time difference (0x092C)",
+                        e,
+                    )
+                })?;
+            let diff = raw & 0x7FFF_FFFF;
+            if diff >= dc.settle_threshold_ns && worst.is_none_or(|(_, w)| diff > w) {
+                worst = Some((i, diff));
+            }
+        }
+        let Some((i, diff)) = worst else {
+            return Ok(());
+        };
+        if crate::rt::monotonic_ns() > deadline {
+            let d = &drives[i];
+            return Err(MasterError::new(
+                Some(&d.drive),
+                "waiting for distributed clocks to settle (0x092C)",
+                ErrorKind::DcSettle,
+                format!(
+                    "system-time difference still {diff} ns after {} ms (threshold {} ns)",
+                    dc.settle_timeout.as_millis(),
+                    dc.settle_threshold_ns
+                ),
+            ));
+        }
+    }
+}

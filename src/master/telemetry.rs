@@ -1,0 +1,264 @@
+//! What the cycle tells the supervisory side, and what it takes from it — all lock-free.
+//!
+//! - [`Command`]s go in through a wait-free SPSC ring (`rtrb`); the cycle pops them without
+//!   blocking.
+//! - [`Event`]s come out through another SPSC ring: state changes, faults, working-counter
+//!   mismatches, lost frames, program progress. Fixed-size values; the supervisory side turns
+//!   them into the readable error history (with alarm names) outside the cycle.
+//! - [`Telemetry`] is the latest snapshot, published each cycle through a triple buffer
+//!   (`triple_buffer`): the cycle writes into a pre-allocated back buffer and publishes; readers
+//!   always get a complete, recent snapshot, and neither side ever waits for the other.
+
+use super::program::CyclicMode;
+use crate::cia402;
+use serde::Serialize;
+
+/// Which axes a command addresses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum Axes {
+    /// Every axis.
+    All,
+    /// One axis, by its index (the drive's position among the configured drives).
+    One(u16),
+}
+
+impl Axes {
+    /// Whether axis `i` is addressed.
+    pub fn includes(self, i: usize) -> bool {
+        match self {
+            Self::All => true,
+            Self::One(n) => n as usize == i,
+        }
+    }
+}
+
+/// How to stop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum StopKind {
+    /// Ramp the set-point down at the configured deceleration, then disable.
+    Ramp,
+    /// The drive's quick stop (0x605A reaction), then disable.
+    QuickStop,
+}
+
+/// A request to the cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum Command {
+    /// Enable (Operation enabled).
+    Enable(Axes),
+    /// Disable (Switch on disabled) at once, without a ramp.
+    Disable(Axes),
+    /// Quick stop.
+    QuickStop(Axes),
+    /// Reset a fault (rising edge on controlword bit 7).
+    FaultReset(Axes),
+    /// Switch the mode of operation while enabled (no jump).
+    Mode(Axes, CyclicMode),
+    /// Start (or restart) the axis's configured program once enabled.
+    RunProgram(Axes),
+    /// Stop the running program and hold the set-point.
+    HoldProgram(Axes),
+    /// Stream one set-point in the axis's mode (position counts, velocity counts/s, torque).
+    Setpoint(u16, f64),
+    /// Stop every axis in a controlled way, disable them, and end the cycle.
+    Stop(StopKind),
+}
+
+/// Why the cycle stopped the axes on its own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub enum StopReason {
+    /// Requested.
+    Requested,
+    /// A drive faulted.
+    DriveFault {
+        /// Axis index.
+        axis: u16,
+    },
+    /// The master-side following-error monitor tripped.
+    FollowingError {
+        /// Axis index.
+        axis: u16,
+    },
+    /// Too many consecutive cycles without a reply.
+    FramesLost,
+    /// A drive left OP.
+    DriveLeftOp {
+        /// Axis index.
+        axis: u16,
+    },
+    /// The working counter stayed wrong.
+    WorkingCounter,
+}
+
+/// Something the cycle observed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub enum EventKind {
+    /// Every drive reached OP.
+    AllOp,
+    /// A drive did not reach OP in time.
+    OpTimeout {
+        /// Axis index.
+        axis: u16,
+        /// Its AL state register value.
+        al_state: u8,
+    },
+    /// An event of the CiA 402 engine.
+    #[serde(skip)]
+    Axis {
+        /// Axis index.
+        axis: u16,
+        /// The event.
+        event: cia402::Event,
+    },
+    /// The working counter differs from the expected value.
+    WorkingCounter {
+        /// Received.
+        got: u16,
+        /// Expected.
+        expected: u16,
+        /// First axis whose state check came back without an answer (the missing drive).
+        missing: Option<u16>,
+    },
+    /// A drive's AL state changed.
+    AlState {
+        /// Axis index.
+        axis: u16,
+        /// The raw AL status value.
+        state: u8,
+    },
+    /// No reply within the cycle.
+    FrameLost {
+        /// Consecutive lost cycles so far.
+        consecutive: u32,
+    },
+    /// Replies resumed after lost cycles.
+    FramesResumed {
+        /// How many cycles were lost.
+        lost: u32,
+    },
+    /// The segment stopped answering (cable pull, power loss).
+    SegmentLost {
+        /// Consecutive lost cycles.
+        cycles: u32,
+    },
+    /// The master-side following-error monitor tripped.
+    FollowingError {
+        /// Axis index.
+        axis: u16,
+        /// |demand − actual| in position units.
+        value: i64,
+        /// The limit.
+        limit: u32,
+    },
+    /// A program step started.
+    ProgramStep {
+        /// Axis index.
+        axis: u16,
+        /// Step index.
+        step: u16,
+    },
+    /// The program finished.
+    ProgramDone {
+        /// Axis index.
+        axis: u16,
+    },
+    /// A command could not be carried out.
+    CommandRefused {
+        /// Axis index.
+        axis: u16,
+        /// Why (a fixed text).
+        why: &'static str,
+    },
+    /// The cycle started stopping the axes.
+    Stopping {
+        /// Why.
+        reason: StopReason,
+    },
+    /// Every axis is disabled and the cycle ended.
+    Stopped,
+}
+
+/// An event with when it happened.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Event {
+    /// Cycle number.
+    pub cycle: u64,
+    /// `CLOCK_MONOTONIC` time, ns.
+    pub time_ns: u64,
+    /// What happened.
+    pub kind: EventKind,
+}
+
+/// One axis in a snapshot.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct AxisTelemetry {
+    /// Statusword as received.
+    pub statusword: u16,
+    /// Controlword as sent.
+    pub controlword: u16,
+    /// Decoded CiA 402 state (`None` when the statusword decodes to no state).
+    #[serde(skip)]
+    pub state: Option<cia402::State>,
+    /// Mode of operation sent (0x6060).
+    pub mode: i8,
+    /// Mode display received (0x6061), if mapped.
+    pub mode_display: i8,
+    /// Position demand (unwrapped), position units.
+    pub position_demand: i64,
+    /// Position actual (unwrapped), position units.
+    pub position_actual: i64,
+    /// Velocity demand, drive units.
+    pub velocity_demand: i32,
+    /// Velocity actual, drive units.
+    pub velocity_actual: i32,
+    /// Torque demand, drive units.
+    pub torque_demand: i16,
+    /// Torque actual, drive units.
+    pub torque_actual: i16,
+    /// Following error: 0x60F4 if mapped, otherwise demand − actual.
+    pub following_error: i64,
+    /// Largest |following error| seen while enabled.
+    pub max_following_error: i64,
+    /// 0x603F, if mapped.
+    pub error_code: u16,
+    /// AL state register value.
+    pub al_state: u8,
+    /// Program step running (equals the step count when finished).
+    pub program_step: u16,
+    /// Whether a program is running.
+    pub program_running: bool,
+}
+
+/// Bus and timing figures in a snapshot.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct CycleTelemetry {
+    /// Cycle number.
+    pub cycle: u64,
+    /// DC system time of the last exchange, ns.
+    pub dc_time: u64,
+    /// Working counter of the last exchange.
+    pub wkc: u16,
+    /// Expected working counter.
+    pub wkc_expected: u16,
+    /// Cycles without a reply, total.
+    pub lost: u64,
+    /// Cycles whose wake-up came later than a whole cycle.
+    pub overruns: u64,
+    /// Wake-up latency of the last cycle, ns.
+    pub wake_latency_ns: u64,
+    /// Frame round trip of the last cycle, ns.
+    pub exchange_ns: u64,
+    /// Time spent awake in the last cycle, ns.
+    pub busy_ns: u64,
+    /// Whether every drive is in OP.
+    pub all_op: bool,
+}
+
+/// The latest snapshot of the cycle.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Telemetry {
+    /// Bus and timing.
+    pub cycle: CycleTelemetry,
+    /// One entry per axis.
+    pub axes: Vec<AxisTelemetry>,
+}

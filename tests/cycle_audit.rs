@@ -1,0 +1,167 @@
+//! Proof that the cycle, once the drives are in OP, allocates nothing and makes no syscall but
+//! the sleep (in-process link: the frame I/O is a function call).
+//!
+//! A counting global allocator counts allocations made by the cycle thread inside a window; a
+//! per-thread perf counter on the `raw_syscalls:sys_enter` tracepoint counts the cycle
+//! thread's syscalls, and those outside the allowed set. The window opens when every drive is
+//! in OP and closes when the stop command arrives; the hooks run on the cycle thread.
+
+mod support {
+    pub mod generic;
+}
+use ecdrive::link::FrameLink;
+use ecdrive::link::netns::{VethPair, require_root};
+use ecdrive::master::cycle::CycleHooks;
+use ecdrive::master::session::{Master, MasterConfig};
+use ecdrive::master::startup::{DriveSetup, Selector};
+use ecdrive::master::telemetry::StopKind;
+use ecdrive::rt::audit::{
+    self, AllocCounts, CountingAlloc, SyscallCounter, SyscallCounts, skip_or_fail,
+};
+use ecdrive::sim::transport::{RawServer, SegmentLink};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use support::generic::{GENERIC_TEST, generic_segment};
+
+#[global_allocator]
+static ALLOC: CountingAlloc = CountingAlloc;
+
+struct Audit {
+    allowed: &'static [libc::c_long],
+    counter: Mutex<Option<SyscallCounter>>,
+    base: Mutex<SyscallCounts>,
+    result: Mutex<Option<(AllocCounts, SyscallCounts)>>,
+    error: Mutex<Option<String>>,
+}
+
+impl CycleHooks for Audit {
+    fn steady_begin(&self) {
+        match SyscallCounter::for_current_thread(self.allowed) {
+            Ok(c) => {
+                if let Ok(b) = c.overhead() {
+                    *self.base.lock().unwrap() = b;
+                }
+                audit::alloc_window_begin();
+                c.start();
+                *self.counter.lock().unwrap() = Some(c);
+            }
+            Err(e) => {
+                *self.error.lock().unwrap() = Some(e.to_string());
+                audit::alloc_window_begin();
+            }
+        }
+    }
+
+    fn steady_end(&self) {
+        let guard = self.counter.lock().unwrap();
+        let counts = match guard.as_ref() {
+            Some(c) => {
+                c.stop();
+                c.read().unwrap_or_default()
+            }
+            None => SyscallCounts::default(),
+        };
+        let allocs = audit::alloc_window_end();
+        *self.result.lock().unwrap() = Some((allocs, counts));
+    }
+}
+
+impl Audit {
+    fn new(allowed: &'static [libc::c_long]) -> Self {
+        Self {
+            allowed,
+            counter: Mutex::default(),
+            base: Mutex::default(),
+            result: Mutex::default(),
+            error: Mutex::default(),
+        }
+    }
+}
+
+/// Run two devices to OP on `link`, audit 300 steady cycles, stop; check the counts.
+fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_long], what: &str) {
+    let audit = Arc::new(Audit::new(allowed));
+    let mut cfg = MasterConfig::new(Duration::from_millis(1));
+    // No supervisory mailbox traffic during the window: its replies wake another thread.
+    cfg.emergency_poll = None;
+    cfg.hooks = Some(audit.clone());
+    cfg.cycle.segment_lost_after = 50;
+    for p in 0..2 {
+        cfg.startup.drives.push(DriveSetup {
+            profile: Some(&GENERIC_TEST),
+            ..DriveSetup::new(Selector::Position(p))
+        });
+    }
+    let mut m = Master::start(link, cfg).unwrap();
+    m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    let c0 = m.telemetry().cycle.cycle;
+    m.wait_until("300 cycles in OP", Duration::from_secs(20), |t| {
+        t.cycle.cycle > c0 + 300
+    })
+    .unwrap();
+    let (report, _) = m.stop(StopKind::Ramp);
+    assert!(report.unwrap().shutdown_ok);
+
+    let (allocs, sys) = audit
+        .result
+        .lock()
+        .unwrap()
+        .take()
+        .expect("the window closed");
+    assert_eq!(
+        allocs,
+        AllocCounts::default(),
+        "{what}: the cycle allocated in steady state"
+    );
+    if let Some(e) = audit.error.lock().unwrap().take() {
+        skip_or_fail(&format!("syscall audit of the cycle ({what}): {e}"));
+        return;
+    }
+    let base = *audit.base.lock().unwrap();
+    let outside = sys.outside - base.outside;
+    let all = sys.all - base.all;
+    assert_eq!(
+        outside, 0,
+        "{what}: syscalls outside {allowed:?}: {sys:?} (base {base:?})"
+    );
+    // At least one sleep per cycle: at least the 300 cycles we waited for.
+    assert!(all >= 300, "{what}: {sys:?}");
+}
+
+/// In-process: the frame I/O is a function call, so the only syscall is the sleep.
+#[test]
+fn steady_cycle_in_process_allocates_nothing_and_only_sleeps() {
+    audit_run(
+        SegmentLink::new(generic_segment(2)),
+        &[libc::SYS_clock_nanosleep],
+        "in-process",
+    );
+}
+
+/// Over a veth pair: the sleep and the raw socket's send, receive and poll.
+#[test]
+fn steady_cycle_over_veth_allocates_nothing_and_only_does_frame_io_and_sleeps() {
+    if !require_root("cycle_audit::steady_cycle_over_veth") {
+        return;
+    }
+    let veth = VethPair::create().expect("veth pair");
+    let server = RawServer::spawn(
+        veth.open_peer_socket().expect("peer socket"),
+        generic_segment(2),
+    )
+    .expect("server");
+    audit_run(
+        veth.open_host_socket().expect("host socket"),
+        &[
+            libc::SYS_clock_nanosleep,
+            libc::SYS_sendto,
+            libc::SYS_recvfrom,
+            libc::SYS_poll,
+            libc::SYS_ppoll,
+        ],
+        "veth",
+    );
+    let (_, served) = server.stop();
+    served.expect("server");
+}

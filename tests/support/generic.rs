@@ -1,0 +1,128 @@
+//! Shared by the master tests: a profile for the sim's generic CoE test device, and segment
+//! builders.
+#![allow(dead_code)]
+
+use ecdrive::cia402::{DriveCaps, SupportedModes};
+use ecdrive::drives::{CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units};
+use ecdrive::od::ObjectAddress;
+use ecdrive::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange};
+use ecdrive::sim::devices::generic_coe::{GENERIC_COE_PRODUCT, OBJECTS};
+use ecdrive::sim::devices::{GenericCoeDevice, TEST_VENDOR_ID};
+use ecdrive::sim::{EscConfig, HostClock, Segment};
+use std::sync::Arc;
+
+static RANGES_RX: &[PdoRange] = &[PdoRange::new(0x1600, 0x1601, 8)];
+static RANGES_TX: &[PdoRange] = &[PdoRange::new(0x1A00, 0x1A01, 8)];
+pub static RX: &[Pdo] = &[Pdo::fixed(
+    0x1600,
+    &[PdoEntry::new(0x6040, 0, 16), PdoEntry::new(0x607A, 0, 32)],
+)];
+pub static TX: &[Pdo] = &[Pdo::fixed(
+    0x1A00,
+    &[PdoEntry::new(0x6041, 0, 16), PdoEntry::new(0x6064, 0, 32)],
+)];
+
+/// A profile for the sim's generic CoE test device, as a test would write one for a new drive.
+pub static GENERIC_TEST: DriveProfile = DriveProfile {
+    name: "generic test device",
+    key: "generic-test",
+    vendor: "ecdrive",
+    identity: IdentityMatch {
+        vendor_id: TEST_VENDOR_ID,
+        product_code: GENERIC_COE_PRODUCT,
+    },
+    revision: 1,
+    caps: DriveCaps {
+        supported_modes: SupportedModes::ALL_STANDARD,
+        ..DriveCaps::CIA402
+    },
+    pdo_limits: PdoLimits {
+        drive: "generic test device",
+        rx: DirectionLimits {
+            pdos: RANGES_RX,
+            max_assigned: 2,
+            max_entries: 16,
+            max_bytes: 64,
+        },
+        tx: DirectionLimits {
+            pdos: RANGES_TX,
+            max_assigned: 2,
+            max_entries: 16,
+            max_bytes: 64,
+        },
+        assignment_writable: true,
+    },
+    default_mapping: Mapping::fixed(RX, TX),
+    cyclic_mapping: Mapping::fixed(RX, TX),
+    required_objects: &[],
+    dictionary: OBJECTS,
+    startup: &[],
+    output_defaults: &[],
+    cycle_counter: None,
+    sync: SyncSpec {
+        free_run: true,
+        dc_sync0: true,
+        cycle_times: CycleTimes::Range {
+            min_ns: 250_000,
+            max_ns: 10_000_000,
+            step_ns: 250_000,
+        },
+        assign_activate: 0x0300,
+        sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
+        cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
+    },
+    units: Units {
+        counts_per_rev: 1.0,
+        position_unit: "count",
+        velocity_unit_counts_per_s: 1.0,
+        velocity_unit: "count/s",
+        torque_unit: "‰",
+    },
+    complete_access: false,
+    esi: "",
+};
+
+/// A segment of `n` generic CoE devices (SM watchdog off: CI machines stall).
+pub fn generic_segment(n: usize) -> Segment {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for i in 0..n {
+        seg.push(
+            Box::new(GenericCoeDevice::new(700 + i as u32).unwrap()),
+            EscConfig {
+                sm_watchdog: 0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+    seg
+}
+
+/// A link whose cable can be pulled: while pulled, frames go nowhere and nothing comes back.
+pub struct PullableLink<L> {
+    pub inner: L,
+    pub pulled: Arc<std::sync::atomic::AtomicBool>,
+}
+
+impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for PullableLink<L> {
+    fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive::link::LinkError> {
+        if self.pulled.load(std::sync::atomic::Ordering::Relaxed) {
+            return Ok(());
+        }
+        self.inner.send(frame)
+    }
+
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Option<std::time::Duration>,
+    ) -> Result<Option<usize>, ecdrive::link::LinkError> {
+        if self.pulled.load(std::sync::atomic::Ordering::Relaxed) {
+            if let Some(t) = timeout {
+                std::thread::sleep(t.min(std::time::Duration::from_millis(1)));
+            }
+            return Ok(None);
+        }
+        self.inner.recv(buf, timeout)
+    }
+}
