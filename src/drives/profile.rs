@@ -221,7 +221,8 @@ pub struct DriveProfile {
     pub units: Units,
     /// Whether SDO complete access works.
     pub complete_access: bool,
-    /// The drive's ESI file (XML text).
+    /// The drive's ESI file (XML text), `include_str!`'d from `esi/`; empty for a profile
+    /// without one (the generic profile). See [`DriveProfile::esi_file`].
     pub esi: &'static str,
 }
 

@@ -884,7 +884,7 @@ impl EmulatedDrive {
                 if self.last_target.is_none() {
                     self.command_unwrapped = i64::from(base);
                 }
-                self.command_unwrapped += delta;
+                self.command_unwrapped = self.command_unwrapped.saturating_add(delta);
                 self.last_target = Some(target);
                 let c = self.spec.command;
                 if self.command_unwrapped < i64::from(i32::MIN)
@@ -1390,7 +1390,10 @@ fn push_error_history(d: &mut crate::sim::coe::ValueStore, code: u16) {
         k -= 1;
     }
     let _ = d.set_uint(ObjectAddress::new(0x1003, 1), u64::from(code));
-    let _ = d.set_uint(ObjectAddress::new(0x1003, 0), u64::from((n + 1).min(max)));
+    let _ = d.set_uint(
+        ObjectAddress::new(0x1003, 0),
+        u64::from(n.saturating_add(1).min(max)),
+    );
 }
 
 fn esi_sdo_info(spec: &DriveSpec) -> bool {

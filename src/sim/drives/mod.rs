@@ -19,9 +19,21 @@
 //!   `Segment::device_mut::<EmulatedDrive>(position)`:
 //!   [`EmulatedDrive::raise_alarm`], [`EmulatedDrive::force_following_error`],
 //!   [`EmulatedDrive::jam`], [`EmulatedDrive::drop_outputs`],
-//!   [`EmulatedDrive::set_main_power`], [`EmulatedDrive::set_remote`], and read-back:
-//!   [`EmulatedDrive::state`], [`EmulatedDrive::position`], [`EmulatedDrive::alarm`],
-//!   [`EmulatedDrive::last_emergency`], [`EmulatedDrive::sync_error_counter`].
+//!   [`EmulatedDrive::set_main_power`], [`EmulatedDrive::set_remote`],
+//!   [`EmulatedDrive::set_loss_detection`]; set-up: [`EmulatedDrive::with_stored`] (a parameter
+//!   stored in the drive, e.g. the MR-J4-TM's [Pr. PA01]), [`EmulatedDrive::power_cycle`];
+//!   read-back: [`EmulatedDrive::state`], [`EmulatedDrive::statusword`],
+//!   [`EmulatedDrive::mode`], [`EmulatedDrive::position`], [`EmulatedDrive::position_rev`],
+//!   [`EmulatedDrive::speed_rev_s`], [`EmulatedDrive::following_error`],
+//!   [`EmulatedDrive::alarm`], [`EmulatedDrive::last_emergency`],
+//!   [`EmulatedDrive::sync_error_counter`], [`EmulatedDrive::stats`], [`EmulatedDrive::od`].
+//!   Injected alarms act at the next process-data cycle.
+//!
+//! Not modelled: touch probes, software position limits and [AL. 98], the MR-J4-TM's point
+//! table, jog and indexer motion (those modes hold the position), homing with switches (only
+//! the "current position" methods home; others report a homing error), warnings (statusword
+//! bit 7 stays 0), storing parameters (0x1010 / 0x2340 accept their command and keep nothing
+//! beyond [`EmulatedDrive::with_stored`]).
 //!
 //! ```
 //! use ecdrive::drives;
