@@ -9,7 +9,10 @@ fn sim(devices: &str) -> Target {
 
 #[test]
 fn slaves_lists_identity_and_mailbox() {
-    let s = tools::session(&sim("generic-coe,generic-io"), |bus| tools::slaves(bus, true)).unwrap();
+    let s = tools::session(&sim("generic-coe,generic-io"), |bus| {
+        tools::slaves(bus, true)
+    })
+    .unwrap();
     println!("{s:#?}");
     assert_eq!(s.len(), 2);
 }

@@ -11,6 +11,7 @@
 //! | `reg` | [`reg_read`], [`reg_write`] | [`RegisterData`] |
 //! | `sii` | [`sii::sii_read`], then [`sii::SiiInfo::decode`] / [`sii::esi_skeleton`] | [`sii::SiiDump`] |
 //! | `esi` | [`esi::show`], [`esi::check`] | [`esi::EsiSummary`], [`esi::EsiCheck`] |
+//! | `run` | [`run::run`] (with a [`crate::config::RunConfig`]) | [`run::RunReport`] |
 //!
 //! ecdrive is not a resident master: every operation starts with a fresh discovery
 //! ([`startup::discover`]: ethercrab resets every device to INIT, assigns station addresses,
@@ -36,6 +37,7 @@ pub mod esi;
 mod od;
 mod pdos;
 mod reg;
+pub mod run;
 pub mod sii;
 mod slaves;
 mod states;
@@ -43,7 +45,9 @@ mod states;
 pub use od::{JsonValue, OdEntry, OdObject, SdoValue, TypeSource, download, hex_of, sdos, upload};
 pub use pdos::{PdoEntryReport, PdoReport, PdoSource, ReportedPdo, SmReport, pdos};
 pub use reg::{MAX_REGISTER_BYTES, RegisterData, reg_read, reg_write, type_len};
-pub use slaves::{AlStatusReport, EscInfo, MailboxReport, PortReport, SlaveDetail, SlaveReport, slaves};
+pub use slaves::{
+    AlStatusReport, EscInfo, MailboxReport, PortReport, SlaveDetail, SlaveReport, slaves,
+};
 pub use states::{StateChange, StatesOptions, states};
 
 use super::bus::{Bus, BusOptions, run_session};
@@ -148,12 +152,7 @@ impl Target {
             Self::Sim(devices) => crate::sim::run::build_segment(devices, esc)
                 .map(|s| ToolLink::Sim(SegmentLink::new(s)))
                 .map_err(|e| {
-                    MasterError::new(
-                        None,
-                        "building the emulated devices",
-                        ErrorKind::Config,
-                        e,
-                    )
+                    MasterError::new(None, "building the emulated devices", ErrorKind::Config, e)
                 }),
         }
     }
@@ -194,12 +193,7 @@ where
     match run_session(link, tool_bus_options(), f) {
         Ok((Ok(r), link)) => Ok((r, link)),
         Ok((Err(e), _)) => Err(e),
-        Err((e, _)) => Err(MasterError::new(
-            None,
-            "opening the bus",
-            ErrorKind::Bus,
-            e,
-        )),
+        Err((e, _)) => Err(MasterError::new(None, "opening the bus", ErrorKind::Bus, e)),
     }
 }
 

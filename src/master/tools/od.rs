@@ -84,7 +84,7 @@ pub struct SdoValue {
     pub type_source: TypeSource,
     /// The value.
     pub value: JsonValue,
-    /// The value as text (`592`, `"MR-J4"`, `0x0102`).
+    /// The value as text (`592`, `MR-J4`, `0x0102`).
     pub text: String,
     /// Integers: the value in hex, as wide as the type (`0x0250`).
     pub hex: Option<String>,
@@ -121,33 +121,47 @@ fn profile_of(d: &DeviceInfo) -> Option<&'static crate::drives::DriveProfile> {
 }
 
 /// The type of `addr` on device `d`: `explicit`, else the profile's dictionary, else the
-/// drive's SDO information, else an error asking for `--type`.
+/// drive's SDO information, else an error asking for `--type`. Also the entry's name when SDO
+/// information gave it.
 fn infer_type<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     d: &DeviceInfo,
     drive: &DriveRef,
     addr: ObjectAddress,
     explicit: Option<DataType>,
-) -> Result<(DataType, TypeSource), MasterError> {
+) -> Result<(DataType, TypeSource, Option<String>), MasterError> {
     if let Some(t) = explicit {
-        return Ok((t, TypeSource::Explicit));
+        return Ok((t, TypeSource::Explicit, None));
     }
     let profile = profile_of(d);
     if let Some(t) = profile.and_then(|p| Dictionary::new(p.dictionary).data_type(addr)) {
-        return Ok((t, TypeSource::Profile));
+        return Ok((t, TypeSource::Profile, None));
     }
     let info = bus.with_coe(d.address, drive.clone(), false, T_SDO, async |c| {
         c.entry_description(addr).await
     });
     let why = match info {
         Ok(e) => match DataType::from_code(e.data_type) {
-            Some(t) => return Ok((t, TypeSource::SdoInfo)),
+            Some(t) => {
+                let name = (!e.name.is_empty()).then_some(e.name);
+                return Ok((t, TypeSource::SdoInfo, name));
+            }
             None => format!(
                 "the drive's SDO information gives data type 0x{:04X}, which ecdrive does not know",
                 e.data_type
             ),
         },
         Err(crate::master::bus::SessionError::Coe(e)) => {
+            if is_missing(&e)
+                && let Some(code) = e.abort_code()
+            {
+                return Err(MasterError::new(
+                    Some(drive),
+                    format!("{addr}"),
+                    ErrorKind::Sdo(code),
+                    format!("the drive has no such object (SDO information: {code})"),
+                ));
+            }
             format!("the drive's SDO information does not say ({})", e.kind)
         }
         Err(e) => return Err(MasterError::from(e)),
@@ -178,12 +192,14 @@ fn coe_error(e: crate::master::bus::SessionError) -> MasterError {
     MasterError::from(e)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn sdo_value(
     d: &DeviceInfo,
     drive: &DriveRef,
     addr: ObjectAddress,
     dt: DataType,
     source: TypeSource,
+    name: Option<String>,
     value: &Value,
     bytes: &[u8],
 ) -> SdoValue {
@@ -193,11 +209,14 @@ fn sdo_value(
         address: addr.to_string(),
         index: addr.index,
         sub: addr.sub,
-        name: entry_name(d, addr),
+        name: name.or_else(|| entry_name(d, addr)),
         data_type: dt.name().to_string(),
         type_source: source,
         value: JsonValue::from(value),
-        text: value.to_string(),
+        text: match value {
+            Value::Str(s) => s.clone(),
+            other => other.to_string(),
+        },
         hex: hex_of(value, dt),
         bytes: hex_bytes(bytes),
     }
@@ -223,7 +242,7 @@ pub fn upload<L: FrameLink>(
     let mut found = None;
     let d = selected(bus, position, &mut found)?.clone();
     let drive = drive_ref(&d);
-    let (dt, source) = infer_type(bus, &d, &drive, addr, data_type)?;
+    let (dt, source, name) = infer_type(bus, &d, &drive, addr, data_type)?;
     let bytes = bus
         .with_coe(d.address, drive.clone(), false, T_SDO, async |c| {
             c.upload(addr, false).await
@@ -234,10 +253,16 @@ pub fn upload<L: FrameLink>(
             Some(&drive),
             format!("decoding {addr} as {dt} ({})", source.describe()),
             ErrorKind::Bus,
-            format!("{e}; the drive sent {} byte(s): {}", bytes.len(), hex_bytes(&bytes)),
+            format!(
+                "{e}; the drive sent {} byte(s): {}",
+                bytes.len(),
+                hex_bytes(&bytes)
+            ),
         )
     })?;
-    Ok(sdo_value(&d, &drive, addr, dt, source, &value, &bytes))
+    Ok(sdo_value(
+        &d, &drive, addr, dt, source, name, &value, &bytes,
+    ))
 }
 
 /// Write `value` (as the user typed it: decimal or `0x` hex for integers) to `addr` on the
@@ -252,17 +277,25 @@ pub fn download<L: FrameLink>(
     // Check the value against an explicit type before touching the bus.
     if let Some(dt) = data_type {
         Value::parse(value, dt).map_err(|e| {
-            MasterError::new(None, format!("parsing the value for {addr}"), ErrorKind::Config, e)
+            MasterError::new(
+                None,
+                format!("parsing the value for {addr}"),
+                ErrorKind::Config,
+                e,
+            )
         })?;
     }
     let mut found = None;
     let d = selected(bus, position, &mut found)?.clone();
     let drive = drive_ref(&d);
-    let (dt, source) = infer_type(bus, &d, &drive, addr, data_type)?;
+    let (dt, source, name) = infer_type(bus, &d, &drive, addr, data_type)?;
     let v = Value::parse(value, dt).map_err(|e| {
         MasterError::new(
             Some(&drive),
-            format!("parsing the value for {addr} ({dt} from {})", source.describe()),
+            format!(
+                "parsing the value for {addr} ({dt} from {})",
+                source.describe()
+            ),
             ErrorKind::Config,
             e,
         )
@@ -280,7 +313,7 @@ pub fn download<L: FrameLink>(
         c.download(addr, &sent, false).await
     })
     .map_err(coe_error)?;
-    Ok(sdo_value(&d, &drive, addr, dt, source, &v, &bytes))
+    Ok(sdo_value(&d, &drive, addr, dt, source, name, &v, &bytes))
 }
 
 /// One entry of an object, as SDO information describes it.
@@ -333,7 +366,10 @@ fn access_text(a: EntryAccess) -> String {
 }
 
 fn mapping_text(a: EntryAccess) -> Option<String> {
-    match (a.contains(EntryAccess::RXPDO), a.contains(EntryAccess::TXPDO)) {
+    match (
+        a.contains(EntryAccess::RXPDO),
+        a.contains(EntryAccess::TXPDO),
+    ) {
         (true, true) => Some("rx/tx".into()),
         (true, false) => Some("rx".into()),
         (false, true) => Some("tx".into()),
@@ -398,7 +434,10 @@ pub fn sdos<L: FrameLink>(
                         Some(match c.upload(addr, false).await {
                             Ok(bytes) => match DataType::from_code(e.data_type) {
                                 Some(dt) => Value::decode(dt, &bytes)
-                                    .map(|v| v.to_string())
+                                    .map(|v| match hex_of(&v, dt) {
+                                        Some(h) => format!("{h} {v}"),
+                                        None => v.to_string(),
+                                    })
                                     .unwrap_or_else(|_| format!("0x{}", hex_bytes(&bytes))),
                                 None => format!("0x{}", hex_bytes(&bytes)),
                             },
@@ -455,7 +494,10 @@ mod tests {
             hex_of(&Value::Int(-2), DataType::Integer32).as_deref(),
             Some("0xFFFFFFFE")
         );
-        assert_eq!(hex_of(&Value::Str("x".into()), DataType::VisibleString), None);
+        assert_eq!(
+            hex_of(&Value::Str("x".into()), DataType::VisibleString),
+            None
+        );
     }
 
     #[test]
@@ -463,6 +505,9 @@ mod tests {
         assert_eq!(access_text(EntryAccess::RW), "rwrwrw");
         assert_eq!(access_text(EntryAccess::RO), "r-r-r-");
         assert_eq!(access_text(EntryAccess::RW_PREOP), "rwr-r-");
-        assert_eq!(mapping_text(EntryAccess::RO | EntryAccess::TXPDO).as_deref(), Some("tx"));
+        assert_eq!(
+            mapping_text(EntryAccess::RO | EntryAccess::TXPDO).as_deref(),
+            Some("tx")
+        );
     }
 }

@@ -35,7 +35,7 @@ pub struct PdoEntryReport {
     pub bits: u8,
     /// Bit offset in the SyncManager's process image.
     pub bit_offset: u32,
-    /// Name, from the drive profile or the SII.
+    /// Name, from the drive profile, the SII or the drive's SDO information.
     pub name: Option<String>,
 }
 
@@ -46,7 +46,7 @@ pub struct ReportedPdo {
     pub direction: String,
     /// Mapping index.
     pub index: u16,
-    /// Name, from the SII.
+    /// Name, from the SII or the drive's SDO information.
     pub name: Option<String>,
     /// Size in bits.
     pub bits: u32,
@@ -103,9 +103,8 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
     let d = found.device(position)?.clone();
     let drive = drive_ref(&d);
     let raw = read_categories(bus, &found.group, position, &drive)?;
-    let sii = SiiInfo::decode(&raw).map_err(|e| {
-        MasterError::new(Some(&drive), "decoding the SII", ErrorKind::Bus, e)
-    })?;
+    let sii = SiiInfo::decode(&raw)
+        .map_err(|e| MasterError::new(Some(&drive), "decoding the SII", ErrorKind::Bus, e))?;
     let profile = crate::drives::by_identity(d.vendor_id, d.product_code);
     let coe = sii.protocol_bits & 0x0004 != 0 && sii.mailbox.is_some();
     let (mapping, source) = if coe {
@@ -147,12 +146,80 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
             )
         };
         // Without CoE the assignment is the SII's: the PDOs with a default SyncManager.
-        let rx = sii.rx_pdos.iter().filter(|p| p.sm != 0xFF).map(pdo).collect();
-        let tx = sii.tx_pdos.iter().filter(|p| p.sm != 0xFF).map(pdo).collect();
+        let rx = sii
+            .rx_pdos
+            .iter()
+            .filter(|p| p.sm != 0xFF)
+            .map(pdo)
+            .collect();
+        let tx = sii
+            .tx_pdos
+            .iter()
+            .filter(|p| p.sm != 0xFF)
+            .map(pdo)
+            .collect();
         (Mapping::owned(rx, tx), PdoSource::Sii)
     };
 
     let dict = profile.map(|p| Dictionary::new(p.dictionary));
+    // Names the profile and the SII do not give: ask the drive's SDO information, when it has
+    // it (General category, CoE details bit 1). Failures only leave the name out.
+    let sdo_info = coe
+        && sii
+            .general
+            .as_ref()
+            .is_some_and(|g| g.coe_details & 0x02 != 0);
+    let mut info_names: std::collections::HashMap<ObjectAddress, String> =
+        std::collections::HashMap::new();
+    if sdo_info && profile.is_none() {
+        let mut wanted: Vec<(ObjectAddress, bool)> = Vec::new();
+        for dir in [Direction::Rx, Direction::Tx] {
+            for p in mapping.pdos(dir) {
+                if !sii
+                    .rx_pdos
+                    .iter()
+                    .chain(&sii.tx_pdos)
+                    .any(|s| s.index == p.index)
+                {
+                    wanted.push((ObjectAddress::new(p.index, 0), true));
+                }
+                for e in p.entries.iter().filter(|e| !e.is_padding()) {
+                    wanted.push((e.address(), false));
+                }
+            }
+        }
+        wanted.sort();
+        wanted.dedup();
+        let addr = d.address;
+        let names = bus.with_coe(addr, drive.clone(), false, T_SDO * 4, async |c| {
+            let mut out = Vec::new();
+            for (a, object) in &wanted {
+                let name = if *object {
+                    c.object_description(a.index).await.map(|o| o.name)
+                } else {
+                    c.entry_description(*a).await.map(|e| e.name)
+                };
+                if let Ok(n) = name
+                    && !n.is_empty()
+                {
+                    out.push((*a, *object, n));
+                }
+            }
+            Ok(out)
+        });
+        if let Ok(names) = names {
+            for (a, object, n) in names {
+                // PDO names are keyed by the mapping index with sub-index 0xFF (no entry
+                // uses it for a name here).
+                let key = if object {
+                    ObjectAddress::new(a.index, 0xFF)
+                } else {
+                    a
+                };
+                info_names.insert(key, n);
+            }
+        }
+    }
     let sii_entry_name = |a: ObjectAddress| {
         sii.rx_pdos
             .iter()
@@ -192,6 +259,7 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
                                     }
                                 })
                                 .or_else(|| sii_entry_name(a))
+                                .or_else(|| info_names.get(&a).cloned())
                         };
                         let r = PdoEntryReport {
                             address: a.to_string(),
@@ -208,7 +276,8 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
                 ReportedPdo {
                     direction: dir.name().to_string(),
                     index: p.index,
-                    name: sii_pdo_name(p.index),
+                    name: sii_pdo_name(p.index)
+                        .or_else(|| info_names.get(&ObjectAddress::new(p.index, 0xFF)).cloned()),
                     bits: p.bits(),
                     entries,
                 }

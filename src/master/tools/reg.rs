@@ -54,16 +54,14 @@ fn hex(b: &[u8]) -> String {
 
 /// The register length of a `--type`, and a check that it has one.
 pub fn type_len(dt: DataType) -> Result<u16, MasterError> {
-    dt.bit_len()
-        .map(|b| b.div_ceil(8))
-        .ok_or_else(|| {
-            MasterError::new(
-                None,
-                "choosing the register length",
-                ErrorKind::Config,
-                format!("{dt} has no fixed size; give the length in bytes instead"),
-            )
-        })
+    dt.bit_len().map(|b| b.div_ceil(8)).ok_or_else(|| {
+        MasterError::new(
+            None,
+            "choosing the register length",
+            ErrorKind::Config,
+            format!("{dt} has no fixed size; give the length in bytes instead"),
+        )
+    })
 }
 
 /// Read `len` bytes from register `address` of the device at `position`; with `data_type`,

@@ -455,8 +455,7 @@ impl SiiInfo {
                 category::FMMU => {
                     info.fmmus = data.iter().map(|b| fmmu_name(*b).to_string()).collect();
                     // A padding byte makes the count even; drop a trailing unused one.
-                    if data.len() % 2 == 0 && data.last().is_some_and(|b| *b == 0 || *b == 0xFF)
-                    {
+                    if data.len() % 2 == 0 && data.last().is_some_and(|b| *b == 0 || *b == 0xFF) {
                         info.fmmus.pop();
                     }
                 }
@@ -597,13 +596,21 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
     let _ = writeln!(x, r#"<EtherCATInfo Version="1.6">"#);
     let _ = writeln!(x, "  <Vendor>");
     let _ = writeln!(x, "    <Id>#x{:08X}</Id>", info.vendor_id);
-    let _ = writeln!(x, "    <Name LcId=\"1033\">Vendor 0x{:08X}</Name>", info.vendor_id);
+    let _ = writeln!(
+        x,
+        "    <Name LcId=\"1033\">Vendor 0x{:08X}</Name>",
+        info.vendor_id
+    );
     let _ = writeln!(x, "  </Vendor>");
     let _ = writeln!(x, "  <Descriptions>");
     let _ = writeln!(x, "    <Groups>");
     let _ = writeln!(x, "      <Group>");
     let _ = writeln!(x, "        <Type>{}</Type>", xml_escape(&group));
-    let _ = writeln!(x, "        <Name LcId=\"1033\">{}</Name>", xml_escape(&group));
+    let _ = writeln!(
+        x,
+        "        <Name LcId=\"1033\">{}</Name>",
+        xml_escape(&group)
+    );
     let _ = writeln!(x, "      </Group>");
     let _ = writeln!(x, "    </Groups>");
     let _ = writeln!(x, "    <Devices>");
@@ -733,11 +740,7 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
     }
     let _ = writeln!(x, "        <Eeprom>");
     let _ = writeln!(x, "          <ByteSize>{}</ByteSize>", info.size_bytes);
-    let config: String = raw
-        .iter()
-        .take(14)
-        .map(|b| format!("{b:02X}"))
-        .collect();
+    let config: String = raw.iter().take(14).map(|b| format!("{b:02X}")).collect();
     let _ = writeln!(x, "          <ConfigData>{config}</ConfigData>");
     if let Some(b) = info.bootstrap_mailbox {
         let words = [b.rx_offset, b.rx_size, b.tx_offset, b.tx_size];

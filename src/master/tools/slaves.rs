@@ -195,11 +195,13 @@ pub fn slaves<L: FrameLink>(
             .map_err(|e| bus_error(Some(&drive), "reading the SII description", e))?;
         let profile = crate::drives::by_identity(d.vendor_id, d.product_code);
         let detail = if verbose {
-            Some(detail(bus, &found, d.position, d.address, &drive, mbx, delay)?)
-                .map(|mut det| {
-                    det.profile_vendor = profile.map(|p| p.vendor.to_string());
-                    det
-                })
+            Some(detail(
+                bus, &found, d.position, d.address, &drive, mbx, delay,
+            )?)
+            .map(|mut det| {
+                det.profile_vendor = profile.map(|p| p.vendor.to_string());
+                det
+            })
         } else {
             None
         };

@@ -124,9 +124,8 @@ fn drive_to<L: FrameLink>(
                         reached: al_state_text(status),
                         ok,
                         al_status_code: (!ok && refused).then_some(code.0),
-                        code_text: (!ok && refused).then(|| {
-                            code.text().unwrap_or("unknown AL status code").to_string()
-                        }),
+                        code_text: (!ok && refused)
+                            .then(|| code.text().unwrap_or("unknown AL status code").to_string()),
                     });
                 }
             }
@@ -188,7 +187,13 @@ pub fn states<L: FrameLink>(
         }
         AlState::Bootstrap => {
             // BOOT is reached from INIT only.
-            drive_to(bus, &mut pending, AlState::Init, opts.timeout, &mut no_exchange)?;
+            drive_to(
+                bus,
+                &mut pending,
+                AlState::Init,
+                opts.timeout,
+                &mut no_exchange,
+            )?;
             let failed: Vec<bool> = pending
                 .iter()
                 .map(|p| p.done.as_ref().is_some_and(|d| !d.ok))
@@ -247,8 +252,17 @@ pub fn states<L: FrameLink>(
                     Ok(cycle)
                 };
                 if target == AlState::Op {
-                    drive_to(bus, &mut pending, AlState::SafeOp, opts.timeout, &mut exchange)?;
-                    if pending.iter().any(|p| p.done.as_ref().is_some_and(|d| !d.ok)) {
+                    drive_to(
+                        bus,
+                        &mut pending,
+                        AlState::SafeOp,
+                        opts.timeout,
+                        &mut exchange,
+                    )?;
+                    if pending
+                        .iter()
+                        .any(|p| p.done.as_ref().is_some_and(|d| !d.ok))
+                    {
                         return Ok(finish(pending, AlState::SafeOp));
                     }
                     for p in &mut pending {
