@@ -1,6 +1,7 @@
 //! The `ecdrive` command line. Argument parsing and output only: the work is in the library
 //! (`ecdrive::master::tools`, `ecdrive::config`, `ecdrive::sim::run`).
 
+mod can;
 mod print;
 mod run;
 mod sim;
@@ -63,6 +64,25 @@ struct BusArgs {
     interface: String,
 }
 
+#[derive(Args, Clone)]
+struct AnyBusArgs {
+    /// EtherCAT: network interface of the segment, or `sim:DEVICE,…` for emulated devices
+    /// in-process.
+    #[arg(
+        short,
+        long,
+        value_name = "IF",
+        required_unless_present = "can",
+        conflicts_with = "can"
+    )]
+    interface: Option<String>,
+    /// CANopen: a SocketCAN interface (`can0`), `virtual` (in-process bus with the emulated
+    /// BLV-R, ASDA-A2 and Lexium at nodes 1, 0x7F and 0x41) or `vbus:/path` (a virtual bus
+    /// hub shared between processes).
+    #[arg(long, value_name = "IF")]
+    can: Option<String>,
+}
+
 #[derive(Args, Clone, Copy)]
 struct Json {
     /// Print the result as JSON (one object or array on stdout).
@@ -76,13 +96,14 @@ enum Command {
     /// with DC, through a csp, csv and cst sequence. Needs no hardware and no root.
     Demo,
     /// List the devices on the segment: position, station address, alias, AL state,
-    /// identity, name, matched drive profile, DC support and mailbox protocols.
+    /// identity, name, matched drive profile, DC support and mailbox protocols. With --can:
+    /// the CANopen nodes (node-ID, NMT state, device type, identity, name, profile).
     #[command(
-        after_help = "Examples:\n  ecdrive slaves -i eth1\n  ecdrive slaves -i eth1 --verbose\n  ecdrive slaves -i sim:mr-j4-tm,bdhde --json"
+        after_help = "Examples:\n  ecdrive slaves -i eth1\n  ecdrive slaves -i eth1 --verbose\n  ecdrive slaves -i sim:mr-j4-tm,bdhde --json\n  ecdrive slaves --can can0"
     )]
     Slaves {
         #[command(flatten)]
-        bus: BusArgs,
+        bus: AnyBusArgs,
         /// Also ESC type and resources, port links, propagation delay, mailbox, EEPROM size.
         #[arg(short, long)]
         verbose: bool,
@@ -92,14 +113,17 @@ enum Command {
     /// Read an object over CoE (SDO upload). The data type comes from --type, else the drive
     /// profile, else the drive's SDO information.
     #[command(
-        after_help = "Examples:\n  ecdrive upload -i eth1 -p 0 0x6041:00\n  ecdrive upload -i eth1 -p 1 0x1008:00 --type string\n  ecdrive upload -i eth1 -p 0 0x6064 --json"
+        after_help = "Examples:\n  ecdrive upload -i eth1 -p 0 0x6041:00\n  ecdrive upload -i eth1 -p 1 0x1008:00 --type string\n  ecdrive upload -i eth1 -p 0 0x6064 --json\n  ecdrive upload --can virtual -n 0x7F 0x6041:00"
     )]
     Upload {
         #[command(flatten)]
-        bus: BusArgs,
-        /// Position of the device on the segment (0 = first).
-        #[arg(short, long, value_name = "POS")]
-        position: u16,
+        bus: AnyBusArgs,
+        /// EtherCAT: position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS", required_unless_present = "can")]
+        position: Option<u16>,
+        /// CANopen: node-ID (1–127, decimal or 0x hex).
+        #[arg(short, long, value_name = "NODE", value_parser = parse_node, required_unless_present = "interface", conflicts_with = "position")]
+        node: Option<u8>,
         /// The object: INDEX:SUB (`0x6041:00`, `6041h:0`; a bare index means sub-index 0).
         #[arg(value_name = "INDEX:SUB", value_parser = parse_address)]
         address: ObjectAddress,
@@ -113,14 +137,17 @@ enum Command {
     /// Write an object over CoE (SDO download). Values in decimal or 0x hex; the value must fit
     /// the data type (found as for upload).
     #[command(
-        after_help = "Examples:\n  ecdrive download -i eth1 -p 0 0x6065:00 100000\n  ecdrive download -i eth1 -p 1 0x6060:00 8\n  ecdrive download -i eth1 -p 0 0x2001:00 0x10 --type u16"
+        after_help = "Examples:\n  ecdrive download -i eth1 -p 0 0x6065:00 100000\n  ecdrive download -i eth1 -p 1 0x6060:00 8\n  ecdrive download -i eth1 -p 0 0x2001:00 0x10 --type u16\n  ecdrive download --can can0 -n 1 0x6081:00 20000"
     )]
     Download {
         #[command(flatten)]
-        bus: BusArgs,
-        /// Position of the device on the segment (0 = first).
-        #[arg(short, long, value_name = "POS")]
-        position: u16,
+        bus: AnyBusArgs,
+        /// EtherCAT: position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS", required_unless_present = "can")]
+        position: Option<u16>,
+        /// CANopen: node-ID (1–127, decimal or 0x hex).
+        #[arg(short, long, value_name = "NODE", value_parser = parse_node, required_unless_present = "interface", conflicts_with = "position")]
+        node: Option<u8>,
         /// The object: INDEX:SUB.
         #[arg(value_name = "INDEX:SUB", value_parser = parse_address)]
         address: ObjectAddress,
@@ -336,6 +363,14 @@ fn parse_type(s: &str) -> Result<DataType, String> {
     })
 }
 
+fn parse_node(s: &str) -> Result<u8, String> {
+    let v = parse_u16(s)?;
+    u8::try_from(v)
+        .ok()
+        .filter(|n| (1..=127).contains(n))
+        .ok_or_else(|| format!("node-ID {s:?} is not in 1–127"))
+}
+
 fn parse_state(s: &str) -> Result<AlState, String> {
     AlState::parse(s)
         .ok_or_else(|| format!("unknown state {s:?} (use INIT, PREOP, SAFEOP, OP or BOOT)"))
@@ -483,7 +518,10 @@ fn dispatch(cli: Cli) -> ExitCode {
             ExitCode::from(2)
         }
         Command::Slaves { bus, verbose, json } => {
-            match session("slaves", &bus.interface, move |b| tools::slaves(b, verbose)) {
+            let Some(interface) = bus.interface else {
+                return can::slaves(bus.can.as_deref().unwrap_or_default(), json.json);
+            };
+            match session("slaves", &interface, move |b| tools::slaves(b, verbose)) {
                 Ok(r) if json.json => print_json("slaves", &r),
                 Ok(r) => {
                     print::slaves(&r, verbose);
@@ -495,36 +533,61 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Upload {
             bus,
             position,
+            node,
             address,
             data_type,
             json,
-        } => match session("upload", &bus.interface, move |b| {
-            tools::upload(b, position, address, data_type)
-        }) {
-            Ok(r) if json.json => print_json("upload", &r),
-            Ok(r) => {
-                print::sdo_value(&r);
-                ExitCode::SUCCESS
+        } => {
+            let (Some(interface), Some(position)) = (bus.interface, position) else {
+                return can::upload(
+                    bus.can.as_deref().unwrap_or_default(),
+                    node.unwrap_or_default(),
+                    address,
+                    data_type,
+                    json.json,
+                );
+            };
+            match session("upload", &interface, move |b| {
+                tools::upload(b, position, address, data_type)
+            }) {
+                Ok(r) if json.json => print_json("upload", &r),
+                Ok(r) => {
+                    print::sdo_value(&r);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
             }
-            Err(code) => code,
-        },
+        }
         Command::Download {
             bus,
             position,
+            node,
             address,
             value,
             data_type,
             json,
-        } => match session("download", &bus.interface, move |b| {
-            tools::download(b, position, address, &value, data_type)
-        }) {
-            Ok(r) if json.json => print_json("download", &r),
-            Ok(r) => {
-                print::downloaded(&r);
-                ExitCode::SUCCESS
+        } => {
+            let (Some(interface), Some(position)) = (bus.interface, position) else {
+                return can::download(
+                    bus.can.as_deref().unwrap_or_default(),
+                    node.unwrap_or_default(),
+                    address,
+                    &value,
+                    data_type,
+                    json.json,
+                );
+            };
+            match session("download", &interface, move |b| {
+                tools::download(b, position, address, &value, data_type)
+            }) {
+                Ok(r) if json.json => print_json("download", &r),
+                Ok(r) => {
+                    print::downloaded(&r);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
             }
-            Err(code) => code,
-        },
+        }
         Command::Sdos {
             bus,
             position,

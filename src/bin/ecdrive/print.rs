@@ -9,7 +9,7 @@ use ecdrive::master::tools::{
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// Print rows as columns separated by two spaces, each as wide as its widest cell.
-fn table(rows: &[Vec<String>]) {
+pub fn table(rows: &[Vec<String>]) {
     let n = rows.iter().map(Vec::len).max().unwrap_or(0);
     let widths: Vec<usize> = (0..n)
         .map(|c| {
