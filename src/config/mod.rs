@@ -128,6 +128,20 @@ pub struct RunConfig {
     pub drives: Vec<DriveConfig>,
 }
 
+impl core::fmt::Debug for RunConfig {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("RunConfig")
+            .field("source", &self.source)
+            .field("target", &self.target)
+            .field("cycle", &self.master.cycle.cycle)
+            .field("startup", &self.master.startup)
+            .field("rt", &self.master.cycle.rt)
+            .field("duration", &self.duration)
+            .field("drives", &self.drives)
+            .finish_non_exhaustive()
+    }
+}
+
 /// Parse a duration as the file writes it: a number and a unit, `ns`, `us` (`µs`), `ms` or
 /// `s` (`250us`, `1 ms`, `0.5ms`, `10s`).
 pub fn parse_duration(text: &str) -> Result<Duration, String> {
@@ -223,40 +237,106 @@ fn key_path(p: &serde_path_to_error::Path) -> String {
         .to_string()
 }
 
+/// One step of a key path.
+enum Segment {
+    Key(String),
+    Index(usize),
+}
+
+/// The span of the item at `path` in the file (or of the key `unknown` inside it, or of the
+/// last key of the path when `unknown` is that key), as precise as the file allows.
+fn locate(text: &str, path: &[Segment], unknown: Option<&str>) -> Option<Range<usize>> {
+    let doc = toml_edit::ImDocument::parse(text).ok()?;
+    let mut item = doc.as_item();
+    let mut parent = None;
+    for (n, seg) in path.iter().enumerate() {
+        let last = n + 1 == path.len();
+        let next = match seg {
+            Segment::Key(k) => {
+                if last && unknown == Some(k.as_str()) {
+                    // The unknown key: point at it.
+                    return key_span(item, k).or_else(|| item.span());
+                }
+                item.get(k.as_str())
+            }
+            Segment::Index(i) => item.get(*i),
+        };
+        match next {
+            Some(x) => {
+                parent = Some(item);
+                item = x;
+            }
+            None => {
+                return item
+                    .span()
+                    .or_else(|| parent.and_then(toml_edit::Item::span));
+            }
+        }
+    }
+    if let Some(k) = unknown
+        && let Some(s) = key_span(item, k)
+    {
+        return Some(s);
+    }
+    item.span()
+}
+
+fn key_span(item: &toml_edit::Item, key: &str) -> Option<Range<usize>> {
+    match item {
+        toml_edit::Item::Table(t) => t.key(key).and_then(toml_edit::Key::span),
+        toml_edit::Item::Value(toml_edit::Value::InlineTable(t)) => {
+            t.key(key).and_then(toml_edit::Key::span)
+        }
+        _ => None,
+    }
+}
+
 /// Check a configuration file's text. `source` names it in errors.
 pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
     let cx = Ctx { text, file: source };
     let de = toml::Deserializer::new(text);
     let f: raw::File = serde_path_to_error::deserialize(de).map_err(|e| {
         let key = key_path(e.path());
+        let segments: Vec<Segment> = e
+            .path()
+            .iter()
+            .filter_map(|s| match s {
+                serde_path_to_error::Segment::Seq { index } => Some(Segment::Index(*index)),
+                serde_path_to_error::Segment::Map { key } if !key.starts_with("$__serde") => {
+                    Some(Segment::Key(key.clone()))
+                }
+                _ => None,
+            })
+            .collect();
         let inner = e.into_inner();
-        let span = inner.span().unwrap_or(0..0);
+        let message = inner.message().trim().to_string();
+        let toml_span = inner.span();
+        // serde names the unknown key as the last path segment; the key itself is then the
+        // most precise position.
+        let unknown = message
+            .strip_prefix("unknown field `")
+            .and_then(|r| r.split('`').next());
+        let located = locate(text, &segments, unknown);
+        let span = match (toml_span, located) {
+            (Some(t), Some(l)) if l.start >= t.start && l.end <= t.end => l,
+            (Some(t), _) => t,
+            (None, Some(l)) => l,
+            (None, None) => 0..0,
+        };
         let key = if key == "." { String::new() } else { key };
-        cx.err(span, key, friendly(inner.message().trim()))
+        cx.err(span, key, friendly(&message))
     })?;
 
     // Where the segment is.
     let (target, sim_names) = match (f.interface.get_ref().as_str(), &f.sim) {
         ("sim", Some(sim)) => {
-            let known: Vec<&str> = crate::sim::devices::DEVICE_NAMES
-                .iter()
-                .map(|(n, _)| *n)
-                .collect();
             let s = sim.get_ref();
             if s.devices.is_empty() {
                 return Err(cx.err(sim.span(), "sim.devices", "name at least one device"));
             }
             for (i, d) in s.devices.iter().enumerate() {
-                if !known.contains(&d.get_ref().as_str()) {
-                    return Err(cx.err(
-                        d.span(),
-                        format!("sim.devices[{i}]"),
-                        format!(
-                            "unknown emulated device {:?}; known: {}",
-                            d.get_ref(),
-                            known.join(", ")
-                        ),
-                    ));
+                if let Err(e) = crate::sim::devices::by_name(d.get_ref(), i) {
+                    return Err(cx.err(d.span(), format!("sim.devices[{i}]"), e.to_string()));
                 }
             }
             let names: Vec<String> = s.devices.iter().map(|d| d.get_ref().clone()).collect();

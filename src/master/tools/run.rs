@@ -229,12 +229,16 @@ pub fn run(
         })
         .collect();
     let steps_total: usize = programs.iter().sum();
+    // The telemetry may carry more axis slots than drives (spare slots of the triple buffer);
+    // only the first `n_axes` are drives.
+    let n_axes = programs.len();
     let mut outcome = Outcome::Completed;
     let mut reason = String::new();
     let mut tick = |phase: &'static str, t: &Telemetry, elapsed: Duration| {
         let done = t
             .axes
             .iter()
+            .take(n_axes)
             .zip(&programs)
             .map(|(a, n)| usize::from(a.program_step).min(*n))
             .sum();
@@ -282,11 +286,12 @@ pub fn run(
             tick("enabling", &t, Duration::ZERO);
             if t.axes
                 .iter()
+                .take(n_axes)
                 .all(|a| a.state == Some(State::OperationEnabled))
             {
                 break;
             }
-            if t.axes.iter().any(|a| is_fault(a.state)) {
+            if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
                 outcome = Outcome::DriveFault;
                 break;
             }
@@ -320,7 +325,7 @@ pub fn run(
             let elapsed = t0.elapsed();
             let t = m.telemetry().clone();
             tick("running", &t, elapsed);
-            if t.axes.iter().any(|a| is_fault(a.state)) {
+            if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
                 outcome = Outcome::DriveFault;
                 break;
             }
@@ -330,6 +335,7 @@ pub fn run(
             }
             if t.axes
                 .iter()
+                .take(n_axes)
                 .any(|a| a.state != Some(State::OperationEnabled))
             {
                 // The cycle stopped an axis on its own (following error, a drive left OP).
@@ -342,7 +348,7 @@ pub fn run(
                 break;
             }
             let programs_done = steps_total > 0
-                && t.axes.iter().zip(&programs).all(|(a, n)| {
+                && t.axes.iter().take(n_axes).zip(&programs).all(|(a, n)| {
                     *n == 0 || (!a.program_running && usize::from(a.program_step) >= *n)
                 });
             if programs_done && duration.is_none_or(|d| elapsed >= d) {
@@ -363,7 +369,12 @@ pub fn run(
         &t,
         started.map_or(Duration::ZERO, |t| t.elapsed()),
     );
-    let steps_done: Vec<usize> = t.axes.iter().map(|a| usize::from(a.program_step)).collect();
+    let steps_done: Vec<usize> = t
+        .axes
+        .iter()
+        .take(n_axes)
+        .map(|a| usize::from(a.program_step))
+        .collect();
     let summaries = m.drives().to_vec();
     let (report, _link) = m.stop(StopKind::Ramp);
     let Some(report) = report else {
