@@ -112,7 +112,7 @@ pub enum ToolLink {
     /// A raw socket on an interface.
     Raw(RawSocket),
     /// Emulated devices in-process.
-    Sim(SegmentLink),
+    Sim(Box<SegmentLink>),
 }
 
 impl FrameLink for ToolLink {
@@ -150,7 +150,7 @@ impl Target {
                 MasterError::new(None, format!("opening interface {i}"), ErrorKind::Link, e)
             }),
             Self::Sim(devices) => crate::sim::run::build_segment(devices, esc)
-                .map(|s| ToolLink::Sim(SegmentLink::new(s)))
+                .map(|s| ToolLink::Sim(Box::new(SegmentLink::new(s))))
                 .map_err(|e| {
                     MasterError::new(None, "building the emulated devices", ErrorKind::Config, e)
                 }),

@@ -115,7 +115,7 @@ fn drive_to<L: FrameLink>(
             for p in pending.iter_mut().filter(|p| p.done.is_none()) {
                 let (status, code) = read_al_status(bus, p.address, &p.drive)?;
                 let refused = status.error();
-                if (status.state() == Some(target) && !refused) || refused || now > deadline {
+                if status.state() == Some(target) || refused || now > deadline {
                     let ok = status.state() == Some(target) && !refused;
                     p.done = Some(StateChange {
                         position: p.drive.position,
