@@ -126,7 +126,9 @@ fn sdos_and_pdos_show_the_dictionary_and_the_mapping() {
     let Some(sim) = start("cli_bus::sdos_and_pdos_show_the_dictionary_and_the_mapping") else {
         return;
     };
-    let text = sim.ecdrive(&["sdos", "-p", "0"]).ok().to_string();
+    let run = sim.ecdrive(&["sdos", "-p", "0"]);
+    assert_eq!(run.stderr, "", "no progress output when piped: {run:#?}");
+    let text = run.ok().to_string();
     assert!(text.contains("SDO 0x1018, RECORD, \"Identity\""), "{text}");
     assert!(
         text.contains("  0x1018:02, r-r-r-, UNSIGNED32, 32 bit, \"Product code\""),
@@ -280,7 +282,10 @@ fn registers_and_the_eeprom() {
     assert_eq!(r.trim(), "0x1F00: fe ff 34 12");
 
     // The EEPROM: summary, raw bytes, JSON and an ESI skeleton the parser reads back.
-    let s = sim.ecdrive(&["sii", "-p", "0"]).ok().to_string();
+    let run = sim.ecdrive(&["sii", "-p", "0"]);
+    // Long operations draw progress on a terminal only: piped, stderr stays empty.
+    assert_eq!(run.stderr, "", "{run:#?}");
+    let s = run.ok().to_string();
     assert!(
         s.contains(
             "Identity: vendor 0x00000ECD, product 0x00000402, revision 0x00010000, serial 0"

@@ -530,18 +530,7 @@ fn drive(
     // Mode.
     let mode = match &r.mode {
         Some(m) => {
-            let mode = match m.get_ref().to_ascii_lowercase().as_str() {
-                "csp" => CyclicMode::Csp,
-                "csv" => CyclicMode::Csv,
-                "cst" => CyclicMode::Cst,
-                other => {
-                    return Err(cx.err(
-                        m.span(),
-                        key("mode"),
-                        format!("unknown mode {other:?}; the cyclic modes are csp, csv and cst"),
-                    ));
-                }
-            };
+            let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
             if let Some(p) = profile
                 && !p
                     .caps

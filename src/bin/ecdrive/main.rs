@@ -461,6 +461,13 @@ where
 }
 
 fn main() -> ExitCode {
+    // Output piped into `head` and the like: end quietly when the reader goes away, as Unix
+    // tools do, instead of failing on every later write.
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread is started; no
+    // handler runs Rust code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
     // Bad input never panics; should a bug panic anyway, say so in one line, without a
     // backtrace, and exit with the internal-error code.
     std::panic::set_hook(Box::new(|info| {

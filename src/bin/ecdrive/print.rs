@@ -167,7 +167,7 @@ pub fn sdo_value(v: &SdoValue) {
 
 pub fn downloaded(v: &SdoValue) {
     println!(
-        "{} = {}{} ({}, type from {})",
+        "{} = {}{}, {}, type from {}",
         v.address,
         v.text,
         v.hex
