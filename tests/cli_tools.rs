@@ -182,6 +182,7 @@ fn in_process_commands_report_typed_results() {
         .map(|o| (o, calls))
     })
     .unwrap();
-    assert_eq!(objs.1, objs.0.len(), "progress once per object");
-    assert!(objs.0.iter().any(|o| o.index == 0x6041));
+    assert_eq!(objs.1, objs.0.objects.len(), "progress once per object");
+    assert_eq!(objs.0.source, tools::OdSource::SdoInfo);
+    assert!(objs.0.objects.iter().any(|o| o.index == 0x6041));
 }

@@ -4,7 +4,7 @@ use ecdrive::master::tools::esi::{EsiCheck, EsiSummary};
 use ecdrive::master::tools::run::{RunProgress, RunReport};
 use ecdrive::master::tools::sii::{SiiDump, SiiInfo};
 use ecdrive::master::tools::{
-    OdObject, PdoReport, RegisterData, SdoValue, SlaveReport, StateChange,
+    OdListing, PdoReport, RegisterData, SdoValue, SlaveReport, StateChange,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -183,8 +183,11 @@ pub fn downloaded(v: &SdoValue) {
     );
 }
 
-pub fn sdos(list: &[OdObject]) {
-    for o in list {
+pub fn sdos(listing: &OdListing) {
+    if let Some(n) = &listing.note {
+        println!("({n})");
+    }
+    for o in &listing.objects {
         println!("SDO 0x{:04X}, {}, \"{}\"", o.index, o.object_code, o.name);
         for e in &o.entries {
             let map = e

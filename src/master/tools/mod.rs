@@ -5,7 +5,7 @@
 //! |---|---|---|
 //! | `slaves` | [`slaves`] | [`SlaveReport`] per device |
 //! | `upload` / `download` | [`upload`], [`download`] | [`SdoValue`] |
-//! | `sdos` | [`sdos`] | [`OdObject`] per object |
+//! | `sdos` | [`sdos`] | [`OdListing`] of [`OdObject`]s |
 //! | `pdos` | [`pdos`] | [`PdoReport`] |
 //! | `states` | [`states`] | [`StateChange`] per device |
 //! | `reg` | [`reg_read`], [`reg_write`] | [`RegisterData`] |
@@ -42,7 +42,10 @@ pub mod sii;
 mod slaves;
 mod states;
 
-pub use od::{JsonValue, OdEntry, OdObject, SdoValue, TypeSource, download, hex_of, sdos, upload};
+pub use od::{
+    JsonValue, OdEntry, OdListing, OdObject, OdSource, SdoValue, TypeSource, download, hex_of,
+    sdos, upload,
+};
 pub use pdos::{PdoEntryReport, PdoReport, PdoSource, ReportedPdo, SmReport, pdos};
 pub use reg::{MAX_REGISTER_BYTES, RegisterData, reg_read, reg_write, type_len};
 pub use slaves::{

@@ -391,27 +391,100 @@ fn is_missing(e: &CoeError) -> bool {
     )
 }
 
+/// Where an object listing came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OdSource {
+    /// The drive's SDO information: what the drive itself says.
+    SdoInfo,
+    /// The matched drive profile's dictionary, because the drive offers no SDO information.
+    Profile,
+}
+
+/// What `sdos` reports.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OdListing {
+    /// Position of the device.
+    pub position: u16,
+    /// The device (profile name, or the SII name).
+    pub drive: String,
+    /// Where the listing came from.
+    pub source: OdSource,
+    /// Why the drive's SDO information was not used, when `source` is the profile.
+    pub note: Option<String>,
+    /// The objects in index order.
+    pub objects: Vec<OdObject>,
+}
+
+/// Upload `addr` and render it for a listing: `0x0250 592`, a string, or the abort.
+async fn value_text(
+    c: &mut crate::master::coe::CoeClient<'_>,
+    addr: ObjectAddress,
+    dt: Option<DataType>,
+) -> Result<String, CoeError> {
+    Ok(match c.upload(addr, false).await {
+        Ok(bytes) => match dt {
+            Some(dt) => Value::decode(dt, &bytes)
+                .map(|v| match hex_of(&v, dt) {
+                    Some(h) => format!("{h} {v}"),
+                    None => v.to_string(),
+                })
+                .unwrap_or_else(|_| format!("0x{}", hex_bytes(&bytes))),
+            None => format!("0x{}", hex_bytes(&bytes)),
+        },
+        Err(err) => match err.abort_code() {
+            Some(code) => format!("SDO abort {code}"),
+            None => return Err(err),
+        },
+    })
+}
+
 /// The object dictionary of the device at `position`, read through SDO information (object
-/// list, object and entry descriptions). With `values`, every readable entry is uploaded too.
-/// `progress(done, total)` is called after each object.
+/// list, object and entry descriptions). A drive without SDO information is listed from its
+/// drive profile's dictionary instead ([`OdSource::Profile`]), if it has one. With `values`,
+/// every readable entry is uploaded too. `progress(done, total)` is called after each object.
 pub fn sdos<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     position: u16,
     values: bool,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<Vec<OdObject>, MasterError> {
+) -> Result<OdListing, MasterError> {
     let mut found = None;
     let d = selected(bus, position, &mut found)?.clone();
     let drive = drive_ref(&d);
-    let indices = bus
-        .with_coe(d.address, drive.clone(), false, T_SDO, async |c| {
-            c.od_list(crate::ec::mailbox::list_type::ALL).await
-        })
-        .map_err(|e| {
+    let listing = |source, note, objects| OdListing {
+        position,
+        drive: drive.name.clone(),
+        source,
+        note,
+        objects,
+    };
+    let indices = match bus.with_coe(d.address, drive.clone(), false, T_SDO, async |c| {
+        c.od_list(crate::ec::mailbox::list_type::ALL).await
+    }) {
+        Ok(i) => i,
+        Err(crate::master::bus::SessionError::Coe(e))
+            if matches!(
+                e.kind,
+                CoeErrorKind::MailboxError(_) | CoeErrorKind::InfoError(_)
+            ) && profile_of(&d).is_some() =>
+        {
+            let p = profile_of(&d).ok_or_else(|| {
+                MasterError::from(crate::master::bus::SessionError::Coe(e.clone()))
+            })?;
+            let note = format!(
+                "the drive offers no SDO information ({}); objects from the {} profile",
+                e.kind, p.name
+            );
+            let objects = profile_objects(bus, &d, &drive, p, values, progress)?;
+            return Ok(listing(OdSource::Profile, Some(note), objects));
+        }
+        Err(e) => {
             let mut e = coe_error(e);
             e.step = "reading the object list (SDO information)".into();
-            e
-        })?;
+            return Err(e);
+        }
+    };
     let total = indices.len();
     let mut out = Vec::with_capacity(total);
     for (n, index) in indices.into_iter().enumerate() {
@@ -431,21 +504,7 @@ pub fn sdos<L: FrameLink>(
                         Err(e) => return Err(e),
                     };
                     let value = if values && e.access.readable() {
-                        Some(match c.upload(addr, false).await {
-                            Ok(bytes) => match DataType::from_code(e.data_type) {
-                                Some(dt) => Value::decode(dt, &bytes)
-                                    .map(|v| match hex_of(&v, dt) {
-                                        Some(h) => format!("{h} {v}"),
-                                        None => v.to_string(),
-                                    })
-                                    .unwrap_or_else(|_| format!("0x{}", hex_bytes(&bytes))),
-                                None => format!("0x{}", hex_bytes(&bytes)),
-                            },
-                            Err(err) => match err.abort_code() {
-                                Some(code) => format!("SDO abort {code}"),
-                                None => return Err(err),
-                            },
-                        })
+                        Some(value_text(c, addr, DataType::from_code(e.data_type)).await?)
                     } else {
                         None
                     };
@@ -471,6 +530,55 @@ pub fn sdos<L: FrameLink>(
             })
             .map_err(coe_error)?;
         out.push(obj);
+        progress(n + 1, total);
+    }
+    Ok(listing(OdSource::SdoInfo, None, out))
+}
+
+/// The objects of a profile's dictionary, as a listing (values uploaded with `values`).
+fn profile_objects<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    d: &DeviceInfo,
+    drive: &DriveRef,
+    p: &'static crate::drives::DriveProfile,
+    values: bool,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<OdObject>, MasterError> {
+    let total = p.dictionary.len();
+    let mut out = Vec::with_capacity(total);
+    for (n, o) in p.dictionary.iter().enumerate() {
+        let mut entries = Vec::with_capacity(o.entries.len());
+        for e in o.entries {
+            let addr = o.at(e.sub);
+            let value = if values && e.access.readable() {
+                let dt = e.data_type;
+                Some(
+                    bus.with_coe(d.address, drive.clone(), false, T_SDO, async |c| {
+                        value_text(c, addr, Some(dt)).await
+                    })
+                    .map_err(coe_error)?,
+                )
+            } else {
+                None
+            };
+            entries.push(OdEntry {
+                sub: e.sub,
+                address: addr.to_string(),
+                name: e.name.to_string(),
+                data_type: e.data_type.name().to_string(),
+                bit_len: e.bit_len,
+                access: access_text(e.access),
+                pdo_mapping: mapping_text(e.access),
+                value,
+            });
+        }
+        out.push(OdObject {
+            index: o.index,
+            name: o.name.to_string(),
+            object_code: o.code.name().to_string(),
+            max_sub: o.entries.iter().map(|e| e.sub).max().unwrap_or(0),
+            entries,
+        });
         progress(n + 1, total);
     }
     Ok(out)
