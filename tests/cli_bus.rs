@@ -141,7 +141,8 @@ fn sdos_and_pdos_show_the_dictionary_and_the_mapping() {
     let j = sim
         .ecdrive(&["sdos", "-p", "0", "--values", "--json"])
         .json();
-    let objs = j.as_array().expect("array");
+    assert_eq!(j["source"], "sdo_info");
+    let objs = j["objects"].as_array().expect("array");
     let identity = objs.iter().find(|o| o["index"] == 0x1018).expect("0x1018");
     assert_eq!(identity["object_code"], "RECORD");
     assert_eq!(identity["entries"][2]["name"], "Product code");
