@@ -208,13 +208,13 @@ pub fn run(
         .drives()
         .iter()
         .map(|d| {
-            let i = cfg
-                .drives
-                .iter()
-                .enumerate()
-                .position(|(i, e)| !used[i] && selects(&e.select, &d.info));
+            let i = cfg.drives.iter().enumerate().position(|(i, e)| {
+                !used.get(i).copied().unwrap_or(true) && selects(&e.select, &d.info)
+            });
             if let Some(i) = i {
-                used[i] = true;
+                if let Some(u) = used.get_mut(i) {
+                    *u = true;
+                }
             }
             i
         })
