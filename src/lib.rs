@@ -19,11 +19,13 @@
 //! | [`master`] | the ethercrab integration: start-up, PDO and DC configuration, the cyclic loop |
 //! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
 //! | [`canopen`] | the same CiA 402 layer over CANopen |
+//! | [`config`] | the `ecdrive run` configuration file (TOML) → master configuration |
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
 pub mod canopen;
 pub mod cia402;
+pub mod config;
 pub mod drives;
 pub mod ec;
 pub mod esi;
