@@ -180,8 +180,24 @@ pub struct CycleReport {
     pub max_following_error: Vec<i64>,
     /// Per axis: the modes it ran set-points in.
     pub modes_run: Vec<Vec<CyclicMode>>,
+    /// Per axis: the largest change of the streamed set-point from one cycle to the next while
+    /// the drive was enabled, for each kind (across mode switches too: a jump shows here).
+    pub max_setpoint_step: Vec<SetpointSteps>,
     /// Per axis: the states it went through, in order (consecutive duplicates removed).
     pub states: Vec<Vec<State>>,
+}
+
+/// Largest cycle-to-cycle changes of the set-points sent to one axis while it was enabled.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SetpointSteps {
+    /// Target position (0x607A), position units, while in csp.
+    pub position: i64,
+    /// Target velocity (0x60FF), drive velocity units, while in csv.
+    pub velocity: i64,
+    /// Target torque (0x6071), drive torque units, while in cst.
+    pub torque: i64,
+    /// Cycle numbers at which each maximum happened (position, velocity, torque).
+    pub at_cycle: [u64; 3],
 }
 
 /// Controlled-stop progress of one axis.
@@ -223,6 +239,8 @@ struct AxisRt {
     last_state: Option<State>,
     states: Vec<State>,
     modes_run: Vec<CyclicMode>,
+    steps: SetpointSteps,
+    last_out: Option<(i32, i32, i16)>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -304,6 +322,8 @@ pub fn run<L: FrameLink>(
             last_state: None,
             states: Vec::with_capacity(64),
             modes_run: Vec::with_capacity(8),
+            steps: SetpointSteps::default(),
+            last_out: None,
         });
     }
     // Outputs that carry fixed values from the first cycle on.
@@ -346,6 +366,7 @@ pub fn run<L: FrameLink>(
     let mut last_wake: u64 = 0;
     let mut next_wake = monotonic_ns() + cycle_ns;
     let mut dc_time: u64 = 0;
+    let mut last_wkc: u16 = 0;
     let stop_ramp_cycles = (settings.stop_ramp.as_nanos() as u64 / cycle_ns.max(1)).max(1);
     let stop_timeout_cycles = (settings.stop_timeout.as_nanos() as u64 / cycle_ns.max(1)).max(1);
 
@@ -392,6 +413,7 @@ pub fn run<L: FrameLink>(
                 }
                 consecutive_lost = 0;
                 dc_time = resp.extra.dc_system_time;
+                last_wkc = resp.working_counter;
                 next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
                 // AL states (state checks ride along with the LRW).
                 let mut missing: Option<u16> = None;
@@ -772,6 +794,41 @@ pub fn run<L: FrameLink>(
                 }
             }
 
+            // Set-point steps while enabled, in the mode the drive runs (confirmed by 0x6061):
+            // the other targets only track the actual values.
+            let running = a.axis.status();
+            if enabled && running.streaming {
+                if let Some((p, v, t)) = a.last_out {
+                    match CyclicMode::from_code(running.active_mode.as_i8()) {
+                        Some(CyclicMode::Csp) => {
+                            let d = i64::from(out.target_position.wrapping_sub(p)).abs();
+                            if d > a.steps.position {
+                                a.steps.position = d;
+                                a.steps.at_cycle[0] = cycle;
+                            }
+                        }
+                        Some(CyclicMode::Csv) => {
+                            let d = (i64::from(out.target_velocity) - i64::from(v)).abs();
+                            if d > a.steps.velocity {
+                                a.steps.velocity = d;
+                                a.steps.at_cycle[1] = cycle;
+                            }
+                        }
+                        Some(CyclicMode::Cst) => {
+                            let d = (i64::from(out.target_torque) - i64::from(t)).abs();
+                            if d > a.steps.torque {
+                                a.steps.torque = d;
+                                a.steps.at_cycle[2] = cycle;
+                            }
+                        }
+                        None => {}
+                    }
+                }
+                a.last_out = Some((out.target_position, out.target_velocity, out.target_torque));
+            } else {
+                a.last_out = None;
+            }
+
             // Following error and telemetry.
             let demand = if a.pos_valid {
                 a.pos + i64::from(out.target_position.wrapping_sub(a.pos_raw))
@@ -864,7 +921,7 @@ pub fn run<L: FrameLink>(
             t.cycle = CycleTelemetry {
                 cycle,
                 dc_time,
-                wkc: t.cycle.wkc,
+                wkc: last_wkc,
                 wkc_expected,
                 lost: lost_total,
                 overruns,
@@ -934,6 +991,7 @@ pub fn run<L: FrameLink>(
         rt,
         max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
         modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
+        max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
         states: axes.iter().map(|a| a.states.clone()).collect(),
     }
 }

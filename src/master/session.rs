@@ -133,6 +133,13 @@ pub struct Master<L: FrameLink + Send + 'static> {
     thread: Option<JoinHandle<SessionOutcome<L>>>,
 }
 
+/// What a successful start-up hands to the [`Master`].
+struct Started {
+    drives: Vec<DriveSummary>,
+    commands: rtrb::Producer<Command>,
+    telemetry: triple_buffer::Output<Telemetry>,
+}
+
 /// What the session thread returns: its report (none if start-up failed) and the link; `None`
 /// if the thread never received the link.
 type SessionOutcome<L> = Option<(Option<SessionReport>, L)>;
@@ -283,16 +290,13 @@ impl<L: FrameLink + Send + 'static> Master<L> {
     /// Start a master on `link`: start-up, then the cycle. Returns once the cycle runs (the
     /// drives then go to OP by themselves), or with the start-up error and the link.
     pub fn start(link: L, cfg: MasterConfig) -> Result<Self, StartFailure<L>> {
-        let n_hint = cfg.startup.drives.len().max(8);
-        let (cycle_io, sup) = cycle::channels(n_hint);
         let shared = Arc::new(Shared {
             history: Mutex::new(Vec::new()),
             rt: Mutex::new(None),
         });
-        let (tx, rx) = mpsc::channel::<Result<Vec<DriveSummary>, MasterError>>();
+        let (tx, rx) = mpsc::channel::<Result<Started, MasterError>>();
         let shared2 = shared.clone();
         let cfg2 = cfg.clone();
-        let mut events = sup.events;
         // The link goes to the session thread only once it runs, so that a failed spawn can
         // give it back.
         let (link_tx, link_rx) = mpsc::channel::<L>();
@@ -305,7 +309,7 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                 };
                 let tx_err = tx.clone();
                 let r = with_bus(link, cfg2.bus, move |bus| {
-                    session(bus, &cfg2, cycle_io, &mut events, &shared2, &tx)
+                    session(bus, &cfg2, &shared2, &tx)
                 });
                 Some(match r {
                     Ok((report, link)) => (report, link),
@@ -341,9 +345,13 @@ impl<L: FrameLink + Send + 'static> Master<L> {
             });
         }
         match rx.recv() {
-            Ok(Ok(drives)) => Ok(Self {
-                commands: sup.commands,
-                telemetry: sup.telemetry,
+            Ok(Ok(Started {
+                drives,
+                commands,
+                telemetry,
+            })) => Ok(Self {
+                commands,
+                telemetry,
                 shared,
                 drives,
                 thread: Some(thread),
@@ -478,10 +486,8 @@ impl<L: FrameLink + Send + 'static> Drop for Master<L> {
 fn session<L: FrameLink + Send>(
     bus: &mut super::bus::Bus<'_, L>,
     cfg: &MasterConfig,
-    mut cycle_io: cycle::CycleIo,
-    events: &mut rtrb::Consumer<Event>,
     shared: &Shared,
-    started_tx: &mpsc::Sender<Result<Vec<DriveSummary>, MasterError>>,
+    started_tx: &mpsc::Sender<Result<Started, MasterError>>,
 ) -> Option<SessionReport> {
     let started = match (|| {
         let (group, devices) = startup::discover(bus)?;
@@ -512,7 +518,16 @@ fn session<L: FrameLink + Send>(
             .map(|d| (d.drive.clone(), d.profile.caps.error_table))
             .collect(),
     };
-    let _ = started_tx.send(Ok(summaries.clone()));
+    // The channels, sized for exactly these drives (every telemetry buffer holds one entry
+    // per drive).
+    let (mut cycle_io, sup) = cycle::channels(started.drives.len());
+    let mut events = sup.events;
+    let events = &mut events;
+    let _ = started_tx.send(Ok(Started {
+        drives: summaries.clone(),
+        commands: sup.commands,
+        telemetry: sup.telemetry,
+    }));
 
     let push_history = |e: HistoryEntry| {
         if let Ok(mut h) = shared.history.lock() {

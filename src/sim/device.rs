@@ -169,6 +169,13 @@ pub trait Device: AsAny + Send {
     /// and abort segmented transfers.
     fn mailbox_reset(&mut self) {}
 
+    /// Apply an injected fault ([`super::faults`]); `false` if the device does not support it.
+    /// Must not allocate: it runs on the thread that processes frames.
+    fn inject(&mut self, fault: &super::faults::DeviceFault) -> bool {
+        let _ = fault;
+        false
+    }
+
     /// One process-data cycle: read `outputs` (SM2 image), fill `inputs` (SM3 image). Return an
     /// AL status code to leave OP for SAFE-OP with the error flag (e.g. 0x001A synchronisation
     /// error after too many missed cycles).

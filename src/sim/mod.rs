@@ -35,6 +35,7 @@ pub mod device;
 pub mod devices;
 pub mod drives;
 pub mod esc;
+pub mod faults;
 pub mod probe;
 pub mod rec;
 pub mod run;

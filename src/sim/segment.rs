@@ -95,6 +95,7 @@ pub struct Segment {
     scratch: Vec<u8>,
     earliest: Option<u64>,
     stats: SegmentStats,
+    faults: Option<rtrb::Consumer<super::faults::Fault>>,
 }
 
 impl core::fmt::Debug for Segment {
@@ -133,6 +134,31 @@ impl Segment {
             scratch: vec![0; crate::ec::frame::MAX_DATAGRAM_DATA],
             earliest: None,
             stats: SegmentStats::default(),
+            faults: None,
+        }
+    }
+
+    /// A handle to inject faults from another thread (see [`super::faults`]). A new handle
+    /// replaces the previous one.
+    pub fn fault_handle(&mut self) -> super::faults::FaultHandle {
+        let (tx, rx) = rtrb::RingBuffer::new(super::faults::QUEUE);
+        self.faults = Some(rx);
+        super::faults::FaultHandle { tx }
+    }
+
+    /// Apply the queued faults (allocation-free).
+    fn apply_faults(&mut self) {
+        let Some(rx) = self.faults.as_mut() else {
+            return;
+        };
+        while let Ok(f) = rx.pop() {
+            match f {
+                super::faults::Fault::Device { position, fault } => {
+                    if let Some(s) = self.slaves.get_mut(usize::from(position)) {
+                        s.device.inject(&fault);
+                    }
+                }
+            }
         }
     }
 
@@ -296,6 +322,7 @@ impl Segment {
             }
             return Err(e.into());
         }
+        self.apply_faults();
         self.run_due(now, true);
         {
             let mut ec = EthercatFrame::new_checked(eth.payload_mut())?;

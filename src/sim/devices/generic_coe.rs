@@ -708,6 +708,24 @@ impl Device for GenericCoeDevice {
         self.coe.reset();
     }
 
+    fn inject(&mut self, fault: &crate::sim::faults::DeviceFault) -> bool {
+        match *fault {
+            crate::sim::faults::DeviceFault::Emergency {
+                error_code,
+                error_register,
+                data,
+            } => {
+                self.coe.push_emergency(Emergency {
+                    error_code,
+                    error_register,
+                    data,
+                });
+                true
+            }
+            _ => false,
+        }
+    }
+
     fn sync(
         &mut self,
         event: &SyncEvent,

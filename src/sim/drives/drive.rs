@@ -1532,6 +1532,36 @@ impl Device for EmulatedDrive {
         self.coe.reset();
     }
 
+    fn inject(&mut self, fault: &crate::sim::faults::DeviceFault) -> bool {
+        use crate::sim::faults::DeviceFault;
+        match *fault {
+            DeviceFault::RaiseAlarm(id) => match self.spec.alarm(id) {
+                // Looked up first: an unknown name must not build an error (allocation).
+                Some(a) => {
+                    self.pending = Some(a);
+                    true
+                }
+                None => false,
+            },
+            DeviceFault::ForceFollowingError(v) => {
+                self.force_following_error(v);
+                true
+            }
+            DeviceFault::Emergency {
+                error_code,
+                error_register,
+                data,
+            } => {
+                self.coe.push_emergency(crate::sim::coe::Emergency {
+                    error_code,
+                    error_register,
+                    data,
+                });
+                true
+            }
+        }
+    }
+
     fn sync(
         &mut self,
         event: &SyncEvent,

@@ -1,0 +1,493 @@
+//! The master's acceptance with the emulated MR-J4-TM and BDHDE on one segment: OP with DC SYNC0
+//! at 1 ms and 500 µs (in-process and over veth); a csp move, a csv ramp and a cst step with the
+//! feedback following the command; csp→csv→cst→csp while enabled without a jump; a user mapping;
+//! an invalid mapping refused before anything is written; a following-error fault that stops both
+//! axes, is decoded with the drive's alarm name, is reset, and motion resumes.
+
+use ecdrive::drives::{DriveProfile, bdhde, mr_j4_tm};
+use ecdrive::link::FrameLink;
+use ecdrive::link::netns::{VethPair, is_root, require_root};
+use ecdrive::master::cycle::CycleEnd;
+use ecdrive::master::error::ErrorKind;
+use ecdrive::master::program::{CyclicMode, Step, Target};
+use ecdrive::master::session::{Master, MasterConfig, SessionReport};
+use ecdrive::master::startup::{DriveSetup, Selector};
+use ecdrive::master::telemetry::{Axes, Command, StopKind, Telemetry};
+use ecdrive::od::ObjectAddress;
+use ecdrive::pdo::{Direction, Mapping, Pdo, PdoEntry};
+use ecdrive::rt::RtSettings;
+use ecdrive::sim::drives::{EmulatedDrive, spec_for};
+use ecdrive::sim::faults::{DeviceFault, Fault};
+use ecdrive::sim::transport::{RawServer, SegmentLink};
+use ecdrive::sim::{EscConfig, HostClock, Segment};
+use std::sync::Arc;
+use std::time::Duration;
+
+const PROFILES: [&DriveProfile; 2] = [&mr_j4_tm::PROFILE, &bdhde::PROFILE];
+
+/// The two emulated drives. Their loss-of-data supervision is on when this process can run the
+/// cycle at real-time priority (root, as CI is); without it, a stall of the test machine would
+/// trip it, which tests here are not about.
+fn segment() -> Segment {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (i, p) in PROFILES.iter().enumerate() {
+        let mut d = EmulatedDrive::new(spec_for(p).unwrap(), 2000 + i as u32).unwrap();
+        if !is_root() {
+            d = d.without_loss_detection();
+        }
+        seg.push(Box::new(d), EscConfig::default()).unwrap();
+    }
+    seg
+}
+
+fn config(cycle: Duration, programs: [Vec<Step>; 2]) -> MasterConfig {
+    let mut cfg = MasterConfig::new(cycle);
+    cfg.cycle.rt = RtSettings {
+        priority: Some(80),
+        cpu: None,
+        lock_memory: false,
+    };
+    for (i, program) in programs.into_iter().enumerate() {
+        cfg.startup.drives.push(DriveSetup {
+            program,
+            ..DriveSetup::new(Selector::Position(i as u16))
+        });
+    }
+    cfg
+}
+
+fn errors(r: &SessionReport) -> Vec<String> {
+    r.history
+        .iter()
+        .filter(|h| h.error)
+        .map(|h| format!("{:?} {}", h.drive, h.text))
+        .collect()
+}
+
+fn run_to_op_and_stop<L: FrameLink + Send + 'static>(
+    link: L,
+    cycle: Duration,
+) -> (SessionReport, L) {
+    let mut m = Master::start(link, config(cycle, [vec![], vec![]]))
+        .unwrap_or_else(|f| panic!("start-up at {cycle:?}: {}", f.error));
+    m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    let c0 = m.telemetry().cycle.cycle;
+    m.wait_until("200 cycles in OP", Duration::from_secs(10), |t| {
+        t.cycle.cycle > c0 + 200
+    })
+    .unwrap();
+    let t = m.telemetry().clone();
+    assert_eq!(t.cycle.wkc, t.cycle.wkc_expected, "{:?}", t.cycle);
+    assert!(t.axes.iter().all(|a| a.al_state == 8));
+    let (r, link) = m.stop(StopKind::Ramp);
+    (r.unwrap(), link)
+}
+
+#[test]
+fn both_drives_reach_op_with_dc_at_1ms_and_500us_in_process() {
+    for cycle in [Duration::from_millis(1), Duration::from_micros(500)] {
+        let (r, _) = run_to_op_and_stop(SegmentLink::new(segment()), cycle);
+        assert!(r.shutdown_ok, "{cycle:?}");
+        assert_eq!(r.cycle.as_ref().unwrap().end, CycleEnd::Stopped);
+        assert!(errors(&r).is_empty(), "{cycle:?}: {:#?}", errors(&r));
+        assert_eq!(r.drives[0].profile, "MR-J4-TM");
+        assert_eq!(r.drives[1].profile, "BDHDE");
+    }
+}
+
+#[test]
+fn both_drives_reach_op_with_dc_at_1ms_and_500us_over_veth() {
+    if !require_root("master_drives::both_drives_reach_op_with_dc_at_1ms_and_500us_over_veth") {
+        return;
+    }
+    for cycle in [Duration::from_millis(1), Duration::from_micros(500)] {
+        let veth = VethPair::create().expect("veth pair");
+        let server = RawServer::spawn(veth.open_peer_socket().expect("peer socket"), segment())
+            .expect("server");
+        let (r, _) = run_to_op_and_stop(veth.open_host_socket().expect("host socket"), cycle);
+        assert!(r.shutdown_ok, "{cycle:?}");
+        assert!(errors(&r).is_empty(), "{cycle:?}: {:#?}", errors(&r));
+        let (_, served) = server.stop();
+        served.expect("server");
+    }
+}
+
+/// Telemetry samples of one axis, taken while a given program step runs.
+#[derive(Default, Clone)]
+struct Samples {
+    velocity: Vec<i32>,
+    torque: Vec<i16>,
+    position: Vec<i64>,
+}
+
+fn sample_until_done(
+    m: &mut Master<SegmentLink>,
+    steps: usize,
+    timeout: Duration,
+) -> Vec<Vec<Samples>> {
+    let mut out = vec![vec![Samples::default(); steps + 1]; 2];
+    let deadline = std::time::Instant::now() + timeout;
+    loop {
+        let t: Telemetry = m.telemetry().clone();
+        for (i, a) in t.axes.iter().enumerate().take(2) {
+            let s = &mut out[i][(a.program_step as usize).min(steps)];
+            s.velocity.push(a.velocity_actual);
+            s.torque.push(a.torque_actual);
+            s.position.push(a.position_actual);
+        }
+        if t.axes
+            .iter()
+            .all(|a| !a.program_running && a.program_step as usize >= steps)
+        {
+            return out;
+        }
+        assert!(
+            std::time::Instant::now() < deadline,
+            "programs did not finish: {:?}",
+            t.axes
+        );
+        std::thread::sleep(Duration::from_micros(500));
+    }
+}
+
+#[test]
+fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
+    let cycle = Duration::from_millis(1);
+    let program = |p: &DriveProfile| {
+        let rev = p.units.counts_per_rev;
+        vec![
+            // 0: csp move by one revolution at up to 2 rev/s.
+            Step::Move {
+                target: Target::By(rev),
+                velocity: 2.0 * rev,
+                acceleration: 20.0 * rev,
+                jerk: None,
+            },
+            // 1: settle.
+            Step::Dwell { seconds: 0.2 },
+            // 2, 3: csv ramp to 1 rev/s and hold.
+            Step::Mode {
+                mode: CyclicMode::Csv,
+            },
+            Step::Ramp {
+                velocity: rev,
+                acceleration: 10.0 * rev,
+                hold: 0.5,
+            },
+            // 4: back to 0.
+            Step::Ramp {
+                velocity: 0.0,
+                acceleration: 10.0 * rev,
+                hold: 0.1,
+            },
+            // 5, 6: cst step of 3 % rated torque and back.
+            Step::Mode {
+                mode: CyclicMode::Cst,
+            },
+            Step::Torque {
+                torque: 30.0,
+                slope: None,
+                hold: 0.1,
+            },
+            Step::Torque {
+                torque: -30.0,
+                slope: None,
+                hold: 0.1,
+            },
+            // 8..: brake through csv, back to csp.
+            Step::Mode {
+                mode: CyclicMode::Csv,
+            },
+            Step::Ramp {
+                velocity: 0.0,
+                acceleration: 10.0 * rev,
+                hold: 0.05,
+            },
+            Step::Mode {
+                mode: CyclicMode::Csp,
+            },
+            Step::Dwell { seconds: 0.05 },
+        ]
+    };
+    let programs = [program(PROFILES[0]), program(PROFILES[1])];
+    let steps = programs[0].len();
+    let mut m = Master::start(SegmentLink::new(segment()), config(cycle, programs)).unwrap();
+    m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    let p0: Vec<i64> = m
+        .telemetry()
+        .axes
+        .iter()
+        .map(|a| a.position_actual)
+        .collect();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.command(Command::RunProgram(Axes::All)).unwrap();
+    let samples = sample_until_done(&mut m, steps, Duration::from_secs(30));
+    let (r, _) = m.stop(StopKind::Ramp);
+    let r = r.unwrap();
+    assert!(errors(&r).is_empty(), "{:#?}", errors(&r));
+    let cyc = r.cycle.as_ref().unwrap();
+    for (i, p) in PROFILES.iter().enumerate() {
+        let rev = p.units.counts_per_rev;
+        let vel_unit = p.units.velocity_unit_counts_per_s;
+        // csp: one revolution, followed within 0.1 % after the dwell.
+        let settled = *samples[i][1].position.last().unwrap() - p0[i];
+        assert!(
+            (settled as f64 - rev).abs() < rev * 1e-3,
+            "{}: moved {settled} counts for {rev}",
+            p.name
+        );
+        // csv: the actual velocity during the hold is within 2 % of 1 rev/s.
+        let hold = &samples[i][3].velocity;
+        let tail = &hold[hold.len() / 2..];
+        let want = rev / vel_unit;
+        for v in tail {
+            assert!(
+                (*v as f64 - want).abs() < want * 0.02,
+                "{}: velocity {v} for {want}",
+                p.name
+            );
+        }
+        // cst: the actual torque during the step follows the command.
+        let tq = &samples[i][6].torque;
+        let t_tail = &tq[tq.len() / 4..tq.len() * 3 / 4];
+        assert!(
+            t_tail.iter().all(|t| (*t - 30).abs() <= 3),
+            "{}: torque {t_tail:?}",
+            p.name
+        );
+        // No jump: set-point steps bounded by the program's dynamics.
+        let s = cyc.max_setpoint_step[i];
+        let dt = cycle.as_secs_f64();
+        assert!(
+            (s.position as f64) <= 2.0 * rev * dt * 1.05 + 1.0,
+            "{}: position set-point jumped {} counts in one cycle",
+            p.name,
+            s.position
+        );
+        assert!(
+            (s.velocity as f64) <= 10.0 * rev / vel_unit * dt * 1.05 + 1.0,
+            "{}: velocity set-point jumped {} in one cycle (cycle {})",
+            p.name,
+            s.velocity,
+            s.at_cycle[1]
+        );
+        // The torque steps are the programmed steps (30), nothing larger: no jump at the
+        // switches into and out of cst.
+        assert!(
+            s.torque <= 60,
+            "{}: torque set-point jumped {}",
+            p.name,
+            s.torque
+        );
+        assert_eq!(
+            cyc.modes_run[i],
+            vec![
+                CyclicMode::Csp,
+                CyclicMode::Csv,
+                CyclicMode::Cst,
+                CyclicMode::Csv,
+                CyclicMode::Csp
+            ],
+            "{}",
+            p.name
+        );
+    }
+}
+
+/// A mapping of the user's: the MR-J4-TM through its second RxPDO table and a TxPDO with a
+/// different order.
+#[test]
+fn a_user_mapping_runs_and_an_invalid_one_is_refused_before_anything_is_written() {
+    static RX: &[Pdo] = &[Pdo::fixed(
+        0x1601,
+        &[
+            PdoEntry::new(0x6060, 0, 8),
+            PdoEntry::new(0x6040, 0, 16),
+            PdoEntry::new(0x607A, 0, 32),
+        ],
+    )];
+    static TX: &[Pdo] = &[Pdo::fixed(
+        0x1A01,
+        &[
+            PdoEntry::new(0x6061, 0, 8),
+            PdoEntry::new(0x6041, 0, 16),
+            PdoEntry::new(0x6064, 0, 32),
+            PdoEntry::new(0x2D12, 0, 16),
+        ],
+    )];
+    let rev = mr_j4_tm::PROFILE.units.counts_per_rev;
+    let mut cfg = config(
+        Duration::from_millis(1),
+        [
+            vec![Step::Move {
+                target: Target::By(0.25 * rev),
+                velocity: rev,
+                acceleration: 10.0 * rev,
+                jerk: None,
+            }],
+            vec![],
+        ],
+    );
+    cfg.startup.drives[0].mapping = Some(Mapping::fixed(RX, TX));
+    let mut m = Master::start(SegmentLink::new(segment()), cfg).unwrap();
+    assert_eq!(m.drives()[0].image_bytes, (7, 9));
+    m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    let p0 = m.telemetry().axes[0].position_actual;
+    m.command(Command::Enable(Axes::One(0))).unwrap();
+    m.command(Command::RunProgram(Axes::One(0))).unwrap();
+    m.wait_until("the move", Duration::from_secs(10), |t| {
+        !t.axes[0].program_running && t.axes[0].program_step == 1
+    })
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(50));
+    let moved = m.telemetry().axes[0].position_actual - p0;
+    assert!(
+        (moved as f64 - 0.25 * rev).abs() < rev * 1e-3,
+        "moved {moved}"
+    );
+    let (r, link) = m.stop(StopKind::Ramp);
+    assert!(errors(&r.unwrap()).is_empty());
+    // The drive reports the mapping the master wrote.
+    let seg = link.segment();
+    let d = seg.device::<EmulatedDrive>(0).unwrap();
+    assert_eq!(
+        d.od().dict().uint(ObjectAddress::new(0x1C12, 1)),
+        Some(0x1601)
+    );
+    assert_eq!(
+        d.od().dict().uint(ObjectAddress::new(0x1C13, 1)),
+        Some(0x1A01)
+    );
+
+    // Over the MR-J4-TM's 64-byte limit: refused before any write.
+    let big: Vec<PdoEntry> = (0..17).map(|_| PdoEntry::new(0x6064, 0, 32)).collect();
+    let mut cfg = config(Duration::from_millis(1), [vec![], vec![]]);
+    cfg.startup.drives[0].mapping = Some(Mapping::owned(
+        vec![Pdo::owned(
+            0x1600,
+            vec![PdoEntry::new(0x6040, 0, 16), PdoEntry::new(0x607A, 0, 32)],
+        )],
+        vec![Pdo::owned(0x1A00, {
+            let mut v = vec![PdoEntry::new(0x6041, 0, 16)];
+            v.extend(big);
+            v
+        })],
+    ));
+    let f = match Master::start(SegmentLink::new(segment()), cfg) {
+        Ok(_) => panic!("an invalid mapping was accepted"),
+        Err(f) => f,
+    };
+    assert_eq!(f.error.kind, ErrorKind::Config);
+    let text = f.error.to_string();
+    assert!(
+        text.starts_with("drive 0 (MR-J4-TM): checking the PDO mapping:"),
+        "{text}"
+    );
+    assert!(text.contains("70 bytes") && text.contains("64"), "{text}");
+    let seg = f.link.segment();
+    let d = seg.device::<EmulatedDrive>(0).unwrap();
+    // Power-on values: nothing was written (the cyclic mapping would have changed 0x1A00).
+    let default_len = mr_j4_tm::PROFILE.default_mapping.tx[0].entries.len() as u64;
+    assert_eq!(
+        d.od().dict().uint(ObjectAddress::new(0x1A00, 0)),
+        Some(default_len)
+    );
+    assert_eq!(
+        d.od().dict().uint(ObjectAddress::new(0x1C32, 2)),
+        Some(250_000)
+    );
+    let _ = Direction::Rx;
+}
+
+#[test]
+fn a_following_error_fault_stops_both_axes_is_decoded_reset_and_motion_resumes() {
+    let jog = |p: &DriveProfile| {
+        let rev = p.units.counts_per_rev;
+        vec![Step::Jog {
+            velocity: 0.5 * rev,
+            acceleration: 5.0 * rev,
+            seconds: 0.4,
+        }]
+    };
+    let mut seg = segment();
+    let mut faults = seg.fault_handle();
+    let mut m = Master::start(
+        SegmentLink::new(seg),
+        config(
+            Duration::from_millis(1),
+            [jog(PROFILES[0]), jog(PROFILES[1])],
+        ),
+    )
+    .unwrap();
+    m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.command(Command::RunProgram(Axes::All)).unwrap();
+    m.wait_until("both moving", Duration::from_secs(10), |t| {
+        t.axes
+            .iter()
+            .all(|a| a.velocity_actual.abs() > 0 && a.program_running)
+    })
+    .unwrap();
+    // The BDHDE's load jams: its following error grows past 0x6065 → fault J3.
+    faults
+        .inject(Fault::Device {
+            position: 1,
+            fault: DeviceFault::ForceFollowingError(Some(i32::MAX / 2)),
+        })
+        .unwrap();
+    let faulted = |t: &Telemetry| t.axes[1].statusword & 0x0008 != 0;
+    m.wait_until("the BDHDE to fault", Duration::from_secs(5), faulted)
+        .unwrap();
+    // The MR-J4-TM is stopped in a controlled way and disabled.
+    m.wait_until("the MR-J4-TM disabled", Duration::from_secs(5), |t| {
+        t.axes[0].state == Some(ecdrive::cia402::State::SwitchOnDisabled)
+    })
+    .unwrap();
+    let h = m.history();
+    let fault = h
+        .iter()
+        .find(|e| {
+            e.error
+                && e.drive.as_ref().is_some_and(|d| d.position == 1)
+                && e.text.starts_with("fault")
+        })
+        .unwrap_or_else(|| panic!("{h:#?}"));
+    assert!(fault.text.contains("J3"), "{}", fault.text);
+    assert!(
+        h.iter()
+            .any(|e| e.text.contains("stopping the axes: DriveFault { axis: 1 }")),
+        "{h:#?}"
+    );
+    // Clear the jam, reset, enable, run again: motion resumes.
+    faults
+        .inject(Fault::Device {
+            position: 1,
+            fault: DeviceFault::ForceFollowingError(None),
+        })
+        .unwrap();
+    m.command(Command::FaultReset(Axes::One(1))).unwrap();
+    m.wait_until("the fault to clear", Duration::from_secs(5), |t| {
+        !faulted(t)
+    })
+    .unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.command(Command::RunProgram(Axes::All)).unwrap();
+    m.wait_until("both moving again", Duration::from_secs(10), |t| {
+        t.axes
+            .iter()
+            .all(|a| a.program_running && a.velocity_actual.abs() > 0)
+    })
+    .unwrap();
+    m.wait_until("the jogs to end", Duration::from_secs(10), |t| {
+        t.axes
+            .iter()
+            .all(|a| !a.program_running && a.program_step == 1)
+    })
+    .unwrap();
+    let (r, _) = m.stop(StopKind::Ramp);
+    assert!(r.unwrap().shutdown_ok);
+}
