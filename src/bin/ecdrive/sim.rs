@@ -13,21 +13,21 @@ pub fn sim(
     list_devices: bool,
     json: bool,
 ) -> ExitCode {
-    use ecdrive::sim::devices::DEVICE_NAMES;
     if list_devices {
+        let names = ecdrive::sim::devices::device_names();
         if json {
             #[derive(serde::Serialize)]
-            struct Dev {
-                name: &'static str,
-                description: &'static str,
+            struct Dev<'a> {
+                name: &'a str,
+                description: &'a str,
             }
-            let list: Vec<Dev> = DEVICE_NAMES
+            let list: Vec<Dev<'_>> = names
                 .iter()
                 .map(|(name, description)| Dev { name, description })
                 .collect();
             return print_json("sim", &list);
         }
-        for (name, what) in DEVICE_NAMES {
+        for (name, what) in &names {
             println!("{name:14} {what}");
         }
         return ExitCode::SUCCESS;
