@@ -44,6 +44,7 @@ lock_memory = true
 [sim]
 devices = ["generic-coe", "generic-coe"]
 sm_watchdog = 0
+loss_detection = false
 [[drive]]
 position = 1
 mode = "csv"
@@ -67,7 +68,8 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
         c.target,
         Target::Sim(vec!["generic-coe".into(), "generic-coe".into()])
     );
-    assert_eq!(c.esc.sm_watchdog, 0);
+    assert_eq!(c.sim.esc.sm_watchdog, 0);
+    assert!(!c.sim.loss_detection);
     assert_eq!(c.duration, Some(Duration::from_secs(2)));
     assert_eq!(c.master.cycle.cycle, Duration::from_micros(500));
     assert_eq!(c.master.startup.cycle, Duration::from_micros(500));

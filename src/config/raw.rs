@@ -43,6 +43,8 @@ pub(super) struct Sim {
     pub devices: Vec<Spanned<String>>,
     #[serde(default)]
     pub sm_watchdog: Option<u16>,
+    #[serde(default)]
+    pub loss_detection: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -192,7 +192,7 @@ pub fn run(
     progress: &mut dyn FnMut(&RunProgress),
 ) -> Result<RunReport, MasterError> {
     let duration = opts.duration.or(cfg.duration);
-    let link = cfg.target.open_with(&cfg.esc)?;
+    let link = cfg.target.open_with(&cfg.sim)?;
     progress(&RunProgress {
         phase: "starting",
         elapsed: Duration::ZERO,
