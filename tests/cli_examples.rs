@@ -230,3 +230,24 @@ fn profile_checks_name_the_line_and_the_limit() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_readme_configuration_example_is_valid() {
+    let readme = std::fs::read_to_string("README.md").unwrap();
+    let section = readme
+        .split("\n## Configuration file\n")
+        .nth(1)
+        .expect("a Configuration file section");
+    let block = section
+        .split("```toml\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("a toml block");
+    let cfg = ecdrive::config::parse(block, "README.md").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(cfg.drives.len(), 1);
+    let d = &cfg.master.startup.drives[0];
+    assert!(d.mapping.is_some());
+    assert_eq!(d.program.len(), 4);
+    assert_eq!(d.sdos.len(), 1);
+    assert_eq!(cfg.drives[0].profile.map(|p| p.key), Some("mr-j4-tm"));
+}
