@@ -299,8 +299,8 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
-    // `ecdrive jitter` (the jitter harness) goes here: one variant, and one dispatch line in
-    // `main` below.
+    // `ecdrive jitter` (the jitter harness, `jitter.rs`) goes here: `mod jitter;` at the top,
+    // one variant here, and one dispatch line in `dispatch` below.
 }
 
 #[derive(Subcommand, Clone)]

@@ -17,17 +17,17 @@ pub fn sim(
         let names = ecdrive::sim::devices::device_names();
         if json {
             #[derive(serde::Serialize)]
-            struct Dev<'a> {
-                name: &'a str,
-                description: &'a str,
+            struct Dev {
+                name: &'static str,
+                description: String,
             }
-            let list: Vec<Dev<'_>> = names
-                .iter()
+            let list: Vec<Dev> = names
+                .into_iter()
                 .map(|(name, description)| Dev { name, description })
                 .collect();
             return print_json("sim", &list);
         }
-        for (name, what) in &names {
+        for (name, what) in names {
             println!("{name:14} {what}");
         }
         return ExitCode::SUCCESS;
