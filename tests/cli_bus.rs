@@ -453,3 +453,73 @@ fn wrong_input_on_the_bus_gives_one_line_and_an_exit_code() {
     sim.ecdrive(&["reg", "-p", "0", "read", "0xFFFF", "4"])
         .fails(2, &["run past 0xFFFF"]);
 }
+
+#[test]
+fn run_drives_both_over_the_wire() {
+    // The test machine is shared and this master not real-time: the emulated drives do not
+    // supervise the cyclic data here (`--no-loss-detection`).
+    let Some(sim) = SimOnVeth::start_with(
+        "cli_bus::run_drives_both_over_the_wire",
+        DEVICES,
+        &["--no-loss-detection"],
+    ) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("ecdrive-cli-run-veth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("veth.toml");
+    std::fs::write(
+        &f,
+        format!(
+            r#"interface = "{}"
+cycle = "1ms"
+[[drive]]
+position = 0
+mode = "csp"
+units = {{ name = "deg", counts_per_unit = 11650.844444 }}
+program = [{{ step = "move", by = 45, velocity = 360, acceleration = 3600 }}]
+[[drive]]
+position = 1
+mode = "csv"
+units = {{ name = "rev", counts_per_unit = 1048576 }}
+program = [
+  {{ step = "ramp", velocity = 2, acceleration = 20 }},
+  {{ step = "ramp", velocity = 0, acceleration = 20 }},
+]
+"#,
+            sim.host()
+        ),
+    )
+    .unwrap();
+    let path = f.display().to_string();
+    let text = support::cli::ecdrive(&["run", "-c", &path])
+        .ok()
+        .to_string();
+    assert!(
+        text.contains("completed (every program finished)"),
+        "{text}"
+    );
+    let j = support::cli::ecdrive(&["run", "-c", &path, "--json"]).json();
+    assert_eq!(j["outcome"], "completed");
+    assert_eq!(j["target"]["Interface"], sim.host());
+    for (i, mode) in ["csp", "csv"].into_iter().enumerate() {
+        let d = &j["drives"][i];
+        assert_eq!(d["name"], profile(i).name);
+        assert_eq!(d["modes_run"], serde_json::json!([mode]));
+        assert_eq!(d["steps_done"], d["program"].as_array().unwrap().len());
+        assert!(
+            d["states"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .any(|s| s == "Operation enabled"),
+            "{d}"
+        );
+        assert!(
+            text.contains(&format!("Drive {i} {} ", profile(i).name)),
+            "{text}"
+        );
+    }
+    assert_eq!(j["shutdown_ok"], true);
+    let _ = std::fs::remove_dir_all(&dir);
+}

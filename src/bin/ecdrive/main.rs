@@ -293,6 +293,10 @@ enum Command {
         /// value of 1000 = 100 ms).
         #[arg(long, value_name = "UNITS")]
         sm_watchdog: Option<u16>,
+        /// The emulated drives do not supervise the cyclic data (as the MR-J4-TM with
+        /// [Pr. PN06]/[Pr. PN02] so set): for masters that cannot keep the cycle.
+        #[arg(long)]
+        no_loss_detection: bool,
         /// List the device names and exit.
         #[arg(long)]
         list_devices: bool,
@@ -825,8 +829,16 @@ fn dispatch(cli: Cli) -> ExitCode {
             interface,
             devices,
             sm_watchdog,
+            no_loss_detection,
             list_devices,
             json,
-        } => sim::sim(interface, devices, sm_watchdog, list_devices, json.json),
+        } => sim::sim(
+            interface,
+            devices,
+            sm_watchdog,
+            !no_loss_detection,
+            list_devices,
+            json.json,
+        ),
     }
 }
