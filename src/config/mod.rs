@@ -11,6 +11,11 @@
 //! cpu = 1                    # pin to this CPU
 //! lock_memory = true         # mlockall
 //!
+//! [supervision]              # how the cycle reacts to the bus (optional)
+//! lost_cycles = 3            # consecutive cycles without a reply before the segment counts as lost
+//! wkc_errors = 3             # consecutive wrong working counters before the axes are stopped
+//! op_timeout = "5s"          # how long the drives may take to reach OP
+//!
 //! [sim]                      # only with interface = "sim"
 //! devices = ["mr-j4-tm", "bdhde"]
 //! loss_detection = true      # the emulated drives supervise the cyclic data (default)
@@ -404,6 +409,30 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         master.cycle.rt.priority = rt.priority.as_ref().map(|p| *p.get_ref());
         master.cycle.rt.cpu = rt.cpu;
         master.cycle.rt.lock_memory = rt.lock_memory;
+    }
+    if let Some(sv) = &f.supervision {
+        for (key, v, slot) in [
+            (
+                "supervision.lost_cycles",
+                &sv.lost_cycles,
+                &mut master.cycle.segment_lost_after,
+            ),
+            (
+                "supervision.wkc_errors",
+                &sv.wkc_errors,
+                &mut master.cycle.wkc_errors_before_stop,
+            ),
+        ] {
+            if let Some(v) = v {
+                if *v.get_ref() == 0 {
+                    return Err(cx.err(v.span(), key, "must be at least 1"));
+                }
+                *slot = *v.get_ref();
+            }
+        }
+        if let Some(t) = &sv.op_timeout {
+            master.cycle.op_timeout = duration_of(t, "supervision.op_timeout")?;
+        }
     }
     master.startup.allow_generic = f.allow_generic;
     master.startup.generic = crate::drives::by_key("generic-cia402");

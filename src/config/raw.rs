@@ -21,6 +21,8 @@ pub(super) struct File {
     #[serde(default)]
     pub rt: Option<Rt>,
     #[serde(default)]
+    pub supervision: Option<Supervision>,
+    #[serde(default)]
     pub sim: Option<Spanned<Sim>>,
     #[serde(default)]
     pub drive: Vec<Spanned<Drive>>,
@@ -35,6 +37,17 @@ pub(super) struct Rt {
     pub cpu: Option<usize>,
     #[serde(default)]
     pub lock_memory: bool,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Supervision {
+    #[serde(default)]
+    pub lost_cycles: Option<Spanned<u32>>,
+    #[serde(default)]
+    pub wkc_errors: Option<Spanned<u32>>,
+    #[serde(default)]
+    pub op_timeout: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]
