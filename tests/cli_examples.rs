@@ -125,7 +125,10 @@ fn every_example_passes_check_and_json_carries_the_text_facts() {
     )
     .unwrap();
     let copy = copy.display().to_string();
-    let text = ecdrive(&["run", "-c", &copy]).ok().to_string();
+    let run = ecdrive(&["run", "-c", &copy]);
+    // The progress display is for terminals: piped, stderr stays empty.
+    assert_eq!(run.stderr, "", "{run:#?}");
+    let text = run.ok().to_string();
     let j = ecdrive(&["run", "-c", &copy, "--json"]).json();
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(j["outcome"], "completed");
