@@ -264,4 +264,8 @@ fn canopen_nodes_on_the_virtual_bus() {
     assert!(d.contains("0x6081:00 = 20000"), "{d}");
     ecdrive(&["download", "--can", "virtual", "-n", "1", "0x6081:00", "-5"])
         .fails(2, &["node 1", "out of range for UNSIGNED32"]);
+    ecdrive(&["upload", "--can", "virtual", "-n", "5", "0x6041:00"])
+        .fails(3, &["node 5 (0x05) does not answer"]);
+    ecdrive(&["upload", "--can", "virtual", "-n", "0x7F", "0x1008:00"])
+        .fails(2, &["node 127", "give the type"]);
 }
