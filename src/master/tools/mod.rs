@@ -19,12 +19,16 @@
 //! requested position. A [`Target`] names where the segment is: a network interface, or
 //! emulated devices in-process (`sim:mr-j4-tm,bdhde`), which needs no root.
 //!
-//! ```no_run
+//! ```
 //! use ecdrive::master::tools::{self, Target};
 //!
-//! let target: Target = "sim:generic-coe".parse()?;
+//! let target: Target = "sim:mr-j4-tm,bdhde".parse()?;
 //! let slaves = tools::session(&target, |bus| tools::slaves(bus, false))?;
-//! assert_eq!(slaves[0].name, "ECD-COE402");
+//! assert_eq!(slaves[1].profile.as_deref(), Some("BDHDE"));
+//! let product = "0x1018:02".parse()?;
+//! // The data type comes from the MR-J4-TM profile.
+//! let v = tools::session(&target, move |bus| tools::upload(bus, 0, product, None))?;
+//! assert_eq!(v.hex.as_deref(), Some("0x00000201"));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
