@@ -41,9 +41,14 @@ duration = "2s"
 priority = 80
 cpu = 1
 lock_memory = true
+[supervision]
+lost_cycles = 10
+wkc_errors = 4
+op_timeout = "8s"
 [sim]
 devices = ["generic-coe", "generic-coe"]
 sm_watchdog = 0
+loss_detection = false
 [[drive]]
 position = 1
 mode = "csv"
@@ -67,7 +72,8 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
         c.target,
         Target::Sim(vec!["generic-coe".into(), "generic-coe".into()])
     );
-    assert_eq!(c.esc.sm_watchdog, 0);
+    assert_eq!(c.sim.esc.sm_watchdog, 0);
+    assert!(!c.sim.loss_detection);
     assert_eq!(c.duration, Some(Duration::from_secs(2)));
     assert_eq!(c.master.cycle.cycle, Duration::from_micros(500));
     assert_eq!(c.master.startup.cycle, Duration::from_micros(500));
@@ -75,6 +81,9 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
     assert_eq!(c.master.cycle.rt.priority, Some(80));
     assert_eq!(c.master.cycle.rt.cpu, Some(1));
     assert!(c.master.cycle.rt.lock_memory);
+    assert_eq!(c.master.cycle.segment_lost_after, 10);
+    assert_eq!(c.master.cycle.wkc_errors_before_stop, 4);
+    assert_eq!(c.master.cycle.op_timeout, Duration::from_secs(8));
     let d = &c.master.startup.drives;
     assert_eq!(d.len(), 2);
     assert_eq!(d[0].select, Selector::Position(1));
@@ -209,6 +218,12 @@ fn wrong_types_and_values_name_the_key() {
         3,
         Some("dc_shift"),
         "shorter than the cycle",
+    );
+    check(
+        "interface = \"eth0\"\n[supervision]\nlost_cycles = 0\n",
+        3,
+        Some("supervision.lost_cycles"),
+        "at least 1",
     );
     check(
         "interface = \"eth0\"\n[rt]\npriority = 0\n",

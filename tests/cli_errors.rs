@@ -197,6 +197,8 @@ fn help_documents_exit_codes_and_examples() {
             .iter()
             .any(|d| d["name"] == "generic-coe")
     );
+    assert_eq!(list[0]["name"], "mr-j4-tm");
+    assert_eq!(list[1]["name"], "bdhde");
 }
 
 #[test]
@@ -208,6 +210,18 @@ fn the_in_process_target_needs_no_root() {
         .ok()
         .to_string();
     assert_eq!(v.trim(), "0x00000ECD 3789");
+    // A device without CoE: its PDOs come from the SII.
+    let io = ecdrive(&["pdos", "-i", "sim:generic-io", "-p", "0", "--json"]).json();
+    assert_eq!(io["source"], "sii");
+    assert_eq!(io["sync_managers"][0]["pdos"][0]["index"], 0x1600);
+    let t = ecdrive(&["pdos", "-i", "sim:generic-io", "-p", "0"])
+        .ok()
+        .to_string();
+    assert!(t.contains("(from the SII: the device has no CoE)"), "{t}");
+    assert!(
+        t.contains("PDO entry 0x7000:01,  8 bit, offset   0, \"Output 1\""),
+        "{t}"
+    );
 }
 
 #[test]
@@ -250,4 +264,8 @@ fn canopen_nodes_on_the_virtual_bus() {
     assert!(d.contains("0x6081:00 = 20000"), "{d}");
     ecdrive(&["download", "--can", "virtual", "-n", "1", "0x6081:00", "-5"])
         .fails(2, &["node 1", "out of range for UNSIGNED32"]);
+    ecdrive(&["upload", "--can", "virtual", "-n", "5", "0x6041:00"])
+        .fails(3, &["node 5 (0x05) does not answer"]);
+    ecdrive(&["upload", "--can", "virtual", "-n", "0x7F", "0x1008:00"])
+        .fails(2, &["node 127", "give the type"]);
 }

@@ -1,37 +1,109 @@
-//! `ecdrive run` in-process: configuration files run against emulated devices, and the
-//! configuration errors a user meets.
+//! `ecdrive run` against the generic CoE test device in-process, with the generic CiA 402
+//! profile the file asks for: the run itself, and a drive refusing its configuration.
 
 mod support {
-    pub mod generic;
+    pub mod cli;
 }
 use ecdrive::master::tools::run::{Outcome, RunOptions, run};
 use std::sync::atomic::AtomicBool;
-use support::generic::GENERIC_TEST;
+use support::cli::ecdrive;
 
-#[test]
-fn generic_device_runs_a_csp_program() {
-    let text = r#"
+const GENERIC: &str = r#"
 interface = "sim"
 cycle = "1ms"
 [sim]
 devices = ["generic-coe"]
-sm_watchdog = 0
 [[drive]]
 position = 0
+profile = "generic-cia402"
 mode = "csp"
+limits = { following_error = 5000 }
 program = [
   { step = "move", by = 1000, velocity = 20000, acceleration = 200000 },
   { step = "dwell", seconds = 0.05 },
 ]
+[drive.mapping]
+rx = [{ pdo = 0x1600, entries = ["0x6040:00", "0x607A:00"] }]
+tx = [{ pdo = 0x1A00, entries = ["0x6041:00", "0x6064:00"] }]
 "#;
-    let mut cfg = ecdrive::config::parse(text, "test.toml").unwrap();
-    cfg.master.startup.drives[0].profile = Some(&GENERIC_TEST);
+
+#[test]
+fn the_generic_device_runs_a_program_and_reports_it() {
+    let cfg = ecdrive::config::parse(GENERIC, "generic.toml").unwrap();
     let stop = AtomicBool::new(false);
-    let mut seen = Vec::new();
+    let mut phases = Vec::new();
     let r = run(&cfg, &RunOptions::default(), &stop, &mut |p| {
-        seen.push(p.phase)
+        if phases.last() != Some(&p.phase) {
+            phases.push(p.phase);
+        }
     })
     .unwrap();
-    println!("{}", serde_json::to_string_pretty(&r).unwrap());
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    assert_eq!(r.reason, "every program finished");
+    assert_eq!(
+        phases,
+        [
+            "starting",
+            "waiting for OP",
+            "enabling",
+            "running",
+            "stopping"
+        ]
+    );
+    let d = &r.drives[0];
+    assert_eq!(d.name, "generic CiA 402 drive");
+    assert_eq!(d.device.name, "ECD-COE402");
+    assert_eq!(d.steps_done, 2);
+    assert_eq!(d.modes_run, ["csp"]);
+    assert_eq!(
+        d.states.first().map(String::as_str),
+        Some("Not ready to switch on")
+    );
+    assert!(
+        d.states.iter().any(|s| s == "Operation enabled"),
+        "{:?}",
+        d.states
+    );
+    assert_eq!(
+        d.states.last().map(String::as_str),
+        Some("Switch on disabled")
+    );
+    assert!(d.errors.is_empty(), "{:?}", d.errors);
+    assert!(r.shutdown_ok);
+    let c = r.cycle.unwrap();
+    assert!(c.cycles > 100);
+    assert!(
+        c.period.p50 > 900_000 && c.period.p50 < 1_100_000,
+        "{:?}",
+        c.period
+    );
+}
+
+#[test]
+fn a_refused_configuration_is_exit_4_naming_the_object() {
+    let dir = std::env::temp_dir().join(format!("ecdrive-cli-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // The generic profile's own cyclic mapping carries 0x6071, which the test device cannot map.
+    let f = dir.join("refused.toml");
+    std::fs::write(
+        &f,
+        "interface = \"sim\"\n[sim]\ndevices = [\"generic-coe\"]\n[[drive]]\nposition = 0\nprofile = \"generic-cia402\"\n",
+    )
+    .unwrap();
+    ecdrive(&["run", "-c", &f.display().to_string()]).fails(
+        4,
+        &[
+            "drive 0 (generic CiA 402 drive)",
+            "0x1600:04",
+            "0x06040041",
+            "cannot be mapped",
+        ],
+    );
+    // The good file through the binary, as JSON.
+    let g = dir.join("generic.toml");
+    std::fs::write(&g, GENERIC).unwrap();
+    let j = ecdrive(&["run", "-c", &g.display().to_string(), "--json"]).json();
+    assert_eq!(j["outcome"], "completed");
+    assert_eq!(j["drives"][0]["steps_done"], 2);
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -11,8 +11,14 @@
 //! cpu = 1                    # pin to this CPU
 //! lock_memory = true         # mlockall
 //!
+//! [supervision]              # how the cycle reacts to the bus (optional)
+//! lost_cycles = 3            # consecutive cycles without a reply before the segment counts as lost
+//! wkc_errors = 3             # consecutive wrong working counters before the axes are stopped
+//! op_timeout = "5s"          # how long the drives may take to reach OP
+//!
 //! [sim]                      # only with interface = "sim"
 //! devices = ["mr-j4-tm", "bdhde"]
+//! loss_detection = true      # the emulated drives supervise the cyclic data (default)
 //!
 //! [[drive]]
 //! position = 0               # or alias = 0x10, or identity = { vendor_id = 0xA1E, product_code = 0x201 }
@@ -48,10 +54,9 @@ use crate::drives::DriveProfile;
 use crate::master::program::{self, CyclicMode, Step, Target as MoveTarget};
 use crate::master::session::MasterConfig;
 use crate::master::startup::{DriveSetup, Selector};
-use crate::master::tools::Target;
+use crate::master::tools::{SimSettings, Target};
 use crate::od::{Dictionary, ObjectAddress, Value};
 use crate::pdo::{Mapping, Pdo, PdoEntry};
-use crate::sim::EscConfig;
 use std::ops::Range;
 use std::path::Path;
 use std::time::Duration;
@@ -117,8 +122,8 @@ pub struct RunConfig {
     pub source: String,
     /// Where the segment is.
     pub target: Target,
-    /// ESC settings of emulated devices (`[sim]`).
-    pub esc: EscConfig,
+    /// How the emulated devices are built (`[sim]`).
+    pub sim: SimSettings,
     /// The master configuration.
     pub master: MasterConfig,
     /// How long to run, if limited.
@@ -359,9 +364,14 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         }
         (name, None) => (Target::Interface(name.to_string()), None),
     };
-    let mut esc = EscConfig::default();
-    if let Some(wd) = f.sim.as_ref().and_then(|s| s.get_ref().sm_watchdog) {
-        esc.sm_watchdog = wd;
+    let mut sim = SimSettings::default();
+    if let Some(s) = &f.sim {
+        if let Some(wd) = s.get_ref().sm_watchdog {
+            sim.esc.sm_watchdog = wd;
+        }
+        if let Some(on) = s.get_ref().loss_detection {
+            sim.loss_detection = on;
+        }
     }
 
     let duration_of = |s: &Spanned<String>, key: &str| {
@@ -400,6 +410,30 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         master.cycle.rt.cpu = rt.cpu;
         master.cycle.rt.lock_memory = rt.lock_memory;
     }
+    if let Some(sv) = &f.supervision {
+        for (key, v, slot) in [
+            (
+                "supervision.lost_cycles",
+                &sv.lost_cycles,
+                &mut master.cycle.segment_lost_after,
+            ),
+            (
+                "supervision.wkc_errors",
+                &sv.wkc_errors,
+                &mut master.cycle.wkc_errors_before_stop,
+            ),
+        ] {
+            if let Some(v) = v {
+                if *v.get_ref() == 0 {
+                    return Err(cx.err(v.span(), key, "must be at least 1"));
+                }
+                *slot = *v.get_ref();
+            }
+        }
+        if let Some(t) = &sv.op_timeout {
+            master.cycle.op_timeout = duration_of(t, "supervision.op_timeout")?;
+        }
+    }
     master.startup.allow_generic = f.allow_generic;
     master.startup.generic = crate::drives::by_key("generic-cia402");
 
@@ -422,7 +456,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
     Ok(RunConfig {
         source: source.to_string(),
         target,
-        esc,
+        sim,
         master,
         duration,
         drives,

@@ -21,6 +21,8 @@ pub(super) struct File {
     #[serde(default)]
     pub rt: Option<Rt>,
     #[serde(default)]
+    pub supervision: Option<Supervision>,
+    #[serde(default)]
     pub sim: Option<Spanned<Sim>>,
     #[serde(default)]
     pub drive: Vec<Spanned<Drive>>,
@@ -39,10 +41,23 @@ pub(super) struct Rt {
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
+pub(super) struct Supervision {
+    #[serde(default)]
+    pub lost_cycles: Option<Spanned<u32>>,
+    #[serde(default)]
+    pub wkc_errors: Option<Spanned<u32>>,
+    #[serde(default)]
+    pub op_timeout: Option<Spanned<String>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub(super) struct Sim {
     pub devices: Vec<Spanned<String>>,
     #[serde(default)]
     pub sm_watchdog: Option<u16>,
+    #[serde(default)]
+    pub loss_detection: Option<bool>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -20,6 +20,10 @@ pub struct SimOptions {
     /// Reset value of the SM watchdog (0x0420) in watchdog units of 100 µs; `None` keeps the ESC
     /// reset value (1000 = 100 ms), `Some(0)` disables it.
     pub sm_watchdog: Option<u16>,
+    /// Whether the emulated drives supervise the cyclic data (on, as real drives are
+    /// delivered; off for masters on a host that cannot keep the cycle, see
+    /// [`super::drives::EmulatedDrive::set_loss_detection`]).
+    pub loss_detection: bool,
 }
 
 /// Why a segment cannot be served.
@@ -90,7 +94,14 @@ impl Prepared {
         if let Some(wd) = opts.sm_watchdog {
             esc.sm_watchdog = wd;
         }
-        let segment = build_segment(&opts.devices, &esc)?;
+        let mut segment = build_segment(&opts.devices, &esc)?;
+        if !opts.loss_detection {
+            for i in 0..segment.len() {
+                if let Some(d) = segment.device_mut::<super::drives::EmulatedDrive>(i) {
+                    d.set_loss_detection(false);
+                }
+            }
+        }
         let socket = RawSocket::open(&opts.interface)?;
         Ok(Self {
             socket,

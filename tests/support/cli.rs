@@ -94,6 +94,11 @@ pub struct SimOnVeth {
 impl SimOnVeth {
     /// Start it; `None` (with the loud skip line of [`require_root`]) without root.
     pub fn start(test: &str, devices: &[&str]) -> Option<Self> {
+        Self::start_with(test, devices, &[])
+    }
+
+    /// [`SimOnVeth::start`] with more `ecdrive sim` arguments.
+    pub fn start_with(test: &str, devices: &[&str], extra: &[&str]) -> Option<Self> {
         if !require_root(test) {
             return None;
         }
@@ -104,6 +109,7 @@ impl SimOnVeth {
         for d in devices {
             cmd.args(["--device", d]);
         }
+        cmd.args(extra);
         let mut child = cmd
             .stdin(Stdio::null())
             .stdout(Stdio::null())

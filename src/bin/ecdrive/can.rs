@@ -37,6 +37,24 @@ fn open(cmd: &str, bus: &str) -> Result<Master<Box<dyn CanTransport>>, ExitCode>
     Ok(Master::new(t, MasterConfig::default()))
 }
 
+/// Fail with a clear line when `node` does not answer at all (rather than with what the
+/// first transfer happens to report).
+fn present<T: CanTransport>(cmd: &str, m: &mut Master<T>, node: u8) -> Result<(), ExitCode> {
+    match tools::scan(m, node..=node) {
+        Ok(found) if found.iter().any(|n| n.node == node) => Ok(()),
+        Ok(_) => Err(fail_with(
+            cmd,
+            &format!(
+                "node {node} (0x{node:02X}) does not answer: no reply to an SDO upload of 0x1000 \
+                 within {} ms",
+                tools::SCAN_WINDOW_US / 1000
+            ),
+            exit::BUS,
+        )),
+        Err(e) => Err(fail(cmd, &e)),
+    }
+}
+
 fn hex(v: Option<u32>) -> String {
     v.map_or_else(|| "-".into(), |v| format!("0x{v:08X}"))
 }
@@ -124,6 +142,9 @@ pub fn upload(
         Ok(m) => m,
         Err(c) => return c,
     };
+    if let Err(c) = present("upload", &mut m, node) {
+        return c;
+    }
     let v = match tools::upload(&mut m, node, addr, dt) {
         Ok(v) => v,
         Err(e) => return fail("upload", &e),
@@ -151,6 +172,9 @@ pub fn download(
         Ok(m) => m,
         Err(c) => return c,
     };
+    if let Err(c) = present("download", &mut m, node) {
+        return c;
+    }
     if let Err(e) = tools::download(&mut m, node, addr, text, dt) {
         return fail("download", &e);
     }

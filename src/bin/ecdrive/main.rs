@@ -294,14 +294,18 @@ enum Command {
         /// value of 1000 = 100 ms).
         #[arg(long, value_name = "UNITS")]
         sm_watchdog: Option<u16>,
+        /// The emulated drives do not supervise the cyclic data (as the MR-J4-TM with
+        /// [Pr. PN06]/[Pr. PN02] so set): for masters that cannot keep the cycle.
+        #[arg(long)]
+        no_loss_detection: bool,
         /// List the device names and exit.
         #[arg(long)]
         list_devices: bool,
         #[command(flatten)]
         json: Json,
     },
-    // `ecdrive jitter` (the jitter harness) goes here: one variant, and one dispatch line in
-    // `main` below.
+    // `ecdrive jitter` (the jitter harness, `jitter.rs`) goes here: `mod jitter;` at the top,
+    // one variant here, and one dispatch line in `dispatch` below.
 }
 
 #[derive(Subcommand, Clone)]
@@ -817,8 +821,16 @@ fn dispatch(cli: Cli) -> ExitCode {
             interface,
             devices,
             sm_watchdog,
+            no_loss_detection,
             list_devices,
             json,
-        } => sim::sim(interface, devices, sm_watchdog, list_devices, json.json),
+        } => sim::sim(
+            interface,
+            devices,
+            sm_watchdog,
+            !no_loss_detection,
+            list_devices,
+            json.json,
+        ),
     }
 }

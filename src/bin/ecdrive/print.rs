@@ -465,7 +465,8 @@ pub fn esi_check(c: &EsiCheck) {
 
 /// A progress bar on stderr, hidden when stderr is not a terminal.
 pub fn progress(what: &str) -> ProgressBar {
-    let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+    // Length 1 until the operation knows its size, so the bar starts empty.
+    let bar = ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr());
     if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len}") {
         bar.set_style(style.progress_chars("=> "));
     }

@@ -10,6 +10,7 @@ pub fn sim(
     interface: Option<String>,
     devices: Vec<String>,
     sm_watchdog: Option<u16>,
+    loss_detection: bool,
     list_devices: bool,
     json: bool,
 ) -> ExitCode {
@@ -39,6 +40,7 @@ pub fn sim(
         interface,
         devices,
         sm_watchdog,
+        loss_detection,
     };
     let prepared = match ecdrive::sim::run::Prepared::new(&opts) {
         Ok(p) => p,

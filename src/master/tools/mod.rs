@@ -19,12 +19,16 @@
 //! requested position. A [`Target`] names where the segment is: a network interface, or
 //! emulated devices in-process (`sim:mr-j4-tm,bdhde`), which needs no root.
 //!
-//! ```no_run
+//! ```
 //! use ecdrive::master::tools::{self, Target};
 //!
-//! let target: Target = "sim:generic-coe".parse()?;
+//! let target: Target = "sim:mr-j4-tm,bdhde".parse()?;
 //! let slaves = tools::session(&target, |bus| tools::slaves(bus, false))?;
-//! assert_eq!(slaves[0].name, "ECD-COE402");
+//! assert_eq!(slaves[1].profile.as_deref(), Some("BDHDE"));
+//! let product = "0x1018:02".parse()?;
+//! // The data type comes from the MR-J4-TM profile.
+//! let v = tools::session(&target, move |bus| tools::upload(bus, 0, product, None))?;
+//! assert_eq!(v.hex.as_deref(), Some("0x00000201"));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
@@ -145,24 +149,60 @@ impl FrameLink for ToolLink {
     }
 }
 
+/// How the emulated devices of a [`Target::Sim`] are built.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SimSettings {
+    /// ESC settings (SM watchdog).
+    pub esc: EscConfig,
+    /// Whether the emulated drives supervise the cyclic data (on, as the real drives are
+    /// delivered: the MR-J4-TM raises AL.86.1 and the BDHDE 0x818D after about 7 ms without
+    /// it). Off is what the MR-J4-TM does with [Pr. PN06]/[Pr. PN02] set so: for masters on a
+    /// host that cannot keep the cycle (no real-time priority, a loaded machine).
+    pub loss_detection: bool,
+}
+
+impl Default for SimSettings {
+    fn default() -> Self {
+        Self {
+            esc: EscConfig::default(),
+            loss_detection: true,
+        }
+    }
+}
+
 impl Target {
-    /// Open the link: the raw socket, or build the emulated devices (with `esc` settings).
-    pub fn open_with(&self, esc: &EscConfig) -> Result<ToolLink, MasterError> {
+    /// Open the link: the raw socket, or build the emulated devices with `sim`.
+    pub fn open_with(&self, sim: &SimSettings) -> Result<ToolLink, MasterError> {
         match self {
             Self::Interface(i) => RawSocket::open(i).map(ToolLink::Raw).map_err(|e| {
                 MasterError::new(None, format!("opening interface {i}"), ErrorKind::Link, e)
             }),
-            Self::Sim(devices) => crate::sim::run::build_segment(devices, esc)
-                .map(|s| ToolLink::Sim(Box::new(SegmentLink::new(s))))
-                .map_err(|e| {
-                    MasterError::new(None, "building the emulated devices", ErrorKind::Config, e)
-                }),
+            Self::Sim(devices) => {
+                let mut segment =
+                    crate::sim::run::build_segment(devices, &sim.esc).map_err(|e| {
+                        MasterError::new(
+                            None,
+                            "building the emulated devices",
+                            ErrorKind::Config,
+                            e,
+                        )
+                    })?;
+                if !sim.loss_detection {
+                    for i in 0..segment.len() {
+                        if let Some(d) = segment.device_mut::<crate::sim::drives::EmulatedDrive>(i)
+                        {
+                            d.set_loss_detection(false);
+                        }
+                    }
+                }
+                Ok(ToolLink::Sim(Box::new(SegmentLink::new(segment))))
+            }
         }
     }
 
-    /// Open the link with the default ESC settings for emulated devices.
+    /// Open the link with the default settings for emulated devices.
     pub fn open(&self) -> Result<ToolLink, MasterError> {
-        self.open_with(&EscConfig::default())
+        self.open_with(&SimSettings::default())
     }
 }
 

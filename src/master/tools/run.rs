@@ -150,7 +150,8 @@ pub struct RunReport {
 pub struct RunOptions {
     /// Override the file's duration.
     pub duration: Option<Duration>,
-    /// How long the drives may take to reach OP.
+    /// How long to wait for OP at least (the file's `supervision.op_timeout` plus 10 s when
+    /// that is longer).
     pub op_timeout: Duration,
     /// How long the axes may take to be enabled.
     pub enable_timeout: Duration,
@@ -192,7 +193,7 @@ pub fn run(
     progress: &mut dyn FnMut(&RunProgress),
 ) -> Result<RunReport, MasterError> {
     let duration = opts.duration.or(cfg.duration);
-    let link = cfg.target.open_with(&cfg.esc)?;
+    let link = cfg.target.open_with(&cfg.sim)?;
     progress(&RunProgress {
         phase: "starting",
         elapsed: Duration::ZERO,
@@ -252,7 +253,10 @@ pub fn run(
         });
     };
 
-    // OP.
+    // OP: the cycle itself gives up after its `op_timeout`; wait a little longer than that.
+    let op_wait = opts
+        .op_timeout
+        .max(cfg.master.cycle.op_timeout + Duration::from_secs(10));
     let mut started = None;
     let wait = Instant::now();
     loop {
@@ -261,12 +265,9 @@ pub fn run(
         if t.cycle.all_op {
             break;
         }
-        if !m.is_running() || wait.elapsed() > opts.op_timeout {
+        if !m.is_running() || wait.elapsed() > op_wait {
             outcome = Outcome::Refused;
-            reason = format!(
-                "the drives did not reach OP within {} s",
-                opts.op_timeout.as_secs()
-            );
+            reason = format!("the drives did not reach OP within {} s", op_wait.as_secs());
             break;
         }
         if stop.load(Ordering::Relaxed) {
