@@ -35,3 +35,8 @@ pub mod od;
 pub mod pdo;
 pub mod rt;
 pub mod sim;
+
+/// The README's Rust examples, compiled by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
