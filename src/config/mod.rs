@@ -435,7 +435,6 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         }
     }
     master.startup.allow_generic = f.allow_generic;
-    master.startup.generic = crate::drives::by_key("generic-cia402");
 
     let mut drives = Vec::with_capacity(f.drive.len());
     for (i, d) in f.drive.iter().enumerate() {

@@ -119,10 +119,9 @@ pub struct StartupConfig {
     /// Per-drive configuration. Devices without an entry run with the defaults of their
     /// profile ([`DriveSetup::new`]).
     pub drives: Vec<DriveSetup>,
-    /// Run unknown devices with the generic CiA 402 profile.
+    /// Run unknown devices with the generic CiA 402 profile
+    /// ([`crate::drives::generic::GENERIC_CIA402`]); only when the user asks for it.
     pub allow_generic: bool,
-    /// The profile unknown devices get when `allow_generic` is set.
-    pub generic: Option<&'static DriveProfile>,
 }
 
 impl StartupConfig {
@@ -133,7 +132,6 @@ impl StartupConfig {
             dc: DcSettings::default(),
             drives: Vec::new(),
             allow_generic: false,
-            generic: None,
         }
     }
 }
@@ -322,35 +320,26 @@ pub fn plan(
     let mut out = Vec::with_capacity(devices.len());
     for (d, setup) in devices.iter().zip(chosen) {
         let setup = setup.unwrap_or_else(|| DriveSetup::new(Selector::Position(d.position)));
-        let profile = match setup
-            .profile
-            .or_else(|| crate::drives::by_identity(d.vendor_id, d.product_code))
-        {
+        let profile = match setup.profile {
             Some(p) => p,
-            None if cfg.allow_generic && cfg.generic.is_some() => {
-                cfg.generic.ok_or_else(|| unknown(d))?
+            None => {
+                crate::drives::identify(d.vendor_id, d.product_code, d.revision, cfg.allow_generic)
+                    .map_err(|e| {
+                        MasterError::new(
+                            Some(&DriveRef {
+                                position: d.position,
+                                name: d.name.clone(),
+                            }),
+                            "matching a drive profile",
+                            ErrorKind::UnknownDevice,
+                            format!("{e} (serial {})", d.serial),
+                        )
+                    })?
             }
-            None => return Err(unknown(d)),
         };
         out.push((setup, profile));
     }
     Ok(out)
-}
-
-fn unknown(d: &DeviceInfo) -> MasterError {
-    MasterError::new(
-        Some(&DriveRef {
-            position: d.position,
-            name: d.name.clone(),
-        }),
-        "matching a drive profile",
-        ErrorKind::UnknownDevice,
-        format!(
-            "unknown device: vendor 0x{:08X}, product 0x{:08X}, revision 0x{:08X}, serial {}; \
-             no profile matches (allow the generic CiA 402 profile to run it anyway)",
-            d.vendor_id, d.product_code, d.revision, d.serial
-        ),
-    )
 }
 
 /// Check every drive's configuration against its profile before anything is written.
