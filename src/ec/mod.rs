@@ -9,6 +9,7 @@ pub mod command;
 pub mod frame;
 pub mod mailbox;
 pub mod register;
+pub mod sii;
 
 pub use al::{AlState, AlStatus, AlStatusCode};
 pub use command::Command;

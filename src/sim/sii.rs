@@ -11,34 +11,10 @@
 
 use bitflags::bitflags;
 
-/// Word address of the first category.
-pub const FIRST_CATEGORY_WORD: u16 = 0x0040;
 /// Default EEPROM size in bytes (16 Kbit, the size of the common 24C16).
 pub const DEFAULT_EEPROM_BYTES: usize = 2048;
 
-/// SII category types (ETG.2010 table 6).
-pub mod category {
-    /// Strings.
-    pub const STRINGS: u16 = 10;
-    /// Data types.
-    pub const DATA_TYPES: u16 = 20;
-    /// General.
-    pub const GENERAL: u16 = 30;
-    /// FMMU usage.
-    pub const FMMU: u16 = 40;
-    /// SyncManagers.
-    pub const SYNC_MANAGER: u16 = 41;
-    /// FMMU extension (FMMU → SM assignment).
-    pub const FMMU_EX: u16 = 42;
-    /// TxPDOs (inputs).
-    pub const TXPDO: u16 = 50;
-    /// RxPDOs (outputs).
-    pub const RXPDO: u16 = 51;
-    /// Distributed clock operation modes.
-    pub const DC: u16 = 60;
-    /// End marker.
-    pub const END: u16 = 0xFFFF;
-}
+pub use crate::ec::sii::{FIRST_CATEGORY_WORD, category};
 
 /// The SII checksum: CRC-8, polynomial 0x07, initial value 0xFF, no reflection, stored in the
 /// low byte of word 7 over bytes 0..14 (words 0–6).

@@ -18,50 +18,7 @@ use crate::od::DataType;
 use serde::Serialize;
 use std::fmt::Write as _;
 
-/// SII category types (ETG.2010 table 6).
-pub mod category {
-    /// Strings.
-    pub const STRINGS: u16 = 10;
-    /// Data types.
-    pub const DATA_TYPES: u16 = 20;
-    /// General.
-    pub const GENERAL: u16 = 30;
-    /// FMMU usage.
-    pub const FMMU: u16 = 40;
-    /// SyncManagers.
-    pub const SYNC_MANAGER: u16 = 41;
-    /// FMMU extension.
-    pub const FMMU_EX: u16 = 42;
-    /// TxPDOs (inputs).
-    pub const TXPDO: u16 = 50;
-    /// RxPDOs (outputs).
-    pub const RXPDO: u16 = 51;
-    /// Distributed clocks.
-    pub const DC: u16 = 60;
-    /// End marker.
-    pub const END: u16 = 0xFFFF;
-
-    /// The category's name.
-    pub fn name(kind: u16) -> &'static str {
-        match kind {
-            STRINGS => "Strings",
-            DATA_TYPES => "DataTypes",
-            GENERAL => "General",
-            FMMU => "FMMU",
-            SYNC_MANAGER => "SyncM",
-            FMMU_EX => "FMMUX",
-            TXPDO => "TxPDO",
-            RXPDO => "RxPDO",
-            DC => "DC",
-            1..=9 => "NOP",
-            0x0800..=0x0FFF => "vendor specific",
-            _ => "unknown",
-        }
-    }
-}
-
-/// Word address of the first category.
-pub const FIRST_CATEGORY_WORD: u16 = 0x0040;
+pub use crate::ec::sii::{FIRST_CATEGORY_WORD, category};
 
 /// Why SII bytes could not be decoded.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
