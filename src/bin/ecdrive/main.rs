@@ -1,5 +1,7 @@
 //! The `ecdrive` command line. Argument parsing and output only: the work is in the library.
 
+mod jitter;
+
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -35,6 +37,8 @@ enum Command {
         #[arg(long)]
         list_devices: bool,
     },
+    /// Measure the cycle's timing against a bare sleep loop and a plain ethercrab loop.
+    Jitter(jitter::JitterArgs),
 }
 
 fn main() -> ExitCode {
@@ -56,6 +60,7 @@ fn main() -> ExitCode {
             sm_watchdog,
             list_devices,
         } => sim(interface, devices, sm_watchdog, list_devices),
+        Command::Jitter(args) => jitter::run(args),
     }
 }
 

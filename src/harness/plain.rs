@@ -1,0 +1,386 @@
+//! The plain ethercrab baseline: ethercrab alone, as its own `dc` example runs it, with no
+//! ecdrive master code.
+//!
+//! `MainDevice::new` (ethercrab's default timeouts) → `init_single_group` → per device the
+//! PRE-OP SDOs the drive needs for DC (PDO mapping, synchronisation type, cycle time, written
+//! with ethercrab's `sdo_write`) and `set_dc_sync(Sync0)` → `into_pre_op_pdi` →
+//! `configure_dc_sync` → `into_safe_op` → `request_into_op` → `tx_rx_dc` cycles until every
+//! device is in OP. Then the measured loop: absolute sleep (`clock_nanosleep`) to the instant
+//! `tx_rx_dc` asked for (start of the exchange + `next_cycle_wait`), `tx_rx_dc`, read each
+//! device's inputs and write its outputs. The futures run on `async_io::block_on` (what
+//! `smol::block_on` is), so ethercrab's PDU timeouts are its usual `async_io` timers.
+//!
+//! The frames are moved by a separate TX/RX thread, as with ethercrab's own drivers:
+//! in-process by [`EthercrabLink`] (which also runs the emulated slaves), on an interface by
+//! `ethercrab::std::tx_rx_task`. It gets the same real-time set-up as the loop thread, and its
+//! CPU time is reported separately.
+
+use super::HarnessError;
+use super::cpu::{CpuReport, CpuSample, ThreadCpuClock};
+use super::report::{RunHistograms, RunReport};
+use crate::drives::{CycleTimeObject, DriveProfile};
+use crate::od::DataType;
+use crate::pdo::{self, RemapOptions};
+use crate::rt::{RtReport, RtSettings, monotonic_ns, sleep_until_ns};
+use crate::sim::Segment;
+use crate::sim::transport::EthercrabLink;
+use ethercrab::std::ethercat_now;
+use ethercrab::subdevice_group::DcConfiguration;
+use ethercrab::{DcSync, MainDevice, MainDeviceConfig, PduStorage, Timeouts};
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// Same group dimensions as ecdrive's (`master::bus`), so both copy the same structures.
+const MAX_SUBDEVICES: usize = 128;
+const MAX_PDI: usize = 16384;
+const MAX_FRAMES: usize = 16;
+const MAX_FRAME: usize = 1514;
+type Storage = PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME) }>;
+
+/// Stack of the loop thread: ethercrab keeps the group (tens of KiB) inline in its futures.
+const STACK: usize = 16 * 1024 * 1024;
+
+/// Where the plain ethercrab loop sends its frames.
+pub enum PlainTransport {
+    /// In-process: this segment, served by an [`EthercrabLink`] thread.
+    InProcess(Segment),
+    /// A network interface, served by `ethercrab::std::tx_rx_task` on its own thread.
+    Interface(String),
+}
+
+/// What the measurement needs to know.
+#[derive(Debug, Clone)]
+pub struct PlainSettings {
+    /// Cycle time.
+    pub cycle: Duration,
+    /// Cycles in the measured window.
+    pub cycles: u64,
+    /// Real-time set-up of the loop and TX/RX threads.
+    pub rt: RtSettings,
+    /// The profile of each device, in line order.
+    pub profiles: Vec<&'static DriveProfile>,
+    /// How long the devices may take to reach OP.
+    pub op_timeout: Duration,
+    /// Reply budget as a fraction of the cycle (a slower exchange counts as missed).
+    pub reply_budget: f64,
+}
+
+fn err(what: impl Into<String>, reason: impl ToString) -> HarnessError {
+    HarnessError::Run {
+        run: "ethercrab",
+        what: what.into(),
+        reason: reason.to_string(),
+    }
+}
+
+/// Run the plain ethercrab loop; returns its report (without drive figures) and, in-process,
+/// the segment back.
+pub fn run(
+    transport: PlainTransport,
+    settings: &PlainSettings,
+) -> Result<(RunReport, Option<Segment>), HarnessError> {
+    // ethercrab's TX/RX handles must outlive every thread that uses them; one storage per run
+    // is leaked (about 25 KiB) rather than reused with `unsafe`.
+    let storage: &'static Storage = Box::leak(Box::new(Storage::new()));
+    let (tx, rx, pdu_loop) = storage
+        .try_split()
+        .map_err(|()| err("splitting the PDU storage", "already split"))?;
+
+    let (clock_tx, clock_rx) = mpsc::channel::<(Option<ThreadCpuClock>, RtReport)>();
+    let io_rt = settings.rt.clone();
+    let on_start = move || {
+        let rep = io_rt.apply_to_current_thread();
+        let _ = clock_tx.send((ThreadCpuClock::current(), rep));
+    };
+    enum Io {
+        Link(EthercrabLink),
+        Task(std::thread::JoinHandle<Result<(), String>>),
+    }
+    let io = match transport {
+        PlainTransport::InProcess(segment) => Io::Link(
+            EthercrabLink::spawn_with(segment, tx, rx, on_start)
+                .map_err(|e| err("starting the in-process TX/RX thread", e))?,
+        ),
+        PlainTransport::Interface(iface) => {
+            let h = std::thread::Builder::new()
+                .name("jitter-ethercrab-txrx".into())
+                .spawn(move || {
+                    on_start();
+                    let task = ethercrab::std::tx_rx_task(&iface, tx, rx)
+                        .map_err(|e| format!("opening {iface}: {e}"))?;
+                    async_io::block_on(task)
+                        .map(|_| ())
+                        .map_err(|e| format!("TX/RX task on {iface}: {e}"))
+                })
+                .map_err(|e| err("starting the TX/RX thread", e))?;
+            Io::Task(h)
+        }
+    };
+    let (io_clock, io_rt_report) = clock_rx
+        .recv_timeout(Duration::from_secs(5))
+        .map_err(|_| err("starting the TX/RX thread", "it did not start"))?;
+
+    let s = settings.clone();
+    let lp = std::thread::Builder::new()
+        .name("jitter-ethercrab".into())
+        .stack_size(STACK)
+        .spawn(move || {
+            let md = MainDevice::new(pdu_loop, Timeouts::default(), MainDeviceConfig::default());
+            let r = async_io::block_on(measure(&md, &s, io_clock));
+            // SAFETY: every group built on `md` was dropped inside `measure` and no frame is in
+            // flight (each exchange was awaited to completion or timed out); the storage is
+            // not used again. Releasing makes the TX/RX task return.
+            let _ = unsafe { md.release_all() };
+            r
+        })
+        .map_err(|e| err("starting the loop thread", e))?;
+    let result = lp.join().map_err(|_| err("the loop thread", "panicked"))?;
+
+    let segment = match io {
+        Io::Link(link) => Some(link.stop()),
+        Io::Task(h) => {
+            // The task ends once `release_all` signalled it; a stuck interface must not hang
+            // the harness, so give it a moment and otherwise leave it.
+            let t0 = monotonic_ns();
+            while !h.is_finished() && monotonic_ns() - t0 < 2_000_000_000 {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            if h.is_finished() {
+                match h.join() {
+                    Ok(Ok(())) | Err(_) => {}
+                    Ok(Err(e)) => tracing::warn!("plain ethercrab baseline: {e}"),
+                }
+            }
+            None
+        }
+    };
+    let mut report = result?;
+    if !io_rt_report.warnings.is_empty() {
+        report.notes.extend(
+            io_rt_report
+                .warnings
+                .iter()
+                .map(|w| format!("TX/RX thread: {w}")),
+        );
+    }
+    Ok((report, segment))
+}
+
+async fn sdo_write<S: std::ops::Deref<Target = ethercrab::SubDevice>>(
+    sd: &ethercrab::SubDeviceRef<'_, S>,
+    w: &pdo::SdoWrite,
+) -> Result<(), ethercrab::error::Error> {
+    let (idx, sub) = (w.address.index, w.address.sub);
+    match w.data_type {
+        DataType::Unsigned8 => sd.sdo_write(idx, sub, w.value as u8).await,
+        DataType::Unsigned16 => sd.sdo_write(idx, sub, w.value as u16).await,
+        _ => sd.sdo_write(idx, sub, w.value).await,
+    }
+}
+
+/// The PRE-OP writes a drive needs for DC SYNC0 at `cycle_ns`, from its profile.
+fn preop_writes(
+    profile: &DriveProfile,
+    cycle_ns: u32,
+    position: usize,
+) -> Result<Vec<pdo::SdoWrite>, HarnessError> {
+    let mut out = pdo::remap_sequence(
+        &profile.cyclic_mapping,
+        &RemapOptions::for_drive(&profile.pdo_limits, None),
+    )
+    .map_err(|e| err(format!("drive {position}: PDO mapping"), e))?;
+    if let Some(a) = profile.sync.sync_type_object {
+        out.push(pdo::SdoWrite::pdo_index(
+            a,
+            2,
+            "synchronisation type = DC SYNC0",
+        ));
+    }
+    match profile.sync.cycle_time_object {
+        Some(CycleTimeObject::Nanoseconds(a)) => {
+            out.push(pdo::SdoWrite::entry(a, cycle_ns, "cycle time"));
+        }
+        None => {}
+        Some(other) => {
+            return Err(err(
+                format!("drive {position} ({})", profile.name),
+                format!(
+                    "the plain-ethercrab baseline cannot set the cycle time through {other:?} \
+                     (only a nanosecond object is supported)"
+                ),
+            ));
+        }
+    }
+    if !profile.startup.is_empty() {
+        return Err(err(
+            format!("drive {position} ({})", profile.name),
+            "the plain-ethercrab baseline does not write profile start-up SDOs",
+        ));
+    }
+    Ok(out)
+}
+
+async fn measure(
+    md: &MainDevice<'_>,
+    s: &PlainSettings,
+    io_clock: Option<ThreadCpuClock>,
+) -> Result<RunReport, HarnessError> {
+    let cycle_ns = s.cycle.as_nanos() as u64;
+    let mut group = md
+        .init_single_group::<MAX_SUBDEVICES, MAX_PDI>(ethercat_now)
+        .await
+        .map_err(|e| err("init_single_group", e))?;
+    if group.len() != s.profiles.len() {
+        return Err(err(
+            "discovery",
+            format!(
+                "found {} devices, expected {}",
+                group.len(),
+                s.profiles.len()
+            ),
+        ));
+    }
+    let cycle32 = u32::try_from(cycle_ns).unwrap_or(u32::MAX);
+    for (i, mut sd) in group.iter_mut(md).enumerate() {
+        let Some(profile) = s.profiles.get(i) else {
+            continue;
+        };
+        for w in preop_writes(profile, cycle32, i)? {
+            sdo_write(&sd, &w)
+                .await
+                .map_err(|e| err(format!("drive {i}: SDO {w}"), e))?;
+        }
+        sd.set_dc_sync(DcSync::Sync0);
+    }
+    let group = group
+        .into_pre_op_pdi(md)
+        .await
+        .map_err(|e| err("into_pre_op_pdi", e))?;
+    let group = group
+        .configure_dc_sync(
+            md,
+            DcConfiguration {
+                start_delay: Duration::from_millis(100),
+                sync0_period: s.cycle,
+                sync0_shift: Duration::ZERO,
+            },
+        )
+        .await
+        .map_err(|e| err("configure_dc_sync", e))?;
+    let group = group
+        .into_safe_op(md)
+        .await
+        .map_err(|e| err("into_safe_op", e))?;
+    let group = group
+        .request_into_op(md)
+        .await
+        .map_err(|e| err("request_into_op", e))?;
+
+    // The cycle starts: real-time set-up now (as ecdrive's cycle thread does it).
+    let rt = s.rt.apply_to_current_thread();
+
+    // Cycle until every device is in OP (not measured).
+    let deadline = monotonic_ns() + s.op_timeout.as_nanos() as u64;
+    let mut next = monotonic_ns();
+    loop {
+        sleep_until_ns(next);
+        let t0 = monotonic_ns();
+        let r = group.tx_rx_dc(md).await;
+        match r {
+            Ok(resp) if resp.all_op() => {
+                next = t0 + resp.extra.next_cycle_wait.as_nanos() as u64;
+                break;
+            }
+            Ok(resp) => next = t0 + resp.extra.next_cycle_wait.as_nanos() as u64,
+            Err(_) => next = t0 + cycle_ns,
+        }
+        if monotonic_ns() > deadline {
+            return Err(err(
+                "waiting for OP",
+                format!(
+                    "not every device in OP after {} ms",
+                    s.op_timeout.as_millis()
+                ),
+            ));
+        }
+    }
+
+    // The measured window.
+    let mut h = RunHistograms::new(true);
+    let mut late = 0u64;
+    let mut missed = 0u64;
+    let budget = (cycle_ns as f64 * s.reply_budget) as u64;
+    let mut last_wake = 0u64;
+    let n = group.len();
+    let begin = CpuSample::take(io_clock.as_ref());
+    for _ in 0..s.cycles {
+        sleep_until_ns(next);
+        let woke = monotonic_ns();
+        let latency = woke.saturating_sub(next);
+        h.wake_latency.record(latency);
+        if last_wake != 0 {
+            h.period.record(woke - last_wake);
+        }
+        last_wake = woke;
+        if latency > cycle_ns {
+            late += 1;
+        }
+        let t0 = monotonic_ns();
+        let r = group.tx_rx_dc(md).await;
+        let t1 = monotonic_ns();
+        let wait = match r {
+            Ok(resp) => {
+                if let Some(e) = h.exchange.as_mut() {
+                    e.record(t1 - t0);
+                }
+                if t1 - woke > budget {
+                    missed += 1;
+                }
+                resp.extra.next_cycle_wait.as_nanos() as u64
+            }
+            Err(_) => {
+                missed += 1;
+                cycle_ns
+            }
+        };
+        // The application: read each device's inputs, write its outputs (the first output
+        // byte, the controlword's low byte, stays 0: the drives are left disabled).
+        for i in 0..n {
+            if let Ok(sd) = group.subdevice(md, i) {
+                let mut io = sd.io_raw_mut();
+                std::hint::black_box(io.inputs().first().copied());
+                if let Some(o) = io.outputs().first_mut() {
+                    *o = 0;
+                }
+            }
+        }
+        h.busy.record(monotonic_ns() - woke);
+        next = t0 + wait;
+    }
+    let end = CpuSample::take(io_clock.as_ref());
+    let cpu = CpuReport::between(&begin, &end, s.cycles);
+
+    // Back to INIT (not measured).
+    let mut notes = Vec::new();
+    match group.into_safe_op(md).await {
+        Ok(g) => match g.into_pre_op(md).await {
+            Ok(g) => {
+                if let Err(e) = g.into_init(md).await {
+                    notes.push(format!("PRE-OP → INIT at the end failed: {e}"));
+                }
+            }
+            Err(e) => notes.push(format!("SAFE-OP → PRE-OP at the end failed: {e}")),
+        },
+        Err(e) => notes.push(format!("OP → SAFE-OP at the end failed: {e}")),
+    }
+    Ok(h.report(
+        "ethercrab",
+        cycle_ns,
+        rt,
+        late,
+        Some(missed),
+        cpu,
+        Vec::new(),
+        notes,
+    ))
+}
