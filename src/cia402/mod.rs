@@ -18,6 +18,7 @@
 //! | [`planner`] ([`Planner`]) | master side: which controlword takes the drive to a [`Target`] |
 //! | [`device`] | drive side: how a drive reacts to a controlword (reference model, emulator core) |
 //! | [`axis`] ([`Axis`]) | the per-cycle engine: enable/disable, quick stop, fault reset, mode switching, set-points |
+//! | [`profile_position`], [`homing`], [`profile_velocity`], [`interpolated`] | the profile modes pp (set-point handshake), hm, pv/tq and ip as per-cycle helpers that drive an [`Axis`] through its public API |
 //! | [`ErrorCode`] | 0x603F decoding by CiA ranges plus per-drive tables |
 //! | [`object`] | the object addresses this layer reads and writes |
 
@@ -27,8 +28,14 @@ mod caps;
 mod command;
 pub mod device;
 mod error_code;
+pub mod homing;
+pub mod interpolated;
 mod mode;
+#[cfg(test)]
+mod mode_test_support;
 pub mod planner;
+pub mod profile_position;
+pub mod profile_velocity;
 mod state;
 
 pub use axis::{
@@ -41,11 +48,15 @@ pub use command::Command;
 pub use error_code::{
     ErrorClass, ErrorCode, ErrorDescription, ErrorEntry, ErrorSource, STANDARD_CODES,
 };
+pub use homing::{Homing, HomingConfig, HomingOutcome, HomingPhase, HomingState};
+pub use interpolated::{Interpolation, IpStatus};
 pub use mode::{OperationMode, SetPointKind, SupportedModes, VendorModeBit};
 pub use planner::{
     Planner, PlannerConfig, PlannerConfigError, PlannerError, Progress, StallCause, Step, Target,
     cycles_for, defaults,
 };
+pub use profile_position::{PpConfig, PpError, PpPhase, PpStatus, ProfilePosition, SetPoint};
+pub use profile_velocity::{ProfileTorque, ProfileVelocity, PvStatus, TqStatus};
 pub use state::State;
 
 /// Object addresses of the CiA 402 objects this layer deals with.

@@ -7,8 +7,14 @@
 //!
 //! - [`mr_j4_tm`]: Mitsubishi MR-J4-_TM_ (EtherCAT).
 //! - [`bdhde`]: Servotronix BDHDE (EtherCAT, EB models).
+//! - [`blv_r`]: Oriental Motor BLV series R type (CANopen).
+//! - [`asda_a2`]: Delta ASDA-A2 (CANopen).
+//! - [`lexium_mdrive`]: Schneider Electric Lexium MDrive (CANopen).
 
+pub mod asda_a2;
 pub mod bdhde;
+pub mod blv_r;
+pub mod lexium_mdrive;
 pub mod mr_j4_tm;
 pub mod profile;
 mod registry;

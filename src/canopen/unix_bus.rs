@@ -1,0 +1,260 @@
+//! The virtual CAN bus across processes on this machine: a hub on a Unix-domain datagram
+//! socket, and ports that connect to it. No kernel CAN support (vcan) is needed.
+//!
+//! Protocol, one datagram each: a client sends `H` (hello) from its own bound socket to
+//! register, `B` (bye) to leave, and frames as the 16-byte Linux `struct can_frame` record
+//! ([`CanFrame::to_record`]). The hub forwards every frame to every other registered client —
+//! the broadcast of a CAN bus — and forgets clients whose socket is gone. Malformed datagrams
+//! are dropped. Only filesystem sockets of this machine are involved.
+
+use super::frame::CanFrame;
+use super::transport::{CanTransport, TransportError, monotonic_us};
+use std::io::ErrorKind;
+use std::os::unix::net::UnixDatagram;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+const HELLO: &[u8] = b"H";
+const BYE: &[u8] = b"B";
+
+fn io(path: &Path, op: &'static str, source: std::io::Error) -> TransportError {
+    TransportError::Io {
+        interface: path.display().to_string(),
+        op,
+        source,
+    }
+}
+
+/// The hub of a cross-process virtual bus.
+#[derive(Debug)]
+pub struct UnixBusHub {
+    sock: UnixDatagram,
+    path: PathBuf,
+    clients: Vec<PathBuf>,
+}
+
+impl UnixBusHub {
+    /// Bind the hub at `path`. A stale socket file (no hub answering) is replaced; a live hub
+    /// there is an error.
+    pub fn bind(path: &Path) -> Result<Self, TransportError> {
+        if path.exists() {
+            let probe = UnixDatagram::unbound().map_err(|e| io(path, "socket", e))?;
+            if probe.connect(path).is_ok() {
+                return Err(io(
+                    path,
+                    "bind",
+                    std::io::Error::new(ErrorKind::AddrInUse, "a hub is already running there"),
+                ));
+            }
+            std::fs::remove_file(path).map_err(|e| io(path, "remove stale socket", e))?;
+        }
+        let sock = UnixDatagram::bind(path).map_err(|e| io(path, "bind", e))?;
+        sock.set_read_timeout(Some(Duration::from_millis(50)))
+            .map_err(|e| io(path, "set timeout", e))?;
+        Ok(Self {
+            sock,
+            path: path.to_path_buf(),
+            clients: Vec::new(),
+        })
+    }
+
+    /// Registered clients.
+    pub fn clients(&self) -> usize {
+        self.clients.len()
+    }
+
+    /// Handle datagrams until `stop` is set.
+    pub fn run(&mut self, stop: &AtomicBool) -> Result<(), TransportError> {
+        let mut buf = [0u8; 64];
+        while !stop.load(Ordering::Relaxed) {
+            let (n, from) = match self.sock.recv_from(&mut buf) {
+                Ok(x) => x,
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+                    ) =>
+                {
+                    continue;
+                }
+                Err(e) => return Err(io(&self.path, "receive", e)),
+            };
+            let Some(from) = from.as_pathname().map(Path::to_path_buf) else {
+                continue;
+            };
+            let msg = buf.get(..n).unwrap_or(&[]);
+            if msg == HELLO {
+                if !self.clients.contains(&from) {
+                    self.clients.push(from);
+                }
+                continue;
+            }
+            if msg == BYE {
+                self.clients.retain(|c| *c != from);
+                continue;
+            }
+            if CanFrame::from_record(msg).is_err() {
+                continue;
+            }
+            let mut gone = Vec::new();
+            for c in &self.clients {
+                if *c == from {
+                    continue;
+                }
+                if let Err(e) = self.sock.send_to(msg, c)
+                    && matches!(e.kind(), ErrorKind::NotFound | ErrorKind::ConnectionRefused)
+                {
+                    gone.push(c.clone());
+                }
+            }
+            self.clients.retain(|c| !gone.contains(c));
+        }
+        Ok(())
+    }
+
+    /// Run a hub at `path` on its own thread until the handle is dropped.
+    pub fn spawn(path: &Path) -> Result<HubHandle, TransportError> {
+        let mut hub = Self::bind(path)?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let s = Arc::clone(&stop);
+        let thread = std::thread::Builder::new()
+            .name("canopen-hub".into())
+            .spawn(move || {
+                let _ = hub.run(&s);
+            })
+            .map_err(|e| io(path, "spawn hub thread", e))?;
+        Ok(HubHandle {
+            stop,
+            thread: Some(thread),
+            path: path.to_path_buf(),
+        })
+    }
+}
+
+impl Drop for UnixBusHub {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// A hub running on a thread; dropping it stops the hub and removes its socket.
+#[derive(Debug)]
+pub struct HubHandle {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    path: PathBuf,
+}
+
+impl HubHandle {
+    /// The hub's socket path.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for HubHandle {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.take() {
+            let _ = t.join();
+        }
+    }
+}
+
+static PORTS: AtomicU64 = AtomicU64::new(0);
+
+/// A process's connection to a [`UnixBusHub`]. Real time (`CLOCK_MONOTONIC`).
+#[derive(Debug)]
+pub struct UnixBusPort {
+    sock: UnixDatagram,
+    own: PathBuf,
+    name: String,
+}
+
+impl UnixBusPort {
+    /// Connect to the hub at `hub`: bind a socket next to it and say hello.
+    pub fn connect(hub: &Path) -> Result<Self, TransportError> {
+        let n = PORTS.fetch_add(1, Ordering::Relaxed);
+        let mut own = hub.as_os_str().to_owned();
+        own.push(format!(".{}.{n}", std::process::id()));
+        let own = PathBuf::from(own);
+        let _ = std::fs::remove_file(&own);
+        let sock = UnixDatagram::bind(&own).map_err(|e| io(&own, "bind", e))?;
+        sock.connect(hub).map_err(|e| io(hub, "connect", e))?;
+        sock.send(HELLO).map_err(|e| io(hub, "hello", e))?;
+        Ok(Self {
+            sock,
+            own,
+            name: format!("vbus:{}", hub.display()),
+        })
+    }
+}
+
+impl Drop for UnixBusPort {
+    fn drop(&mut self) {
+        let _ = self.sock.send(BYE);
+        let _ = std::fs::remove_file(&self.own);
+    }
+}
+
+impl CanTransport for UnixBusPort {
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn now_us(&self) -> u64 {
+        monotonic_us()
+    }
+
+    fn send(&mut self, frame: &CanFrame) -> Result<(), TransportError> {
+        match self.sock.send(&frame.to_record()) {
+            Ok(_) => Ok(()),
+            Err(e) if matches!(e.kind(), ErrorKind::NotFound | ErrorKind::ConnectionRefused) => {
+                Err(TransportError::Closed(self.name.clone()))
+            }
+            Err(e) => Err(io(&self.own, "send", e)),
+        }
+    }
+
+    fn recv(&mut self, timeout_us: u64) -> Result<Option<CanFrame>, TransportError> {
+        let deadline = monotonic_us().saturating_add(timeout_us);
+        let mut buf = [0u8; 64];
+        loop {
+            let left = deadline.saturating_sub(monotonic_us());
+            let r = if left == 0 {
+                self.sock
+                    .set_nonblocking(true)
+                    .map_err(|e| io(&self.own, "set non-blocking", e))?;
+                let r = self.sock.recv(&mut buf);
+                self.sock
+                    .set_nonblocking(false)
+                    .map_err(|e| io(&self.own, "set blocking", e))?;
+                r
+            } else {
+                self.sock
+                    .set_read_timeout(Some(Duration::from_micros(left)))
+                    .map_err(|e| io(&self.own, "set timeout", e))?;
+                self.sock.recv(&mut buf)
+            };
+            match r {
+                Ok(n) => {
+                    if let Ok(f) = CanFrame::from_record(buf.get(..n).unwrap_or(&[])) {
+                        return Ok(Some(f));
+                    }
+                }
+                Err(e)
+                    if matches!(
+                        e.kind(),
+                        ErrorKind::WouldBlock | ErrorKind::TimedOut | ErrorKind::Interrupted
+                    ) => {}
+                Err(e) => return Err(io(&self.own, "receive", e)),
+            }
+            if left == 0 || monotonic_us() >= deadline {
+                return Ok(None);
+            }
+        }
+    }
+}
