@@ -12,6 +12,7 @@ fn short_run() -> JitterReport {
     let mut cfg = JitterConfig::new(Duration::from_millis(1));
     cfg.cycles = CYCLES;
     cfg.transport = Transport::InProcess;
+    cfg.count_syscalls = true;
     harness::run(&cfg, &|what| eprintln!("jitter: {what}")).expect("the harness runs in-process")
 }
 

@@ -10,6 +10,7 @@
 //!   ([`ThreadCpuClock::current`]) and read from anywhere while it runs;
 //! - the whole process: `CLOCK_PROCESS_CPUTIME_ID`.
 
+use crate::rt::audit::{AuditError, SyscallCounter, SyscallCounts};
 use nix::time::{ClockId, clock_gettime};
 
 fn read_ns(id: ClockId) -> Option<u64> {
@@ -94,6 +95,31 @@ impl CpuSample {
     }
 }
 
+/// Counts the calling thread's syscalls over a window (opt-in: the kernel's
+/// `raw_syscalls:sys_enter` tracepoint adds a little to every syscall, so the CPU figures of a
+/// run that counts are slightly pessimistic). Needs root or `perf_event_paranoid` ≤ 1.
+pub struct SyscallWindow {
+    counter: SyscallCounter,
+    base: SyscallCounts,
+}
+
+impl SyscallWindow {
+    /// Open the window on the calling thread and start counting.
+    pub fn start() -> Result<Self, AuditError> {
+        let counter = SyscallCounter::for_current_thread(&[])?;
+        let base = counter.overhead()?;
+        counter.start();
+        Ok(Self { counter, base })
+    }
+
+    /// Stop counting; the syscalls made inside the window (the counter's own stop excluded).
+    pub fn stop(self) -> Result<u64, AuditError> {
+        self.counter.stop();
+        let n = self.counter.read()?;
+        Ok(n.all.saturating_sub(self.base.all))
+    }
+}
+
 /// How the CPU time per cycle is measured (also in the JSON).
 pub const CPU_METHOD: &str = "per-window: CLOCK_THREAD_CPUTIME_ID of the cycle thread (and \
     pthread_getcpuclockid of the TX/RX thread) and CLOCK_PROCESS_CPUTIME_ID read when the \
@@ -125,6 +151,9 @@ pub struct CpuReport {
     pub voluntary_switches: Option<f64>,
     /// Involuntary context switches of the cycle thread per cycle.
     pub involuntary_switches: Option<f64>,
+    /// Syscalls of the cycle thread per cycle (only when counting was asked for and possible;
+    /// see [`SyscallWindow`]).
+    pub syscalls: Option<f64>,
 }
 
 impl CpuReport {
@@ -152,7 +181,45 @@ impl CpuReport {
             process_ns: per(begin.process_ns, end.process_ns),
             voluntary_switches: per(begin.voluntary, end.voluntary),
             involuntary_switches: per(begin.involuntary, end.involuntary),
+            syscalls: None,
         }
+    }
+
+    /// Add the syscall count of the window (`count` syscalls over `self.cycles` cycles).
+    pub fn with_syscalls(mut self, count: u64) -> Self {
+        self.syscalls = Some(count as f64 / self.cycles.max(1) as f64);
+        self
+    }
+}
+
+/// Start counting syscalls if asked to; a note when it is not possible.
+pub fn start_syscalls(wanted: bool, notes: &mut Vec<String>) -> Option<SyscallWindow> {
+    if !wanted {
+        return None;
+    }
+    match SyscallWindow::start() {
+        Ok(w) => Some(w),
+        Err(e) => {
+            notes.push(format!("syscalls not counted: {e}"));
+            None
+        }
+    }
+}
+
+/// Add a syscall count (from [`SyscallWindow::stop`], if counting ran) to `cpu`; a note if
+/// reading failed.
+pub fn apply_syscalls(
+    count: Option<Result<u64, AuditError>>,
+    cpu: CpuReport,
+    notes: &mut Vec<String>,
+) -> CpuReport {
+    match count {
+        Some(Ok(n)) => cpu.with_syscalls(n),
+        Some(Err(e)) => {
+            notes.push(format!("syscalls not counted: {e}"));
+            cpu
+        }
+        None => cpu,
     }
 }
 

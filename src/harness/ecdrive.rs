@@ -14,7 +14,7 @@
 //! (`steady_begin` / `steady_end`); nothing is read per cycle.
 
 use super::HarnessError;
-use super::cpu::{CpuReport, CpuSample};
+use super::cpu::{CpuReport, CpuSample, SyscallWindow, apply_syscalls, start_syscalls};
 use super::report::{RunHistograms, RunReport};
 use crate::cia402::State;
 use crate::drives::DriveProfile;
@@ -24,6 +24,7 @@ use crate::master::session::{Master, MasterConfig};
 use crate::master::startup::{DriveSetup, Selector};
 use crate::master::telemetry::{Axes, Command, StopKind};
 use crate::rt::RtSettings;
+use crate::rt::audit::AuditError;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -40,13 +41,20 @@ pub struct EcdriveSettings {
     pub profiles: Vec<&'static DriveProfile>,
     /// How long the devices may take to reach OP.
     pub op_timeout: Duration,
+    /// Count the cycle thread's syscalls ([`super::cpu::SyscallWindow`]).
+    pub count_syscalls: bool,
 }
 
-/// CPU samples at the edges of steady state, taken on the cycle thread.
+/// CPU samples (and optionally a syscall count) at the edges of steady state, taken on the
+/// cycle thread. The mutexes are taken only there and after the run.
 #[derive(Default)]
 struct Window {
+    count_syscalls: bool,
     begin: Mutex<Option<CpuSample>>,
     end: Mutex<Option<CpuSample>>,
+    syscalls: Mutex<Option<SyscallWindow>>,
+    counted: Mutex<Option<Result<u64, AuditError>>>,
+    notes: Mutex<Vec<String>>,
 }
 
 impl CycleHooks for Window {
@@ -55,12 +63,24 @@ impl CycleHooks for Window {
         if let Ok(mut b) = self.begin.lock() {
             *b = Some(s);
         }
+        if let (Ok(mut notes), Ok(mut sys)) = (self.notes.lock(), self.syscalls.lock()) {
+            *sys = start_syscalls(self.count_syscalls, &mut notes);
+        }
     }
 
     fn steady_end(&self) {
+        let counted = self
+            .syscalls
+            .lock()
+            .ok()
+            .and_then(|mut w| w.take())
+            .map(SyscallWindow::stop);
         let s = CpuSample::take(None);
         if let Ok(mut e) = self.end.lock() {
             *e = Some(s);
+        }
+        if let Ok(mut c) = self.counted.lock() {
+            *c = counted;
         }
     }
 }
@@ -79,7 +99,10 @@ pub fn run<L: FrameLink + Send + 'static>(
     s: &EcdriveSettings,
 ) -> Result<(RunReport, L), HarnessError> {
     let cycle_ns = s.cycle.as_nanos() as u64;
-    let window = Arc::new(Window::default());
+    let window = Arc::new(Window {
+        count_syscalls: s.count_syscalls,
+        ..Window::default()
+    });
     let mut cfg = MasterConfig::new(s.cycle);
     cfg.cycle.rt = s.rt.clone();
     cfg.cycle.steady_timing_only = true;
@@ -141,9 +164,14 @@ pub fn run<L: FrameLink + Send + 'static>(
     };
     let begin = window.begin.lock().ok().and_then(|b| *b);
     let end = window.end.lock().ok().and_then(|e| *e);
-    let mut notes = Vec::new();
+    let mut notes = window.notes.lock().map(|n| n.clone()).unwrap_or_default();
+    let counted = window.counted.lock().ok().and_then(|mut c| c.take());
     let cpu = match (begin, end) {
-        (Some(b), Some(e)) => CpuReport::between(&b, &e, t.wake_latency.len()),
+        (Some(b), Some(e)) => apply_syscalls(
+            counted,
+            CpuReport::between(&b, &e, t.wake_latency.len()),
+            &mut notes,
+        ),
         _ => {
             notes.push("the steady-state window did not open and close; no CPU figures".into());
             CpuReport::default()
@@ -152,14 +180,26 @@ pub fn run<L: FrameLink + Send + 'static>(
     if !enabled {
         notes.push("not every axis reached Operation enabled during the window".into());
     }
+    // Errors of the run's history, each text once with how often it came.
+    let mut seen: Vec<(String, usize)> = Vec::new();
     for e in report.history.iter().filter(|e| e.error) {
-        notes.push(format!(
+        let text = format!(
             "{}{}",
             e.drive.as_ref().map_or(String::new(), |d| format!("{d}: ")),
             e.text
-        ));
+        );
+        match seen.iter_mut().find(|(t, _)| *t == text) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((text, 1)),
+        }
     }
-    notes.truncate(20);
+    for (text, n) in seen.into_iter().take(20) {
+        notes.push(if n > 1 {
+            format!("{text} (×{n})")
+        } else {
+            text
+        });
+    }
     Ok((
         h.report(
             "ecdrive",

@@ -30,6 +30,7 @@
 //! | busy | woke → ready to sleep | same | `Timing::busy` |
 //! | late cycles | wake-up more than one cycle late | same | the cycle's overruns (same rule) |
 //! | missed cycles | — | `tx_rx_dc` failed, or the reply came later than 0.8 cycle after the wake-up | cycles without a reply within the cycle's reply budget (0.8 cycle) |
+//! | syscalls per cycle (opt-in) | the cycle thread's, `raw_syscalls:sys_enter` tracepoint ([`cpu::SyscallWindow`]) | the loop thread's (not the TX/RX thread's) | the cycle thread's |
 //! | CPU per cycle | see [`cpu`]: thread CPU clocks read when the window opens and closes, ÷ cycles | loop thread + TX/RX thread (reported apart too) | cycle thread (frame I/O included), sampled by `CycleHooks` on the cycle thread |
 //! | DC system-time difference | — | \|0x092C\| of each emulated ESC after every drift-compensation write in OP, read from the emulated ESC after the run ([`crate::sim::esc::TimingStats`]) | same |
 //! | frame arrival after SYNC0 | — | at each emulated ESC, time from the latest SYNC0 to the frame completing its outputs, in OP; and SYNC0 pulses that found no fresh outputs | same |
@@ -64,7 +65,8 @@
 //!     "exchange": SUMMARY | null,
 //!     "late": n, "missed": n | null,
 //!     "cpu": { "method", "cycles", "window_s", "cycle_thread_ns", "io_thread_ns",
-//!              "master_ns", "process_ns", "voluntary_switches", "involuntary_switches" },
+//!              "master_ns", "process_ns", "voluntary_switches", "involuntary_switches",
+//!              "syscalls" },
 //!     "drives": [ { "position", "device", "dc_difference": SUMMARY | null,
 //!                   "arrival_after_sync0": SUMMARY | null, "sync0_pulses",
 //!                   "sync0_without_outputs" } ],
@@ -131,6 +133,9 @@ pub struct JitterConfig {
     pub drives: Vec<String>,
     /// How long the drives may take to reach OP.
     pub op_timeout: Duration,
+    /// Also count each run's cycle-thread syscalls per cycle (root or `perf_event_paranoid`
+    /// ≤ 1; the tracepoint adds a little to every syscall, so leave it off for CPU figures).
+    pub count_syscalls: bool,
 }
 
 impl JitterConfig {
@@ -148,6 +153,7 @@ impl JitterConfig {
             },
             drives: vec!["generic-coe".into(), "generic-coe".into()],
             op_timeout: Duration::from_secs(10),
+            count_syscalls: false,
         }
     }
 }
@@ -270,10 +276,12 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         cfg.cycles,
         cycle_ns / 1000
     ));
-    let sleep = sleep::run(cfg.cycle, cfg.cycles, &cfg.rt).map_err(|e| HarnessError::Run {
-        run: "sleep",
-        what: "running".into(),
-        reason: e.to_string(),
+    let sleep = sleep::run(cfg.cycle, cfg.cycles, &cfg.rt, cfg.count_syscalls).map_err(|e| {
+        HarnessError::Run {
+            run: "sleep",
+            what: "running".into(),
+            reason: e.to_string(),
+        }
     })?;
 
     // 2. Plain ethercrab.
@@ -285,6 +293,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         profiles: profiles.clone(),
         op_timeout: cfg.op_timeout,
         reply_budget: 0.8,
+        count_syscalls: cfg.count_syscalls,
     };
     let (mut ethercrab, seg) = match &cfg.transport {
         Transport::InProcess => plain::run(
@@ -312,6 +321,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         rt: cfg.rt.clone(),
         profiles: profiles.clone(),
         op_timeout: cfg.op_timeout,
+        count_syscalls: cfg.count_syscalls,
     };
     let (mut ecd, seg) = match &cfg.transport {
         Transport::InProcess => {
@@ -361,6 +371,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         version: env!("CARGO_PKG_VERSION"),
         host: HostInfo::read(),
         settings: SettingsReport {
+            count_syscalls: cfg.count_syscalls,
             cycle_ns,
             cycles: cfg.cycles,
             transport: match cfg.transport {

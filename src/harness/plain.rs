@@ -16,7 +16,7 @@
 //! CPU time is reported separately.
 
 use super::HarnessError;
-use super::cpu::{CpuReport, CpuSample, ThreadCpuClock};
+use super::cpu::{CpuReport, CpuSample, ThreadCpuClock, apply_syscalls, start_syscalls};
 use super::report::{RunHistograms, RunReport};
 use crate::drives::{CycleTimeObject, DriveProfile};
 use crate::od::DataType;
@@ -35,7 +35,9 @@ const MAX_SUBDEVICES: usize = 128;
 const MAX_PDI: usize = 16384;
 const MAX_FRAMES: usize = 16;
 const MAX_FRAME: usize = 1514;
-type Storage = PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME) }>;
+/// Whole frames of at most `MAX_FRAME` bytes (`element_size` adds ethercrab's headers).
+type Storage =
+    PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME - PduStorage::element_size(0)) }>;
 
 /// Stack of the loop thread: ethercrab keeps the group (tens of KiB) inline in its futures.
 const STACK: usize = 16 * 1024 * 1024;
@@ -63,6 +65,8 @@ pub struct PlainSettings {
     pub op_timeout: Duration,
     /// Reply budget as a fraction of the cycle (a slower exchange counts as missed).
     pub reply_budget: f64,
+    /// Count the loop thread's syscalls ([`super::cpu::SyscallWindow`]).
+    pub count_syscalls: bool,
 }
 
 fn err(what: impl Into<String>, reason: impl ToString) -> HarnessError {
@@ -312,7 +316,9 @@ async fn measure(
     let budget = (cycle_ns as f64 * s.reply_budget) as u64;
     let mut last_wake = 0u64;
     let n = group.len();
+    let mut notes = Vec::new();
     let begin = CpuSample::take(io_clock.as_ref());
+    let sys = start_syscalls(s.count_syscalls, &mut notes);
     for _ in 0..s.cycles {
         sleep_until_ns(next);
         let woke = monotonic_ns();
@@ -357,11 +363,18 @@ async fn measure(
         h.busy.record(monotonic_ns() - woke);
         next = t0 + wait;
     }
+    let sys_end = sys.map(|w| w.stop());
     let end = CpuSample::take(io_clock.as_ref());
-    let cpu = CpuReport::between(&begin, &end, s.cycles);
+    let cpu = apply_syscalls(
+        sys_end,
+        CpuReport::between(&begin, &end, s.cycles),
+        &mut notes,
+    );
+    if s.count_syscalls {
+        notes.push("syscalls are counted on the loop thread only, not the TX/RX thread".into());
+    }
 
     // Back to INIT (not measured).
-    let mut notes = Vec::new();
     match group.into_safe_op(md).await {
         Ok(g) => match g.into_pre_op(md).await {
             Ok(g) => {

@@ -351,6 +351,8 @@ pub struct SettingsReport {
     pub profiles: Vec<String>,
     /// What ecdrive's axes did during the window.
     pub ecdrive_axes: String,
+    /// Whether syscalls were counted (which costs a little on every syscall).
+    pub count_syscalls: bool,
 }
 
 /// The whole measurement. See [the module documentation](super) for the JSON layout.
@@ -497,14 +499,14 @@ impl JitterReport {
         let _ = writeln!(s);
         let _ = writeln!(
             s,
-            "CPU per cycle (µs): {:<10} {:>12} {:>12} {:>12} {:>14}",
-            "", "cycle thr", "TX/RX thr", "process", "ctx sw vol/inv"
+            "CPU per cycle (µs): {:<10} {:>12} {:>12} {:>12} {:>14} {:>9}",
+            "", "cycle thr", "TX/RX thr", "process", "ctx sw vol/inv", "syscalls"
         );
         for r in [&self.sleep, &self.ethercrab, &self.ecdrive] {
             let c = &r.cpu;
             let _ = writeln!(
                 s,
-                "                    {:<10} {:>12} {:>12} {:>12} {:>14}",
+                "                    {:<10} {:>12} {:>12} {:>12} {:>14} {:>9}",
                 r.name,
                 opt_us(c.cycle_thread_ns),
                 opt_us(c.io_thread_ns),
@@ -516,6 +518,7 @@ impl JitterReport {
                     c.involuntary_switches
                         .map_or("-".into(), |v| format!("{v:.2}"))
                 ),
+                c.syscalls.map_or("-".into(), |v| format!("{v:.2}")),
             );
         }
         if !self.ecdrive.drives.is_empty() || !self.ethercrab.drives.is_empty() {

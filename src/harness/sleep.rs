@@ -3,7 +3,7 @@
 //! fixed grid with `clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME)` and records how late it
 //! woke. Nothing else.
 
-use super::cpu::{CpuReport, CpuSample};
+use super::cpu::{CpuReport, CpuSample, apply_syscalls, start_syscalls};
 use super::report::{RunHistograms, RunReport};
 use crate::rt::{RtSettings, monotonic_ns, sleep_until_ns};
 use std::time::Duration;
@@ -12,16 +12,22 @@ use std::time::Duration;
 const WARM_UP: u64 = 10;
 
 /// Run the sleep loop for `cycles` cycles of `cycle` on a new thread set up with `rt`.
-pub fn run(cycle: Duration, cycles: u64, rt: &RtSettings) -> std::io::Result<RunReport> {
+/// With `count_syscalls`, the thread's syscalls are counted too ([`super::cpu::SyscallWindow`]).
+pub fn run(
+    cycle: Duration,
+    cycles: u64,
+    rt: &RtSettings,
+    count_syscalls: bool,
+) -> std::io::Result<RunReport> {
     let rt = rt.clone();
     let h = std::thread::Builder::new()
         .name("jitter-sleep".into())
-        .spawn(move || measure(cycle, cycles, &rt))?;
+        .spawn(move || measure(cycle, cycles, &rt, count_syscalls))?;
     h.join()
         .map_err(|_| std::io::Error::other("the sleep-loop thread panicked"))
 }
 
-fn measure(cycle: Duration, cycles: u64, rt: &RtSettings) -> RunReport {
+fn measure(cycle: Duration, cycles: u64, rt: &RtSettings, count_syscalls: bool) -> RunReport {
     let report = rt.apply_to_current_thread();
     let cycle_ns = cycle.as_nanos() as u64;
     let mut h = RunHistograms::new(false);
@@ -29,9 +35,12 @@ fn measure(cycle: Duration, cycles: u64, rt: &RtSettings) -> RunReport {
     let mut next = monotonic_ns() + cycle_ns;
     let mut last_wake = 0u64;
     let mut begin = CpuSample::default();
+    let mut notes = Vec::new();
+    let mut sys = None;
     for i in 0..WARM_UP + cycles {
         if i == WARM_UP {
             begin = CpuSample::take(None);
+            sys = start_syscalls(count_syscalls, &mut notes);
         }
         sleep_until_ns(next);
         let woke = monotonic_ns();
@@ -55,8 +64,13 @@ fn measure(cycle: Duration, cycles: u64, rt: &RtSettings) -> RunReport {
             h.busy.record(monotonic_ns() - woke);
         }
     }
+    let sys_end = sys.map(|w| w.stop());
     let end = CpuSample::take(None);
-    let cpu = CpuReport::between(&begin, &end, cycles);
+    let cpu = apply_syscalls(
+        sys_end,
+        CpuReport::between(&begin, &end, cycles),
+        &mut notes,
+    );
     h.report(
         "sleep",
         cycle_ns,
@@ -65,7 +79,7 @@ fn measure(cycle: Duration, cycles: u64, rt: &RtSettings) -> RunReport {
         None,
         cpu,
         Vec::new(),
-        Vec::new(),
+        notes,
     )
 }
 
@@ -75,7 +89,13 @@ mod tests {
 
     #[test]
     fn every_cycle_is_recorded() {
-        let r = run(Duration::from_micros(500), 50, &RtSettings::default()).unwrap();
+        let r = run(
+            Duration::from_micros(500),
+            50,
+            &RtSettings::default(),
+            false,
+        )
+        .unwrap();
         assert_eq!(r.cycles, 50);
         // The first measured wake-up has a predecessor in the warm-up.
         assert_eq!(r.period.count, 50);

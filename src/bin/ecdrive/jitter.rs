@@ -49,6 +49,10 @@ pub struct JitterArgs {
     /// How long the drives may take to reach OP, in seconds.
     #[arg(long, value_name = "S", default_value_t = 10)]
     op_timeout: u64,
+    /// Also count each run's cycle-thread syscalls per cycle (root; the kernel tracepoint adds
+    /// a little to every syscall, so leave it off when the CPU figures matter).
+    #[arg(long)]
+    syscalls: bool,
     /// Write every figure as JSON to this file.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
@@ -98,6 +102,7 @@ pub fn run(args: JitterArgs) -> ExitCode {
     cfg.cycles = cycles;
     cfg.drives = drives;
     cfg.op_timeout = Duration::from_secs(args.op_timeout);
+    cfg.count_syscalls = args.syscalls;
     cfg.rt = RtSettings {
         priority: (args.priority > 0).then_some(args.priority),
         cpu: args.cpu,
