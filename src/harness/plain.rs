@@ -140,6 +140,7 @@ pub fn run(
         .map_err(|e| err("starting the loop thread", e))?;
     let result = lp.join().map_err(|_| err("the loop thread", "panicked"))?;
 
+    let mut io_error = None;
     let segment = match io {
         Io::Link(link) => Some(link.stop()),
         Io::Task(h) => {
@@ -151,14 +152,24 @@ pub fn run(
             }
             if h.is_finished() {
                 match h.join() {
-                    Ok(Ok(())) | Err(_) => {}
-                    Ok(Err(e)) => tracing::warn!("plain ethercrab baseline: {e}"),
+                    Ok(Ok(())) => {}
+                    Ok(Err(e)) => io_error = Some(e),
+                    Err(_) => io_error = Some("the TX/RX thread panicked".into()),
                 }
             }
             None
         }
     };
-    let mut report = result?;
+    let mut report = match (result, io_error) {
+        (Ok(r), Some(e)) => {
+            tracing::warn!("plain ethercrab baseline: {e}");
+            r
+        }
+        (Ok(r), None) => r,
+        // The TX/RX thread's failure (e.g. no permission for the interface) is the cause.
+        (Err(_), Some(e)) => return Err(err("TX/RX thread", e)),
+        (Err(e), None) => return Err(e),
+    };
     if !io_rt_report.warnings.is_empty() {
         report.notes.extend(
             io_rt_report

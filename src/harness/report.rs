@@ -526,7 +526,11 @@ impl JitterReport {
             let _ = writeln!(
                 s,
                 "at the drives (µs)  {:<10} {:>5} {:>24} {:>26} {:>10}",
-                "", "drive", "|DC diff| p50/p99/max", "arrival after SYNC0 p50/max", "no outputs"
+                "",
+                "drive",
+                "|DC diff| ns p50/p99/max",
+                "arrival after SYNC0 p50/max",
+                "no outputs"
             );
             for r in [&self.ethercrab, &self.ecdrive] {
                 for d in &r.drives {
@@ -535,12 +539,8 @@ impl JitterReport {
                         "                    {:<10} {:>5} {:>24} {:>26} {:>10}",
                         r.name,
                         d.position,
-                        d.dc_difference.map_or("-".into(), |v| format!(
-                            "{} / {} / {}",
-                            us(v.p50),
-                            us(v.p99),
-                            us(v.max)
-                        )),
+                        d.dc_difference
+                            .map_or("-".into(), |v| format!("{} / {} / {}", v.p50, v.p99, v.max)),
                         d.arrival_after_sync0.map_or("-".into(), |v| format!(
                             "{} / {}",
                             us(v.p50),
