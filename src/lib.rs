@@ -20,11 +20,13 @@
 //! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
 //! | [`harness`] | the cycle-jitter harness behind `ecdrive jitter`: ecdrive's cycle against a bare sleep loop and plain ethercrab |
 //! | [`canopen`] | the same CiA 402 layer over CANopen |
+//! | [`config`] | the `ecdrive run` configuration file (TOML) → master configuration |
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
 pub mod canopen;
 pub mod cia402;
+pub mod config;
 pub mod drives;
 pub mod ec;
 pub mod esi;

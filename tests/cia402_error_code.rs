@@ -109,6 +109,9 @@ fn mr_j4_alarm_codes() {
     // An alarm the table does not name falls to the catch-all row; the number is the low byte.
     let d = ErrorCode(0xFF20).describe(t);
     assert_eq!(d.name, "AL.xx");
+    // The rows from the MELSERVO-J4 numbering the emulated drive raises.
+    assert_eq!(ErrorCode(0xFF52).describe(t).text, "Error excessive");
+    assert_eq!(ErrorCode(0xFF35).describe(t).name, "AL.35");
     assert_eq!(ErrorCode(0xFF20).device_specific_low_byte(), Some(0x20));
     assert_eq!(ErrorCode(0x8611).device_specific_low_byte(), None);
     // Old firmware.

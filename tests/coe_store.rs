@@ -8,11 +8,10 @@ use ecdrive::od::{
     ConstValue, DataType, EntryAccess, EntryDesc, ObjectAddress, ObjectCode, ObjectDesc,
     SdoAbortCode, Value,
 };
-use ecdrive::pdo::{Direction, PdoEntry};
+use ecdrive::pdo::{Direction, DirectionLimits, PdoEntry, PdoLimits, PdoRange};
 use ecdrive::sim::coe::hooks::{AllowedValues, Chain, Mirror, RefuseMappedWrites, RefuseWrites};
 use ecdrive::sim::coe::{
-    CoeConfig, CoeServer, Dictionary, ListType, ObjectStore, OdHooks, OdStore, PdoDirectionLimits,
-    PdoRules, fixture,
+    CoeConfig, CoeServer, ListType, ObjectStore, OdHooks, OdStore, ValueStore, fixture,
 };
 
 const PRE: AlState = AlState::PreOp;
@@ -310,16 +309,35 @@ fn pdo_objects_are_writable_only_in_preop() {
     }
 }
 
+static RX_RANGES: &[PdoRange] = &[PdoRange::new(0x1600, 0x1601, 4)];
+static TX_RANGES: &[PdoRange] = &[
+    PdoRange::single(0x1A00, 8),
+    PdoRange::single(0x1A01, 8).fixed(),
+];
+
+/// A drive's PDO limits for the fixture: Rx 0x1600/0x1601 of at most 4 entries, two PDOs, 3
+/// entries and 8 bytes per direction; Tx 0x1A00 writable, 0x1A01 fixed, one PDO.
+const LIMITS: PdoLimits = PdoLimits {
+    drive: "fixture",
+    rx: DirectionLimits {
+        pdos: RX_RANGES,
+        max_assigned: 2,
+        max_entries: 3,
+        max_bytes: 8,
+    },
+    tx: DirectionLimits {
+        pdos: TX_RANGES,
+        max_assigned: 1,
+        max_entries: 8,
+        max_bytes: 32,
+    },
+    assignment_writable: true,
+};
+
 #[test]
 fn pdo_size_limits() {
-    let rules = PdoRules {
-        rx: PdoDirectionLimits {
-            max_bytes: 8,
-            max_entries: 3,
-        },
-        tx: PdoDirectionLimits::UNLIMITED,
-    };
-    let mut od = store().with_rules(rules);
+    let mut od = store().with_limits(LIMITS);
+    assert_eq!(od.limits(), Some(&LIMITS));
     // Assigned 0x1600: 6 bytes, 2 entries. Adding 0x60FF (4 bytes) → 10 bytes > 8.
     od.write(0x1600, 0, PRE, &[0]).unwrap();
     w32(&mut od, 0x1600, 3, 0x60FF_0020).unwrap();
@@ -333,6 +351,12 @@ fn pdo_size_limits() {
     w32(&mut od, 0x1600, 4, 0x6060_0008).unwrap();
     assert_eq!(
         od.write(0x1600, 0, PRE, &[4]),
+        Err(SdoAbortCode::PDO_TOO_LONG)
+    );
+    // More entries than the mapping object of the range holds (4): refused as too long too.
+    w32(&mut od, 0x1600, 5, 0x6060_0008).unwrap();
+    assert_eq!(
+        od.write(0x1600, 0, PRE, &[5]),
         Err(SdoAbortCode::PDO_TOO_LONG)
     );
     od.write(0x1600, 0, PRE, &[3]).unwrap();
@@ -350,6 +374,34 @@ fn pdo_size_limits() {
     assert_eq!(od.mapping().unwrap().bytes(Direction::Rx), 4);
 }
 
+#[test]
+fn pdo_assignment_and_fixed_mapping_limits() {
+    let mut od = store().with_limits(LIMITS);
+    // One TxPDO per SyncManager: sub 0 = 2 is too high even with valid entries.
+    od.write(0x1C13, 0, PRE, &[0]).unwrap();
+    od.write(0x1C13, 2, PRE, &0x1A01u16.to_le_bytes()).unwrap();
+    assert_eq!(
+        od.write(0x1C13, 0, PRE, &[2]),
+        Err(SdoAbortCode::VALUE_TOO_HIGH)
+    );
+    // The fixed mapping 0x1A01 refuses writes, the writable 0x1A00 accepts them.
+    assert_eq!(od.write(0x1A01, 0, PRE, &[0]), Err(SdoAbortCode::READ_ONLY));
+    od.write(0x1A00, 0, PRE, &[0]).unwrap();
+    // It can still be assigned (assignment_writable), alone.
+    od.write(0x1C13, 1, PRE, &0x1A01u16.to_le_bytes()).unwrap();
+    od.write(0x1C13, 0, PRE, &[1]).unwrap();
+    assert_eq!(od.mapping().unwrap().tx[0].index, 0x1A01);
+    // A fixed assignment refuses writes to 0x1C12/0x1C13.
+    let mut fixed = store().with_limits(PdoLimits {
+        assignment_writable: false,
+        ..LIMITS
+    });
+    assert_eq!(
+        fixed.write(0x1C12, 0, PRE, &[0]),
+        Err(SdoAbortCode::READ_ONLY)
+    );
+}
+
 // ---------------------------------------------------------------------------------------------
 // Hooks: the MR-J4-TM behaviours as data, plus a computed read.
 
@@ -359,7 +411,7 @@ struct ComputedStatusword;
 impl OdHooks for ComputedStatusword {
     fn on_read(
         &mut self,
-        dict: &Dictionary,
+        dict: &ValueStore,
         addr: ObjectAddress,
         _state: AlState,
         buf: &mut [u8],

@@ -310,6 +310,9 @@ fn mrj4_dictionary_objects() {
     assert_eq!(e(0x605A, 0).default, Some(Value::Int(2)));
     assert_eq!(e(0x60E0, 0).max, Some(Value::Uint(10_000)));
     assert_eq!(e(0x6502, 0).default, Some(Value::Uint(0x000B_03AD)));
+    // DISCREPANCY §7.3.8(6) (0) vs §5.4.1 (8 with [Pr. PA01] = ___0): the file follows §5.4.1.
+    assert_eq!(e(0x6060, 0).default, Some(Value::Int(8)));
+    assert_eq!(e(0x6061, 0).default, Some(Value::Int(8)));
     // 60E3h: 39 supported homing methods, first 37, last -43 (§7.3.13).
     let h = dict.resolve(0x60E3).unwrap().unwrap();
     assert_eq!(h.code, ObjectCode::Array);
@@ -447,21 +450,25 @@ fn bdhde_dc_and_interpolation_period() {
     let dc = &d.dc[0];
     assert_eq!(dc.assign_activate, 0x0300);
     assert_eq!(dc.sync0_cycle_ns(1_000_000), 1_000_000);
-    // §2.4 / §9 60C2h: 60C2h:01 = 4..64 × 250 µs.
+    // §2.4: FBITPRD = 60C2h:01 = 1..64 × 250 µs (DISCREPANCY: the 60C2h table says 4..64; the
+    // file follows §2.4, so 250 µs and 500 µs cycles are allowed).
     let c = dc.allowed_cycle_times.as_ref().unwrap();
     assert_eq!(
         c,
         &CycleTimes::Range {
-            min: 1_000_000,
+            min: 250_000,
             max: 16_000_000,
             step: 250_000
         }
     );
-    assert!(c.contains(1_000_000) && c.contains(1_250_000) && c.contains(16_000_000));
-    assert!(!c.contains(500_000) && !c.contains(1_100_000) && !c.contains(16_250_000));
+    assert!(c.contains(250_000) && c.contains(500_000) && c.contains(1_000_000));
+    assert!(c.contains(1_250_000) && c.contains(16_000_000));
+    assert!(!c.contains(125_000) && !c.contains(1_100_000) && !c.contains(16_250_000));
     let p = d.dictionary().unwrap().resolve(0x60C2).unwrap().unwrap();
     assert_eq!(p.code, ObjectCode::Record);
     assert_eq!(p.entry(1).unwrap().default, Some(Value::Uint(4)));
+    assert_eq!(p.entry(1).unwrap().min, Some(Value::Uint(1)));
+    assert_eq!(p.entry(1).unwrap().max, Some(Value::Uint(64)));
     assert_eq!(p.entry(2).unwrap().default, Some(Value::Int(-4)));
     assert_eq!(p.entry(2).unwrap().access, EntryAccess::RO);
 }

@@ -7,10 +7,26 @@
 //!
 //! Sections of this file:
 //! - PDO mapping: limits, the power-on contents of every mapping object, the default assignment,
-//!   the recommended cyclic mapping, and the objects each mode needs.
+//!   the recommended cyclic mapping, and the objects each mode needs;
+//! - CiA 402 behaviour: no state skipping, quick-stop option codes 0/2/6 with transition 16, the
+//!   remote bit, the fault table;
+//! - synchronisation (0x60C2 in 250 µs units) and cycle times; units (the factor group);
+//! - start-up: the SDOs a safe start needs;
+//! - the object dictionary ([`DICTIONARY`], in `bdhde/dictionary.rs`);
+//! - the profile ([`PROFILE`]);
+//! - **values that are ours**: every MANUAL GAP and \[REC\] value of this file, and the reading
+//!   taken where the manual contradicts itself (DISCREPANCY), in one section at the end.
 
-use crate::od::ObjectAddress;
+use super::profile::{
+    CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, StartupSdo, StartupWhen, SyncSpec,
+    Units,
+};
+use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes};
+use crate::od::{ConstValue, ObjectAddress};
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
+
+mod dictionary;
+pub use dictionary::DICTIONARY;
 
 // ============================================================================================
 // PDO mapping (§5.2.2, chapter 7 objects 1600h–1603h, 1A00h–1A03h, 1C12h, 1C13h)
@@ -241,5 +257,313 @@ pub const REQUIRED_OBJECTS: &[RequiredObjects] = &[
         mode_name: "hm",
         rx: &[CONTROLWORD],
         tx: SW_ONLY,
+    },
+];
+
+// ============================================================================================
+// CiA 402 behaviour (§5.4, §5.5, §9 605Ah–605Eh, §10.2)
+// ============================================================================================
+
+/// The fault codes of §10.2 Table 10-4, as 0x603F and EMCY codes, with the 7-segment code and
+/// FLT number as the name. Several faults share one code (0x6320 covers twelve); such rows name
+/// all of them, since the code alone cannot tell them apart. Codes that are also standard CiA
+/// codes are named here with the drive's own wording, which is looked up first.
+pub const ERRORS: &[ErrorEntry] = &[
+    ErrorEntry::exact(
+        0x2214,
+        "F24 (FLT 146) / P (FLT 3)",
+        "Hardware over-current / Over-Current",
+    ),
+    ErrorEntry::exact(0x2250, "F20 (FLT 166)", "IPM Bottom Leg Short Circuit"),
+    ErrorEntry::exact(0x2310, "F2 (FLT 17)", "Motor Foldback"),
+    ErrorEntry::exact(0x2311, "F1 (FLT 16)", "Drive Foldback"),
+    ErrorEntry::exact(0x2330, "F21 (FLT 167)", "UVW to Ground Short Circuit"),
+    ErrorEntry::exact(
+        0x2380,
+        "e109 (FLT 43) / F23 (FLT 155)",
+        "Current-Sensors Offset Invalid / Current Sensor boot strap error",
+    ),
+    ErrorEntry::exact(0x2382, "o9 (FLT 105)", "Digital Output Over-Current Fault"),
+    ErrorEntry::exact(0x3110, "o (FLT 9)", "Over-Voltage"),
+    ErrorEntry::exact(0x3120, "u (FLT 11)", "Under-Voltage"),
+    ErrorEntry::exact(0x3183, "o7 (FLT 78)", "Bus AC Supply Line Disconnect"),
+    ErrorEntry::exact(
+        0x3199,
+        "F4 (FLT 148) / o8 (FLT 83)",
+        "Regeneration fault / Regen Resistor Overload",
+    ),
+    ErrorEntry::exact(
+        0x4080,
+        "t2 (FLT 39)",
+        "Integrated Power Module Over-Temperature",
+    ),
+    ErrorEntry::exact(0x4310, "t1 (FLT 10)", "Power Stage Over-Temperature"),
+    ErrorEntry::exact(
+        0x5530,
+        "e107 (FLT 7) / F13 (FLT 159)",
+        "Power EEPROM Fault / Failure Writing to Power EEPROM",
+    ),
+    ErrorEntry::exact(
+        0x5581,
+        "e106 (FLT 6) / F11 (FLT 157) / F14 (FLT 160)",
+        "Control EEPROM Fault / Parameter EEPROM Fault / Failure Writing to Control EEPROM",
+    ),
+    ErrorEntry::exact(
+        0x5585,
+        "e (FLT 2) / F0 (FLT 154) / F12 (FLT 158) / F15 (FLT 161) / F9 (FLT 153)",
+        "Parameter Memory Checksum Failure / Eeprom version error / Control EEPROM Checksum \
+         Failure / Control Board and Power Board Mismatch / Power EEPROM Checksum Failure",
+    ),
+    ErrorEntry::exact(0x5586, "E (FLT 12)", "Failure Writing to Flash Memory"),
+    ErrorEntry::exact(0x6100, "HE (FLT 174)", "Homing Error"),
+    ErrorEntry::exact(
+        0x6320,
+        "F10/F16/F17/F18/F25/F7/F8/H1-H5 (FLT 156/162/163/164/147/151/152/169-173)",
+        "Power On Time Out / No Signal for Touch Probe / Electrical Gear Calculate Overflow / \
+         Electrical Gear Over Range / Regeneration resistance less than 40 Ohm / Drive parameter \
+         initialize fail / Motor parameter initialize fail / HDM 1-5",
+    ),
+    ErrorEntry::exact(0x6381, "-1 (FLT 12)", "Not Configured"),
+    ErrorEntry::exact(0x6581, "e101 (FLT 5)", "FPGA Config Failed"),
+    ErrorEntry::exact(0x7090, "e120 (FLT 47)", "FPGA Version Mismatch"),
+    ErrorEntry::exact(0x7091, "n3 (FLT 57)", "Emergency Stop Issued"),
+    ErrorEntry::exact(0x7121, "F3 (FLT 59)", "Stall Fault"),
+    ErrorEntry::exact(
+        0x7305,
+        "F22 (FLT 168)",
+        "Encoder Multi-turn Counter Overflow",
+    ),
+    ErrorEntry::exact(0x7380, "r20 (FLT 34)", "Feedback Communication Error"),
+    ErrorEntry::exact(
+        0x7382,
+        "F19 (FLT 165) / r24 (FLT 42)",
+        "SenseAR Init Failed / Tamagawa Init Failed",
+    ),
+    ErrorEntry::exact(
+        0x7385,
+        "r29 (FLT 56)",
+        "Absolute Multi-turn Encoder Battery Low Voltage Fault",
+    ),
+    ErrorEntry::exact(0x7388, "r26 (FLT 49)", "Tamagawa Abs Operational Fault"),
+    ErrorEntry::exact(0x738D, "r40 (FLT 82)", "SensAR Encoder Fault"),
+    ErrorEntry::exact(0x7580, "Fb3 (FLT 65)", "Fieldbus Cable Disconnected"),
+    ErrorEntry::exact(0x818D, "Fb8 (FLT 91)", "EtherCAT Packet Loss"),
+    ErrorEntry::exact(0x8481, "J (FLT 14)", "Velocity Over-Speed Exceeded"),
+    ErrorEntry::exact(0x8482, "J2 (FLT 67)", "Exceeded Maximum Velocity Error"),
+    ErrorEntry::exact(0x8689, "J3 (FLT 87)", "Excessive PE Value"),
+    ErrorEntry::exact(0xF080, "Fb9 (FLT 92)", "CAN/EtherCAT State Not Operational"),
+    ErrorEntry::exact(0xFF02, "e123 (FLT 85)", "Motor Plate Read Failed"),
+    ErrorEntry::exact(0xFF04, "- (FLT 89)", "Realtime Overload Fault"),
+    ErrorEntry::exact(
+        0xFF14,
+        "e131 (FLT 108)",
+        "MOTORNAME and MTP data are not compatible",
+    ),
+];
+
+/// The device-control rules (§5.4, §5.5, §9 605Ah, §2.3):
+/// - no state skipping: Shutdown → Switch on → Enable operation;
+/// - quick-stop option codes 0 (disable the drive, the motor coasts; **the default**), 2 (ramp on
+///   0x6085, then Switch on disabled) and 6 (ramp on 0x6085 and stay; transition 16 on Enable
+///   operation). The manual words 6 as "remain in Operation Enabled"; CiA 402 and this model
+///   read it as staying in Quick stop active;
+/// - commands act only with statusword bit 9 (remote, COMMmode 1, the factory setting);
+/// - 0x6502 = 941 (0x3AD): pp, pv, tq, hm, csp, csv, cst; no vendor modes;
+/// - the fault table [`ERRORS`].
+pub const CAPS: DriveCaps = DriveCaps {
+    state_skipping: false,
+    transition_16: true,
+    quick_stop_options: &[
+        QuickStopOption::DISABLE_DRIVE,
+        QuickStopOption::QUICK_STOP_RAMP,
+        QuickStopOption::QUICK_STOP_RAMP_STAY,
+    ],
+    default_quick_stop_option: QuickStopOption::DISABLE_DRIVE,
+    position_mode_switch_needs_zero_speed: false,
+    vendor_position_modes: &[],
+    remote_gates_controlword: true,
+    supported_modes: SupportedModes::from_raw(0x0000_03AD),
+    error_table: ERRORS,
+};
+
+// ============================================================================================
+// Synchronisation (§2.4, §4.4.1, §9 60C2h)
+// ============================================================================================
+
+/// The time unit of 0x60C2:01 (FBITPRD): 250 µs; 0x60C2:02 (FBITIDX) is fixed at −4 and
+/// read-only (§2.4).
+pub const INTERPOLATION_UNIT_NS: u32 = 250_000;
+
+/// DC SYNC0 ("DC-Synchronous", §4.4.1 step 8) with the cycle told to the drive in 0x60C2:01 as a
+/// multiple of 250 µs, 1 to 64 (250 µs to 16 ms; DISCREPANCY, see the end of this file). The
+/// drive has no 0x1C32/0x1C33 and no documented free run.
+pub const SYNC: SyncSpec = SyncSpec {
+    free_run: false,
+    dc_sync0: true,
+    cycle_times: CycleTimes::Range {
+        min_ns: INTERPOLATION_UNIT_NS * FBITPRD_MIN,
+        max_ns: INTERPOLATION_UNIT_NS * 64,
+        step_ns: INTERPOLATION_UNIT_NS,
+    },
+    assign_activate: ASSIGN_ACTIVATE,
+    sync_type_object: None,
+    cycle_time_object: Some(CycleTimeObject::InterpolationFixedIndex {
+        unit_ns: INTERPOLATION_UNIT_NS,
+        index: -4,
+    }),
+};
+
+// ============================================================================================
+// Units (§6, §9 6091h/6092h, 6071h–6078h)
+// ============================================================================================
+
+/// Position units per motor revolution once [`STARTUP`] has set the factor group:
+/// (0x6091:01 / 0x6091:02) × (0x6092:01 / 0x6092:02) = 1 048 576 / 1 × 1 / 1 (§6.2–§6.4, the
+/// manual's own example). With the drive's defaults (all 1) one unit is one revolution.
+pub const COUNTS_PER_REV: u32 = 1 << 20;
+
+/// Position in user units (2^20 per revolution after [`STARTUP`]), velocity in user units per
+/// second, acceleration in user units per s² (§6.2–§6.4), torque in per mille of the motor's
+/// rated torque 0x6076 (§6.6).
+pub const UNITS: Units = Units {
+    counts_per_rev: COUNTS_PER_REV as f64,
+    position_unit: "count (2^20 per revolution, set at start-up)",
+    velocity_unit_counts_per_s: 1.0,
+    velocity_unit: "count/s",
+    torque_unit: "0.1 % of rated torque (0x6076)",
+};
+
+// ============================================================================================
+// Start-up (§6.2, §9 6065h/6066h/605Ah/607Fh/6085h; reference 12 items 5 and 10)
+// ============================================================================================
+
+/// SDOs for a safe start, written in PRE-OP in this order. The drive's documented defaults are
+/// unusable: one user unit per revolution, a following-error window of 1 unit with no time-out,
+/// a maximum profile velocity of 1 unit/s, a quick stop that coasts (0x605A = 0) and a quick-stop
+/// deceleration of 1 unit/s². The values are ours (\[REC\]), see [`REC_STARTUP`].
+pub const STARTUP: &[StartupSdo] = REC_STARTUP;
+
+// ============================================================================================
+// The profile
+// ============================================================================================
+
+/// Everything ecdrive knows about the BDHDE.
+pub static PROFILE: DriveProfile = DriveProfile {
+    name: "BDHDE",
+    key: "bdhde",
+    vendor: "Servotronix",
+    identity: IdentityMatch {
+        vendor_id: VENDOR_ID,
+        product_code: PRODUCT_CODE,
+    },
+    revision: REVISION,
+    caps: CAPS,
+    pdo_limits: PDO_LIMITS,
+    default_mapping: DEFAULT_MAPPING,
+    cyclic_mapping: CYCLIC_MAPPING,
+    required_objects: REQUIRED_OBJECTS,
+    dictionary: DICTIONARY,
+    startup: STARTUP,
+    output_defaults: &[],
+    cycle_counter: None,
+    sync: SYNC,
+    units: UNITS,
+    // MANUAL GAP: complete access is not described; the abort list names 0x06010004
+    // "cannot be accessed via complete access". Off, as in the ESI file.
+    complete_access: false,
+    esi: include_str!("../../esi/Servotronix_BDHDE.xml"),
+};
+
+/// Vendor ID (0x1018:01, §7 1018h).
+pub const VENDOR_ID: u32 = 0x0000_02E1;
+/// Product code (0x1018:02, §7 1018h).
+pub const PRODUCT_CODE: u32 = 0x000B_E2EB;
+/// Revision number (0x1018:03 default 0, §7 1018h).
+pub const REVISION: u32 = 0;
+
+// ============================================================================================
+// Values that are ours (MANUAL GAP, [REC]) and readings of DISCREPANCIES
+// ============================================================================================
+//
+// Declared here: [`ASSIGN_ACTIVATE`], [`FBITPRD_MIN`] (DISCREPANCY), [`REC_STARTUP`].
+//
+// Declared with their section, and marked there:
+// - PDO limits: one PDO per SyncManager (\[REC\]: 0x1C12/0x1C13 documented as single U16
+//   variables, served in the ETG array form), 8 entries / 32 bytes per direction (MANUAL GAP,
+//   DERIVED from the largest mapping object);
+// - [`CYCLIC_MAPPING`] and [`REQUIRED_OBJECTS`] (\[REC\]);
+// - [`CAPS`]: quick-stop code 6 read as CiA "stay in Quick stop active" (DISCREPANCY with the
+//   manual's wording "remain in Operation Enabled");
+// - [`UNITS`]: the 2^20 units per revolution follow from [`REC_STARTUP`];
+// - complete access off (MANUAL GAP);
+// - dictionary: 0x60C2:02 INTEGER8 (the manual prints UNSIGNED8 for −4); 0x1C12/0x1C13 as ETG
+//   arrays (\[REC\]); 0x60C2:01 range 1–64 (DISCREPANCY, [`FBITPRD_MIN`]).
+
+/// MANUAL GAP: the ESI AssignActivate word of the DC mode; 0x0300 (SYNC0 only) is the usual
+/// "DC-Synchronous" value.
+pub const ASSIGN_ACTIVATE: u16 = 0x0300;
+
+/// DISCREPANCY: the smallest 0x60C2:01 (FBITPRD). §2.4, the description of the parameter itself,
+/// says "the setting range of FBITPRD is from 1 to 64" (250 µs to 16 ms); the 0x60C2 object
+/// table prints 4 to 64 (1 ms to 16 ms). The parameter's own description is followed, so the
+/// drive runs at 500 µs and 250 µs too; the ESI file and the emulated drive agree.
+pub const FBITPRD_MIN: u32 = 1;
+
+/// \[REC\] The start-up SDOs (see [`STARTUP`]): the factor group first, then the windows and
+/// limits in the resulting units.
+pub const REC_STARTUP: &[StartupSdo] = &[
+    StartupSdo {
+        address: ObjectAddress::new(0x6091, 1),
+        value: ConstValue::Uint(COUNTS_PER_REV as u64),
+        why: "gear ratio motor revolutions: 2^20 position units per motor revolution (§6.2 example)",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x6091, 2),
+        value: ConstValue::Uint(1),
+        why: "gear ratio shaft revolutions: 1",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x6092, 1),
+        value: ConstValue::Uint(1),
+        why: "feed constant numerator: 1",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x6092, 2),
+        value: ConstValue::Uint(1),
+        why: "feed constant denominator: 1",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x6065, 0),
+        value: ConstValue::Uint(3 * COUNTS_PER_REV as u64),
+        why: "following-error window 3 revolutions (the drive's default is 1 unit)",
+        when: StartupWhen::IfNotMapped,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x6066, 0),
+        value: ConstValue::Uint(10),
+        why: "following-error time-out 10 ms (the drive's default is 0)",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x607F, 0),
+        value: ConstValue::Uint(100 * COUNTS_PER_REV as u64),
+        why: "maximum profile velocity 100 rev/s = 6000 r/min (the drive's default is 1 unit/s)",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x6085, 0),
+        value: ConstValue::Uint(1000 * COUNTS_PER_REV as u64),
+        why: "quick-stop deceleration 1000 rev/s² (6000 r/min to 0 in 0.1 s; default 1 unit/s²)",
+        when: StartupWhen::Always,
+    },
+    StartupSdo {
+        address: ObjectAddress::new(0x605A, 0),
+        value: ConstValue::Int(2),
+        why: "quick stop on the 0x6085 ramp, then Switch on disabled (the default 0 lets the motor coast)",
+        when: StartupWhen::Always,
     },
 ];

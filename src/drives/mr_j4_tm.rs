@@ -8,10 +8,25 @@
 //!
 //! Sections of this file:
 //! - PDO mapping: limits, the power-on contents of every mapping object, the default assignment,
-//!   the recommended cyclic mapping, and the objects each mode needs.
+//!   the recommended cyclic mapping, and the objects each mode needs;
+//! - CiA 402 behaviour: state skipping, the quick-stop option, the mode rules, the alarm table;
+//! - synchronisation and cycle times; units;
+//! - start-up: what the master writes by SDO and into the first cycle's outputs;
+//! - the object dictionary ([`DICTIONARY`], in `mr_j4_tm/dictionary.rs`);
+//! - the profile ([`PROFILE`]);
+//! - **values that are ours**: every MANUAL GAP and \[REC\] value of this file, and the reading
+//!   taken where the manual contradicts itself (DISCREPANCY), in one section at the end.
 
+use super::profile::{
+    CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,
+    StartupSdo, SyncSpec, Units,
+};
+use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes, VendorModeBit};
 use crate::od::ObjectAddress;
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
+
+mod dictionary;
+pub use dictionary::DICTIONARY;
 
 // ============================================================================================
 // PDO mapping (§1.3, §3.3, §3.4, §3.5, §7.3.2, §7.3.3)
@@ -304,4 +319,217 @@ pub const REQUIRED_OBJECTS: &[RequiredObjects] = &[
         rx: &[CONTROLWORD, ObjectAddress::new(0x2D60, 0)],
         tx: SW_ONLY,
     },
+];
+
+// ============================================================================================
+// CiA 402 behaviour (§5.1, §5.4, §5.6, §7.3.8, §10)
+// ============================================================================================
+
+/// 0x6502 vendor bits (§7.3.8(8)): bit 16 jg (−100), bit 17 pt (−101), bit 19 idx (−103).
+pub const VENDOR_MODE_BITS: &[VendorModeBit] = &[
+    VendorModeBit {
+        bit: 16,
+        mode: -100,
+    },
+    VendorModeBit {
+        bit: 17,
+        mode: -101,
+    },
+    VendorModeBit {
+        bit: 19,
+        mode: -103,
+    },
+];
+
+/// The alarms this manual names, as 0x603F / 0x1003 / EMCY codes: 0xFF00 + the main alarm
+/// number (software B2 and later; §7.3.1(8), §7.3.8(1)). Several details share one code
+/// (AL.86.1 and AL.86.2 are both 0xFF86); 0x2A41 carries the detail. Two rows come from the
+/// MELSERVO-J4 alarm numbering rather than from this manual (see [`REC_ALARMS`]). The last row
+/// names any other alarm by its number.
+pub const ERRORS: &[ErrorEntry] = &[
+    ErrorEntry::exact(0xFF10, "AL.10", "Undervoltage"),
+    ErrorEntry::exact(0xFF25, "AL.25", "Absolute position erased"),
+    REC_ALARMS[0],
+    ErrorEntry::exact(0xFF37, "AL.37", "Parameter error"),
+    REC_ALARMS[1],
+    ErrorEntry::exact(0xFF69, "AL.69", "Command error"),
+    ErrorEntry::exact(0xFF86, "AL.86", "Network communication error"),
+    ErrorEntry {
+        code: 0xFF00,
+        mask: 0xFF00,
+        name: "AL.xx",
+        text: "MR-J4-TM alarm: the low byte is the alarm number",
+    },
+];
+
+/// The device-control rules (§5.1, §5.4.2, §5.6, §7.3.8):
+/// - **state skipping**: Switch on (0x0007) or Enable operation (0x000F) from Switch on
+///   disabled, and Enable operation from Ready to switch on, jump straight there;
+/// - quick-stop option code **2 only** (0x605A range 2–2): decelerate on 0x6085, then Switch on
+///   disabled; no transition 16 (§5.1 table: "not supported");
+/// - switching 0x6060 to or from a position mode needs zero speed (§5.4.2); pt and idx position
+///   the axis, jg does not (our reading: §5.4.2 only says "position mode");
+/// - 0x6502 = 0x000B03AD: pp, pv, tq, hm, csp, csv, cst plus jg, pt, idx (B2 and later);
+/// - the alarm table [`ERRORS`].
+pub const CAPS: DriveCaps = DriveCaps {
+    state_skipping: true,
+    transition_16: false,
+    quick_stop_options: &[QuickStopOption::QUICK_STOP_RAMP],
+    default_quick_stop_option: QuickStopOption::QUICK_STOP_RAMP,
+    position_mode_switch_needs_zero_speed: true,
+    vendor_position_modes: &[-101, -103],
+    remote_gates_controlword: false,
+    supported_modes: SupportedModes::from_raw(0x000B_03AD).with_vendor_bits(VENDOR_MODE_BITS),
+    error_table: ERRORS,
+};
+
+// ============================================================================================
+// Synchronisation (§1.1, §1.3, §2.4, §7.3.3(4), (5))
+// ============================================================================================
+
+/// The PDO / SYNC0 cycle times the drive accepts in 0x1C32:02, ns (§1.3, §7.3.3(4)); any other
+/// value is refused (abort 0x06090030).
+pub const CYCLE_TIMES_NS: &[u32] = &[250_000, 500_000, 1_000_000, 2_000_000];
+
+/// Free run (0x1C32:01 = 0; the cyclic modes need software B4 or later) or DC SYNC0
+/// (0x1C32:01 = 2), with SYNC0 = the PDO cycle, no shift, SYNC1 unused (§1.1(3)); the master
+/// writes 0x1C32:01 and 0x1C32:02 in PRE-OP (0x1C33:01/:02 follow). There is no 0x60C2.
+pub const SYNC: SyncSpec = SyncSpec {
+    free_run: true,
+    dc_sync0: true,
+    cycle_times: CycleTimes::List(CYCLE_TIMES_NS),
+    assign_activate: ASSIGN_ACTIVATE,
+    sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
+    cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
+};
+
+// ============================================================================================
+// Units (§5.4.3–§5.4.5, §7.3.14)
+// ============================================================================================
+
+/// Position command units per motor revolution in the cyclic modes: pulses, the encoder
+/// resolution of the MR-J4 rotary motors (22 bits; 0x608F:01 reports it, e.g. 4 194 304).
+pub const COUNTS_PER_REV: f64 = 4_194_304.0;
+
+/// Position in pulses (4 194 304 per revolution), velocity in 0.01 r/min (0x60A9 = 0xFEB44700),
+/// torque in 0.1 % of the rated torque (§5.4.3–§5.4.5). Ramps (0x6083/0x6084/0x6085) are time
+/// constants in ms from 0 to the rated speed, not accelerations.
+pub const UNITS: Units = Units {
+    counts_per_rev: COUNTS_PER_REV,
+    position_unit: "pulse",
+    velocity_unit_counts_per_s: COUNTS_PER_REV / 6000.0,
+    velocity_unit: "0.01 r/min",
+    torque_unit: "0.1 % of rated torque",
+};
+
+// ============================================================================================
+// Start-up (§1.4.2, §3.3 notes, §5.9, §6.2)
+// ============================================================================================
+
+/// SDOs for a safe start: none beyond the synchronisation set-up ([`SYNC`]: 0x1C32:01 and the
+/// cycle in 0x1C32:02). The drive's power-on values are safe: quick stop on the 100 ms ramp,
+/// following-error window 3 revolutions, torque limits at [Pr. PA11]/[Pr. PA12]. The values that
+/// are unsafe at zero are outputs, not SDOs: see [`OUTPUT_DEFAULTS`].
+pub const STARTUP: &[StartupSdo] = &[];
+
+/// Outputs that must not start at zero when they are mapped (§3.3 notes 1–2, §5.4.5): 0 in the
+/// velocity limit 0x2D20 stops the motor in cst/tq, 0 in the torque limits 0x60E0/0x60E1 means no
+/// torque at all. The default 0x1600 maps all three.
+pub const OUTPUT_DEFAULTS: &[OutputDefault] = &[
+    OutputDefault {
+        address: ObjectAddress::new(0x2D20, 0),
+        value: 50_000,
+        why: "velocity limit 500.00 r/min (the drive's default, [Pr. PT67]); 0 would hold the motor at zero speed in cst/tq",
+    },
+    OutputDefault {
+        address: ObjectAddress::new(0x60E0, 0),
+        value: 10_000,
+        why: "positive torque limit 1000.0 % (the maximum; the motor's own limit applies); 0 would mean no torque",
+    },
+    OutputDefault {
+        address: ObjectAddress::new(0x60E1, 0),
+        value: 10_000,
+        why: "negative torque limit 1000.0 % (the maximum; the motor's own limit applies); 0 would mean no torque",
+    },
+];
+
+/// The incremental (watchdog) counter of §6.2 / §7.3.7(22), (23): when 0x2D23 is mapped the
+/// master adds 1 (mod 256) every cycle, else [AL. 86.2]; the drive returns 0x2D24 = 0x2D23 + 1.
+/// Checked in DC mode only.
+pub const CYCLE_COUNTER: CycleCounter = CycleCounter {
+    output: ObjectAddress::new(0x2D23, 0),
+    echo: Some(ObjectAddress::new(0x2D24, 0)),
+};
+
+// ============================================================================================
+// The profile
+// ============================================================================================
+
+/// Everything ecdrive knows about the MR-J4-TM.
+pub static PROFILE: DriveProfile = DriveProfile {
+    name: "MR-J4-TM",
+    key: "mr-j4-tm",
+    vendor: "Mitsubishi Electric",
+    identity: IdentityMatch {
+        vendor_id: VENDOR_ID,
+        product_code: PRODUCT_CODE,
+    },
+    revision: REVISION,
+    caps: CAPS,
+    pdo_limits: PDO_LIMITS,
+    default_mapping: DEFAULT_MAPPING,
+    cyclic_mapping: CYCLIC_MAPPING,
+    required_objects: REQUIRED_OBJECTS,
+    dictionary: DICTIONARY,
+    startup: STARTUP,
+    output_defaults: OUTPUT_DEFAULTS,
+    cycle_counter: Some(CYCLE_COUNTER),
+    sync: SYNC,
+    units: UNITS,
+    // §4.1: "Complete Access: not supported".
+    complete_access: false,
+    esi: include_str!("../../esi/Mitsubishi_MR-J4-TM.xml"),
+};
+
+/// Vendor ID (0x1018:01, §7.3.1(9); the manual prints the 7-digit "0000A1Eh").
+pub const VENDOR_ID: u32 = 0x0000_0A1E;
+/// Product code (0x1018:02, §7.3.1(9)).
+pub const PRODUCT_CODE: u32 = 0x0000_0201;
+
+// ============================================================================================
+// Values that are ours (MANUAL GAP, [REC]) and readings of DISCREPANCIES
+// ============================================================================================
+//
+// Declared here:
+// - [`REVISION`] (MANUAL GAP), [`ASSIGN_ACTIVATE`] (MANUAL GAP), [`REC_ALARMS`] (\[REC\]).
+//
+// Declared with their section, and marked there:
+// - PDO limits: one PDO per SyncManager (\[REC\], DISCREPANCY §3.4 vs §7.3.3); the assignment
+//   writable in PRE-OP only (DERIVED);
+// - default mapping-object contents: entry values DERIVED from the object types; sub-0 counts
+//   12/16/10/0 and 14/19/0/0 (DISCREPANCY §3.4 vs §7.3.2, §3.4 used); 0x1A01 50 bytes
+//   (DISCREPANCY: §3.3 says 54); 0x6077 INTEGER16 and 0x2D20 UNSIGNED32 (DISCREPANCIES with §5);
+// - [`CYCLIC_MAPPING`] (\[REC\]);
+// - [`CAPS`]: jg is not a position mode for the zero-speed rule, pt and idx are (our reading);
+// - [`OUTPUT_DEFAULTS`]: the values 50 000 / 10 000 / 10 000 (the drive's defaults);
+// - dictionary: 0x6060/0x6061 = 8 at power-on (DISCREPANCY §7.3.8(6) says 0, §5.4.1 says 8 for
+//   [Pr. PA01] = ___0; §5.4.1 used, as in the ESI file); 0x1C33:02 writable (DISCREPANCY §3.2 vs
+//   §7.3.3: §7.3.3 used, mirrored with 0x1C32:02); 0x2D20 default 50 000 (DISCREPANCY §5.4.8
+//   says 5000); 0x6098 default 37, 0x6086 default −1, 0x606E default 10 (the §7 values).
+
+/// \[REC\] / MANUAL GAP: the revision number 0x1018:03 and the SII revision. The manual gives
+/// no value; 0x00020002 is what one public field report read from an MR-J4-20TM.
+pub const REVISION: u32 = 0x0002_0002;
+
+/// MANUAL GAP: the ESI AssignActivate word of the DC mode (0x0980/0x0981). The manual states only
+/// "SYNC0 used, SYNC1 not used"; 0x0300 is the ETG convention for SYNC0-only operation.
+pub const ASSIGN_ACTIVATE: u16 = 0x0300;
+
+/// \[REC\] Alarm names that are not in this manual but in the MELSERVO-J4 alarm numbering (the
+/// troubleshooting manual SH(NA)030109 is not available here). The emulated drive raises them:
+/// AL.35 when a csp set-point step implies a speed above the permissible speed, AL.52 when the
+/// droop exceeds the following-error window 0x6065 for longer than 0x6066.
+pub const REC_ALARMS: [ErrorEntry; 2] = [
+    ErrorEntry::exact(0xFF35, "AL.35", "Command frequency error"),
+    ErrorEntry::exact(0xFF52, "AL.52", "Error excessive"),
 ];

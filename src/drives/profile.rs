@@ -221,8 +221,146 @@ pub struct DriveProfile {
     pub units: Units,
     /// Whether SDO complete access works.
     pub complete_access: bool,
-    /// The drive's ESI file (XML text).
+    /// The drive's ESI file (XML text), `include_str!`'d from `esi/`; empty for a profile
+    /// without one (the generic profile). See [`DriveProfile::esi_file`].
     pub esi: &'static str,
+}
+
+/// A cycle time the drive does not accept.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("the {drive} does not accept a cycle of {cycle_ns} ns; it accepts {allowed}")]
+pub struct CycleTimeError {
+    /// Drive name.
+    pub drive: &'static str,
+    /// The cycle asked for, ns.
+    pub cycle_ns: u32,
+    /// The accepted cycles, as text.
+    pub allowed: String,
+}
+
+/// One SDO download the master makes for the synchronisation set-up.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SyncWrite {
+    /// The object.
+    pub address: ObjectAddress,
+    /// The value, as an unsigned or signed integer of the object's type.
+    pub value: i64,
+    /// Why.
+    pub why: &'static str,
+}
+
+impl SyncSpec {
+    /// The writes that tell the drive its cycle and synchronisation mode, in order: the
+    /// synchronisation type (if the drive has such an object: 2 for DC SYNC0, 0 for free run),
+    /// then the cycle time in the drive's form. Fails if the drive does not accept `cycle_ns` or
+    /// the mode.
+    pub fn writes(
+        &self,
+        drive: &'static str,
+        cycle_ns: u32,
+        dc: bool,
+    ) -> Result<Vec<SyncWrite>, CycleTimeError> {
+        let refuse = || CycleTimeError {
+            drive,
+            cycle_ns,
+            allowed: self.cycle_times.describe(),
+        };
+        if !self.cycle_times.contains(cycle_ns) || (dc && !self.dc_sync0) || (!dc && !self.free_run)
+        {
+            let mut e = refuse();
+            if dc && !self.dc_sync0 {
+                e.allowed = format!("{} in free run only (no DC SYNC0)", e.allowed);
+            } else if !dc && !self.free_run {
+                e.allowed = format!("{} with DC SYNC0 only (no free run)", e.allowed);
+            }
+            return Err(e);
+        }
+        let mut out = Vec::with_capacity(3);
+        if let Some(address) = self.sync_type_object {
+            out.push(SyncWrite {
+                address,
+                value: if dc { 2 } else { 0 },
+                why: if dc {
+                    "synchronisation type: DC SYNC0"
+                } else {
+                    "synchronisation type: free run"
+                },
+            });
+        }
+        match self.cycle_time_object {
+            None => {}
+            Some(CycleTimeObject::Nanoseconds(address)) => out.push(SyncWrite {
+                address,
+                value: i64::from(cycle_ns),
+                why: "cycle time, ns",
+            }),
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, .. }) => {
+                if unit_ns == 0 || cycle_ns % unit_ns != 0 {
+                    return Err(refuse());
+                }
+                out.push(SyncWrite {
+                    address: ObjectAddress::new(0x60C2, 1),
+                    value: i64::from(cycle_ns / unit_ns),
+                    why: "interpolation time period in the drive's fixed time unit (0x60C2:02)",
+                });
+            }
+            Some(CycleTimeObject::InterpolationStandard) => {
+                // value × 10^index s with the smallest index that keeps value an integer ≤ 255.
+                let mut value = u64::from(cycle_ns);
+                let mut index: i64 = -9;
+                while value % 10 == 0 && index < 0 {
+                    value /= 10;
+                    index += 1;
+                }
+                if value > 255 {
+                    return Err(refuse());
+                }
+                out.push(SyncWrite {
+                    address: ObjectAddress::new(0x60C2, 1),
+                    value: value as i64,
+                    why: "interpolation time period value",
+                });
+                out.push(SyncWrite {
+                    address: ObjectAddress::new(0x60C2, 2),
+                    value: index,
+                    why: "interpolation time index (power of ten of seconds)",
+                });
+            }
+        }
+        Ok(out)
+    }
+}
+
+impl DriveProfile {
+    /// Whether a device with this vendor ID and product code is this drive type.
+    pub const fn matches(&self, vendor_id: u32, product_code: u32) -> bool {
+        self.identity.matches(vendor_id, product_code)
+    }
+
+    /// A view over the dictionary (type inference, mapping checks).
+    pub const fn od(&self) -> crate::od::Dictionary<'static> {
+        crate::od::Dictionary::new(self.dictionary)
+    }
+
+    /// Decode a 0x603F / EMCY error code with the drive's alarm table first.
+    pub fn describe_error(&self, code: u16) -> crate::cia402::ErrorDescription {
+        crate::cia402::ErrorCode(code).describe(self.caps.error_table)
+    }
+
+    /// Whether the profile carries an ESI file (the generic profile does not).
+    pub fn has_esi(&self) -> bool {
+        !self.esi.is_empty()
+    }
+
+    /// The drive's ESI file, parsed; `None` for a profile without one.
+    pub fn esi_file(&self) -> Option<Result<crate::esi::EsiFile, crate::esi::EsiError>> {
+        self.has_esi().then(|| crate::esi::EsiFile::parse(self.esi))
+    }
+
+    /// The writes for the synchronisation set-up (see [`SyncSpec::writes`]).
+    pub fn sync_writes(&self, cycle_ns: u32, dc: bool) -> Result<Vec<SyncWrite>, CycleTimeError> {
+        self.sync.writes(self.name, cycle_ns, dc)
+    }
 }
 
 impl PartialEq for DriveProfile {

@@ -11,3 +11,4 @@ pub mod session;
 pub mod setpoint;
 pub mod startup;
 pub mod telemetry;
+pub mod tools;

@@ -9,6 +9,7 @@
 //!   in-process, or as a synchronous [`link::FrameLink`](crate::link::FrameLink);
 //! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
 //! - [`devices`]: ready-made test devices (generic CoE servo, EEPROM-only I/O, mailbox echo);
+//! - [`drives`]: the emulated drives (MR-J4-TM, BDHDE), built from their profiles and ESI files;
 //! - [`clock`]: host and manual time sources;
 //! - [`probe`]: a minimal datagram sender for tests and tools;
 //! - [`run`]: serving named devices on an interface (`ecdrive sim`);
@@ -32,6 +33,7 @@ pub mod clock;
 pub mod coe;
 pub mod device;
 pub mod devices;
+pub mod drives;
 pub mod esc;
 pub mod probe;
 pub mod rec;

@@ -15,7 +15,7 @@ use std::sync::{Arc, Mutex};
 pub struct SimOptions {
     /// Network interface.
     pub interface: String,
-    /// Device names in line order (see [`devices::DEVICE_NAMES`]).
+    /// Device names in line order (see [`devices::device_names`]).
     pub devices: Vec<String>,
     /// Reset value of the SM watchdog (0x0420) in watchdog units of 100 µs; `None` keeps the ESC
     /// reset value (1000 = 100 ms), `Some(0)` disables it.
@@ -60,11 +60,7 @@ pub enum SimError {
 pub fn build_segment(names: &[String], esc: &EscConfig) -> Result<Segment, SimError> {
     if names.is_empty() {
         return Err(SimError::NoDevices {
-            known: devices::DEVICE_NAMES
-                .iter()
-                .map(|(n, _)| *n)
-                .collect::<Vec<_>>()
-                .join(", "),
+            known: devices::known_names(),
         });
     }
     let mut seg = Segment::new(Arc::new(HostClock));

@@ -1,7 +1,8 @@
 //! `ecdrive jitter`: arguments and output. The measurement is `ecdrive::harness`.
 
 use clap::Args;
-use ecdrive::harness::{self, JitterConfig, Transport};
+use super::exit;
+use ecdrive::harness::{self, HarnessError, JitterConfig, Transport};
 use ecdrive::rt::RtSettings;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -91,7 +92,7 @@ pub fn run(args: JitterArgs) -> ExitCode {
         Ok(d) => d,
         Err(e) => {
             eprintln!("ecdrive jitter: {e}");
-            return ExitCode::from(2);
+            return ExitCode::from(exit::USAGE);
         }
     };
     let cycle = Duration::from_micros(args.cycle_us);
@@ -117,7 +118,12 @@ pub fn run(args: JitterArgs) -> ExitCode {
         Ok(r) => r,
         Err(e) => {
             eprintln!("ecdrive jitter: {e}");
-            return ExitCode::FAILURE;
+            return ExitCode::from(match e {
+                HarnessError::Settings(_) | HarnessError::Emulation(_) => exit::USAGE,
+                HarnessError::Run { .. } | HarnessError::Netns(_) | HarnessError::Link(_) => {
+                    exit::BUS
+                }
+            });
         }
     };
     for w in &report.warnings {
@@ -152,8 +158,8 @@ pub fn run(args: JitterArgs) -> ExitCode {
         ok = false;
     }
     if ok {
-        ExitCode::SUCCESS
+        ExitCode::from(exit::OK)
     } else {
-        ExitCode::FAILURE
+        ExitCode::from(exit::USAGE)
     }
 }

@@ -1,18 +1,94 @@
-//! The `ecdrive` command line. Argument parsing and output only: the work is in the library.
+//! The `ecdrive` command line. Argument parsing and output only: the work is in the library
+//! (`ecdrive::master::tools`, `ecdrive::config`, `ecdrive::sim::run`).
 
+mod can;
 mod jitter;
+mod print;
+mod run;
+mod sim;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
+use ecdrive::ec::AlState;
+use ecdrive::master::error::{ErrorKind, MasterError};
+use ecdrive::master::tools::{self, Target};
+use ecdrive::od::{DataType, ObjectAddress};
+use std::path::PathBuf;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
-/// EtherCAT master for CiA 402 servo drives.
+/// Exit codes (documented in `--help` and the README).
+pub mod exit {
+    /// Success.
+    pub const OK: u8 = 0;
+    /// An internal error (a bug: please report it).
+    pub const INTERNAL: u8 = 1;
+    /// Usage or input error: bad arguments, a bad configuration or ESI file, a position out of
+    /// range, a value that does not fit its type.
+    pub const USAGE: u8 = 2;
+    /// Bus or link error: the interface is missing or down, no permission, nothing answers,
+    /// timeouts, the segment was lost.
+    pub const BUS: u8 = 3;
+    /// A drive refused: SDO abort, AL state change refused, OP not reached.
+    pub const REFUSED: u8 = 4;
+    /// A drive faulted during `run` (fault, following error).
+    pub const FAULT: u8 = 5;
+}
+
+const EXIT_CODES: &str = "\
+Exit codes:
+  0  success
+  1  internal error (a bug; please report it)
+  2  usage or input error (bad arguments, configuration or ESI file, position or value out of range)
+  3  bus or link error (interface missing or down, no permission, no answer, timeout)
+  4  a drive refused (SDO abort, AL state change refused, OP not reached)
+  5  a drive faulted during `run` (fault, following error)";
+
+/// EtherCAT master for CiA 402 servo drives: IgH-style tools, cyclic runs from a configuration
+/// file, and a software EtherCAT slave. No kernel module needed.
+///
+/// Bus commands take `-i IF`: a network interface (raw socket: root or CAP_NET_RAW), or
+/// `sim:DEVICE,…` for emulated devices in-process (no root; see `ecdrive sim --list-devices`).
+/// ecdrive is not a resident master: each command discovers the segment afresh (every device
+/// goes INIT → PRE-OP), does its work, and exits.
 #[derive(Parser)]
-#[command(name = "ecdrive", version, about, long_about = None)]
+#[command(name = "ecdrive", version, about, long_about, after_help = EXIT_CODES)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
+}
+
+#[derive(Args, Clone)]
+struct BusArgs {
+    /// Network interface of the EtherCAT segment, or `sim:DEVICE,…` for emulated devices
+    /// in-process.
+    #[arg(short, long, value_name = "IF")]
+    interface: String,
+}
+
+#[derive(Args, Clone)]
+struct AnyBusArgs {
+    /// EtherCAT: network interface of the segment, or `sim:DEVICE,…` for emulated devices
+    /// in-process.
+    #[arg(
+        short,
+        long,
+        value_name = "IF",
+        required_unless_present = "can",
+        conflicts_with = "can"
+    )]
+    interface: Option<String>,
+    /// CANopen: a SocketCAN interface (`can0`), `virtual` (in-process bus with the emulated
+    /// BLV-R, ASDA-A2 and Lexium at nodes 1, 0x7F and 0x41) or `vbus:/path` (a virtual bus
+    /// hub shared between processes).
+    #[arg(long, value_name = "IF")]
+    can: Option<String>,
+}
+
+#[derive(Args, Clone, Copy)]
+struct Json {
+    /// Print the result as JSON (one object or array on stdout).
+    #[arg(long, global = true)]
+    json: bool,
 }
 
 #[derive(Subcommand)]
@@ -20,8 +96,193 @@ enum Command {
     /// Run the main job on emulated drives: an MR-J4-TM and a BDHDE in-process, brought to OP
     /// with DC, through a csp, csv and cst sequence. Needs no hardware and no root.
     Demo,
+    /// List the devices on the segment: position, station address, alias, AL state,
+    /// identity, name, matched drive profile, DC support and mailbox protocols. With --can:
+    /// the CANopen nodes (node-ID, NMT state, device type, identity, name, profile).
+    #[command(
+        after_help = "Examples:\n  ecdrive slaves -i eth1\n  ecdrive slaves -i eth1 --verbose\n  ecdrive slaves -i sim:mr-j4-tm,bdhde --json\n  ecdrive slaves --can can0"
+    )]
+    Slaves {
+        #[command(flatten)]
+        bus: AnyBusArgs,
+        /// Also ESC type and resources, port links, propagation delay, mailbox, EEPROM size.
+        #[arg(short, long)]
+        verbose: bool,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Read an object over CoE (SDO upload). The data type comes from --type, else the drive
+    /// profile, else the drive's SDO information.
+    #[command(
+        after_help = "Examples:\n  ecdrive upload -i eth1 -p 0 0x6041:00\n  ecdrive upload -i eth1 -p 1 0x1008:00 --type string\n  ecdrive upload -i eth1 -p 0 0x6064 --json\n  ecdrive upload --can virtual -n 0x7F 0x6041:00"
+    )]
+    Upload {
+        #[command(flatten)]
+        bus: AnyBusArgs,
+        /// EtherCAT: position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS", required_unless_present = "can")]
+        position: Option<u16>,
+        /// CANopen: node-ID (1–127, decimal or 0x hex).
+        #[arg(short, long, value_name = "NODE", value_parser = parse_node, required_unless_present = "interface", conflicts_with = "position")]
+        node: Option<u8>,
+        /// The object: INDEX:SUB (`0x6041:00`, `6041h:0`; a bare index means sub-index 0).
+        #[arg(value_name = "INDEX:SUB", value_parser = parse_address)]
+        address: ObjectAddress,
+        /// Data type: u8…u64, i8…i64, f32, f64, bool, string, bytes, or a CiA/IEC name
+        /// (UNSIGNED16, UINT, DINT, …).
+        #[arg(short = 't', long = "type", value_name = "T", value_parser = parse_type)]
+        data_type: Option<DataType>,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Write an object over CoE (SDO download). Values in decimal or 0x hex; the value must fit
+    /// the data type (found as for upload).
+    #[command(
+        after_help = "Examples:\n  ecdrive download -i eth1 -p 0 0x6065:00 100000\n  ecdrive download -i eth1 -p 1 0x6060:00 8\n  ecdrive download -i eth1 -p 0 0x2001:00 0x10 --type u16\n  ecdrive download --can can0 -n 1 0x6081:00 20000"
+    )]
+    Download {
+        #[command(flatten)]
+        bus: AnyBusArgs,
+        /// EtherCAT: position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS", required_unless_present = "can")]
+        position: Option<u16>,
+        /// CANopen: node-ID (1–127, decimal or 0x hex).
+        #[arg(short, long, value_name = "NODE", value_parser = parse_node, required_unless_present = "interface", conflicts_with = "position")]
+        node: Option<u8>,
+        /// The object: INDEX:SUB.
+        #[arg(value_name = "INDEX:SUB", value_parser = parse_address)]
+        address: ObjectAddress,
+        /// The value.
+        #[arg(value_name = "VALUE", allow_hyphen_values = true)]
+        value: String,
+        /// Data type (see `upload --help`).
+        #[arg(short = 't', long = "type", value_name = "T", value_parser = parse_type)]
+        data_type: Option<DataType>,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// List the object dictionary through SDO information (objects, entries, types, access,
+    /// PDO mappability).
+    #[command(
+        after_help = "Examples:\n  ecdrive sdos -i eth1 -p 0\n  ecdrive sdos -i eth1 -p 0 --values\n  ecdrive sdos -i eth1 -p 1 --json"
+    )]
+    Sdos {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        /// Also upload every readable entry's value.
+        #[arg(long)]
+        values: bool,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Show the SyncManagers and the PDO assignment and mapping as the drive reports them
+    /// (over CoE; from the SII for devices without CoE).
+    #[command(
+        after_help = "Examples:\n  ecdrive pdos -i eth1 -p 0\n  ecdrive pdos -i eth1 -p 1 --json"
+    )]
+    Pdos {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Request an EtherCAT state (INIT, PREOP, SAFEOP, OP, BOOT) and report what each device
+    /// reached. SAFEOP and OP configure the whole segment first (PDO mapping, DC) and exchange
+    /// process data with every output zero; no drive is enabled. ecdrive does not stay
+    /// resident: once it exits, a device's watchdog takes it out of OP.
+    #[command(
+        after_help = "Examples:\n  ecdrive states -i eth1 PREOP\n  ecdrive states -i eth1 -p 1 OP\n  ecdrive states -i eth1 INIT --json"
+    )]
+    States {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Only this device (default: every device).
+        #[arg(short, long, value_name = "POS")]
+        position: Option<u16>,
+        /// The state: INIT, PREOP, SAFEOP, OP or BOOT.
+        #[arg(value_name = "STATE", value_parser = parse_state)]
+        state: AlState,
+        /// Cycle time of the process data for SAFEOP and OP, µs.
+        #[arg(long, value_name = "US", default_value_t = 1000)]
+        cycle_us: u32,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Read or write ESC registers of one device.
+    #[command(
+        after_help = "Examples:\n  ecdrive reg -i eth1 -p 0 read 0x0130 2\n  ecdrive reg -i eth1 -p 0 read 0x0910 --type u64\n  ecdrive reg -i eth1 -p 0 write 0x0120 2 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 \"34 12\""
+    )]
+    Reg {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        #[command(subcommand)]
+        op: RegOp,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Read a device's SII EEPROM: a decoded summary, a hex dump, the raw bytes to a file, or
+    /// an ESI skeleton.
+    #[command(
+        after_help = "Examples:\n  ecdrive sii -i eth1 -p 0\n  ecdrive sii -i eth1 -p 0 --hex\n  ecdrive sii -i eth1 -p 0 -o drive0.bin\n  ecdrive sii -i eth1 -p 0 --esi > drive0.xml"
+    )]
+    Sii {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        /// Render the SII as an ESI skeleton (XML) on stdout.
+        #[arg(long, conflicts_with_all = ["hex", "json"])]
+        esi: bool,
+        /// Print a hex dump of the whole EEPROM.
+        #[arg(long, conflicts_with = "json")]
+        hex: bool,
+        /// Write the raw EEPROM bytes to FILE.
+        #[arg(short, long, value_name = "FILE")]
+        output: Option<PathBuf>,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Show what the parser reads from an ESI file, or check it and say why it is invalid.
+    #[command(
+        after_help = "Examples:\n  ecdrive esi show esi/Mitsubishi_MR-J4-TM.xml\n  ecdrive esi check vendor.xml\n  ecdrive esi show esi/Servotronix_BDHDE.xml --json"
+    )]
+    Esi {
+        #[command(subcommand)]
+        op: EsiOp,
+    },
+    /// A cyclic run from a configuration file: OP, enable, each drive's set-point program,
+    /// controlled stop, summary. Progress on a terminal; quiet when piped.
+    #[command(
+        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n\nThe configuration file is described in the README (\"Configuration file\")."
+    )]
+    Run {
+        /// The configuration file (TOML).
+        #[arg(short, long, value_name = "FILE")]
+        config: PathBuf,
+        /// Stop after this long (e.g. 10s, 500ms), overriding the file's `duration`.
+        #[arg(long, value_name = "TIME", value_parser = parse_duration)]
+        duration: Option<Duration>,
+        /// Only check the file, do not run.
+        #[arg(long)]
+        check: bool,
+        #[command(flatten)]
+        json: Json,
+    },
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
     /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves.
+    #[command(
+        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde"
+    )]
     Sim {
         /// Interface to serve on (e.g. one end of a veth pair).
         #[arg(long, short, required_unless_present = "list_devices")]
@@ -36,13 +297,224 @@ enum Command {
         /// List the device names and exit.
         #[arg(long)]
         list_devices: bool,
+        #[command(flatten)]
+        json: Json,
     },
-    /// Measure the cycle's timing against a bare sleep loop and a plain ethercrab loop.
+    /// Measure the cycle's timing against a bare sleep loop and a plain ethercrab loop, on
+    /// emulated drives (in-process, or over a veth pair or an interface).
     Jitter(jitter::JitterArgs),
 }
 
+#[derive(Subcommand, Clone)]
+enum RegOp {
+    /// Read LEN bytes (default: the size of --type, else 1) from ADDR.
+    Read {
+        /// Register address (decimal or 0x hex).
+        #[arg(value_name = "ADDR", value_parser = parse_u16)]
+        address: u16,
+        /// Number of bytes.
+        #[arg(value_name = "LEN", value_parser = parse_u16)]
+        len: Option<u16>,
+        /// Decode the bytes as this type (little-endian).
+        #[arg(short = 't', long = "type", value_name = "T", value_parser = parse_type)]
+        data_type: Option<DataType>,
+    },
+    /// Write VALUE to ADDR: as --type (little-endian), or hex bytes in address order.
+    Write {
+        /// Register address (decimal or 0x hex).
+        #[arg(value_name = "ADDR", value_parser = parse_u16)]
+        address: u16,
+        /// The value.
+        #[arg(value_name = "VALUE", allow_hyphen_values = true)]
+        value: String,
+        /// Encode the value as this type (little-endian).
+        #[arg(short = 't', long = "type", value_name = "T", value_parser = parse_type)]
+        data_type: Option<DataType>,
+    },
+}
+
+#[derive(Subcommand, Clone)]
+enum EsiOp {
+    /// What the parser reads: vendor, devices, SyncManagers, PDOs, DC modes, dictionary size.
+    Show {
+        /// The ESI file.
+        file: PathBuf,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Parse and check for consistency; exit 2 with every problem (line, column, what) if the
+    /// file is invalid.
+    Check {
+        /// The ESI file.
+        file: PathBuf,
+        #[command(flatten)]
+        json: Json,
+    },
+}
+
+fn parse_address(s: &str) -> Result<ObjectAddress, String> {
+    s.parse::<ObjectAddress>().map_err(|e| e.to_string())
+}
+
+fn parse_type(s: &str) -> Result<DataType, String> {
+    DataType::parse(s).ok_or_else(|| {
+        format!(
+            "unknown data type {s:?} (use u8, u16, u32, u64, i8, i16, i32, i64, f32, f64, bool, \
+             string, bytes, or a CiA/IEC name such as UNSIGNED16 or DINT)"
+        )
+    })
+}
+
+fn parse_node(s: &str) -> Result<u8, String> {
+    let v = parse_u16(s)?;
+    u8::try_from(v)
+        .ok()
+        .filter(|n| (1..=127).contains(n))
+        .ok_or_else(|| format!("node-ID {s:?} is not in 1–127"))
+}
+
+fn parse_state(s: &str) -> Result<AlState, String> {
+    AlState::parse(s)
+        .ok_or_else(|| format!("unknown state {s:?} (use INIT, PREOP, SAFEOP, OP or BOOT)"))
+}
+
+fn parse_u16(s: &str) -> Result<u16, String> {
+    let t = s.trim();
+    let v = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(h) => u32::from_str_radix(h, 16),
+        None => t.parse::<u32>(),
+    }
+    .map_err(|_| format!("{s:?} is not a number (decimal or 0x hex)"))?;
+    u16::try_from(v).map_err(|_| format!("{s:?} is larger than 0xFFFF"))
+}
+
+fn parse_duration(s: &str) -> Result<Duration, String> {
+    ecdrive::config::parse_duration(s)
+}
+
+/// The exit code for a library error.
+pub fn exit_code(kind: &ErrorKind) -> u8 {
+    match kind {
+        ErrorKind::Config | ErrorKind::UnknownDevice => exit::USAGE,
+        ErrorKind::Discovery | ErrorKind::Timeout | ErrorKind::Link | ErrorKind::Bus => exit::BUS,
+        ErrorKind::Sdo(_) | ErrorKind::AlState(_) | ErrorKind::DcSettle => exit::REFUSED,
+        ErrorKind::DriveFault => exit::FAULT,
+    }
+}
+
+/// Print a library error as one line and return its exit code.
+pub fn fail(cmd: &str, e: &MasterError) -> ExitCode {
+    eprintln!("ecdrive {cmd}: {}", one_line(&e.to_string()));
+    ExitCode::from(exit_code(&e.kind))
+}
+
+/// Print a message as one line and return `code`.
+pub fn fail_with(cmd: &str, msg: &str, code: u8) -> ExitCode {
+    eprintln!("ecdrive {cmd}: {}", one_line(msg));
+    ExitCode::from(code)
+}
+
+/// Collapse whitespace and line breaks into single spaces.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Print `value` as pretty JSON on stdout.
+pub fn print_json<T: serde::Serialize>(cmd: &str, value: &T) -> ExitCode {
+    match serde_json::to_string_pretty(value) {
+        Ok(s) => {
+            println!("{s}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail_with(cmd, &format!("cannot write JSON: {e}"), exit::INTERNAL),
+    }
+}
+
+/// Clap's error as one line: `error: … (see ecdrive CMD --help)`.
+fn usage_error(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let mut parts = Vec::new();
+    for line in text.lines() {
+        let l = line.trim();
+        if l.starts_with("Usage:") || l.starts_with("For more information") {
+            break;
+        }
+        if !l.is_empty() {
+            parts.push(l.trim_start_matches("error: ").to_string());
+        }
+    }
+    let mut s = parts.join(" ");
+    if let Some(tip) = s.find("tip:") {
+        // Keep clap's tip, it is usually the useful part ("a similar subcommand exists").
+        s.replace_range(tip..tip + 4, "—");
+    }
+    s
+}
+
+fn session<R, F>(cmd: &str, target: &str, f: F) -> Result<R, ExitCode>
+where
+    R: Send + 'static,
+    F: FnOnce(&mut ecdrive::master::bus::Bus<'_, tools::ToolLink>) -> Result<R, MasterError>
+        + Send
+        + 'static,
+{
+    let t: Target = target.parse().map_err(|e| fail(cmd, &e))?;
+    tools::session(&t, f).map_err(|e| fail(cmd, &e))
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // Output piped into `head` and the like: end quietly when the reader goes away, as Unix
+    // tools do, instead of failing on every later write.
+    // SAFETY: restoring the default disposition of SIGPIPE before any thread is started; no
+    // handler runs Rust code.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+    // Bad input never panics; should a bug panic anyway, say so in one line, without a
+    // backtrace, and exit with the internal-error code.
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "panic".into());
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!(
+            "ecdrive: internal error (please report it): {}{at}",
+            one_line(&msg)
+        );
+    }));
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind as K;
+            return match e.kind() {
+                K::DisplayHelp | K::DisplayVersion => {
+                    let _ = e.print();
+                    ExitCode::SUCCESS
+                }
+                K::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    let _ = e.print();
+                    ExitCode::from(exit::USAGE)
+                }
+                _ => {
+                    eprintln!("ecdrive: {} (see --help)", usage_error(&e));
+                    ExitCode::from(exit::USAGE)
+                }
+            };
+        }
+    };
+    match std::panic::catch_unwind(move || dispatch(cli)) {
+        Ok(code) => code,
+        Err(_) => ExitCode::from(exit::INTERNAL),
+    }
+}
+
+fn dispatch(cli: Cli) -> ExitCode {
     match cli.command {
         Command::Demo => {
             eprintln!(
@@ -54,79 +526,310 @@ fn main() -> ExitCode {
             );
             ExitCode::from(2)
         }
+        Command::Slaves { bus, verbose, json } => {
+            let Some(interface) = bus.interface else {
+                return can::slaves(bus.can.as_deref().unwrap_or_default(), json.json);
+            };
+            match session("slaves", &interface, move |b| tools::slaves(b, verbose)) {
+                Ok(r) if json.json => print_json("slaves", &r),
+                Ok(r) => {
+                    print::slaves(&r, verbose);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
+        Command::Upload {
+            bus,
+            position,
+            node,
+            address,
+            data_type,
+            json,
+        } => {
+            let (Some(interface), Some(position)) = (bus.interface, position) else {
+                return can::upload(
+                    bus.can.as_deref().unwrap_or_default(),
+                    node.unwrap_or_default(),
+                    address,
+                    data_type,
+                    json.json,
+                );
+            };
+            match session("upload", &interface, move |b| {
+                tools::upload(b, position, address, data_type)
+            }) {
+                Ok(r) if json.json => print_json("upload", &r),
+                Ok(r) => {
+                    print::sdo_value(&r);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
+        Command::Download {
+            bus,
+            position,
+            node,
+            address,
+            value,
+            data_type,
+            json,
+        } => {
+            let (Some(interface), Some(position)) = (bus.interface, position) else {
+                return can::download(
+                    bus.can.as_deref().unwrap_or_default(),
+                    node.unwrap_or_default(),
+                    address,
+                    &value,
+                    data_type,
+                    json.json,
+                );
+            };
+            match session("download", &interface, move |b| {
+                tools::download(b, position, address, &value, data_type)
+            }) {
+                Ok(r) if json.json => print_json("download", &r),
+                Ok(r) => {
+                    print::downloaded(&r);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
+        Command::Sdos {
+            bus,
+            position,
+            values,
+            json,
+        } => {
+            let bar = print::progress("reading the object dictionary");
+            let b2 = bar.clone();
+            let r = session("sdos", &bus.interface, move |b| {
+                tools::sdos(b, position, values, &mut |done, total| {
+                    b2.set_length(total as u64);
+                    b2.set_position(done as u64);
+                })
+            });
+            bar.finish_and_clear();
+            match r {
+                Ok(r) if json.json => print_json("sdos", &r),
+                Ok(r) => {
+                    print::sdos(&r);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
+        Command::Pdos {
+            bus,
+            position,
+            json,
+        } => match session("pdos", &bus.interface, move |b| tools::pdos(b, position)) {
+            Ok(r) if json.json => print_json("pdos", &r),
+            Ok(r) => {
+                print::pdos(&r);
+                ExitCode::SUCCESS
+            }
+            Err(code) => code,
+        },
+        Command::States {
+            bus,
+            position,
+            state,
+            cycle_us,
+            json,
+        } => {
+            let mut opts = tools::StatesOptions::new(state);
+            opts.position = position;
+            opts.cycle = Duration::from_micros(u64::from(cycle_us));
+            match session("states", &bus.interface, move |b| tools::states(b, &opts)) {
+                Ok(r) => {
+                    let code = if r.iter().all(|c| c.ok) {
+                        ExitCode::SUCCESS
+                    } else {
+                        ExitCode::from(exit::REFUSED)
+                    };
+                    if json.json {
+                        let c = print_json("states", &r);
+                        if c != ExitCode::SUCCESS {
+                            return c;
+                        }
+                    } else {
+                        print::states(&r);
+                    }
+                    if code != ExitCode::SUCCESS {
+                        for c in r.iter().filter(|c| !c.ok) {
+                            eprintln!(
+                                "ecdrive states: drive {} ({}) did not reach {}: {}{}",
+                                c.position,
+                                c.drive,
+                                c.requested,
+                                c.reached,
+                                c.al_status_code
+                                    .map(|k| format!(
+                                        ", AL status code 0x{k:04X} ({})",
+                                        c.code_text.as_deref().unwrap_or("?")
+                                    ))
+                                    .unwrap_or_default()
+                            );
+                        }
+                    }
+                    code
+                }
+                Err(code) => code,
+            }
+        }
+        Command::Reg {
+            bus,
+            position,
+            op,
+            json,
+        } => {
+            let r = match op {
+                RegOp::Read {
+                    address,
+                    len,
+                    data_type,
+                } => {
+                    let len = match (len, data_type) {
+                        (Some(l), _) => l,
+                        (None, Some(t)) => match tools::type_len(t) {
+                            Ok(l) => l,
+                            Err(e) => return fail("reg", &e),
+                        },
+                        (None, None) => 1,
+                    };
+                    session("reg", &bus.interface, move |b| {
+                        tools::reg_read(b, position, address, len, data_type)
+                    })
+                }
+                RegOp::Write {
+                    address,
+                    value,
+                    data_type,
+                } => session("reg", &bus.interface, move |b| {
+                    tools::reg_write(b, position, address, &value, data_type)
+                }),
+            };
+            match r {
+                Ok(r) if json.json => print_json("reg", &r),
+                Ok(r) => {
+                    print::register(&r);
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
+        Command::Sii {
+            bus,
+            position,
+            esi,
+            hex,
+            output,
+            json,
+        } => {
+            let bar = print::progress("reading the EEPROM");
+            let b2 = bar.clone();
+            let r = session("sii", &bus.interface, move |b| {
+                tools::sii::sii_read(b, position, &mut |done, total| {
+                    b2.set_length(total as u64);
+                    b2.set_position(done as u64);
+                })
+            });
+            bar.finish_and_clear();
+            let dump = match r {
+                Ok(d) => d,
+                Err(code) => return code,
+            };
+            if let Some(path) = &output
+                && let Err(e) = std::fs::write(path, &dump.bytes)
+            {
+                return fail_with(
+                    "sii",
+                    &format!("cannot write {}: {e}", path.display()),
+                    exit::USAGE,
+                );
+            }
+            let info = match tools::sii::SiiInfo::decode(&dump.bytes) {
+                Ok(i) => i,
+                Err(e) => {
+                    return fail_with(
+                        "sii",
+                        &format!("drive {} ({}): {e}", dump.position, dump.drive),
+                        exit::BUS,
+                    );
+                }
+            };
+            if json.json {
+                #[derive(serde::Serialize)]
+                struct Out<'a> {
+                    #[serde(flatten)]
+                    dump: &'a tools::sii::SiiDump,
+                    info: &'a tools::sii::SiiInfo,
+                }
+                return print_json(
+                    "sii",
+                    &Out {
+                        dump: &dump,
+                        info: &info,
+                    },
+                );
+            }
+            if esi {
+                print!("{}", tools::sii::esi_skeleton(&info, &dump.bytes));
+            } else if hex {
+                print::hex_dump(&dump.bytes);
+            } else if output.is_none() {
+                print::sii(&dump, &info);
+            } else if let Some(p) = &output {
+                eprintln!(
+                    "ecdrive sii: wrote {} bytes to {}",
+                    dump.bytes.len(),
+                    p.display()
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Command::Esi { op } => match op {
+            EsiOp::Show { file, json } => match tools::esi::show(&file) {
+                Ok(s) if json.json => print_json("esi", &s),
+                Ok(s) => {
+                    print::esi_summary(&s);
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail_with("esi", &e.to_string(), exit::USAGE),
+            },
+            EsiOp::Check { file, json } => {
+                let c = tools::esi::check(&file);
+                if json.json {
+                    let code = print_json("esi", &c);
+                    if code != ExitCode::SUCCESS {
+                        return code;
+                    }
+                } else {
+                    print::esi_check(&c);
+                }
+                if c.valid {
+                    ExitCode::SUCCESS
+                } else {
+                    ExitCode::from(exit::USAGE)
+                }
+            }
+        },
+        Command::Run {
+            config,
+            duration,
+            check,
+            json,
+        } => run::run(&config, duration, check, json.json),
         Command::Sim {
             interface,
             devices,
             sm_watchdog,
             list_devices,
-        } => sim(interface, devices, sm_watchdog, list_devices),
+            json,
+        } => sim::sim(interface, devices, sm_watchdog, list_devices, json.json),
         Command::Jitter(args) => jitter::run(args),
-    }
-}
-
-fn sim(
-    interface: Option<String>,
-    devices: Vec<String>,
-    sm_watchdog: Option<u16>,
-    list_devices: bool,
-) -> ExitCode {
-    use ecdrive::sim::devices::DEVICE_NAMES;
-    if list_devices {
-        for (name, what) in DEVICE_NAMES {
-            println!("{name:14} {what}");
-        }
-        return ExitCode::SUCCESS;
-    }
-    let Some(interface) = interface else {
-        eprintln!("ecdrive sim: --interface is required");
-        return ExitCode::from(2);
-    };
-    let opts = ecdrive::sim::run::SimOptions {
-        interface,
-        devices,
-        sm_watchdog,
-    };
-    let prepared = match ecdrive::sim::run::Prepared::new(&opts) {
-        Ok(p) => p,
-        Err(e) => {
-            eprintln!("ecdrive sim: {e}");
-            return ExitCode::FAILURE;
-        }
-    };
-    eprintln!(
-        "ecdrive sim: serving {} device(s) on {} — Ctrl-C to stop",
-        opts.devices.len(),
-        opts.interface
-    );
-    for line in prepared.describe() {
-        eprintln!("  {line}");
-    }
-    let stop = Arc::new(AtomicBool::new(false));
-    let on_signal = stop.clone();
-    let waiter = std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_current_thread()
-            .enable_io()
-            .build();
-        match rt {
-            Ok(rt) => {
-                let _ = rt.block_on(tokio::signal::ctrl_c());
-            }
-            Err(e) => eprintln!("ecdrive sim: cannot wait for Ctrl-C ({e}); stopping"),
-        }
-        on_signal.store(true, Ordering::Release);
-    });
-    match prepared.serve(&stop) {
-        Ok(stats) => {
-            let _ = waiter.join();
-            eprintln!(
-                "ecdrive sim: stopped; {} frames answered, {} dropped",
-                stats.frames, stats.dropped
-            );
-            ExitCode::SUCCESS
-        }
-        Err(e) => {
-            eprintln!("ecdrive sim: {e}");
-            ExitCode::FAILURE
-        }
     }
 }

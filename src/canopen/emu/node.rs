@@ -21,7 +21,7 @@ use crate::canopen::sdo::{SdoObjects, SdoServer};
 use crate::cia402::device::{Device, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{ControlWord, OperationMode, State, StopRamp};
 use crate::od::{DataType, EntryAccess, ObjectAddress, SdoAbortCode, Value};
-use crate::sim::coe::Dictionary;
+use crate::sim::coe::ValueStore;
 use std::collections::VecDeque;
 
 /// Why a node cannot be built.
@@ -94,8 +94,8 @@ pub const OUTBOX_FRAMES: usize = 1024;
 pub struct EmulatedNode {
     id: u8,
     profile: &'static CanDriveProfile,
-    od: Dictionary,
-    stored: Dictionary,
+    od: ValueStore,
+    stored: ValueStore,
     restore_pending: [bool; 5],
     nmt: NmtState,
     sdo: SdoServer,
@@ -124,7 +124,7 @@ pub struct EmulatedNode {
     powered: bool,
 }
 
-fn adjust_node_ids(d: &mut Dictionary, id: u8) {
+fn adjust_node_ids(d: &mut ValueStore, id: u8) {
     let addrs: Vec<ObjectAddress> = d
         .objects()
         .flat_map(|o| {
@@ -169,7 +169,7 @@ impl EmulatedNode {
         if !(1..=127).contains(&id) {
             return Err(EmuError::NodeId(id));
         }
-        let mut od = Dictionary::new(profile.dictionary).map_err(|e| EmuError::Dictionary {
+        let mut od = ValueStore::new(profile.dictionary).map_err(|e| EmuError::Dictionary {
             drive: profile.name,
             reason: e.to_string(),
         })?;
@@ -340,7 +340,7 @@ impl EmulatedNode {
         for (i, pending) in self.restore_pending.iter_mut().enumerate() {
             if *pending {
                 let (a, b) = comm_range(i as u8);
-                if let Ok(mut fresh) = Dictionary::new(self.profile.dictionary) {
+                if let Ok(mut fresh) = ValueStore::new(self.profile.dictionary) {
                     adjust_node_ids(&mut fresh, self.id);
                     copy_range(&fresh, &mut self.stored, a, b);
                 }
@@ -1027,7 +1027,7 @@ impl EmulatedNode {
         let u = &self.profile.units;
         let vel_units = u.from_rev_per_s(u.velocity, self.motion.vel / u.position_per_rev);
         let pos = i64::from(self.motion.reported_position());
-        let set = |od: &mut Dictionary, i: u16, v: i64| {
+        let set = |od: &mut ValueStore, i: u16, v: i64| {
             if od.entry_desc(ObjectAddress::new(i, 0)).is_some() {
                 let _ = od.set_int(ObjectAddress::new(i, 0), v);
             }
@@ -1266,7 +1266,7 @@ impl EmulatedNode {
     }
 }
 
-fn copy_range(from: &Dictionary, to: &mut Dictionary, lo: u16, hi: u16) {
+fn copy_range(from: &ValueStore, to: &mut ValueStore, lo: u16, hi: u16) {
     let addrs: Vec<ObjectAddress> = from
         .objects()
         .filter(|o| (lo..=hi).contains(&o.index))

@@ -1,7 +1,7 @@
 //! Ready-made [`OdHooks`] for common device behaviour, combinable with [`Chain`]. A drive
 //! profile describes its quirks as a list of these (data, not code).
 
-use super::od_store::{Dictionary, OdHooks};
+use super::od_store::{OdHooks, ValueStore};
 use crate::ec::AlState;
 use crate::od::{ObjectAddress, SdoAbortCode};
 use crate::pdo::Direction;
@@ -27,7 +27,7 @@ impl Chain {
 impl OdHooks for Chain {
     fn before_write(
         &mut self,
-        dict: &Dictionary,
+        dict: &ValueStore,
         addr: ObjectAddress,
         state: AlState,
         data: &[u8],
@@ -37,7 +37,7 @@ impl OdHooks for Chain {
             .try_for_each(|h| h.before_write(dict, addr, state, data))
     }
 
-    fn after_write(&mut self, dict: &mut Dictionary, addr: ObjectAddress, state: AlState) {
+    fn after_write(&mut self, dict: &mut ValueStore, addr: ObjectAddress, state: AlState) {
         for h in &mut self.0 {
             h.after_write(dict, addr, state);
         }
@@ -45,7 +45,7 @@ impl OdHooks for Chain {
 
     fn on_read(
         &mut self,
-        dict: &Dictionary,
+        dict: &ValueStore,
         addr: ObjectAddress,
         state: AlState,
         buf: &mut [u8],
@@ -69,7 +69,7 @@ pub struct RefuseMappedWrites {
 impl OdHooks for RefuseMappedWrites {
     fn before_write(
         &mut self,
-        dict: &Dictionary,
+        dict: &ValueStore,
         addr: ObjectAddress,
         _state: AlState,
         _data: &[u8],
@@ -97,7 +97,7 @@ pub struct RefuseWrites {
 impl OdHooks for RefuseWrites {
     fn before_write(
         &mut self,
-        _dict: &Dictionary,
+        _dict: &ValueStore,
         addr: ObjectAddress,
         _state: AlState,
         _data: &[u8],
@@ -125,7 +125,7 @@ pub struct AllowedValues {
 impl OdHooks for AllowedValues {
     fn before_write(
         &mut self,
-        _dict: &Dictionary,
+        _dict: &ValueStore,
         addr: ObjectAddress,
         _state: AlState,
         data: &[u8],
@@ -157,7 +157,7 @@ pub struct Mirror {
 }
 
 impl OdHooks for Mirror {
-    fn after_write(&mut self, dict: &mut Dictionary, addr: ObjectAddress, _state: AlState) {
+    fn after_write(&mut self, dict: &mut ValueStore, addr: ObjectAddress, _state: AlState) {
         let (from, to) = if addr == self.a {
             (self.a, self.b)
         } else if addr == self.b {

@@ -25,9 +25,7 @@ mod od_store;
 mod store;
 
 pub use crate::ec::mailbox::Emergency;
-pub use od_store::{
-    Dictionary, MappingError, NoHooks, OdError, OdHooks, OdStore, PdoDirectionLimits, PdoRules,
-};
+pub use od_store::{NoHooks, OdError, OdHooks, OdStore, ValueStore};
 pub use store::{ListType, ObjectInfo, ObjectStore};
 
 use crate::ec::AlState;

@@ -7,7 +7,7 @@ use crate::ec::AlState;
 use crate::od::{
     DataType, EntryAccess, EntryDesc, ObjectAddress, ObjectCode, ObjectDesc, SdoAbortCode, Value,
 };
-use crate::pdo::{Direction, Mapping, Pdo, PdoEntry};
+use crate::pdo::{Direction, Mapping, PdoEntry, PdoLimits, ReadbackError, read_mapping_sync};
 use core::ops::{Deref, DerefMut};
 
 use super::{MAX_UNSIZED_STRING, RECORD_DATA_TYPE};
@@ -20,65 +20,6 @@ pub struct OdError {
     pub at: String,
     /// What is wrong.
     pub reason: String,
-}
-
-/// Why the PDO mapping in the dictionary cannot be read as a [`Mapping`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("PDO configuration entry {address}: {reason}")]
-pub struct MappingError {
-    /// The assignment or mapping entry at fault.
-    pub address: ObjectAddress,
-    /// What is wrong.
-    pub reason: &'static str,
-}
-
-/// PDO size limits of one direction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PdoDirectionLimits {
-    /// Most bytes of all PDOs assigned to the SyncManager.
-    pub max_bytes: u32,
-    /// Most mapped entries (padding included) over all assigned PDOs.
-    pub max_entries: u32,
-}
-
-impl PdoDirectionLimits {
-    /// No limit beyond what the mapping objects can hold.
-    pub const UNLIMITED: Self = Self {
-        max_bytes: u32::MAX,
-        max_entries: u32::MAX,
-    };
-}
-
-/// PDO limits the dictionary enforces on writes to 0x1C12/0x1C13 and 0x16xx/0x1Axx (abort
-/// 0x06040042). Plain numbers for now; a drive profile fills them from its PDO limits.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct PdoRules {
-    /// RxPDO (outputs, SM2) limits.
-    pub rx: PdoDirectionLimits,
-    /// TxPDO (inputs, SM3) limits.
-    pub tx: PdoDirectionLimits,
-}
-
-impl PdoRules {
-    /// No limits beyond the object sizes.
-    pub const UNLIMITED: Self = Self {
-        rx: PdoDirectionLimits::UNLIMITED,
-        tx: PdoDirectionLimits::UNLIMITED,
-    };
-
-    /// The limits of one direction.
-    pub const fn limits(&self, dir: Direction) -> PdoDirectionLimits {
-        match dir {
-            Direction::Rx => self.rx,
-            Direction::Tx => self.tx,
-        }
-    }
-}
-
-impl Default for PdoRules {
-    fn default() -> Self {
-        Self::UNLIMITED
-    }
 }
 
 /// What a standard PDO configuration object is.
@@ -131,18 +72,22 @@ fn allowed_in(access: EntryAccess, state: AlState, write: bool) -> bool {
     access.contains(flag)
 }
 
-/// The object descriptors and their current values, plus the PDO limits. Access here is the
-/// device's own (no access rights, no hooks): the emulated drive reads and writes its
-/// dictionary through these methods, and [`OdHooks`] get it to inspect or update values.
+/// The object descriptors and their current values, plus the PDO limits: the runtime value store
+/// behind an [`OdStore`]. (Not to be confused with [`crate::od::Dictionary`], the read-only view
+/// over a static descriptor table, or [`crate::esi::Dictionary`], an ESI file's dictionary.)
+///
+/// Access here is the device's own (no access rights, no hooks): the emulated drive reads and
+/// writes its values through these methods, and [`OdHooks`] get it to inspect or update values.
 #[derive(Debug, Clone)]
-pub struct Dictionary {
+pub struct ValueStore {
     /// Objects sorted by index.
     objects: Vec<&'static ObjectDesc>,
     /// Index of each object's first value in `values`.
     base: Vec<usize>,
     /// One value per entry, in object order then entry order, as SDO bytes.
     values: Vec<Vec<u8>>,
-    rules: PdoRules,
+    /// The drive's PDO rules; `None`: only what the mapping objects can hold.
+    limits: Option<PdoLimits>,
 }
 
 /// Largest byte size an entry's value may take.
@@ -204,7 +149,7 @@ fn initial_value(obj: &ObjectDesc, e: &EntryDesc) -> Result<Vec<u8>, OdError> {
     Ok(v)
 }
 
-impl Dictionary {
+impl ValueStore {
     /// Build from descriptor tables, values initialised from the defaults (zero or empty where
     /// none is given). Checks the tables: unique indices and sub-indices, a VAR has exactly
     /// sub 0, an ARRAY/RECORD has an UNSIGNED8 sub 0, defaults fit their types.
@@ -260,18 +205,18 @@ impl Dictionary {
             objects: sorted,
             base,
             values,
-            rules: PdoRules::UNLIMITED,
+            limits: None,
         })
     }
 
-    /// The PDO limits enforced on master writes.
-    pub fn rules(&self) -> PdoRules {
-        self.rules
+    /// The PDO limits enforced on master writes (`None`: none beyond the object sizes).
+    pub fn limits(&self) -> Option<&PdoLimits> {
+        self.limits.as_ref()
     }
 
     /// Replace the PDO limits.
-    pub fn set_rules(&mut self, rules: PdoRules) {
-        self.rules = rules;
+    pub fn set_limits(&mut self, limits: Option<PdoLimits>) {
+        self.limits = limits;
     }
 
     /// Reset every value to its default (a power cycle of a device that stores nothing).
@@ -355,7 +300,7 @@ impl Dictionary {
         Value::decode(e.data_type, self.raw(addr)?).ok()
     }
 
-    /// Set a value as the device itself (see [`Dictionary::set_raw`]); the value must fit the
+    /// Set a value as the device itself (see [`ValueStore::set_raw`]); the value must fit the
     /// data type (0x06090030 otherwise).
     pub fn set_value(&mut self, addr: ObjectAddress, v: &Value) -> Result<(), SdoAbortCode> {
         let e = self.entry_desc(addr).ok_or_else(|| self.missing(addr))?;
@@ -404,47 +349,26 @@ impl Dictionary {
     }
 
     /// The current PDO assignment and mapping: the PDOs listed in 0x1C12/0x1C13 entries
-    /// 1..=sub 0, each with its mapping entries 1..=sub 0. A direction whose assignment object
-    /// does not exist is empty.
-    pub fn mapping(&self) -> Result<Mapping, MappingError> {
-        Ok(Mapping {
-            rx: self.assigned(Direction::Rx)?.into(),
-            tx: self.assigned(Direction::Tx)?.into(),
+    /// 1..=sub 0, each with its mapping entries 1..=sub 0, read with the same
+    /// [`read_mapping_sync`] a master uses on a drive. A direction whose assignment object does
+    /// not exist is empty. Errors carry the abort code a master would have got for the entry.
+    pub fn mapping(&self) -> Result<Mapping, ReadbackError<SdoAbortCode>> {
+        read_mapping_sync(|address, _| {
+            if address.sub == 0
+                && pdo_object(address.index).is_some_and(|k| matches!(k, PdoObject::Assign(_)))
+                && self.object_desc(address.index).is_none()
+            {
+                return Ok(0);
+            }
+            let e = self
+                .entry_desc(address)
+                .ok_or_else(|| self.missing(address))?;
+            if !e.data_type.is_unsigned() {
+                return Err(SdoAbortCode::LENGTH_MISMATCH);
+            }
+            let v = self.raw(address).map(le_u64).ok_or(SdoAbortCode::GENERAL)?;
+            u32::try_from(v).map_err(|_| SdoAbortCode::VALUE_RANGE)
         })
-    }
-
-    fn assigned(&self, dir: Direction) -> Result<Vec<Pdo>, MappingError> {
-        let ai = dir.assign_index();
-        let mut out = Vec::new();
-        if self.object_desc(ai).is_none() {
-            return Ok(out);
-        }
-        let n = self.count(ai);
-        for s in 1..=n {
-            let address = ObjectAddress::new(ai, s);
-            let pdo = self.raw(address).map(le_u64).ok_or(MappingError {
-                address,
-                reason: "sub 0 counts an assignment entry that does not exist",
-            })? as u16;
-            if !pdo_index_in(dir, pdo) || self.object_desc(pdo).is_none() {
-                return Err(MappingError {
-                    address,
-                    reason: "the assigned PDO does not exist in this direction",
-                });
-            }
-            let m = self.count(pdo);
-            let mut entries = Vec::with_capacity(m as usize);
-            for k in 1..=m {
-                let address = ObjectAddress::new(pdo, k);
-                let v = self.raw(address).map(le_u64).ok_or(MappingError {
-                    address,
-                    reason: "sub 0 counts a mapping entry that does not exist",
-                })?;
-                entries.push(PdoEntry::from_u32(v as u32));
-            }
-            out.push(Pdo::owned(pdo, entries));
-        }
-        Ok(out)
     }
 
     /// The sub-0 value of an ARRAY/RECORD (0 if missing).
@@ -504,10 +428,13 @@ impl Dictionary {
         Ok(())
     }
 
-    /// Whether the PDOs `assigned` to direction `dir` stay within the limits, with PDO
-    /// `changed.0` counted with `changed.1` entries instead of its current sub-0 value.
+    /// Whether the PDOs `assigned` to direction `dir` stay within the limits (bytes and entries
+    /// per direction), with PDO `changed.0` counted with `changed.1` entries instead of its
+    /// current sub-0 value.
     fn check_limits(&self, dir: Direction, assigned: &[u16], changed: Option<(u16, u8)>) -> bool {
-        let lim = self.rules.limits(dir);
+        let Some(lim) = self.limits.as_ref().map(|l| *l.direction(dir)) else {
+            return true;
+        };
         let (mut bits, mut entries) = (0u64, 0u64);
         for &p in assigned {
             let n = match changed {
@@ -519,6 +446,17 @@ impl Dictionary {
             entries += e;
         }
         bits.div_ceil(8) <= u64::from(lim.max_bytes) && entries <= u64::from(lim.max_entries)
+    }
+
+    /// Whether `index` is a mapping object of `dir` the device has: in the dictionary and,
+    /// with limits, in one of the direction's ranges.
+    fn pdo_exists(&self, dir: Direction, index: u16) -> bool {
+        pdo_index_in(dir, index)
+            && self.object_desc(index).is_some()
+            && self
+                .limits
+                .as_ref()
+                .is_none_or(|l| l.direction(dir).range_of(index).is_some())
     }
 
     fn assigned_indices(&self, dir: Direction, n: u8) -> Vec<u16> {
@@ -546,6 +484,15 @@ impl Dictionary {
             return Err(SdoAbortCode::DEVICE_STATE);
         }
         let v = le_u64(data);
+        if let Some(l) = &self.limits {
+            let writable = match kind {
+                PdoObject::Assign(_) => l.assignment_writable,
+                PdoObject::Map(_) => l.mapping_writable(addr.index),
+            };
+            if !writable {
+                return Err(SdoAbortCode::READ_ONLY);
+            }
+        }
         match (kind, addr.sub) {
             (PdoObject::Map(_), s) | (PdoObject::Assign(_), s) if s > 0 => {
                 if self.count(addr.index) != 0 {
@@ -559,7 +506,7 @@ impl Dictionary {
                     }
                     PdoObject::Assign(dir) => {
                         let p = v as u16;
-                        if p != 0 && (!pdo_index_in(dir, p) || self.object_desc(p).is_none()) {
+                        if p != 0 && !self.pdo_exists(dir, p) {
                             return Err(SdoAbortCode::VALUE_RANGE);
                         }
                     }
@@ -568,6 +515,11 @@ impl Dictionary {
             }
             (PdoObject::Map(dir), _) => {
                 let n = v as u8;
+                if let Some(r) = self.limits.as_ref().and_then(|l| l.range_of(addr.index))
+                    && n > r.max_entries
+                {
+                    return Err(SdoAbortCode::PDO_TOO_LONG);
+                }
                 for k in 1..=n {
                     let e = self
                         .raw(ObjectAddress::new(addr.index, k))
@@ -590,12 +542,17 @@ impl Dictionary {
             }
             (PdoObject::Assign(dir), _) => {
                 let n = v as u8;
+                if let Some(l) = &self.limits
+                    && n > l.direction(dir).max_assigned
+                {
+                    return Err(SdoAbortCode::VALUE_TOO_HIGH);
+                }
                 let assigned = self.assigned_indices(dir, n);
                 for &p in &assigned {
                     if p == 0 {
                         return Err(SdoAbortCode::VALUE_TOO_HIGH);
                     }
-                    if !pdo_index_in(dir, p) || self.object_desc(p).is_none() {
+                    if !self.pdo_exists(dir, p) {
                         return Err(SdoAbortCode::VALUE_RANGE);
                     }
                 }
@@ -658,7 +615,7 @@ fn check_range(e: &EntryDesc, data: &[u8]) -> Result<(), SdoAbortCode> {
 
 /// Device-specific behaviour plugged into an [`OdStore`]. Every method has a default that does
 /// nothing, so a hook implements only what its device needs. Hooks see the
-/// [`Dictionary`] (values, mapping) and the AL state.
+/// [`ValueStore`] (values, mapping) and the AL state.
 ///
 /// The order of a master write is: existence → access rights for the state → the PDO objects'
 /// PRE-OP rule → length → [`OdHooks::before_write`] → minimum/maximum → sub 0 of
@@ -674,7 +631,7 @@ pub trait OdHooks: Send {
     /// Called before a master write is stored; an error refuses it with that abort code.
     fn before_write(
         &mut self,
-        dict: &Dictionary,
+        dict: &ValueStore,
         addr: ObjectAddress,
         state: AlState,
         data: &[u8],
@@ -684,7 +641,7 @@ pub trait OdHooks: Send {
     }
 
     /// Called after a master write was stored; may update other values.
-    fn after_write(&mut self, dict: &mut Dictionary, addr: ObjectAddress, state: AlState) {
+    fn after_write(&mut self, dict: &mut ValueStore, addr: ObjectAddress, state: AlState) {
         let _ = (dict, addr, state);
     }
 
@@ -692,7 +649,7 @@ pub trait OdHooks: Send {
     /// `Ok(n)` with `n` bytes written into `buf`, or an abort.
     fn on_read(
         &mut self,
-        dict: &Dictionary,
+        dict: &ValueStore,
         addr: ObjectAddress,
         state: AlState,
         buf: &mut [u8],
@@ -708,7 +665,7 @@ pub struct NoHooks;
 
 impl OdHooks for NoHooks {}
 
-/// A generic object dictionary served over CoE: a [`Dictionary`] built from
+/// A generic object dictionary served over CoE: a [`ValueStore`] built from
 /// `&'static [ObjectDesc]` plus device [`OdHooks`].
 ///
 /// Master accesses (through [`ObjectStore`]) are checked:
@@ -733,10 +690,14 @@ impl OdHooks for NoHooks {}
 ///   direction, or names no PDO;
 /// - sub 0 cannot exceed the number of written (non-zero) entries (0x06090031), and its entries
 ///   are checked again as above;
-/// - the assigned PDOs of a direction must stay within [`PdoRules`] (bytes and entries,
-///   0x06040042), checked when a mapping's or an assignment's sub 0 is written.
+/// - with a drive's [`PdoLimits`] ([`OdStore::with_limits`]): the assigned PDOs of a direction
+///   must stay within its byte and entry budget (0x06040042), checked when a mapping's or an
+///   assignment's sub 0 is written; a mapping's sub 0 cannot exceed its range's entry count
+///   (0x06040042); an assignment's sub 0 cannot exceed the PDOs per SyncManager (0x06090031);
+///   an assignment entry must name a mapping object of the limits (0x06090030); a fixed mapping
+///   or a fixed assignment refuses writes (0x06010002).
 pub struct OdStore {
-    dict: Dictionary,
+    dict: ValueStore,
     hooks: Box<dyn OdHooks>,
 }
 
@@ -752,7 +713,7 @@ impl OdStore {
     /// A store without device hooks.
     pub fn new(objects: &'static [ObjectDesc]) -> Result<Self, OdError> {
         Ok(Self {
-            dict: Dictionary::new(objects)?,
+            dict: ValueStore::new(objects)?,
             hooks: Box::new(NoHooks),
         })
     }
@@ -763,24 +724,24 @@ impl OdStore {
         self
     }
 
-    /// With PDO limits.
-    pub fn with_rules(mut self, rules: PdoRules) -> Self {
-        self.dict.set_rules(rules);
+    /// With a drive's PDO limits (see the rules above).
+    pub fn with_limits(mut self, limits: PdoLimits) -> Self {
+        self.dict.set_limits(Some(limits));
         self
     }
 
     /// The dictionary (values, mapping).
-    pub fn dict(&self) -> &Dictionary {
+    pub fn dict(&self) -> &ValueStore {
         &self.dict
     }
 
     /// The dictionary, mutable (device-side value updates).
-    pub fn dict_mut(&mut self) -> &mut Dictionary {
+    pub fn dict_mut(&mut self) -> &mut ValueStore {
         &mut self.dict
     }
 
     /// The current PDO assignment and mapping.
-    pub fn mapping(&self) -> Result<Mapping, MappingError> {
+    pub fn mapping(&self) -> Result<Mapping, ReadbackError<SdoAbortCode>> {
         self.dict.mapping()
     }
 
@@ -794,15 +755,15 @@ impl OdStore {
 }
 
 impl Deref for OdStore {
-    type Target = Dictionary;
+    type Target = ValueStore;
 
-    fn deref(&self) -> &Dictionary {
+    fn deref(&self) -> &ValueStore {
         &self.dict
     }
 }
 
 impl DerefMut for OdStore {
-    fn deref_mut(&mut self) -> &mut Dictionary {
+    fn deref_mut(&mut self) -> &mut ValueStore {
         &mut self.dict
     }
 }

@@ -10,7 +10,8 @@
 //! - [`GenericCoeDevice`]: a CiA 402-style servo with a CoE mailbox (SDO, SDO information,
 //!   complete access, emergencies), variable PDO mapping and DC synchronisation.
 //!
-//! [`by_name`] creates devices from the names `ecdrive sim --device` accepts.
+//! [`by_name`] creates devices from the names `ecdrive sim --device` accepts ([`device_names`]):
+//! the emulated drives of the registry ([`super::drives`]) and the test devices here.
 
 mod echo;
 pub mod generic_coe;
@@ -43,7 +44,8 @@ pub enum DeviceError {
     },
 }
 
-/// Names accepted by [`by_name`], with a one-line description each.
+/// The test devices [`by_name`] accepts, with a one-line description each. The emulated drives
+/// come on top, from the drive registry: see [`device_names`].
 pub const DEVICE_NAMES: &[(&str, &str)] = &[
     (
         "generic-coe",
@@ -59,7 +61,36 @@ pub const DEVICE_NAMES: &[(&str, &str)] = &[
     ),
 ];
 
-/// Create a device by name (see [`DEVICE_NAMES`]). `position` makes serial numbers unique.
+/// Every name [`by_name`] accepts, with a one-line description: each emulated drive of the
+/// registry ([`crate::drives::all`], by its `--device` key), then the test devices.
+pub fn device_names() -> Vec<(&'static str, String)> {
+    let drives = crate::drives::all()
+        .iter()
+        .filter(|p| super::drives::spec_for(p).is_some())
+        .map(|p| {
+            (
+                p.key,
+                format!(
+                    "emulated {} {} (vendor 0x{:08X}, product 0x{:08X}), SII from its ESI file",
+                    p.vendor, p.name, p.identity.vendor_id, p.identity.product_code
+                ),
+            )
+        });
+    drives
+        .chain(DEVICE_NAMES.iter().map(|(n, d)| (*n, (*d).to_string())))
+        .collect()
+}
+
+/// The names [`by_name`] accepts, comma-separated (for error messages).
+pub fn known_names() -> String {
+    device_names()
+        .iter()
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Create a device by name (see [`device_names`]). `position` makes serial numbers unique.
 pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
     let serial = u32::try_from(position).unwrap_or(u32::MAX);
     match name {
@@ -71,13 +102,12 @@ pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceErr
             }),
         "generic-io" => Ok(Box::new(IoDevice::new(2, 4).with_serial(serial))),
         "echo-mailbox" => Ok(Box::new(EchoMailbox::new().with_serial(serial))),
-        _ => Err(DeviceError::Unknown {
-            name: name.into(),
-            known: DEVICE_NAMES
-                .iter()
-                .map(|(n, _)| *n)
-                .collect::<Vec<_>>()
-                .join(", "),
-        }),
+        _ => match crate::drives::all().iter().find(|p| p.key == name) {
+            Some(p) => super::drives::emulated(p, serial),
+            None => Err(DeviceError::Unknown {
+                name: name.into(),
+                known: known_names(),
+            }),
+        },
     }
 }

@@ -158,7 +158,9 @@ impl DcUnit {
         self.filtered = if depth == 0 || self.filtered == 0 {
             e
         } else {
-            self.filtered + ((e - self.filtered) >> depth)
+            // Saturating: a master may write any 64-bit value to 0x0910.
+            self.filtered
+                .saturating_add(e.saturating_sub(self.filtered) >> depth)
         };
         self.filtered
     }

@@ -1,0 +1,177 @@
+//! `slaves`, `upload` and `download` on a CANopen bus (`--can IF`): the library side is
+//! `ecdrive::canopen::tools`.
+
+use crate::{exit, fail_with, print_json};
+use ecdrive::canopen::error::{CanError, CanErrorKind};
+use ecdrive::canopen::master::{Master, MasterConfig};
+use ecdrive::canopen::tools::{self, BusSpec};
+use ecdrive::canopen::transport::CanTransport;
+use ecdrive::od::{DataType, ObjectAddress, Value};
+use serde_json::json;
+use std::process::ExitCode;
+
+/// The exit code for a CANopen error.
+fn code(e: &CanError) -> u8 {
+    match &e.kind {
+        CanErrorKind::Abort(_) | CanErrorKind::NmtRefused { .. } | CanErrorKind::Identity(_) => {
+            exit::REFUSED
+        }
+        CanErrorKind::Sdo(s) if s.abort_code().is_some() => exit::REFUSED,
+        CanErrorKind::Value(_) | CanErrorKind::UnknownType | CanErrorKind::Invalid(_) => {
+            exit::USAGE
+        }
+        _ => exit::BUS,
+    }
+}
+
+fn fail(cmd: &str, e: &CanError) -> ExitCode {
+    fail_with(cmd, &e.to_string(), code(e))
+}
+
+fn open(cmd: &str, bus: &str) -> Result<Master<Box<dyn CanTransport>>, ExitCode> {
+    let spec: BusSpec = bus
+        .parse()
+        .map_err(|e: tools::BusSpecError| fail_with(cmd, &e.to_string(), exit::USAGE))?;
+    let t = tools::open_bus(&spec)
+        .map_err(|e| fail_with(cmd, &format!("opening CAN bus {spec}: {e}"), exit::BUS))?;
+    Ok(Master::new(t, MasterConfig::default()))
+}
+
+fn hex(v: Option<u32>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("0x{v:08X}"))
+}
+
+pub fn slaves(bus: &str, json: bool) -> ExitCode {
+    let mut m = match open("slaves", bus) {
+        Ok(m) => m,
+        Err(c) => return c,
+    };
+    let nodes = match tools::scan(&mut m, 1..=127) {
+        Ok(n) => n,
+        Err(e) => return fail("slaves", &e),
+    };
+    if json {
+        let list: Vec<serde_json::Value> = nodes
+            .iter()
+            .map(|n| {
+                json!({
+                    "node": n.node,
+                    "nmt_state": n.nmt.map(|s| s.name()),
+                    "device_type": n.device_type,
+                    "vendor_id": n.vendor_id,
+                    "product_code": n.product_code,
+                    "revision": n.revision,
+                    "serial": n.serial,
+                    "name": n.name,
+                    "model": n.model(),
+                    "profile": n.profile.map(|p| p.name),
+                })
+            })
+            .collect();
+        return print_json("slaves", &list);
+    }
+    let mut rows = vec![
+        [
+            "NODE", "NMT", "VENDOR", "PRODUCT", "TYPE", "REVISION", "SERIAL", "PROFILE", "MODEL",
+        ]
+        .map(String::from)
+        .to_vec(),
+    ];
+    for n in &nodes {
+        rows.push(vec![
+            format!("{} (0x{:02X})", n.node, n.node),
+            n.nmt.map_or("?", |s| s.name()).to_string(),
+            hex(n.vendor_id),
+            hex(n.product_code),
+            hex(n.device_type),
+            hex(n.revision),
+            hex(n.serial),
+            n.profile.map_or("-", |p| p.name).to_string(),
+            n.model(),
+        ]);
+    }
+    crate::print::table(&rows);
+    ExitCode::SUCCESS
+}
+
+fn value_json(node: u8, addr: ObjectAddress, dt: Option<DataType>, v: &Value) -> serde_json::Value {
+    let value = match v {
+        Value::Int(i) => json!(i),
+        Value::Uint(u) => json!(u),
+        Value::Real(r) => json!(r),
+        Value::Str(s) => json!(s),
+        Value::Bytes(_) => json!(v.to_string()),
+    };
+    json!({
+        "node": node,
+        "address": addr.to_string(),
+        "index": addr.index,
+        "sub": addr.sub,
+        "data_type": dt.map(|t| t.name()),
+        "value": value,
+        "text": dt.map_or_else(|| v.to_string(), |t| tools::format_value(v, t)),
+    })
+}
+
+pub fn upload(
+    bus: &str,
+    node: u8,
+    addr: ObjectAddress,
+    dt: Option<DataType>,
+    json: bool,
+) -> ExitCode {
+    let mut m = match open("upload", bus) {
+        Ok(m) => m,
+        Err(c) => return c,
+    };
+    let v = match tools::upload(&mut m, node, addr, dt) {
+        Ok(v) => v,
+        Err(e) => return fail("upload", &e),
+    };
+    let dt = m.data_type(node, addr, dt).ok();
+    if json {
+        return print_json("upload", &value_json(node, addr, dt, &v));
+    }
+    match dt {
+        Some(t) => println!("{}", tools::format_value(&v, t)),
+        None => println!("{v}"),
+    }
+    ExitCode::SUCCESS
+}
+
+pub fn download(
+    bus: &str,
+    node: u8,
+    addr: ObjectAddress,
+    text: &str,
+    dt: Option<DataType>,
+    json: bool,
+) -> ExitCode {
+    let mut m = match open("download", bus) {
+        Ok(m) => m,
+        Err(c) => return c,
+    };
+    if let Err(e) = tools::download(&mut m, node, addr, text, dt) {
+        return fail("download", &e);
+    }
+    let t = m.data_type(node, addr, dt).ok();
+    let v = t.and_then(|t| Value::parse(text, t).ok());
+    if json {
+        return match v {
+            Some(v) => print_json("download", &value_json(node, addr, t, &v)),
+            None => print_json(
+                "download",
+                &json!({"node": node, "address": addr.to_string()}),
+            ),
+        };
+    }
+    match (v, t) {
+        (Some(v), Some(t)) => println!(
+            "node {node} {addr} = {} ({})",
+            tools::format_value(&v, t),
+            t.name()
+        ),
+        _ => println!("node {node} {addr} = {text}"),
+    }
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,583 @@
+//! Text output of the commands: tables and listings in the style of the IgH `ethercat` tool.
+
+use ecdrive::master::tools::esi::{EsiCheck, EsiSummary};
+use ecdrive::master::tools::run::{RunProgress, RunReport};
+use ecdrive::master::tools::sii::{SiiDump, SiiInfo};
+use ecdrive::master::tools::{
+    OdListing, PdoReport, RegisterData, SdoValue, SlaveReport, StateChange,
+};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// Print rows as columns separated by two spaces, each as wide as its widest cell.
+pub fn table(rows: &[Vec<String>]) {
+    let n = rows.iter().map(Vec::len).max().unwrap_or(0);
+    let widths: Vec<usize> = (0..n)
+        .map(|c| {
+            rows.iter()
+                .filter_map(|r| r.get(c))
+                .map(|s| s.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    for r in rows {
+        let mut line = String::new();
+        for (c, cell) in r.iter().enumerate() {
+            if c + 1 == r.len() {
+                line.push_str(cell);
+            } else {
+                let w = widths.get(c).copied().unwrap_or(0);
+                line.push_str(&format!("{cell:w$}  "));
+            }
+        }
+        println!("{}", line.trim_end());
+    }
+}
+
+pub fn slaves(list: &[SlaveReport], verbose: bool) {
+    if verbose {
+        for (i, s) in list.iter().enumerate() {
+            if i > 0 {
+                println!();
+            }
+            slave_verbose(s);
+        }
+        return;
+    }
+    let mut rows = vec![
+        [
+            "POS", "ADDR", "ALIAS", "STATE", "VENDOR", "PRODUCT", "REVISION", "SERIAL", "DC",
+            "MAILBOX", "PROFILE", "NAME",
+        ]
+        .map(String::from)
+        .to_vec(),
+    ];
+    for s in list {
+        rows.push(vec![
+            s.position.to_string(),
+            format!("0x{:04X}", s.address),
+            s.alias.to_string(),
+            s.al.state.clone(),
+            format!("0x{:08X}", s.vendor_id),
+            format!("0x{:08X}", s.product_code),
+            format!("0x{:08X}", s.revision),
+            s.serial.to_string(),
+            if s.dc { "yes" } else { "no" }.to_string(),
+            if s.mailbox_protocols.is_empty() {
+                "-".into()
+            } else {
+                s.mailbox_protocols.join(",")
+            },
+            s.profile.clone().unwrap_or_else(|| "-".into()),
+            match &s.description {
+                Some(d) if d != &s.name => format!("{} ({d})", s.name),
+                _ => s.name.clone(),
+            },
+        ]);
+    }
+    table(&rows);
+}
+
+fn slave_verbose(s: &SlaveReport) {
+    println!(
+        "=== Position {}, station address 0x{:04X} ===",
+        s.position, s.address
+    );
+    println!("Name: {}", s.name);
+    if let Some(d) = &s.description {
+        println!("Description: {d}");
+    }
+    println!("Alias: {}", s.alias);
+    match (&s.al.code, &s.al.code_text) {
+        (Some(c), Some(t)) => println!("State: {} (AL status code 0x{c:04X}: {t})", s.al.state),
+        _ => println!("State: {}", s.al.state),
+    }
+    println!("Identity:");
+    println!("  Vendor Id:       0x{:08X}", s.vendor_id);
+    println!("  Product code:    0x{:08X}", s.product_code);
+    println!("  Revision number: 0x{:08X}", s.revision);
+    println!("  Serial number:   {}", s.serial);
+    match &s.profile {
+        Some(p) => println!(
+            "Profile: {p}{}",
+            s.detail
+                .as_ref()
+                .and_then(|d| d.profile_vendor.as_ref())
+                .map(|v| format!(" ({v})"))
+                .unwrap_or_default()
+        ),
+        None => println!("Profile: none (unknown device)"),
+    }
+    println!(
+        "Distributed clocks: {}",
+        if s.dc {
+            format!("yes, {}", s.dc_kind)
+        } else {
+            "no".into()
+        }
+    );
+    let Some(d) = &s.detail else {
+        return;
+    };
+    println!(
+        "ESC: type 0x{:02X}, revision {}, build {}, {} FMMUs, {} SyncManagers, {} KiB RAM",
+        d.esc.esc_type,
+        d.esc.revision,
+        d.esc.build,
+        d.esc.fmmus,
+        d.esc.sync_managers,
+        d.esc.ram_kib
+    );
+    println!("Propagation delay: {} ns", d.propagation_delay_ns);
+    println!("Ports:");
+    for p in &d.ports {
+        println!(
+            "  {}  link {}  loop {}  communication {}",
+            p.port,
+            if p.link { "up  " } else { "down" },
+            if p.loop_closed { "closed" } else { "open  " },
+            if p.communication { "yes" } else { "no" }
+        );
+    }
+    println!("Mailboxes:");
+    match &d.mailbox {
+        Some(m) => println!(
+            "  Standard RX: 0x{:04X}/{}, TX: 0x{:04X}/{}",
+            m.rx_offset, m.rx_size, m.tx_offset, m.tx_size
+        ),
+        None => println!("  none"),
+    }
+    println!(
+        "  Supported protocols: {}",
+        if s.mailbox_protocols.is_empty() {
+            "none".into()
+        } else {
+            s.mailbox_protocols.join(", ")
+        }
+    );
+    println!("EEPROM: {} bytes", d.eeprom_bytes);
+}
+
+pub fn sdo_value(v: &SdoValue) {
+    match &v.hex {
+        Some(h) => println!("{h} {}", v.text),
+        None => println!("{}", v.text),
+    }
+}
+
+pub fn downloaded(v: &SdoValue) {
+    println!(
+        "{} = {}{}, {}, type from {}",
+        v.address,
+        v.text,
+        v.hex
+            .as_ref()
+            .map(|h| format!(" ({h})"))
+            .unwrap_or_default(),
+        v.data_type,
+        match v.type_source {
+            ecdrive::master::tools::TypeSource::Explicit => "--type",
+            ecdrive::master::tools::TypeSource::Profile => "profile",
+            ecdrive::master::tools::TypeSource::SdoInfo => "SDO information",
+        }
+    );
+}
+
+pub fn sdos(listing: &OdListing) {
+    if let Some(n) = &listing.note {
+        println!("({n})");
+    }
+    for o in &listing.objects {
+        println!("SDO 0x{:04X}, {}, \"{}\"", o.index, o.object_code, o.name);
+        for e in &o.entries {
+            let map = e
+                .pdo_mapping
+                .as_ref()
+                .map(|m| format!(", {m} mappable"))
+                .unwrap_or_default();
+            let val = e
+                .value
+                .as_ref()
+                .map(|v| format!(" = {v}"))
+                .unwrap_or_default();
+            println!(
+                "  {}, {}, {}, {} bit{map}, \"{}\"{val}",
+                e.address, e.access, e.data_type, e.bit_len, e.name
+            );
+        }
+    }
+}
+
+pub fn pdos(r: &PdoReport) {
+    for sm in &r.sync_managers {
+        let size = match sm.mapped_bytes {
+            Some(b) => format!("{b:4} (mapped)"),
+            None => format!("{:4}", sm.default_size),
+        };
+        println!(
+            "SM{}: PhysAddr 0x{:04X}, Size {size}, ControlRegister 0x{:02X}, Enable {}, {}",
+            sm.index,
+            sm.start,
+            sm.control,
+            u8::from(sm.enable),
+            sm.kind
+        );
+        for p in &sm.pdos {
+            println!(
+                "  {} 0x{:04X} \"{}\" ({} bit)",
+                p.direction,
+                p.index,
+                p.name.as_deref().unwrap_or(""),
+                p.bits
+            );
+            for e in &p.entries {
+                println!(
+                    "    PDO entry {}, {:2} bit, offset {:3}, \"{}\"",
+                    e.address,
+                    e.bits,
+                    e.bit_offset,
+                    e.name.as_deref().unwrap_or("")
+                );
+            }
+        }
+    }
+    if r.source == ecdrive::master::tools::PdoSource::Sii {
+        println!("(from the SII: the device has no CoE)");
+    }
+}
+
+pub fn states(list: &[StateChange]) {
+    let mut rows = vec![
+        ["POS", "DRIVE", "REQUESTED", "REACHED", "RESULT"]
+            .map(String::from)
+            .to_vec(),
+    ];
+    for c in list {
+        rows.push(vec![
+            c.position.to_string(),
+            c.drive.clone(),
+            c.requested.clone(),
+            c.reached.clone(),
+            if c.ok {
+                "ok".into()
+            } else {
+                match (c.al_status_code, &c.code_text) {
+                    (Some(k), Some(t)) => format!("refused: AL status code 0x{k:04X} ({t})"),
+                    _ => "not reached".into(),
+                }
+            },
+        ]);
+    }
+    table(&rows);
+}
+
+pub fn register(r: &RegisterData) {
+    let bytes: Vec<String> = r
+        .bytes
+        .as_bytes()
+        .chunks(2)
+        .map(|c| String::from_utf8_lossy(c).into_owned())
+        .collect();
+    let value = match (&r.value, &r.data_type) {
+        (Some(v), Some(t)) => format!(
+            "  = {} ({t})",
+            serde_json::to_string(v)
+                .unwrap_or_default()
+                .trim_matches('"')
+        ),
+        _ => String::new(),
+    };
+    println!("0x{:04X}: {}{value}", r.address, bytes.join(" "));
+}
+
+pub fn hex_dump(b: &[u8]) {
+    for (i, chunk) in b.chunks(16).enumerate() {
+        let hex: Vec<String> = chunk.iter().map(|x| format!("{x:02x}")).collect();
+        let text: String = chunk
+            .iter()
+            .map(|&x| {
+                if x.is_ascii_graphic() || x == b' ' {
+                    x as char
+                } else {
+                    '.'
+                }
+            })
+            .collect();
+        println!("{:06x}  {:<47}  {text}", i * 16, hex.join(" "));
+    }
+}
+
+pub fn sii(d: &SiiDump, i: &SiiInfo) {
+    println!(
+        "EEPROM of position {} ({}): {} bytes read, size word {} bytes, SII version {}, checksum {}",
+        d.position,
+        d.drive,
+        d.bytes.len(),
+        i.size_bytes,
+        i.version,
+        if i.checksum_ok { "ok" } else { "WRONG" }
+    );
+    println!(
+        "Identity: vendor 0x{:08X}, product 0x{:08X}, revision 0x{:08X}, serial {}",
+        i.vendor_id, i.product_code, i.revision, i.serial
+    );
+    println!(
+        "Config: PDI control 0x{:04X}, PDI config 0x{:04X}, SYNC impulse {} × 10 ns, alias {}",
+        i.pdi_control, i.pdi_config, i.sync_impulse_len, i.alias
+    );
+    if let Some(m) = &i.mailbox {
+        println!(
+            "Mailbox: RX 0x{:04X}/{}, TX 0x{:04X}/{}, protocols {}",
+            m.rx_offset,
+            m.rx_size,
+            m.tx_offset,
+            m.tx_size,
+            i.protocols.join(", ")
+        );
+    }
+    if let Some(g) = &i.general {
+        println!(
+            "General: order {:?}, name {:?}, group {:?}, CoE details 0x{:02X}, flags 0x{:02X}",
+            g.order, g.name, g.group, g.coe_details, g.flags
+        );
+    }
+    println!("Categories:");
+    for c in &i.categories {
+        println!(
+            "  {:>5}  {:<15} word 0x{:04X}, {} words",
+            c.kind, c.name, c.word, c.words
+        );
+    }
+    for (n, s) in i.sync_managers.iter().enumerate() {
+        println!(
+            "SM{n}: start 0x{:04X}, size {}, control 0x{:02X}, enable {}, {}",
+            s.start, s.length, s.control, s.enable, s.kind
+        );
+    }
+    for (dir, pdos) in [("RxPDO", &i.rx_pdos), ("TxPDO", &i.tx_pdos)] {
+        for p in pdos {
+            println!(
+                "{dir} 0x{:04X} \"{}\" (SM {}, {} entries)",
+                p.index,
+                p.name,
+                if p.sm == 0xFF {
+                    "-".to_string()
+                } else {
+                    p.sm.to_string()
+                },
+                p.entries.len()
+            );
+        }
+    }
+    for m in &i.dc_modes {
+        println!(
+            "DC mode {:?}: AssignActivate 0x{:04X}, SYNC0 cycle {} ns, shift {} ns",
+            m.name, m.assign_activate, m.cycle_time0, m.shift_time0
+        );
+    }
+}
+
+pub fn esi_summary(s: &EsiSummary) {
+    println!(
+        "{}: vendor 0x{:08X} {:?}{}",
+        s.file,
+        s.vendor_id,
+        s.vendor,
+        s.version
+            .as_ref()
+            .map(|v| format!(", schema {v}"))
+            .unwrap_or_default()
+    );
+    for d in &s.devices {
+        println!();
+        println!(
+            "Device {:?} ({}): product 0x{:08X}, revision {}",
+            d.name,
+            d.type_name,
+            d.product_code,
+            d.revision
+                .map_or_else(|| "-".to_string(), |r| format!("0x{r:08X}"))
+        );
+        if let Some(p) = &d.profile {
+            println!("  ecdrive profile: {p}");
+        }
+        println!(
+            "  Mailbox: {}",
+            if d.mailbox_protocols.is_empty() {
+                "none".into()
+            } else {
+                d.mailbox_protocols.join(", ")
+            }
+        );
+        for sm in &d.sync_managers {
+            println!(
+                "  SM{}: {:<8} start 0x{:04X}, default size {}, control 0x{:02X}",
+                sm.index,
+                sm.kind,
+                sm.start,
+                sm.default_size
+                    .map_or_else(|| "-".to_string(), |v| v.to_string()),
+                sm.control
+            );
+        }
+        for p in &d.pdos {
+            println!(
+                "  {} 0x{:04X} {:?}: {} entries, {} bit{}{}",
+                p.direction,
+                p.index,
+                p.name,
+                p.entries,
+                p.bits,
+                p.sm.map(|s| format!(", default on SM{s}"))
+                    .unwrap_or_default(),
+                if p.fixed { ", fixed" } else { "" }
+            );
+        }
+        if let Some((o, i)) = d.default_image_bytes {
+            println!("  Default process image: {o} output bytes, {i} input bytes");
+        }
+        for m in &d.dc_modes {
+            println!("  DC {m}");
+        }
+        println!("  Dictionary: {} objects", d.dictionary_objects);
+        if let Some(b) = d.eeprom_bytes {
+            println!("  EEPROM: {b} bytes");
+        }
+    }
+}
+
+pub fn esi_check(c: &EsiCheck) {
+    if c.valid {
+        println!("{}: valid ({} device(s))", c.file, c.devices);
+        return;
+    }
+    for i in &c.issues {
+        if i.line > 0 {
+            println!(
+                "{} line {}, column {}: {}",
+                c.file, i.line, i.column, i.message
+            );
+        } else {
+            println!("{}: {}", c.file, i.message);
+        }
+    }
+}
+
+/// A progress bar on stderr, hidden when stderr is not a terminal.
+pub fn progress(what: &str) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+    if let Ok(style) = ProgressStyle::with_template("{msg} [{bar:30}] {pos}/{len}") {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar.set_message(what.to_string());
+    bar
+}
+
+/// The progress display of `run`.
+pub fn run_progress() -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+    if let Ok(style) = ProgressStyle::with_template("{spinner} {msg}") {
+        bar.set_style(style);
+    }
+    bar.enable_steady_tick(std::time::Duration::from_millis(200));
+    bar
+}
+
+pub fn update_run_progress(bar: &ProgressBar, p: &RunProgress) {
+    let time = match p.duration {
+        Some(d) => format!("{:.1}/{:.1} s", p.elapsed.as_secs_f64(), d.as_secs_f64()),
+        None => format!("{:.1} s", p.elapsed.as_secs_f64()),
+    };
+    let steps = if p.steps_total > 0 {
+        format!(", program steps {}/{}", p.steps_done, p.steps_total)
+    } else {
+        String::new()
+    };
+    bar.set_message(format!("{}: {time}{steps}, cycle {}", p.phase, p.cycles));
+}
+
+fn us(ns: u64) -> String {
+    format!("{:.1}", ns as f64 / 1000.0)
+}
+
+pub fn run_report(r: &RunReport) {
+    println!(
+        "{} on {}: {} ({}), {:.2} s, cycle {} µs",
+        r.config,
+        r.target,
+        r.outcome.describe(),
+        r.reason,
+        r.run_seconds,
+        r.cycle_ns / 1000
+    );
+    for d in &r.drives {
+        println!();
+        println!(
+            "Drive {} {} ({}, vendor 0x{:08X} product 0x{:08X}), start mode {}",
+            d.position, d.name, d.device.name, d.device.vendor_id, d.device.product_code, d.mode
+        );
+        println!("  States:              {}", d.states.join(" → "));
+        println!(
+            "  Modes run:           {}",
+            if d.modes_run.is_empty() {
+                "none".into()
+            } else {
+                d.modes_run.join(", ")
+            }
+        );
+        match (&d.units, d.max_following_error_units) {
+            (Some(u), Some(v)) => println!(
+                "  Max following error: {} counts ({v:.4} {})",
+                d.max_following_error, u.name
+            ),
+            _ => println!("  Max following error: {} counts", d.max_following_error),
+        }
+        println!(
+            "  Program:             {}/{} steps{}",
+            d.steps_done,
+            d.program.len(),
+            if d.program.is_empty() {
+                String::new()
+            } else {
+                format!(": {}", d.program.join("; "))
+            }
+        );
+        for e in &d.errors {
+            println!("  Error:               {e}");
+        }
+    }
+    if let Some(c) = &r.cycle {
+        println!();
+        println!(
+            "Cycle: {} cycles, {} lost, {} overruns{}",
+            c.cycles,
+            c.lost,
+            c.overruns,
+            match (c.priority, c.cpu) {
+                (Some(p), Some(cpu)) => format!(", SCHED_FIFO {p} on CPU {cpu}"),
+                (Some(p), None) => format!(", SCHED_FIFO {p}"),
+                (None, Some(cpu)) => format!(", CPU {cpu}"),
+                (None, None) => String::new(),
+            }
+        );
+        println!("                 p50 µs    p99 µs    max µs");
+        for (name, s) in [
+            ("wake latency", &c.wake_latency),
+            ("period", &c.period),
+            ("exchange", &c.exchange),
+        ] {
+            println!(
+                "  {name:<12} {:>9} {:>9} {:>9}",
+                us(s.p50),
+                us(s.p99),
+                us(s.max)
+            );
+        }
+        for w in &c.rt_warnings {
+            println!("  warning: {w}");
+        }
+    }
+    if !r.shutdown_ok {
+        println!("Not every drive confirmed INIT at the end.");
+    }
+}

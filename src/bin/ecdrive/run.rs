@@ -1,0 +1,96 @@
+//! `ecdrive run -c FILE`: a cyclic run from a configuration file.
+
+use crate::{exit, fail, fail_with, print, print_json};
+use ecdrive::master::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+pub fn run(path: &Path, duration: Option<Duration>, check: bool, json: bool) -> ExitCode {
+    let cfg = match ecdrive::config::load(path) {
+        Ok(c) => c,
+        Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
+    };
+    if check {
+        if json {
+            #[derive(serde::Serialize)]
+            struct Checked<'a> {
+                config: &'a str,
+                target: &'a ecdrive::master::tools::Target,
+                cycle_ns: u64,
+                drives: usize,
+                valid: bool,
+            }
+            return print_json(
+                "run",
+                &Checked {
+                    config: &cfg.source,
+                    target: &cfg.target,
+                    cycle_ns: cfg.master.cycle.cycle.as_nanos() as u64,
+                    drives: cfg.drives.len(),
+                    valid: true,
+                },
+            );
+        }
+        println!(
+            "{}: valid; {} drive entr{}, cycle {} µs, on {}",
+            cfg.source,
+            cfg.drives.len(),
+            if cfg.drives.len() == 1 { "y" } else { "ies" },
+            cfg.master.cycle.cycle.as_micros(),
+            cfg.target
+        );
+        return ExitCode::SUCCESS;
+    }
+    let stop = Arc::new(AtomicBool::new(false));
+    let on_signal = stop.clone();
+    // Ctrl-C ends the run in a controlled way (ramp, disable, INIT); the thread is left
+    // waiting when the run ends by itself.
+    let _ = std::thread::Builder::new()
+        .name("ctrl-c".into())
+        .spawn(move || {
+            if let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+                .enable_io()
+                .build()
+                && rt.block_on(tokio::signal::ctrl_c()).is_ok()
+            {
+                on_signal.store(true, Ordering::Release);
+            }
+        });
+    let opts = RunOptions {
+        duration,
+        ..RunOptions::default()
+    };
+    let bar = print::run_progress();
+    let mut show = |p: &RunProgress| print::update_run_progress(&bar, p);
+    let r = run_config(&cfg, &opts, &stop, &mut show);
+    bar.finish_and_clear();
+    let report = match r {
+        Ok(r) => r,
+        Err(e) => return fail("run", &e),
+    };
+    let code = match report.outcome {
+        Outcome::Completed | Outcome::Interrupted => exit::OK,
+        Outcome::DriveFault => exit::FAULT,
+        Outcome::Refused => exit::REFUSED,
+        Outcome::BusLost => exit::BUS,
+    };
+    if json {
+        let c = print_json("run", &report);
+        if c != ExitCode::SUCCESS {
+            return c;
+        }
+    } else {
+        print::run_report(&report);
+    }
+    if code != exit::OK {
+        eprintln!(
+            "ecdrive run: {}: {}",
+            report.outcome.describe(),
+            report.reason
+        );
+    }
+    ExitCode::from(code)
+}

@@ -1,0 +1,1013 @@
+//! The `ecdrive run` configuration file: TOML → [`MasterConfig`] and a [`Target`].
+//!
+//! ```toml
+//! interface = "sim"          # a network interface (raw socket), or "sim": emulated devices in-process
+//! cycle = "1ms"              # cycle time (ns, us, ms, s); default 1 ms
+//! dc_shift = "0us"           # offset of the master's frame from SYNC0
+//! duration = "10s"           # stop after this long (default: when every program has finished)
+//!
+//! [rt]                       # real-time set-up of the cycle thread (optional)
+//! priority = 80              # SCHED_FIFO priority 1–99
+//! cpu = 1                    # pin to this CPU
+//! lock_memory = true         # mlockall
+//!
+//! [sim]                      # only with interface = "sim"
+//! devices = ["mr-j4-tm", "bdhde"]
+//!
+//! [[drive]]
+//! position = 0               # or alias = 0x10, or identity = { vendor_id = 0xA1E, product_code = 0x201 }
+//! mode = "csp"               # csp, csv or cst at start
+//! units = { name = "deg", counts_per_unit = 11650.8444 }
+//! limits = { following_error = 5, max_velocity = 720, max_acceleration = 7200 }
+//! sdos = { "0x6065:00" = 100000 }
+//! program = [
+//!   { step = "move", by = 90, velocity = 360, acceleration = 3600 },
+//!   { step = "sine", amplitude = 10, frequency = 2, periods = 3 },
+//! ]
+//! ```
+//!
+//! Every table denies unknown keys. A bad file gives one [`ConfigError`] naming the file, the
+//! line and column, the key and what is wrong:
+//! `examples/bad.toml line 7, column 1: drive[0].velocty: unknown key `velocty` …`.
+//!
+//! Per drive, [`parse`] checks what it can before anything touches the bus, with the file
+//! position: the mode against the drive's supported modes, a PDO mapping override against
+//! the drive's PDO limits and dictionary, start-up SDO values against their data types, the
+//! cycle time against the drive's allowed cycles, and every program step against the mode it
+//! runs in, its own parameters and the drive's `limits`. The drive's profile is known when the
+//! entry names it (`profile = "mr-j4-tm"`), selects by identity, or selects a position of the
+//! emulated devices; otherwise the master checks the same at start-up, naming the drive.
+//!
+//! Program values are in the drive's user units when `units` is given (positions and distances
+//! in `name`, velocities in `name`/s, accelerations in `name`/s², jerks in `name`/s³), otherwise
+//! in position counts; torques are always in the drive's torque unit.
+
+mod raw;
+
+use crate::drives::DriveProfile;
+use crate::master::program::{self, CyclicMode, Step, Target as MoveTarget};
+use crate::master::session::MasterConfig;
+use crate::master::startup::{DriveSetup, Selector};
+use crate::master::tools::Target;
+use crate::od::{Dictionary, ObjectAddress, Value};
+use crate::pdo::{Mapping, Pdo, PdoEntry};
+use crate::sim::EscConfig;
+use std::ops::Range;
+use std::path::Path;
+use std::time::Duration;
+use toml::Spanned;
+
+/// A bad configuration file: where, which key, and what is wrong.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The file (or the name given to [`parse`]).
+    pub file: String,
+    /// Line, 1-based (0: no position, e.g. the file cannot be read).
+    pub line: usize,
+    /// Column, 1-based, in characters.
+    pub column: usize,
+    /// The key path (`drive[0].mapping`), if the error concerns one.
+    pub key: Option<String>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(&self.file)?;
+        if self.line > 0 {
+            write!(f, " line {}, column {}", self.line, self.column)?;
+        }
+        f.write_str(": ")?;
+        if let Some(k) = &self.key {
+            write!(f, "{k}: ")?;
+        }
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for ConfigError {}
+
+/// User units of one drive: program values and limits are multiplied by `counts_per_unit`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UserUnits {
+    /// Unit name (`deg`, `mm`).
+    pub name: String,
+    /// Position counts per unit.
+    pub counts_per_unit: f64,
+}
+
+/// One `[[drive]]` entry after checking.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveConfig {
+    /// Which device.
+    pub select: Selector,
+    /// The profile, when the file names it or it follows from the selector.
+    pub profile: Option<&'static DriveProfile>,
+    /// User units, if given.
+    pub units: Option<UserUnits>,
+    /// The program steps, described in the file's units.
+    pub steps: Vec<String>,
+}
+
+/// A checked configuration file.
+#[derive(Clone)]
+pub struct RunConfig {
+    /// Where it came from (for messages).
+    pub source: String,
+    /// Where the segment is.
+    pub target: Target,
+    /// ESC settings of emulated devices (`[sim]`).
+    pub esc: EscConfig,
+    /// The master configuration.
+    pub master: MasterConfig,
+    /// How long to run, if limited.
+    pub duration: Option<Duration>,
+    /// The drive entries, in file order (index = the `setup` index in
+    /// `master.startup.drives`).
+    pub drives: Vec<DriveConfig>,
+}
+
+impl core::fmt::Debug for RunConfig {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("RunConfig")
+            .field("source", &self.source)
+            .field("target", &self.target)
+            .field("cycle", &self.master.cycle.cycle)
+            .field("startup", &self.master.startup)
+            .field("rt", &self.master.cycle.rt)
+            .field("duration", &self.duration)
+            .field("drives", &self.drives)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Parse a duration as the file writes it: a number and a unit, `ns`, `us` (`µs`), `ms` or
+/// `s` (`250us`, `1 ms`, `0.5ms`, `10s`).
+pub fn parse_duration(text: &str) -> Result<Duration, String> {
+    let t = text.trim();
+    let split = t
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(t.len());
+    let (num, unit) = t.split_at(split);
+    let unit = unit.trim();
+    let scale = match unit {
+        "ns" => 1e-9,
+        "us" | "µs" => 1e-6,
+        "ms" => 1e-3,
+        "s" => 1.0,
+        "" => {
+            return Err(format!(
+                "{text:?} has no unit (write e.g. \"1ms\", \"250us\", \"10s\")"
+            ));
+        }
+        u => {
+            return Err(format!(
+                "unknown time unit {u:?} in {text:?} (use ns, us, ms or s)"
+            ));
+        }
+    };
+    let v: f64 = num
+        .parse()
+        .map_err(|_| format!("{text:?} is not a time (write e.g. \"1ms\", \"250us\", \"10s\")"))?;
+    let secs = v * scale;
+    if !secs.is_finite() || !(0.0..=86_400.0 * 365.0).contains(&secs) {
+        return Err(format!("{text:?} is out of range"));
+    }
+    Ok(Duration::from_secs_f64(secs))
+}
+
+/// Read and check a configuration file.
+pub fn load(path: &Path) -> Result<RunConfig, ConfigError> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
+        file: file.clone(),
+        line: 0,
+        column: 0,
+        key: None,
+        message: format!("cannot read the file: {e}"),
+    })?;
+    parse(&text, &file)
+}
+
+struct Ctx<'a> {
+    text: &'a str,
+    file: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(
+        &self,
+        span: Range<usize>,
+        key: impl Into<String>,
+        message: impl Into<String>,
+    ) -> ConfigError {
+        let (line, column) = line_col(self.text, span.start);
+        let key = key.into();
+        ConfigError {
+            file: self.file.to_string(),
+            line,
+            column,
+            key: (!key.is_empty()).then_some(key),
+            message: message.into(),
+        }
+    }
+}
+
+fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let before = text.get(..offset.min(text.len())).unwrap_or(text);
+    let line = before.matches('\n').count() + 1;
+    let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+    (line, column)
+}
+
+/// Rewrite serde's messages in the file's terms.
+fn friendly(msg: &str) -> String {
+    msg.replace("unknown field", "unknown key")
+        .replace("missing field", "missing key")
+        .replace("expected one of", "the keys allowed here are")
+        .replace("unknown variant", "unknown step")
+}
+
+fn key_path(p: &serde_path_to_error::Path) -> String {
+    p.to_string()
+        .replace(".$__serde_spanned_private_value", "")
+        .replace("$__serde_spanned_private_value", "")
+        .trim_matches('.')
+        .to_string()
+}
+
+/// One step of a key path.
+enum Segment {
+    Key(String),
+    Index(usize),
+}
+
+/// The span of the item at `path` in the file (or of the key `unknown` inside it, or of the
+/// last key of the path when `unknown` is that key), as precise as the file allows.
+fn locate(text: &str, path: &[Segment], unknown: Option<&str>) -> Option<Range<usize>> {
+    let doc = toml_edit::ImDocument::parse(text).ok()?;
+    let mut item = doc.as_item();
+    let mut parent = None;
+    for (n, seg) in path.iter().enumerate() {
+        let last = n + 1 == path.len();
+        let next = match seg {
+            Segment::Key(k) => {
+                if last && unknown == Some(k.as_str()) {
+                    // The unknown key: point at it.
+                    return key_span(item, k).or_else(|| item.span());
+                }
+                item.get(k.as_str())
+            }
+            Segment::Index(i) => item.get(*i),
+        };
+        match next {
+            Some(x) => {
+                parent = Some(item);
+                item = x;
+            }
+            None => {
+                return item
+                    .span()
+                    .or_else(|| parent.and_then(toml_edit::Item::span));
+            }
+        }
+    }
+    if let Some(k) = unknown
+        && let Some(s) = key_span(item, k)
+    {
+        return Some(s);
+    }
+    item.span()
+}
+
+fn key_span(item: &toml_edit::Item, key: &str) -> Option<Range<usize>> {
+    match item {
+        toml_edit::Item::Table(t) => t.key(key).and_then(toml_edit::Key::span),
+        toml_edit::Item::Value(toml_edit::Value::InlineTable(t)) => {
+            t.key(key).and_then(toml_edit::Key::span)
+        }
+        _ => None,
+    }
+}
+
+/// Check a configuration file's text. `source` names it in errors.
+pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
+    let cx = Ctx { text, file: source };
+    let de = toml::Deserializer::new(text);
+    let f: raw::File = serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = key_path(e.path());
+        let segments: Vec<Segment> = e
+            .path()
+            .iter()
+            .filter_map(|s| match s {
+                serde_path_to_error::Segment::Seq { index } => Some(Segment::Index(*index)),
+                serde_path_to_error::Segment::Map { key } if !key.starts_with("$__serde") => {
+                    Some(Segment::Key(key.clone()))
+                }
+                _ => None,
+            })
+            .collect();
+        let inner = e.into_inner();
+        let message = inner.message().trim().to_string();
+        let toml_span = inner.span();
+        // serde names the unknown key as the last path segment; the key itself is then the
+        // most precise position.
+        let unknown = message
+            .strip_prefix("unknown field `")
+            .and_then(|r| r.split('`').next());
+        let located = locate(text, &segments, unknown);
+        let span = match (toml_span, located) {
+            (Some(t), Some(l)) if l.start >= t.start && l.end <= t.end => l,
+            (Some(t), _) => t,
+            (None, Some(l)) => l,
+            (None, None) => 0..0,
+        };
+        let key = if key == "." { String::new() } else { key };
+        cx.err(span, key, friendly(&message))
+    })?;
+
+    // Where the segment is.
+    let (target, sim_names) = match (f.interface.get_ref().as_str(), &f.sim) {
+        ("sim", Some(sim)) => {
+            let s = sim.get_ref();
+            if s.devices.is_empty() {
+                return Err(cx.err(sim.span(), "sim.devices", "name at least one device"));
+            }
+            for (i, d) in s.devices.iter().enumerate() {
+                if let Err(e) = crate::sim::devices::by_name(d.get_ref(), i) {
+                    return Err(cx.err(d.span(), format!("sim.devices[{i}]"), e.to_string()));
+                }
+            }
+            let names: Vec<String> = s.devices.iter().map(|d| d.get_ref().clone()).collect();
+            (Target::Sim(names.clone()), Some(names))
+        }
+        ("sim", None) => {
+            return Err(cx.err(
+                f.interface.span(),
+                "interface",
+                "interface = \"sim\" needs a [sim] table listing the emulated devices",
+            ));
+        }
+        ("", _) => return Err(cx.err(f.interface.span(), "interface", "is empty")),
+        (name, Some(sim)) => {
+            return Err(cx.err(
+                sim.span(),
+                "sim",
+                format!("a [sim] table only goes with interface = \"sim\", not {name:?}"),
+            ));
+        }
+        (name, None) => (Target::Interface(name.to_string()), None),
+    };
+    let mut esc = EscConfig::default();
+    if let Some(wd) = f.sim.as_ref().and_then(|s| s.get_ref().sm_watchdog) {
+        esc.sm_watchdog = wd;
+    }
+
+    let duration_of = |s: &Spanned<String>, key: &str| {
+        parse_duration(s.get_ref()).map_err(|m| cx.err(s.span(), key, m))
+    };
+    let cycle = match &f.cycle {
+        Some(c) => {
+            let d = duration_of(c, "cycle")?;
+            if d < Duration::from_micros(50) || d > Duration::from_secs(1) {
+                return Err(cx.err(c.span(), "cycle", "must be between 50 us and 1 s"));
+            }
+            d
+        }
+        None => Duration::from_millis(1),
+    };
+    let mut master = MasterConfig::new(cycle);
+    if let Some(s) = &f.dc_shift {
+        let d = duration_of(s, "dc_shift")?;
+        if d >= cycle {
+            return Err(cx.err(s.span(), "dc_shift", "must be shorter than the cycle"));
+        }
+        master.startup.dc.shift = d;
+    }
+    let duration = f
+        .duration
+        .as_ref()
+        .map(|d| duration_of(d, "duration"))
+        .transpose()?;
+    if let Some(rt) = &f.rt {
+        if let Some(p) = &rt.priority
+            && !(1..=99).contains(p.get_ref())
+        {
+            return Err(cx.err(p.span(), "rt.priority", "SCHED_FIFO priorities are 1–99"));
+        }
+        master.cycle.rt.priority = rt.priority.as_ref().map(|p| *p.get_ref());
+        master.cycle.rt.cpu = rt.cpu;
+        master.cycle.rt.lock_memory = rt.lock_memory;
+    }
+    master.startup.allow_generic = f.allow_generic;
+    master.startup.generic = crate::drives::by_key("generic-cia402");
+
+    let mut drives = Vec::with_capacity(f.drive.len());
+    for (i, d) in f.drive.iter().enumerate() {
+        let (setup, dc) = drive(&cx, i, d, sim_names.as_deref(), cycle, &f.cycle)?;
+        // The same device twice.
+        if let Some(j) = master.startup.drives.iter().position(|s: &DriveSetup| {
+            s.select == setup.select && !matches!(s.select, Selector::Identity { .. })
+        }) {
+            return Err(cx.err(
+                d.span(),
+                format!("drive[{i}]"),
+                format!("selects the same device as drive[{j}]"),
+            ));
+        }
+        master.startup.drives.push(setup);
+        drives.push(dc);
+    }
+    Ok(RunConfig {
+        source: source.to_string(),
+        target,
+        esc,
+        master,
+        duration,
+        drives,
+    })
+}
+
+fn profile_keys() -> String {
+    let mut keys: Vec<&str> = crate::drives::all().iter().map(|p| p.key).collect();
+    if let Some(g) = crate::drives::by_key("generic-cia402") {
+        keys.push(g.key);
+    }
+    if keys.is_empty() {
+        "none".into()
+    } else {
+        keys.join(", ")
+    }
+}
+
+fn drive(
+    cx: &Ctx<'_>,
+    i: usize,
+    d: &Spanned<raw::Drive>,
+    sim: Option<&[String]>,
+    cycle: Duration,
+    cycle_key: &Option<Spanned<String>>,
+) -> Result<(DriveSetup, DriveConfig), ConfigError> {
+    let key = |k: &str| {
+        if k.is_empty() {
+            format!("drive[{i}]")
+        } else {
+            format!("drive[{i}].{k}")
+        }
+    };
+    let r = d.get_ref();
+    // Which device.
+    let select = match (&r.position, &r.alias, &r.identity) {
+        (Some(p), None, None) => Selector::Position(*p.get_ref()),
+        (None, Some(a), None) => {
+            if *a.get_ref() == 0 {
+                return Err(cx.err(
+                    a.span(),
+                    key("alias"),
+                    "alias 0 means \"no alias\"; select by position",
+                ));
+            }
+            Selector::Alias(*a.get_ref())
+        }
+        (None, None, Some(id)) => Selector::Identity {
+            vendor_id: id.get_ref().vendor_id,
+            product_code: id.get_ref().product_code,
+        },
+        (None, None, None) => {
+            return Err(cx.err(
+                d.span(),
+                key(""),
+                "say which device: give position, alias or identity",
+            ));
+        }
+        _ => {
+            return Err(cx.err(
+                d.span(),
+                key(""),
+                "give only one of position, alias and identity",
+            ));
+        }
+    };
+    // The profile, if it can be known now.
+    let profile = match &r.profile {
+        Some(p) => Some(crate::drives::by_key(p.get_ref()).ok_or_else(|| {
+            cx.err(
+                p.span(),
+                key("profile"),
+                format!(
+                    "unknown drive profile {:?}; known: {}",
+                    p.get_ref(),
+                    profile_keys()
+                ),
+            )
+        })?),
+        None => match select {
+            Selector::Identity {
+                vendor_id,
+                product_code,
+            } => crate::drives::by_identity(vendor_id, product_code),
+            Selector::Position(p) => sim
+                .and_then(|names| names.get(usize::from(p)))
+                .and_then(|n| crate::drives::by_key(n)),
+            Selector::Alias(_) => None,
+        },
+    };
+    if let (Selector::Position(p), Some(names), Some(pos)) = (select, sim, &r.position)
+        && usize::from(p) >= names.len()
+    {
+        return Err(cx.err(
+            pos.span(),
+            key("position"),
+            format!(
+                "there are {} emulated device(s) (positions 0–{})",
+                names.len(),
+                names.len().saturating_sub(1)
+            ),
+        ));
+    }
+
+    // Mode.
+    let mode = match &r.mode {
+        Some(m) => {
+            let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
+            if let Some(p) = profile
+                && !p
+                    .caps
+                    .supported_modes
+                    .contains(crate::cia402::OperationMode::from_i8(mode.code()))
+            {
+                return Err(cx.err(
+                    m.span(),
+                    key("mode"),
+                    format!("the {} does not support {}", p.name, mode.name()),
+                ));
+            }
+            mode
+        }
+        None => CyclicMode::Csp,
+    };
+    if let Some(p) = profile {
+        let ns = u32::try_from(cycle.as_nanos()).unwrap_or(u32::MAX);
+        if !p.sync.cycle_times.contains(ns) {
+            let span = cycle_key.as_ref().map_or(d.span(), Spanned::span);
+            return Err(cx.err(
+                span,
+                if cycle_key.is_some() {
+                    "cycle".to_string()
+                } else {
+                    key("")
+                },
+                format!(
+                    "{} µs is not a cycle time the {} (drive[{i}]) accepts ({})",
+                    cycle.as_micros(),
+                    p.name,
+                    p.sync.cycle_times.describe()
+                ),
+            ));
+        }
+    }
+
+    // Units.
+    let units = match &r.units {
+        Some(u) => {
+            let k = u.get_ref().counts_per_unit;
+            if !(k.is_finite() && k > 0.0) {
+                return Err(cx.err(
+                    u.span(),
+                    key("units.counts_per_unit"),
+                    format!("must be a positive number, not {k}"),
+                ));
+            }
+            Some(UserUnits {
+                name: u.get_ref().name.clone(),
+                counts_per_unit: k,
+            })
+        }
+        None => None,
+    };
+    let k = units.as_ref().map_or(1.0, |u| u.counts_per_unit);
+    let uname = units
+        .as_ref()
+        .map_or("counts", |u| u.name.as_str())
+        .to_string();
+
+    // Limits.
+    let mut fe_limit = None;
+    if let Some(l) = &r.limits {
+        let lim = l.get_ref();
+        for (name, v) in [
+            ("following_error", lim.following_error),
+            ("max_velocity", lim.max_velocity),
+            ("max_acceleration", lim.max_acceleration),
+            ("max_torque", lim.max_torque),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return Err(cx.err(
+                    l.span(),
+                    key(&format!("limits.{name}")),
+                    format!("must be a positive number, not {v}"),
+                ));
+            }
+        }
+        if let Some(fe) = lim.following_error {
+            let counts = (fe * k).round();
+            if counts < 1.0 || counts > f64::from(u32::MAX) {
+                return Err(cx.err(
+                    l.span(),
+                    key("limits.following_error"),
+                    format!(
+                        "{fe} {uname} is {counts} counts; it must be 1 to {} counts",
+                        u32::MAX
+                    ),
+                ));
+            }
+            fe_limit = Some(counts as u32);
+        }
+    }
+
+    // Program.
+    let mut steps = Vec::with_capacity(r.program.len());
+    let mut described = Vec::with_capacity(r.program.len());
+    for (n, s) in r.program.iter().enumerate() {
+        let step = scale_step(s.get_ref(), k)
+            .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
+        if let Some(l) = &r.limits {
+            check_limits(s.get_ref(), l.get_ref(), &uname)
+                .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
+        }
+        described.push(describe(s.get_ref(), &uname));
+        steps.push(step);
+    }
+    program::validate(&steps, mode).map_err(|e| {
+        let n = match &e {
+            program::ProgramError::WrongMode { index, .. }
+            | program::ProgramError::Profile { index, .. } => *index,
+        };
+        let span = r.program.get(n).map_or(d.span(), Spanned::span);
+        cx.err(span, key(&format!("program[{n}]")), e.to_string())
+    })?;
+
+    // Mapping override.
+    let mapping = match &r.mapping {
+        Some(m) => {
+            let mapping = build_mapping(cx, &key, m, profile)?;
+            if let Some(p) = profile {
+                crate::pdo::validate(&mapping, &p.pdo_limits, Some(p.dictionary))
+                    .map_err(|e| cx.err(m.span(), key("mapping"), e.to_string()))?;
+            }
+            Some(mapping)
+        }
+        None => None,
+    };
+
+    // Start-up SDOs.
+    let mut sdos = Vec::new();
+    if let Some(table) = &r.sdos {
+        for (a, v) in table.get_ref() {
+            let k = key(&format!("sdos.\"{a}\""));
+            let addr: ObjectAddress = a.parse().map_err(|e: crate::od::AddressParseError| {
+                cx.err(v.span(), k.clone(), e.to_string())
+            })?;
+            let text = match v.get_ref() {
+                toml::Value::Integer(i) => i.to_string(),
+                toml::Value::Float(x) => x.to_string(),
+                toml::Value::String(s) => s.clone(),
+                toml::Value::Boolean(b) => b.to_string(),
+                other => {
+                    return Err(cx.err(
+                        v.span(),
+                        k,
+                        format!(
+                            "a start-up value is a number, a string or a boolean, not {}",
+                            other.type_str()
+                        ),
+                    ));
+                }
+            };
+            let value = match profile {
+                Some(p) => {
+                    let dt = Dictionary::new(p.dictionary)
+                        .data_type(addr)
+                        .ok_or_else(|| {
+                            cx.err(
+                                v.span(),
+                                k.clone(),
+                                format!("{addr} is not in the {} dictionary", p.name),
+                            )
+                        })?;
+                    Value::parse(&text, dt)
+                        .map_err(|e| cx.err(v.span(), k.clone(), e.to_string()))?
+                }
+                None => match v.get_ref() {
+                    toml::Value::Integer(i) => Value::Int(*i),
+                    toml::Value::Float(x) => Value::Real(*x),
+                    toml::Value::Boolean(b) => Value::Uint(u64::from(*b)),
+                    _ => Value::Str(text),
+                },
+            };
+            sdos.push((addr, value));
+        }
+    }
+    Ok((
+        DriveSetup {
+            select,
+            profile: r.profile.as_ref().and(profile),
+            mode,
+            mapping,
+            sdos,
+            following_error_limit: fe_limit,
+            program: steps,
+        },
+        DriveConfig {
+            select,
+            profile,
+            units,
+            steps: described,
+        },
+    ))
+}
+
+fn build_mapping(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    m: &Spanned<raw::Mapping>,
+    profile: Option<&'static DriveProfile>,
+) -> Result<Mapping, ConfigError> {
+    let dict = profile.map(|p| Dictionary::new(p.dictionary));
+    let mut dirs: [Vec<Pdo>; 2] = [Vec::new(), Vec::new()];
+    for (d, (name, list)) in [("rx", &m.get_ref().rx), ("tx", &m.get_ref().tx)]
+        .into_iter()
+        .enumerate()
+    {
+        for (pi, p) in list.iter().enumerate() {
+            let mut entries = Vec::new();
+            for (ei, e) in p.get_ref().entries.iter().enumerate() {
+                let k = key(&format!("mapping.{name}[{pi}].entries[{ei}]"));
+                let bad = || {
+                    cx.err(
+                        e.span(),
+                        k.clone(),
+                        "a mapping entry is \"0xINDEX:SUB\", { object = \"0xINDEX:SUB\", bits = N } or { padding = N }",
+                    )
+                };
+                let entry = match e.get_ref() {
+                    toml::Value::String(s) => {
+                        let a: ObjectAddress =
+                            s.parse().map_err(|er: crate::od::AddressParseError| {
+                                cx.err(e.span(), k.clone(), er.to_string())
+                            })?;
+                        let bits = dict
+                            .as_ref()
+                            .and_then(|dict| dict.entry(a))
+                            .map(|en| en.bit_len)
+                            .ok_or_else(|| {
+                                cx.err(
+                                    e.span(),
+                                    k.clone(),
+                                    match profile {
+                                        Some(p) => format!("{a} is not in the {} dictionary", p.name),
+                                        None => format!(
+                                            "the size of {a} is not known without a drive profile; write {{ object = \"{s}\", bits = N }}"
+                                        ),
+                                    },
+                                )
+                            })?;
+                        let bits = u8::try_from(bits).map_err(|_| {
+                            cx.err(
+                                e.span(),
+                                k.clone(),
+                                format!("{a} has {bits} bits, too large for a PDO entry"),
+                            )
+                        })?;
+                        PdoEntry::new(a.index, a.sub, bits)
+                    }
+                    toml::Value::Table(t) => {
+                        let get = |n: &str| t.get(n);
+                        if let Some(unknown) = t
+                            .keys()
+                            .find(|n| !["object", "bits", "padding"].contains(&n.as_str()))
+                        {
+                            return Err(cx.err(
+                                e.span(),
+                                k.clone(),
+                                format!("unknown key `{unknown}` in a mapping entry"),
+                            ));
+                        }
+                        match (get("object"), get("bits"), get("padding")) {
+                            (Some(toml::Value::String(s)), Some(toml::Value::Integer(b)), None) => {
+                                let a: ObjectAddress =
+                                    s.parse().map_err(|er: crate::od::AddressParseError| {
+                                        cx.err(e.span(), k.clone(), er.to_string())
+                                    })?;
+                                let bits =
+                                    u8::try_from(*b).ok().filter(|b| *b > 0).ok_or_else(|| {
+                                        cx.err(
+                                            e.span(),
+                                            k.clone(),
+                                            format!("bits must be 1–255, not {b}"),
+                                        )
+                                    })?;
+                                PdoEntry::new(a.index, a.sub, bits)
+                            }
+                            (None, None, Some(toml::Value::Integer(b))) => {
+                                let bits =
+                                    u8::try_from(*b).ok().filter(|b| *b > 0).ok_or_else(|| {
+                                        cx.err(
+                                            e.span(),
+                                            k.clone(),
+                                            format!("padding must be 1–255 bits, not {b}"),
+                                        )
+                                    })?;
+                                PdoEntry::padding(bits)
+                            }
+                            _ => return Err(bad()),
+                        }
+                    }
+                    _ => return Err(bad()),
+                };
+                entries.push(entry);
+            }
+            if let Some(slot) = dirs.get_mut(d) {
+                slot.push(Pdo::owned(p.get_ref().pdo, entries));
+            }
+        }
+    }
+    let [rx, tx] = dirs;
+    Ok(Mapping::owned(rx, tx))
+}
+
+fn mode_of(s: &str) -> Result<CyclicMode, String> {
+    match s.to_ascii_lowercase().as_str() {
+        "csp" => Ok(CyclicMode::Csp),
+        "csv" => Ok(CyclicMode::Csv),
+        "cst" => Ok(CyclicMode::Cst),
+        other => Err(format!(
+            "unknown mode {other:?}; the cyclic modes are csp, csv and cst"
+        )),
+    }
+}
+
+/// A file step in counts (`k` counts per user unit).
+fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
+    Ok(match *s {
+        raw::Step::Mode { ref mode } => Step::Mode {
+            mode: mode_of(mode)?,
+        },
+        raw::Step::Move {
+            to,
+            by,
+            velocity,
+            acceleration,
+            jerk,
+        } => Step::Move {
+            target: match (to, by) {
+                (Some(t), None) => MoveTarget::To(t * k),
+                (None, Some(b)) => MoveTarget::By(b * k),
+                _ => return Err("a move needs exactly one of `to` and `by`".into()),
+            },
+            velocity: velocity * k,
+            acceleration: acceleration * k,
+            jerk: jerk.map(|j| j * k),
+        },
+        raw::Step::Sine {
+            amplitude,
+            frequency,
+            periods,
+        } => Step::Sine {
+            amplitude: amplitude * k,
+            frequency,
+            periods,
+        },
+        raw::Step::Ramp {
+            velocity,
+            acceleration,
+            hold,
+        } => Step::Ramp {
+            velocity: velocity * k,
+            acceleration: acceleration * k,
+            hold,
+        },
+        raw::Step::Jog {
+            velocity,
+            acceleration,
+            seconds,
+        } => Step::Jog {
+            velocity: velocity * k,
+            acceleration: acceleration * k,
+            seconds,
+        },
+        raw::Step::Torque {
+            torque,
+            slope,
+            hold,
+        } => Step::Torque {
+            torque,
+            slope,
+            hold,
+        },
+        raw::Step::Dwell { seconds } => Step::Dwell { seconds },
+    })
+}
+
+/// Check a step against the drive's limits (in user units).
+fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String> {
+    let over = |what: &str, v: f64, lim: Option<f64>, u: &str| match lim {
+        Some(lim) if v.abs() > lim => Err(format!(
+            "{what} {} {unit}{u} exceeds the drive's limit of {lim} {unit}{u}",
+            v.abs()
+        )),
+        _ => Ok(()),
+    };
+    match *s {
+        raw::Step::Move {
+            velocity,
+            acceleration,
+            ..
+        }
+        | raw::Step::Ramp {
+            velocity,
+            acceleration,
+            ..
+        }
+        | raw::Step::Jog {
+            velocity,
+            acceleration,
+            ..
+        } => {
+            over("velocity", velocity, l.max_velocity, "/s")?;
+            over("acceleration", acceleration, l.max_acceleration, "/s²")
+        }
+        raw::Step::Sine {
+            amplitude,
+            frequency,
+            ..
+        } => {
+            let w = 2.0 * std::f64::consts::PI * frequency;
+            over("peak velocity", amplitude * w, l.max_velocity, "/s")?;
+            over(
+                "peak acceleration",
+                amplitude * w * w,
+                l.max_acceleration,
+                "/s²",
+            )
+        }
+        raw::Step::Torque { torque, .. } => match l.max_torque {
+            Some(lim) if torque.abs() > lim => Err(format!(
+                "torque {} exceeds the drive's limit of {lim}",
+                torque.abs()
+            )),
+            _ => Ok(()),
+        },
+        raw::Step::Mode { .. } | raw::Step::Dwell { .. } => Ok(()),
+    }
+}
+
+fn describe(s: &raw::Step, u: &str) -> String {
+    match s {
+        raw::Step::Mode { mode } => format!("switch to {mode}"),
+        raw::Step::Move { to: Some(t), .. } => format!("move to {t} {u}"),
+        raw::Step::Move { by, .. } => format!("move by {} {u}", by.unwrap_or(0.0)),
+        raw::Step::Sine {
+            amplitude,
+            frequency,
+            periods,
+        } => format!("sine ±{amplitude} {u} at {frequency} Hz × {periods}"),
+        raw::Step::Ramp { velocity, .. } => format!("ramp to {velocity} {u}/s"),
+        raw::Step::Jog {
+            velocity, seconds, ..
+        } => format!("jog at {velocity} {u}/s for {seconds} s"),
+        raw::Step::Torque { torque, hold, .. } => format!("torque {torque} for {hold} s"),
+        raw::Step::Dwell { seconds } => format!("dwell {seconds} s"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations() {
+        assert_eq!(parse_duration("1ms"), Ok(Duration::from_millis(1)));
+        assert_eq!(parse_duration("250 us"), Ok(Duration::from_micros(250)));
+        assert_eq!(parse_duration("0.5ms"), Ok(Duration::from_micros(500)));
+        assert_eq!(parse_duration("10s"), Ok(Duration::from_secs(10)));
+        assert!(parse_duration("10").unwrap_err().contains("no unit"));
+        assert!(
+            parse_duration("10 parsecs")
+                .unwrap_err()
+                .contains("unknown time unit")
+        );
+        assert!(parse_duration("-1ms").is_err());
+        assert!(parse_duration("ms").is_err());
+    }
+
+    #[test]
+    fn line_and_column() {
+        assert_eq!(line_col("ab\ncd\n", 4), (2, 2));
+        assert_eq!(line_col("x", 0), (1, 1));
+        assert_eq!(line_col("x", 99), (1, 2));
+    }
+}

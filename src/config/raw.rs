@@ -1,0 +1,159 @@
+//! The configuration file as serde reads it: every table denies unknown keys, and the values
+//! whose meaning is checked afterwards keep their position in the file ([`Spanned`]).
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use toml::Spanned;
+
+/// The whole file.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct File {
+    pub interface: Spanned<String>,
+    #[serde(default)]
+    pub cycle: Option<Spanned<String>>,
+    #[serde(default)]
+    pub dc_shift: Option<Spanned<String>>,
+    #[serde(default)]
+    pub duration: Option<Spanned<String>>,
+    #[serde(default)]
+    pub allow_generic: bool,
+    #[serde(default)]
+    pub rt: Option<Rt>,
+    #[serde(default)]
+    pub sim: Option<Spanned<Sim>>,
+    #[serde(default)]
+    pub drive: Vec<Spanned<Drive>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Rt {
+    #[serde(default)]
+    pub priority: Option<Spanned<u8>>,
+    #[serde(default)]
+    pub cpu: Option<usize>,
+    #[serde(default)]
+    pub lock_memory: bool,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Sim {
+    pub devices: Vec<Spanned<String>>,
+    #[serde(default)]
+    pub sm_watchdog: Option<u16>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Identity {
+    pub vendor_id: u32,
+    pub product_code: u32,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Drive {
+    #[serde(default)]
+    pub position: Option<Spanned<u16>>,
+    #[serde(default)]
+    pub alias: Option<Spanned<u16>>,
+    #[serde(default)]
+    pub identity: Option<Spanned<Identity>>,
+    #[serde(default)]
+    pub profile: Option<Spanned<String>>,
+    #[serde(default)]
+    pub mode: Option<Spanned<String>>,
+    #[serde(default)]
+    pub mapping: Option<Spanned<Mapping>>,
+    #[serde(default)]
+    pub sdos: Option<Spanned<BTreeMap<String, Spanned<toml::Value>>>>,
+    #[serde(default)]
+    pub limits: Option<Spanned<Limits>>,
+    #[serde(default)]
+    pub units: Option<Spanned<Units>>,
+    #[serde(default)]
+    pub program: Vec<Spanned<Step>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Mapping {
+    #[serde(default)]
+    pub rx: Vec<Spanned<Pdo>>,
+    #[serde(default)]
+    pub tx: Vec<Spanned<Pdo>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Pdo {
+    pub pdo: u16,
+    /// `"0x6040:00"`, `{ object = "0x6040:00", bits = 16 }` or `{ padding = 8 }`.
+    pub entries: Vec<Spanned<toml::Value>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Limits {
+    #[serde(default)]
+    pub following_error: Option<f64>,
+    #[serde(default)]
+    pub max_velocity: Option<f64>,
+    #[serde(default)]
+    pub max_acceleration: Option<f64>,
+    #[serde(default)]
+    pub max_torque: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Units {
+    pub name: String,
+    pub counts_per_unit: f64,
+}
+
+/// A program step as the file writes it, in the drive's user units.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
+pub(super) enum Step {
+    Mode {
+        mode: String,
+    },
+    Move {
+        #[serde(default)]
+        to: Option<f64>,
+        #[serde(default)]
+        by: Option<f64>,
+        velocity: f64,
+        acceleration: f64,
+        #[serde(default)]
+        jerk: Option<f64>,
+    },
+    Sine {
+        amplitude: f64,
+        frequency: f64,
+        periods: f64,
+    },
+    Ramp {
+        velocity: f64,
+        acceleration: f64,
+        #[serde(default)]
+        hold: f64,
+    },
+    Jog {
+        velocity: f64,
+        acceleration: f64,
+        seconds: f64,
+    },
+    Torque {
+        torque: f64,
+        #[serde(default)]
+        slope: Option<f64>,
+        hold: f64,
+    },
+    Dwell {
+        seconds: f64,
+    },
+}

@@ -1,0 +1,219 @@
+//! The generic CiA 402 profile: what ecdrive assumes about a drive it has no profile for.
+//!
+//! A device with an unknown identity is reported with its vendor ID, product code and revision
+//! ([`super::identify`]); it runs with this profile only when the user asks for it. Everything
+//! here is the plain CiA 402 / ETG.1020 standard, nothing vendor-specific:
+//! - device control without state skipping, every standard quick-stop code, transition 16;
+//! - PDO mapping objects 0x1600–0x17FF / 0x1A00–0x1BFF with no limits beyond the standard ones
+//!   (the drive refuses what it does not accept, and the master reports that abort);
+//! - the recommended cyclic mapping of the known drives (controlword, target position, velocity
+//!   and torque, mode; statusword, actual position, velocity and torque, following error, error
+//!   code, mode display) on 0x1600 / 0x1A00;
+//! - synchronisation through 0x1C32:01 / 0x1C32:02 (ETG.1020), DC SYNC0 or free run, any cycle
+//!   from 125 µs to 100 ms in 1 µs steps;
+//! - the standard objects with their CiA 301 / CiA 402 types, for type inference only: an
+//!   unknown device need not have them;
+//! - no start-up SDOs, no output defaults, no cycle counter, no complete access, no ESI file.
+
+use super::od_table::*;
+use super::profile::{CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units};
+use crate::cia402::DriveCaps;
+use crate::od::{EntryDesc, ObjectAddress, ObjectCode, ObjectDesc};
+use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
+
+const RX_RANGES: &[PdoRange] = &[PdoRange::new(0x1600, 0x17FF, 255)];
+const TX_RANGES: &[PdoRange] = &[PdoRange::new(0x1A00, 0x1BFF, 255)];
+
+/// The standard ranges and no further limits (the SyncManager length is the only bound the
+/// ESC gives: 1024 bytes here, beyond any CiA 402 drive's process data).
+pub const PDO_LIMITS: PdoLimits = PdoLimits {
+    drive: "generic CiA 402 drive",
+    rx: DirectionLimits {
+        pdos: RX_RANGES,
+        max_assigned: 255,
+        max_entries: 1024,
+        max_bytes: 1024,
+    },
+    tx: DirectionLimits {
+        pdos: TX_RANGES,
+        max_assigned: 255,
+        max_entries: 1024,
+        max_bytes: 1024,
+    },
+    assignment_writable: true,
+};
+
+/// The recommended cyclic mapping (the same as the known drives'): output 13 bytes, input 19.
+pub const CYCLIC_MAPPING: Mapping = Mapping::fixed(CYCLIC_RX, CYCLIC_TX);
+const CYCLIC_RX: &[Pdo] = &[Pdo::fixed(
+    0x1600,
+    &[
+        PdoEntry::new(0x6040, 0, 16),
+        PdoEntry::new(0x607A, 0, 32),
+        PdoEntry::new(0x60FF, 0, 32),
+        PdoEntry::new(0x6071, 0, 16),
+        PdoEntry::new(0x6060, 0, 8),
+    ],
+)];
+const CYCLIC_TX: &[Pdo] = &[Pdo::fixed(
+    0x1A00,
+    &[
+        PdoEntry::new(0x6041, 0, 16),
+        PdoEntry::new(0x6064, 0, 32),
+        PdoEntry::new(0x606C, 0, 32),
+        PdoEntry::new(0x6077, 0, 16),
+        PdoEntry::new(0x60F4, 0, 32),
+        PdoEntry::new(0x603F, 0, 16),
+        PdoEntry::new(0x6061, 0, 8),
+    ],
+)];
+
+/// The power-on mapping of an unknown drive is unknown: empty (the master reads it back).
+pub const DEFAULT_MAPPING: Mapping = Mapping::fixed(&[], &[]);
+
+const CONTROLWORD: ObjectAddress = ObjectAddress::new(0x6040, 0);
+const SW_ONLY: &[ObjectAddress] = &[ObjectAddress::new(0x6041, 0)];
+
+/// The CiA 402 minimum per mode: controlword and statusword plus the mode's set-point.
+pub const REQUIRED_OBJECTS: &[RequiredObjects] = &[
+    RequiredObjects {
+        mode: 8,
+        mode_name: "csp",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x607A, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 9,
+        mode_name: "csv",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x60FF, 0)],
+        tx: SW_ONLY,
+    },
+    RequiredObjects {
+        mode: 10,
+        mode_name: "cst",
+        rx: &[CONTROLWORD, ObjectAddress::new(0x6071, 0)],
+        tx: SW_ONLY,
+    },
+];
+
+macro_rules! var {
+    ($index:literal, $name:literal, $ty:expr, $acc:expr) => {
+        ObjectDesc {
+            index: $index,
+            name: $name,
+            code: ObjectCode::Var,
+            entries: &[EntryDesc::new(0, $name, $ty, $acc)],
+        }
+    };
+}
+
+/// The standard objects with their CiA 301 / CiA 402 types and access, for type inference.
+pub static DICTIONARY: &[ObjectDesc] = &[
+    var!(0x1000, "Device type", U32, RO),
+    var!(0x1001, "Error register", U8, RO),
+    ObjectDesc {
+        index: 0x1018,
+        name: "Identity object",
+        code: ObjectCode::Record,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Vendor ID", U32, RO),
+            EntryDesc::new(2, "Product code", U32, RO),
+            EntryDesc::new(3, "Revision number", U32, RO),
+            EntryDesc::new(4, "Serial number", U32, RO),
+        ],
+    },
+    ObjectDesc {
+        index: 0x1C32,
+        name: "SM output parameter",
+        code: ObjectCode::Record,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Synchronization type", U16, RW_PREOP),
+            EntryDesc::new(2, "Cycle time", U32, RW_PREOP),
+        ],
+    },
+    var!(0x603F, "Error code", U16, RO_TX),
+    var!(0x6040, "Controlword", U16, RW_RX),
+    var!(0x6041, "Statusword", U16, RO_TX),
+    var!(0x605A, "Quick stop option code", I16, RW),
+    var!(0x605B, "Shutdown option code", I16, RW),
+    var!(0x605C, "Disable operation option code", I16, RW),
+    var!(0x605D, "Halt option code", I16, RW),
+    var!(0x605E, "Fault reaction option code", I16, RW),
+    var!(0x6060, "Modes of operation", I8, RW_RX),
+    var!(0x6061, "Modes of operation display", I8, RO_TX),
+    var!(0x6064, "Position actual value", I32, RO_TX),
+    var!(0x6065, "Following error window", U32, RW),
+    var!(0x6066, "Following error time out", U16, RW),
+    var!(0x606C, "Velocity actual value", I32, RO_TX),
+    var!(0x6071, "Target torque", I16, RW_RX),
+    var!(0x6077, "Torque actual value", I16, RO_TX),
+    var!(0x607A, "Target position", I32, RW_RX),
+    var!(0x607F, "Max profile velocity", U32, RW),
+    var!(0x6085, "Quick stop deceleration", U32, RW),
+    var!(0x60B1, "Velocity offset", I32, RW_RX),
+    var!(0x60B2, "Torque offset", I16, RW_RX),
+    ObjectDesc {
+        index: 0x60C2,
+        name: "Interpolation time period",
+        code: ObjectCode::Record,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Interpolation time period value", U8, RW),
+            EntryDesc::new(2, "Interpolation time index", I8, RW),
+        ],
+    },
+    var!(0x60F4, "Following error actual value", I32, RO_TX),
+    var!(0x60FF, "Target velocity", I32, RW_RX),
+    var!(0x6502, "Supported drive modes", U32, RO),
+];
+
+/// ETG.1020 synchronisation: 0x1C32:01 (2 = DC SYNC0, 0 = free run) and the cycle in 0x1C32:02.
+pub const SYNC: SyncSpec = SyncSpec {
+    free_run: true,
+    dc_sync0: true,
+    cycle_times: CycleTimes::Range {
+        min_ns: 125_000,
+        max_ns: 100_000_000,
+        step_ns: 1_000,
+    },
+    assign_activate: 0x0300,
+    sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
+    cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
+};
+
+/// Units are the drive's own: increments, increments per second, per mille of rated torque.
+pub const UNITS: Units = Units {
+    counts_per_rev: 1.0,
+    position_unit: "increment (drive-defined)",
+    velocity_unit_counts_per_s: 1.0,
+    velocity_unit: "increment/s (drive-defined)",
+    torque_unit: "0.1 % of rated torque (0x6076)",
+};
+
+/// The generic CiA 402 profile (see the [module documentation](self)). Its identity matches no
+/// device: it is chosen by [`super::identify`] with `allow_generic`, or by its key.
+pub static GENERIC_CIA402: DriveProfile = DriveProfile {
+    name: "generic CiA 402 drive",
+    key: "generic-cia402",
+    vendor: "any",
+    identity: IdentityMatch {
+        vendor_id: 0,
+        product_code: 0,
+    },
+    revision: 0,
+    caps: DriveCaps::CIA402,
+    pdo_limits: PDO_LIMITS,
+    default_mapping: DEFAULT_MAPPING,
+    cyclic_mapping: CYCLIC_MAPPING,
+    required_objects: REQUIRED_OBJECTS,
+    dictionary: DICTIONARY,
+    startup: &[],
+    output_defaults: &[],
+    cycle_counter: None,
+    sync: SYNC,
+    units: UNITS,
+    complete_access: false,
+    esi: "",
+};

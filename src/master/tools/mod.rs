@@ -1,0 +1,277 @@
+//! The bus operations behind the `ecdrive` commands, as library functions with typed,
+//! serializable results: the command line only parses arguments, calls one of these and prints.
+//!
+//! | command | function | result |
+//! |---|---|---|
+//! | `slaves` | [`slaves`] | [`SlaveReport`] per device |
+//! | `upload` / `download` | [`upload`], [`download`] | [`SdoValue`] |
+//! | `sdos` | [`sdos`] | [`OdListing`] of [`OdObject`]s |
+//! | `pdos` | [`pdos`] | [`PdoReport`] |
+//! | `states` | [`states`] | [`StateChange`] per device |
+//! | `reg` | [`reg_read`], [`reg_write`] | [`RegisterData`] |
+//! | `sii` | [`sii::sii_read`], then [`sii::SiiInfo::decode`] / [`sii::esi_skeleton`] | [`sii::SiiDump`] |
+//! | `esi` | [`esi::show`], [`esi::check`] | [`esi::EsiSummary`], [`esi::EsiCheck`] |
+//! | `run` | [`run::run`] (with a [`crate::config::RunConfig`]) | [`run::RunReport`] |
+//!
+//! ecdrive is not a resident master: every operation starts with a fresh discovery
+//! ([`startup::discover`]: ethercrab resets every device to INIT, assigns station addresses,
+//! reads the SII and takes the segment to PRE-OP), then does its work on the device at the
+//! requested position. A [`Target`] names where the segment is: a network interface, or
+//! emulated devices in-process (`sim:mr-j4-tm,bdhde`), which needs no root.
+//!
+//! ```no_run
+//! use ecdrive::master::tools::{self, Target};
+//!
+//! let target: Target = "sim:generic-coe".parse()?;
+//! let slaves = tools::session(&target, |bus| tools::slaves(bus, false))?;
+//! assert_eq!(slaves[0].name, "ECD-COE402");
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! Every failure is a [`MasterError`] naming the drive, the object or register, and the reason.
+//! Its [`ErrorKind`] tells input that does not fit the segment ([`ErrorKind::Config`]: a
+//! position out of range, a value out of range, a type that cannot be inferred) from bus
+//! failures and from drives refusing ([`ErrorKind::Sdo`], [`ErrorKind::AlState`]).
+
+pub mod esi;
+mod od;
+mod pdos;
+mod reg;
+pub mod run;
+pub mod sii;
+mod slaves;
+mod states;
+
+pub use od::{
+    JsonValue, OdEntry, OdListing, OdObject, OdSource, SdoValue, TypeSource, download, hex_of,
+    sdos, upload,
+};
+pub use pdos::{PdoEntryReport, PdoReport, PdoSource, ReportedPdo, SmReport, pdos};
+pub use reg::{MAX_REGISTER_BYTES, RegisterData, reg_read, reg_write, type_len};
+pub use slaves::{
+    AlStatusReport, EscInfo, MailboxReport, PortReport, SlaveDetail, SlaveReport, slaves,
+};
+pub use states::{StateChange, StatesOptions, states};
+
+use super::bus::{Bus, BusOptions, run_session};
+use super::error::{DriveRef, ErrorKind, MasterError, bus_error, exec_error};
+use super::startup::{self, DeviceInfo, Group};
+use crate::ec::{AlStatus, AlStatusCode, register};
+use crate::link::{FrameLink, LinkError, RawSocket};
+use crate::sim::EscConfig;
+use crate::sim::transport::SegmentLink;
+use ethercrab::subdevice_group::PreOp;
+use std::str::FromStr;
+use std::time::Duration;
+
+/// Where the segment is.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub enum Target {
+    /// A network interface (raw socket; needs `CAP_NET_RAW`).
+    Interface(String),
+    /// Emulated devices in-process, by `ecdrive sim --device` name, in line order.
+    Sim(Vec<String>),
+}
+
+impl FromStr for Target {
+    type Err = MasterError;
+
+    /// `sim:NAME[,NAME…]` for emulated devices in-process, anything else is an interface name.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.strip_prefix("sim:") {
+            Some(list) => {
+                let devices: Vec<String> = list
+                    .split(',')
+                    .map(|d| d.trim().to_string())
+                    .filter(|d| !d.is_empty())
+                    .collect();
+                if devices.is_empty() {
+                    return Err(MasterError::new(
+                        None,
+                        format!("reading the target {s:?}"),
+                        ErrorKind::Config,
+                        "name at least one emulated device after `sim:` (see `ecdrive sim --list-devices`)",
+                    ));
+                }
+                Ok(Self::Sim(devices))
+            }
+            None => Ok(Self::Interface(s.to_string())),
+        }
+    }
+}
+
+impl core::fmt::Display for Target {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Interface(i) => f.write_str(i),
+            Self::Sim(d) => write!(f, "sim:{}", d.join(",")),
+        }
+    }
+}
+
+/// The link of a [`Target`]: a raw socket or the in-process segment.
+#[derive(Debug)]
+pub enum ToolLink {
+    /// A raw socket on an interface.
+    Raw(RawSocket),
+    /// Emulated devices in-process.
+    Sim(Box<SegmentLink>),
+}
+
+impl FrameLink for ToolLink {
+    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        match self {
+            Self::Raw(r) => r.send(frame),
+            Self::Sim(s) => s.send(frame),
+        }
+    }
+
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Option<Duration>,
+    ) -> Result<Option<usize>, LinkError> {
+        match self {
+            Self::Raw(r) => r.recv(buf, timeout),
+            Self::Sim(s) => s.recv(buf, timeout),
+        }
+    }
+
+    fn describe(&self) -> String {
+        match self {
+            Self::Raw(r) => r.describe(),
+            Self::Sim(s) => s.describe(),
+        }
+    }
+}
+
+impl Target {
+    /// Open the link: the raw socket, or build the emulated devices (with `esc` settings).
+    pub fn open_with(&self, esc: &EscConfig) -> Result<ToolLink, MasterError> {
+        match self {
+            Self::Interface(i) => RawSocket::open(i).map(ToolLink::Raw).map_err(|e| {
+                MasterError::new(None, format!("opening interface {i}"), ErrorKind::Link, e)
+            }),
+            Self::Sim(devices) => crate::sim::run::build_segment(devices, esc)
+                .map(|s| ToolLink::Sim(Box::new(SegmentLink::new(s))))
+                .map_err(|e| {
+                    MasterError::new(None, "building the emulated devices", ErrorKind::Config, e)
+                }),
+        }
+    }
+
+    /// Open the link with the default ESC settings for emulated devices.
+    pub fn open(&self) -> Result<ToolLink, MasterError> {
+        self.open_with(&EscConfig::default())
+    }
+}
+
+/// Bus timing for tool sessions: the defaults, without ethercrab's static drift compensation
+/// at init (tools do not run DC; [`states`] lets the clocks settle itself when it needs them).
+pub fn tool_bus_options() -> BusOptions {
+    BusOptions {
+        dc_static_sync_iterations: 0,
+        ..BusOptions::default()
+    }
+}
+
+/// Open `target` and run `f` with a bus session on it, on a thread with a stack large enough
+/// for ethercrab (see [`run_session`]).
+pub fn session<R, F>(target: &Target, f: F) -> Result<R, MasterError>
+where
+    R: Send + 'static,
+    F: FnOnce(&mut Bus<'_, ToolLink>) -> Result<R, MasterError> + Send + 'static,
+{
+    let link = target.open()?;
+    on_link(link, f).map(|(r, _)| r)
+}
+
+/// Run `f` with a bus session on `link` (any [`FrameLink`]); returns the link with the result.
+pub fn on_link<L, R, F>(link: L, f: F) -> Result<(R, L), MasterError>
+where
+    L: FrameLink + Send + 'static,
+    R: Send + 'static,
+    F: FnOnce(&mut Bus<'_, L>) -> Result<R, MasterError> + Send + 'static,
+{
+    match run_session(link, tool_bus_options(), f) {
+        Ok((Ok(r), link)) => Ok((r, link)),
+        Ok((Err(e), _)) => Err(e),
+        Err((e, _)) => Err(MasterError::new(None, "opening the bus", ErrorKind::Bus, e)),
+    }
+}
+
+/// Timeout of one register access or short step.
+pub(crate) const T_STEP: Duration = Duration::from_secs(5);
+
+/// The segment after discovery.
+pub(crate) struct Discovered {
+    pub group: Group<PreOp>,
+    pub devices: Vec<DeviceInfo>,
+}
+
+pub(crate) fn discover<L: FrameLink>(bus: &mut Bus<'_, L>) -> Result<Discovered, MasterError> {
+    let (group, devices) = startup::discover(bus)?;
+    Ok(Discovered { group, devices })
+}
+
+impl Discovered {
+    /// The device at `position`, or an error that says how many there are.
+    pub fn device(&self, position: u16) -> Result<&DeviceInfo, MasterError> {
+        self.devices
+            .get(usize::from(position))
+            .ok_or_else(|| out_of_range(position, self.devices.len()))
+    }
+}
+
+/// The error for a position beyond the segment.
+pub(crate) fn out_of_range(position: u16, count: usize) -> MasterError {
+    MasterError::new(
+        None,
+        format!("selecting the device at position {position}"),
+        ErrorKind::Config,
+        match count {
+            0 => "the segment has no devices".to_string(),
+            1 => "the segment has 1 device (position 0)".to_string(),
+            n => format!("the segment has {n} devices (positions 0–{})", n - 1),
+        },
+    )
+}
+
+/// How messages name a device: its profile name, or the SII name of unknown devices.
+pub(crate) fn drive_ref(d: &DeviceInfo) -> DriveRef {
+    DriveRef {
+        position: d.position,
+        name: d.profile.unwrap_or(d.name.as_str()).to_string(),
+    }
+}
+
+/// Read AL status (0x0130) and AL status code (0x0134) of the device at `address`.
+pub(crate) fn read_al_status<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    address: u16,
+    drive: &DriveRef,
+) -> Result<(AlStatus, AlStatusCode), MasterError> {
+    let b = bus
+        .block_on(
+            &|| format!("{drive}: reading AL status (0x0130)"),
+            T_STEP,
+            |md| async move {
+                ethercrab::Command::fprd(address, register::AL_STATUS)
+                    .receive::<[u8; 6]>(md)
+                    .await
+            },
+        )
+        .map_err(|e| exec_error(Some(drive), e))?
+        .map_err(|e| bus_error(Some(drive), "reading AL status (0x0130)", e))?;
+    Ok((
+        AlStatus {
+            raw: u16::from_le_bytes([b[0], b[1]]),
+        },
+        AlStatusCode(u16::from_le_bytes([b[4], b[5]])),
+    ))
+}
+
+/// The short name of an AL status value (`PREOP`, `SAFEOP+ERR`, `state 0x5`).
+pub(crate) fn al_state_text(status: AlStatus) -> String {
+    status.to_string()
+}

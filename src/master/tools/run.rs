@@ -1,0 +1,494 @@
+//! `ecdrive run`: a cyclic run from a configuration file.
+//!
+//! [`run`] starts a [`Master`] on the file's target, waits until every drive is in OP, enables
+//! every axis, starts each axis's program, and watches until every program has finished, the
+//! duration has passed, the caller asks to stop (Ctrl-C), or something stops the axes (a drive
+//! fault, the following-error monitor, a drive leaving OP, the segment going silent). Then it
+//! stops every axis with a ramp, takes the drives to INIT and reports what happened: per drive
+//! the CiA 402 states it went through, the modes it ran, its largest following error and the
+//! faults, and the cycle timing.
+
+use super::Target;
+use crate::cia402::State;
+use crate::config::{RunConfig, UserUnits};
+use crate::master::cycle::CycleEnd;
+use crate::master::error::{ErrorKind, MasterError};
+use crate::master::session::{HistoryEntry, Master};
+use crate::master::startup::{DeviceInfo, Selector};
+use crate::master::telemetry::{Axes, Command, StopKind, Telemetry};
+use crate::rt::Summary;
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// How a run ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Every program finished (or the duration passed) and the axes stopped cleanly.
+    Completed,
+    /// Stopped on request (Ctrl-C).
+    Interrupted,
+    /// A drive faulted, or the master stopped the axes because of one (following error, a
+    /// drive leaving OP).
+    DriveFault,
+    /// A drive did not reach OP or refused to be enabled.
+    Refused,
+    /// The segment stopped answering or the link failed.
+    BusLost,
+}
+
+impl Outcome {
+    /// In words: `completed`, `interrupted`, `drive fault`, `refused`, `bus lost`.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Self::Completed => "completed",
+            Self::Interrupted => "interrupted",
+            Self::DriveFault => "drive fault",
+            Self::Refused => "refused",
+            Self::BusLost => "bus lost",
+        }
+    }
+}
+
+/// Where a run is, for progress displays.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunProgress {
+    /// What is happening (`starting`, `waiting for OP`, `enabling`, `running`, `stopping`).
+    pub phase: &'static str,
+    /// Time since the programs started.
+    pub elapsed: Duration,
+    /// The duration limit, if any.
+    pub duration: Option<Duration>,
+    /// Program steps done over all axes.
+    pub steps_done: usize,
+    /// Program steps over all axes.
+    pub steps_total: usize,
+    /// Cycles run.
+    pub cycles: u64,
+}
+
+/// Timing of the cycle, ns.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CycleSummary {
+    /// Cycles run.
+    pub cycles: u64,
+    /// Cycles without a reply.
+    pub lost: u64,
+    /// Cycles whose wake-up came more than a cycle late.
+    pub overruns: u64,
+    /// Wake-up latency against the intended instant.
+    pub wake_latency: Summary,
+    /// Period between wake-ups.
+    pub period: Summary,
+    /// Frame round trip.
+    pub exchange: Summary,
+    /// SCHED_FIFO priority granted, if any.
+    pub priority: Option<u8>,
+    /// CPU pinned, if any.
+    pub cpu: Option<usize>,
+    /// What the real-time set-up could not get.
+    pub rt_warnings: Vec<String>,
+}
+
+/// One drive after a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DriveRunReport {
+    /// Position on the segment.
+    pub position: u16,
+    /// Profile name.
+    pub name: String,
+    /// Identity and SII name.
+    pub device: DeviceInfo,
+    /// Start mode.
+    pub mode: String,
+    /// CiA 402 states it went through, in order.
+    pub states: Vec<String>,
+    /// Modes it ran set-points in, in order.
+    pub modes_run: Vec<String>,
+    /// Largest |following error| while energised in csp, position counts.
+    pub max_following_error: i64,
+    /// The same in user units, if the file gives units.
+    pub max_following_error_units: Option<f64>,
+    /// The user units.
+    pub units: Option<UserUnits>,
+    /// Program steps (as the file describes them).
+    pub program: Vec<String>,
+    /// Steps started (equals the program length when it finished).
+    pub steps_done: usize,
+    /// Faults and errors the history records for this drive.
+    pub errors: Vec<String>,
+}
+
+/// What a run did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunReport {
+    /// The configuration file.
+    pub config: String,
+    /// Where it ran.
+    pub target: Target,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Why, in words (the first error of the history, or what ended the run).
+    pub reason: String,
+    /// Cycle time, ns.
+    pub cycle_ns: u64,
+    /// Time from the programs' start to the stop request.
+    pub run_seconds: f64,
+    /// Per drive, in segment order.
+    pub drives: Vec<DriveRunReport>,
+    /// Cycle timing.
+    pub cycle: Option<CycleSummary>,
+    /// Whether every drive reached INIT at the end.
+    pub shutdown_ok: bool,
+    /// The whole event history.
+    pub history: Vec<HistoryEntry>,
+}
+
+/// What can change how [`run`] runs a file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Override the file's duration.
+    pub duration: Option<Duration>,
+    /// How long the drives may take to reach OP.
+    pub op_timeout: Duration,
+    /// How long the axes may take to be enabled.
+    pub enable_timeout: Duration,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        Self {
+            duration: None,
+            op_timeout: Duration::from_secs(15),
+            enable_timeout: Duration::from_secs(5),
+        }
+    }
+}
+
+fn selects(s: &Selector, d: &DeviceInfo) -> bool {
+    match *s {
+        Selector::Position(p) => d.position == p,
+        Selector::Alias(a) => d.alias == a,
+        Selector::Identity {
+            vendor_id,
+            product_code,
+        } => d.vendor_id == vendor_id && d.product_code == product_code,
+    }
+}
+
+fn is_fault(s: Option<State>) -> bool {
+    matches!(s, Some(State::Fault | State::FaultReactionActive))
+}
+
+/// Run a configuration. Start-up failures (nothing answered, a device refused its
+/// configuration, the configuration does not fit the segment) are errors; everything after
+/// the cycle started ends in a [`RunReport`] whose [`Outcome`] says how it went.
+/// `progress` is called about every 100 ms; setting `stop` ends the run early.
+pub fn run(
+    cfg: &RunConfig,
+    opts: &RunOptions,
+    stop: &AtomicBool,
+    progress: &mut dyn FnMut(&RunProgress),
+) -> Result<RunReport, MasterError> {
+    let duration = opts.duration.or(cfg.duration);
+    let link = cfg.target.open_with(&cfg.esc)?;
+    progress(&RunProgress {
+        phase: "starting",
+        elapsed: Duration::ZERO,
+        duration,
+        steps_done: 0,
+        steps_total: 0,
+        cycles: 0,
+    });
+    let mut m = Master::start(link, cfg.master.clone()).map_err(|f| f.error)?;
+    // Which file entry each axis is.
+    let mut used = vec![false; cfg.drives.len()];
+    let entries: Vec<Option<usize>> = m
+        .drives()
+        .iter()
+        .map(|d| {
+            let i = cfg.drives.iter().enumerate().position(|(i, e)| {
+                !used.get(i).copied().unwrap_or(true) && selects(&e.select, &d.info)
+            });
+            if let Some(i) = i {
+                if let Some(u) = used.get_mut(i) {
+                    *u = true;
+                }
+            }
+            i
+        })
+        .collect();
+    let programs: Vec<usize> = m
+        .drives()
+        .iter()
+        .zip(&entries)
+        .map(|(_, e)| {
+            e.and_then(|e| cfg.master.startup.drives.get(e))
+                .map_or(0, |s| s.program.len())
+        })
+        .collect();
+    let steps_total: usize = programs.iter().sum();
+    // The telemetry may carry more axis slots than drives (spare slots of the triple buffer);
+    // only the first `n_axes` are drives.
+    let n_axes = programs.len();
+    let mut outcome = Outcome::Completed;
+    let mut reason = String::new();
+    let mut tick = |phase: &'static str, t: &Telemetry, elapsed: Duration| {
+        let done = t
+            .axes
+            .iter()
+            .take(n_axes)
+            .zip(&programs)
+            .map(|(a, n)| usize::from(a.program_step).min(*n))
+            .sum();
+        progress(&RunProgress {
+            phase,
+            elapsed,
+            duration,
+            steps_done: done,
+            steps_total,
+            cycles: t.cycle.cycle,
+        });
+    };
+
+    // OP.
+    let mut started = None;
+    let wait = Instant::now();
+    loop {
+        let t = m.telemetry().clone();
+        tick("waiting for OP", &t, Duration::ZERO);
+        if t.cycle.all_op {
+            break;
+        }
+        if !m.is_running() || wait.elapsed() > opts.op_timeout {
+            outcome = Outcome::Refused;
+            reason = format!(
+                "the drives did not reach OP within {} s",
+                opts.op_timeout.as_secs()
+            );
+            break;
+        }
+        if stop.load(Ordering::Relaxed) {
+            outcome = Outcome::Interrupted;
+            reason = "interrupted".into();
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+
+    // Enable, then run the programs.
+    if outcome == Outcome::Completed {
+        m.command(Command::Enable(Axes::All))?;
+        let wait = Instant::now();
+        loop {
+            let t = m.telemetry().clone();
+            tick("enabling", &t, Duration::ZERO);
+            if t.axes
+                .iter()
+                .take(n_axes)
+                .all(|a| a.state == Some(State::OperationEnabled))
+            {
+                break;
+            }
+            if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
+                outcome = Outcome::DriveFault;
+                break;
+            }
+            if !m.is_running() || wait.elapsed() > opts.enable_timeout {
+                outcome = Outcome::Refused;
+                reason = format!(
+                    "not every axis reached Operation enabled within {} s",
+                    opts.enable_timeout.as_secs()
+                );
+                break;
+            }
+            if stop.load(Ordering::Relaxed) {
+                outcome = Outcome::Interrupted;
+                reason = "interrupted".into();
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+    }
+    if outcome == Outcome::Completed {
+        for (i, n) in programs.iter().enumerate() {
+            if *n > 0 {
+                m.command(Command::RunProgram(Axes::One(i as u16)))?;
+            }
+        }
+        let t0 = Instant::now();
+        started = Some(t0);
+        // Give the cycle a moment to take the programs.
+        std::thread::sleep(Duration::from_millis(20));
+        loop {
+            let elapsed = t0.elapsed();
+            let t = m.telemetry().clone();
+            tick("running", &t, elapsed);
+            if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
+                outcome = Outcome::DriveFault;
+                break;
+            }
+            if !m.is_running() {
+                outcome = Outcome::BusLost;
+                break;
+            }
+            if t.axes
+                .iter()
+                .take(n_axes)
+                .any(|a| a.state != Some(State::OperationEnabled))
+            {
+                // The cycle stopped an axis on its own (following error, a drive left OP).
+                outcome = Outcome::DriveFault;
+                break;
+            }
+            if stop.load(Ordering::Relaxed) {
+                outcome = Outcome::Interrupted;
+                reason = "interrupted".into();
+                break;
+            }
+            let programs_done = steps_total > 0
+                && t.axes.iter().take(n_axes).zip(&programs).all(|(a, n)| {
+                    *n == 0 || (!a.program_running && usize::from(a.program_step) >= *n)
+                });
+            if programs_done && duration.is_none_or(|d| elapsed >= d) {
+                break;
+            }
+            if let Some(d) = duration
+                && elapsed >= d
+            {
+                break;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+    let run_seconds = started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+    let t = m.telemetry().clone();
+    tick(
+        "stopping",
+        &t,
+        started.map_or(Duration::ZERO, |t| t.elapsed()),
+    );
+    let steps_done: Vec<usize> = t
+        .axes
+        .iter()
+        .take(n_axes)
+        .map(|a| usize::from(a.program_step))
+        .collect();
+    let summaries = m.drives().to_vec();
+    let (report, _link) = m.stop(StopKind::Ramp);
+    let Some(report) = report else {
+        return Err(MasterError::new(
+            None,
+            "stopping the run",
+            ErrorKind::Bus,
+            "the session ended without a report",
+        ));
+    };
+    let cycle = report.cycle.as_ref();
+    if let Some(c) = cycle {
+        match c.end {
+            CycleEnd::SegmentLost | CycleEnd::LinkFailed => outcome = Outcome::BusLost,
+            CycleEnd::OpFailed { .. } if outcome != Outcome::DriveFault => {
+                outcome = Outcome::Refused
+            }
+            _ => {}
+        }
+    }
+    let first_error = report
+        .history
+        .iter()
+        .find(|h| h.error)
+        .map(|h| match &h.drive {
+            Some(d) => format!("{d}: {}", h.text),
+            None => h.text.clone(),
+        });
+    if reason.is_empty() || outcome != Outcome::Interrupted {
+        match (outcome, first_error) {
+            (Outcome::Completed, _) => {
+                reason = match duration {
+                    Some(d) if steps_total == 0 || run_seconds >= d.as_secs_f64() => {
+                        format!("ran for {} s", d.as_secs_f64())
+                    }
+                    _ => "every program finished".into(),
+                }
+            }
+            (_, Some(e)) => reason = e,
+            (_, None) if reason.is_empty() => reason = format!("{outcome:?}"),
+            _ => {}
+        }
+    }
+    let drives = summaries
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let entry = entries
+                .get(i)
+                .copied()
+                .flatten()
+                .and_then(|e| cfg.drives.get(e));
+            let units = entry.and_then(|e| e.units.clone());
+            let max_fe = cycle
+                .and_then(|c| c.max_following_error.get(i).copied())
+                .unwrap_or(0);
+            DriveRunReport {
+                position: s.info.position,
+                name: s.profile.to_string(),
+                device: s.info.clone(),
+                mode: s.mode.to_string(),
+                states: cycle
+                    .and_then(|c| c.states.get(i))
+                    .map(|v| v.iter().map(|s| s.to_string()).collect())
+                    .unwrap_or_default(),
+                modes_run: cycle
+                    .and_then(|c| c.modes_run.get(i))
+                    .map(|v| v.iter().map(|m| m.name().to_string()).collect())
+                    .unwrap_or_default(),
+                max_following_error: max_fe,
+                max_following_error_units: units
+                    .as_ref()
+                    .map(|u| max_fe as f64 / u.counts_per_unit),
+                units,
+                program: entry.map(|e| e.steps.clone()).unwrap_or_default(),
+                steps_done: steps_done
+                    .get(i)
+                    .copied()
+                    .unwrap_or(0)
+                    .min(programs.get(i).copied().unwrap_or(0)),
+                errors: report
+                    .history
+                    .iter()
+                    .filter(|h| {
+                        h.error
+                            && h.drive
+                                .as_ref()
+                                .is_some_and(|d| d.position == s.info.position)
+                    })
+                    .map(|h| h.text.clone())
+                    .collect(),
+            }
+        })
+        .collect();
+    Ok(RunReport {
+        config: cfg.source.clone(),
+        target: cfg.target.clone(),
+        outcome,
+        reason,
+        cycle_ns: cfg.master.cycle.cycle.as_nanos() as u64,
+        run_seconds,
+        drives,
+        cycle: cycle.map(|c| CycleSummary {
+            cycles: c.cycles,
+            lost: c.lost,
+            overruns: c.overruns,
+            wake_latency: c.timing.wake_latency.summary(),
+            period: c.timing.period.summary(),
+            exchange: c.timing.exchange.summary(),
+            priority: c.rt.priority_granted,
+            cpu: c.rt.cpu_pinned,
+            rt_warnings: c.rt.warnings.clone(),
+        }),
+        shutdown_ok: report.shutdown_ok,
+        history: report.history,
+    })
+}

@@ -1,0 +1,277 @@
+//! `ecdrive states`: request an EtherCAT state and report what each device reached.
+//!
+//! INIT, PRE-OP and BOOT are requested directly through AL control (0x0120), BOOT by way of
+//! INIT as the state machine demands. SAFE-OP and OP need process data: when every device on
+//! the segment has a drive profile, the segment is configured as the master does it
+//! ([`startup::configure`]: the profile's PDO mapping, synchronisation, DC SYNC0) and ends in
+//! SAFE-OP; otherwise ethercrab sizes the process data from each device's current mapping. OP
+//! is then requested while process data (all outputs zero: no drive is enabled) is exchanged
+//! every cycle, until each requested device reports OP or refuses with an AL status code.
+//!
+//! ecdrive is not a resident master: when the command ends nobody exchanges process data any
+//! more, and a device's SyncManager watchdog takes it back from OP to SAFE-OP.
+
+use super::{T_STEP, al_state_text, discover, drive_ref, read_al_status};
+use crate::ec::{AlState, register};
+use crate::link::FrameLink;
+use crate::master::bus::Bus;
+use crate::master::error::{DriveRef, MasterError, bus_error, exec_error};
+use crate::master::startup::{self, DeviceInfo, StartupConfig};
+use serde::Serialize;
+use std::time::Duration;
+
+/// What to request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StatesOptions {
+    /// One device, or every device.
+    pub position: Option<u16>,
+    /// The state to request.
+    pub target: AlState,
+    /// Cycle time of the process data exchanged for SAFE-OP and OP (and of SYNC0).
+    pub cycle: Duration,
+    /// How long a device may take to reach the state.
+    pub timeout: Duration,
+}
+
+impl StatesOptions {
+    /// Defaults: every device, 1 ms cycle, 10 s per transition.
+    pub fn new(target: AlState) -> Self {
+        Self {
+            position: None,
+            target,
+            cycle: Duration::from_millis(1),
+            timeout: Duration::from_secs(10),
+        }
+    }
+}
+
+/// The outcome for one device.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct StateChange {
+    /// Position.
+    pub position: u16,
+    /// The device (profile name, or the SII name).
+    pub drive: String,
+    /// The state requested.
+    pub requested: String,
+    /// The AL status at the end (`OP`, `SAFEOP+ERR`, …).
+    pub reached: String,
+    /// Whether the device is in the requested state without error.
+    pub ok: bool,
+    /// The AL status code when the device refused.
+    pub al_status_code: Option<u16>,
+    /// Its meaning.
+    pub code_text: Option<String>,
+}
+
+fn write_control<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    address: u16,
+    drive: &DriveRef,
+    value: u16,
+) -> Result<(), MasterError> {
+    bus.block_on(
+        &|| format!("{drive}: writing AL control (0x0120)"),
+        T_STEP,
+        |md| async move {
+            ethercrab::Command::fpwr(address, register::AL_CONTROL)
+                .send(md, value)
+                .await
+        },
+    )
+    .map_err(|e| exec_error(Some(drive), e))?
+    .map_err(|e| bus_error(Some(drive), "writing AL control (0x0120)", e))
+}
+
+/// One device being moved.
+struct Pending {
+    address: u16,
+    drive: DriveRef,
+    done: Option<StateChange>,
+}
+
+/// Request `target` from every pending device, then poll until each reached it or refused,
+/// calling `exchange` between polls (process data, returns the time to the next cycle).
+fn drive_to<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    pending: &mut [Pending],
+    target: AlState,
+    timeout: Duration,
+    exchange: &mut dyn FnMut(&mut Bus<'_, L>) -> Result<Duration, MasterError>,
+) -> Result<(), MasterError> {
+    for p in pending.iter_mut() {
+        let (status, _) = read_al_status(bus, p.address, &p.drive)?;
+        // Acknowledge a pending error together with the request (AL control bit 4).
+        let ack = if status.error() { 0x0010 } else { 0 };
+        write_control(bus, p.address, &p.drive, target as u16 | ack)?;
+    }
+    let deadline = crate::rt::monotonic_ns() + timeout.as_nanos() as u64;
+    let mut next_poll = 0u64;
+    loop {
+        let wait = exchange(bus)?;
+        let now = crate::rt::monotonic_ns();
+        if now >= next_poll {
+            next_poll = now + 10_000_000;
+            for p in pending.iter_mut().filter(|p| p.done.is_none()) {
+                let (status, code) = read_al_status(bus, p.address, &p.drive)?;
+                let refused = status.error();
+                if status.state() == Some(target) || refused || now > deadline {
+                    let ok = status.state() == Some(target) && !refused;
+                    p.done = Some(StateChange {
+                        position: p.drive.position,
+                        drive: p.drive.name.clone(),
+                        requested: target.name().to_string(),
+                        reached: al_state_text(status),
+                        ok,
+                        al_status_code: (!ok && refused).then_some(code.0),
+                        code_text: (!ok && refused)
+                            .then(|| code.text().unwrap_or("unknown AL status code").to_string()),
+                    });
+                }
+            }
+            if pending.iter().all(|p| p.done.is_some()) {
+                return Ok(());
+            }
+        }
+        if !wait.is_zero() {
+            std::thread::sleep(wait);
+        }
+    }
+}
+
+fn no_exchange<L: FrameLink>(_: &mut Bus<'_, L>) -> Result<Duration, MasterError> {
+    Ok(Duration::from_millis(1))
+}
+
+fn finish(pending: Vec<Pending>, target: AlState) -> Vec<StateChange> {
+    pending
+        .into_iter()
+        .map(|p| {
+            p.done.unwrap_or(StateChange {
+                position: p.drive.position,
+                drive: p.drive.name,
+                requested: target.name().to_string(),
+                reached: "?".into(),
+                ok: false,
+                al_status_code: None,
+                code_text: None,
+            })
+        })
+        .collect()
+}
+
+/// Request `opts.target` from one device or all, and report what each reached. A refusal is
+/// not an error of this function: it is reported in the device's [`StateChange`] with the AL
+/// status code.
+pub fn states<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    opts: &StatesOptions,
+) -> Result<Vec<StateChange>, MasterError> {
+    let found = discover(bus)?;
+    let selected: Vec<DeviceInfo> = match opts.position {
+        Some(p) => vec![found.device(p)?.clone()],
+        None => found.devices.clone(),
+    };
+    let mut pending: Vec<Pending> = selected
+        .iter()
+        .map(|d| Pending {
+            address: d.address,
+            drive: drive_ref(d),
+            done: None,
+        })
+        .collect();
+    let target = opts.target;
+    match target {
+        AlState::Init | AlState::PreOp => {
+            drive_to(bus, &mut pending, target, opts.timeout, &mut no_exchange)?;
+        }
+        AlState::Bootstrap => {
+            // BOOT is reached from INIT only.
+            drive_to(
+                bus,
+                &mut pending,
+                AlState::Init,
+                opts.timeout,
+                &mut no_exchange,
+            )?;
+            let failed: Vec<bool> = pending
+                .iter()
+                .map(|p| p.done.as_ref().is_some_and(|d| !d.ok))
+                .collect();
+            for p in &mut pending {
+                p.done = None;
+            }
+            drive_to(bus, &mut pending, target, opts.timeout, &mut no_exchange)?;
+            for (p, f) in pending.iter_mut().zip(failed) {
+                if let (Some(d), true) = (p.done.as_mut(), f) {
+                    d.ok = false;
+                }
+            }
+        }
+        AlState::SafeOp | AlState::Op => {
+            let all_known = found
+                .devices
+                .iter()
+                .all(|d| crate::drives::by_identity(d.vendor_id, d.product_code).is_some());
+            if all_known {
+                let cfg = StartupConfig::new(opts.cycle);
+                let plan = startup::plan(&found.devices, &cfg)?;
+                let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
+                let group = started.group;
+                // Valid outputs for a few cycles before OP, as the cycle does.
+                let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
+                    let r = bus
+                        .block_on(&|| "exchanging process data".into(), T_STEP, |md| {
+                            group.tx_rx_dc(md)
+                        })
+                        .map_err(|e| exec_error(None, e))?
+                        .map_err(|e| bus_error(None, "exchanging process data", e))?;
+                    Ok(r.extra.next_cycle_wait)
+                };
+                for _ in 0..20 {
+                    let w = exchange(bus)?;
+                    std::thread::sleep(w);
+                }
+                drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
+            } else {
+                let group = bus
+                    .block_on(
+                        &|| "building the process image (PRE-OP)".into(),
+                        T_STEP,
+                        |md| found.group.into_pre_op_pdi(md),
+                    )
+                    .map_err(|e| exec_error(None, e))?
+                    .map_err(|e| bus_error(None, "building the process image (PRE-OP)", e))?;
+                let cycle = opts.cycle;
+                let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
+                    bus.block_on(&|| "exchanging process data".into(), T_STEP, |md| {
+                        group.tx_rx(md)
+                    })
+                    .map_err(|e| exec_error(None, e))?
+                    .map_err(|e| bus_error(None, "exchanging process data", e))?;
+                    Ok(cycle)
+                };
+                if target == AlState::Op {
+                    drive_to(
+                        bus,
+                        &mut pending,
+                        AlState::SafeOp,
+                        opts.timeout,
+                        &mut exchange,
+                    )?;
+                    if pending
+                        .iter()
+                        .any(|p| p.done.as_ref().is_some_and(|d| !d.ok))
+                    {
+                        return Ok(finish(pending, AlState::SafeOp));
+                    }
+                    for p in &mut pending {
+                        p.done = None;
+                    }
+                }
+                drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
+            }
+        }
+    }
+    Ok(finish(pending, target))
+}

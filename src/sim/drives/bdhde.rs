@@ -1,0 +1,319 @@
+//! The emulated BDHDE: the emulator's model of the drive on top of
+//! [`crate::drives::bdhde::PROFILE`].
+//!
+//! What it does, with the manual sections (EtherCAT Reference Manual rev. 0.0.2):
+//! - the object dictionary of the profile with its documented defaults, including the unusable
+//!   ones a master must replace (one unit per revolution, 0x6065 = 1, 0x607F = 1; §6, §9);
+//!   0x605A accepts 0, 2 and 6, 0x6060 the modes of 0x6502 (§9); remapping only in PRE-OP with
+//!   sub-index 0 cleared first (abort 0x06010003); 0x60C2:02 read-only −4 (§2.4);
+//! - the CiA 402 state machine without state skipping; quick-stop codes 0 (disable at once),
+//!   2 (ramp, then Switch on disabled) and 6 (ramp and stay, transition 16 on Enable operation);
+//!   halt in csp/csv slows down on the profile deceleration (605Dh = 1); the controlword acts
+//!   only with statusword bit 9 (COMMmode 1);
+//! - the cycle told by 0x60C2:01 × 250 µs; SAFE-OP → OP needs SYNC0 with that cycle;
+//! - the factor group: units per revolution = (0x6091:01/:02) × (0x6092:01/:02), velocity in
+//!   units/s, acceleration in units/s² (§6.2–§6.4); torque in ‰ of 0x6076 (§6.6);
+//! - faults latch 0x603F with the codes of Table 10-4 and send one EMCY each (§10.2); a fault
+//!   reset clears them; the following error beyond 0x6065 for longer than 0x6066 raises J3
+//!   0x8689 "Excessive PE Value".
+//!
+//! The emulator's own choices are in the section "Values that are ours" below.
+
+use super::spec::{
+    AlarmDef, CommandCheck, Condition, DriveSpec, EmcyData, ErrorReporting, FollowingErrorSpec,
+    LossDetection, LossLimit, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData, PowerOnValue,
+    Quantity, Scaling, StatusBit, TorqueLimits, TorqueSlopeUnit, WriteRule,
+};
+use crate::drives::bdhde::PROFILE;
+use crate::ec::AlStatusCode;
+use crate::od::{ObjectAddress, SdoAbortCode};
+
+const fn a(index: u16, sub: u8) -> ObjectAddress {
+    ObjectAddress::new(index, sub)
+}
+
+const fn fault(id: &'static str, text: &'static str, code: u16, reg: u8, flt: u32) -> AlarmDef {
+    AlarmDef {
+        id,
+        text,
+        error_code: code,
+        error_register: reg,
+        detail: flt,
+        resettable: true,
+    }
+}
+
+/// The faults the emulated BDHDE raises (Table 10-4; the id is the 7-segment code, the detail
+/// the FLT number). The 0x1001 bits are ours, see [`REC_ERROR_REGISTER`].
+pub const ALARMS: &[AlarmDef] = &[
+    fault(
+        "J3",
+        "Excessive PE Value",
+        0x8689,
+        REC_ERROR_REGISTER.monitoring,
+        87,
+    ),
+    fault(
+        "Fb8",
+        "EtherCAT Packet Loss",
+        0x818D,
+        REC_ERROR_REGISTER.monitoring,
+        91,
+    ),
+    fault(
+        "Fb9",
+        "CAN/EtherCAT State Not Operational",
+        0xF080,
+        REC_ERROR_REGISTER.monitoring,
+        92,
+    ),
+    fault(
+        "Fb3",
+        "Fieldbus Cable Disconnected",
+        0x7580,
+        REC_ERROR_REGISTER.monitoring,
+        65,
+    ),
+    fault(
+        "J",
+        "Velocity Over-Speed Exceeded",
+        0x8481,
+        REC_ERROR_REGISTER.monitoring,
+        14,
+    ),
+    fault(
+        "J2",
+        "Exceeded Maximum Velocity Error",
+        0x8482,
+        REC_ERROR_REGISTER.monitoring,
+        67,
+    ),
+    fault(
+        "F2",
+        "Motor Foldback",
+        0x2310,
+        REC_ERROR_REGISTER.current,
+        17,
+    ),
+    fault("o", "Over-Voltage", 0x3110, REC_ERROR_REGISTER.voltage, 9),
+    fault("u", "Under-Voltage", 0x3120, REC_ERROR_REGISTER.voltage, 11),
+    fault(
+        "t1",
+        "Power Stage Over-Temperature",
+        0x4310,
+        REC_ERROR_REGISTER.temperature,
+        10,
+    ),
+    fault(
+        "n3",
+        "Emergency Stop Issued",
+        0x7091,
+        REC_ERROR_REGISTER.generic,
+        57,
+    ),
+    fault("F3", "Stall Fault", 0x7121, REC_ERROR_REGISTER.generic, 59),
+    fault(
+        "HE",
+        "Homing Error",
+        0x6100,
+        REC_ERROR_REGISTER.generic,
+        174,
+    ),
+];
+
+/// The drive's write rules.
+pub const WRITE_RULES: &[WriteRule] = &[
+    WriteRule::Allowed {
+        address: a(0x605A, 0),
+        values: &[0, 2, 6],
+        code: SdoAbortCode::VALUE_RANGE,
+    },
+    WriteRule::Allowed {
+        address: a(0x6060, 0),
+        values: &[0, 1, 3, 4, 6, 8, 9, 10],
+        code: SdoAbortCode::VALUE_RANGE,
+    },
+    WriteRule::Allowed {
+        address: a(0x607E, 0),
+        values: &[0],
+        code: SdoAbortCode::VALUE_RANGE,
+    },
+];
+
+/// The emulated BDHDE.
+pub static SPEC: DriveSpec = DriveSpec {
+    profile: &PROFILE,
+    alarms: ALARMS,
+    reporting: ErrorReporting {
+        current_alarm: None,
+        history_newest: None,
+        error_history: false,
+        clear_error_code_on_reset: true,
+        emcy_data: EmcyData::Zero,
+        emcy_on_reset: REC_EMCY_ON_RESET,
+    },
+    write_rules: WRITE_RULES,
+    power_on: REC_POWER_ON,
+    motor: REC_MOTOR,
+    scaling: Scaling::FactorProduct {
+        gear: 0x6091,
+        feed: 0x6092,
+    },
+    loss: REC_LOSS,
+    counter_alarm: None,
+    leave_op_alarm: REC_LEAVE_OP_ALARM,
+    following_error: FollowingErrorSpec {
+        window: a(0x6065, 0),
+        timeout_ms: a(0x6066, 0),
+        disabled: 0xFFFF_FFFF,
+        alarm: Some("J3"),
+    },
+    command: CommandCheck {
+        speed_factor: 1.0,
+        speed_alarm: None,
+        overflow_alarm: None,
+    },
+    torque_limits: TorqueLimits {
+        positive: None,
+        negative: None,
+        max: Some(a(0x6072, 0)),
+        speed_limit: None,
+    },
+    torque_slope: TorqueSlopeUnit::MilliNewtonMetrePerSecond,
+    torque_mode_quick_stop_immediate: false,
+    halt_in_cyclic_modes: true,
+    modes: ModeRules {
+        selector: None,
+        groups: &[],
+        modes: &[1, 3, 4, 6, 8, 9, 10],
+        initial: 0,
+    },
+    monitors: &[
+        Monitor {
+            address: a(0x6078, 0),
+            quantity: Quantity::CurrentPermille,
+        },
+        Monitor {
+            address: a(0x6079, 0),
+            quantity: Quantity::DcLinkMillivolt,
+        },
+    ],
+    status_bits: &[
+        StatusBit {
+            address: a(0x20B5, 0),
+            bit: 0,
+            condition: Condition::InPosition,
+        },
+        StatusBit {
+            address: a(0x20A2, 0),
+            bit: 0,
+            condition: Condition::PowerStageOn,
+        },
+    ],
+    homing_on_current_position: REC_HOMING_ON_CURRENT_POSITION,
+    sync_cycle_mismatch: AlStatusCode::DC_INVALID_CYCLE_TIME,
+};
+
+// ============================================================================================
+// Values that are ours ([REC]): what the manual leaves open, chosen for the emulation
+// ============================================================================================
+
+/// \[REC\] 0x1001 bits per fault class (the manual lists the bits, not which fault sets which):
+/// bit 0 always, plus bit 1 current, bit 2 voltage, bit 3 temperature, bit 4 communication /
+/// monitoring.
+pub struct ErrorRegisterBits {
+    /// Generic.
+    pub generic: u8,
+    /// Current.
+    pub current: u8,
+    /// Voltage.
+    pub voltage: u8,
+    /// Temperature.
+    pub temperature: u8,
+    /// Communication and monitoring.
+    pub monitoring: u8,
+}
+
+/// \[REC\] See [`ErrorRegisterBits`].
+pub const REC_ERROR_REGISTER: ErrorRegisterBits = ErrorRegisterBits {
+    generic: 0x01,
+    current: 0x03,
+    voltage: 0x05,
+    temperature: 0x09,
+    monitoring: 0x11,
+};
+
+/// \[REC\] The emulated motor: the 400 W motor the dictionary's defaults describe (torque
+/// constant 0x2039 = 321 mN·m/A, drive continuous current 0x207C = 3959 mA, so a rated torque
+/// of 1.271 N·m; peak current 0x2036 = 11 879 mA = 300 %), 3000 r/min rated, 6000 r/min
+/// maximum, total inertia 7.4 × 10⁻⁵ kg·m² (rotor and an equal load). With the power stage
+/// off it coasts (0x605E = −1, DISMODE 0, read as "disable at once"). Zero speed below
+/// 30 r/min.
+pub const REC_MOTOR: MotorSpec = MotorSpec {
+    rated_torque_nm: 1.271,
+    peak_torque_permille: 3000.0,
+    rated_speed_rev_s: 50.0,
+    max_speed_rev_s: 100.0,
+    inertia_kg_m2: 7.4e-5,
+    viscous_nm_s_rad: 4.0e-5,
+    dynamic_brake_nm_s_rad: 0.0,
+    power_off: PowerOff::Coast,
+    zero_speed_rev_s: 0.5,
+};
+
+/// \[REC\] Power-on values the manual leaves to the hardware: motor rated current 0x6075 =
+/// 3959 mA and torque 0x6076 = 1271 mN·m (the manual prints 0, "motor-dependent"), motor
+/// maximum speed 0x6080 and 0x20EE = 6000 r/min, the firmware version the manual is written for
+/// in 0x100A, and the serial number.
+pub const REC_POWER_ON: &[PowerOnValue] = &[
+    PowerOnValue {
+        address: a(0x1009, 0),
+        value: PowerOnData::Text("emulated"),
+    },
+    PowerOnValue {
+        address: a(0x100A, 0),
+        value: PowerOnData::Text("2.0.6"),
+    },
+    PowerOnValue {
+        address: a(0x1018, 4),
+        value: PowerOnData::Serial,
+    },
+    PowerOnValue {
+        address: a(0x6075, 0),
+        value: PowerOnData::Int(3959),
+    },
+    PowerOnValue {
+        address: a(0x6076, 0),
+        value: PowerOnData::Int(1271),
+    },
+    PowerOnValue {
+        address: a(0x6080, 0),
+        value: PowerOnData::Int(6000),
+    },
+    PowerOnValue {
+        address: a(0x20EE, 0),
+        value: PowerOnData::Int(6000),
+    },
+];
+
+/// \[REC\] Loss of cyclic data (MANUAL GAP: the manual names the fault, not the rule): the
+/// ETG.1020 error counter, +3 per SYNC0 without data, −1 per cycle with data; 0x818D "EtherCAT
+/// Packet Loss" after 7 ms of consecutive misses, the MR-J4-TM's automatic threshold.
+pub const REC_LOSS: LossDetection = LossDetection {
+    increment: 3,
+    decrement: 1,
+    limit: LossLimit::Milliseconds(7),
+    alarm: "Fb8",
+};
+
+/// \[REC\] Leaving OP with the motor energised raises 0xF080 "CAN/EtherCAT State Not
+/// Operational".
+pub const REC_LEAVE_OP_ALARM: Option<&str> = Some("Fb9");
+
+/// \[REC\] An EMCY with code 0x0000 when a fault is reset (the manual does not say).
+pub const REC_EMCY_ON_RESET: bool = true;
+
+/// \[REC\] Homing: method 35 (CiA 402 "homing on the current position") sets the position to
+/// the home offset 0x607C; the emulator has no switches, so every other method reports a homing
+/// error (statusword bit 13).
+pub const REC_HOMING_ON_CURRENT_POSITION: &[i8] = &[35];

@@ -1,0 +1,146 @@
+//! The emulated drives: the MR-J4-TM and the BDHDE as the software slave presents them, built
+//! from their profiles ([`crate::drives`]) and their ESI files.
+//!
+//! One engine, [`EmulatedDrive`], runs every drive; what differs is data, a [`DriveSpec`]:
+//! the profile (identity, dictionary, PDO rules, synchronisation, CiA 402 capabilities, units)
+//! plus the emulator's model (alarms, write rules, loss-of-data detection, motor and load,
+//! monitors). Each drive's spec is in its own file ([`mr_j4_tm`], [`bdhde`]) with the values
+//! that are ours (\[REC\]) in one labelled section.
+//!
+//! - **SII**: built from the drive's ESI file ([`description`], through
+//!   [`crate::sim::sii::from_esi`]), so the EEPROM a master reads and the ESI a user reads
+//!   cannot drift apart.
+//! - **CoE**: the profile's dictionary in an [`crate::sim::coe::OdStore`] with the drive's PDO
+//!   limits and write rules; complete access and SDO information as the ESI file says.
+//! - **Cycle**: at every SYNC0 (or, in free run, every process-data frame) the drive moves the
+//!   motor over the cycle that ended, supervises it, reads the new outputs, steps the CiA 402
+//!   state machine ([`crate::cia402::device`]) and plans the next cycle; see [`motor`].
+//! - **Fault injection** (for the master's tests), on the device reached with
+//!   `Segment::device_mut::<EmulatedDrive>(position)`:
+//!   [`EmulatedDrive::raise_alarm`], [`EmulatedDrive::force_following_error`],
+//!   [`EmulatedDrive::jam`], [`EmulatedDrive::drop_outputs`],
+//!   [`EmulatedDrive::set_main_power`], [`EmulatedDrive::set_remote`],
+//!   [`EmulatedDrive::set_loss_detection`]; set-up: [`EmulatedDrive::with_stored`] (a parameter
+//!   stored in the drive, e.g. the MR-J4-TM's [Pr. PA01]), [`EmulatedDrive::power_cycle`];
+//!   read-back: [`EmulatedDrive::state`], [`EmulatedDrive::statusword`],
+//!   [`EmulatedDrive::mode`], [`EmulatedDrive::position`], [`EmulatedDrive::position_rev`],
+//!   [`EmulatedDrive::speed_rev_s`], [`EmulatedDrive::following_error`],
+//!   [`EmulatedDrive::alarm`], [`EmulatedDrive::last_emergency`],
+//!   [`EmulatedDrive::sync_error_counter`], [`EmulatedDrive::stats`], [`EmulatedDrive::od`].
+//!   Injected alarms act at the next process-data cycle.
+//!
+//! Not modelled: touch probes, software position limits and [AL. 98], the MR-J4-TM's point
+//! table, jog and indexer motion (those modes hold the position), homing with switches (only
+//! the "current position" methods home; others report a homing error), warnings (statusword
+//! bit 7 stays 0), storing parameters (0x1010 / 0x2340 accept their command and keep nothing
+//! beyond [`EmulatedDrive::with_stored`]).
+//!
+//! ```
+//! use ecdrive::drives;
+//! use ecdrive::sim::drives::{EmulatedDrive, emulated};
+//! use ecdrive::sim::{ManualClock, Segment};
+//! use std::sync::Arc;
+//!
+//! let mut segment = Segment::new(Arc::new(ManualClock::new(0)));
+//! for key in ["mr-j4-tm", "bdhde"] {
+//!     let profile = drives::by_key(key).unwrap();
+//!     segment.push_device(emulated(profile, 1).unwrap()).unwrap();
+//! }
+//! let mr = segment.device_mut::<EmulatedDrive>(0).unwrap();
+//! assert_eq!(mr.spec().profile.name, "MR-J4-TM");
+//! mr.raise_alarm("AL.86.1").unwrap();
+//! assert!(mr.raise_alarm("AL.99").is_err());
+//! ```
+
+pub mod bdhde;
+mod drive;
+pub mod motor;
+pub mod mr_j4_tm;
+pub mod spec;
+
+pub use drive::{DriveStats, EmulatedDrive, UnknownAlarm};
+pub use spec::DriveSpec;
+
+use super::device::Device;
+use super::devices::DeviceError;
+use super::sii::DeviceDescription;
+use crate::drives::DriveProfile;
+
+static SPECS: [&DriveSpec; 2] = [&mr_j4_tm::SPEC, &bdhde::SPEC];
+
+/// Every emulated drive.
+pub fn specs() -> &'static [&'static DriveSpec] {
+    &SPECS
+}
+
+/// The emulation of `profile`, if there is one.
+pub fn spec_for(profile: &DriveProfile) -> Option<&'static DriveSpec> {
+    SPECS
+        .iter()
+        .copied()
+        .find(|s| core::ptr::eq(s.profile, profile) || s.profile.key == profile.key)
+}
+
+/// The emulated drive of `profile` with serial number `serial`, ready to push onto a
+/// [`crate::sim::Segment`].
+pub fn emulated(profile: &DriveProfile, serial: u32) -> Result<Box<dyn Device>, DeviceError> {
+    let spec = spec_for(profile).ok_or_else(|| DeviceError::Build {
+        name: profile.key.to_string(),
+        reason: format!("ecdrive has no emulation of the {}", profile.name),
+    })?;
+    EmulatedDrive::new(spec, serial)
+        .map(|d| Box::new(d) as Box<dyn Device>)
+        .map_err(|e| DeviceError::Build {
+            name: profile.key.to_string(),
+            reason: e.to_string(),
+        })
+}
+
+/// Why the SII description of a profile cannot be built.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DescriptionError {
+    /// The profile has no ESI file.
+    #[error("the {0} profile has no ESI file")]
+    NoEsi(&'static str),
+    /// The ESI file does not parse.
+    #[error("the {drive} ESI file: {error}")]
+    Esi {
+        /// Drive name.
+        drive: &'static str,
+        /// The parser's error.
+        error: String,
+    },
+    /// The ESI file has no device with the profile's identity.
+    #[error("the {drive} ESI file has no device with product code 0x{product_code:08X}")]
+    NoDevice {
+        /// Drive name.
+        drive: &'static str,
+        /// The product code looked for.
+        product_code: u32,
+    },
+    /// The ESI device cannot be described in the SII.
+    #[error(transparent)]
+    Sii(#[from] crate::sim::sii::FromEsiError),
+}
+
+/// The SII description of the drive of `profile`, built from its ESI file, with serial number
+/// `serial`.
+pub fn description(
+    profile: &DriveProfile,
+    serial: u32,
+) -> Result<DeviceDescription, DescriptionError> {
+    let file = profile
+        .esi_file()
+        .ok_or(DescriptionError::NoEsi(profile.name))?
+        .map_err(|e| DescriptionError::Esi {
+            drive: profile.name,
+            error: e.to_string(),
+        })?;
+    let device = file
+        .device(profile.identity.product_code, Some(profile.revision))
+        .ok_or(DescriptionError::NoDevice {
+            drive: profile.name,
+            product_code: profile.identity.product_code,
+        })?;
+    Ok(crate::sim::sii::from_esi(file.vendor.id, device, serial)?)
+}

@@ -1,0 +1,412 @@
+//! What an emulated drive is, as data: the profile it emulates plus the emulator's own model of
+//! the drive's behaviour (alarms, loss-of-data detection, motor, write rules, monitors).
+//!
+//! The engine ([`super::EmulatedDrive`]) reads a [`DriveSpec`] and never asks which vendor it
+//! emulates. Everything the drive's manual states lives in the [`DriveProfile`]; what the
+//! emulator adds is in the spec, and each drive's spec file keeps its \[REC\] values in one
+//! labelled section.
+
+use crate::drives::DriveProfile;
+use crate::od::{ObjectAddress, SdoAbortCode};
+
+/// One alarm (fault) the emulated drive can raise.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AlarmDef {
+    /// The drive's own name, e.g. `"AL.86.1"` or `"J3"`; [`super::EmulatedDrive::raise_alarm`]
+    /// takes it.
+    pub id: &'static str,
+    /// What it means.
+    pub text: &'static str,
+    /// The 0x603F value and the EMCY error code.
+    pub error_code: u16,
+    /// The bits set in 0x1001 while the alarm is present.
+    pub error_register: u8,
+    /// The drive's detail value: MR-J4-TM 0x2A41 (`alarm << 16 | detail`), BDHDE FLT number.
+    pub detail: u32,
+    /// Whether a fault reset (controlword bit 7 edge) clears it.
+    pub resettable: bool,
+}
+
+/// How the five manufacturer-specific bytes of an EMCY are filled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EmcyData {
+    /// All zero.
+    Zero,
+    /// The alarm's [`AlarmDef::detail`] as 4 bytes little-endian, then 0.
+    DetailLe,
+}
+
+/// Where and how alarms are reported besides the statusword.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ErrorReporting {
+    /// The current-alarm object (MR-J4-TM 0x2A41), set to [`AlarmDef::detail`] while present.
+    pub current_alarm: Option<ObjectAddress>,
+    /// The newest alarm-history entry (MR-J4-TM 0x2A00:01), set to the detail of each alarm.
+    pub history_newest: Option<ObjectAddress>,
+    /// The pre-defined error field 0x1003 (count in sub 0, newest in sub 1): each alarm's
+    /// error code is pushed in, if the object exists.
+    pub error_history: bool,
+    /// Whether 0x603F goes back to 0 on a successful fault reset. The MR-J4-TM reports "the
+    /// latest error since power-on" (§7.3.8(1)) and keeps it.
+    pub clear_error_code_on_reset: bool,
+    /// The manufacturer bytes of EMCYs.
+    pub emcy_data: EmcyData,
+    /// Whether an EMCY with code 0x0000 is sent when a fault is reset.
+    pub emcy_on_reset: bool,
+}
+
+/// What happens to the motor when the power stage switches off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PowerOff {
+    /// The motor coasts (friction only).
+    Coast,
+    /// A dynamic brake shorts the windings: a braking torque proportional to speed.
+    DynamicBrake,
+}
+
+/// The emulated motor and load, in SI units. Deterministic: the model integrates the drive's
+/// outputs with the drive's cycle time, never with host time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MotorSpec {
+    /// Rated torque, N·m (1000 ‰ in the torque objects).
+    pub rated_torque_nm: f64,
+    /// Largest torque the drive can make, ‰ of rated.
+    pub peak_torque_permille: f64,
+    /// Rated speed, rev/s (the reference of the MR-J4-TM's time-constant ramps).
+    pub rated_speed_rev_s: f64,
+    /// Largest speed, rev/s (the permissible speed; 0x6080).
+    pub max_speed_rev_s: f64,
+    /// Rotor plus load inertia, kg·m².
+    pub inertia_kg_m2: f64,
+    /// Viscous friction, N·m·s/rad.
+    pub viscous_nm_s_rad: f64,
+    /// Braking coefficient of the dynamic brake, N·m·s/rad (used with [`PowerOff::DynamicBrake`]).
+    pub dynamic_brake_nm_s_rad: f64,
+    /// What the motor does with the power stage off.
+    pub power_off: PowerOff,
+    /// Below this speed the motor counts as stopped (zero-speed signal, quick-stop end), rev/s.
+    pub zero_speed_rev_s: f64,
+}
+
+/// How the drive's position, velocity and ramp units relate to motor revolutions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Scaling {
+    /// Fixed units: `position_per_rev` position units per revolution, `velocity_per_rev_s`
+    /// velocity units per rev/s; ramps (profile acceleration, quick stop) are time constants in
+    /// ms from 0 to the rated speed (MR-J4-TM).
+    Fixed {
+        /// Position units per revolution.
+        position_per_rev: f64,
+        /// Velocity units per rev/s.
+        velocity_per_rev_s: f64,
+    },
+    /// Units per revolution = (gear:01 / gear:02) × (feed:01 / feed:02); velocity in units/s,
+    /// acceleration in units/s² (BDHDE §6).
+    FactorProduct {
+        /// The gear-ratio object (0x6091).
+        gear: u16,
+        /// The feed-constant object (0x6092).
+        feed: u16,
+    },
+}
+
+/// How the drive notices that cyclic outputs stop arriving (DC mode: a SYNC0 without fresh
+/// outputs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LossDetection {
+    /// Added to the error counter per SYNC0 without fresh outputs.
+    pub increment: u32,
+    /// Subtracted per SYNC0 with fresh outputs (not below 0).
+    pub decrement: u32,
+    /// When the alarm is raised.
+    pub limit: LossLimit,
+    /// The alarm.
+    pub alarm: &'static str,
+}
+
+/// The error-counter limit of a [`LossDetection`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LossLimit {
+    /// Alarm when the counter reaches this value.
+    Counter(u32),
+    /// Alarm when the counter reaches `increment` × the number of cycles in this many ms
+    /// (rounded up): consecutive misses for that long raise it (MR-J4-TM automatic mode, 7 ms).
+    Milliseconds(u32),
+}
+
+impl LossDetection {
+    /// The counter value that raises the alarm at a cycle of `cycle_ns`.
+    pub fn threshold(&self, cycle_ns: u32) -> u32 {
+        match self.limit {
+            LossLimit::Counter(n) => n.max(1),
+            LossLimit::Milliseconds(ms) => {
+                let cycles = (u64::from(ms) * 1_000_000).div_ceil(u64::from(cycle_ns.max(1)));
+                let n = u32::try_from(cycles).unwrap_or(u32::MAX).max(1);
+                n.saturating_mul(self.increment.max(1))
+            }
+        }
+    }
+}
+
+/// The following-error supervision.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FollowingErrorSpec {
+    /// The window (0x6065), position units; [`FollowingErrorSpec::disabled`] switches it off.
+    pub window: ObjectAddress,
+    /// The time-out (0x6066), ms: the error must stay above the window longer than this.
+    pub timeout_ms: ObjectAddress,
+    /// The window value that disables the supervision.
+    pub disabled: u64,
+    /// The alarm raised (besides statusword bit 13), if any.
+    pub alarm: Option<&'static str>,
+}
+
+/// A check of the csp set-point stream.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CommandCheck {
+    /// Raise `speed_alarm` when a set-point step implies a speed above this factor times the
+    /// permissible speed.
+    pub speed_factor: f64,
+    /// The alarm for a too fast set-point.
+    pub speed_alarm: Option<&'static str>,
+    /// Raise this alarm when the unwrapped command position leaves the 32-bit range.
+    pub overflow_alarm: Option<&'static str>,
+}
+
+/// Where torque limits come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TorqueLimits {
+    /// Positive limit object, ‰ (MR-J4-TM 0x60E0).
+    pub positive: Option<ObjectAddress>,
+    /// Negative limit object, ‰ (MR-J4-TM 0x60E1).
+    pub negative: Option<ObjectAddress>,
+    /// Symmetric limit object, ‰ (0x6072).
+    pub max: Option<ObjectAddress>,
+    /// The speed limit in the torque modes, velocity units (MR-J4-TM 0x2D20); without it the
+    /// permissible speed applies.
+    pub speed_limit: Option<ObjectAddress>,
+}
+
+/// The unit of the torque slope 0x6087.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TorqueSlopeUnit {
+    /// ‰ of the rated torque per second (MR-J4-TM: 0.1 %/s).
+    PermillePerSecond,
+    /// mN·m per second (BDHDE §9 6087h), converted with the rated torque.
+    MilliNewtonMetrePerSecond,
+}
+
+/// Which physical quantity an object shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quantity {
+    /// Motor speed in r/min.
+    SpeedRpm,
+    /// Torque in % of rated.
+    TorquePercent,
+    /// Motor current in ‰ of rated (torque / torque constant).
+    CurrentPermille,
+    /// Position in position units.
+    Position,
+    /// DC-link voltage, mV.
+    DcLinkMillivolt,
+}
+
+/// An object the emulator keeps up to date every cycle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Monitor {
+    /// The object.
+    pub address: ObjectAddress,
+    /// What it shows.
+    pub quantity: Quantity,
+}
+
+/// A condition a status bit shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Condition {
+    /// The motor is at zero speed.
+    ZeroSpeed,
+    /// The following error is within the position window 0x6067.
+    InPosition,
+    /// The torque is at a limit.
+    TorqueLimited,
+    /// The speed is at the speed limit in a torque mode.
+    SpeedLimited,
+    /// The power stage is on (servo on).
+    PowerStageOn,
+}
+
+/// One manufacturer status bit (MR-J4-TM Status DO objects).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StatusBit {
+    /// The object.
+    pub address: ObjectAddress,
+    /// The bit.
+    pub bit: u8,
+    /// What it shows.
+    pub condition: Condition,
+}
+
+/// A value the emulated hardware reports at power-on (motor data and the like), which the
+/// manual leaves to the hardware.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PowerOnValue {
+    /// The object.
+    pub address: ObjectAddress,
+    /// The value.
+    pub value: PowerOnData,
+}
+
+/// The value of a [`PowerOnValue`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PowerOnData {
+    /// An integer.
+    Int(i64),
+    /// A text.
+    Text(&'static str),
+    /// The serial number the drive was built with.
+    Serial,
+}
+
+/// A write rule of the object store beyond types, access and ranges.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WriteRule {
+    /// Refuse SDO downloads to objects mapped in the RxPDO.
+    RefuseMappedRx(SdoAbortCode),
+    /// Only these values.
+    Allowed {
+        /// The entry.
+        address: ObjectAddress,
+        /// Accepted values, as the raw unsigned value of the entry (two's complement for
+        /// signed types, in the entry's width).
+        values: &'static [u64],
+        /// The abort for others.
+        code: SdoAbortCode,
+    },
+    /// Refuse every write.
+    Refuse {
+        /// Whole objects.
+        objects: &'static [u16],
+        /// Single entries.
+        entries: &'static [ObjectAddress],
+        /// The abort.
+        code: SdoAbortCode,
+    },
+    /// Keep two entries equal.
+    Mirror(ObjectAddress, ObjectAddress),
+}
+
+/// A group of modes selectable together, keyed by a parameter read at power-on (MR-J4-TM
+/// [Pr. PA01]: cyclic modes or profile modes, never both).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeGroup {
+    /// The selector value (low hex digit of the parameter).
+    pub selector: i64,
+    /// The 0x6060 values usable.
+    pub modes: &'static [i8],
+    /// 0x6060/0x6061 at power-on.
+    pub initial: i8,
+}
+
+/// The mode rules.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeRules {
+    /// The parameter that selects the group, and the groups; without one every mode the engine
+    /// emulates is usable.
+    pub selector: Option<ObjectAddress>,
+    /// The groups (selector = parameter value & 0xF).
+    pub groups: &'static [ModeGroup],
+    /// Modes usable without a selector.
+    pub modes: &'static [i8],
+    /// 0x6060/0x6061 at power-on without a selector.
+    pub initial: i8,
+}
+
+/// The emulated drive: its profile and the emulator's model of it.
+#[derive(Debug)]
+pub struct DriveSpec {
+    /// The profile (identity, dictionary, PDO rules, sync, caps, units).
+    pub profile: &'static DriveProfile,
+    /// The alarms the emulator can raise.
+    pub alarms: &'static [AlarmDef],
+    /// How alarms are reported.
+    pub reporting: ErrorReporting,
+    /// Write rules of the object store.
+    pub write_rules: &'static [WriteRule],
+    /// Values set at power-on.
+    pub power_on: &'static [PowerOnValue],
+    /// The motor and load.
+    pub motor: MotorSpec,
+    /// Units.
+    pub scaling: Scaling,
+    /// Loss of cyclic data in DC mode.
+    pub loss: LossDetection,
+    /// The alarm when 0x2D23-style cycle counter updates are wrong (with the profile's
+    /// [`DriveProfile::cycle_counter`]); checked in DC mode only.
+    pub counter_alarm: Option<&'static str>,
+    /// The alarm when OP is left (by the master or the SM watchdog) while the motor is
+    /// energised.
+    pub leave_op_alarm: Option<&'static str>,
+    /// Following-error supervision.
+    pub following_error: FollowingErrorSpec,
+    /// csp set-point checks.
+    pub command: CommandCheck,
+    /// Torque and speed limits.
+    pub torque_limits: TorqueLimits,
+    /// The unit of 0x6087.
+    pub torque_slope: TorqueSlopeUnit,
+    /// In cst/tq the quick stop switches the power stage off at once (MR-J4-TM §5.6: dynamic
+    /// brake) instead of ramping.
+    pub torque_mode_quick_stop_immediate: bool,
+    /// Halt (controlword bit 8) acts in the cyclic modes.
+    pub halt_in_cyclic_modes: bool,
+    /// Mode rules.
+    pub modes: ModeRules,
+    /// Monitors kept up to date.
+    pub monitors: &'static [Monitor],
+    /// Manufacturer status bits.
+    pub status_bits: &'static [StatusBit],
+    /// Homing methods that set the current position as home (35, 37); others report a homing
+    /// error.
+    pub homing_on_current_position: &'static [i8],
+    /// SAFE-OP → OP refusal when the SYNC0 cycle does not match the drive's cycle object.
+    pub sync_cycle_mismatch: crate::ec::AlStatusCode,
+}
+
+impl DriveSpec {
+    /// The alarm with this id.
+    pub fn alarm(&self, id: &str) -> Option<&'static AlarmDef> {
+        self.alarms.iter().find(|a| a.id.eq_ignore_ascii_case(id))
+    }
+}
+
+impl DriveSpec {
+    /// The entries the emulator keeps up to date or sets at power-on, whose value therefore is
+    /// not the dictionary default: the CiA 402 feedback objects, the error reporting objects,
+    /// the monitors and status bits, the cycle-counter echo, the power-on values and the serial
+    /// number. (Only entries the dictionary has.)
+    pub fn runtime_objects(&self) -> Vec<ObjectAddress> {
+        const FEEDBACK: &[u16] = &[
+            0x1001, 0x603F, 0x6041, 0x6061, 0x6062, 0x6063, 0x6064, 0x606B, 0x606C, 0x6074, 0x6077,
+            0x60F4, 0x60FA, 0x60FC,
+        ];
+        let mut out: Vec<ObjectAddress> =
+            FEEDBACK.iter().map(|&i| ObjectAddress::new(i, 0)).collect();
+        out.push(ObjectAddress::new(0x1018, 4));
+        out.extend(self.reporting.current_alarm);
+        out.extend(self.reporting.history_newest);
+        if self.reporting.error_history {
+            out.extend((0..=u8::MAX).map(|s| ObjectAddress::new(0x1003, s)));
+        }
+        out.extend(self.monitors.iter().map(|m| m.address));
+        out.extend(self.status_bits.iter().map(|b| b.address));
+        out.extend(self.power_on.iter().map(|p| p.address));
+        if let Some(c) = self.profile.cycle_counter {
+            out.extend(c.echo);
+        }
+        let od = self.profile.od();
+        out.retain(|a| od.entry(*a).is_some());
+        out.sort_unstable_by_key(|a| (a.index, a.sub));
+        out.dedup();
+        out
+    }
+}

@@ -1,0 +1,185 @@
+//! Shared by the `cli_*` tests: running the `ecdrive` binary, and `ecdrive sim` serving
+//! emulated devices on one end of a veth pair inside a network namespace the test creates.
+#![allow(dead_code)]
+
+use ecdrive::link::netns::{VethPair, require_root};
+use std::io::{BufRead, BufReader, Read};
+use std::process::{Child, ChildStderr, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// The binary under test.
+pub const ECDRIVE: &str = env!("CARGO_BIN_EXE_ecdrive");
+
+/// What one run of `ecdrive` printed and how it ended.
+#[derive(Debug)]
+pub struct Run {
+    /// Exit code (`None` if killed by a signal).
+    pub code: Option<i32>,
+    /// Standard output.
+    pub stdout: String,
+    /// Standard error.
+    pub stderr: String,
+}
+
+impl Run {
+    /// Assert success and return stdout.
+    #[track_caller]
+    pub fn ok(&self) -> &str {
+        assert_eq!(self.code, Some(0), "{self:#?}");
+        &self.stdout
+    }
+
+    /// Assert success and parse stdout as JSON.
+    #[track_caller]
+    pub fn json(&self) -> serde_json::Value {
+        let out = self.ok();
+        serde_json::from_str(out).unwrap_or_else(|e| panic!("not JSON ({e}):\n{out}"))
+    }
+
+    /// Assert exit `code`, nothing on stdout, exactly one line on stderr that names
+    /// `ecdrive` and contains each of `has`, and no panic or backtrace. Returns the line.
+    #[track_caller]
+    pub fn fails(&self, code: i32, has: &[&str]) -> String {
+        assert_eq!(self.code, Some(code), "{self:#?}");
+        let lines: Vec<&str> = self
+            .stderr
+            .lines()
+            .filter(|l| !l.trim().is_empty())
+            .collect();
+        assert_eq!(lines.len(), 1, "not one line: {self:#?}");
+        let line = lines[0];
+        assert!(line.starts_with("ecdrive"), "{line}");
+        for h in has {
+            assert!(line.contains(h), "{line:?} does not mention {h:?}");
+        }
+        for bad in [
+            "panicked",
+            "RUST_BACKTRACE",
+            "stack backtrace",
+            "internal error",
+        ] {
+            assert!(!self.stderr.contains(bad), "{self:#?}");
+        }
+        line.to_string()
+    }
+}
+
+/// Run `ecdrive` with `args` (stdin closed, stdout and stderr captured).
+pub fn ecdrive(args: &[&str]) -> Run {
+    let out: Output = Command::new(ECDRIVE)
+        .args(args)
+        .stdin(Stdio::null())
+        .output()
+        .expect("run ecdrive");
+    Run {
+        code: out.status.code(),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// `ecdrive sim` serving `devices` on the peer end of a fresh veth pair, inside the pair's
+/// namespace. The host end (in the test's namespace) is where the commands under test go.
+/// Stopped with SIGINT on drop (killed if it does not stop); the pair and namespace are then
+/// removed.
+pub struct SimOnVeth {
+    child: Child,
+    stderr: Option<BufReader<ChildStderr>>,
+    /// The banner `ecdrive sim` printed (one line per device).
+    pub banner: String,
+    // Dropped after the child is stopped (fields drop in declaration order).
+    veth: VethPair,
+}
+
+impl SimOnVeth {
+    /// Start it; `None` (with the loud skip line of [`require_root`]) without root.
+    pub fn start(test: &str, devices: &[&str]) -> Option<Self> {
+        if !require_root(test) {
+            return None;
+        }
+        let veth = VethPair::create().expect("veth pair");
+        let mut cmd = Command::new("ip");
+        cmd.args(["netns", "exec", veth.netns().name(), ECDRIVE, "sim"])
+            .args(["--interface", veth.peer(), "--sm-watchdog", "0"]);
+        for d in devices {
+            cmd.args(["--device", d]);
+        }
+        let mut child = cmd
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("start ecdrive sim");
+        let mut stderr = BufReader::new(child.stderr.take().expect("stderr"));
+        let mut banner = String::new();
+        let mut line = String::new();
+        let last = format!("  {}: ", devices.len() - 1);
+        while stderr.read_line(&mut line).expect("read sim stderr") > 0 {
+            banner.push_str(&line);
+            if line.starts_with(&last) {
+                break;
+            }
+            line.clear();
+        }
+        assert!(
+            banner.contains(&format!("serving {} device(s)", devices.len())),
+            "ecdrive sim did not start:\n{banner}"
+        );
+        Some(Self {
+            child,
+            stderr: Some(stderr),
+            banner,
+            veth,
+        })
+    }
+
+    /// The interface the commands under test use.
+    pub fn host(&self) -> &str {
+        self.veth.host()
+    }
+
+    /// Run `ecdrive` with `args`, `-i <host end>` inserted after the command name.
+    pub fn ecdrive(&self, args: &[&str]) -> Run {
+        let mut all: Vec<&str> = args.to_vec();
+        let at = all.len().min(1);
+        all.splice(at..at, ["-i", self.host()]);
+        ecdrive(&all)
+    }
+
+    /// Stop the simulator with SIGINT and return what it printed after the banner.
+    pub fn stop(mut self) -> String {
+        self.stop_inner()
+    }
+
+    fn stop_inner(&mut self) -> String {
+        let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
+        let _ = nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGINT);
+        let deadline = Instant::now() + Duration::from_secs(10);
+        loop {
+            match self.child.try_wait() {
+                Ok(Some(_)) => break,
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(10));
+                }
+                _ => {
+                    let _ = self.child.kill();
+                    let _ = self.child.wait();
+                    break;
+                }
+            }
+        }
+        let mut rest = String::new();
+        if let Some(mut e) = self.stderr.take() {
+            let _ = e.read_to_string(&mut rest);
+        }
+        rest
+    }
+}
+
+impl Drop for SimOnVeth {
+    fn drop(&mut self) {
+        if self.stderr.is_some() {
+            self.stop_inner();
+        }
+    }
+}
