@@ -1,5 +1,5 @@
 //! Start-up: from `Master::start` to every drive in OP, in-process, for 2 and 64 emulated
-//! drives (the sim's generic CoE device), 1 ms cycle with DC SYNC0. This covers discovery,
+//! drives (the sim's MR-J4-TM and BDHDE emulations, alternating), 1 ms cycle with DC SYNC0. This covers discovery,
 //! SII reads, profile matching, PDO remapping over CoE, DC set-up and settling, SAFE-OP and the
 //! cycle's OP request. Shutting down (not measured) follows each start.
 //!
@@ -19,7 +19,9 @@ fn bench(c: &mut Criterion) {
         .warm_up_time(Duration::from_millis(1))
         .measurement_time(Duration::from_secs(5));
     for n in [2usize, 64] {
-        let names = vec!["generic-coe".to_string(); n];
+        let names: Vec<String> = (0..n)
+            .map(|i| if i % 2 == 0 { "mr-j4-tm" } else { "bdhde" }.to_string())
+            .collect();
         let profiles = emulated::profiles(&names).expect("profiles");
         g.bench_function(format!("{n}_drives"), |b| {
             b.iter_custom(|iters| {

@@ -39,7 +39,12 @@
 //! OP; ecdrive from the cycle after every drive reached OP to the stop request
 //! ([`CycleSettings::steady_timing_only`](crate::master::cycle::CycleSettings)); the sleep loop
 //! after 10 warm-up cycles. The drive figures (DC difference, SYNC0) come from the emulated
-//! slaves and are empty when the far end is not the harness's (`--interface`).
+//! slaves and are empty when the far end is not the harness's (`--interface`); they cover the
+//! whole time each drive was in OP from its first SYNC0 pulse on (both masters start SYNC0
+//! 100 ms after the DC set-up, and an emulated drive may reach OP before that).
+//!
+//! Emulated drives: any sim device with a drive profile (`generic-coe`, the only one that runs
+//! at 125 µs, and the emulated `mr-j4-tm` and `bdhde` from 250 µs).
 //!
 //! In-process, the emulated slaves run on ecdrive's cycle thread and on plain ethercrab's TX/RX
 //! thread, so the master CPU figure (cycle thread + TX/RX thread) contains the same slave work

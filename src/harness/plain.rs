@@ -2,13 +2,17 @@
 //! ecdrive master code.
 //!
 //! `MainDevice::new` (ethercrab's default timeouts) → `init_single_group` → per device the
-//! PRE-OP SDOs the drive needs for DC (PDO mapping, synchronisation type, cycle time, written
-//! with ethercrab's `sdo_write`) and `set_dc_sync(Sync0)` → `into_pre_op_pdi` →
-//! `configure_dc_sync` → `into_safe_op` → `request_into_op` → `tx_rx_dc` cycles until every
-//! device is in OP. Then the measured loop: absolute sleep (`clock_nanosleep`) to the instant
-//! `tx_rx_dc` asked for (start of the exchange + `next_cycle_wait`), `tx_rx_dc`, read each
-//! device's inputs and write its outputs. The futures run on `async_io::block_on` (what
-//! `smol::block_on` is), so ethercrab's PDU timeouts are its usual `async_io` timers.
+//! PRE-OP SDOs the drive needs (PDO mapping, synchronisation type, cycle time, the profile's
+//! start-up SDOs; written with ethercrab's `sdo_write`, the values taken from the drive's
+//! profile as an application would hard-code them) and `set_dc_sync(Sync0)` →
+//! `into_pre_op_pdi` → `configure_dc_sync` → `into_safe_op` → `request_into_op` → `tx_rx_dc`
+//! cycles until every device is in OP. Then the measured loop: absolute sleep
+//! (`clock_nanosleep`) to the instant `tx_rx_dc` asked for (start of the exchange +
+//! `next_cycle_wait`), `tx_rx_dc`, then the application: read each device's inputs, write its
+//! outputs (the drives stay disabled; outputs that must not be zero are set once before the
+//! first cycle, and a drive's cycle counter, MR-J4-TM 0x2D23, advances every cycle). The
+//! futures run on `async_io::block_on` (what `smol::block_on` is), so ethercrab's PDU timeouts
+//! are its usual `async_io` timers.
 //!
 //! The frames are moved by a separate TX/RX thread, as with ethercrab's own drivers:
 //! in-process by [`EthercrabLink`] (which also runs the emulated slaves), on an interface by
@@ -18,9 +22,9 @@
 use super::HarnessError;
 use super::cpu::{CpuReport, CpuSample, ThreadCpuClock, apply_syscalls, start_syscalls};
 use super::report::{RunHistograms, RunReport};
-use crate::drives::{CycleTimeObject, DriveProfile};
-use crate::od::DataType;
-use crate::pdo::{self, RemapOptions};
+use crate::drives::{CycleTimeObject, DriveProfile, StartupWhen};
+use crate::od::{self, ObjectAddress};
+use crate::pdo::{self, Direction, Field, RemapOptions};
 use crate::rt::{RtReport, RtSettings, monotonic_ns, sleep_until_ns};
 use crate::sim::Segment;
 use crate::sim::transport::EthercrabLink;
@@ -181,58 +185,169 @@ pub fn run(
     Ok((report, segment))
 }
 
-async fn sdo_write<S: std::ops::Deref<Target = ethercrab::SubDevice>>(
-    sd: &ethercrab::SubDeviceRef<'_, S>,
-    w: &pdo::SdoWrite,
-) -> Result<(), ethercrab::error::Error> {
-    let (idx, sub) = (w.address.index, w.address.sub);
-    match w.data_type {
-        DataType::Unsigned8 => sd.sdo_write(idx, sub, w.value as u8).await,
-        DataType::Unsigned16 => sd.sdo_write(idx, sub, w.value as u16).await,
-        _ => sd.sdo_write(idx, sub, w.value).await,
-    }
+/// What the plain loop does for one drive, from its profile (data, as any ethercrab
+/// application would hard-code it): PRE-OP SDO writes, outputs that must not be zero, and the
+/// cycle counter a drive may require to advance every cycle.
+struct DrivePlan {
+    /// `(object, little-endian value, why)`.
+    writes: Vec<(ObjectAddress, Vec<u8>, String)>,
+    /// Output fields set once before the first cycle.
+    defaults: Vec<(Field, i64)>,
+    /// Output field incremented (mod 256) every cycle.
+    counter: Option<Field>,
 }
 
-/// The PRE-OP writes a drive needs for DC SYNC0 at `cycle_ns`, from its profile.
-fn preop_writes(
+fn drive_plan(
     profile: &DriveProfile,
     cycle_ns: u32,
     position: usize,
-) -> Result<Vec<pdo::SdoWrite>, HarnessError> {
-    let mut out = pdo::remap_sequence(
-        &profile.cyclic_mapping,
-        &RemapOptions::for_drive(&profile.pdo_limits, None),
-    )
-    .map_err(|e| err(format!("drive {position}: PDO mapping"), e))?;
+) -> Result<DrivePlan, HarnessError> {
+    let what = |w: &str| format!("drive {position} ({}): {w}", profile.name);
+    let mapping = &profile.cyclic_mapping;
+    let mut writes: Vec<(ObjectAddress, Vec<u8>, String)> =
+        pdo::remap_sequence(mapping, &RemapOptions::for_drive(&profile.pdo_limits, None))
+            .map_err(|e| err(what("PDO mapping"), e))?
+            .into_iter()
+            .map(|w| (w.address, w.bytes(), w.description))
+            .collect();
     if let Some(a) = profile.sync.sync_type_object {
-        out.push(pdo::SdoWrite::pdo_index(
-            a,
-            2,
-            "synchronisation type = DC SYNC0",
-        ));
+        writes.push((a, 2u16.to_le_bytes().to_vec(), "sync type DC SYNC0".into()));
     }
     match profile.sync.cycle_time_object {
         Some(CycleTimeObject::Nanoseconds(a)) => {
-            out.push(pdo::SdoWrite::entry(a, cycle_ns, "cycle time"));
+            writes.push((a, cycle_ns.to_le_bytes().to_vec(), "cycle time".into()));
         }
-        None => {}
-        Some(other) => {
-            return Err(err(
-                format!("drive {position} ({})", profile.name),
-                format!(
-                    "the plain-ethercrab baseline cannot set the cycle time through {other:?} \
-                     (only a nanosecond object is supported)"
-                ),
+        Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, .. }) => {
+            let v = u8::try_from(cycle_ns / unit_ns.max(1)).map_err(|_| {
+                err(
+                    what("interpolation period"),
+                    format!("{cycle_ns} ns is more than 255 units of {unit_ns} ns"),
+                )
+            })?;
+            writes.push((
+                ObjectAddress::new(0x60C2, 1),
+                vec![v],
+                "interpolation period".into(),
             ));
         }
+        Some(CycleTimeObject::InterpolationStandard) => {
+            // cycle = value × 10^index s with value ≤ 255.
+            let (mut value, mut index) = (u64::from(cycle_ns), -9i8);
+            while value > 255 || (value % 10 == 0 && value > 0 && index < 0) {
+                value /= 10;
+                index += 1;
+            }
+            writes.push((
+                ObjectAddress::new(0x60C2, 1),
+                vec![value as u8],
+                "interpolation value".into(),
+            ));
+            writes.push((
+                ObjectAddress::new(0x60C2, 2),
+                vec![index as u8],
+                "interpolation index".into(),
+            ));
+        }
+        None => {}
     }
-    if !profile.startup.is_empty() {
-        return Err(err(
-            format!("drive {position} ({})", profile.name),
-            "the plain-ethercrab baseline does not write profile start-up SDOs",
-        ));
+    let dict = od::Dictionary::new(profile.dictionary);
+    for sdo in profile.startup {
+        if sdo.when == StartupWhen::IfNotMapped && mapping.contains(Direction::Rx, sdo.address) {
+            continue;
+        }
+        let bytes = sdo
+            .value
+            .to_value()
+            .zip(dict.data_type(sdo.address))
+            .ok_or_else(|| {
+                err(
+                    what("start-up SDO"),
+                    format!("{} has no typed value", sdo.address),
+                )
+            })
+            .and_then(|(v, dt)| v.encode(dt).map_err(|e| err(what("start-up SDO"), e)))?;
+        writes.push((sdo.address, bytes, sdo.why.to_string()));
     }
-    Ok(out)
+    let layout = pdo::Layout::new(mapping);
+    let defaults = profile
+        .output_defaults
+        .iter()
+        .filter_map(|d| {
+            layout
+                .raw_field(Direction::Rx, d.address, true)
+                .ok()
+                .map(|f| (f, d.value))
+        })
+        .collect();
+    let counter = profile
+        .cycle_counter
+        .and_then(|c| layout.raw_field(Direction::Rx, c.output, false).ok());
+    Ok(DrivePlan {
+        writes,
+        defaults,
+        counter,
+    })
+}
+
+/// One expedited SDO download with ethercrab (1, 2 or 4 bytes).
+async fn sdo_write<S: std::ops::Deref<Target = ethercrab::SubDevice>>(
+    sd: &ethercrab::SubDeviceRef<'_, S>,
+    a: ObjectAddress,
+    bytes: &[u8],
+) -> Result<(), String> {
+    let r = match *bytes {
+        [b] => sd.sdo_write(a.index, a.sub, b).await,
+        [b0, b1] => {
+            sd.sdo_write(a.index, a.sub, u16::from_le_bytes([b0, b1]))
+                .await
+        }
+        [b0, b1, b2, b3] => {
+            sd.sdo_write(a.index, a.sub, u32::from_le_bytes([b0, b1, b2, b3]))
+                .await
+        }
+        _ => {
+            return Err(format!(
+                "{} bytes: ethercrab downloads 1, 2 or 4 bytes only",
+                bytes.len()
+            ));
+        }
+    };
+    r.map_err(|e| e.to_string())
+}
+
+/// The group once OP was requested.
+type OpGroup = ethercrab::SubDeviceGroup<
+    MAX_SUBDEVICES,
+    MAX_PDI,
+    ethercrab::DefaultLock,
+    ethercrab::subdevice_group::Op,
+    ethercrab::subdevice_group::HasDc,
+>;
+
+/// Outputs that must not be zero, before the first cycle.
+fn output_defaults(group: &OpGroup, md: &MainDevice<'_>, plans: &[DrivePlan]) {
+    for (i, plan) in plans.iter().enumerate() {
+        if let Ok(sd) = group.subdevice(md, i) {
+            let mut io = sd.io_raw_mut();
+            for (f, v) in &plan.defaults {
+                let _ = f.write_int(io.outputs(), i128::from(*v));
+            }
+        }
+    }
+}
+
+/// The application part of a cycle: read each drive's inputs, write its outputs (the drives
+/// stay disabled: the controlword stays 0), advance the cycle counters.
+fn application(group: &OpGroup, md: &MainDevice<'_>, plans: &[DrivePlan], counter: u8) {
+    for (i, plan) in plans.iter().enumerate() {
+        if let Ok(sd) = group.subdevice(md, i) {
+            let mut io = sd.io_raw_mut();
+            std::hint::black_box(io.inputs().first().copied());
+            if let Some(c) = &plan.counter {
+                let _ = c.write_raw(io.outputs(), u64::from(counter));
+            }
+        }
+    }
 }
 
 async fn measure(
@@ -256,14 +371,20 @@ async fn measure(
         ));
     }
     let cycle32 = u32::try_from(cycle_ns).unwrap_or(u32::MAX);
+    let plans = s
+        .profiles
+        .iter()
+        .enumerate()
+        .map(|(i, p)| drive_plan(p, cycle32, i))
+        .collect::<Result<Vec<_>, _>>()?;
     for (i, mut sd) in group.iter_mut(md).enumerate() {
-        let Some(profile) = s.profiles.get(i) else {
+        let Some(plan) = plans.get(i) else {
             continue;
         };
-        for w in preop_writes(profile, cycle32, i)? {
-            sdo_write(&sd, &w)
+        for (a, bytes, why) in &plan.writes {
+            sdo_write(&sd, *a, bytes)
                 .await
-                .map_err(|e| err(format!("drive {i}: SDO {w}"), e))?;
+                .map_err(|e| err(format!("drive {i}: SDO {a} ({why})"), e))?;
         }
         sd.set_dc_sync(DcSync::Sync0);
     }
@@ -293,6 +414,8 @@ async fn measure(
 
     // The cycle starts: real-time set-up now (as ecdrive's cycle thread does it).
     let rt = s.rt.apply_to_current_thread();
+    output_defaults(&group, md, &plans);
+    let mut counter: u8 = 0;
 
     // Cycle until every device is in OP (not measured).
     let deadline = monotonic_ns() + s.op_timeout.as_nanos() as u64;
@@ -301,6 +424,8 @@ async fn measure(
         sleep_until_ns(next);
         let t0 = monotonic_ns();
         let r = group.tx_rx_dc(md).await;
+        counter = counter.wrapping_add(1);
+        application(&group, md, &plans, counter);
         match r {
             Ok(resp) if resp.all_op() => {
                 next = t0 + resp.extra.next_cycle_wait.as_nanos() as u64;
@@ -324,9 +449,9 @@ async fn measure(
     let mut h = RunHistograms::new(true);
     let mut late = 0u64;
     let mut missed = 0u64;
+    let mut not_op = 0u64;
     let budget = (cycle_ns as f64 * s.reply_budget) as u64;
     let mut last_wake = 0u64;
-    let n = group.len();
     let mut notes = Vec::new();
     let begin = CpuSample::take(io_clock.as_ref());
     let sys = start_syscalls(s.count_syscalls, &mut notes);
@@ -353,6 +478,10 @@ async fn measure(
                 if t1 - woke > budget {
                     missed += 1;
                 }
+                // An application checks the states that ride along (ecdrive's cycle does).
+                if !resp.all_op() {
+                    not_op += 1;
+                }
                 resp.extra.next_cycle_wait.as_nanos() as u64
             }
             Err(_) => {
@@ -360,17 +489,8 @@ async fn measure(
                 cycle_ns
             }
         };
-        // The application: read each device's inputs, write its outputs (the first output
-        // byte, the controlword's low byte, stays 0: the drives are left disabled).
-        for i in 0..n {
-            if let Ok(sd) = group.subdevice(md, i) {
-                let mut io = sd.io_raw_mut();
-                std::hint::black_box(io.inputs().first().copied());
-                if let Some(o) = io.outputs().first_mut() {
-                    *o = 0;
-                }
-            }
-        }
+        counter = counter.wrapping_add(1);
+        application(&group, md, &plans, counter);
         h.busy.record(monotonic_ns() - woke);
         next = t0 + wait;
     }
@@ -383,6 +503,9 @@ async fn measure(
     );
     if s.count_syscalls {
         notes.push("syscalls are counted on the loop thread only, not the TX/RX thread".into());
+    }
+    if not_op > 0 {
+        notes.push(format!("{not_op} cycles with a device not in OP"));
     }
 
     // Back to INIT (not measured).

@@ -1,7 +1,7 @@
 //! `ecdrive jitter`: arguments and output. The measurement is `ecdrive::harness`.
 
-use clap::Args;
 use super::exit;
+use clap::Args;
 use ecdrive::harness::{self, HarnessError, JitterConfig, Transport};
 use ecdrive::rt::RtSettings;
 use std::path::PathBuf;
