@@ -71,7 +71,7 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
     assert_eq!(c.duration, Some(Duration::from_secs(2)));
     assert_eq!(c.master.cycle.cycle, Duration::from_micros(500));
     assert_eq!(c.master.startup.cycle, Duration::from_micros(500));
-    assert_eq!(c.master.startup.dc.shift, Duration::from_micros(100));
+    assert_eq!(c.master.startup.dc.shift, Some(Duration::from_micros(100)));
     assert_eq!(c.master.cycle.rt.priority, Some(80));
     assert_eq!(c.master.cycle.rt.cpu, Some(1));
     assert!(c.master.cycle.rt.lock_memory);

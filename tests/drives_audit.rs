@@ -29,7 +29,7 @@ fn cyclic_path_does_not_allocate() {
             w.command(0, cw);
         }
         let mut outputs = w.outputs_mut(0).to_vec();
-        let mut inputs = vec![0u8; cyclic::IN];
+        let mut inputs = vec![0u8; w.inputs(0).len()];
         let d: &mut EmulatedDrive = w.drive(0);
         let mut event = SyncEvent {
             kind: SyncKind::Sync0,

@@ -121,8 +121,8 @@ fn bdhde_packet_loss() {
     assert_eq!(w.state(0), State::Fault);
 }
 
-/// The recommended mapping plus the incremental counters: 0x2D23 (DL) at output byte 13,
-/// 0x2D24 (UL) at input byte 19.
+/// The recommended mapping plus the incremental counters: 0x2D23 (DL) at the end of the
+/// outputs, 0x2D24 (UL) at the end of the inputs.
 fn with_counter(p: &DriveProfile) -> Mapping {
     let mut rx: Vec<PdoEntry> = p.cyclic_mapping.rx[0].entries.to_vec();
     rx.push(PdoEntry::new(0x2D23, 0, 8));
@@ -142,14 +142,19 @@ fn mr_j4_incremental_counter() {
     wire::remap(&mut w, 0, &m);
     w.write_u16(0, 0x1C32, 1, 2).unwrap();
     w.write_u32(0, 0x1C32, 2, 1_000_000).unwrap();
-    w.configure_pd(&[(cyclic::OUT + 1, cyclic::IN + 1)]);
+    let (out_len, in_len) = (
+        m.bytes(ecdrive::pdo::Direction::Rx),
+        m.bytes(ecdrive::pdo::Direction::Tx),
+    );
+    let (dl_at, ul_at) = (out_len - 1, in_len - 1);
+    w.configure_pd(&[(out_len, in_len)]);
     assert_eq!(w.request(0, 4), (4, 0));
     w.activate_dc(1_000_000);
     assert_eq!(w.request(0, 8), (8, 0));
     let mut dl: u8 = 250;
     for k in 0..20 {
         dl = dl.wrapping_add(1);
-        w.outputs_mut(0)[13] = dl;
+        w.outputs_mut(0)[dl_at] = dl;
         if k == 10 {
             // A lost frame: the master's counter moves on anyway.
             w.skip_cycle();
@@ -158,7 +163,7 @@ fn mr_j4_incremental_counter() {
         w.cycle();
         if k > 1 && k != 11 {
             assert_eq!(
-                w.inputs(0)[19],
+                w.inputs(0)[ul_at],
                 dl.wrapping_add(0),
                 "UL = DL + 1 of the previous frame"
             );
@@ -229,7 +234,7 @@ fn mr_j4_free_run() {
         w.download(0, s.address.index, s.address.sub, &b).unwrap();
     }
     assert_eq!(w.read_u32(0, 0x1C33, 1), 0);
-    w.configure_pd(&[(cyclic::OUT, cyclic::IN)]);
+    w.configure_pd(&[cyclic::sizes(MR)]);
     assert_eq!(w.request(0, 4), (4, 0));
     assert_eq!(w.request(0, 8), (8, 0));
     w.cycle();

@@ -90,7 +90,7 @@ async fn ethercrab_runs_both_emulated_drives() {
         },
     )));
     let mut group = md
-        .init_single_group::<4, 64>(ethercat_now)
+        .init_single_group::<4, 128>(ethercat_now)
         .await
         .expect("init");
     assert_eq!(group.len(), 2);
@@ -127,9 +127,16 @@ async fn ethercrab_runs_both_emulated_drives() {
         sd.set_dc_sync(DcSync::Sync0);
     }
     let group = group.into_pre_op_pdi(md).await.expect("PRE-OP with PDI");
-    for sd in group.iter(md) {
+    for (sd, p) in group.iter(md).zip(PROFILES) {
         let io = sd.io_raw();
-        assert_eq!((io.outputs().len(), io.inputs().len()), (13, 19));
+        let l = ecdrive::pdo::Layout::new(&p.cyclic_mapping);
+        assert_eq!(
+            (io.outputs().len(), io.inputs().len()),
+            (
+                l.bytes(ecdrive::pdo::Direction::Rx),
+                l.bytes(ecdrive::pdo::Direction::Tx)
+            )
+        );
     }
     let group = group
         .configure_dc_sync(

@@ -356,7 +356,7 @@ fn op_with(drive: EmulatedDrive, p: &DriveProfile) -> Wire {
             .unwrap();
         w.download(0, s.address.index, s.address.sub, &b).unwrap();
     }
-    w.configure_pd(&[(cyclic::OUT, cyclic::IN)]);
+    w.configure_pd(&[cyclic::sizes(p)]);
     assert_eq!(w.request(0, 4), (4, 0));
     w.activate_dc(1_000_000);
     assert_eq!(w.request(0, 8), (8, 0));

@@ -185,8 +185,19 @@ fn bdhde_default_entry_values_are_the_manual_decimals() {
 }
 
 #[test]
-fn cyclic_mappings_are_identical_and_aligned() {
-    assert_eq!(mr_j4_tm::CYCLIC_MAPPING, bdhde::CYCLIC_MAPPING);
+fn cyclic_mappings_share_their_layout_and_are_aligned() {
+    // Both drives' recommended mappings have the same fields at the same offsets; the MR-J4-TM's
+    // adds Status DO 2 (0x2D12, its zero-speed signal) after them.
+    assert_eq!(mr_j4_tm::CYCLIC_MAPPING.rx, bdhde::CYCLIC_MAPPING.rx);
+    let common_tx = vec![
+        (0x6041, 0, 16),
+        (0x6064, 2, 32),
+        (0x606C, 6, 32),
+        (0x6077, 10, 16),
+        (0x60F4, 12, 32),
+        (0x603F, 16, 16),
+        (0x6061, 18, 8),
+    ];
     let layout = Layout::new(&mr_j4_tm::CYCLIC_MAPPING);
     assert_eq!(
         offsets(&layout, Direction::Rx),
@@ -198,20 +209,14 @@ fn cyclic_mappings_are_identical_and_aligned() {
             (0x6060, 12, 8),
         ]
     );
-    assert_eq!(
-        offsets(&layout, Direction::Tx),
-        vec![
-            (0x6041, 0, 16),
-            (0x6064, 2, 32),
-            (0x606C, 6, 32),
-            (0x6077, 10, 16),
-            (0x60F4, 12, 32),
-            (0x603F, 16, 16),
-            (0x6061, 18, 8),
-        ]
-    );
+    let mut mr_tx = common_tx.clone();
+    mr_tx.push((0x2D12, 19, 16));
+    assert_eq!(offsets(&layout, Direction::Tx), mr_tx);
     assert_eq!(layout.bytes(Direction::Rx), 13);
-    assert_eq!(layout.bytes(Direction::Tx), 19);
+    assert_eq!(layout.bytes(Direction::Tx), 21);
+    let bd = Layout::new(&bdhde::CYCLIC_MAPPING);
+    assert_eq!(offsets(&bd, Direction::Tx), common_tx);
+    assert_eq!(bd.bytes(Direction::Tx), 19);
 }
 
 /// Two PDOs per direction, padding and sub-byte entries: PDOs follow each other in assignment

@@ -383,7 +383,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         if d >= cycle {
             return Err(cx.err(s.span(), "dc_shift", "must be shorter than the cycle"));
         }
-        master.startup.dc.shift = d;
+        master.startup.dc.shift = Some(d);
     }
     let duration = f
         .duration

@@ -472,6 +472,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
     // "cannot be accessed via complete access". Off, as in the ESI file.
     complete_access: false,
     esi: include_str!("../../esi/Servotronix_BDHDE.xml"),
+    zero_speed_flag: None,
 };
 
 /// Vendor ID (0x1018:01, §7 1018h).

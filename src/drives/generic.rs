@@ -216,4 +216,5 @@ pub static GENERIC_CIA402: DriveProfile = DriveProfile {
     units: UNITS,
     complete_access: false,
     esi: "",
+    zero_speed_flag: None,
 };

@@ -44,5 +44,5 @@ pub use registry::{UnknownDevice, all, by_identity, by_key, identify};
 
 pub use profile::{
     CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch,
-    OutputDefault, StartupSdo, StartupWhen, SyncSpec, SyncWrite, Units,
+    OutputDefault, StartupSdo, StartupWhen, StatusFlag, SyncSpec, SyncWrite, Units,
 };

@@ -19,7 +19,7 @@
 
 use super::profile::{
     CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,
-    StartupSdo, SyncSpec, Units,
+    StartupSdo, StatusFlag, SyncSpec, Units,
 };
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes, VendorModeBit};
 use crate::od::ObjectAddress;
@@ -247,6 +247,10 @@ const CYCLIC_TX: &[Pdo] = &[Pdo::fixed(
         PdoEntry::new(0x60F4, 0, 32), // Following error actual value, byte 12
         PdoEntry::new(0x603F, 0, 16), // Error code, byte 16
         PdoEntry::new(0x6061, 0, 8),  // Modes of operation display, byte 18
+        // [REC] Status DO 2: bit 3 S_ZSP is the drive's zero-speed signal, which the drive
+        // requires before switching to or from a position mode (§5.4.2); the engine waits for
+        // it rather than guessing from the velocity.
+        PdoEntry::new(0x2D12, 0, 16), // byte 19
     ],
 )];
 
@@ -489,6 +493,10 @@ pub static PROFILE: DriveProfile = DriveProfile {
     // §4.1: "Complete Access: not supported".
     complete_access: false,
     esi: include_str!("../../esi/Mitsubishi_MR-J4-TM.xml"),
+    zero_speed_flag: Some(StatusFlag {
+        address: ObjectAddress::new(0x2D12, 0),
+        bit: 3,
+    }),
 };
 
 /// Vendor ID (0x1018:01, §7.3.1(9); the manual prints the 7-digit "0000A1Eh").

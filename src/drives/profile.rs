@@ -224,6 +224,18 @@ pub struct DriveProfile {
     /// The drive's ESI file (XML text), `include_str!`'d from `esi/`; empty for a profile
     /// without one (the generic profile). See [`DriveProfile::esi_file`].
     pub esi: &'static str,
+    /// A status bit the drive sets at zero speed, which the CiA 402 engine uses (when mapped)
+    /// to decide standstill before a mode switch that needs it (MR-J4-TM: 0x2D12 bit 3 S_ZSP).
+    pub zero_speed_flag: Option<StatusFlag>,
+}
+
+/// One bit of a mapped status object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StatusFlag {
+    /// The object.
+    pub address: ObjectAddress,
+    /// The bit.
+    pub bit: u8,
 }
 
 /// A cycle time the drive does not accept.

@@ -43,6 +43,8 @@ pub struct EcdriveSettings {
     pub op_timeout: Duration,
     /// Count the cycle thread's syscalls ([`super::cpu::SyscallWindow`]).
     pub count_syscalls: bool,
+    /// When the frame is sent after SYNC0.
+    pub sync0_shift: Duration,
 }
 
 /// CPU samples (and optionally a syscall count) at the edges of steady state, taken on the
@@ -107,6 +109,7 @@ pub fn run<L: FrameLink + Send + 'static>(
     cfg.cycle.rt = s.rt.clone();
     cfg.cycle.steady_timing_only = true;
     cfg.cycle.op_timeout = s.op_timeout;
+    cfg.startup.dc.shift = Some(s.sync0_shift);
     // The axes hold position: a short stop ramp ends the run without many cycles in OP after
     // the window (the slave-side statistics cover the whole time in OP).
     cfg.cycle.stop_ramp = s.cycle.saturating_mul(10);

@@ -83,6 +83,7 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
     },
     complete_access: false,
     esi: "",
+    zero_speed_flag: None,
 };
 
 /// Why the emulated line cannot be built.

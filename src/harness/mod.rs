@@ -61,7 +61,8 @@
 //!   "host": { "kernel", "preempt_rt", "cpu_model", "cpus", "governor", "isolated_cpus",
 //!             "sched_rt_runtime_us" },
 //!   "settings": { "cycle_ns", "cycles", "transport", "interface", "priority", "cpu",
-//!                 "lock_memory", "drives": [..], "profiles": [..], "ecdrive_axes" },
+//!                 "lock_memory", "drives": [..], "profiles": [..], "ecdrive_axes",
+//!                 "count_syscalls", "sync0_shift_ns" },
 //!   "priority_granted": bool, "warnings": [..],
 //!   "sleep" | "ethercrab" | "ecdrive": {
 //!     "name", "rt": { "priority_granted", "cpu_pinned", "memory_locked", "warnings" },
@@ -141,6 +142,9 @@ pub struct JitterConfig {
     /// Also count each run's cycle-thread syscalls per cycle (root or `perf_event_paranoid`
     /// ≤ 1; the tracepoint adds a little to every syscall, so leave it off for CPU figures).
     pub count_syscalls: bool,
+    /// When both masters send their frame after SYNC0; `None`: half a cycle (ecdrive's
+    /// default, see [`crate::master::startup::DcSettings`]).
+    pub sync0_shift: Option<Duration>,
 }
 
 impl JitterConfig {
@@ -159,6 +163,7 @@ impl JitterConfig {
             drives: vec!["generic-coe".into(), "generic-coe".into()],
             op_timeout: Duration::from_secs(10),
             count_syscalls: false,
+            sync0_shift: None,
         }
     }
 }
@@ -225,6 +230,13 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         )));
     }
     let profiles = emulated::profiles(&cfg.drives)?;
+    let sync0_shift = cfg.sync0_shift.unwrap_or(cfg.cycle / 2);
+    if sync0_shift >= cfg.cycle {
+        return Err(HarnessError::Settings(format!(
+            "the SYNC0 shift ({} µs) must be shorter than the cycle",
+            sync0_shift.as_micros()
+        )));
+    }
     let veth = match &cfg.transport {
         Transport::Veth if !is_root() => {
             return Err(HarnessError::Settings(
@@ -299,6 +311,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         op_timeout: cfg.op_timeout,
         reply_budget: 0.8,
         count_syscalls: cfg.count_syscalls,
+        sync0_shift,
     };
     let (mut ethercrab, seg) = match &cfg.transport {
         Transport::InProcess => plain::run(
@@ -327,6 +340,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         profiles: profiles.clone(),
         op_timeout: cfg.op_timeout,
         count_syscalls: cfg.count_syscalls,
+        sync0_shift,
     };
     let (mut ecd, seg) = match &cfg.transport {
         Transport::InProcess => {
@@ -377,6 +391,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         host: HostInfo::read(),
         settings: SettingsReport {
             count_syscalls: cfg.count_syscalls,
+            sync0_shift_ns: u64::try_from(sync0_shift.as_nanos()).unwrap_or(u64::MAX),
             cycle_ns,
             cycles: cfg.cycles,
             transport: match cfg.transport {

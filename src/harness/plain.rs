@@ -71,6 +71,8 @@ pub struct PlainSettings {
     pub reply_budget: f64,
     /// Count the loop thread's syscalls ([`super::cpu::SyscallWindow`]).
     pub count_syscalls: bool,
+    /// When the frame is sent after SYNC0 (ethercrab's `sync0_shift`).
+    pub sync0_shift: Duration,
 }
 
 fn err(what: impl Into<String>, reason: impl ToString) -> HarnessError {
@@ -398,7 +400,7 @@ async fn measure(
             DcConfiguration {
                 start_delay: Duration::from_millis(100),
                 sync0_period: s.cycle,
-                sync0_shift: Duration::ZERO,
+                sync0_shift: s.sync0_shift,
             },
         )
         .await

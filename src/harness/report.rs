@@ -353,6 +353,8 @@ pub struct SettingsReport {
     pub ecdrive_axes: String,
     /// Whether syscalls were counted (which costs a little on every syscall).
     pub count_syscalls: bool,
+    /// When both masters send their frame after SYNC0, ns.
+    pub sync0_shift_ns: u64,
 }
 
 /// The whole measurement. See [the module documentation](super) for the JSON layout.

@@ -353,6 +353,7 @@ pub fn run<L: FrameLink>(
     let mut recorded_overruns: u64 = 0;
     let mut all_op = false;
     let mut op_requested_at: Option<u64> = None;
+    let mut preop_requested_at: Option<u64> = None;
     let mut ending = false;
     let mut steady = false;
     let end;
@@ -467,7 +468,7 @@ pub fn run<L: FrameLink>(
                         steady = true;
                     }
                 }
-                if all_op {
+                if all_op && !ending {
                     if resp.working_counter != wkc_expected {
                         wkc_errors += 1;
                         emit!(EventKind::WorkingCounter {
@@ -616,7 +617,10 @@ pub fn run<L: FrameLink>(
                     velocity: f.velocity.as_ref().map(|_| a.tel.velocity_actual),
                     torque: f.torque.as_ref().map(|_| a.tel.torque_actual),
                     error_code: f.error_code.as_ref().map(|_| ErrorCode(a.tel.error_code)),
-                    zero_speed: None,
+                    zero_speed: f
+                        .zero_speed
+                        .as_ref()
+                        .map(|(z, bit)| read_u(z, inp) >> bit & 1 == 1),
                 }
             };
 
@@ -748,6 +752,15 @@ pub fn run<L: FrameLink>(
                                 a.runner.mode_switched(actual);
                             }
                         }
+                    }
+                    cia402::Event::ModeSwitchFailed(_) if a.requested_mode.is_some() => {
+                        // The program asked for this switch and cannot go on without it.
+                        a.requested_mode = None;
+                        a.program = ProgramState::Idle;
+                        emit!(EventKind::CommandRefused {
+                            axis: i as u16,
+                            why: "the program stopped: its mode switch failed"
+                        });
                     }
                     cia402::Event::Fault { .. } if !ending => {
                         a.program = ProgramState::Idle;
@@ -906,9 +919,28 @@ pub fn run<L: FrameLink>(
                 .iter()
                 .all(|a| !matches!(a.stopping, Stopping::Ramp { .. } | Stopping::Quick { .. }))
         {
-            emit!(EventKind::Stopped);
-            end = CycleEnd::Stopped;
-            break;
+            // Every axis is disabled. Leave OP while still exchanging process data (drives
+            // in OP with SYNC0 treat missing data as a communication fault): request PRE-OP,
+            // and end once no drive is in OP any more.
+            match preop_requested_at {
+                None => {
+                    for d in drives {
+                        let addr = d.info.address;
+                        let fut =
+                            pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(md, 0x0002u16));
+                        let _ = exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 2);
+                    }
+                    preop_requested_at = Some(cycle);
+                }
+                Some(at) => {
+                    let out_of_op = axes.iter().all(|a| a.al_state & 0x0F != 8);
+                    if out_of_op || (cycle - at) * cycle_ns > 1_000_000_000 {
+                        emit!(EventKind::Stopped);
+                        end = CycleEnd::Stopped;
+                        break;
+                    }
+                }
+            }
         }
 
         if recording {

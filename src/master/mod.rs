@@ -3,6 +3,7 @@
 pub mod bus;
 pub mod coe;
 pub mod cycle;
+pub mod demo;
 pub mod error;
 pub mod exec;
 pub mod io;

@@ -184,7 +184,30 @@ impl Decoder {
                     cia402::Event::ModeSwitchFailed(m) => {
                         (true, format!("mode switch failed: {m}"))
                     }
-                    other => (false, format!("{other:?}")),
+                    cia402::Event::StateChanged { from, to } => {
+                        let name = |s: Option<cia402::State>| {
+                            s.map_or("(no state)".to_string(), |s| s.to_string())
+                        };
+                        (false, format!("state {} → {}", name(from), name(to)))
+                    }
+                    cia402::Event::TargetReached(t) => (false, format!("reached {t:?}")),
+                    cia402::Event::FaultCleared => (false, "fault cleared".into()),
+                    cia402::Event::WarningChanged(w) => (
+                        false,
+                        if w { "warning set" } else { "warning cleared" }.into(),
+                    ),
+                    cia402::Event::ModeSwitched { from, to } => {
+                        (false, format!("mode {from} → {to}"))
+                    }
+                    cia402::Event::ModeDisplayMismatch {
+                        expected,
+                        displayed,
+                    } => (
+                        true,
+                        format!(
+                            "0x6061 shows {displayed} instead of {expected}; set-points paused"
+                        ),
+                    ),
                 };
                 (self.drive(axis), error, text)
             }

@@ -85,9 +85,11 @@ impl DriveSetup {
 /// Distributed-clock settings.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DcSettings {
-    /// Offset of the master's frame from SYNC0 (ethercrab sends `shift` after the SYNC0
-    /// instant).
-    pub shift: Duration,
+    /// When the master sends its frame, after the SYNC0 instant. `None`: half a cycle, so the
+    /// outputs reach every drive well before its next SYNC0 whatever the wake-up jitter (with
+    /// a shift near 0 or a whole cycle, jitter moves frames across SYNC0 and drives count the
+    /// cycles they miss).
+    pub shift: Option<Duration>,
     /// Delay before the first SYNC0.
     pub start_delay: Duration,
     /// The system-time difference every drive must get below before SAFE-OP → OP, ns.
@@ -99,7 +101,7 @@ pub struct DcSettings {
 impl Default for DcSettings {
     fn default() -> Self {
         Self {
-            shift: Duration::ZERO,
+            shift: None,
             start_delay: Duration::from_millis(100),
             settle_threshold_ns: 1000,
             settle_timeout: Duration::from_secs(5),
@@ -193,6 +195,8 @@ pub struct DriveFields {
     pub digital_inputs: Option<Field>,
     /// The profile's cycle counter (output) and its echo (input).
     pub counter: Option<(Field, Option<Field>)>,
+    /// The drive's zero-speed flag (input object and bit), if mapped.
+    pub zero_speed: Option<(Field, u8)>,
     /// Outputs that carry a fixed value from the first cycle on.
     pub output_defaults: Vec<(Field, i64)>,
 }
@@ -705,7 +709,7 @@ pub fn configure<L: FrameLink>(
     let dc_conf = DcConfiguration {
         start_delay: cfg.dc.start_delay,
         sync0_period: cfg.cycle,
-        sync0_shift: cfg.dc.shift,
+        sync0_shift: cfg.dc.shift.unwrap_or(cfg.cycle / 2),
     };
     let group = bus
         .block_on(&|| "starting SYNC0".into(), T_STEP, |md| {
@@ -827,6 +831,13 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
             .transpose()?,
         None => None,
     };
+    let zero_speed = match profile.zero_speed_flag {
+        Some(z) => layout
+            .raw_field(Direction::Tx, z.address, false)
+            .ok()
+            .map(|f| (f, z.bit)),
+        None => None,
+    };
     let mut output_defaults = Vec::new();
     for d in profile.output_defaults {
         if let Some(f) = get(Direction::Rx, d.address)? {
@@ -854,6 +865,7 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
         following_error: get(Direction::Tx, a(0x60F4, 0))?,
         digital_inputs: get(Direction::Tx, a(0x60FD, 0))?,
         counter,
+        zero_speed,
         output_defaults,
     })
 }

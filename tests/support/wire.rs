@@ -494,10 +494,19 @@ impl Wire {
 /// The recommended cyclic mapping layout of both drives (profile `cyclic_mapping`):
 /// outputs: controlword 0, target position 2, target velocity 6, target torque 10, mode 12;
 /// inputs: statusword 0, position 2, velocity 6, torque 10, following error 12, error code 16,
-/// mode display 18.
+/// mode display 18. The MR-J4-TM's adds Status DO 2 (0x2D12) at the end of its inputs.
 pub mod cyclic {
     pub const OUT: usize = 13;
     pub const IN: usize = 19;
+
+    /// Output and input image sizes of a profile's recommended cyclic mapping.
+    pub fn sizes(p: &ecdrive::drives::DriveProfile) -> (usize, usize) {
+        let l = ecdrive::pdo::Layout::new(&p.cyclic_mapping);
+        (
+            l.bytes(ecdrive::pdo::Direction::Rx),
+            l.bytes(ecdrive::pdo::Direction::Tx),
+        )
+    }
 
     pub fn set_cw(o: &mut [u8], cw: u16) {
         o[0..2].copy_from_slice(&cw.to_le_bytes());
@@ -569,8 +578,7 @@ impl Wire {
                     .unwrap_or_else(|c| panic!("{}: {} abort 0x{c:08X}", p.name, s.address));
             }
         }
-        let sizes: Vec<(usize, usize)> =
-            profiles.iter().map(|_| (cyclic::OUT, cyclic::IN)).collect();
+        let sizes: Vec<(usize, usize)> = profiles.iter().map(|p| cyclic::sizes(p)).collect();
         w.configure_pd(&sizes);
         for pos in 0..profiles.len() {
             assert_eq!(w.request(pos, 0x0004), (0x0004, 0), "SAFE-OP");

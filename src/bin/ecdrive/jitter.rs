@@ -50,6 +50,9 @@ pub struct JitterArgs {
     /// How long the drives may take to reach OP, in seconds.
     #[arg(long, value_name = "S", default_value_t = 10)]
     op_timeout: u64,
+    /// When both masters send their frame after SYNC0, in µs (default: half the cycle).
+    #[arg(long, value_name = "US")]
+    shift_us: Option<u64>,
     /// Also count each run's cycle-thread syscalls per cycle (root; the kernel tracepoint adds
     /// a little to every syscall, so leave it off when the CPU figures matter).
     #[arg(long)]
@@ -104,6 +107,7 @@ pub fn run(args: JitterArgs) -> ExitCode {
     cfg.drives = drives;
     cfg.op_timeout = Duration::from_secs(args.op_timeout);
     cfg.count_syscalls = args.syscalls;
+    cfg.sync0_shift = args.shift_us.map(Duration::from_micros);
     cfg.rt = RtSettings {
         priority: (args.priority > 0).then_some(args.priority),
         cpu: args.cpu,

@@ -2,6 +2,7 @@
 //! (`ecdrive::master::tools`, `ecdrive::config`, `ecdrive::sim::run`).
 
 mod can;
+mod demo;
 mod jitter;
 mod print;
 mod run;
@@ -95,7 +96,7 @@ struct Json {
 enum Command {
     /// Run the main job on emulated drives: an MR-J4-TM and a BDHDE in-process, brought to OP
     /// with DC, through a csp, csv and cst sequence. Needs no hardware and no root.
-    Demo,
+    Demo(demo::DemoArgs),
     /// List the devices on the segment: position, station address, alias, AL state,
     /// identity, name, matched drive profile, DC support and mailbox protocols. With --can:
     /// the CANopen nodes (node-ID, NMT state, device type, identity, name, profile).
@@ -516,16 +517,7 @@ fn main() -> ExitCode {
 
 fn dispatch(cli: Cli) -> ExitCode {
     match cli.command {
-        Command::Demo => {
-            eprintln!(
-                "ecdrive demo: not available yet.\n\
-                 When finished it will start an emulated Mitsubishi MR-J4-TM and a Servotronix \
-                 BDHDE in-process, bring both to OP with DC SYNC0, run a csp move, a csv ramp and \
-                 a cst step, and print a summary per drive and the cycle timing.\n\
-                 The software slave and the master loop it needs are still being built."
-            );
-            ExitCode::from(2)
-        }
+        Command::Demo(args) => demo::run(args),
         Command::Slaves { bus, verbose, json } => {
             let Some(interface) = bus.interface else {
                 return can::slaves(bus.can.as_deref().unwrap_or_default(), json.json);

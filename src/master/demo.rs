@@ -1,0 +1,316 @@
+//! `ecdrive demo`: the main job on the embedded default — an emulated MR-J4-TM and an emulated
+//! BDHDE, in-process, brought to OP with DC SYNC0 and driven through csp, csv and cst.
+//!
+//! Everything is real except the drives: the software slave emulates both drives on the wire
+//! (ESC registers, SII built from their ESI files, CoE, DC, CiA 402 with a motor model), and the
+//! master is the same code that runs against hardware. Needs no hardware and no root (without
+//! the privilege for SCHED_FIFO it says so and runs at normal priority).
+
+use super::cycle::CycleSettings;
+use super::error::{ErrorKind, MasterError};
+use super::program::{CyclicMode, Step, Target};
+use super::session::{Master, MasterConfig};
+use super::startup::{DriveSetup, Selector};
+use super::telemetry::{Axes, Command, StopKind};
+use crate::drives::{self, DriveProfile};
+use crate::rt::host::HostInfo;
+use crate::rt::{RtReport, RtSettings, Summary};
+use crate::sim::transport::SegmentLink;
+use crate::sim::{EscConfig, HostClock, Segment};
+use serde::Serialize;
+use std::sync::Arc;
+use std::time::Duration;
+
+/// Options of the demo.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DemoOptions {
+    /// Cycle time.
+    pub cycle: Duration,
+    /// Real-time settings of the cycle thread.
+    pub rt: RtSettings,
+}
+
+impl Default for DemoOptions {
+    fn default() -> Self {
+        Self {
+            cycle: Duration::from_millis(1),
+            rt: RtSettings {
+                priority: Some(80),
+                cpu: None,
+                lock_memory: true,
+            },
+        }
+    }
+}
+
+/// What the demo did with one drive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DemoDrive {
+    /// Position on the segment.
+    pub position: u16,
+    /// Profile name.
+    pub name: String,
+    /// SII name.
+    pub device_name: String,
+    /// Vendor ID.
+    pub vendor_id: u32,
+    /// Product code.
+    pub product_code: u32,
+    /// Revision.
+    pub revision: u32,
+    /// Serial number.
+    pub serial: u32,
+    /// CiA 402 states reached, in order.
+    pub states: Vec<String>,
+    /// Modes set-points were streamed in, in order.
+    pub modes: Vec<String>,
+    /// Largest |following error| while enabled, in position units.
+    pub max_following_error: i64,
+    /// The same in motor revolutions.
+    pub max_following_error_rev: f64,
+    /// Whether the drive's program ran to its end.
+    pub program_done: bool,
+}
+
+/// Cycle timing of the demo, ns.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DemoTiming {
+    /// Wake-up latency against the intended instant.
+    pub wake_latency: Summary,
+    /// Period between wake-ups.
+    pub period: Summary,
+    /// Frame round trip.
+    pub exchange: Summary,
+    /// Time awake per cycle.
+    pub busy: Summary,
+}
+
+/// The demo's result.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DemoReport {
+    /// Cycle time, µs.
+    pub cycle_us: u64,
+    /// The drives.
+    pub drives: Vec<DemoDrive>,
+    /// Timing.
+    pub timing: DemoTiming,
+    /// Cycles run.
+    pub cycles: u64,
+    /// Cycles without a reply.
+    pub lost: u64,
+    /// Cycles woken more than a cycle late.
+    pub overruns: u64,
+    /// What the RT set-up got.
+    pub rt: RtReport,
+    /// The host.
+    pub host: HostInfo,
+    /// Errors in the history (empty on success).
+    pub errors: Vec<String>,
+    /// The whole history, one line per entry (cycle, drive, what happened).
+    pub history: Vec<String>,
+    /// Whether everything completed.
+    pub ok: bool,
+}
+
+/// The program each drive runs: a csp move and sine, a csv ramp, a cst torque step, and back to
+/// csp, in the drive's own units (one motor revolution = `counts_per_rev`).
+pub fn program(profile: &DriveProfile) -> Vec<Step> {
+    let rev = profile.units.counts_per_rev;
+    vec![
+        Step::Move {
+            target: Target::By(0.5 * rev),
+            velocity: 2.0 * rev,
+            acceleration: 20.0 * rev,
+            jerk: Some(400.0 * rev),
+        },
+        Step::Sine {
+            amplitude: 0.05 * rev,
+            frequency: 2.0,
+            periods: 2.0,
+        },
+        Step::Mode {
+            mode: CyclicMode::Csv,
+        },
+        Step::Ramp {
+            velocity: 1.0 * rev,
+            acceleration: 10.0 * rev,
+            hold: 0.3,
+        },
+        Step::Ramp {
+            velocity: 0.0,
+            acceleration: 10.0 * rev,
+            hold: 0.05,
+        },
+        Step::Mode {
+            mode: CyclicMode::Cst,
+        },
+        Step::Torque {
+            torque: 50.0,
+            slope: Some(1000.0),
+            hold: 0.1,
+        },
+        Step::Torque {
+            torque: -50.0,
+            slope: Some(1000.0),
+            hold: 0.1,
+        },
+        // Back to position control through csv, which brakes with the drive's velocity loop
+        // (with zero torque a free motor coasts, and the MR-J4-TM switches to a position mode
+        // only at zero speed).
+        Step::Mode {
+            mode: CyclicMode::Csv,
+        },
+        Step::Ramp {
+            velocity: 0.0,
+            acceleration: 10.0 * rev,
+            hold: 0.05,
+        },
+        Step::Mode {
+            mode: CyclicMode::Csp,
+        },
+        Step::Move {
+            target: Target::By(-0.5 * rev),
+            velocity: 2.0 * rev,
+            acceleration: 20.0 * rev,
+            jerk: None,
+        },
+    ]
+}
+
+/// The demo segment: an emulated MR-J4-TM and an emulated BDHDE.
+pub fn segment() -> Result<Segment, MasterError> {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (i, p) in [&drives::mr_j4_tm::PROFILE, &drives::bdhde::PROFILE]
+        .iter()
+        .enumerate()
+    {
+        let dev = crate::sim::drives::emulated(p, 1000 + i as u32).map_err(|e| {
+            MasterError::new(
+                None,
+                format!("building the emulated {}", p.name),
+                ErrorKind::Config,
+                e,
+            )
+        })?;
+        seg.push(dev, EscConfig::default()).map_err(|e| {
+            MasterError::new(
+                None,
+                format!("building the emulated {}", p.name),
+                ErrorKind::Config,
+                e,
+            )
+        })?;
+    }
+    Ok(seg)
+}
+
+/// Run the demo.
+pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
+    let profiles = [&drives::mr_j4_tm::PROFILE, &drives::bdhde::PROFILE];
+    let mut cfg = MasterConfig::new(opts.cycle);
+    cfg.cycle = CycleSettings {
+        rt: opts.rt.clone(),
+        ..CycleSettings::new(opts.cycle)
+    };
+    for (i, p) in profiles.iter().enumerate() {
+        cfg.startup.drives.push(DriveSetup {
+            program: program(p),
+            ..DriveSetup::new(Selector::Position(i as u16))
+        });
+    }
+    let steps: Vec<usize> = profiles.iter().map(|p| program(p).len()).collect();
+    let mut m = Master::start(SegmentLink::new(segment()?), cfg).map_err(|f| f.error)?;
+    m.wait_until("every drive in OP", Duration::from_secs(10), |t| {
+        t.cycle.all_op
+    })?;
+    m.command(Command::Enable(Axes::All))?;
+    m.command(Command::RunProgram(Axes::All))?;
+    let done = m.wait_until("the programs to finish", Duration::from_secs(30), |t| {
+        t.axes
+            .iter()
+            .zip(&steps)
+            .all(|(a, n)| !a.program_running && a.program_step as usize >= *n)
+    });
+    let (report, _) = m.stop(StopKind::Ramp);
+    let report = report.ok_or_else(|| {
+        MasterError::new(
+            None,
+            "the demo",
+            ErrorKind::Bus,
+            "the session ended without a report",
+        )
+    })?;
+    let cycle = report.cycle.clone().ok_or_else(|| {
+        MasterError::new(None, "the demo", ErrorKind::Bus, "the cycle did not run")
+    })?;
+    let drives: Vec<DemoDrive> = report
+        .drives
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            let rev = profiles.get(i).map_or(1.0, |p| p.units.counts_per_rev);
+            let fe = cycle.max_following_error.get(i).copied().unwrap_or(0);
+            DemoDrive {
+                position: d.info.position,
+                name: d.profile.to_string(),
+                device_name: d.info.name.clone(),
+                vendor_id: d.info.vendor_id,
+                product_code: d.info.product_code,
+                revision: d.info.revision,
+                serial: d.info.serial,
+                states: cycle
+                    .states
+                    .get(i)
+                    .map(|v| v.iter().map(|s| s.to_string()).collect())
+                    .unwrap_or_default(),
+                modes: cycle
+                    .modes_run
+                    .get(i)
+                    .map(|v| v.iter().map(|m| m.name().to_string()).collect())
+                    .unwrap_or_default(),
+                max_following_error: fe,
+                max_following_error_rev: fe as f64 / rev,
+                program_done: done.is_ok(),
+            }
+        })
+        .collect();
+    let errors: Vec<String> = report
+        .history
+        .iter()
+        .filter(|h| h.error)
+        .map(|h| match &h.drive {
+            Some(d) => format!("{d}: {}", h.text),
+            None => h.text.clone(),
+        })
+        .collect();
+    let history: Vec<String> = report
+        .history
+        .iter()
+        .map(|h| {
+            let cycle = h.cycle.map_or(String::from("-"), |c| c.to_string());
+            match &h.drive {
+                Some(d) => format!("[{cycle}] {d}: {}", h.text),
+                None => format!("[{cycle}] {}", h.text),
+            }
+        })
+        .collect();
+    let ok = done.is_ok() && errors.is_empty() && report.shutdown_ok;
+    Ok(DemoReport {
+        cycle_us: opts.cycle.as_micros() as u64,
+        drives,
+        timing: DemoTiming {
+            wake_latency: cycle.timing.wake_latency.summary(),
+            period: cycle.timing.period.summary(),
+            exchange: cycle.timing.exchange.summary(),
+            busy: cycle.timing.busy.summary(),
+        },
+        cycles: cycle.cycles,
+        lost: cycle.lost,
+        overruns: cycle.overruns,
+        rt: cycle.rt.clone(),
+        host: HostInfo::read(),
+        errors,
+        history,
+        ok,
+    })
+}
