@@ -43,6 +43,9 @@
 //! whole time each drive was in OP from its first SYNC0 pulse on (both masters start SYNC0
 //! 100 ms after the DC set-up, and an emulated drive may reach OP before that).
 //!
+//! Both masters configure the same DC SYNC0: 100 ms start delay, SYNC0 period = cycle, frames
+//! sent [`JitterConfig::sync0_shift`] after SYNC0 (default half a cycle, ecdrive's default).
+//!
 //! Emulated drives: any sim device with a drive profile (`generic-coe`, the only one that runs
 //! at 125 µs, and the emulated `mr-j4-tm` and `bdhde` from 250 µs).
 //!
