@@ -18,6 +18,7 @@
 //! | [`sim`] | the software EtherCAT slave: ESC registers, SII, mailbox/CoE, DC and emulated drives |
 //! | [`master`] | the ethercrab integration: start-up, PDO and DC configuration, the cyclic loop |
 //! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
+//! | [`harness`] | the cycle-jitter harness behind `ecdrive jitter`: ecdrive's cycle against a bare sleep loop and plain ethercrab |
 //! | [`canopen`] | the same CiA 402 layer over CANopen |
 //! | [`config`] | the `ecdrive run` configuration file (TOML) → master configuration |
 #![warn(missing_docs)]
@@ -29,6 +30,7 @@ pub mod config;
 pub mod drives;
 pub mod ec;
 pub mod esi;
+pub mod harness;
 pub mod link;
 pub mod master;
 pub mod od;

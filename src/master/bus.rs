@@ -21,8 +21,18 @@ pub const MAX_SUBDEVICES: usize = 128;
 /// Largest process image (inputs + outputs of every device), bytes.
 pub const MAX_PDI: usize = 16384;
 
-/// The PDU storage of one session.
-pub type Storage = PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME) }>;
+/// The PDU storage of one session. An ethercrab frame buffer holds the whole Ethernet frame:
+/// `element_size` adds ethercrab's 28 bytes of headers (`element_size(0)`) to the PDU data, so
+/// the data may be `MAX_FRAME − 28` for every frame to fit an Ethernet frame. (With
+/// `element_size(MAX_FRAME)` ethercrab packs frames of up to 1542 bytes when there is much to
+/// send, e.g. the DC set-up of 64 drives, and a NIC or the in-process segment refuses them.)
+pub type Storage =
+    PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME - PduStorage::element_size(0)) }>;
+
+const _: () = assert!(
+    PduStorage::element_size(MAX_FRAME - PduStorage::element_size(0)) == MAX_FRAME,
+    "ethercrab frames must fit an Ethernet frame"
+);
 
 /// Timing of a session.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

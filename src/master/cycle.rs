@@ -56,6 +56,11 @@ pub struct CycleSettings {
     /// How late, as a fraction of the cycle, the reply may arrive before the cycle counts it
     /// as lost.
     pub reply_budget: f64,
+    /// Record the [`Timing`] histograms and the report's lost/overrun counts in steady state
+    /// only: from the cycle after every drive reached OP to the cycle that takes the stop
+    /// request. The jitter harness measures steady state; start-up cycles (extra frames for
+    /// the OP request) would blur it. Off by default: every cycle is recorded.
+    pub steady_timing_only: bool,
 }
 
 impl CycleSettings {
@@ -71,6 +76,7 @@ impl CycleSettings {
             stop_ramp: Duration::from_millis(200),
             stop_timeout: Duration::from_secs(3),
             reply_budget: 0.8,
+            steady_timing_only: false,
         }
     }
 }
@@ -168,9 +174,11 @@ pub struct CycleReport {
     pub end: CycleEnd,
     /// Cycles run.
     pub cycles: u64,
-    /// Cycles without a reply.
+    /// Cycles without a reply (in steady state only with
+    /// [`CycleSettings::steady_timing_only`]).
     pub lost: u64,
-    /// Cycles whose wake-up was more than one cycle late.
+    /// Cycles whose wake-up was more than one cycle late (in steady state only with
+    /// [`CycleSettings::steady_timing_only`]).
     pub overruns: u64,
     /// The histograms.
     pub timing: Timing,
@@ -357,6 +365,12 @@ pub fn run<L: FrameLink>(
     let mut consecutive_lost: u32 = 0;
     let mut wkc_errors: u32 = 0;
     let mut overruns: u64 = 0;
+    // What the timing histograms and the report's counts cover (see `steady_timing_only`).
+    let mut recording = !settings.steady_timing_only;
+    let mut recording_from_next = false;
+    let mut recording_ends = false;
+    let mut recorded_lost: u64 = 0;
+    let mut recorded_overruns: u64 = 0;
     let mut all_op = false;
     let mut op_requested_at: Option<u64> = None;
     let mut preop_requested_at: Option<u64> = None;
@@ -381,15 +395,24 @@ pub fn run<L: FrameLink>(
     }
 
     loop {
+        if recording_from_next {
+            recording_from_next = false;
+            recording = true;
+        }
         sleep_until_ns(next_wake);
         let woke = monotonic_ns();
         let latency = woke.saturating_sub(next_wake);
-        timing.wake_latency.record(latency);
-        if last_wake != 0 {
-            timing.period.record(woke - last_wake);
+        if recording {
+            timing.wake_latency.record(latency);
+            if last_wake != 0 {
+                timing.period.record(woke - last_wake);
+            }
         }
         if latency > cycle_ns {
             overruns += 1;
+            if recording {
+                recorded_overruns += 1;
+            }
         }
         last_wake = woke;
         cycle += 1;
@@ -405,7 +428,9 @@ pub fn run<L: FrameLink>(
         let mut next_wait: Option<u64> = None;
         match result {
             Ok(Ok(resp)) => {
-                timing.exchange.record(t_ex_done - t_ex);
+                if recording {
+                    timing.exchange.record(t_ex_done - t_ex);
+                }
                 if consecutive_lost > 0 {
                     emit!(EventKind::FramesResumed {
                         lost: consecutive_lost
@@ -457,6 +482,9 @@ pub fn run<L: FrameLink>(
                 if !all_op && every_op && !axes.is_empty() {
                     all_op = true;
                     emit!(EventKind::AllOp);
+                    if settings.steady_timing_only {
+                        recording_from_next = true;
+                    }
                     if let Some(h) = hooks {
                         h.steady_begin();
                         steady = true;
@@ -485,6 +513,9 @@ pub fn run<L: FrameLink>(
             }
             Ok(Err(_)) | Err(ExchangeError::Late) => {
                 lost_total += 1;
+                if recording {
+                    recorded_lost += 1;
+                }
                 consecutive_lost += 1;
                 emit!(EventKind::FrameLost {
                     consecutive: consecutive_lost
@@ -534,6 +565,9 @@ pub fn run<L: FrameLink>(
         while let Ok(cmd) = io.commands.pop() {
             match cmd {
                 Command::Stop(kind) => {
+                    if settings.steady_timing_only {
+                        recording_ends = true;
+                    }
                     if let Some(h) = hooks
                         && steady
                     {
@@ -966,7 +1000,12 @@ pub fn run<L: FrameLink>(
             }
         }
 
-        timing.busy.record(monotonic_ns() - woke);
+        if recording {
+            timing.busy.record(monotonic_ns() - woke);
+        }
+        if recording_ends {
+            recording = false;
+        }
         // 6. Next instant: DC-aligned when the reference clock answered, else one cycle on.
         next_wake = match next_wait {
             Some(w) => t_ex + w,
@@ -985,8 +1024,8 @@ pub fn run<L: FrameLink>(
     CycleReport {
         end,
         cycles: cycle,
-        lost: lost_total,
-        overruns,
+        lost: recorded_lost,
+        overruns: recorded_overruns,
         timing,
         rt,
         max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),

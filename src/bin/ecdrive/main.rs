@@ -3,6 +3,7 @@
 
 mod can;
 mod demo;
+mod jitter;
 mod print;
 mod run;
 mod sim;
@@ -304,8 +305,9 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
-    // `ecdrive jitter` (the jitter harness, `jitter.rs`) goes here: `mod jitter;` at the top,
-    // one variant here, and one dispatch line in `dispatch` below.
+    /// Measure the cycle's timing against a bare sleep loop and a plain ethercrab loop, on
+    /// emulated drives (in-process, or over a veth pair or an interface).
+    Jitter(jitter::JitterArgs),
 }
 
 #[derive(Subcommand, Clone)]
@@ -832,5 +834,6 @@ fn dispatch(cli: Cli) -> ExitCode {
             list_devices,
             json.json,
         ),
+        Command::Jitter(args) => jitter::run(args),
     }
 }

@@ -11,9 +11,11 @@
 
 mod dc;
 mod regs;
+mod timing;
 
 pub use dc::{DcUnit, SyncGen};
 pub use regs::{IMPLEMENTED, REG_SPACE, RegisterMap, TRIGGER};
+pub use timing::TimingStats;
 
 use super::device::{DcSyncStatus, Device, StateRequest, SyncEvent, SyncKind};
 use super::rec;
@@ -221,6 +223,8 @@ pub struct Esc {
     reset_step: u8,
     scratch: Vec<u8>,
     station_address_changed: bool,
+    /// Opt-in timing statistics (boxed: most ESCs never enable them).
+    timing: Option<Box<TimingStats>>,
 }
 
 fn overlaps(a: usize, b: usize, lo: usize, hi: usize) -> bool {
@@ -280,6 +284,7 @@ impl Esc {
             reset_step: 0,
             scratch: Vec::new(),
             station_address_changed: false,
+            timing: None,
             cfg,
         };
         let req = usize::from(mbx.map(|m| m.out_len).unwrap_or(0));
@@ -926,6 +931,18 @@ impl Esc {
             self.local_time(hop.forward_ns)
         };
         self.pd.last_outputs_ns = Some(t);
+        if self.state == AlState::Op
+            && self.dc.sync.active
+            && self.dc.sync.count > 0
+            && let Some(stats) = self.timing.as_deref_mut()
+        {
+            // Pulses up to now were delivered before this frame: the latest one was a cycle
+            // before the next.
+            let cycle = i128::from(self.dc.sync.cycle.max(1));
+            let last = i128::from(self.dc.sync.next) - cycle;
+            let since = (i128::from(t) - last).rem_euclid(cycle);
+            stats.record_arrival(since as u64);
+        }
         // Re-trigger the SM watchdog.
         if self.byte(Self::sm_base(sm.idx) + 4) & 0x40 != 0 {
             self.wd_deadline = self.watchdog_ns().map(|w| hop.forward_ns.saturating_add(w));
@@ -1281,6 +1298,11 @@ impl Esc {
                 let depth = self.byte(0x0934);
                 let f = self.dc.loop_input(hop.forward_ns, e, depth);
                 self.put_u32(0x092C, DcUnit::encode_difference(f));
+                if self.state == AlState::Op
+                    && let Some(t) = self.timing.as_deref_mut()
+                {
+                    t.record_dc_difference(f);
+                }
             }
         }
         if overlaps(a, b, 0x0930, 0x0932) || overlaps(a, b, 0x0934, 0x0936) {
@@ -1688,6 +1710,20 @@ impl Esc {
         self.set_bits(Self::sm_base(sm) + 5, 0x02, false);
     }
 
+    /// Start recording [`TimingStats`] (allocates the histograms once; recording never
+    /// allocates). Calling it again resets them.
+    pub fn enable_timing_stats(&mut self) {
+        match self.timing.as_deref_mut() {
+            Some(t) => t.reset(),
+            None => self.timing = Some(Box::new(TimingStats::new())),
+        }
+    }
+
+    /// The timing statistics, if enabled.
+    pub fn timing_stats(&self) -> Option<&TimingStats> {
+        self.timing.as_deref()
+    }
+
     /// Host time at which [`run_due`](Self::run_due) has something to do (next SYNC0 pulse or
     /// watchdog expiry), conservatively early.
     pub fn next_deadline(&self, host_now: u64) -> Option<u64> {
@@ -1758,6 +1794,15 @@ impl Esc {
                 c
             }
         };
+        if kind == SyncKind::Sync0
+            && self.state == AlState::Op
+            && let Some(stats) = self.timing.as_deref_mut()
+        {
+            stats.sync0_pulses += 1;
+            if self.pd.outputs_received == 0 {
+                stats.sync0_without_outputs += 1;
+            }
+        }
         let ev = SyncEvent {
             kind,
             time_ns: t,

@@ -69,6 +69,17 @@ impl EthercrabLink {
         tx: PduTx<'static>,
         rx: PduRx<'static>,
     ) -> std::io::Result<Self> {
+        Self::spawn_with(segment, tx, rx, || {})
+    }
+
+    /// Like [`spawn`](Self::spawn), running `on_start` first on the new thread (e.g. to give
+    /// it a real-time priority, or to note its CPU clock for measurements).
+    pub fn spawn_with(
+        segment: Segment,
+        tx: PduTx<'static>,
+        rx: PduRx<'static>,
+        on_start: impl FnOnce() + Send + 'static,
+    ) -> std::io::Result<Self> {
         let shared = Arc::new(Shared {
             segment: Mutex::new(segment),
             stop: AtomicBool::new(false),
@@ -78,7 +89,10 @@ impl EthercrabLink {
         let s = shared.clone();
         let thread = thread::Builder::new()
             .name("ecdrive-sim-ethercrab".into())
-            .spawn(move || pump(&s, tx, rx))?;
+            .spawn(move || {
+                on_start();
+                pump(&s, tx, rx)
+            })?;
         Ok(Self {
             shared,
             thread: Some(thread),

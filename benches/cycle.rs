@@ -1,0 +1,114 @@
+//! A whole in-process cycle of ecdrive's master: 2 and 64 emulated drives in OP with DC SYNC0,
+//! axes enabled and holding position in csp. The drives are the sim's emulations of the
+//! Mitsubishi MR-J4-TM and the Servotronix BDHDE, alternating (2 = one of each, 64 = 32 of
+//! each).
+//!
+//! What is measured is the **CPU time of the cycle thread per cycle**: the sleep's kernel
+//! side, the exchange (`tx_rx_dc`, the frame processed by the emulated segment inline), the
+//! AL/WKC checks, one CiA 402 step per axis, outputs and telemetry. The master runs on its own
+//! cycle thread at its real cycle time; the bench reads that thread's CPU clock
+//! (`pthread_getcpuclockid`, noted by a `CycleHooks` on the cycle thread) before and after
+//! `iters` cycles and reports the CPU time of `iters` cycles. Wall-clock figures (wake-up
+//! latency, jitter) are `ecdrive jitter`'s job, not a bench's.
+//!
+//! Run with `cargo bench --bench cycle`.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use ecdrive::harness::cpu::ThreadCpuClock;
+use ecdrive::harness::emulated;
+use ecdrive::master::cycle::CycleHooks;
+use ecdrive::master::session::{Master, MasterConfig};
+use ecdrive::master::startup::{DriveSetup, Selector};
+use ecdrive::master::telemetry::{Axes, Command, StopKind};
+use ecdrive::sim::transport::SegmentLink;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+#[derive(Default)]
+struct Clock(Mutex<Option<ThreadCpuClock>>);
+
+impl CycleHooks for Clock {
+    fn steady_begin(&self) {
+        if let Ok(mut c) = self.0.lock() {
+            *c = ThreadCpuClock::current();
+        }
+    }
+}
+
+/// `n` drives, MR-J4-TM and BDHDE alternating.
+fn line(n: usize) -> Vec<String> {
+    (0..n)
+        .map(|i| if i % 2 == 0 { "mr-j4-tm" } else { "bdhde" }.to_string())
+        .collect()
+}
+
+fn start(n: usize, cycle: Duration) -> (Master<SegmentLink>, ThreadCpuClock) {
+    let names = line(n);
+    let profiles = emulated::profiles(&names).expect("profiles");
+    let link = SegmentLink::new(emulated::segment(&names).expect("segment"));
+    let clock = Arc::new(Clock::default());
+    let mut cfg = MasterConfig::new(cycle);
+    cfg.emergency_poll = None;
+    cfg.hooks = Some(clock.clone());
+    cfg.cycle.segment_lost_after = 1000;
+    for (i, p) in profiles.into_iter().enumerate() {
+        cfg.startup.drives.push(DriveSetup {
+            profile: Some(p),
+            ..DriveSetup::new(Selector::Position(i as u16))
+        });
+    }
+    let mut m = Master::start(link, cfg).expect("start-up");
+    m.wait_until("OP", Duration::from_secs(30), |t| t.cycle.all_op)
+        .expect("OP");
+    m.command(Command::Enable(Axes::All)).expect("enable");
+    m.wait_until("enabled", Duration::from_secs(10), |t| {
+        t.axes
+            .iter()
+            .take(n)
+            .all(|a| a.state == Some(ecdrive::cia402::State::OperationEnabled))
+    })
+    .expect("every axis enabled");
+    let c = clock
+        .0
+        .lock()
+        .ok()
+        .and_then(|c| *c)
+        .expect("the cycle's CPU clock");
+    (m, c)
+}
+
+fn bench(c: &mut Criterion) {
+    let mut g = c.benchmark_group("cycle_cpu");
+    g.sample_size(10)
+        .warm_up_time(Duration::from_millis(100))
+        .measurement_time(Duration::from_millis(500));
+    // The shortest cycle both drives take is 250 µs; 64 drives get 1 ms.
+    for (n, cycle) in [
+        (2usize, Duration::from_micros(250)),
+        (64, Duration::from_millis(1)),
+    ] {
+        let (mut m, clock) = start(n, cycle);
+        g.bench_function(format!("{n}_drives"), |b| {
+            b.iter_custom(|iters| {
+                let c0 = m.telemetry().cycle.cycle;
+                let t0 = clock.now_ns().unwrap_or(0);
+                std::thread::sleep(cycle.saturating_mul(iters as u32));
+                m.wait_until("the cycles", Duration::from_secs(60), |t| {
+                    t.cycle.cycle >= c0 + iters
+                })
+                .expect("cycles");
+                let t1 = clock.now_ns().unwrap_or(0);
+                let c1 = m.telemetry().cycle.cycle;
+                // CPU per cycle over the cycles that really ran, times the cycles asked for.
+                let per = (t1 - t0) as f64 / (c1 - c0).max(1) as f64;
+                Duration::from_nanos((per * iters as f64) as u64)
+            })
+        });
+        let (r, _) = m.stop(StopKind::QuickStop);
+        assert!(r.is_some_and(|r| r.shutdown_ok), "clean shutdown");
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

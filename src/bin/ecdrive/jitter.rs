@@ -1,0 +1,169 @@
+//! `ecdrive jitter`: arguments and output. The measurement is `ecdrive::harness`.
+
+use super::exit;
+use clap::Args;
+use ecdrive::harness::{self, HarnessError, JitterConfig, Transport};
+use ecdrive::rt::RtSettings;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+/// Measure ecdrive's cycle against a bare sleep loop and a plain ethercrab loop, one after the
+/// other, at the same period, priority and CPU, on emulated drives.
+#[derive(Args, Debug)]
+pub struct JitterArgs {
+    /// Cycle time in µs (e.g. 1000, 500, 250, 125).
+    #[arg(long, value_name = "US", default_value_t = 1000)]
+    cycle_us: u64,
+    /// Length of each run in seconds.
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 10.0,
+        conflicts_with = "cycles"
+    )]
+    seconds: f64,
+    /// Length of each run in cycles (instead of --seconds).
+    #[arg(long, value_name = "N")]
+    cycles: Option<u64>,
+    /// Run over a veth pair the harness creates, the emulated drives on its far end in a
+    /// network namespace (needs root). Default: in-process.
+    #[arg(long, conflicts_with = "interface")]
+    veth: bool,
+    /// Run over this interface; its far end must already serve the drives (e.g. `ecdrive sim`
+    /// on the other end of a veth pair). Needs root or CAP_NET_RAW.
+    #[arg(long, short, value_name = "IF")]
+    interface: Option<String>,
+    /// SCHED_FIFO priority of every run's cycle thread (0: normal scheduling).
+    #[arg(long, value_name = "1-99", default_value_t = 80, value_parser = clap::value_parser!(u8).range(0..=99))]
+    priority: u8,
+    /// Pin every run's cycle thread to this CPU.
+    #[arg(long, value_name = "N")]
+    cpu: Option<usize>,
+    /// Do not lock memory (mlockall).
+    #[arg(long)]
+    no_mlock: bool,
+    /// An emulated drive, in line order, optionally repeated (`generic-coe:64`); repeat the
+    /// option for more. Default: generic-coe:2.
+    #[arg(long = "device", short = 'd', value_name = "NAME[:COUNT]")]
+    devices: Vec<String>,
+    /// How long the drives may take to reach OP, in seconds.
+    #[arg(long, value_name = "S", default_value_t = 10)]
+    op_timeout: u64,
+    /// When both masters send their frame after SYNC0, in µs (default: half the cycle).
+    #[arg(long, value_name = "US")]
+    shift_us: Option<u64>,
+    /// Also count each run's cycle-thread syscalls per cycle (root; the kernel tracepoint adds
+    /// a little to every syscall, so leave it off when the CPU figures matter).
+    #[arg(long)]
+    syscalls: bool,
+    /// Write every figure as JSON to this file.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Draw the latency histograms of the three runs on one log-scale plot (SVG).
+    #[arg(long, value_name = "FILE")]
+    svg: Option<PathBuf>,
+}
+
+fn expand(devices: &[String]) -> Result<Vec<String>, String> {
+    if devices.is_empty() {
+        return Ok(vec!["generic-coe".into(), "generic-coe".into()]);
+    }
+    let mut out = Vec::new();
+    for d in devices {
+        match d.rsplit_once(':') {
+            Some((name, n)) => {
+                let n: usize = n
+                    .parse()
+                    .ok()
+                    .filter(|n| (1..=128).contains(n))
+                    .ok_or_else(|| format!("--device {d}: the count must be 1 to 128"))?;
+                out.extend(std::iter::repeat_n(name.to_string(), n));
+            }
+            None => out.push(d.clone()),
+        }
+    }
+    if out.len() > 128 {
+        return Err(format!("{} drives: at most 128", out.len()));
+    }
+    Ok(out)
+}
+
+/// Run `ecdrive jitter`.
+pub fn run(args: JitterArgs) -> ExitCode {
+    let drives = match expand(&args.devices) {
+        Ok(d) => d,
+        Err(e) => {
+            eprintln!("ecdrive jitter: {e}");
+            return ExitCode::from(exit::USAGE);
+        }
+    };
+    let cycle = Duration::from_micros(args.cycle_us);
+    let cycles = args.cycles.unwrap_or_else(|| {
+        (args.seconds.max(0.0) * 1e6 / args.cycle_us.max(1) as f64).round() as u64
+    });
+    let mut cfg = JitterConfig::new(cycle);
+    cfg.cycles = cycles;
+    cfg.drives = drives;
+    cfg.op_timeout = Duration::from_secs(args.op_timeout);
+    cfg.count_syscalls = args.syscalls;
+    cfg.sync0_shift = args.shift_us.map(Duration::from_micros);
+    cfg.rt = RtSettings {
+        priority: (args.priority > 0).then_some(args.priority),
+        cpu: args.cpu,
+        lock_memory: !args.no_mlock,
+    };
+    cfg.transport = match (&args.interface, args.veth) {
+        (Some(i), _) => Transport::Interface(i.clone()),
+        (None, true) => Transport::Veth,
+        (None, false) => Transport::InProcess,
+    };
+    let report = match harness::run(&cfg, &|what| eprintln!("ecdrive jitter: {what}")) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("ecdrive jitter: {e}");
+            return ExitCode::from(match e {
+                HarnessError::Settings(_) | HarnessError::Emulation(_) => exit::USAGE,
+                HarnessError::Run { .. } | HarnessError::Netns(_) | HarnessError::Link(_) => {
+                    exit::BUS
+                }
+            });
+        }
+    };
+    for w in &report.warnings {
+        eprintln!("ecdrive jitter: warning: {w}");
+    }
+    println!("{}", report.text());
+    let command = std::iter::once("ecdrive".to_string())
+        .chain(std::env::args().skip(1))
+        .collect::<Vec<_>>()
+        .join(" ");
+    let mut ok = true;
+    if let Some(path) = &args.json {
+        let json = serde_json::to_value(&report).map(|mut v| {
+            if let Some(o) = v.as_object_mut() {
+                o.insert("command".into(), serde_json::Value::String(command.clone()));
+            }
+            v
+        });
+        let written = json
+            .and_then(|v| serde_json::to_string_pretty(&v))
+            .map_err(|e| e.to_string())
+            .and_then(|s| std::fs::write(path, s + "\n").map_err(|e| e.to_string()));
+        if let Err(e) = written {
+            eprintln!("ecdrive jitter: writing {}: {e}", path.display());
+            ok = false;
+        }
+    }
+    if let Some(path) = &args.svg
+        && let Err(e) = std::fs::write(path, harness::svg::render(&report))
+    {
+        eprintln!("ecdrive jitter: writing {}: {e}", path.display());
+        ok = false;
+    }
+    if ok {
+        ExitCode::from(exit::OK)
+    } else {
+        ExitCode::from(exit::USAGE)
+    }
+}

@@ -1,0 +1,220 @@
+//! The emulated drives a measurement runs against: sim devices by name, the drive profile the
+//! master uses for each, and fresh segments with the ESC timing statistics switched on.
+
+use crate::cia402::{DriveCaps, SupportedModes};
+use crate::drives::{
+    self, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units,
+};
+use crate::od::ObjectAddress;
+use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange};
+use crate::sim::devices::generic_coe::{GENERIC_COE_PRODUCT, OBJECTS};
+use crate::sim::devices::{self, TEST_VENDOR_ID};
+use crate::sim::{EscConfig, HostClock, Segment};
+use std::sync::Arc;
+
+static RANGES_RX: &[PdoRange] = &[PdoRange::new(0x1600, 0x1601, 8)];
+static RANGES_TX: &[PdoRange] = &[PdoRange::new(0x1A00, 0x1A01, 8)];
+static RX: &[Pdo] = &[Pdo::fixed(
+    0x1600,
+    &[PdoEntry::new(0x6040, 0, 16), PdoEntry::new(0x607A, 0, 32)],
+)];
+static TX: &[Pdo] = &[Pdo::fixed(
+    0x1A00,
+    &[PdoEntry::new(0x6041, 0, 16), PdoEntry::new(0x6064, 0, 32)],
+)];
+
+/// The profile the harness runs the sim's generic CoE device (`generic-coe`) with: its default
+/// mapping (controlword + target position, statusword + actual position, 6 bytes each way) as
+/// the cyclic mapping, DC SYNC0 with 0x1C32:01/02, any cycle from 125 µs in 125 µs steps.
+pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
+    name: "generic CoE device (emulated)",
+    key: "generic-coe",
+    vendor: "ecdrive",
+    identity: IdentityMatch {
+        vendor_id: TEST_VENDOR_ID,
+        product_code: GENERIC_COE_PRODUCT,
+    },
+    revision: 1,
+    caps: DriveCaps {
+        supported_modes: SupportedModes::ALL_STANDARD,
+        ..DriveCaps::CIA402
+    },
+    pdo_limits: PdoLimits {
+        drive: "generic CoE device",
+        rx: DirectionLimits {
+            pdos: RANGES_RX,
+            max_assigned: 2,
+            max_entries: 16,
+            max_bytes: 64,
+        },
+        tx: DirectionLimits {
+            pdos: RANGES_TX,
+            max_assigned: 2,
+            max_entries: 16,
+            max_bytes: 64,
+        },
+        assignment_writable: true,
+    },
+    default_mapping: Mapping::fixed(RX, TX),
+    cyclic_mapping: Mapping::fixed(RX, TX),
+    required_objects: &[],
+    dictionary: OBJECTS,
+    startup: &[],
+    output_defaults: &[],
+    cycle_counter: None,
+    sync: SyncSpec {
+        free_run: true,
+        dc_sync0: true,
+        cycle_times: CycleTimes::Range {
+            min_ns: 125_000,
+            max_ns: 10_000_000,
+            step_ns: 125_000,
+        },
+        assign_activate: 0x0300,
+        sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
+        cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
+    },
+    units: Units {
+        counts_per_rev: 1.0,
+        position_unit: "count",
+        velocity_unit_counts_per_s: 1.0,
+        velocity_unit: "count/s",
+        torque_unit: "‰",
+    },
+    complete_access: false,
+    esi: "",
+    zero_speed_flag: None,
+};
+
+/// Why the emulated line cannot be built.
+#[derive(Debug, thiserror::Error)]
+pub enum EmulationError {
+    /// The device name is unknown or the device cannot be built.
+    #[error("emulated drive {position}: {source}")]
+    Device {
+        /// Position in the line.
+        position: usize,
+        /// Why.
+        #[source]
+        source: devices::DeviceError,
+    },
+    /// No profile matches the device.
+    #[error(
+        "emulated drive {position} ({name}): no drive profile matches vendor 0x{vendor:08X} \
+         product 0x{product:08X}; the master cannot run it"
+    )]
+    NoProfile {
+        /// Position.
+        position: usize,
+        /// Device name.
+        name: String,
+        /// Vendor ID.
+        vendor: u32,
+        /// Product code.
+        product: u32,
+    },
+    /// The SII of a device cannot be built.
+    #[error("emulated drive {position} ({name}): {reason}")]
+    Sii {
+        /// Position.
+        position: usize,
+        /// Device name.
+        name: String,
+        /// Why.
+        reason: String,
+    },
+    /// No drive given.
+    #[error("no drives to emulate")]
+    Empty,
+}
+
+/// The profile the master uses for the sim device `name`: the harness's own for
+/// `generic-coe`, otherwise the registered profile matching the device's identity.
+pub fn profile_for(name: &str, position: usize) -> Result<&'static DriveProfile, EmulationError> {
+    if name == "generic-coe" {
+        return Ok(&GENERIC_COE_PROFILE);
+    }
+    let dev = devices::by_name(name, position)
+        .map_err(|source| EmulationError::Device { position, source })?;
+    let id = dev.description().identity;
+    drives::by_identity(id.vendor_id, id.product_code).ok_or(EmulationError::NoProfile {
+        position,
+        name: name.to_string(),
+        vendor: id.vendor_id,
+        product: id.product_code,
+    })
+}
+
+/// Profiles for a line of sim devices, in order.
+pub fn profiles(names: &[String]) -> Result<Vec<&'static DriveProfile>, EmulationError> {
+    if names.is_empty() {
+        return Err(EmulationError::Empty);
+    }
+    names
+        .iter()
+        .enumerate()
+        .map(|(i, n)| profile_for(n, i))
+        .collect()
+}
+
+/// \[REC\] The emulated oscillators: drive `i` runs `DRIFT_PPB[i % 4]` fast (negative: slow)
+/// against the host clock, with its local clock `i × 13.7 µs` ahead. Real crystals are
+/// specified to ±50–100 ppm; without drift the DC difference would be trivially zero and say
+/// nothing about the master's drift compensation.
+pub const DRIFT_PPB: [i64; 4] = [30_000, -20_000, 45_000, -35_000];
+
+/// A fresh segment of the named devices on the host clock, every ESC recording its timing
+/// statistics ([`crate::sim::esc::TimingStats`]), each with its own oscillator
+/// ([`DRIFT_PPB`]). The SM watchdog is off so that a stalled machine ends in a late-cycle count
+/// rather than an aborted run.
+pub fn segment(names: &[String]) -> Result<Segment, EmulationError> {
+    if names.is_empty() {
+        return Err(EmulationError::Empty);
+    }
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (position, name) in names.iter().enumerate() {
+        let dev = devices::by_name(name, position)
+            .map_err(|source| EmulationError::Device { position, source })?;
+        let at = seg
+            .push(
+                dev,
+                EscConfig {
+                    sm_watchdog: 0,
+                    clock_drift_ppb: DRIFT_PPB[position % DRIFT_PPB.len()],
+                    clock_offset_ns: position as i64 * 13_700,
+                    ..Default::default()
+                },
+            )
+            .map_err(|e| EmulationError::Sii {
+                position,
+                name: name.clone(),
+                reason: e.to_string(),
+            })?;
+        if let Some(s) = seg.slave_mut(at) {
+            s.esc.enable_timing_stats();
+        }
+    }
+    Ok(seg)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn generic_devices_get_the_harness_profile_and_unknown_names_are_named() {
+        let names = vec!["generic-coe".to_string(), "generic-coe".to_string()];
+        let p = profiles(&names).unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!(p[0].key, "generic-coe");
+        let seg = segment(&names).unwrap();
+        assert_eq!(seg.len(), 2);
+        assert!(seg.slave(1).unwrap().esc.timing_stats().is_some());
+        let e = profiles(&["nope".to_string()]).unwrap_err();
+        assert!(e.to_string().contains("unknown device \"nope\""), "{e}");
+        // A device without a drive profile: named, with its identity.
+        let e = profiles(&["generic-io".to_string()]).unwrap_err();
+        assert!(e.to_string().contains("generic-io"), "{e}");
+        assert!(matches!(profiles(&[]), Err(EmulationError::Empty)));
+    }
+}

@@ -1,0 +1,617 @@
+//! What a jitter measurement produces: per run the summaries, counts, CPU time and per-drive
+//! figures; the ratios of ecdrive to both baselines; the host conditions. Serialises to the JSON
+//! documented in [the module documentation](super).
+
+use super::cpu::CpuReport;
+use crate::rt::host::HostInfo;
+use crate::rt::{LatencyHistogram, RtReport, Summary};
+use hdrhistogram::Histogram;
+use serde::Serialize;
+use std::fmt::Write as _;
+
+/// Version tag of the JSON layout.
+pub const SCHEMA: &str = "ecdrive-jitter/1";
+
+/// The percentile summary of an hdrhistogram (ns).
+pub fn summary_of(h: &Histogram<u64>) -> Summary {
+    if h.is_empty() {
+        return Summary::default();
+    }
+    Summary {
+        count: h.len(),
+        min: h.min(),
+        p50: h.value_at_quantile(0.50),
+        p90: h.value_at_quantile(0.90),
+        p99: h.value_at_quantile(0.99),
+        p999: h.value_at_quantile(0.999),
+        max: h.max(),
+        mean: h.mean(),
+    }
+}
+
+/// One bin of a log-spaced histogram: values in `[lo_ns, hi_ns)`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Bucket {
+    /// Lower bound, ns.
+    pub lo_ns: u64,
+    /// Upper bound (exclusive), ns.
+    pub hi_ns: u64,
+    /// Samples in the bin.
+    pub count: u64,
+}
+
+/// Bins per decade of [`buckets`].
+pub const BINS_PER_DECADE: u32 = 20;
+
+/// The non-empty bins of `h` on a log scale ([`BINS_PER_DECADE`] per decade, from 1 ns).
+pub fn buckets(h: &Histogram<u64>) -> Vec<Bucket> {
+    let mut out: Vec<Bucket> = Vec::new();
+    let edge = |k: u32| -> u64 {
+        10f64
+            .powf(f64::from(k) / f64::from(BINS_PER_DECADE))
+            .round() as u64
+    };
+    for v in h.iter_recorded() {
+        let value = v.value_iterated_to().max(1);
+        let count = v.count_at_value();
+        let k = ((value as f64).log10() * f64::from(BINS_PER_DECADE))
+            .floor()
+            .max(0.0) as u32;
+        let (lo, hi) = (edge(k), edge(k + 1).max(edge(k) + 1));
+        match out.last_mut() {
+            Some(b) if b.lo_ns == lo => b.count += count,
+            _ => out.push(Bucket {
+                lo_ns: lo,
+                hi_ns: hi,
+                count,
+            }),
+        }
+    }
+    out
+}
+
+/// What the emulated slave saw of one run at one drive (from its ESC's timing statistics, see
+/// [`crate::sim::esc::TimingStats`]), over the whole time the drive was in OP (the measured
+/// window and the few cycles before and after it). Only available when the harness runs the
+/// emulated segment itself (in-process, or over the veth pair it creates).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DriveTiming {
+    /// Position on the segment.
+    pub position: u16,
+    /// Emulated device.
+    pub device: String,
+    /// |DC system-time difference| (0x092C) after each drift-compensation write in OP, ns;
+    /// `None` for the reference clock (it is the time the others are compared with).
+    pub dc_difference: Option<Summary>,
+    /// Time from the latest SYNC0 to the frame completing the outputs, in OP, ns; `None` if no
+    /// frame arrived in OP.
+    pub arrival_after_sync0: Option<Summary>,
+    /// SYNC0 pulses in OP.
+    pub sync0_pulses: u64,
+    /// SYNC0 pulses in OP that found no fresh outputs (the frame came late or not at all).
+    pub sync0_without_outputs: u64,
+}
+
+/// One measured run: the bare sleep loop, the plain ethercrab loop or ecdrive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RunReport {
+    /// `sleep`, `ethercrab` or `ecdrive`.
+    pub name: &'static str,
+    /// What the real-time set-up of the cycle thread got.
+    pub rt: RtReport,
+    /// Cycles in the measured window.
+    pub cycles: u64,
+    /// Wake-up latency against the intended instant, ns.
+    pub wake_latency: Summary,
+    /// Time between consecutive wake-ups, ns.
+    pub period: Summary,
+    /// |period − cycle time|, ns (derived from the period histogram: resolution 0.1 % of
+    /// the period).
+    pub period_error: Summary,
+    /// Frame round trip (exchange start → reply processed), ns; `None` for the sleep loop.
+    pub exchange: Option<Summary>,
+    /// Time awake per cycle (wake-up → ready to sleep), ns.
+    pub busy: Summary,
+    /// Cycles whose wake-up came more than one cycle late.
+    pub late: u64,
+    /// Cycles whose exchange did not complete within the reply budget (0.8 cycle after the
+    /// wake-up) or failed; `None` for the sleep loop.
+    pub missed: Option<u64>,
+    /// CPU time per cycle.
+    pub cpu: CpuReport,
+    /// Per drive, what the emulated slave saw; empty when the far end is not the harness's.
+    pub drives: Vec<DriveTiming>,
+    /// The wake-up latency histogram in log-spaced bins (for plots).
+    pub wake_latency_histogram: Vec<Bucket>,
+    /// Remarks (e.g. figures not available and why).
+    pub notes: Vec<String>,
+}
+
+/// Histograms a run records; turned into a [`RunReport`] by [`RunHistograms::report`].
+#[derive(Debug, Clone, Default)]
+pub struct RunHistograms {
+    /// Wake-up latency.
+    pub wake_latency: LatencyHistogram,
+    /// Period.
+    pub period: LatencyHistogram,
+    /// Exchange (none for the sleep loop).
+    pub exchange: Option<LatencyHistogram>,
+    /// Busy time.
+    pub busy: LatencyHistogram,
+}
+
+/// |period − cycle| from a period histogram. Derived rather than recorded, so that every run
+/// (ecdrive's cycle keeps a period histogram only) gets it the same way; its resolution is the
+/// period histogram's, 0.1 % of the period (1 µs at 1 ms).
+pub fn period_error(period: &Histogram<u64>, cycle_ns: u64) -> Summary {
+    let mut e = LatencyHistogram::new();
+    for v in period.iter_recorded() {
+        let x = period
+            .median_equivalent(v.value_iterated_to())
+            .abs_diff(cycle_ns);
+        for _ in 0..v.count_at_value() {
+            e.record(x);
+        }
+    }
+    e.summary()
+}
+
+impl RunHistograms {
+    /// Empty histograms (allocated here, recording never allocates).
+    pub fn new(with_exchange: bool) -> Self {
+        Self {
+            wake_latency: LatencyHistogram::new(),
+            period: LatencyHistogram::new(),
+            exchange: with_exchange.then(LatencyHistogram::new),
+            busy: LatencyHistogram::new(),
+        }
+    }
+
+    /// The report of a run with these histograms at `cycle_ns`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn report(
+        &self,
+        name: &'static str,
+        cycle_ns: u64,
+        rt: RtReport,
+        late: u64,
+        missed: Option<u64>,
+        cpu: CpuReport,
+        drives: Vec<DriveTiming>,
+        notes: Vec<String>,
+    ) -> RunReport {
+        RunReport {
+            name,
+            rt,
+            cycles: self.wake_latency.len(),
+            wake_latency: self.wake_latency.summary(),
+            period: self.period.summary(),
+            period_error: period_error(self.period.histogram(), cycle_ns),
+            exchange: self.exchange.as_ref().map(LatencyHistogram::summary),
+            busy: self.busy.summary(),
+            late,
+            missed,
+            cpu,
+            drives,
+            wake_latency_histogram: buckets(self.wake_latency.histogram()),
+            notes,
+        }
+    }
+}
+
+/// Ratios of two summaries (`None` where the denominator is 0).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct SummaryRatio {
+    /// Median.
+    pub p50: Option<f64>,
+    /// 90th percentile.
+    pub p90: Option<f64>,
+    /// 99th percentile.
+    pub p99: Option<f64>,
+    /// 99.9th percentile.
+    pub p999: Option<f64>,
+    /// Maximum.
+    pub max: Option<f64>,
+}
+
+fn ratio(a: f64, b: f64) -> Option<f64> {
+    (b > 0.0 && a.is_finite() && b.is_finite()).then(|| a / b)
+}
+
+impl SummaryRatio {
+    /// `a / b` per percentile.
+    pub fn of(a: &Summary, b: &Summary) -> Self {
+        let r = |x: u64, y: u64| ratio(x as f64, y as f64);
+        Self {
+            p50: r(a.p50, b.p50),
+            p90: r(a.p90, b.p90),
+            p99: r(a.p99, b.p99),
+            p999: r(a.p999, b.p999),
+            max: r(a.max, b.max),
+        }
+    }
+}
+
+/// Ratios of one drive's slave-side figures.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct DriveRatio {
+    /// Position.
+    pub position: u16,
+    /// DC system-time difference (`None` for the reference clock).
+    pub dc_difference: Option<SummaryRatio>,
+    /// Frame arrival after SYNC0.
+    pub arrival_after_sync0: Option<SummaryRatio>,
+}
+
+/// Every ecdrive figure as a ratio to one baseline.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Ratios {
+    /// Wake-up latency.
+    pub wake_latency: SummaryRatio,
+    /// Period error.
+    pub period_error: SummaryRatio,
+    /// Frame round trip (`None` against the sleep loop, which has none).
+    pub exchange: Option<SummaryRatio>,
+    /// Busy time.
+    pub busy: SummaryRatio,
+    /// Late cycles (`None` when the baseline had none).
+    pub late: Option<f64>,
+    /// Missed exchanges (`None` against the sleep loop or when the baseline had none).
+    pub missed: Option<f64>,
+    /// CPU per cycle of the master (cycle thread + TX/RX thread).
+    pub cpu_master: Option<f64>,
+    /// CPU per cycle of the cycle thread alone.
+    pub cpu_cycle_thread: Option<f64>,
+    /// CPU per cycle of the whole process.
+    pub cpu_process: Option<f64>,
+    /// Per drive (only against the plain ethercrab loop, with the harness's own far end).
+    pub drives: Vec<DriveRatio>,
+}
+
+impl Ratios {
+    /// `ecdrive / base` for every figure.
+    pub fn of(ecdrive: &RunReport, base: &RunReport) -> Self {
+        let opt = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (Some(a), Some(b)) => ratio(a, b),
+            _ => None,
+        };
+        let drives = ecdrive
+            .drives
+            .iter()
+            .filter_map(|d| {
+                base.drives
+                    .iter()
+                    .find(|b| b.position == d.position)
+                    .map(|b| {
+                        let both = |x: &Option<Summary>, y: &Option<Summary>| match (x, y) {
+                            (Some(x), Some(y)) => Some(SummaryRatio::of(x, y)),
+                            _ => None,
+                        };
+                        DriveRatio {
+                            position: d.position,
+                            dc_difference: both(&d.dc_difference, &b.dc_difference),
+                            arrival_after_sync0: both(
+                                &d.arrival_after_sync0,
+                                &b.arrival_after_sync0,
+                            ),
+                        }
+                    })
+            })
+            .collect();
+        Self {
+            wake_latency: SummaryRatio::of(&ecdrive.wake_latency, &base.wake_latency),
+            period_error: SummaryRatio::of(&ecdrive.period_error, &base.period_error),
+            exchange: match (&ecdrive.exchange, &base.exchange) {
+                (Some(a), Some(b)) => Some(SummaryRatio::of(a, b)),
+                _ => None,
+            },
+            busy: SummaryRatio::of(&ecdrive.busy, &base.busy),
+            late: ratio(ecdrive.late as f64, base.late as f64),
+            missed: match (ecdrive.missed, base.missed) {
+                (Some(a), Some(b)) => ratio(a as f64, b as f64),
+                _ => None,
+            },
+            cpu_master: opt(ecdrive.cpu.master_ns, base.cpu.master_ns),
+            cpu_cycle_thread: opt(ecdrive.cpu.cycle_thread_ns, base.cpu.cycle_thread_ns),
+            cpu_process: opt(ecdrive.cpu.process_ns, base.cpu.process_ns),
+            drives,
+        }
+    }
+}
+
+/// The ratios of ecdrive to both baselines.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct AllRatios {
+    /// ecdrive / bare sleep loop.
+    pub ecdrive_to_sleep: Ratios,
+    /// ecdrive / plain ethercrab loop.
+    pub ecdrive_to_ethercrab: Ratios,
+}
+
+/// The settings a measurement ran with.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SettingsReport {
+    /// Cycle time, ns.
+    pub cycle_ns: u64,
+    /// Cycles measured per run.
+    pub cycles: u64,
+    /// `in-process`, `veth` or `interface`.
+    pub transport: String,
+    /// The interface the masters used (veth host end or the given interface).
+    pub interface: Option<String>,
+    /// SCHED_FIFO priority requested.
+    pub priority: Option<u8>,
+    /// CPU requested.
+    pub cpu: Option<usize>,
+    /// Whether memory locking was requested.
+    pub lock_memory: bool,
+    /// The emulated drives, in line order.
+    pub drives: Vec<String>,
+    /// The drive profile the master used for each.
+    pub profiles: Vec<String>,
+    /// What ecdrive's axes did during the window.
+    pub ecdrive_axes: String,
+    /// Whether syscalls were counted (which costs a little on every syscall).
+    pub count_syscalls: bool,
+    /// When both masters send their frame after SYNC0, ns.
+    pub sync0_shift_ns: u64,
+}
+
+/// The whole measurement. See [the module documentation](super) for the JSON layout.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct JitterReport {
+    /// [`SCHEMA`].
+    pub schema: &'static str,
+    /// ecdrive's version.
+    pub version: &'static str,
+    /// Host conditions.
+    pub host: HostInfo,
+    /// Settings.
+    pub settings: SettingsReport,
+    /// Whether every run got the real-time priority requested (`false` also when none was
+    /// requested).
+    pub priority_granted: bool,
+    /// Warnings (priority not granted, memory not locked, …), each once.
+    pub warnings: Vec<String>,
+    /// The bare sleep loop.
+    pub sleep: RunReport,
+    /// The plain ethercrab `tx_rx_dc` loop.
+    pub ethercrab: RunReport,
+    /// ecdrive's cycle.
+    pub ecdrive: RunReport,
+    /// ecdrive's figures as ratios to the baselines.
+    pub ratios: AllRatios,
+}
+
+fn us(ns: u64) -> String {
+    format!("{:.1}", ns as f64 / 1000.0)
+}
+
+fn opt_us(v: Option<f64>) -> String {
+    v.map_or("-".into(), |ns| format!("{:.2}", ns / 1000.0))
+}
+
+fn x(v: Option<f64>) -> String {
+    v.map_or("-".into(), |r| format!("{r:.2}"))
+}
+
+impl JitterReport {
+    /// A plain-text table of the figures, for a terminal.
+    pub fn text(&self) -> String {
+        let mut s = String::new();
+        let st = &self.settings;
+        let h = &self.host;
+        let _ = writeln!(
+            s,
+            "cycle {} µs, {} cycles per run, {}{}, drives: {}",
+            st.cycle_ns / 1000,
+            st.cycles,
+            st.transport,
+            st.interface
+                .as_deref()
+                .map_or(String::new(), |i| format!(" ({i})")),
+            st.drives.join(", ")
+        );
+        let _ = writeln!(
+            s,
+            "host: {} | PREEMPT_RT {} | {} ({} CPUs) | governor {} | isolated CPUs {} | \
+             sched_rt_runtime_us {}",
+            h.kernel,
+            if h.preempt_rt { "yes" } else { "no" },
+            h.cpu_model,
+            h.cpus,
+            h.governor.as_deref().unwrap_or("n/a"),
+            if h.isolated_cpus.is_empty() {
+                "none"
+            } else {
+                &h.isolated_cpus
+            },
+            h.sched_rt_runtime_us
+                .map_or("n/a".into(), |v| v.to_string())
+        );
+        let _ = writeln!(
+            s,
+            "priority: {} ({}), CPU {}, memory lock {}",
+            st.priority
+                .map_or("none requested".into(), |p| format!("SCHED_FIFO {p}")),
+            if self.priority_granted {
+                "granted"
+            } else {
+                "NOT granted"
+            },
+            st.cpu.map_or("any".into(), |c| c.to_string()),
+            if st.lock_memory { "requested" } else { "off" }
+        );
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14} {:>6} {:>6}",
+            "all µs",
+            "wake-up latency p50/p99/p99.9/max",
+            "period err p50/max",
+            "exchange p50/max",
+            "busy p50/max",
+            "CPU/cycle",
+            "late",
+            "missed"
+        );
+        for r in [&self.sleep, &self.ethercrab, &self.ecdrive] {
+            let w = &r.wake_latency;
+            let _ = writeln!(
+                s,
+                "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14} {:>6} {:>6}",
+                r.name,
+                format!(
+                    "{} / {} / {} / {}",
+                    us(w.p50),
+                    us(w.p99),
+                    us(w.p999),
+                    us(w.max)
+                ),
+                format!("{} / {}", us(r.period_error.p50), us(r.period_error.max)),
+                r.exchange.as_ref().map_or("-".into(), |e| format!(
+                    "{} / {}",
+                    us(e.p50),
+                    us(e.max)
+                )),
+                format!("{} / {}", us(r.busy.p50), us(r.busy.max)),
+                opt_us(r.cpu.master_ns),
+                r.late,
+                r.missed.map_or("-".into(), |m| m.to_string()),
+            );
+        }
+        for (name, q) in [
+            ("÷ sleep", &self.ratios.ecdrive_to_sleep),
+            ("÷ ethercrab", &self.ratios.ecdrive_to_ethercrab),
+        ] {
+            let w = &q.wake_latency;
+            let _ = writeln!(
+                s,
+                "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14}",
+                name,
+                format!("{} / {} / {} / {}", x(w.p50), x(w.p99), x(w.p999), x(w.max)),
+                format!("{} / {}", x(q.period_error.p50), x(q.period_error.max)),
+                q.exchange
+                    .as_ref()
+                    .map_or("-".into(), |e| format!("{} / {}", x(e.p50), x(e.max))),
+                format!("{} / {}", x(q.busy.p50), x(q.busy.max)),
+                x(q.cpu_master),
+            );
+        }
+        let _ = writeln!(s);
+        let _ = writeln!(
+            s,
+            "CPU per cycle (µs): {:<10} {:>12} {:>12} {:>12} {:>14} {:>9}",
+            "", "cycle thr", "TX/RX thr", "process", "ctx sw vol/inv", "syscalls"
+        );
+        for r in [&self.sleep, &self.ethercrab, &self.ecdrive] {
+            let c = &r.cpu;
+            let _ = writeln!(
+                s,
+                "                    {:<10} {:>12} {:>12} {:>12} {:>14} {:>9}",
+                r.name,
+                opt_us(c.cycle_thread_ns),
+                opt_us(c.io_thread_ns),
+                opt_us(c.process_ns),
+                format!(
+                    "{} / {}",
+                    c.voluntary_switches
+                        .map_or("-".into(), |v| format!("{v:.2}")),
+                    c.involuntary_switches
+                        .map_or("-".into(), |v| format!("{v:.2}"))
+                ),
+                c.syscalls.map_or("-".into(), |v| format!("{v:.2}")),
+            );
+        }
+        if !self.ecdrive.drives.is_empty() || !self.ethercrab.drives.is_empty() {
+            let _ = writeln!(s);
+            let _ = writeln!(
+                s,
+                "at the drives (µs)  {:<10} {:>5} {:>24} {:>26} {:>10}",
+                "",
+                "drive",
+                "|DC diff| ns p50/p99/max",
+                "arrival after SYNC0 p50/max",
+                "no outputs"
+            );
+            for r in [&self.ethercrab, &self.ecdrive] {
+                for d in &r.drives {
+                    let _ = writeln!(
+                        s,
+                        "                    {:<10} {:>5} {:>24} {:>26} {:>10}",
+                        r.name,
+                        d.position,
+                        d.dc_difference
+                            .map_or("-".into(), |v| format!("{} / {} / {}", v.p50, v.p99, v.max)),
+                        d.arrival_after_sync0.map_or("-".into(), |v| format!(
+                            "{} / {}",
+                            us(v.p50),
+                            us(v.max)
+                        )),
+                        format!("{}/{}", d.sync0_without_outputs, d.sync0_pulses),
+                    );
+                }
+            }
+        }
+        let notes: Vec<String> = [&self.sleep, &self.ethercrab, &self.ecdrive]
+            .iter()
+            .flat_map(|r| r.notes.iter().map(move |n| format!("{}: {n}", r.name)))
+            .collect();
+        if !notes.is_empty() {
+            let _ = writeln!(s);
+            for n in notes {
+                let _ = writeln!(s, "note: {n}");
+            }
+        }
+        s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn buckets_cover_every_sample_once() {
+        let mut h = LatencyHistogram::new();
+        for v in [900u64, 1_000, 1_100, 5_000, 5_000, 1_000_000] {
+            h.record(v);
+        }
+        let b = buckets(h.histogram());
+        assert_eq!(b.iter().map(|b| b.count).sum::<u64>(), 6);
+        for w in b.windows(2) {
+            assert!(w[0].hi_ns <= w[1].lo_ns, "{b:?}");
+        }
+        for bin in &b {
+            assert!(bin.lo_ns < bin.hi_ns);
+        }
+    }
+
+    #[test]
+    fn period_error_is_the_distance_from_the_cycle() {
+        let mut p = LatencyHistogram::new();
+        for v in [1_000_000u64, 1_000_000, 1_010_000, 990_000] {
+            p.record(v);
+        }
+        let e = period_error(p.histogram(), 1_000_000);
+        assert_eq!(e.count, 4);
+        assert!(e.p50 < 1_000, "{e:?}");
+        assert!((9_000..=11_000).contains(&e.max), "{e:?}");
+    }
+
+    #[test]
+    fn ratios_are_none_on_a_zero_denominator() {
+        let a = Summary {
+            p50: 10,
+            max: 20,
+            ..Summary::default()
+        };
+        let b = Summary {
+            p50: 5,
+            ..Summary::default()
+        };
+        let r = SummaryRatio::of(&a, &b);
+        assert_eq!(r.p50, Some(2.0));
+        assert_eq!(r.max, None);
+    }
+}
