@@ -20,7 +20,8 @@ use super::program::{CyclicMode, Runner, Tick};
 use super::setpoint::Sample;
 use super::startup::{ConfiguredDrive, DriveFields, Group};
 use super::telemetry::{
-    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
+    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, Phase, StopKind, StopReason,
+    Telemetry,
 };
 use crate::cia402::{
     self, Axis, AxisConfig, ErrorCode, Feedback, OperationMode, State, StatusWord,
@@ -44,9 +45,16 @@ pub struct CycleSettings {
     pub safeop_cycles: u32,
     /// How long the drives may take to reach OP.
     pub op_timeout: Duration,
-    /// Consecutive cycles without a reply after which the segment counts as lost (the cycle
-    /// ends). The bound is three cycles.
+    /// Consecutive cycles without a reply after which the axes are stopped in a controlled
+    /// way (the ramp runs on the frames that get through; until then every axis holds its
+    /// set-point).
+    pub lost_before_stop: u32,
+    /// Consecutive cycles without a reply after which the segment counts as lost (cable pull
+    /// detected: an event, and the axes are stopped). Three by default.
     pub segment_lost_after: u32,
+    /// How long the segment may stay silent before the cycle ends: the drives' own
+    /// watchdogs have disabled them by then, and only a re-start brings them back.
+    pub segment_gone_after: Duration,
     /// Consecutive cycles with a wrong working counter before the axes are stopped.
     pub wkc_errors_before_stop: u32,
     /// Time to ramp a moving axis to standstill in a controlled stop.
@@ -71,7 +79,9 @@ impl CycleSettings {
             rt: RtSettings::default(),
             safeop_cycles: 20,
             op_timeout: Duration::from_secs(5),
+            lost_before_stop: 3,
             segment_lost_after: 3,
+            segment_gone_after: Duration::from_millis(200),
             wkc_errors_before_stop: 3,
             stop_ramp: Duration::from_millis(200),
             stop_timeout: Duration::from_secs(3),
@@ -100,6 +110,10 @@ pub struct CycleIo {
     pub telemetry: triple_buffer::Input<Telemetry>,
     /// Where the cycle reports what its real-time set-up got, before the loop starts.
     pub rt_report: Option<std::sync::mpsc::Sender<RtReport>>,
+    /// Re-starts so far (published in the telemetry).
+    pub restarts: u32,
+    /// This run is a re-start: [`Self::restarts`] counts up once every drive is in OP.
+    pub restarting: bool,
 }
 
 /// The supervisory ends of the channels.
@@ -127,6 +141,8 @@ pub fn channels(axes: usize) -> (CycleIo, SupervisorIo) {
             events: etx,
             telemetry: tin,
             rt_report: None,
+            restarts: 0,
+            restarting: false,
         },
         SupervisorIo {
             commands: ctx,
@@ -148,10 +164,24 @@ pub enum CycleEnd {
         /// AL state register value.
         al_state: u8,
     },
-    /// The segment stopped answering.
+    /// The segment stopped answering for longer than
+    /// [`CycleSettings::segment_gone_after`].
     SegmentLost,
     /// The link failed.
     LinkFailed,
+    /// A drive left OP on its own; every axis was stopped and disabled, the others taken to
+    /// PRE-OP.
+    DriveLeftOp {
+        /// Axis index.
+        axis: u16,
+        /// Its AL status (0x0130) when seen.
+        al_state: u8,
+        /// Its AL status code (0x0134), if it could be read.
+        code: Option<u16>,
+    },
+    /// A re-start was requested; every axis was stopped and disabled, the drives taken to
+    /// PRE-OP.
+    Restart,
 }
 
 /// Timing histograms of a cycle run.
@@ -212,10 +242,13 @@ pub struct SetpointSteps {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Stopping {
     No,
-    /// Ramping the set-point to standstill from this sample, started at this cycle.
+    /// Ramping the set-point to standstill from this sample, started at this good cycle
+    /// (the ramp's clock, like the program's, runs on cycles with a reply) and at this cycle
+    /// (for the timeout).
     Ramp {
         from: Sample,
         at: u64,
+        since: u64,
     },
     /// Quick stop requested at this cycle.
     Quick {
@@ -279,7 +312,7 @@ pub fn run<L: FrameLink>(
     group: &Group<SafeOp, HasDc>,
     drives: &[ConfiguredDrive],
     settings: &CycleSettings,
-    mut io: CycleIo,
+    io: &mut CycleIo,
     hooks: Option<&dyn CycleHooks>,
 ) -> CycleReport {
     let rt = settings.rt.apply_to_current_thread();
@@ -361,6 +394,13 @@ pub fn run<L: FrameLink>(
 
     // ---- the loop (no allocation from here on) -------------------------------------------
     let mut cycle: u64 = 0;
+    // Cycles with a reply: the clock of the programs and the stop ramps (a lost cycle holds
+    // the set-point, so the motion resumes where it stood).
+    let mut tick: u64 = 0;
+    let mut end_reason: Option<CycleEnd> = None;
+    let mut segment_lost = false;
+    let segment_gone_cycles = (settings.segment_gone_after.as_nanos() as u64 / cycle_ns.max(1))
+        .max(u64::from(settings.segment_lost_after));
     let mut lost_total: u64 = 0;
     let mut consecutive_lost: u32 = 0;
     let mut wkc_errors: u32 = 0;
@@ -426,8 +466,11 @@ pub fn run<L: FrameLink>(
         };
         let t_ex_done = monotonic_ns();
         let mut next_wait: Option<u64> = None;
+        let mut good = false;
         match result {
             Ok(Ok(resp)) => {
+                good = true;
+                tick += 1;
                 if recording {
                     timing.exchange.record(t_ex_done - t_ex);
                 }
@@ -437,12 +480,14 @@ pub fn run<L: FrameLink>(
                     });
                 }
                 consecutive_lost = 0;
+                segment_lost = false;
                 dc_time = resp.extra.dc_system_time;
                 last_wkc = resp.working_counter;
                 next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
                 // AL states (state checks ride along with the LRW).
                 let mut missing: Option<u16> = None;
                 let mut every_op = true;
+                let mut left_op: Option<(u16, u8)> = None;
                 for (i, st) in resp.subdevice_states.iter().enumerate() {
                     let raw: u8 = match st {
                         SubDeviceState::None => 0,
@@ -469,18 +514,49 @@ pub fn run<L: FrameLink>(
                             state: raw
                         });
                         if was_op && raw != 8 && !ending {
-                            // A drive left OP on its own: stop the others.
-                            emit!(EventKind::Stopping {
-                                reason: StopReason::DriveLeftOp { axis: i as u16 }
+                            // A drive left OP on its own: decode why, stop every axis, end.
+                            let addr = drives.get(i).map_or(0, |d| d.info.address);
+                            let code = {
+                                let fut = pin!(
+                                    EcCommand::fprd(addr, register::AL_STATUS_CODE)
+                                        .receive::<u16>(md)
+                                );
+                                match exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 4) {
+                                    Ok(Ok(c)) => Some(c),
+                                    _ => None,
+                                }
+                            };
+                            emit!(EventKind::LeftOp {
+                                axis: i as u16,
+                                state: raw,
+                                code
                             });
-                            for a in axes.iter_mut() {
-                                begin_stop(a, StopKind::Ramp, cycle);
+                            if left_op.is_none() {
+                                left_op = Some((i as u16, raw));
+                                end_reason = Some(CycleEnd::DriveLeftOp {
+                                    axis: i as u16,
+                                    al_state: raw,
+                                    code,
+                                });
                             }
                         }
                     }
                 }
+                if let Some((axis, _)) = left_op {
+                    emit!(EventKind::Stopping {
+                        reason: StopReason::DriveLeftOp { axis }
+                    });
+                    ending = true;
+                    for a in axes.iter_mut() {
+                        begin_stop(a, StopKind::Ramp, tick, cycle);
+                    }
+                }
                 if !all_op && every_op && !axes.is_empty() {
                     all_op = true;
+                    if io.restarting {
+                        io.restarting = false;
+                        io.restarts += 1;
+                    }
                     emit!(EventKind::AllOp);
                     if settings.steady_timing_only {
                         recording_from_next = true;
@@ -503,7 +579,7 @@ pub fn run<L: FrameLink>(
                                 reason: StopReason::WorkingCounter
                             });
                             for a in axes.iter_mut() {
-                                begin_stop(a, StopKind::Ramp, cycle);
+                                begin_stop(a, StopKind::Ramp, tick, cycle);
                             }
                         }
                     } else {
@@ -517,11 +593,38 @@ pub fn run<L: FrameLink>(
                     recorded_lost += 1;
                 }
                 consecutive_lost += 1;
-                emit!(EventKind::FrameLost {
-                    consecutive: consecutive_lost
-                });
-                if consecutive_lost >= settings.segment_lost_after {
+                // Each lost cycle up to the stop and the detection; after that the segment
+                // counts as lost, and the count comes with `FramesResumed` or `SegmentGone`.
+                if consecutive_lost <= settings.lost_before_stop.max(settings.segment_lost_after) {
+                    emit!(EventKind::FrameLost {
+                        consecutive: consecutive_lost
+                    });
+                }
+                if consecutive_lost == settings.lost_before_stop && !ending {
+                    emit!(EventKind::Stopping {
+                        reason: StopReason::FramesLost {
+                            cycles: consecutive_lost
+                        }
+                    });
+                    for a in axes.iter_mut() {
+                        if matches!(a.stopping, Stopping::No) {
+                            begin_stop(a, StopKind::Ramp, tick, cycle);
+                        }
+                    }
+                }
+                if consecutive_lost == settings.segment_lost_after && !segment_lost {
+                    segment_lost = true;
                     emit!(EventKind::SegmentLost {
+                        cycles: consecutive_lost
+                    });
+                    for a in axes.iter_mut() {
+                        if matches!(a.stopping, Stopping::No) {
+                            begin_stop(a, StopKind::Ramp, tick, cycle);
+                        }
+                    }
+                }
+                if u64::from(consecutive_lost) >= segment_gone_cycles {
+                    emit!(EventKind::SegmentGone {
                         cycles: consecutive_lost
                     });
                     end = CycleEnd::SegmentLost;
@@ -564,7 +667,11 @@ pub fn run<L: FrameLink>(
         // 3. Commands.
         while let Ok(cmd) = io.commands.pop() {
             match cmd {
-                Command::Stop(kind) => {
+                Command::Stop(_) | Command::Restart => {
+                    let kind = match cmd {
+                        Command::Stop(k) => k,
+                        _ => StopKind::Ramp,
+                    };
                     if settings.steady_timing_only {
                         recording_ends = true;
                     }
@@ -576,11 +683,21 @@ pub fn run<L: FrameLink>(
                     }
                     if !ending {
                         ending = true;
+                        let restart = cmd == Command::Restart;
+                        end_reason = Some(if restart {
+                            CycleEnd::Restart
+                        } else {
+                            CycleEnd::Stopped
+                        });
                         emit!(EventKind::Stopping {
-                            reason: StopReason::Requested
+                            reason: if restart {
+                                StopReason::Restart
+                            } else {
+                                StopReason::Requested
+                            }
                         });
                         for a in axes.iter_mut() {
-                            begin_stop(a, kind, cycle);
+                            begin_stop(a, kind, tick, cycle);
                         }
                     }
                 }
@@ -597,13 +714,22 @@ pub fn run<L: FrameLink>(
             }
         }
 
-        // 4. Per axis: inputs → program → engine → outputs.
-        let now_s = cycle as f64 * dt;
-        let mut any_energised = false;
+        // 4. Per axis: inputs → program → engine → outputs. On a lost cycle the inputs are
+        // stale: every axis holds its set-point (the outputs go out again unchanged), only the
+        // drive's cycle counter (if mapped) advances, as the drive expects one per cycle.
+        let now_s = tick as f64 * dt;
         for (i, a) in axes.iter_mut().enumerate() {
             let Ok(sd) = group.subdevice(md, i) else {
                 continue;
             };
+            if !good {
+                if let Some((c, _)) = &a.fields.counter {
+                    a.counter = a.counter.wrapping_add(1);
+                    let mut io_w = sd.io_raw_mut();
+                    write_i(c, io_w.outputs(), i64::from(a.counter));
+                }
+                continue;
+            }
             // Inputs.
             let fb = {
                 let io_r = sd.io_raw();
@@ -666,8 +792,8 @@ pub fn run<L: FrameLink>(
             }
             let mut sp = a.hold;
             match a.stopping {
-                Stopping::Ramp { from, at } => {
-                    let k = (cycle - at) as f64 / stop_ramp_cycles as f64;
+                Stopping::Ramp { from, at, .. } => {
+                    let k = tick.saturating_sub(at) as f64 / stop_ramp_cycles as f64;
                     if k >= 1.0 || !enabled {
                         a.axis.request_disable();
                         a.stopping = Stopping::Disabling;
@@ -678,7 +804,7 @@ pub fn run<L: FrameLink>(
                         };
                     } else {
                         // Linear velocity (and torque) ramp to zero; position integrates.
-                        let t = (cycle - at) as f64 * dt;
+                        let t = tick.saturating_sub(at) as f64 * dt;
                         let total = stop_ramp_cycles as f64 * dt;
                         sp = Sample {
                             pos: from.pos + from.vel * (t - t * t / (2.0 * total)),
@@ -871,7 +997,6 @@ pub fn run<L: FrameLink>(
             };
             let state = StatusWord::from_raw(a.tel.statusword).state();
             let energised = state.is_some_and(State::is_energised);
-            any_energised |= energised;
             if a.fields.following_error.is_none() {
                 // The actual value of this exchange answers the demand of two cycles ago.
                 a.tel.following_error = a.demand_hist[1] - a.pos;
@@ -927,7 +1052,7 @@ pub fn run<L: FrameLink>(
                     if !a.axis.status().fault && a.stopping == Stopping::No {
                         let st = a.axis.status();
                         if st.state == Some(State::OperationEnabled) {
-                            begin_stop(a, StopKind::Ramp, cycle);
+                            begin_stop(a, StopKind::Ramp, tick, cycle);
                         }
                     }
                 }
@@ -935,7 +1060,7 @@ pub fn run<L: FrameLink>(
         }
         // A controlled stop that takes too long: disable regardless.
         for a in axes.iter_mut() {
-            if let Stopping::Ramp { at, .. } | Stopping::Quick { at } = a.stopping
+            if let Stopping::Ramp { since: at, .. } | Stopping::Quick { at } = a.stopping
                 && cycle - at > stop_timeout_cycles
             {
                 a.axis.request_disable();
@@ -963,6 +1088,9 @@ pub fn run<L: FrameLink>(
                 exchange_ns: t_ex_done - t_ex,
                 busy_ns: monotonic_ns() - woke,
                 all_op,
+                lost_in_a_row: consecutive_lost,
+                phase: Phase::Cycling,
+                restarts: io.restarts,
             };
             for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
                 *slot = a.tel;
@@ -970,6 +1098,10 @@ pub fn run<L: FrameLink>(
             io.telemetry.publish();
         }
 
+        // Energised as last seen (on a lost cycle: as of the last reply).
+        let any_energised = axes
+            .iter()
+            .any(|a| a.tel.state.is_some_and(State::is_energised));
         if ending
             && !any_energised
             && axes
@@ -993,7 +1125,7 @@ pub fn run<L: FrameLink>(
                     let out_of_op = axes.iter().all(|a| a.al_state & 0x0F != 8);
                     if out_of_op || (cycle - at) * cycle_ns > 1_000_000_000 {
                         emit!(EventKind::Stopped);
-                        end = CycleEnd::Stopped;
+                        end = end_reason.unwrap_or(CycleEnd::Stopped);
                         break;
                     }
                 }
@@ -1035,7 +1167,9 @@ pub fn run<L: FrameLink>(
     }
 }
 
-fn begin_stop(a: &mut AxisRt, kind: StopKind, cycle: u64) {
+/// Begin a controlled stop of one axis at good cycle `tick` (the ramp's clock) and cycle
+/// `cycle` (the timeout's).
+fn begin_stop(a: &mut AxisRt, kind: StopKind, tick: u64, cycle: u64) {
     a.program = ProgramState::Idle;
     let st = a.axis.status();
     if !st.state.is_some_and(State::is_energised) {
@@ -1046,7 +1180,8 @@ fn begin_stop(a: &mut AxisRt, kind: StopKind, cycle: u64) {
     a.stopping = match kind {
         StopKind::Ramp => Stopping::Ramp {
             from: a.hold,
-            at: cycle,
+            at: tick,
+            since: cycle,
         },
         StopKind::QuickStop => {
             a.axis.request_quick_stop();

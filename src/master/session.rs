@@ -14,7 +14,10 @@ use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec;
 use super::io::FrameLink;
 use super::startup::{self, DeviceInfo, StartupConfig};
-use super::telemetry::{Command, Event, EventKind, StopKind, Telemetry};
+use super::telemetry::{
+    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, Phase, StopKind, StopReason,
+    Telemetry,
+};
 use crate::cia402::{self, ErrorCode, ErrorEntry};
 use crate::ec::register;
 use crate::pdo::Direction;
@@ -39,6 +42,28 @@ pub struct MasterConfig {
     pub emergency_poll: Option<Duration>,
     /// Instrumentation hooks on the cycle thread.
     pub hooks: Option<Arc<dyn CycleHooks + Send>>,
+    /// What happens when the cycle ends by itself (segment lost, a drive fell out of OP).
+    pub restart: RestartPolicy,
+}
+
+/// What the session does when its cycle ends by itself: the segment stopped answering, or a
+/// drive fell out of OP (every axis has then been stopped and disabled).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RestartPolicy {
+    /// The session ends; [`Master::join`] returns the report and the link (start a new
+    /// [`Master`] on it to try again).
+    Never,
+    /// The session waits (no frames) for [`Master::restart`] or [`Master::stop`].
+    OnRequest,
+    /// The session re-starts the drives by itself: every `retry_every` it checks whether the
+    /// segment answers with the same drives and takes them INIT → OP. After `max_attempts`
+    /// failed attempts in a row (if set) it waits for a request as with `OnRequest`.
+    Auto {
+        /// Time between attempts.
+        retry_every: Duration,
+        /// Failed attempts in a row before falling back to waiting for a request.
+        max_attempts: Option<u32>,
+    },
 }
 
 impl MasterConfig {
@@ -50,6 +75,7 @@ impl MasterConfig {
             bus: BusOptions::default(),
             emergency_poll: Some(Duration::from_millis(50)),
             hooks: None,
+            restart: RestartPolicy::Never,
         }
     }
 }
@@ -97,6 +123,8 @@ pub struct SessionReport {
     pub emergencies: Vec<EmergencyRecord>,
     /// Whether the drives reached INIT at the end.
     pub shutdown_ok: bool,
+    /// Re-starts that brought the drives back to OP.
+    pub restarts: u32,
 }
 
 /// A failed start: the error, and the link back.
@@ -152,6 +180,19 @@ struct Decoder {
 impl Decoder {
     fn drive(&self, axis: u16) -> Option<DriveRef> {
         self.drives.get(axis as usize).map(|(d, _)| d.clone())
+    }
+
+    fn name(&self, axis: u16) -> String {
+        self.drive(axis)
+            .map_or_else(|| format!("axis {axis}"), |d| d.to_string())
+    }
+
+    fn all_drives(&self) -> String {
+        self.drives
+            .iter()
+            .map(|(d, _)| d.to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     fn table(&self, axis: u16) -> &'static [ErrorEntry] {
@@ -242,7 +283,30 @@ impl Decoder {
             EventKind::FrameLost { consecutive } => (
                 None,
                 true,
-                format!("no reply in this cycle ({consecutive} in a row)"),
+                format!(
+                    "no reply in this cycle ({consecutive} in a row); {} held their set-points",
+                    self.all_drives()
+                ),
+            ),
+            EventKind::SegmentGone { cycles } => (
+                None,
+                true,
+                format!(
+                    "the segment stayed silent for {cycles} cycles: the cycle ends; {} are \
+                     disabled by their own watchdogs; a re-start brings them back",
+                    self.all_drives()
+                ),
+            ),
+            EventKind::LeftOp { axis, state, code } => (
+                self.drive(axis),
+                true,
+                format!(
+                    "left OP on its own: AL status {}, AL status code {}",
+                    cycle::al_state_name(state),
+                    code.map_or("unreadable".to_string(), |c| {
+                        crate::ec::AlStatusCode(c).to_string()
+                    })
+                ),
             ),
             EventKind::FramesResumed { lost } => (
                 None,
@@ -254,11 +318,7 @@ impl Decoder {
                 true,
                 format!(
                     "the segment stopped answering ({cycles} cycles without a reply); drives: {}",
-                    self.drives
-                        .iter()
-                        .map(|(d, _)| d.to_string())
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    self.all_drives()
                 ),
             ),
             EventKind::FollowingError { axis, value, limit } => (
@@ -272,7 +332,24 @@ impl Decoder {
             EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
             EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
             EventKind::Stopping { reason } => {
-                (None, false, format!("stopping the axes: {reason:?}"))
+                let why = match reason {
+                    StopReason::Requested => "requested".to_string(),
+                    StopReason::Restart => "re-start requested".to_string(),
+                    StopReason::DriveFault { axis } => format!("{} faulted", self.name(axis)),
+                    StopReason::FollowingError { axis } => {
+                        format!("following error of {}", self.name(axis))
+                    }
+                    StopReason::FramesLost { cycles } => {
+                        format!("{cycles} cycles in a row without a reply")
+                    }
+                    StopReason::DriveLeftOp { axis } => format!("{} left OP", self.name(axis)),
+                    StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
+                };
+                (
+                    None,
+                    false,
+                    format!("stopping the axes in a controlled way: {why}"),
+                )
             }
             EventKind::Stopped => (None, false, "every axis disabled; cycle ended".into()),
         };
@@ -307,22 +384,7 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                 let Ok(link) = link_rx.recv() else {
                     return None;
                 };
-                let tx_err = tx.clone();
-                let r = with_bus(link, cfg2.bus, move |bus| {
-                    session(bus, &cfg2, &shared2, &tx)
-                });
-                Some(match r {
-                    Ok((report, link)) => (report, link),
-                    Err((e, link)) => {
-                        let _ = tx_err.send(Err(MasterError::new(
-                            None,
-                            "opening the bus",
-                            ErrorKind::Bus,
-                            e,
-                        )));
-                        (None, link)
-                    }
-                })
+                Some(session(link, &cfg2, &shared2, &tx))
             });
         let thread = match thread {
             Ok(t) => t,
@@ -452,6 +514,14 @@ impl<L: FrameLink + Send + 'static> Master<L> {
         }
     }
 
+    /// Re-start the drives on the same link (see [`Command::Restart`]): while the cycle runs,
+    /// every axis is stopped in a controlled way and the cycle ends first; while the session
+    /// waits after the segment was lost or a drive fell out of OP, the drives are taken
+    /// INIT → OP again. The history records each attempt and its outcome.
+    pub fn restart(&mut self) -> Result<(), MasterError> {
+        self.command(Command::Restart)
+    }
+
     /// Stop every axis in a controlled way, end the cycle, take the drives to INIT. Returns the
     /// report and the link.
     pub fn stop(mut self, kind: StopKind) -> (Option<SessionReport>, L) {
@@ -459,8 +529,9 @@ impl<L: FrameLink + Send + 'static> Master<L> {
         self.join()
     }
 
-    /// Wait for the session to end by itself (segment lost, OP failed) and return its report
-    /// and the link.
+    /// Wait for the session to end by itself and return its report and the link. With
+    /// [`RestartPolicy::Never`] it ends when its cycle does (segment lost, a drive fell out of
+    /// OP, OP not reached); with the other policies only on [`Master::stop`].
     pub fn join(mut self) -> (Option<SessionReport>, L) {
         match self.thread.take().map(JoinHandle::join) {
             Some(Ok(Some(r))) => r,
@@ -482,58 +553,351 @@ impl<L: FrameLink + Send + 'static> Drop for Master<L> {
     }
 }
 
-/// The session: start-up, cycle, supervision, shutdown. Runs on the session thread.
+/// What one run on a bus (start-up, cycle, shutdown) came to.
+enum RunEnd {
+    /// The session is over: stopped on request, OP not reached at the first start, the link
+    /// failed.
+    Over,
+    /// The cycle ended by itself: the segment was lost or a drive fell out of OP.
+    Interrupted,
+    /// A re-start was requested while the cycle ran.
+    Restart,
+    /// Start-up failed (at the first start: `start` returns the error; later: a failed
+    /// re-start attempt).
+    StartFailed(MasterError),
+}
+
+/// What lives across the runs of one session (the supervisory ends stay with the [`Master`]).
+struct Persist {
+    cycle_io: cycle::CycleIo,
+    events: rtrb::Consumer<Event>,
+    decoder: Decoder,
+    summaries: Vec<DriveSummary>,
+    last_cycle: Option<CycleReport>,
+    emergencies: Vec<EmergencyRecord>,
+    restarts: u32,
+    shutdown_ok: bool,
+}
+
+impl Persist {
+    /// Publish a snapshot while no cycle runs: the phase, the re-start count, each axis's
+    /// last known CiA 402 state.
+    fn publish_idle(&mut self, phase: Phase) {
+        let n = self.summaries.len();
+        let states: Vec<Option<cia402::State>> = (0..n)
+            .map(|i| {
+                self.last_cycle
+                    .as_ref()
+                    .and_then(|r| r.states.get(i).and_then(|s| s.last().copied()))
+            })
+            .collect();
+        let lost = self.last_cycle.as_ref().map_or(0, |r| r.lost);
+        let t = self.cycle_io.telemetry.input_buffer_mut();
+        t.cycle = CycleTelemetry {
+            phase,
+            restarts: self.restarts,
+            lost,
+            ..CycleTelemetry::default()
+        };
+        t.axes.clear();
+        t.axes.extend(states.into_iter().map(|state| AxisTelemetry {
+            state,
+            ..AxisTelemetry::default()
+        }));
+        self.cycle_io.telemetry.publish();
+    }
+}
+
+fn push_history(shared: &Shared, e: HistoryEntry) {
+    if let Ok(mut h) = shared.history.lock() {
+        h.push(e);
+    }
+}
+
+fn note(shared: &Shared, error: bool, text: String) {
+    push_history(
+        shared,
+        HistoryEntry {
+            time_ns: monotonic_ns(),
+            cycle: None,
+            drive: None,
+            error,
+            text,
+        },
+    );
+}
+
+/// The session: runs (start-up, cycle, shutdown) on fresh buses over the same link, re-started
+/// as the [`RestartPolicy`] says. Runs on the session thread.
 fn session<L: FrameLink + Send>(
+    link: L,
+    cfg: &MasterConfig,
+    shared: &Shared,
+    started_tx: &mpsc::Sender<Result<Started, MasterError>>,
+) -> (Option<SessionReport>, L) {
+    let mut link = link;
+    let mut persist: Option<Persist> = None;
+    let mut failures: u32 = 0;
+    let mut restarting = false;
+    loop {
+        let r = with_bus(link, cfg.bus, |bus| {
+            run(bus, cfg, shared, started_tx, &mut persist, restarting)
+        });
+        let end = match r {
+            Ok((end, l)) => {
+                link = l;
+                end
+            }
+            Err((e, l)) => {
+                link = l;
+                RunEnd::StartFailed(MasterError::new(None, "opening the bus", ErrorKind::Bus, e))
+            }
+        };
+        let Some(p) = persist.as_mut() else {
+            // The first start failed: `start` returns the error.
+            if let RunEnd::StartFailed(e) = end {
+                let _ = started_tx.send(Err(e));
+            }
+            return (None, link);
+        };
+        match end {
+            RunEnd::Over => break,
+            RunEnd::Restart => {
+                failures = 0;
+                restarting = true;
+                note(shared, false, "re-starting the drives on request".into());
+                continue;
+            }
+            RunEnd::Interrupted => {
+                failures = 0;
+                match cfg.restart {
+                    RestartPolicy::Never => break,
+                    RestartPolicy::OnRequest => note(
+                        shared,
+                        false,
+                        "waiting for a re-start request (Master::restart)".into(),
+                    ),
+                    RestartPolicy::Auto { retry_every, .. } => note(
+                        shared,
+                        false,
+                        format!(
+                            "re-starting automatically, trying every {} ms",
+                            retry_every.as_millis()
+                        ),
+                    ),
+                }
+            }
+            RunEnd::StartFailed(e) => {
+                failures += 1;
+                note(
+                    shared,
+                    true,
+                    format!("re-start attempt {failures} failed: {e}"),
+                );
+            }
+        }
+        let auto = match cfg.restart {
+            RestartPolicy::Auto {
+                retry_every,
+                max_attempts,
+            } => {
+                if max_attempts.is_some_and(|m| failures >= m) {
+                    if max_attempts == Some(failures) {
+                        note(
+                            shared,
+                            true,
+                            format!(
+                                "giving up automatic re-starts after {failures} failed \
+                                 attempts; waiting for a re-start request"
+                            ),
+                        );
+                    }
+                    None
+                } else {
+                    Some(retry_every)
+                }
+            }
+            _ => None,
+        };
+        if wait_for_restart(p, auto, shared) {
+            restarting = true;
+        } else {
+            break;
+        }
+    }
+    let Some(mut p) = persist else {
+        return (None, link);
+    };
+    p.publish_idle(Phase::Ended);
+    let history = shared.history.lock().map(|h| h.clone()).unwrap_or_default();
+    (
+        Some(SessionReport {
+            drives: p.summaries,
+            cycle: p.last_cycle,
+            history,
+            emergencies: p.emergencies,
+            shutdown_ok: p.shutdown_ok,
+            restarts: p.restarts,
+        }),
+        link,
+    )
+}
+
+/// Between runs: wait for [`Command::Restart`] (true) or [`Command::Stop`] (false), or until
+/// `auto` has passed (true). Other commands are refused in the history: no cycle runs.
+fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) -> bool {
+    p.publish_idle(if auto.is_some() {
+        Phase::Restarting
+    } else {
+        Phase::WaitingForRestart
+    });
+    let deadline = auto.map(|d| monotonic_ns() + d.as_nanos() as u64);
+    loop {
+        while let Ok(c) = p.cycle_io.commands.pop() {
+            match c {
+                Command::Restart => return true,
+                Command::Stop(_) => return false,
+                other => note(
+                    shared,
+                    true,
+                    format!("{other:?} refused: no cycle runs (waiting for a re-start)"),
+                ),
+            }
+        }
+        if deadline.is_some_and(|d| monotonic_ns() >= d) {
+            return true;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+}
+
+/// Whether the segment holds the drives the session started with (a re-start must find the
+/// same drives at the same positions).
+fn same_drives(summaries: &[DriveSummary], devices: &[DeviceInfo]) -> Result<(), MasterError> {
+    for s in summaries {
+        let found = devices.iter().find(|d| d.position == s.info.position);
+        match found {
+            Some(d)
+                if d.vendor_id == s.info.vendor_id
+                    && d.product_code == s.info.product_code
+                    && d.serial == s.info.serial => {}
+            Some(d) => {
+                return Err(MasterError::new(
+                    Some(&s.drive),
+                    "re-start",
+                    ErrorKind::Config,
+                    format!(
+                        "another device is at its position now: vendor 0x{:08X} product \
+                         0x{:08X} serial {} (it was vendor 0x{:08X} product 0x{:08X} serial {})",
+                        d.vendor_id,
+                        d.product_code,
+                        d.serial,
+                        s.info.vendor_id,
+                        s.info.product_code,
+                        s.info.serial
+                    ),
+                ));
+            }
+            None => {
+                return Err(MasterError::new(
+                    Some(&s.drive),
+                    "re-start",
+                    ErrorKind::Bus,
+                    format!(
+                        "the drive does not answer (the segment has {} device(s))",
+                        devices.len()
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// One run: start-up, the cycle with its supervision, shutdown.
+fn run<L: FrameLink + Send>(
     bus: &mut super::bus::Bus<'_, L>,
     cfg: &MasterConfig,
     shared: &Shared,
     started_tx: &mpsc::Sender<Result<Started, MasterError>>,
-) -> Option<SessionReport> {
-    let started = match (|| {
+    persist: &mut Option<Persist>,
+    restarting: bool,
+) -> RunEnd {
+    let started = (|| {
         let (group, devices) = startup::discover(bus)?;
+        if let Some(p) = persist.as_ref() {
+            same_drives(&p.summaries, &devices)?;
+        }
         let plan = startup::plan(&devices, &cfg.startup)?;
         startup::configure(bus, group, devices, plan, &cfg.startup)
-    })() {
+    })();
+    let started = match started {
         Ok(s) => s,
-        Err(e) => {
-            let _ = started_tx.send(Err(e));
-            return None;
-        }
+        Err(e) => return RunEnd::StartFailed(e),
     };
-    let summaries: Vec<DriveSummary> = started
-        .drives
-        .iter()
-        .map(|d| DriveSummary {
-            drive: d.drive.clone(),
-            info: d.info.clone(),
-            profile: d.profile.name,
-            image_bytes: (d.layout.bytes(Direction::Rx), d.layout.bytes(Direction::Tx)),
-            mode: d.setup.mode.name(),
-        })
-        .collect();
-    let decoder = Decoder {
-        drives: started
+    if persist.is_none() {
+        let summaries: Vec<DriveSummary> = started
             .drives
             .iter()
-            .map(|d| (d.drive.clone(), d.profile.caps.error_table))
-            .collect(),
+            .map(|d| DriveSummary {
+                drive: d.drive.clone(),
+                info: d.info.clone(),
+                profile: d.profile.name,
+                image_bytes: (d.layout.bytes(Direction::Rx), d.layout.bytes(Direction::Tx)),
+                mode: d.setup.mode.name(),
+            })
+            .collect();
+        let decoder = Decoder {
+            drives: started
+                .drives
+                .iter()
+                .map(|d| (d.drive.clone(), d.profile.caps.error_table))
+                .collect(),
+        };
+        // The channels, sized for exactly these drives (every telemetry buffer holds one
+        // entry per drive); they live as long as the session, across re-starts.
+        let (cycle_io, sup) = cycle::channels(started.drives.len());
+        let _ = started_tx.send(Ok(Started {
+            drives: summaries.clone(),
+            commands: sup.commands,
+            telemetry: sup.telemetry,
+        }));
+        *persist = Some(Persist {
+            cycle_io,
+            events: sup.events,
+            decoder,
+            summaries,
+            last_cycle: None,
+            emergencies: Vec::new(),
+            restarts: 0,
+            shutdown_ok: false,
+        });
+    } else if restarting {
+        note(
+            shared,
+            false,
+            format!(
+                "re-start: the segment answers with the same {} drive(s); taking them to OP",
+                started.drives.len()
+            ),
+        );
+    }
+    let Some(p) = persist.as_mut() else {
+        return RunEnd::Over;
     };
-    // The channels, sized for exactly these drives (every telemetry buffer holds one entry
-    // per drive).
-    let (mut cycle_io, sup) = cycle::channels(started.drives.len());
-    let mut events = sup.events;
-    let events = &mut events;
-    let _ = started_tx.send(Ok(Started {
-        drives: summaries.clone(),
-        commands: sup.commands,
-        telemetry: sup.telemetry,
-    }));
+    let Persist {
+        cycle_io,
+        events,
+        decoder,
+        last_cycle,
+        emergencies,
+        restarts,
+        shutdown_ok: shutdown_ok_out,
+        ..
+    } = p;
+    cycle_io.restarts = *restarts;
+    cycle_io.restarting = restarting;
 
-    let push_history = |e: HistoryEntry| {
-        if let Ok(mut h) = shared.history.lock() {
-            h.push(e);
-        }
-    };
     let log = bus.emergencies().clone();
     let mut seen_emcy = 0usize;
     let drain_emcy = |seen: &mut usize| {
@@ -544,13 +908,16 @@ fn session<L: FrameLink + Send>(
                     .get(r.position as usize)
                     .map_or(&[][..], |(_, t)| *t);
                 let d = ErrorCode(r.error_code).describe(table);
-                push_history(HistoryEntry {
-                    time_ns: r.time_ns,
-                    cycle: None,
-                    drive: decoder.drive(r.position),
-                    error: r.error_code != 0,
-                    text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),
-                });
+                push_history(
+                    shared,
+                    HistoryEntry {
+                        time_ns: r.time_ns,
+                        cycle: None,
+                        drive: decoder.drive(r.position),
+                        error: r.error_code != 0,
+                        text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),
+                    },
+                );
             }
             *seen = l.len();
         }
@@ -571,20 +938,14 @@ fn session<L: FrameLink + Send>(
         let h = std::thread::Builder::new()
             .name("ecdrive-cycle".into())
             .stack_size(8 * 1024 * 1024)
-            .spawn_scoped(s, move || {
+            .spawn_scoped(s, || {
                 let hooks_ref = hooks.as_deref().map(|h| h as &dyn CycleHooks);
                 cycle::run(md, pump, group, drives, &cfg.cycle, cycle_io, hooks_ref)
             });
         let h = match h {
             Ok(h) => h,
             Err(e) => {
-                push_history(HistoryEntry {
-                    time_ns: monotonic_ns(),
-                    cycle: None,
-                    drive: None,
-                    error: true,
-                    text: format!("cannot start the cycle thread: {e}"),
-                });
+                note(shared, true, format!("cannot start the cycle thread: {e}"));
                 return None;
             }
         };
@@ -593,24 +954,29 @@ fn session<L: FrameLink + Send>(
         if let Ok(rt) = rt_rx.recv_timeout(Duration::from_secs(5)) {
             for w in &rt.warnings {
                 tracing::warn!("{w}");
-                push_history(HistoryEntry {
-                    time_ns: monotonic_ns(),
-                    cycle: None,
-                    drive: None,
-                    error: false,
-                    text: format!("warning: {w}"),
-                });
+                note(shared, false, format!("warning: {w}"));
             }
             if let Ok(mut r) = shared.rt.lock() {
                 *r = Some(rt);
             }
         }
-        while !h.is_finished() {
+        let before = *restarts;
+        let mut drain_events = || {
             while let Ok(e) = events.pop() {
                 if let Some(entry) = decoder.entry(&e) {
-                    push_history(entry);
+                    push_history(shared, entry);
+                }
+                if restarting && matches!(e.kind, EventKind::AllOp) {
+                    note(
+                        shared,
+                        false,
+                        format!("re-start {}: every drive is back in OP", before + 1),
+                    );
                 }
             }
+        };
+        while !h.is_finished() {
+            drain_events();
             if let Some(every) = cfg.emergency_poll
                 && monotonic_ns() >= next_poll
             {
@@ -638,20 +1004,16 @@ fn session<L: FrameLink + Send>(
             }
             std::thread::sleep(Duration::from_millis(2));
         }
-        while let Ok(e) = events.pop() {
-            if let Some(entry) = decoder.entry(&e) {
-                push_history(entry);
-            }
-        }
+        drain_events();
         h.join().ok()
     });
+    *restarts = cycle_io.restarts;
 
-    // Shutdown: every drive to INIT (the cycle has disabled the axes).
+    // Shutdown: every drive to INIT (the cycle has disabled the axes), unless the segment is
+    // gone.
+    let end = report.as_ref().map(|r| r.end);
     let mut shutdown_ok = true;
-    if !matches!(
-        report.as_ref().map(|r| r.end),
-        Some(CycleEnd::SegmentLost | CycleEnd::LinkFailed)
-    ) {
+    if !matches!(end, Some(CycleEnd::SegmentLost | CycleEnd::LinkFailed)) {
         for d in drives {
             let addr = d.info.address;
             let r = bus.block_on(
@@ -671,13 +1033,29 @@ fn session<L: FrameLink + Send>(
         shutdown_ok = false;
     }
     drain_emcy(&mut seen_emcy);
-    let history = shared.history.lock().map(|h| h.clone()).unwrap_or_default();
-    let emergencies = log.lock().map(|l| l.clone()).unwrap_or_default();
-    Some(SessionReport {
-        drives: summaries,
-        cycle: report,
-        history,
-        emergencies,
-        shutdown_ok,
-    })
+    if let Ok(l) = log.lock() {
+        emergencies.extend(l.iter().cloned());
+    }
+    *shutdown_ok_out = shutdown_ok;
+    *last_cycle = report;
+    match end {
+        None | Some(CycleEnd::Stopped | CycleEnd::LinkFailed) => RunEnd::Over,
+        Some(CycleEnd::OpFailed { axis, al_state }) => {
+            if restarting {
+                RunEnd::StartFailed(MasterError::new(
+                    decoder.drive(axis).as_ref(),
+                    "re-start",
+                    ErrorKind::Timeout,
+                    format!(
+                        "did not reach OP (AL status {})",
+                        cycle::al_state_name(al_state)
+                    ),
+                ))
+            } else {
+                RunEnd::Over
+            }
+        }
+        Some(CycleEnd::SegmentLost | CycleEnd::DriveLeftOp { .. }) => RunEnd::Interrupted,
+        Some(CycleEnd::Restart) => RunEnd::Restart,
+    }
 }

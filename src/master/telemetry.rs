@@ -62,6 +62,10 @@ pub enum Command {
     Setpoint(u16, f64),
     /// Stop every axis in a controlled way, disable them, and end the cycle.
     Stop(StopKind),
+    /// Re-start the segment: if the cycle runs, stop every axis in a controlled way and end
+    /// it; then start the drives again (INIT → OP) on the same link, in the same process.
+    /// After the segment was lost or a drive fell out of OP, this brings the drives back.
+    Restart,
 }
 
 /// Why the cycle stopped the axes on its own.
@@ -80,7 +84,12 @@ pub enum StopReason {
         axis: u16,
     },
     /// Too many consecutive cycles without a reply.
-    FramesLost,
+    FramesLost {
+        /// Consecutive lost cycles.
+        cycles: u32,
+    },
+    /// A re-start was requested.
+    Restart,
     /// A drive left OP.
     DriveLeftOp {
         /// Axis index.
@@ -126,7 +135,19 @@ pub enum EventKind {
         /// The raw AL status value.
         state: u8,
     },
-    /// No reply within the cycle.
+    /// A drive left OP without being asked: its AL status and AL status code (0x0134), read
+    /// in the cycle it was seen.
+    LeftOp {
+        /// Axis index.
+        axis: u16,
+        /// The raw AL status value (0x0130).
+        state: u8,
+        /// The AL status code (0x0134); `None` if reading it failed.
+        code: Option<u16>,
+    },
+    /// No reply within the cycle's budget ([`super::cycle::CycleSettings::reply_budget`]; a
+    /// reply that comes later is discarded): every axis held its set-point (the outputs were sent again
+    /// unchanged, the program clock stood still).
     FrameLost {
         /// Consecutive lost cycles so far.
         consecutive: u32,
@@ -136,8 +157,15 @@ pub enum EventKind {
         /// How many cycles were lost.
         lost: u32,
     },
-    /// The segment stopped answering (cable pull, power loss).
+    /// The segment stopped answering (cable pull, power loss): detected after
+    /// [`super::cycle::CycleSettings::segment_lost_after`] cycles without a reply.
     SegmentLost {
+        /// Consecutive lost cycles.
+        cycles: u32,
+    },
+    /// The segment stayed silent for [`super::cycle::CycleSettings::segment_gone_after`]: the
+    /// cycle ends (the drives' own watchdogs have disabled them); a re-start brings them back.
+    SegmentGone {
         /// Consecutive lost cycles.
         cycles: u32,
     },
@@ -252,6 +280,28 @@ pub struct CycleTelemetry {
     pub busy_ns: u64,
     /// Whether every drive is in OP.
     pub all_op: bool,
+    /// Consecutive cycles without a reply (0 while the segment answers).
+    pub lost_in_a_row: u32,
+    /// Where the session is.
+    pub phase: Phase,
+    /// Re-starts so far (0 on the first start).
+    pub restarts: u32,
+}
+
+/// Where a session is, for the supervisory side.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub enum Phase {
+    /// Starting the drives (INIT → SAFE-OP) or waiting for OP.
+    #[default]
+    Starting,
+    /// The cycle runs.
+    Cycling,
+    /// The cycle ended (segment lost, a drive left OP); waiting for a re-start request.
+    WaitingForRestart,
+    /// Re-starting the drives (waiting for the segment to answer, then INIT → OP).
+    Restarting,
+    /// The session ended.
+    Ended,
 }
 
 /// The latest snapshot of the cycle.

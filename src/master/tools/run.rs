@@ -390,6 +390,7 @@ pub fn run(
     if let Some(c) = cycle {
         match c.end {
             CycleEnd::SegmentLost | CycleEnd::LinkFailed => outcome = Outcome::BusLost,
+            CycleEnd::DriveLeftOp { .. } => outcome = Outcome::DriveFault,
             CycleEnd::OpFailed { .. } if outcome != Outcome::DriveFault => {
                 outcome = Outcome::Refused
             }
