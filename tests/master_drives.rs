@@ -459,7 +459,7 @@ fn a_following_error_fault_stops_both_axes_is_decoded_reset_and_motion_resumes()
     assert!(fault.text.contains("J3"), "{}", fault.text);
     assert!(
         h.iter()
-            .any(|e| e.text.contains("stopping the axes: DriveFault { axis: 1 }")),
+            .any(|e| e.text == "stopping the axes in a controlled way: drive 1 (BDHDE) faulted"),
         "{h:#?}"
     );
     // Clear the jam, reset, enable, run again: motion resumes.

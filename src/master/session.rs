@@ -106,8 +106,43 @@ pub struct HistoryEntry {
     pub drive: Option<DriveRef>,
     /// Whether it is a fault or error (as opposed to information).
     pub error: bool,
+    /// What kind of entry it is, for programs that react to the history.
+    pub kind: HistoryKind,
     /// What happened, readable.
     pub text: String,
+}
+
+/// The kind of a [`HistoryEntry`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+pub enum HistoryKind {
+    /// Progress: AL and CiA 402 state changes, OP reached, program steps, mode switches.
+    Info,
+    /// A warning (real-time set-up, a drive's warning bit).
+    Warning,
+    /// A cycle without a reply (the axes held their set-points) or replies resuming.
+    FrameLost,
+    /// The segment stopped answering (cable pull detected) or stayed silent (cycle ended).
+    SegmentLost,
+    /// The working counter differed from the expected value.
+    WorkingCounter,
+    /// A drive left OP on its own (with its AL status code), or did not reach OP.
+    AlState,
+    /// A drive fault (CiA 402 Fault, decoded with the drive's alarm table).
+    DriveFault,
+    /// The master-side following-error monitor tripped.
+    FollowingError,
+    /// The CiA 402 state machine or a mode switch failed.
+    StateMachine,
+    /// A command was refused.
+    CommandRefused,
+    /// An emergency message from a drive.
+    Emergency,
+    /// The cycle began a controlled stop of the axes, or ended.
+    Stopping,
+    /// Re-start progress: requested, attempted, failed, back in OP.
+    Restart,
+    /// The session itself failed (a thread could not start).
+    Session,
 }
 
 /// What a master run did.
@@ -353,11 +388,35 @@ impl Decoder {
             }
             EventKind::Stopped => (None, false, "every axis disabled; cycle ended".into()),
         };
+        let kind = match e.kind {
+            EventKind::AllOp
+            | EventKind::AlState { .. }
+            | EventKind::ProgramStep { .. }
+            | EventKind::ProgramDone { .. } => HistoryKind::Info,
+            EventKind::OpTimeout { .. } | EventKind::LeftOp { .. } => HistoryKind::AlState,
+            EventKind::Axis { event, .. } => match event {
+                cia402::Event::Fault { .. } => HistoryKind::DriveFault,
+                cia402::Event::PlannerFailed(_)
+                | cia402::Event::ModeSwitchFailed(_)
+                | cia402::Event::ModeDisplayMismatch { .. } => HistoryKind::StateMachine,
+                cia402::Event::WarningChanged(_) => HistoryKind::Warning,
+                _ => HistoryKind::Info,
+            },
+            EventKind::WorkingCounter { .. } => HistoryKind::WorkingCounter,
+            EventKind::FrameLost { .. } | EventKind::FramesResumed { .. } => HistoryKind::FrameLost,
+            EventKind::SegmentLost { .. } | EventKind::SegmentGone { .. } => {
+                HistoryKind::SegmentLost
+            }
+            EventKind::FollowingError { .. } => HistoryKind::FollowingError,
+            EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
+            EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,
+        };
         Some(HistoryEntry {
             time_ns: e.time_ns,
             cycle: Some(e.cycle),
             drive,
             error,
+            kind,
             text,
         })
     }
@@ -614,7 +673,7 @@ fn push_history(shared: &Shared, e: HistoryEntry) {
     }
 }
 
-fn note(shared: &Shared, error: bool, text: String) {
+fn note(shared: &Shared, kind: HistoryKind, error: bool, text: String) {
     push_history(
         shared,
         HistoryEntry {
@@ -622,6 +681,7 @@ fn note(shared: &Shared, error: bool, text: String) {
             cycle: None,
             drive: None,
             error,
+            kind,
             text,
         },
     );
@@ -665,7 +725,12 @@ fn session<L: FrameLink + Send>(
             RunEnd::Restart => {
                 failures = 0;
                 restarting = true;
-                note(shared, false, "re-starting the drives on request".into());
+                note(
+                    shared,
+                    HistoryKind::Restart,
+                    false,
+                    "re-starting the drives on request".into(),
+                );
                 continue;
             }
             RunEnd::Interrupted => {
@@ -674,11 +739,13 @@ fn session<L: FrameLink + Send>(
                     RestartPolicy::Never => break,
                     RestartPolicy::OnRequest => note(
                         shared,
+                        HistoryKind::Restart,
                         false,
                         "waiting for a re-start request (Master::restart)".into(),
                     ),
                     RestartPolicy::Auto { retry_every, .. } => note(
                         shared,
+                        HistoryKind::Restart,
                         false,
                         format!(
                             "re-starting automatically, trying every {} ms",
@@ -691,6 +758,7 @@ fn session<L: FrameLink + Send>(
                 failures += 1;
                 note(
                     shared,
+                    HistoryKind::Restart,
                     true,
                     format!("re-start attempt {failures} failed: {e}"),
                 );
@@ -705,6 +773,7 @@ fn session<L: FrameLink + Send>(
                     if max_attempts == Some(failures) {
                         note(
                             shared,
+                            HistoryKind::Restart,
                             true,
                             format!(
                                 "giving up automatic re-starts after {failures} failed \
@@ -759,6 +828,7 @@ fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) ->
                 Command::Stop(_) => return false,
                 other => note(
                     shared,
+                    HistoryKind::CommandRefused,
                     true,
                     format!("{other:?} refused: no cycle runs (waiting for a re-start)"),
                 ),
@@ -875,6 +945,7 @@ fn run<L: FrameLink + Send>(
     } else if restarting {
         note(
             shared,
+            HistoryKind::Restart,
             false,
             format!(
                 "re-start: the segment answers with the same {} drive(s); taking them to OP",
@@ -915,6 +986,7 @@ fn run<L: FrameLink + Send>(
                         cycle: None,
                         drive: decoder.drive(r.position),
                         error: r.error_code != 0,
+                        kind: HistoryKind::Emergency,
                         text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),
                     },
                 );
@@ -945,7 +1017,12 @@ fn run<L: FrameLink + Send>(
         let h = match h {
             Ok(h) => h,
             Err(e) => {
-                note(shared, true, format!("cannot start the cycle thread: {e}"));
+                note(
+                    shared,
+                    HistoryKind::Session,
+                    true,
+                    format!("cannot start the cycle thread: {e}"),
+                );
                 return None;
             }
         };
@@ -954,7 +1031,7 @@ fn run<L: FrameLink + Send>(
         if let Ok(rt) = rt_rx.recv_timeout(Duration::from_secs(5)) {
             for w in &rt.warnings {
                 tracing::warn!("{w}");
-                note(shared, false, format!("warning: {w}"));
+                note(shared, HistoryKind::Warning, false, format!("warning: {w}"));
             }
             if let Ok(mut r) = shared.rt.lock() {
                 *r = Some(rt);
@@ -969,6 +1046,7 @@ fn run<L: FrameLink + Send>(
                 if restarting && matches!(e.kind, EventKind::AllOp) {
                     note(
                         shared,
+                        HistoryKind::Restart,
                         false,
                         format!("re-start {}: every drive is back in OP", before + 1),
                     );
