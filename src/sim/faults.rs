@@ -117,9 +117,8 @@ pub enum Corruption {
     /// The command byte (header byte 0) XOR 0x80: a reserved command code, not the command the
     /// master sent.
     Command,
-    /// The length field's lowest bit (header byte 6) XOR 1: the datagram claims one byte more or
-    /// less, so the frame no longer parses (or the datagram's data and working counter are
-    /// misplaced).
+    /// The length field (11 bits of header bytes 6–7) set to 2047, its maximum: the datagram
+    /// claims more data than any frame holds, so the frame no longer parses.
     Length,
     /// Every data byte inverted (XOR 0xFF); header and working counter intact. Only a master
     /// that checks content (e.g. a register it wrote) notices.

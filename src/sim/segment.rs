@@ -695,7 +695,14 @@ fn corrupt_first_datagram(payload: &mut [u8], c: Corruption) -> bool {
         Corruption::WorkingCounter => xor(d.get_mut(DATAGRAM_HEADER_LEN + data_len + 1), 0x80),
         Corruption::Index => xor(d.get_mut(1), 0x80),
         Corruption::Command => xor(d.get_mut(0), 0x80),
-        Corruption::Length => xor(d.get_mut(6), 0x01),
+        Corruption::Length => match d.get_mut(6..8) {
+            Some([lo, hi]) => {
+                *lo = 0xFF;
+                *hi |= 0x07;
+                true
+            }
+            _ => false,
+        },
         Corruption::Data => match d.get_mut(DATAGRAM_HEADER_LEN..DATAGRAM_HEADER_LEN + data_len) {
             Some(data) if !data.is_empty() => {
                 data.iter_mut().for_each(|b| *b ^= 0xFF);
