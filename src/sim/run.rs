@@ -2,16 +2,212 @@
 
 use super::clock::HostClock;
 use super::devices::{self, DeviceError};
+use super::drives::EmulatedDrive;
 use super::esc::EscConfig;
-use super::segment::Segment;
+use super::faults::{DeviceFault, Fault, FaultHandle, LinkFault, SlaveFault};
+use super::segment::{Segment, SegmentStats};
 use super::sii::SiiError;
 use super::transport::{ServeStats, serve};
 use crate::link::{LinkError, RawSocket};
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+/// A fault for `ecdrive sim`, naming things as the command line does; checked against the
+/// devices and turned into a [`Fault`] when the segment is built.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FaultSpec {
+    /// A link fault (see [`LinkFault`]).
+    Link(LinkFault),
+    /// [`SlaveFault::ResetToInit`] at `position`.
+    Reset {
+        /// Position in the line (0-based).
+        position: u16,
+    },
+    /// [`SlaveFault::ClockDrift`] at `position`.
+    Drift {
+        /// Position in the line.
+        position: u16,
+        /// Drift in ppb.
+        ppb: i32,
+    },
+    /// [`DeviceFault::RaiseAlarm`]: the drive at `position` raises the alarm named `id` (as
+    /// its manual names it, e.g. `AL.52`, `J3`).
+    Alarm {
+        /// Position in the line.
+        position: u16,
+        /// Alarm name.
+        id: String,
+    },
+    /// [`DeviceFault::ForceFollowingError`] at `position`.
+    FollowingError {
+        /// Position in the line.
+        position: u16,
+        /// Following error in position units.
+        value: i32,
+    },
+    /// [`DeviceFault::AbortSdo`] at `position`.
+    SdoAbort {
+        /// Position in the line.
+        position: u16,
+        /// Object index.
+        index: u16,
+        /// Subindex, `None` for any.
+        subindex: Option<u8>,
+        /// Abort code.
+        code: u32,
+    },
+    /// [`DeviceFault::EmergencyDuringSdo`] at `position` (the error register follows from
+    /// the code's class, manufacturer bytes zero).
+    EmergencyDuringSdo {
+        /// Position in the line.
+        position: u16,
+        /// Emergency error code.
+        error_code: u16,
+    },
+}
+
+/// A fault and when to inject it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScheduledFault {
+    /// Time after serving starts; zero: before the first frame.
+    pub at: Duration,
+    /// The fault.
+    pub fault: FaultSpec,
+    /// How the user wrote it (e.g. `--alarm 0:AL.52@5s`), for error messages.
+    pub source: String,
+}
+
+/// The error register of an emergency with `code` (CiA 301 §7.5.2.2, object 0x1001): bit 0
+/// (generic error) always, plus current (0x2xxx), voltage (0x3xxx), temperature (0x4xxx),
+/// communication (0x81xx) or manufacturer-specific (0xFFxx) by the code's class.
+fn error_register(code: u16) -> u8 {
+    let class = match code >> 8 {
+        0x20..=0x2F => 0x02,
+        0x30..=0x3F => 0x04,
+        0x40..=0x4F => 0x08,
+        0x81 => 0x10,
+        0xFF => 0x80,
+        _ => 0,
+    };
+    0x01 | class
+}
+
+impl ScheduledFault {
+    /// Check the fault against `segment` and resolve names (an alarm name to the drive's own).
+    pub fn resolve(&self, segment: &Segment) -> Result<Fault, SimError> {
+        let bad = |reason: String| SimError::Fault {
+            source_text: self.source.clone(),
+            reason,
+        };
+        let slave = |position: u16| {
+            segment.slave(usize::from(position)).ok_or_else(|| {
+                bad(format!(
+                    "there is no device at position {position} (positions 0 to {} are served)",
+                    segment.len().saturating_sub(1)
+                ))
+            })
+        };
+        let drive = |position: u16| {
+            slave(position)?;
+            segment
+                .device::<EmulatedDrive>(usize::from(position))
+                .ok_or_else(|| bad(format!("the device at position {position} is not a drive")))
+        };
+        let coe = |position: u16| {
+            let s = slave(position)?;
+            let has = s
+                .device
+                .description()
+                .mailbox
+                .is_some_and(|m| m.protocols.contains(super::sii::MailboxProtocols::COE));
+            if has {
+                Ok(())
+            } else {
+                Err(bad(format!(
+                    "the device at position {position} has no CoE mailbox"
+                )))
+            }
+        };
+        Ok(match self.fault {
+            FaultSpec::Link(l) => Fault::Link(l),
+            FaultSpec::Reset { position } => {
+                slave(position)?;
+                Fault::Slave {
+                    position,
+                    fault: SlaveFault::ResetToInit,
+                }
+            }
+            FaultSpec::Drift { position, ppb } => {
+                if !slave(position)?.esc.config().dc.supported() {
+                    return Err(bad(format!(
+                        "the device at position {position} has no distributed clock"
+                    )));
+                }
+                Fault::Slave {
+                    position,
+                    fault: SlaveFault::ClockDrift(ppb),
+                }
+            }
+            FaultSpec::Alarm { position, ref id } => {
+                let d = drive(position)?;
+                let spec = d.spec();
+                let Some(a) = spec.alarm(id) else {
+                    let names: Vec<&str> = spec.alarms.iter().map(|a| a.id).collect();
+                    return Err(bad(format!(
+                        "the {} at position {position} has no alarm {id:?} (it has {})",
+                        spec.profile.name,
+                        names.join(", ")
+                    )));
+                };
+                Fault::Device {
+                    position,
+                    fault: DeviceFault::RaiseAlarm(a.id),
+                }
+            }
+            FaultSpec::FollowingError { position, value } => {
+                drive(position)?;
+                Fault::Device {
+                    position,
+                    fault: DeviceFault::ForceFollowingError(Some(value)),
+                }
+            }
+            FaultSpec::SdoAbort {
+                position,
+                index,
+                subindex,
+                code,
+            } => {
+                coe(position)?;
+                Fault::Device {
+                    position,
+                    fault: DeviceFault::AbortSdo {
+                        index,
+                        subindex,
+                        code,
+                    },
+                }
+            }
+            FaultSpec::EmergencyDuringSdo {
+                position,
+                error_code,
+            } => {
+                coe(position)?;
+                Fault::Device {
+                    position,
+                    fault: DeviceFault::EmergencyDuringSdo {
+                        error_code,
+                        error_register: error_register(error_code),
+                        data: [0; 5],
+                    },
+                }
+            }
+        })
+    }
+}
 
 /// What to serve.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SimOptions {
     /// Network interface.
     pub interface: String,
@@ -24,6 +220,8 @@ pub struct SimOptions {
     /// delivered; off for masters on a host that cannot keep the cycle, see
     /// [`super::drives::EmulatedDrive::set_loss_detection`]).
     pub loss_detection: bool,
+    /// Faults to inject, in any order.
+    pub faults: Vec<ScheduledFault>,
 }
 
 /// Why a segment cannot be served.
@@ -55,6 +253,14 @@ pub enum SimError {
         #[source]
         source: SiiError,
     },
+    /// A fault cannot be injected into these devices.
+    #[error("{source_text}: {reason}")]
+    Fault {
+        /// The fault as the user wrote it.
+        source_text: String,
+        /// Why.
+        reason: String,
+    },
     /// Frame I/O failed.
     #[error(transparent)]
     Link(#[from] LinkError),
@@ -85,6 +291,61 @@ pub fn build_segment(names: &[String], esc: &EscConfig) -> Result<Segment, SimEr
 pub struct Prepared {
     socket: RawSocket,
     segment: Mutex<Segment>,
+    /// Faults still to inject, by time.
+    schedule: Vec<(Duration, Fault)>,
+    handle: Option<FaultHandle>,
+}
+
+/// Check the faults of `opts` against `segment`, apply the immediate ones and return the rest
+/// by time.
+pub fn plan_faults(
+    segment: &mut Segment,
+    faults: &[ScheduledFault],
+) -> Result<Vec<(Duration, Fault)>, SimError> {
+    let mut timed = Vec::new();
+    let mut resolved = Vec::with_capacity(faults.len());
+    for f in faults {
+        resolved.push((f.at, f.resolve(segment)?, f));
+    }
+    // Cable pulls must alternate with reconnects.
+    let mut cable: Vec<(Duration, bool, &ScheduledFault)> = resolved
+        .iter()
+        .filter_map(|(at, f, src)| match f {
+            Fault::Link(LinkFault::Disconnect) => Some((*at, true, *src)),
+            Fault::Link(LinkFault::Reconnect) => Some((*at, false, *src)),
+            _ => None,
+        })
+        .collect();
+    cable.sort_by_key(|c| c.0);
+    let mut pulled = false;
+    for (_, pull, src) in cable {
+        if pull == pulled {
+            return Err(SimError::Fault {
+                source_text: src.source.clone(),
+                reason: if pull {
+                    "the cable is already pulled then (add a --reconnect-at before it)".into()
+                } else {
+                    "the cable is not pulled then (add a --disconnect-at before it)".into()
+                },
+            });
+        }
+        pulled = pull;
+    }
+    // Settings first (seed, where drops happen, what corruption does), so that a fault at the
+    // same time uses them.
+    let order = |f: &Fault| match f {
+        Fault::Link(LinkFault::Seed(_) | LinkFault::DropOn(_) | LinkFault::CorruptWith(_)) => 0,
+        _ => 1,
+    };
+    resolved.sort_by_key(|(at, f, _)| (*at, order(f)));
+    for (at, f, _) in resolved {
+        if at.is_zero() {
+            segment.apply(&f);
+        } else {
+            timed.push((at, f));
+        }
+    }
+    Ok(timed)
 }
 
 impl Prepared {
@@ -102,11 +363,20 @@ impl Prepared {
                 }
             }
         }
+        let schedule = plan_faults(&mut segment, &opts.faults)?;
+        let handle = (!schedule.is_empty()).then(|| segment.fault_handle());
         let socket = RawSocket::open(&opts.interface)?;
         Ok(Self {
             socket,
             segment: Mutex::new(segment),
+            schedule,
+            handle,
         })
+    }
+
+    /// The segment's counters (frames, injected faults).
+    pub fn segment_stats(&self) -> SegmentStats {
+        super::transport::lock(&self.segment).stats()
     }
 
     /// One line per device: position, name and identity.
@@ -130,9 +400,60 @@ impl Prepared {
             .collect()
     }
 
-    /// Serve until `stop` is set.
-    pub fn serve(&self, stop: &AtomicBool) -> Result<ServeStats, SimError> {
-        Ok(serve(&self.socket, &self.segment, stop)?)
+    /// Serve until `stop` is set, injecting the scheduled faults at their times (counted from
+    /// now).
+    pub fn serve(&mut self, stop: &AtomicBool) -> Result<ServeStats, SimError> {
+        let start = Instant::now();
+        let done = AtomicBool::new(false);
+        let schedule = std::mem::take(&mut self.schedule);
+        let handle = self.handle.take();
+        let (socket, segment) = (&self.socket, &self.segment);
+        let r = std::thread::scope(|s| {
+            if let Some(h) = handle {
+                let done = &done;
+                std::thread::Builder::new()
+                    .name("ecdrive-sim-faults".into())
+                    .spawn_scoped(s, move || inject_on_time(h, &schedule, start, stop, done))
+                    .map_err(|e| {
+                        LinkError::Peer(format!("cannot start the fault scheduler: {e}"))
+                    })?;
+            }
+            let r = serve(socket, segment, stop);
+            done.store(true, Ordering::Release);
+            r
+        });
+        Ok(r?)
+    }
+}
+
+/// Inject each fault at its time after `start` until `stop` or `done`.
+fn inject_on_time(
+    mut handle: FaultHandle,
+    schedule: &[(Duration, Fault)],
+    start: Instant,
+    stop: &AtomicBool,
+    done: &AtomicBool,
+) {
+    let quit = || stop.load(Ordering::Acquire) || done.load(Ordering::Acquire);
+    for (at, fault) in schedule {
+        loop {
+            if quit() {
+                return;
+            }
+            let left = at.saturating_sub(start.elapsed());
+            if left.is_zero() {
+                break;
+            }
+            std::thread::sleep(left.min(Duration::from_millis(50)));
+        }
+        // The segment applies faults at every frame and at least every 10 ms: the queue
+        // empties quickly; retry while it is full.
+        while handle.inject(*fault).is_err() {
+            if quit() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
     }
 }
 

@@ -21,6 +21,7 @@
 use super::clock::Clock;
 use super::device::Device;
 use super::esc::{Esc, EscConfig, Hop};
+use super::faults::{Corruption, Fate, Fault, LinkState, SlaveFault};
 use super::sii::SiiError;
 use crate::ec::Command;
 use crate::ec::frame::{Datagram, EthercatFrame, EthernetFrame, FrameError};
@@ -51,6 +52,34 @@ pub enum SegmentError {
     /// The segment has no slaves, so nothing comes back.
     #[error("no slaves on the segment: the frame does not come back")]
     Empty,
+    /// The frame was lost by an injected fault ([`LinkFault::DropFraction`] or
+    /// [`LinkFault::DropNext`](super::faults::LinkFault::DropNext)).
+    ///
+    /// [`LinkFault::DropFraction`]: super::faults::LinkFault::DropFraction
+    #[error("frame lost by an injected fault (the slaves processed it: {reached_slaves})")]
+    Lost {
+        /// Whether the slaves processed the frame before its reply was lost.
+        reached_slaves: bool,
+    },
+    /// The cable is pulled ([`LinkFault::Disconnect`](super::faults::LinkFault::Disconnect)):
+    /// the frame never reached the slaves.
+    #[error("frame lost: the cable is pulled (injected fault)")]
+    Disconnected,
+}
+
+/// A processed frame's reply, from [`Segment::process_frame`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SegmentReply {
+    /// Length of the reply (always the length of the frame).
+    pub len: usize,
+    /// Time on the segment's clock at which the reply reaches the master: the time the frame
+    /// was processed, plus the delay of an injected [`LinkFault::Delay`]. A transport holds the
+    /// reply until then.
+    ///
+    /// [`LinkFault::Delay`]: super::faults::LinkFault::Delay
+    pub due_ns: u64,
+    /// The injected delay (0: none).
+    pub delay_ns: u64,
 }
 
 /// One slave: the ESC and the device application behind it.
@@ -71,14 +100,36 @@ impl core::fmt::Debug for Slave {
 }
 
 /// Counters of a segment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct SegmentStats {
-    /// Frames processed and returned.
+    /// Frames processed and returned (including delayed and corrupted ones).
     pub frames: u64,
     /// Datagrams processed.
     pub datagrams: u64,
     /// Frames dropped as malformed.
     pub invalid_frames: u64,
+    /// Frames lost by an injected drop ([`LinkFault::DropFraction`],
+    /// [`LinkFault::DropNext`]), on either leg.
+    ///
+    /// [`LinkFault::DropFraction`]: super::faults::LinkFault::DropFraction
+    /// [`LinkFault::DropNext`]: super::faults::LinkFault::DropNext
+    pub dropped: u64,
+    /// Of [`dropped`](Self::dropped), the frames lost on the way back (the slaves processed
+    /// them).
+    pub dropped_replies: u64,
+    /// Replies delayed by an injected [`LinkFault::Delay`](super::faults::LinkFault::Delay).
+    pub delayed: u64,
+    /// Replies corrupted by an injected
+    /// [`LinkFault::CorruptNext`](super::faults::LinkFault::CorruptNext).
+    pub corrupted: u64,
+    /// Frames that arrived while the cable was pulled
+    /// ([`LinkFault::Disconnect`](super::faults::LinkFault::Disconnect)).
+    pub lost_disconnected: u64,
+    /// Faults applied.
+    pub faults_applied: u64,
+    /// Faults ignored: position out of range, or a device fault the device does not support
+    /// (e.g. an alarm name the drive does not have, a CoE fault for a device without CoE).
+    pub faults_ignored: u64,
 }
 
 /// A line of emulated slaves.
@@ -94,8 +145,16 @@ pub struct Segment {
     dirty_mark: Vec<bool>,
     scratch: Vec<u8>,
     earliest: Option<u64>,
-    stats: SegmentStats,
-    faults: Option<rtrb::Consumer<super::faults::Fault>>,
+    /// Boxed: keeps `Segment` small enough to move around by value.
+    stats: Box<SegmentStats>,
+    faults: Box<FaultState>,
+}
+
+/// Injected-fault state of a segment.
+#[derive(Default)]
+struct FaultState {
+    rx: Option<rtrb::Consumer<Fault>>,
+    link: LinkState,
 }
 
 impl core::fmt::Debug for Segment {
@@ -133,8 +192,8 @@ impl Segment {
             dirty_mark: Vec::new(),
             scratch: vec![0; crate::ec::frame::MAX_DATAGRAM_DATA],
             earliest: None,
-            stats: SegmentStats::default(),
-            faults: None,
+            stats: Box::default(),
+            faults: Box::default(),
         }
     }
 
@@ -142,24 +201,62 @@ impl Segment {
     /// replaces the previous one.
     pub fn fault_handle(&mut self) -> super::faults::FaultHandle {
         let (tx, rx) = rtrb::RingBuffer::new(super::faults::QUEUE);
-        self.faults = Some(rx);
+        self.faults.rx = Some(rx);
         super::faults::FaultHandle { tx }
     }
 
     /// Apply the queued faults (allocation-free).
     fn apply_faults(&mut self) {
-        let Some(rx) = self.faults.as_mut() else {
-            return;
-        };
-        while let Ok(f) = rx.pop() {
-            match f {
-                super::faults::Fault::Device { position, fault } => {
-                    if let Some(s) = self.slaves.get_mut(usize::from(position)) {
-                        s.device.inject(&fault);
-                    }
-                }
-            }
+        while let Some(f) = self.faults.rx.as_mut().and_then(|rx| rx.pop().ok()) {
+            self.apply(&f);
         }
+    }
+
+    /// Apply a fault now (see [`super::faults`]); the owner of the segment can call this
+    /// directly instead of going through a [`FaultHandle`](super::faults::FaultHandle).
+    /// Returns whether it was applied: `false` for a position out of range or a device fault
+    /// the device does not support (counted in [`SegmentStats::faults_ignored`]).
+    /// Allocation-free.
+    pub fn apply(&mut self, fault: &Fault) -> bool {
+        let now = self.clock.now_ns();
+        let ok = match *fault {
+            Fault::Device { position, fault } => self
+                .slaves
+                .get_mut(usize::from(position))
+                .is_some_and(|s| s.device.inject(&fault)),
+            Fault::Slave { position, fault } => match self.slaves.get_mut(usize::from(position)) {
+                None => false,
+                Some(s) => {
+                    match fault {
+                        SlaveFault::ResetToInit => {
+                            // Time-driven work up to now happens before the reset.
+                            s.esc.run_due(now, s.device.as_mut());
+                            s.esc.local_reset(s.device.as_mut());
+                        }
+                        SlaveFault::ClockDrift(ppb) => {
+                            s.esc.set_clock_drift(now, i64::from(ppb));
+                            self.earliest = Some(now);
+                        }
+                    }
+                    true
+                }
+            },
+            Fault::Link(l) => {
+                self.faults.link.apply(l);
+                true
+            }
+        };
+        if ok {
+            self.stats.faults_applied += 1;
+        } else {
+            self.stats.faults_ignored += 1;
+        }
+        ok
+    }
+
+    /// Whether the cable is pulled ([`LinkFault::Disconnect`](super::faults::LinkFault)).
+    pub fn is_disconnected(&self) -> bool {
+        self.faults.link.disconnected()
     }
 
     /// Append a slave fronting `device` with the given ESC hardware at the end of the line.
@@ -236,7 +333,7 @@ impl Segment {
 
     /// Counters.
     pub fn stats(&self) -> SegmentStats {
-        self.stats
+        *self.stats
     }
 
     /// Host time at which [`poll`](Self::poll) has work (a SYNC0 pulse or a watchdog expiry),
@@ -261,7 +358,11 @@ impl Segment {
 
     /// Deliver due SYNC0 pulses and apply expired watchdogs, without a frame (e.g. on a
     /// receive timeout, so that a pulled cable is noticed).
+    ///
+    /// Applies queued faults first, so that faults (e.g. a reconnect) take effect while no
+    /// frames arrive.
     pub fn poll(&mut self) {
+        self.apply_faults();
         let now = self.clock.now_ns();
         self.run_due(now, false);
     }
@@ -307,11 +408,40 @@ impl Segment {
 
     /// Process one Ethernet frame in place and return the length of the reply (always the
     /// length of the frame: slaves never change a frame's size).
+    ///
+    /// Injected link faults apply (a lost frame is an error, a corrupted one is returned
+    /// corrupted), except [`LinkFault::Delay`](super::faults::LinkFault::Delay): the reply is
+    /// returned at once. Transports use [`process_frame`](Self::process_frame), which reports
+    /// the delay.
     pub fn process(&mut self, frame: &mut [u8]) -> Result<usize, SegmentError> {
+        self.process_frame(frame).map(|r| r.len)
+    }
+
+    /// Process one Ethernet frame in place, with injected link faults: returns the reply's
+    /// length and when it reaches the master, or why no reply comes back
+    /// ([`SegmentError::Lost`], [`SegmentError::Disconnected`] for injected faults).
+    pub fn process_frame(&mut self, frame: &mut [u8]) -> Result<SegmentReply, SegmentError> {
         if self.slaves.is_empty() {
             return Err(SegmentError::Empty);
         }
+        self.apply_faults();
         let now = self.clock.now_ns();
+        let (delay_ns, corrupt, lose_reply) = match self.faults.link.fate() {
+            Fate::Pass { delay_ns, corrupt } => (delay_ns, corrupt, false),
+            Fate::LostReturn => (0, None, true),
+            Fate::LostOutbound => {
+                self.stats.dropped += 1;
+                self.run_due(now, false);
+                return Err(SegmentError::Lost {
+                    reached_slaves: false,
+                });
+            }
+            Fate::Disconnected => {
+                self.stats.lost_disconnected += 1;
+                self.run_due(now, false);
+                return Err(SegmentError::Disconnected);
+            }
+        };
         let len = frame.len();
         let mut eth = EthernetFrame::new_checked(&mut *frame)?;
         let valid = EthercatFrame::new_checked(eth.payload_mut()).and_then(|f| f.check());
@@ -322,7 +452,6 @@ impl Segment {
             }
             return Err(e.into());
         }
-        self.apply_faults();
         self.run_due(now, true);
         {
             let mut ec = EthercatFrame::new_checked(eth.payload_mut())?;
@@ -350,8 +479,27 @@ impl Segment {
         }
         self.dirty.clear();
         eth.mark_forwarded();
+        if lose_reply {
+            self.stats.dropped += 1;
+            self.stats.dropped_replies += 1;
+            return Err(SegmentError::Lost {
+                reached_slaves: true,
+            });
+        }
+        if let Some(c) = corrupt {
+            if corrupt_first_datagram(eth.payload_mut(), c) {
+                self.stats.corrupted += 1;
+            }
+        }
+        if delay_ns > 0 {
+            self.stats.delayed += 1;
+        }
         self.stats.frames += 1;
-        Ok(len)
+        Ok(SegmentReply {
+            len,
+            due_ns: now.saturating_add(delay_ns),
+            delay_ns,
+        })
     }
 
     fn touched(&mut self, k: usize) {
@@ -522,5 +670,45 @@ impl Segment {
             d.set_adp(adp.wrapping_add(n as u16));
         }
         d.set_wkc(wkc);
+    }
+}
+
+/// Corrupt the first datagram of an EtherCAT frame payload (see [`Corruption`]). Returns
+/// whether something was changed.
+fn corrupt_first_datagram(payload: &mut [u8], c: Corruption) -> bool {
+    use crate::ec::frame::{DATAGRAM_HEADER_LEN, ECAT_HEADER_LEN};
+    let Some(d) = payload.get_mut(ECAT_HEADER_LEN..) else {
+        return false;
+    };
+    let data_len = match (d.get(6), d.get(7)) {
+        (Some(&lo), Some(&hi)) => usize::from(u16::from_le_bytes([lo, hi]) & 0x07FF),
+        _ => return false,
+    };
+    let xor = |b: Option<&mut u8>, m: u8| match b {
+        Some(b) => {
+            *b ^= m;
+            true
+        }
+        None => false,
+    };
+    match c {
+        Corruption::WorkingCounter => xor(d.get_mut(DATAGRAM_HEADER_LEN + data_len + 1), 0x80),
+        Corruption::Index => xor(d.get_mut(1), 0x80),
+        Corruption::Command => xor(d.get_mut(0), 0x80),
+        Corruption::Length => match d.get_mut(6..8) {
+            Some([lo, hi]) => {
+                *lo = 0xFF;
+                *hi |= 0x07;
+                true
+            }
+            _ => false,
+        },
+        Corruption::Data => match d.get_mut(DATAGRAM_HEADER_LEN..DATAGRAM_HEADER_LEN + data_len) {
+            Some(data) if !data.is_empty() => {
+                data.iter_mut().for_each(|b| *b ^= 0xFF);
+                true
+            }
+            _ => false,
+        },
     }
 }

@@ -282,7 +282,7 @@ enum Command {
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
     /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves.
     #[command(
-        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde"
+        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde\n  ecdrive sim -i veth1 -d mr-j4-tm -d bdhde --drop 1% --seed 7 --delay 5%:200us\n  ecdrive sim -i veth1 -d mr-j4-tm --disconnect-at 5s --reconnect-at 8s --alarm 0:AL.52@12s\n\nFault times (T) count from the start of serving and need a unit (500ms, 5s); positions (POS)\nare 0-based in --device order; numbers are decimal or 0x hex. The counters of injected faults\nare printed when ecdrive sim stops (and are in its --json output)."
     )]
     Sim {
         /// Interface to serve on (e.g. one end of a veth pair).
@@ -302,6 +302,8 @@ enum Command {
         /// List the device names and exit.
         #[arg(long)]
         list_devices: bool,
+        #[command(flatten)]
+        faults: Box<sim::FaultArgs>,
         #[command(flatten)]
         json: Json,
     },
@@ -825,6 +827,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             sm_watchdog,
             no_loss_detection,
             list_devices,
+            faults,
             json,
         } => sim::sim(
             interface,
@@ -832,6 +835,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             sm_watchdog,
             !no_loss_detection,
             list_devices,
+            faults,
             json.json,
         ),
         Command::Jitter(args) => jitter::run(args),

@@ -1,10 +1,430 @@
-//! `ecdrive sim`: serve emulated devices on an interface until Ctrl-C.
+//! `ecdrive sim`: serve emulated devices on an interface until Ctrl-C, optionally injecting
+//! faults.
 
 use crate::{exit, fail_with, print_json};
-use ecdrive::sim::run::SimError;
+use ecdrive::sim::faults::{Corruption, DropLeg, LinkFault};
+use ecdrive::sim::run::{FaultSpec, ScheduledFault, SimError};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// Where dropped frames are lost.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default)]
+pub enum Leg {
+    /// On the way to the slaves: they never see the frame.
+    #[default]
+    Outbound,
+    /// On the way back: the slaves processed the frame, the reply is lost.
+    Return,
+}
+
+/// What `--corrupt-at` corrupts in the first datagram of a frame.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, Default)]
+pub enum Kind {
+    /// The working counter (XOR 0x8000).
+    #[default]
+    Wkc,
+    /// The datagram index (XOR 0x80).
+    Index,
+    /// The command (XOR 0x80: a reserved code).
+    Command,
+    /// The length field (set to 2047: the frame no longer parses).
+    Length,
+    /// Every data byte (inverted).
+    Data,
+}
+
+/// Fault injection options of `ecdrive sim`. Times (T) count from when serving starts, with a
+/// unit: `500ms`, `5s`. Positions (POS) are 0-based in `--device` order. Numbers may be
+/// decimal or 0x hex.
+#[derive(clap::Args, Clone, Debug, Default)]
+#[command(next_help_heading = "Fault injection")]
+pub struct FaultArgs {
+    /// Drop this fraction of frames, from the start: a percentage (`1%`) or a fraction (`0.01`).
+    #[arg(long, value_name = "P", value_parser = parse_drop)]
+    drop: Option<ScheduledFault>,
+    /// Where dropped frames are lost.
+    #[arg(long, value_enum, value_name = "LEG", default_value_t)]
+    drop_leg: Leg,
+    /// Delay the reply of a fraction of frames (the slaves process them on time):
+    /// `P:TIME`, e.g. `5%:200us`.
+    #[arg(long, value_name = "P:TIME", value_parser = parse_delay)]
+    delay: Option<ScheduledFault>,
+    /// Corrupt the first datagram of N frames (default 1) from time T: `T[:N]`, e.g. `3s`,
+    /// `3s:10`. Repeatable.
+    #[arg(long, value_name = "T[:N]", value_parser = parse_corrupt)]
+    corrupt_at: Vec<ScheduledFault>,
+    /// What --corrupt-at corrupts.
+    #[arg(long, value_enum, value_name = "KIND", default_value_t)]
+    corrupt_kind: Kind,
+    /// Pull the cable at time T: nothing reaches the slaves, which keep running (SYNC0,
+    /// watchdogs, the drives' loss-of-data alarms). Repeatable.
+    #[arg(long, value_name = "T", value_parser = parse_disconnect)]
+    disconnect_at: Vec<ScheduledFault>,
+    /// Put the cable back at time T. Repeatable; each follows a --disconnect-at.
+    #[arg(long, value_name = "T", value_parser = parse_reconnect)]
+    reconnect_at: Vec<ScheduledFault>,
+    /// The slave at POS restarts locally at time T: INIT with AL status code 0x0060:
+    /// `POS@T`. Repeatable.
+    #[arg(long, value_name = "POS@T", value_parser = parse_reset)]
+    reset_at: Vec<ScheduledFault>,
+    /// The drive at POS raises its alarm ID (the manual's name, e.g. `AL.52`, `J3`) at time T:
+    /// `POS:ID@T`. Repeatable.
+    #[arg(long, value_name = "POS:ID@T", value_parser = parse_alarm)]
+    alarm: Vec<ScheduledFault>,
+    /// The drive at POS sees this following error (position units) from time T:
+    /// `POS:VALUE@T`. Repeatable.
+    #[arg(long, value_name = "POS:VALUE@T", value_parser = parse_following_error)]
+    following_error: Vec<ScheduledFault>,
+    /// The device at POS answers the next SDO request to INDEX[:SUB] with abort CODE (from
+    /// time T, default at once): `POS:INDEX[:SUB]:CODE[@T]`, e.g. `0:0x6060:0x08000022`.
+    /// Repeatable.
+    #[arg(long, value_name = "POS:INDEX[:SUB]:CODE[@T]", value_parser = parse_sdo_abort)]
+    sdo_abort: Vec<ScheduledFault>,
+    /// The device at POS sends an emergency with CODE in the middle of its next segmented SDO
+    /// transfer (from time T, default at once): `POS:CODE[@T]`. Repeatable.
+    #[arg(long, value_name = "POS:CODE[@T]", value_parser = parse_emergency_during_sdo)]
+    emergency_during_sdo: Vec<ScheduledFault>,
+    /// The local clock of the slave at POS drifts by PPB parts per billion (from time T,
+    /// default at once): `POS:PPB[@T]`, e.g. `1:50000`. Repeatable.
+    #[arg(long, value_name = "POS:PPB[@T]", value_parser = parse_drift)]
+    drift: Vec<ScheduledFault>,
+    /// Seed of the random choices of --drop and --delay (the same seed drops the same frames).
+    #[arg(long, value_name = "N", value_parser = parse_seed)]
+    seed: Option<ScheduledFault>,
+}
+
+impl FaultArgs {
+    /// Every fault, settings included.
+    pub fn faults(&self) -> Vec<ScheduledFault> {
+        let mut out = Vec::new();
+        let setting = |f: LinkFault, source: String| ScheduledFault {
+            at: Duration::ZERO,
+            fault: FaultSpec::Link(f),
+            source,
+        };
+        if !self.is_empty() {
+            let leg = match self.drop_leg {
+                Leg::Outbound => DropLeg::Outbound,
+                Leg::Return => DropLeg::Return,
+            };
+            out.push(setting(LinkFault::DropOn(leg), "--drop-leg".into()));
+            let kind = match self.corrupt_kind {
+                Kind::Wkc => Corruption::WorkingCounter,
+                Kind::Index => Corruption::Index,
+                Kind::Command => Corruption::Command,
+                Kind::Length => Corruption::Length,
+                Kind::Data => Corruption::Data,
+            };
+            out.push(setting(
+                LinkFault::CorruptWith(kind),
+                "--corrupt-kind".into(),
+            ));
+        }
+        out.extend(self.seed.iter().cloned());
+        out.extend(self.drop.iter().cloned());
+        out.extend(self.delay.iter().cloned());
+        for v in [
+            &self.corrupt_at,
+            &self.disconnect_at,
+            &self.reconnect_at,
+            &self.reset_at,
+            &self.alarm,
+            &self.following_error,
+            &self.sdo_abort,
+            &self.emergency_during_sdo,
+            &self.drift,
+        ] {
+            out.extend(v.iter().cloned());
+        }
+        out
+    }
+
+    /// No fault asked for.
+    pub fn is_empty(&self) -> bool {
+        self.drop.is_none()
+            && self.delay.is_none()
+            && self.seed.is_none()
+            && self.corrupt_at.is_empty()
+            && self.disconnect_at.is_empty()
+            && self.reconnect_at.is_empty()
+            && self.reset_at.is_empty()
+            && self.alarm.is_empty()
+            && self.following_error.is_empty()
+            && self.sdo_abort.is_empty()
+            && self.emergency_during_sdo.is_empty()
+            && self.drift.is_empty()
+    }
+}
+
+// ------------------------------------------------------------------------------- parsing
+
+fn num(s: &str, what: &str) -> Result<u64, String> {
+    let t = s.trim();
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(h) => u64::from_str_radix(h, 16),
+        None => t.parse::<u64>(),
+    }
+    .map_err(|_| format!("{what} {t:?} is not a number (decimal or 0x hex)"))
+}
+
+fn bounded<T: TryFrom<u64>>(s: &str, what: &str, max: u64) -> Result<T, String> {
+    let v = num(s, what)?;
+    if v > max {
+        return Err(format!("{what} {s:?} is larger than {max:#X}"));
+    }
+    T::try_from(v).map_err(|_| format!("{what} {s:?} is out of range"))
+}
+
+fn position(s: &str) -> Result<u16, String> {
+    s.trim()
+        .parse::<u16>()
+        .map_err(|_| format!("position {s:?} is not a number from 0 to 65535"))
+}
+
+fn time(s: &str) -> Result<Duration, String> {
+    ecdrive::config::parse_duration(s)
+}
+
+/// A probability: `1%`, `0.5 %` or `0.01`; 0 to 1.
+fn fraction(s: &str) -> Result<f32, String> {
+    let t = s.trim();
+    let (v, scale) = match t.strip_suffix('%') {
+        Some(p) => (p.trim(), 100.0),
+        None => (t, 1.0),
+    };
+    let v: f64 = v
+        .parse()
+        .map_err(|_| format!("{s:?} is not a fraction (write e.g. \"1%\" or \"0.01\")"))?;
+    let f = v / scale;
+    if !f.is_finite() || !(0.0..=1.0).contains(&f) {
+        return Err(format!("{s:?} is not between 0 and 100%"));
+    }
+    Ok(f as f32)
+}
+
+/// Split `X@T` into `X` and the time (`None` without `@`).
+fn at(s: &str) -> Result<(&str, Option<Duration>), String> {
+    match s.rsplit_once('@') {
+        Some((x, t)) => Ok((x, Some(time(t)?))),
+        None => Ok((s, None)),
+    }
+}
+
+fn required_at(s: &str) -> Result<(&str, Duration), String> {
+    match at(s)? {
+        (x, Some(t)) => Ok((x, t)),
+        (_, None) => Err(format!("{s:?} has no time: add @T, e.g. @5s")),
+    }
+}
+
+fn sched(opt: &str, value: &str, at: Duration, fault: FaultSpec) -> ScheduledFault {
+    ScheduledFault {
+        at,
+        fault,
+        source: format!("--{opt} {value}"),
+    }
+}
+
+fn parse_drop(s: &str) -> Result<ScheduledFault, String> {
+    let f = fraction(s)?;
+    Ok(sched(
+        "drop",
+        s,
+        Duration::ZERO,
+        FaultSpec::Link(LinkFault::DropFraction(f)),
+    ))
+}
+
+fn parse_delay(s: &str) -> Result<ScheduledFault, String> {
+    let (p, t) = s
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?} is not P:TIME (write e.g. \"5%:200us\")"))?;
+    let fraction = fraction(p)?;
+    let d = time(t)?;
+    if d.is_zero() {
+        return Err(format!("the delay in {s:?} is zero"));
+    }
+    let delay_ns = u64::try_from(d.as_nanos()).map_err(|_| format!("{s:?}: delay too long"))?;
+    Ok(sched(
+        "delay",
+        s,
+        Duration::ZERO,
+        FaultSpec::Link(LinkFault::Delay { fraction, delay_ns }),
+    ))
+}
+
+fn parse_corrupt(s: &str) -> Result<ScheduledFault, String> {
+    let (t, n) = match s.split_once(':') {
+        Some((t, n)) => (t, bounded::<u32>(n, "count", u64::from(u32::MAX))?),
+        None => (s, 1),
+    };
+    if n == 0 {
+        return Err(format!("the count in {s:?} is zero"));
+    }
+    Ok(sched(
+        "corrupt-at",
+        s,
+        time(t)?,
+        FaultSpec::Link(LinkFault::CorruptNext(n)),
+    ))
+}
+
+fn parse_disconnect(s: &str) -> Result<ScheduledFault, String> {
+    Ok(sched(
+        "disconnect-at",
+        s,
+        time(s)?,
+        FaultSpec::Link(LinkFault::Disconnect),
+    ))
+}
+
+fn parse_reconnect(s: &str) -> Result<ScheduledFault, String> {
+    Ok(sched(
+        "reconnect-at",
+        s,
+        time(s)?,
+        FaultSpec::Link(LinkFault::Reconnect),
+    ))
+}
+
+fn parse_reset(s: &str) -> Result<ScheduledFault, String> {
+    let (p, t) = required_at(s)?;
+    Ok(sched(
+        "reset-at",
+        s,
+        t,
+        FaultSpec::Reset {
+            position: position(p)?,
+        },
+    ))
+}
+
+fn parse_alarm(s: &str) -> Result<ScheduledFault, String> {
+    let (x, t) = required_at(s)?;
+    let (p, id) = x
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?} is not POS:ID@T (write e.g. \"0:AL.52@5s\")"))?;
+    if id.trim().is_empty() {
+        return Err(format!("{s:?} names no alarm"));
+    }
+    Ok(sched(
+        "alarm",
+        s,
+        t,
+        FaultSpec::Alarm {
+            position: position(p)?,
+            id: id.trim().to_string(),
+        },
+    ))
+}
+
+fn parse_following_error(s: &str) -> Result<ScheduledFault, String> {
+    let (x, t) = required_at(s)?;
+    let (p, v) = x
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?} is not POS:VALUE@T (write e.g. \"1:50000@2s\")"))?;
+    let value: i32 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("following error {v:?} is not a 32-bit integer"))?;
+    Ok(sched(
+        "following-error",
+        s,
+        t,
+        FaultSpec::FollowingError {
+            position: position(p)?,
+            value,
+        },
+    ))
+}
+
+fn parse_sdo_abort(s: &str) -> Result<ScheduledFault, String> {
+    let (x, t) = at(s)?;
+    let parts: Vec<&str> = x.split(':').collect();
+    let (p, index, sub, code) = match parts.as_slice() {
+        [p, i, c] => (*p, *i, None, *c),
+        [p, i, sub, c] => (*p, *i, Some(*sub), *c),
+        _ => {
+            return Err(format!(
+                "{s:?} is not POS:INDEX[:SUB]:CODE (write e.g. \"0:0x6060:0x08000022\")"
+            ));
+        }
+    };
+    Ok(sched(
+        "sdo-abort",
+        s,
+        t.unwrap_or(Duration::ZERO),
+        FaultSpec::SdoAbort {
+            position: position(p)?,
+            index: bounded(index, "index", 0xFFFF)?,
+            subindex: sub.map(|v| bounded(v, "subindex", 0xFF)).transpose()?,
+            code: bounded(code, "abort code", u64::from(u32::MAX))?,
+        },
+    ))
+}
+
+fn parse_emergency_during_sdo(s: &str) -> Result<ScheduledFault, String> {
+    let (x, t) = at(s)?;
+    let (p, c) = x
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?} is not POS:CODE (write e.g. \"0:0xFF10\")"))?;
+    Ok(sched(
+        "emergency-during-sdo",
+        s,
+        t.unwrap_or(Duration::ZERO),
+        FaultSpec::EmergencyDuringSdo {
+            position: position(p)?,
+            error_code: bounded(c, "error code", 0xFFFF)?,
+        },
+    ))
+}
+
+fn parse_drift(s: &str) -> Result<ScheduledFault, String> {
+    let (x, t) = at(s)?;
+    let (p, v) = x
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?} is not POS:PPB (write e.g. \"1:50000\")"))?;
+    let ppb: i32 = v
+        .trim()
+        .parse()
+        .map_err(|_| format!("drift {v:?} is not an integer number of ppb"))?;
+    // Real oscillators stay within ±100 ppm; the ESC's drift loop corrects up to ±1000 ppm.
+    if ppb.unsigned_abs() > 1_000_000 {
+        return Err(format!(
+            "drift {ppb} ppb is beyond ±1000 ppm (±1000000 ppb), more than the DC loop corrects"
+        ));
+    }
+    Ok(sched(
+        "drift",
+        s,
+        t.unwrap_or(Duration::ZERO),
+        FaultSpec::Drift {
+            position: position(p)?,
+            ppb,
+        },
+    ))
+}
+
+fn parse_seed(s: &str) -> Result<ScheduledFault, String> {
+    let n = num(s, "seed")?;
+    Ok(sched(
+        "seed",
+        s,
+        Duration::ZERO,
+        FaultSpec::Link(LinkFault::Seed(n)),
+    ))
+}
+
+/// What `ecdrive sim --json` prints when it stops.
+#[derive(serde::Serialize)]
+struct Report {
+    /// Frames answered and dropped by the server.
+    served: ecdrive::sim::transport::ServeStats,
+    /// The segment's counters, injected faults included.
+    segment: ecdrive::sim::segment::SegmentStats,
+}
 
 pub fn sim(
     interface: Option<String>,
@@ -12,6 +432,7 @@ pub fn sim(
     sm_watchdog: Option<u16>,
     loss_detection: bool,
     list_devices: bool,
+    faults: Box<FaultArgs>,
     json: bool,
 ) -> ExitCode {
     if list_devices {
@@ -41,8 +462,9 @@ pub fn sim(
         devices,
         sm_watchdog,
         loss_detection,
+        faults: faults.faults(),
     };
-    let prepared = match ecdrive::sim::run::Prepared::new(&opts) {
+    let mut prepared = match ecdrive::sim::run::Prepared::new(&opts) {
         Ok(p) => p,
         Err(e) => {
             let code = match e {
@@ -77,10 +499,33 @@ pub fn sim(
     match prepared.serve(&stop) {
         Ok(stats) => {
             let _ = waiter.join();
+            let seg = prepared.segment_stats();
             eprintln!(
                 "ecdrive sim: stopped; {} frames answered, {} dropped",
                 stats.frames, stats.dropped
             );
+            if !faults.is_empty() {
+                eprintln!(
+                    "ecdrive sim: injected: {} frames dropped ({} on the way back), {} delayed, \
+                     {} corrupted, {} lost while disconnected; {} faults applied, {} ignored",
+                    seg.dropped,
+                    seg.dropped_replies,
+                    seg.delayed,
+                    seg.corrupted,
+                    seg.lost_disconnected,
+                    seg.faults_applied,
+                    seg.faults_ignored
+                );
+            }
+            if json {
+                return print_json(
+                    "sim",
+                    &Report {
+                        served: stats,
+                        segment: seg,
+                    },
+                );
+            }
             ExitCode::SUCCESS
         }
         Err(e) => fail_with("sim", &e.to_string(), exit::BUS),

@@ -149,6 +149,13 @@ pub struct CoeServer {
     pending_info: Option<PendingInfo>,
     emergencies: VecDeque<Emergency>,
     stats: CoeStats,
+    /// Injected: abort the next initiate to (index, subindex or any) with this code.
+    abort_next: Option<(u16, Option<u8>, u32)>,
+    /// Injected: answer the next segment request with this emergency.
+    emcy_during_sdo: Option<Emergency>,
+    /// The reply held back behind an injected emergency (`held[..held_len]`).
+    held: Vec<u8>,
+    held_len: usize,
 }
 
 impl CoeServer {
@@ -164,7 +171,25 @@ impl CoeServer {
             pending_info: None,
             emergencies: VecDeque::with_capacity(config.emergency_queue_len),
             stats: CoeStats::default(),
+            abort_next: None,
+            emcy_during_sdo: None,
+            held: Vec::new(),
+            held_len: 0,
         }
+    }
+
+    /// Fault injection: answer the next SDO upload or download initiate to `index:sub` (`sub`
+    /// `None`: any subindex) with an abort carrying `code` instead of serving it. One shot;
+    /// replaces a previous one. Allocation-free.
+    pub fn abort_next_sdo(&mut self, index: u16, sub: Option<u8>, code: u32) {
+        self.abort_next = Some((index, sub, code));
+    }
+
+    /// Fault injection: answer the first segment request of the next segmented SDO transfer
+    /// with `emcy`, and send the segment response as the next mailbox message (as soon as SM1
+    /// is free again). One shot; replaces a previous one. Allocation-free.
+    pub fn emergency_during_next_sdo(&mut self, emcy: Emergency) {
+        self.emcy_during_sdo = Some(emcy);
     }
 
     /// The configuration.
@@ -185,7 +210,7 @@ impl CoeServer {
     /// Whether [`CoeServer::poll_unsolicited`] has something to send (SDO information
     /// fragments or emergencies).
     pub fn has_unsolicited(&self) -> bool {
-        self.pending_info.is_some() || !self.emergencies.is_empty()
+        self.held_len > 0 || self.pending_info.is_some() || !self.emergencies.is_empty()
     }
 
     /// Mailbox (re)configured or INIT: forget the duplicate counter and the reply counter,
@@ -199,6 +224,7 @@ impl CoeServer {
         self.info.clear();
         self.pending_info = None;
         self.emergencies.clear();
+        self.held_len = 0;
     }
 
     /// Queue an emergency; delivered by [`CoeServer::poll_unsolicited`] when SM1 is free. When
@@ -223,6 +249,15 @@ impl CoeServer {
     /// The ESC must not call this between receiving a request and posting its reply: a master
     /// waiting for an SDO response must get that response first.
     pub fn poll_unsolicited(&mut self, reply: &mut [u8]) -> Option<usize> {
+        if self.held_len > 0 {
+            // The reply held back behind an injected emergency comes first.
+            let n = self.held_len;
+            let src = self.held.get(..n)?;
+            let dst = reply.get_mut(..n)?;
+            dst.copy_from_slice(src);
+            self.held_len = 0;
+            return Some(n);
+        }
         if let Some(p) = self.pending_info {
             return self.next_info_fragment(p, reply);
         }
@@ -356,6 +391,74 @@ impl CoeServer {
                 return self.abort(index, sub, SdoAbortCode::INVALID_COMMAND, reply);
             }
         };
+        if let Some((ai, asub, code)) = self.abort_next {
+            let target = match req {
+                SdoRequest::Upload { index, sub, .. }
+                | SdoRequest::DownloadExpedited { index, sub, .. }
+                | SdoRequest::DownloadNormal { index, sub, .. } => Some((index, sub)),
+                _ => None,
+            };
+            if let Some((index, sub)) = target
+                && index == ai
+                && asub.is_none_or(|s| s == sub)
+            {
+                self.abort_next = None;
+                tracing::debug!(index, sub, code, "injected SDO abort");
+                return self.abort(index, sub, SdoAbortCode(code), reply);
+            }
+        }
+        let segment = matches!(
+            req,
+            SdoRequest::UploadSegment { .. } | SdoRequest::DownloadSegment { .. }
+        );
+        if segment && self.transfer != Transfer::Idle {
+            if let Some(emcy) = self.emcy_during_sdo.take() {
+                return self.emergency_then(emcy, req, state, od, reply);
+            }
+        }
+        self.serve_sdo(req, state, od, reply)
+    }
+
+    /// Answer with `emcy` now and hold the response to `req` back until SM1 is free again.
+    fn emergency_then(
+        &mut self,
+        emcy: Emergency,
+        req: SdoRequest<'_>,
+        state: AlState,
+        od: &mut dyn ObjectStore,
+        reply: &mut [u8],
+    ) -> Option<usize> {
+        let Some(n) = self.emit(reply, |c, b| emcy.emit_mailbox(c, b)) else {
+            return self.serve_sdo(req, state, od, reply);
+        };
+        tracing::debug!(
+            error_code = emcy.error_code,
+            "injected emergency in the middle of an SDO transfer"
+        );
+        if self.held.len() < reply.len() {
+            // Sized to the mailbox once, when the fault first fires.
+            self.held.resize(reply.len(), 0);
+        }
+        let mut held = std::mem::take(&mut self.held);
+        let r = match held.get_mut(..reply.len()) {
+            Some(h) => {
+                h.fill(0);
+                self.serve_sdo(req, state, od, h)
+            }
+            None => None,
+        };
+        self.held = held;
+        self.held_len = r.unwrap_or(0);
+        Some(n)
+    }
+
+    fn serve_sdo(
+        &mut self,
+        req: SdoRequest<'_>,
+        state: AlState,
+        od: &mut dyn ObjectStore,
+        reply: &mut [u8],
+    ) -> Option<usize> {
         match req {
             SdoRequest::Upload {
                 index,

@@ -722,6 +722,26 @@ impl Device for GenericCoeDevice {
                 });
                 true
             }
+            crate::sim::faults::DeviceFault::AbortSdo {
+                index,
+                subindex,
+                code,
+            } => {
+                self.coe.abort_next_sdo(index, subindex, code);
+                true
+            }
+            crate::sim::faults::DeviceFault::EmergencyDuringSdo {
+                error_code,
+                error_register,
+                data,
+            } => {
+                self.coe.emergency_during_next_sdo(Emergency {
+                    error_code,
+                    error_register,
+                    data,
+                });
+                true
+            }
             _ => false,
         }
     }

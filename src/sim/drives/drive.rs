@@ -1559,6 +1559,27 @@ impl Device for EmulatedDrive {
                 });
                 true
             }
+            DeviceFault::AbortSdo {
+                index,
+                subindex,
+                code,
+            } => {
+                self.coe.abort_next_sdo(index, subindex, code);
+                true
+            }
+            DeviceFault::EmergencyDuringSdo {
+                error_code,
+                error_register,
+                data,
+            } => {
+                self.coe
+                    .emergency_during_next_sdo(crate::sim::coe::Emergency {
+                        error_code,
+                        error_register,
+                        data,
+                    });
+                true
+            }
         }
     }
 

@@ -94,6 +94,17 @@ impl DcUnit {
         self.drift_ppb
     }
 
+    /// Change the drift from host time `host_ns` on, keeping the local time continuous there
+    /// (the offset absorbs the difference).
+    pub fn set_drift(&mut self, host_ns: u64, drift_ppb: i64) {
+        let before = i128::from(self.local(host_ns));
+        let q = ppb_to_q(drift_ppb);
+        let offset = before - i128::from(host_ns) - apply_q(host_ns, q);
+        self.offset_ns = offset.clamp(i128::from(i64::MIN), i128::from(i64::MAX)) as i64;
+        self.drift_ppb = drift_ppb;
+        self.drift_q = q;
+    }
+
     /// Local time at host time `host_ns`.
     pub fn local(&self, host_ns: u64) -> u64 {
         let v = i128::from(host_ns) + i128::from(self.offset_ns) + apply_q(host_ns, self.drift_q);

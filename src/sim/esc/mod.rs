@@ -1588,6 +1588,24 @@ impl Esc {
         self.finish_transition(from, to, Some(code), dev);
     }
 
+    /// A local restart of the application controller (an injected
+    /// [`SlaveFault::ResetToInit`](crate::sim::faults::SlaveFault::ResetToInit)): INIT with the
+    /// error bit and AL status code 0x0060 "Slave restarted locally"; the mailbox stops, the
+    /// device sees the change as a local error. ESC registers (station address, SyncManager
+    /// and FMMU configuration) are kept.
+    pub fn local_reset(&mut self, dev: &mut dyn Device) {
+        self.local_error(AlState::Init, AlStatusCode::RESTARTED_LOCALLY, dev);
+    }
+
+    /// Change the local clock's drift against the host clock from host time `host_ns` on (an
+    /// injected [`SlaveFault::ClockDrift`](crate::sim::faults::SlaveFault::ClockDrift)). The
+    /// local time does not jump; a later ESC reset keeps the new drift (it is the oscillator's).
+    pub fn set_clock_drift(&mut self, host_ns: u64, drift_ppb: i64) {
+        self.dc.set_drift(host_ns, drift_ppb);
+        self.cfg.clock_drift_ppb = drift_ppb;
+        self.cfg.clock_offset_ns = self.dc.offset_ns;
+    }
+
     // ---------------------------------------------------------------- end of frame / time
 
     /// Whether there is work for [`end_of_frame`](Self::end_of_frame).

@@ -1,8 +1,10 @@
 //! Serve a segment to an ethercrab `MainDevice` in the same process, through its `PduTx` /
 //! `PduRx` halves: no network, no root.
 
+use super::held::HeldReplies;
 use super::lock;
-use crate::sim::segment::Segment;
+use crate::sim::clock::Clock;
+use crate::sim::segment::{Segment, SegmentError};
 use ethercrab::{PduRx, PduTx};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -19,6 +21,7 @@ struct Shared {
     stop: AtomicBool,
     frames: AtomicU64,
     dropped: AtomicU64,
+    lost: AtomicU64,
 }
 
 struct Unpark(Thread);
@@ -85,6 +88,7 @@ impl EthercrabLink {
             stop: AtomicBool::new(false),
             frames: AtomicU64::new(0),
             dropped: AtomicU64::new(0),
+            lost: AtomicU64::new(0),
         });
         let s = shared.clone();
         let thread = thread::Builder::new()
@@ -104,7 +108,7 @@ impl EthercrabLink {
         lock(&self.shared.segment)
     }
 
-    /// Frames processed so far.
+    /// Frames answered so far (including late ones).
     pub fn frames(&self) -> u64 {
         self.shared.frames.load(Ordering::Relaxed)
     }
@@ -112,6 +116,11 @@ impl EthercrabLink {
     /// Frames the segment dropped (malformed) or ethercrab refused (e.g. after a timeout).
     pub fn dropped(&self) -> u64 {
         self.shared.dropped.load(Ordering::Relaxed)
+    }
+
+    /// Frames not answered because of an injected link fault (dropped, cable pulled).
+    pub fn lost(&self) -> u64 {
+        self.shared.lost.load(Ordering::Relaxed)
     }
 
     /// Stop the thread and give the segment back.
@@ -145,14 +154,28 @@ impl Drop for EthercrabLink {
     }
 }
 
+/// Delayed replies held at once at most.
+const HELD: usize = 32;
+
 fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>) {
     let waker = Waker::from(Arc::new(Unpark(thread::current())));
     let mut buf: Vec<u8> = vec![0; 2048];
+    let mut held = HeldReplies::new(HELD);
+    let clock = lock(&shared.segment).clock().clone();
     loop {
         if shared.stop.load(Ordering::Acquire) || tx.should_exit() {
             break;
         }
         tx.replace_waker(&waker);
+        // Delayed replies whose time has come (a stale one is refused by ethercrab and counted
+        // as dropped).
+        while let Some(f) = held.pop_due(clock.now_ns()) {
+            if rx.receive_frame(f).is_ok() {
+                shared.frames.fetch_add(1, Ordering::Relaxed);
+            } else {
+                shared.dropped.fetch_add(1, Ordering::Relaxed);
+            }
+        }
         let mut any = false;
         while let Some(frame) = tx.next_sendable_frame() {
             any = true;
@@ -175,17 +198,26 @@ fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>) {
             let Some(frame) = buf.get_mut(..len) else {
                 continue;
             };
-            let reply = lock(&shared.segment).process(frame);
+            let reply = lock(&shared.segment).process_frame(frame);
             match reply {
-                Ok(n) => {
+                Ok(r) if r.delay_ns > 0 => {
+                    let ok = buf.get(..r.len).is_some_and(|f| held.push(f, r.due_ns));
+                    if !ok {
+                        shared.dropped.fetch_add(1, Ordering::Relaxed);
+                    }
+                }
+                Ok(r) => {
                     shared.frames.fetch_add(1, Ordering::Relaxed);
                     let ok = buf
-                        .get(..n)
+                        .get(..r.len)
                         .map(|f| rx.receive_frame(f).is_ok())
                         .unwrap_or(false);
                     if !ok {
                         shared.dropped.fetch_add(1, Ordering::Relaxed);
                     }
+                }
+                Err(SegmentError::Lost { .. } | SegmentError::Disconnected) => {
+                    shared.lost.fetch_add(1, Ordering::Relaxed);
                 }
                 Err(_) => {
                     shared.dropped.fetch_add(1, Ordering::Relaxed);
@@ -197,8 +229,11 @@ fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>) {
                 let mut seg = lock(&shared.segment);
                 seg.poll();
                 let now = seg.clock().now_ns();
-                seg.next_deadline()
-                    .map(|d| Duration::from_nanos(d.saturating_sub(now)).min(IDLE_PARK))
+                let next = match (seg.next_deadline(), held.next_due()) {
+                    (Some(a), Some(b)) => Some(a.min(b)),
+                    (a, b) => a.or(b),
+                };
+                next.map(|d| Duration::from_nanos(d.saturating_sub(now)).min(IDLE_PARK))
                     .unwrap_or(IDLE_PARK)
             };
             thread::park_timeout(timeout);

@@ -1,9 +1,10 @@
 //! Serve a segment on a raw socket.
 
+use super::held::HeldReplies;
 use super::lock;
 use crate::ec::frame::MAX_FRAME_LEN;
 use crate::link::{LinkError, RawSocket};
-use crate::sim::segment::Segment;
+use crate::sim::segment::{Segment, SegmentError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -14,18 +15,27 @@ use std::time::Duration;
 const MAX_WAIT: Duration = Duration::from_millis(10);
 
 /// Counters of [`serve`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub struct ServeStats {
-    /// Frames answered.
+    /// Frames answered (including late ones).
     pub frames: u64,
-    /// Frames received but not answered (malformed, not EtherCAT, too large).
+    /// Frames received but not answered (malformed, not EtherCAT, too large), and delayed
+    /// replies that found no free buffer to wait in.
     pub dropped: u64,
+    /// Frames not answered because of an injected link fault (dropped, cable pulled).
+    pub lost: u64,
+    /// Replies sent late because of an injected delay.
+    pub delayed: u64,
 }
 
+/// Delayed replies held at once at most.
+const HELD: usize = 64;
+
 /// Answer EtherCAT frames arriving on `socket` with `segment` until `stop` is set. Between
-/// frames (at most every 10 ms, or at the next SYNC0 deadline) it polls the segment so that
-/// SYNC0 events and watchdogs are processed while the master is silent. One receive buffer is
-/// allocated up front.
+/// frames (at most every 10 ms, or at the next SYNC0 deadline or delayed reply) it polls the
+/// segment so that SYNC0 events, watchdogs and injected faults are processed while the master
+/// is silent (or the cable is pulled). Replies delayed by an injected fault are held and sent
+/// when due. The receive buffer and the buffers of delayed replies are allocated up front.
 pub fn serve(
     socket: &RawSocket,
     segment: &Mutex<Segment>,
@@ -33,27 +43,44 @@ pub fn serve(
 ) -> Result<ServeStats, LinkError> {
     let mut stats = ServeStats::default();
     let mut buf = vec![0u8; socket.max_frame_len().max(MAX_FRAME_LEN)];
+    let mut held = HeldReplies::new(HELD);
     while !stop.load(Ordering::Acquire) {
-        let timeout = {
+        let (now, deadline) = {
             let seg = lock(segment);
-            let now = seg.clock().now_ns();
-            seg.next_deadline()
-                .map(|d| Duration::from_nanos(d.saturating_sub(now)).min(MAX_WAIT))
-                .unwrap_or(MAX_WAIT)
+            (seg.clock().now_ns(), seg.next_deadline())
         };
+        while let Some(f) = held.pop_due(now) {
+            socket.send(f)?;
+            stats.frames += 1;
+        }
+        let next = match (deadline, held.next_due()) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        };
+        let timeout = next
+            .map(|d| Duration::from_nanos(d.saturating_sub(now)).min(MAX_WAIT))
+            .unwrap_or(MAX_WAIT);
         match socket.recv(&mut buf, Some(timeout)) {
             Ok(Some(n)) => {
                 let Some(frame) = buf.get_mut(..n) else {
                     continue;
                 };
-                let reply = lock(segment).process(frame);
+                let reply = lock(segment).process_frame(frame);
                 match reply {
-                    Ok(len) => {
-                        if let Some(f) = buf.get(..len) {
+                    Ok(r) => {
+                        let Some(f) = buf.get(..r.len) else {
+                            continue;
+                        };
+                        if r.delay_ns == 0 {
                             socket.send(f)?;
                             stats.frames += 1;
+                        } else if held.push(f, r.due_ns) {
+                            stats.delayed += 1;
+                        } else {
+                            stats.dropped += 1;
                         }
                     }
+                    Err(SegmentError::Lost { .. } | SegmentError::Disconnected) => stats.lost += 1,
                     Err(_) => stats.dropped += 1,
                 }
             }

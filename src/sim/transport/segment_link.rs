@@ -1,7 +1,9 @@
 //! The synchronous in-process link.
 
+use super::held::HeldReplies;
 use crate::ec::frame::MAX_FRAME_LEN;
 use crate::link::{FrameLink, LinkError};
+use crate::sim::clock::Clock;
 use crate::sim::segment::Segment;
 use std::time::Duration;
 
@@ -9,15 +11,20 @@ use std::time::Duration;
 pub const IN_FLIGHT: usize = 32;
 
 /// A [`FrameLink`] whose other end is a [`Segment`] in the same thread: `send` processes the
-/// frame immediately, `recv` hands out the replies in order. Dropped frames (malformed, or no
-/// slaves) produce no reply, as on a wire. Buffers are allocated once at construction.
+/// frame immediately, `recv` hands out the replies. Dropped frames (malformed, no slaves, or
+/// lost by an injected fault) produce no reply, as on a wire. Buffers are allocated once at
+/// construction.
+///
+/// A reply delayed by an injected [`LinkFault::Delay`](crate::sim::faults::LinkFault::Delay)
+/// is handed out once the segment's clock reaches its due time; replies come out earliest due
+/// first (a delayed reply can be overtaken by a later frame's). `recv` waits for a held reply
+/// if it falls due within its timeout (a real sleep: with a
+/// [`ManualClock`](crate::sim::ManualClock) the caller moves the time instead, and `recv`
+/// returns `None` until it has).
 #[derive(Debug)]
 pub struct SegmentLink {
     segment: Segment,
-    slots: Vec<[u8; MAX_FRAME_LEN]>,
-    lens: [usize; IN_FLIGHT],
-    head: usize,
-    count: usize,
+    held: HeldReplies,
 }
 
 impl SegmentLink {
@@ -25,10 +32,7 @@ impl SegmentLink {
     pub fn new(segment: Segment) -> Self {
         Self {
             segment,
-            slots: vec![[0u8; MAX_FRAME_LEN]; IN_FLIGHT],
-            lens: [0; IN_FLIGHT],
-            head: 0,
-            count: 0,
+            held: HeldReplies::new(IN_FLIGHT),
         }
     }
 
@@ -47,9 +51,25 @@ impl SegmentLink {
         self.segment
     }
 
-    /// Replies waiting to be received.
+    /// Replies waiting to be received (including delayed ones not yet due).
     pub fn pending_replies(&self) -> usize {
-        self.count
+        self.held.len()
+    }
+
+    fn take_due(&mut self, buf: &mut [u8]) -> Result<Option<usize>, LinkError> {
+        let now = self.segment.clock().now_ns();
+        let Some(src) = self.held.pop_due(now) else {
+            return Ok(None);
+        };
+        let n = src.len();
+        let capacity = buf.len();
+        let dst = buf.get_mut(..n).ok_or_else(|| LinkError::Truncated {
+            interface: "in-process segment".into(),
+            len: n,
+            capacity,
+        })?;
+        dst.copy_from_slice(src);
+        Ok(Some(n))
     }
 }
 
@@ -66,24 +86,17 @@ impl FrameLink for SegmentLink {
                 max: MAX_FRAME_LEN,
             });
         }
-        if self.count >= IN_FLIGHT {
+        let Some((i, slot)) = self.held.free_slot() else {
             return Err(LinkError::Peer(format!(
                 "in-process segment: {IN_FLIGHT} replies are waiting to be received; receive before sending more"
             )));
-        }
-        let idx = (self.head + self.count) % IN_FLIGHT;
-        let (Some(slot), Some(len)) = (self.slots.get_mut(idx), self.lens.get_mut(idx)) else {
-            return Err(LinkError::Peer(
-                "in-process segment: slot out of range".into(),
-            ));
         };
         let Some(buf) = slot.get_mut(..frame.len()) else {
             return Err(LinkError::Peer("in-process segment: slot too small".into()));
         };
         buf.copy_from_slice(frame);
-        if let Ok(n) = self.segment.process(buf) {
-            *len = n;
-            self.count += 1;
+        if let Ok(r) = self.segment.process_frame(buf) {
+            self.held.commit(i, r.len, r.due_ns);
         }
         Ok(())
     }
@@ -91,30 +104,25 @@ impl FrameLink for SegmentLink {
     fn recv(
         &mut self,
         buf: &mut [u8],
-        _timeout: Option<Duration>,
+        timeout: Option<Duration>,
     ) -> Result<Option<usize>, LinkError> {
-        if self.count == 0 {
-            // Nothing in flight: let time-driven work (SYNC0, watchdogs) happen, then report a
-            // timeout at once (nothing can arrive while we wait in the same thread).
-            self.segment.poll();
+        if let Some(n) = self.take_due(buf)? {
+            return Ok(Some(n));
+        }
+        // Nothing due: let time-driven work (SYNC0, watchdogs, queued faults) happen.
+        self.segment.poll();
+        let Some(due) = self.held.next_due() else {
+            // Nothing in flight: report a timeout at once (nothing can arrive while we wait in
+            // the same thread).
+            return Ok(None);
+        };
+        let wait = Duration::from_nanos(due.saturating_sub(self.segment.clock().now_ns()));
+        if timeout.is_some_and(|t| wait > t) {
             return Ok(None);
         }
-        let idx = self.head;
-        let n = self.lens.get(idx).copied().unwrap_or(0);
-        let src = self
-            .slots
-            .get(idx)
-            .and_then(|s| s.get(..n))
-            .ok_or_else(|| LinkError::Peer("in-process segment: bad slot".into()))?;
-        let capacity = buf.len();
-        let dst = buf.get_mut(..n).ok_or_else(|| LinkError::Truncated {
-            interface: "in-process segment".into(),
-            len: n,
-            capacity,
-        })?;
-        dst.copy_from_slice(src);
-        self.head = (self.head + 1) % IN_FLIGHT;
-        self.count -= 1;
-        Ok(Some(n))
+        // A delayed reply falls due within the timeout: wait for it, as a socket would.
+        std::thread::sleep(wait);
+        self.segment.poll();
+        self.take_due(buf)
     }
 }
