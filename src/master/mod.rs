@@ -10,6 +10,7 @@ pub mod io;
 pub mod program;
 pub mod session;
 pub mod setpoint;
+pub mod soak;
 pub mod startup;
 pub mod telemetry;
 pub mod tools;

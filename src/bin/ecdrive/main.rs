@@ -7,6 +7,7 @@ mod jitter;
 mod print;
 mod run;
 mod sim;
+mod soak;
 
 use clap::{Args, Parser, Subcommand};
 use ecdrive::ec::AlState;
@@ -97,6 +98,11 @@ enum Command {
     /// Run the main job on emulated drives: an MR-J4-TM and a BDHDE in-process, brought to OP
     /// with DC, through a csp, csv and cst sequence. Needs no hardware and no root.
     Demo(demo::DemoArgs),
+    /// Run the demo's two emulated drives for a long time (default an hour) while the
+    /// emulated segment drops a fraction of the frames at random (default 1 %); the programs
+    /// repeat, the master recovers from controlled stops and re-starts by itself, and the
+    /// report counts what happened and any unhandled error (exit code 5 if there is one).
+    Soak(soak::SoakArgs),
     /// List the devices on the segment: position, station address, alias, AL state,
     /// identity, name, matched drive profile, DC support and mailbox protocols. With --can:
     /// the CANopen nodes (node-ID, NMT state, device type, identity, name, profile).
@@ -524,6 +530,7 @@ fn main() -> ExitCode {
 fn dispatch(cli: Cli) -> ExitCode {
     match cli.command {
         Command::Demo(args) => demo::run(args),
+        Command::Soak(args) => soak::run(args),
         Command::Slaves { bus, verbose, json } => {
             let Some(interface) = bus.interface else {
                 return can::slaves(bus.can.as_deref().unwrap_or_default(), json.json);

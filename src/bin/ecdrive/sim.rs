@@ -188,7 +188,7 @@ fn time(s: &str) -> Result<Duration, String> {
 }
 
 /// A probability: `1%`, `0.5 %` or `0.01`; 0 to 1.
-fn fraction(s: &str) -> Result<f32, String> {
+pub(crate) fn fraction(s: &str) -> Result<f32, String> {
     let t = s.trim();
     let (v, scale) = match t.strip_suffix('%') {
         Some(p) => (p.trim(), 100.0),

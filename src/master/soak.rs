@@ -1,0 +1,325 @@
+//! `ecdrive soak`: the demo's two emulated drives (MR-J4-TM and BDHDE, in-process) running
+//! their programs over and over for a long time while the software slave drops a fraction of
+//! the frames at random, and a count of what happened.
+//!
+//! The master runs as an application would run it: automatic re-start
+//! ([`RestartPolicy::Auto`]); after a controlled stop (too many lost frames in a row, a drive
+//! fault) the soak resets faults, enables the axes again and restarts the programs. Every
+//! history entry is counted by [`HistoryKind`]. An error is *handled* when the master reacted
+//! as documented (lost cycles held the set-point; a controlled stop; a decoded fault; a
+//! re-start) and the soak could bring the axes back to motion. It is *unhandled* when the
+//! session ended by itself, a command or a recovery failed, an axis stayed enabled while a
+//! fault was shown, or an entry of a kind that lost frames must not cause (state-machine
+//! failures, refused commands, a session error) appeared.
+
+use super::cycle::CycleSettings;
+use super::demo;
+use super::error::{ErrorKind, MasterError};
+use super::session::{HistoryKind, Master, MasterConfig, RestartPolicy};
+use super::startup::{DriveSetup, Selector};
+use super::telemetry::{Axes, Command, Phase, StopKind, Telemetry};
+use crate::cia402::State;
+use crate::drives;
+use crate::rt::RtSettings;
+use crate::sim::faults::{Fault, LinkFault};
+use crate::sim::transport::SegmentLink;
+use serde::Serialize;
+use std::collections::BTreeMap;
+use std::time::{Duration, Instant};
+
+/// Options of a soak run.
+#[derive(Debug, Clone)]
+pub struct SoakOptions {
+    /// How long to run.
+    pub duration: Duration,
+    /// Cycle time.
+    pub cycle: Duration,
+    /// Fraction of frames the software slave drops at random (0.01 = 1 %).
+    pub drop: f32,
+    /// Seed of the drop pattern.
+    pub seed: u64,
+    /// Real-time settings of the cycle thread.
+    pub rt: RtSettings,
+    /// Progress callback, called about once a second with the elapsed time and the counts.
+    pub progress: Option<fn(Duration, &SoakCounts)>,
+}
+
+impl Default for SoakOptions {
+    fn default() -> Self {
+        Self {
+            duration: Duration::from_secs(3600),
+            cycle: Duration::from_millis(1),
+            drop: 0.01,
+            seed: 1,
+            rt: demo::DemoOptions::default().rt,
+            progress: None,
+        }
+    }
+}
+
+/// Running counts of a soak.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct SoakCounts {
+    /// Cycles run (over every re-start).
+    pub cycles: u64,
+    /// Cycles without a reply, as the master counted them.
+    pub lost_cycles: u64,
+    /// Cycles whose wake-up came more than a whole cycle late (a stall of the machine; long
+    /// ones make the drives' own loss supervision trip, which the master then handles).
+    pub late_wakeups: u64,
+    /// Programs run to their end (both axes together count once).
+    pub programs_completed: u64,
+    /// Times the soak brought the axes back to motion after a controlled stop.
+    pub recoveries: u64,
+    /// Re-starts of the segment.
+    pub restarts: u32,
+    /// History entries per kind (errors and information alike).
+    pub history: BTreeMap<String, u64>,
+    /// Unhandled errors, each with what and when.
+    pub unhandled: Vec<String>,
+    /// The first error entries of the history other than lost frames (at most
+    /// [`MAX_ERRORS`]), each with when, for the reader.
+    pub errors: Vec<String>,
+}
+
+/// At most this many error texts are kept in [`SoakCounts::errors`].
+pub const MAX_ERRORS: usize = 200;
+
+/// The result of a soak run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SoakReport {
+    /// Seconds run.
+    pub seconds: f64,
+    /// Cycle time, µs.
+    pub cycle_us: u64,
+    /// The drop fraction asked for.
+    pub drop: f32,
+    /// Frames the software slave answered.
+    pub frames: u64,
+    /// Frames it dropped (on either leg).
+    pub frames_dropped: u64,
+    /// The counts.
+    pub counts: SoakCounts,
+    /// Whether the drives were taken to INIT at the end.
+    pub shutdown_ok: bool,
+    /// No unhandled error, the session ran to the end, and the drives were shut down.
+    pub ok: bool,
+}
+
+fn soak_error(reason: impl std::fmt::Display) -> MasterError {
+    MasterError::new(None, "the soak", ErrorKind::Bus, reason)
+}
+
+/// Run a soak. Errors only when it cannot start at all; everything after that is counted in
+/// the report.
+pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
+    if !(0.0..=1.0).contains(&opts.drop) {
+        return Err(MasterError::new(
+            None,
+            "the soak",
+            ErrorKind::Config,
+            format!("drop fraction {} is not between 0 and 1", opts.drop),
+        ));
+    }
+    let profiles = [&drives::mr_j4_tm::PROFILE, &drives::bdhde::PROFILE];
+    let mut cfg = MasterConfig::new(opts.cycle);
+    cfg.cycle = CycleSettings {
+        rt: opts.rt.clone(),
+        ..CycleSettings::new(opts.cycle)
+    };
+    cfg.restart = RestartPolicy::Auto {
+        retry_every: Duration::from_millis(500),
+        max_attempts: None,
+    };
+    for (i, p) in profiles.iter().enumerate() {
+        cfg.startup.drives.push(DriveSetup {
+            program: demo::program(p),
+            ..DriveSetup::new(Selector::Position(i as u16))
+        });
+    }
+    let steps: Vec<usize> = profiles.iter().map(|p| demo::program(p).len()).collect();
+    let mut seg = demo::segment()?;
+    let mut faults = seg.fault_handle();
+    let mut m = Master::start(SegmentLink::new(seg), cfg).map_err(|f| f.error)?;
+    // The drops start once the drives are in OP: start-up has its own retries.
+    m.wait_until("every drive in OP", Duration::from_secs(10), |t| {
+        t.cycle.all_op
+    })?;
+    for f in [
+        LinkFault::Seed(opts.seed),
+        LinkFault::DropFraction(opts.drop),
+    ] {
+        faults
+            .inject(Fault::Link(f))
+            .map_err(|e| soak_error(format!("injecting {f:?}: {e}")))?;
+    }
+
+    let start = Instant::now();
+    let mut counts = SoakCounts::default();
+    let mut seen = 0usize;
+    let mut next_progress = Duration::from_secs(1);
+    let mut running_program = false;
+    // When the axes were last seen not moving without a program (to recover them).
+    let mut idle_since: Option<Instant> = None;
+    let mut reset_sent: Option<Instant> = None;
+    let mut enable_sent: Option<Instant> = None;
+    let mut last_restarts = 0u32;
+    let mut cycles_before: u64 = 0;
+    let mut last_cycle: u64 = 0;
+    let mut lost_before: u64 = 0;
+    let mut last_lost: u64 = 0;
+    let mut overruns_before: u64 = 0;
+    let unhandled = |counts: &mut SoakCounts, what: String| {
+        counts
+            .unhandled
+            .push(format!("{:.3} s: {what}", start.elapsed().as_secs_f64()));
+    };
+
+    while start.elapsed() < opts.duration {
+        std::thread::sleep(Duration::from_millis(10));
+        if !m.is_running() {
+            unhandled(&mut counts, "the session ended by itself".into());
+            break;
+        }
+        // History: count by kind, judge what lost frames must not cause.
+        let h = m.history();
+        for e in h.iter().skip(seen) {
+            *counts.history.entry(format!("{:?}", e.kind)).or_default() += 1;
+            if !e.error || e.kind == HistoryKind::FrameLost {
+                continue;
+            }
+            let drive = e.drive.as_ref().map_or(String::new(), |d| format!("{d}: "));
+            let text = format!("{:.3} s: {drive}{}", start.elapsed().as_secs_f64(), e.text);
+            if matches!(e.kind, HistoryKind::CommandRefused | HistoryKind::Session) {
+                counts.unhandled.push(text.clone());
+            }
+            if counts.errors.len() < MAX_ERRORS {
+                counts.errors.push(text);
+            }
+        }
+        seen = h.len();
+
+        let t: Telemetry = m.telemetry().clone();
+        if t.cycle.restarts != last_restarts {
+            // A re-start: the cycle counter began again.
+            last_restarts = t.cycle.restarts;
+            cycles_before += last_cycle;
+            last_cycle = 0;
+            lost_before += last_lost;
+            last_lost = 0;
+            overruns_before = counts.late_wakeups;
+        }
+        last_cycle = last_cycle.max(t.cycle.cycle);
+        last_lost = last_lost.max(t.cycle.lost);
+        counts.cycles = cycles_before + last_cycle;
+        counts.lost_cycles = lost_before + last_lost;
+        counts.late_wakeups = counts.late_wakeups.max(overruns_before + t.cycle.overruns);
+        counts.restarts = t.cycle.restarts;
+        if t.cycle.phase != Phase::Cycling || !t.cycle.all_op {
+            idle_since = None;
+            continue;
+        }
+        // A fault must never leave an axis enabled.
+        for (i, a) in t.axes.iter().enumerate() {
+            if a.statusword & 0x0008 != 0 && a.state == Some(State::OperationEnabled) {
+                unhandled(&mut counts, format!("axis {i} enabled with a fault shown"));
+            }
+        }
+        let done = t
+            .axes
+            .iter()
+            .zip(&steps)
+            .all(|(a, n)| !a.program_running && a.program_step as usize >= *n);
+        let all_enabled = t
+            .axes
+            .iter()
+            .all(|a| a.state == Some(State::OperationEnabled));
+        let any_running = t.axes.iter().any(|a| a.program_running);
+        if running_program && done && all_enabled {
+            counts.programs_completed += 1;
+            running_program = false;
+        }
+        if all_enabled && !any_running && !running_program {
+            m.command(Command::RunProgram(Axes::All))?;
+            running_program = true;
+            idle_since = None;
+            continue;
+        }
+        if all_enabled {
+            enable_sent = None;
+        } else if let Some(at) = enable_sent
+            && at.elapsed() > Duration::from_secs(5)
+        {
+            unhandled(
+                &mut counts,
+                format!(
+                    "the axes are not enabled 5 s after the request (states {:?})",
+                    t.axes.iter().map(|a| a.state).collect::<Vec<_>>()
+                ),
+            );
+            enable_sent = None;
+        }
+        if !all_enabled && !any_energised(&t) && enable_sent.is_none() {
+            // Stopped in a controlled way (lost frames, a fault, a re-start): recover after
+            // the axes have been disabled for a moment; a fault is reset first.
+            let since = *idle_since.get_or_insert_with(Instant::now);
+            if since.elapsed() > Duration::from_millis(50) {
+                if t.axes.iter().any(|a| a.statusword & 0x0008 != 0) {
+                    match reset_sent {
+                        None => {
+                            m.command(Command::FaultReset(Axes::All))?;
+                            reset_sent = Some(Instant::now());
+                        }
+                        Some(at) if at.elapsed() > Duration::from_secs(2) => {
+                            unhandled(&mut counts, "a fault reset did not clear the fault".into());
+                            reset_sent = None;
+                        }
+                        Some(_) => {}
+                    }
+                } else {
+                    m.command(Command::Enable(Axes::All))?;
+                    enable_sent = Some(Instant::now());
+                    reset_sent = None;
+                    counts.recoveries += 1;
+                    running_program = false;
+                    idle_since = None;
+                }
+            }
+        }
+        if start.elapsed() >= next_progress {
+            next_progress += Duration::from_secs(1);
+            if let Some(p) = opts.progress {
+                p(start.elapsed(), &counts);
+            }
+        }
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let (report, link) = m.stop(StopKind::Ramp);
+    let report = report.ok_or_else(|| soak_error("the session ended without a report"))?;
+    for e in report.history.iter().skip(seen) {
+        *counts.history.entry(format!("{:?}", e.kind)).or_default() += 1;
+    }
+    if let Some(c) = &report.cycle {
+        counts.cycles = counts.cycles.max(cycles_before + c.cycles);
+        counts.lost_cycles = counts.lost_cycles.max(lost_before + c.lost);
+    }
+    counts.restarts = report.restarts;
+    let stats = link.segment().stats();
+    let ok = counts.unhandled.is_empty() && report.shutdown_ok;
+    Ok(SoakReport {
+        seconds,
+        cycle_us: opts.cycle.as_micros() as u64,
+        drop: opts.drop,
+        frames: stats.frames,
+        frames_dropped: stats.dropped,
+        counts,
+        shutdown_ok: report.shutdown_ok,
+        ok,
+    })
+}
+
+fn any_energised(t: &Telemetry) -> bool {
+    t.axes
+        .iter()
+        .any(|a| a.state.is_some_and(State::is_energised))
+}
