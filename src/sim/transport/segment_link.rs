@@ -17,10 +17,11 @@ pub const IN_FLIGHT: usize = 32;
 ///
 /// A reply delayed by an injected [`LinkFault::Delay`](crate::sim::faults::LinkFault::Delay)
 /// is handed out once the segment's clock reaches its due time; replies come out earliest due
-/// first (a delayed reply can be overtaken by a later frame's). `recv` waits for a held reply
-/// if it falls due within its timeout (a real sleep: with a
-/// [`ManualClock`](crate::sim::ManualClock) the caller moves the time instead, and `recv`
-/// returns `None` until it has).
+/// first (a delayed reply can be overtaken by a later frame's). While a delayed reply is held,
+/// `recv` waits for it as a socket would: until it is due or the timeout passes, whichever
+/// comes first (a real sleep; with a [`ManualClock`](crate::sim::ManualClock) the caller moves
+/// the time instead and passes a zero timeout). With nothing in flight it returns `None` at
+/// once.
 #[derive(Debug)]
 pub struct SegmentLink {
     segment: Segment,
@@ -116,13 +117,13 @@ impl FrameLink for SegmentLink {
             // the same thread).
             return Ok(None);
         };
+        // A delayed reply is on its way: wait for it, at most `timeout`, as a socket would.
         let wait = Duration::from_nanos(due.saturating_sub(self.segment.clock().now_ns()));
-        if timeout.is_some_and(|t| wait > t) {
-            return Ok(None);
+        let wait = timeout.map_or(wait, |t| wait.min(t));
+        if !wait.is_zero() {
+            std::thread::sleep(wait);
+            self.segment.poll();
         }
-        // A delayed reply falls due within the timeout: wait for it, as a socket would.
-        std::thread::sleep(wait);
-        self.segment.poll();
         self.take_due(buf)
     }
 }
