@@ -7,8 +7,11 @@ use crate::sim::clock::Clock;
 use crate::sim::segment::Segment;
 use std::time::Duration;
 
-/// Frames that can be in flight at once (sent, reply not yet received).
+/// Replies that can wait to be received at once; one more `send` is refused.
 pub const IN_FLIGHT: usize = 32;
+
+/// Replies held at once, delayed ones included (see [`SegmentLink`]).
+const HELD: usize = 4 * IN_FLIGHT;
 
 /// A [`FrameLink`] whose other end is a [`Segment`] in the same thread: `send` processes the
 /// frame immediately, `recv` hands out the replies. Dropped frames (malformed, no slaves, or
@@ -22,10 +25,17 @@ pub const IN_FLIGHT: usize = 32;
 /// comes first (a real sleep; with a [`ManualClock`](crate::sim::ManualClock) the caller moves
 /// the time instead and passes a zero timeout). With nothing in flight it returns `None` at
 /// once.
+///
+/// Sending is refused (a [`LinkError::Peer`]) when [`IN_FLIGHT`] replies are due but not
+/// received: the caller forgot to receive. Delayed replies not yet due do not count; should so
+/// many be held that no buffer is free (128), a new frame is still processed but its reply is
+/// lost, counted in [`SegmentLink::replies_lost`].
 #[derive(Debug)]
 pub struct SegmentLink {
     segment: Segment,
     held: HeldReplies,
+    scratch: Box<[u8; MAX_FRAME_LEN]>,
+    lost: u64,
 }
 
 impl SegmentLink {
@@ -33,8 +43,15 @@ impl SegmentLink {
     pub fn new(segment: Segment) -> Self {
         Self {
             segment,
-            held: HeldReplies::new(IN_FLIGHT),
+            held: HeldReplies::new(HELD),
+            scratch: Box::new([0u8; MAX_FRAME_LEN]),
+            lost: 0,
         }
+    }
+
+    /// Replies lost because every buffer held a delayed reply.
+    pub fn replies_lost(&self) -> u64 {
+        self.lost
     }
 
     /// The segment.
@@ -87,10 +104,21 @@ impl FrameLink for SegmentLink {
                 max: MAX_FRAME_LEN,
             });
         }
-        let Some((i, slot)) = self.held.free_slot() else {
+        if self.held.due_count(self.segment.clock().now_ns()) >= IN_FLIGHT {
             return Err(LinkError::Peer(format!(
                 "in-process segment: {IN_FLIGHT} replies are waiting to be received; receive before sending more"
             )));
+        }
+        let Some((i, slot)) = self.held.free_slot() else {
+            // Every buffer holds a delayed reply: the frame still reaches the slaves, its reply
+            // is lost.
+            if let Some(buf) = self.scratch.get_mut(..frame.len()) {
+                buf.copy_from_slice(frame);
+                if self.segment.process_frame(buf).is_ok() {
+                    self.lost += 1;
+                }
+            }
+            return Ok(());
         };
         let Some(buf) = slot.get_mut(..frame.len()) else {
             return Err(LinkError::Peer("in-process segment: slot too small".into()));
