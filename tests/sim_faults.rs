@@ -615,3 +615,40 @@ fn unsupported_faults_and_bad_positions_are_counted_as_ignored() {
     assert_eq!(seg.stats().faults_ignored, 2);
     assert_eq!(w.p.segment.stats().faults_ignored, 1);
 }
+
+/// Delayed replies do not count against the link's in-flight limit: a master keeps sending
+/// while they are on their way; only replies that are due and never received do.
+#[test]
+fn delayed_replies_do_not_block_sending() {
+    use ecdrive::sim::transport::IN_FLIGHT;
+    let (seg, clock) = io_segment(1);
+    let mut l = SegmentLink::new(seg);
+    l.segment_mut().apply(&link(LinkFault::Delay {
+        fraction: 1.0,
+        delay_ns: 1_000_000_000,
+    }));
+    for _ in 0..130 {
+        l.send(&brd_frame(1)).unwrap();
+    }
+    // 128 held; the frames beyond reached the slave, their replies were lost.
+    assert_eq!(l.pending_replies(), 128);
+    assert_eq!(l.replies_lost(), 2);
+    assert_eq!(l.segment().stats().frames, 130);
+    clock.advance(1_000_000_000);
+    let mut rx = [0u8; 1600];
+    let mut n = 0;
+    while l.recv(&mut rx, Some(Duration::ZERO)).unwrap().is_some() {
+        n += 1;
+    }
+    assert_eq!(n, 128);
+    // Without a delay: IN_FLIGHT replies due and not received refuse the next send.
+    l.segment_mut().apply(&link(LinkFault::Delay {
+        fraction: 0.0,
+        delay_ns: 0,
+    }));
+    for _ in 0..IN_FLIGHT {
+        l.send(&brd_frame(1)).unwrap();
+    }
+    let e = l.send(&brd_frame(1)).unwrap_err();
+    assert!(e.to_string().contains("receive before sending more"), "{e}");
+}

@@ -10,6 +10,9 @@
 //! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
 //! - [`devices`]: ready-made test devices (generic CoE servo, EEPROM-only I/O, mailbox echo);
 //! - [`drives`]: the emulated drives (MR-J4-TM, BDHDE), built from their profiles and ESI files;
+//! - [`faults`]: fault injection from any thread, without locks or allocation: lost, delayed
+//!   and corrupted frames, a pulled cable, a slave restarting to INIT, clock drift, drive
+//!   alarms, SDO aborts, emergencies in the middle of an SDO transfer;
 //! - [`clock`]: host and manual time sources;
 //! - [`probe`]: a minimal datagram sender for tests and tools;
 //! - [`run`]: serving named devices on an interface (`ecdrive sim`);
@@ -46,5 +49,6 @@ pub mod transport;
 pub use clock::{Clock, HostClock, ManualClock};
 pub use device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
 pub use esc::{DcSupport, Esc, EscConfig};
-pub use segment::{Segment, SegmentConfig, SegmentError, Slave};
+pub use faults::{DeviceFault, Fault, FaultHandle, LinkFault, SlaveFault};
+pub use segment::{Segment, SegmentConfig, SegmentError, SegmentReply, SegmentStats, Slave};
 pub use sii::DeviceDescription;

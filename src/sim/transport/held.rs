@@ -74,6 +74,15 @@ impl HeldReplies {
         true
     }
 
+    /// Replies held that are due at `now`.
+    pub(crate) fn due_count(&self, now: u64) -> usize {
+        self.used
+            .iter()
+            .zip(&self.due)
+            .filter(|&(&u, &d)| u && d <= now)
+            .count()
+    }
+
     /// The earliest due time held.
     pub(crate) fn next_due(&self) -> Option<u64> {
         (0..self.used.len())

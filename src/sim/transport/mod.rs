@@ -20,7 +20,7 @@ mod segment_link;
 
 pub use ethercrab_link::EthercrabLink;
 pub use raw::{RawServer, ServeStats, serve};
-pub use segment_link::SegmentLink;
+pub use segment_link::{IN_FLIGHT, SegmentLink};
 
 use std::sync::{Mutex, MutexGuard};
 

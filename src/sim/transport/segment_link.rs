@@ -7,8 +7,11 @@ use crate::sim::clock::Clock;
 use crate::sim::segment::Segment;
 use std::time::Duration;
 
-/// Frames that can be in flight at once (sent, reply not yet received).
+/// Replies that can wait to be received at once; one more `send` is refused.
 pub const IN_FLIGHT: usize = 32;
+
+/// Replies held at once, delayed ones included (see [`SegmentLink`]).
+const HELD: usize = 4 * IN_FLIGHT;
 
 /// A [`FrameLink`] whose other end is a [`Segment`] in the same thread: `send` processes the
 /// frame immediately, `recv` hands out the replies. Dropped frames (malformed, no slaves, or
@@ -17,14 +20,22 @@ pub const IN_FLIGHT: usize = 32;
 ///
 /// A reply delayed by an injected [`LinkFault::Delay`](crate::sim::faults::LinkFault::Delay)
 /// is handed out once the segment's clock reaches its due time; replies come out earliest due
-/// first (a delayed reply can be overtaken by a later frame's). `recv` waits for a held reply
-/// if it falls due within its timeout (a real sleep: with a
-/// [`ManualClock`](crate::sim::ManualClock) the caller moves the time instead, and `recv`
-/// returns `None` until it has).
+/// first (a delayed reply can be overtaken by a later frame's). While a delayed reply is held,
+/// `recv` waits for it as a socket would: until it is due or the timeout passes, whichever
+/// comes first (a real sleep; with a [`ManualClock`](crate::sim::ManualClock) the caller moves
+/// the time instead and passes a zero timeout). With nothing in flight it returns `None` at
+/// once.
+///
+/// Sending is refused (a [`LinkError::Peer`]) when [`IN_FLIGHT`] replies are due but not
+/// received: the caller forgot to receive. Delayed replies not yet due do not count; should so
+/// many be held that no buffer is free (128), a new frame is still processed but its reply is
+/// lost, counted in [`SegmentLink::replies_lost`].
 #[derive(Debug)]
 pub struct SegmentLink {
     segment: Segment,
     held: HeldReplies,
+    scratch: Box<[u8; MAX_FRAME_LEN]>,
+    lost: u64,
 }
 
 impl SegmentLink {
@@ -32,8 +43,15 @@ impl SegmentLink {
     pub fn new(segment: Segment) -> Self {
         Self {
             segment,
-            held: HeldReplies::new(IN_FLIGHT),
+            held: HeldReplies::new(HELD),
+            scratch: Box::new([0u8; MAX_FRAME_LEN]),
+            lost: 0,
         }
+    }
+
+    /// Replies lost because every buffer held a delayed reply.
+    pub fn replies_lost(&self) -> u64 {
+        self.lost
     }
 
     /// The segment.
@@ -86,10 +104,21 @@ impl FrameLink for SegmentLink {
                 max: MAX_FRAME_LEN,
             });
         }
-        let Some((i, slot)) = self.held.free_slot() else {
+        if self.held.due_count(self.segment.clock().now_ns()) >= IN_FLIGHT {
             return Err(LinkError::Peer(format!(
                 "in-process segment: {IN_FLIGHT} replies are waiting to be received; receive before sending more"
             )));
+        }
+        let Some((i, slot)) = self.held.free_slot() else {
+            // Every buffer holds a delayed reply: the frame still reaches the slaves, its reply
+            // is lost.
+            if let Some(buf) = self.scratch.get_mut(..frame.len()) {
+                buf.copy_from_slice(frame);
+                if self.segment.process_frame(buf).is_ok() {
+                    self.lost += 1;
+                }
+            }
+            return Ok(());
         };
         let Some(buf) = slot.get_mut(..frame.len()) else {
             return Err(LinkError::Peer("in-process segment: slot too small".into()));
@@ -116,13 +145,13 @@ impl FrameLink for SegmentLink {
             // the same thread).
             return Ok(None);
         };
+        // A delayed reply is on its way: wait for it, at most `timeout`, as a socket would.
         let wait = Duration::from_nanos(due.saturating_sub(self.segment.clock().now_ns()));
-        if timeout.is_some_and(|t| wait > t) {
-            return Ok(None);
+        let wait = timeout.map_or(wait, |t| wait.min(t));
+        if !wait.is_zero() {
+            std::thread::sleep(wait);
+            self.segment.poll();
         }
-        // A delayed reply falls due within the timeout: wait for it, as a socket would.
-        std::thread::sleep(wait);
-        self.segment.poll();
         self.take_due(buf)
     }
 }
