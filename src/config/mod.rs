@@ -147,8 +147,8 @@ impl core::fmt::Debug for RunConfig {
     }
 }
 
-/// Parse a duration as the file writes it: a number and a unit, `ns`, `us` (`µs`), `ms` or
-/// `s` (`250us`, `1 ms`, `0.5ms`, `10s`).
+/// Parse a duration as the file writes it: a number and a unit, `ns`, `us` (`µs`), `ms`, `s`,
+/// `min` or `h` (`250us`, `1 ms`, `0.5ms`, `10s`, `2min`, `1h`).
 pub fn parse_duration(text: &str) -> Result<Duration, String> {
     let t = text.trim();
     let split = t
@@ -161,6 +161,8 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
         "us" | "µs" => 1e-6,
         "ms" => 1e-3,
         "s" => 1.0,
+        "min" => 60.0,
+        "h" => 3600.0,
         "" => {
             return Err(format!(
                 "{text:?} has no unit (write e.g. \"1ms\", \"250us\", \"10s\")"
@@ -168,7 +170,7 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
         }
         u => {
             return Err(format!(
-                "unknown time unit {u:?} in {text:?} (use ns, us, ms or s)"
+                "unknown time unit {u:?} in {text:?} (use ns, us, ms, s, min or h)"
             ));
         }
     };

@@ -1098,10 +1098,12 @@ pub fn run<L: FrameLink>(
             io.telemetry.publish();
         }
 
-        // Energised as last seen (on a lost cycle: as of the last reply).
-        let any_energised = axes
-            .iter()
-            .any(|a| a.tel.state.is_some_and(State::is_energised));
+        // Energised as last seen (on a lost cycle: as of the last reply). A drive below
+        // SAFE-OP sends no valid inputs and takes no outputs (its own state machine has
+        // disabled it): its last statusword says nothing, so it does not hold the end up.
+        let any_energised = axes.iter().any(|a| {
+            matches!(a.al_state & 0x0F, 4 | 8) && a.tel.state.is_some_and(State::is_energised)
+        });
         if ending
             && !any_energised
             && axes

@@ -639,17 +639,11 @@ struct Persist {
 }
 
 impl Persist {
-    /// Publish a snapshot while no cycle runs: the phase, the re-start count, each axis's
-    /// last known CiA 402 state.
+    /// Publish a snapshot while no cycle runs: the phase and the re-start count. No drive is
+    /// in SAFE-OP or OP then (taken to INIT, or out of reach), so no CiA 402 state is known:
+    /// every axis shows `state: None`.
     fn publish_idle(&mut self, phase: Phase) {
         let n = self.summaries.len();
-        let states: Vec<Option<cia402::State>> = (0..n)
-            .map(|i| {
-                self.last_cycle
-                    .as_ref()
-                    .and_then(|r| r.states.get(i).and_then(|s| s.last().copied()))
-            })
-            .collect();
         let lost = self.last_cycle.as_ref().map_or(0, |r| r.lost);
         let t = self.cycle_io.telemetry.input_buffer_mut();
         t.cycle = CycleTelemetry {
@@ -659,10 +653,7 @@ impl Persist {
             ..CycleTelemetry::default()
         };
         t.axes.clear();
-        t.axes.extend(states.into_iter().map(|state| AxisTelemetry {
-            state,
-            ..AxisTelemetry::default()
-        }));
+        t.axes.resize(n, AxisTelemetry::default());
         self.cycle_io.telemetry.publish();
     }
 }
