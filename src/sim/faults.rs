@@ -88,7 +88,9 @@ pub enum SlaveFault {
     /// From now on the slave's local clock runs this many ppb faster (positive) or slower
     /// (negative) than the host clock, replacing its previous drift. The local time stays
     /// continuous (no step); only its rate changes. The DC drift loop, if the master runs it,
-    /// has to follow.
+    /// has to follow (the emulated loop corrects up to ±1000 ppm, as real ESCs do; beyond
+    /// ±2000 ppm a transport may also notice SYNC0 pulses late, though each is still delivered
+    /// with its exact time).
     ClockDrift(i32),
 }
 

@@ -17,6 +17,12 @@
 //! time latches see. SYNC0 pulses and watchdogs are processed lazily and exactly: before a frame
 //! is processed (and in [`Segment::poll`]), every SYNC0 instant that has passed at each slave is
 //! delivered to its device in order.
+//!
+//! Injected faults ([`super::faults`]) are applied at the start of every frame and every
+//! [`Segment::poll`]. Link faults act here, in front of the first slave, so that every
+//! transport honours them: [`Segment::process_frame`] says whether a frame was lost (before
+//! or after the slaves processed it) and when its reply is due; a corrupted reply is changed
+//! in place after the slaves processed the frame.
 
 use super::clock::Clock;
 use super::device::Device;

@@ -104,7 +104,9 @@ impl FrameLink for SegmentLink {
                 max: MAX_FRAME_LEN,
             });
         }
-        if self.held.due_count(self.segment.clock().now_ns()) >= IN_FLIGHT {
+        if self.held.len() >= IN_FLIGHT
+            && self.held.due_count(self.segment.clock().now_ns()) >= IN_FLIGHT
+        {
             return Err(LinkError::Peer(format!(
                 "in-process segment: {IN_FLIGHT} replies are waiting to be received; receive before sending more"
             )));
@@ -125,7 +127,7 @@ impl FrameLink for SegmentLink {
         };
         buf.copy_from_slice(frame);
         if let Ok(r) = self.segment.process_frame(buf) {
-            self.held.commit(i, r.len, r.due_ns);
+            self.held.commit(i, r.len, r.due_ns, r.delay_ns > 0);
         }
         Ok(())
     }
