@@ -176,6 +176,7 @@ proptest! {
             let _ = e.values();
         }
         let _ = ecdrive::ec::mailbox::OdList::parse(&b).map(|l| l.values().count());
+        let _ = ecdrive::ec::mailbox::ObjectDescription::parse(&b);
     }
 }
 

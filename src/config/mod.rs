@@ -316,7 +316,19 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
             })
             .collect();
         let inner = e.into_inner();
-        let message = inner.message().trim().to_string();
+        // The TOML parser's messages can span lines ("invalid string\nexpected ..."), and are
+        // empty for some syntax errors (`a =` at the end of the file); an error is shown on one
+        // line and says something.
+        let mut message = inner
+            .message()
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
+        if message.is_empty() {
+            message = "invalid TOML syntax here".to_string();
+        }
         let toml_span = inner.span();
         // serde names the unknown key as the last path segment; the key itself is then the
         // most precise position.

@@ -1,0 +1,9 @@
+//! The software slave's frame and datagram processing (`Segment::process`) on arbitrary frames.
+//!
+//! The input format and the checks are in `ecdrive_fuzz::segment` (`fuzz/src/lib.rs`), shared with
+//! the corpus replay of the normal test suite (`tests/fuzz_corpus.rs`).
+#![no_main]
+
+use libfuzzer_sys::fuzz_target;
+
+fuzz_target!(|data: &[u8]| ecdrive_fuzz::segment(data));
