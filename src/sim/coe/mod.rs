@@ -11,7 +11,9 @@
 //! - aborts with the codes the [`ObjectStore`] gives, mailbox error replies (type 0) for
 //!   unsupported protocols and services and for malformed mailboxes;
 //! - emergencies, queued and delivered by [`CoeServer::poll_unsolicited`] only, never as the
-//!   answer to a request (ethercrab panics when an SDO request is answered by an emergency);
+//!   answer to a request (ethercrab panics when an SDO request is answered by an emergency),
+//!   unless a test injects exactly that ([`CoeServer::emergency_during_next_sdo`]);
+//! - injected faults: an SDO abort instead of the answer ([`CoeServer::abort_next_sdo`]);
 //! - the duplicate counter: a request whose counter equals the previous one is a repeat and is
 //!   not executed again.
 //!
@@ -187,7 +189,8 @@ impl CoeServer {
 
     /// Fault injection: answer the first segment request of the next segmented SDO transfer
     /// with `emcy`, and send the segment response as the next mailbox message (as soon as SM1
-    /// is free again). One shot; replaces a previous one. Allocation-free.
+    /// is free again). One shot; replaces a previous one. Arming allocates nothing; when it
+    /// fires the first time, the buffer for the held-back response is sized to the mailbox.
     pub fn emergency_during_next_sdo(&mut self, emcy: Emergency) {
         self.emcy_during_sdo = Some(emcy);
     }
