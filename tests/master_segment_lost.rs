@@ -184,13 +184,18 @@ fn after_a_cable_pull_a_restart_on_request_brings_the_drives_back_to_op() {
         let c = m.telemetry().cycle;
         panic!("{e}: {c:?} {:#?}", texts(&m));
     }
-    // The axes come back disabled; enabling them works again.
-    assert!(
-        m.telemetry()
-            .axes
-            .iter()
-            .all(|a| a.state != Some(State::OperationEnabled))
-    );
+    // The axes come back disabled (a device that kept its CiA 402 state through the pull is
+    // disabled by the master); enabling them works again.
+    m.wait_until(
+        "the axes disabled after the re-start",
+        Duration::from_secs(10),
+        |t| {
+            t.axes
+                .iter()
+                .all(|a| a.state != Some(State::OperationEnabled))
+        },
+    )
+    .unwrap();
     m.command(Command::Enable(Axes::All)).unwrap();
     m.wait_until("enabled again", Duration::from_secs(10), |t| {
         t.axes
