@@ -603,7 +603,7 @@ fn a_drifting_clock_is_kept_in_sync<L: FrameLink + Send + 'static>(
 }
 
 in_process_and_over_veth!(
-    drives_segment(),
+    tolerant_drives_segment(),
     a_drifting_clock_is_kept_in_sync,
     a_drifting_clock_is_kept_in_sync_in_process,
     a_drifting_clock_is_kept_in_sync_over_veth

@@ -606,22 +606,14 @@ pub fn run<L: FrameLink>(
                             cycles: consecutive_lost
                         }
                     });
-                    for a in axes.iter_mut() {
-                        if matches!(a.stopping, Stopping::No) {
-                            begin_stop(a, StopKind::Ramp, tick, cycle);
-                        }
-                    }
+                    stop_moving_axes(&mut axes, tick, cycle);
                 }
                 if consecutive_lost == settings.segment_lost_after && !segment_lost {
                     segment_lost = true;
                     emit!(EventKind::SegmentLost {
                         cycles: consecutive_lost
                     });
-                    for a in axes.iter_mut() {
-                        if matches!(a.stopping, Stopping::No) {
-                            begin_stop(a, StopKind::Ramp, tick, cycle);
-                        }
-                    }
+                    stop_moving_axes(&mut axes, tick, cycle);
                 }
                 if u64::from(consecutive_lost) >= segment_gone_cycles {
                     emit!(EventKind::SegmentGone {
@@ -1166,6 +1158,13 @@ pub fn run<L: FrameLink>(
         modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
         max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
         states: axes.iter().map(|a| a.states.clone()).collect(),
+    }
+}
+
+/// Begin a ramp stop of every axis not already stopping.
+fn stop_moving_axes(axes: &mut [AxisRt], tick: u64, cycle: u64) {
+    for a in axes.iter_mut().filter(|a| a.stopping == Stopping::No) {
+        begin_stop(a, StopKind::Ramp, tick, cycle);
     }
 }
 

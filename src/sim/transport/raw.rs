@@ -28,6 +28,9 @@ pub struct ServeStats {
     pub delayed: u64,
 }
 
+/// SCHED_FIFO priority of a [`RawServer`] thread (a master's cycle thread defaults to 80).
+pub const SERVE_PRIORITY: u8 = 70;
+
 /// Delayed replies held at once at most.
 const HELD: usize = 64;
 
@@ -123,7 +126,19 @@ impl RawServer {
         let s = shared.clone();
         let thread = std::thread::Builder::new()
             .name(format!("ecdrive-sim {interface}"))
-            .spawn(move || serve(&socket, &s.segment, &s.stop))?;
+            .spawn(move || {
+                // The emulated slave controller answers in hardware time on a real segment:
+                // serve at real-time priority (just below a master's default cycle thread)
+                // when the process may, so the scheduler does not turn a loaded machine into
+                // lost frames. Without the privilege it serves at normal priority.
+                let _ = crate::rt::RtSettings {
+                    priority: Some(SERVE_PRIORITY),
+                    cpu: None,
+                    lock_memory: false,
+                }
+                .apply_to_current_thread();
+                serve(&socket, &s.segment, &s.stop)
+            })?;
         Ok(Self {
             shared,
             thread: Some(thread),
