@@ -185,7 +185,10 @@ fn cyclic_frames_make_no_syscalls() {
     let (p, frame, states) = segment_in_op(Arc::new(HostClock));
     let mut link = SegmentLink::new(p.segment);
     let mut rx = vec![0u8; MAX_FRAME_LEN];
-    for _ in 0..5 {
+    // Warm up over a few SYNC0 periods of host time (1 ms): the buffers that grow once, at
+    // the first SYNC0 event (the devices' output latches), reach their size.
+    let warm_until = std::time::Instant::now() + std::time::Duration::from_millis(5);
+    while std::time::Instant::now() < warm_until {
         link.send(&frame).unwrap();
         link.send(&states).unwrap();
         link.recv(&mut rx, None).unwrap();
