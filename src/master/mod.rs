@@ -6,6 +6,7 @@ pub mod cycle;
 pub mod demo;
 pub mod error;
 pub mod exec;
+pub mod history;
 pub mod io;
 pub mod program;
 pub mod session;

@@ -12,6 +12,7 @@ use super::coe::{CoeClient, EmergencyRecord};
 use super::cycle::{self, CycleEnd, CycleHooks, CycleReport, CycleSettings};
 use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec;
+pub use super::history::{HistoryEntry, HistoryKind, HistoryLog, HistorySlice};
 use super::io::FrameLink;
 use super::startup::{self, DeviceInfo, StartupConfig};
 use super::telemetry::{
@@ -44,6 +45,9 @@ pub struct MasterConfig {
     pub hooks: Option<Arc<dyn CycleHooks + Send>>,
     /// What happens when the cycle ends by itself (segment lost, a drive fell out of OP).
     pub restart: RestartPolicy,
+    /// History entries kept with their text (the latest; older ones are discarded but
+    /// counted per kind): see [`HistoryLog`].
+    pub history_capacity: usize,
 }
 
 /// What the session does when its cycle ends by itself: the segment stopped answering, or a
@@ -76,6 +80,7 @@ impl MasterConfig {
             emergency_poll: Some(Duration::from_millis(50)),
             hooks: None,
             restart: RestartPolicy::Never,
+            history_capacity: HistoryLog::DEFAULT_CAPACITY,
         }
     }
 }
@@ -95,56 +100,6 @@ pub struct DriveSummary {
     pub mode: &'static str,
 }
 
-/// An entry of the error/event history.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct HistoryEntry {
-    /// `CLOCK_MONOTONIC` time, ns.
-    pub time_ns: u64,
-    /// Cycle number, if it came from the cycle.
-    pub cycle: Option<u64>,
-    /// The drive, if it concerns one.
-    pub drive: Option<DriveRef>,
-    /// Whether it is a fault or error (as opposed to information).
-    pub error: bool,
-    /// What kind of entry it is, for programs that react to the history.
-    pub kind: HistoryKind,
-    /// What happened, readable.
-    pub text: String,
-}
-
-/// The kind of a [`HistoryEntry`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
-pub enum HistoryKind {
-    /// Progress: AL and CiA 402 state changes, OP reached, program steps, mode switches.
-    Info,
-    /// A warning (real-time set-up, a drive's warning bit).
-    Warning,
-    /// A cycle without a reply (the axes held their set-points) or replies resuming.
-    FrameLost,
-    /// The segment stopped answering (cable pull detected) or stayed silent (cycle ended).
-    SegmentLost,
-    /// The working counter differed from the expected value.
-    WorkingCounter,
-    /// A drive left OP on its own (with its AL status code), or did not reach OP.
-    AlState,
-    /// A drive fault (CiA 402 Fault, decoded with the drive's alarm table).
-    DriveFault,
-    /// The master-side following-error monitor tripped.
-    FollowingError,
-    /// The CiA 402 state machine or a mode switch failed.
-    StateMachine,
-    /// A command was refused.
-    CommandRefused,
-    /// An emergency message from a drive.
-    Emergency,
-    /// The cycle began a controlled stop of the axes, or ended.
-    Stopping,
-    /// Re-start progress: requested, attempted, failed, back in OP.
-    Restart,
-    /// The session itself failed (a thread could not start).
-    Session,
-}
-
 /// What a master run did.
 #[derive(Debug, Clone)]
 pub struct SessionReport {
@@ -152,8 +107,12 @@ pub struct SessionReport {
     pub drives: Vec<DriveSummary>,
     /// The cycle's report.
     pub cycle: Option<CycleReport>,
-    /// The history.
+    /// The history: the latest [`MasterConfig::history_capacity`] entries.
     pub history: Vec<HistoryEntry>,
+    /// Entries of the history discarded because it was full (the oldest).
+    pub history_discarded: u64,
+    /// History entries per kind over the whole run, discarded ones included.
+    pub history_totals: std::collections::BTreeMap<HistoryKind, u64>,
     /// Every emergency received.
     pub emergencies: Vec<EmergencyRecord>,
     /// Whether the drives reached INIT at the end.
@@ -183,7 +142,7 @@ impl<L> std::fmt::Display for StartFailure<L> {
 }
 
 struct Shared {
-    history: Mutex<Vec<HistoryEntry>>,
+    history: Mutex<HistoryLog>,
     rt: Mutex<Option<RtReport>>,
 }
 
@@ -427,7 +386,7 @@ impl<L: FrameLink + Send + 'static> Master<L> {
     /// drives then go to OP by themselves), or with the start-up error and the link.
     pub fn start(link: L, cfg: MasterConfig) -> Result<Self, StartFailure<L>> {
         let shared = Arc::new(Shared {
-            history: Mutex::new(Vec::new()),
+            history: Mutex::new(HistoryLog::new(cfg.history_capacity)),
             rt: Mutex::new(None),
         });
         let (tx, rx) = mpsc::channel::<Result<Started, MasterError>>();
@@ -520,12 +479,25 @@ impl<L: FrameLink + Send + 'static> Master<L> {
         self.telemetry.read()
     }
 
-    /// The history so far.
+    /// The history so far: the latest [`MasterConfig::history_capacity`] entries, oldest
+    /// first. A program that polls should use [`Master::history_since`], which copies only
+    /// what is new.
     pub fn history(&self) -> Vec<HistoryEntry> {
         self.shared
             .history
             .lock()
-            .map(|h| h.clone())
+            .map(|h| h.entries())
+            .unwrap_or_default()
+    }
+
+    /// The history entries from sequence number `seq` on (0: from the start), with the number
+    /// to pass next time, what was missed because it had been discarded, and the totals per
+    /// kind.
+    pub fn history_since(&self, seq: u64) -> HistorySlice {
+        self.shared
+            .history
+            .lock()
+            .map(|h| h.since(seq))
             .unwrap_or_default()
     }
 
@@ -789,12 +761,18 @@ fn session<L: FrameLink + Send>(
         return (None, link);
     };
     p.publish_idle(Phase::Ended);
-    let history = shared.history.lock().map(|h| h.clone()).unwrap_or_default();
+    let (history, history_discarded, history_totals) = shared
+        .history
+        .lock()
+        .map(|h| (h.entries(), h.discarded(), h.totals().clone()))
+        .unwrap_or_default();
     (
         Some(SessionReport {
             drives: p.summaries,
             cycle: p.last_cycle,
             history,
+            history_discarded,
+            history_totals,
             emergencies: p.emergencies,
             shutdown_ok: p.shutdown_ok,
             restarts: p.restarts,

@@ -20,7 +20,7 @@ use super::startup::{DriveSetup, Selector};
 use super::telemetry::{Axes, Command, Phase, StopKind, Telemetry};
 use crate::cia402::State;
 use crate::drives;
-use crate::rt::RtSettings;
+use crate::rt::{RtSettings, Summary};
 use crate::sim::faults::{Fault, LinkFault};
 use crate::sim::transport::SegmentLink;
 use serde::Serialize;
@@ -100,6 +100,9 @@ pub struct SoakReport {
     pub frames_dropped: u64,
     /// The counts.
     pub counts: SoakCounts,
+    /// Wake-up latency of the cycle thread, ns, over the cycles since the last re-start (the
+    /// whole run when there was none): stalls of the machine show in its maximum.
+    pub wake_latency_ns: Summary,
     /// Whether the drives were taken to INIT at the end.
     pub shutdown_ok: bool,
     /// No unhandled error, the session ran to the end, and the drives were shut down.
@@ -156,13 +159,10 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
 
     let start = Instant::now();
     let mut counts = SoakCounts::default();
-    let mut seen = 0usize;
+    let mut next_seq = 0u64;
     let mut next_progress = Duration::from_secs(1);
     let mut running_program = false;
-    // When the axes were last seen not moving without a program (to recover them).
-    let mut idle_since: Option<Instant> = None;
-    let mut reset_sent: Option<Instant> = None;
-    let mut enable_sent: Option<Instant> = None;
+    let mut rec = Recovery::default();
     let mut last_restarts = 0u32;
     let mut cycles_before: u64 = 0;
     let mut last_cycle: u64 = 0;
@@ -176,15 +176,25 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
     };
 
     while start.elapsed() < opts.duration {
-        std::thread::sleep(Duration::from_millis(10));
+        std::thread::sleep(POLL);
         if !m.is_running() {
             unhandled(&mut counts, "the session ended by itself".into());
             break;
         }
-        // History: count by kind, judge what lost frames must not cause.
-        let h = m.history();
-        for e in h.iter().skip(seen) {
-            *counts.history.entry(format!("{:?}", e.kind)).or_default() += 1;
+        // History: only what is new; count by kind, judge what lost frames must not cause.
+        let h = m.history_since(next_seq);
+        next_seq = h.next;
+        if h.missed > 0 {
+            unhandled(
+                &mut counts,
+                format!(
+                    "{} history entries were discarded before the soak read them",
+                    h.missed
+                ),
+            );
+        }
+        counts.history = kind_counts(&h.totals);
+        for e in &h.entries {
             if !e.error || e.kind == HistoryKind::FrameLost {
                 continue;
             }
@@ -197,7 +207,6 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
                 counts.errors.push(text);
             }
         }
-        seen = h.len();
 
         let t: Telemetry = m.telemetry().clone();
         if t.cycle.restarts != last_restarts {
@@ -215,13 +224,20 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
         counts.lost_cycles = lost_before + last_lost;
         counts.late_wakeups = counts.late_wakeups.max(overruns_before + t.cycle.overruns);
         counts.restarts = t.cycle.restarts;
+        if start.elapsed() >= next_progress {
+            next_progress += Duration::from_secs(1);
+            if let Some(p) = opts.progress {
+                p(start.elapsed(), &counts);
+            }
+        }
         if t.cycle.phase != Phase::Cycling || !t.cycle.all_op {
-            idle_since = None;
+            // Stopped, re-starting: the recovery begins again once the drives are in OP.
+            rec = Recovery::default();
             continue;
         }
         // A fault must never leave an axis enabled.
         for (i, a) in t.axes.iter().enumerate() {
-            if a.statusword & 0x0008 != 0 && a.state == Some(State::OperationEnabled) {
+            if a.statusword & FAULT_BIT != 0 && a.state == Some(State::OperationEnabled) {
                 unhandled(&mut counts, format!("axis {i} enabled with a fault shown"));
             }
         }
@@ -239,66 +255,37 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
             counts.programs_completed += 1;
             running_program = false;
         }
-        if all_enabled && !any_running && !running_program {
-            m.command(Command::RunProgram(Axes::All))?;
-            running_program = true;
-            idle_since = None;
-            continue;
-        }
-        if all_enabled {
-            enable_sent = None;
-        } else if let Some(at) = enable_sent
-            && at.elapsed() > Duration::from_secs(5)
-        {
-            unhandled(
-                &mut counts,
-                format!(
-                    "the axes are not enabled 5 s after the request (states {:?})",
-                    t.axes.iter().map(|a| a.state).collect::<Vec<_>>()
-                ),
-            );
-            enable_sent = None;
-        }
-        if !all_enabled && !any_energised(&t) && enable_sent.is_none() {
-            // Stopped in a controlled way (lost frames, a fault, a re-start): recover after
-            // the axes have been disabled for a moment; a fault is reset first.
-            let since = *idle_since.get_or_insert_with(Instant::now);
-            if since.elapsed() > Duration::from_millis(50) {
-                if t.axes.iter().any(|a| a.statusword & 0x0008 != 0) {
-                    match reset_sent {
-                        None => {
-                            m.command(Command::FaultReset(Axes::All))?;
-                            reset_sent = Some(Instant::now());
-                        }
-                        Some(at) if at.elapsed() > Duration::from_secs(2) => {
-                            unhandled(&mut counts, "a fault reset did not clear the fault".into());
-                            reset_sent = None;
-                        }
-                        Some(_) => {}
-                    }
-                } else {
-                    m.command(Command::Enable(Axes::All))?;
-                    enable_sent = Some(Instant::now());
-                    reset_sent = None;
-                    counts.recoveries += 1;
-                    running_program = false;
-                    idle_since = None;
+        match rec.next(&t, all_enabled) {
+            Action::None => {}
+            Action::RunProgram => {
+                if !any_running && !running_program {
+                    m.command(Command::RunProgram(Axes::All))?;
+                    running_program = true;
                 }
             }
-        }
-        if start.elapsed() >= next_progress {
-            next_progress += Duration::from_secs(1);
-            if let Some(p) = opts.progress {
-                p(start.elapsed(), &counts);
+            Action::FaultReset(axes) => {
+                running_program = false;
+                for i in axes {
+                    m.command(Command::FaultReset(Axes::One(i)))?;
+                }
             }
+            Action::Enable => {
+                m.command(Command::Enable(Axes::All))?;
+                counts.recoveries += 1;
+                running_program = false;
+            }
+            Action::Unhandled(what) => unhandled(&mut counts, what),
         }
     }
     let seconds = start.elapsed().as_secs_f64();
     let (report, link) = m.stop(StopKind::Ramp);
     let report = report.ok_or_else(|| soak_error("the session ended without a report"))?;
-    for e in report.history.iter().skip(seen) {
-        *counts.history.entry(format!("{:?}", e.kind)).or_default() += 1;
-    }
+    counts.history = kind_counts(&report.history_totals);
+    let wake_latency_ns = report
+        .cycle
+        .as_ref()
+        .map(|c| c.timing.wake_latency.summary())
+        .unwrap_or_default();
     if let Some(c) = &report.cycle {
         counts.cycles = counts.cycles.max(cycles_before + c.cycles);
         counts.lost_cycles = counts.lost_cycles.max(lost_before + c.lost);
@@ -313,6 +300,7 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
         frames: stats.frames,
         frames_dropped: stats.dropped,
         counts,
+        wake_latency_ns,
         shutdown_ok: report.shutdown_ok,
         ok,
     })
@@ -322,4 +310,230 @@ fn any_energised(t: &Telemetry) -> bool {
     t.axes
         .iter()
         .any(|a| a.state.is_some_and(State::is_energised))
+}
+
+fn kind_counts(totals: &BTreeMap<HistoryKind, u64>) -> BTreeMap<String, u64> {
+    totals.iter().map(|(k, n)| (format!("{k:?}"), *n)).collect()
+}
+
+/// How often the soak looks at the telemetry and the history.
+const POLL: Duration = Duration::from_millis(10);
+/// Statusword bit 3, Fault.
+const FAULT_BIT: u16 = 0x0008;
+/// How long the axes stay disabled (no fault) before the soak enables them again.
+const SETTLE: Duration = Duration::from_millis(50);
+/// How long a fault may stay shown after the reset was requested (the master's planner pulses
+/// bit 7 until the drive leaves Fault); longer is an unhandled error.
+const FAULT_CLEAR_LIMIT: Duration = Duration::from_secs(5);
+/// How long the axes may take to reach Operation enabled after the request (no fault meanwhile).
+const ENABLE_LIMIT: Duration = Duration::from_secs(5);
+
+/// What the application does next, as the soak's operator would.
+#[derive(Debug, PartialEq)]
+enum Action {
+    None,
+    RunProgram,
+    /// Reset the fault of these axes.
+    FaultReset(Vec<u16>),
+    Enable,
+    Unhandled(String),
+}
+
+/// The soak's recovery after a controlled stop, as an application would do it: while a fault
+/// is shown, request one reset per faulted axis and fault episode (the master then pulses
+/// bit 7 until the drive leaves Fault); once no axis shows a fault and none is energised,
+/// wait a moment and enable them all; once all are enabled, run the programs.
+///
+/// A fault that appears while the enable is under way cancels it (the master refuses to
+/// energise a faulted drive); the reset and the enable then start again. It is an unhandled
+/// error when a fault stays shown [`FAULT_CLEAR_LIMIT`] after its reset was requested, or the
+/// axes are not enabled [`ENABLE_LIMIT`] after the request without a fault meanwhile.
+#[derive(Debug)]
+struct Recovery {
+    /// How long the axes stay idle before the enable ([`SETTLE`]).
+    settle: Duration,
+    /// [`FAULT_CLEAR_LIMIT`].
+    fault_clear_limit: Duration,
+    /// [`ENABLE_LIMIT`].
+    enable_limit: Duration,
+    /// When each axis's reset was requested, in this fault episode.
+    reset_at: Vec<Option<Instant>>,
+    /// Since when no axis has been energised nor faulted.
+    idle_since: Option<Instant>,
+    /// When the enable was requested.
+    enable_at: Option<Instant>,
+}
+
+impl Default for Recovery {
+    fn default() -> Self {
+        Self {
+            settle: SETTLE,
+            fault_clear_limit: FAULT_CLEAR_LIMIT,
+            enable_limit: ENABLE_LIMIT,
+            reset_at: Vec::new(),
+            idle_since: None,
+            enable_at: None,
+        }
+    }
+}
+
+impl Recovery {
+    fn next(&mut self, t: &Telemetry, all_enabled: bool) -> Action {
+        self.reset_at.resize(t.axes.len(), None);
+        let now = Instant::now();
+        let mut reset = Vec::new();
+        for (i, a) in t.axes.iter().enumerate() {
+            let Some(slot) = self.reset_at.get_mut(i) else {
+                continue;
+            };
+            if a.statusword & FAULT_BIT == 0 {
+                // No fault (any more): the next fault is a new episode.
+                *slot = None;
+                continue;
+            }
+            match *slot {
+                None => {
+                    *slot = Some(now);
+                    reset.push(i as u16);
+                }
+                Some(at) if now.duration_since(at) > self.fault_clear_limit => {
+                    *slot = Some(now);
+                    return Action::Unhandled(format!(
+                        "axis {i}: fault (0x603F = 0x{:04X}, state {:?}) still shown {:?} \
+                         after its reset was requested",
+                        a.error_code, a.state, self.fault_clear_limit
+                    ));
+                }
+                Some(_) => {}
+            }
+        }
+        let faulted = self.reset_at.iter().any(Option::is_some);
+        if faulted {
+            // A fault cancels an enable under way; it starts again after the reset.
+            self.enable_at = None;
+            self.idle_since = None;
+            return if reset.is_empty() {
+                Action::None
+            } else {
+                Action::FaultReset(reset)
+            };
+        }
+        if all_enabled {
+            self.enable_at = None;
+            self.idle_since = None;
+            return Action::RunProgram;
+        }
+        if let Some(at) = self.enable_at {
+            if now.duration_since(at) > self.enable_limit {
+                self.enable_at = None;
+                return Action::Unhandled(format!(
+                    "the axes are not enabled {:?} after the request (states {:?})",
+                    self.enable_limit,
+                    t.axes.iter().map(|a| a.state).collect::<Vec<_>>()
+                ));
+            }
+            return Action::None;
+        }
+        if any_energised(t) {
+            // Still stopping (a ramp, a quick stop): wait.
+            self.idle_since = None;
+            return Action::None;
+        }
+        let since = *self.idle_since.get_or_insert(now);
+        if now.duration_since(since) < self.settle {
+            return Action::None;
+        }
+        self.idle_since = None;
+        self.enable_at = Some(now);
+        Action::Enable
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::master::telemetry::AxisTelemetry;
+
+    fn telemetry(states: &[(State, bool)]) -> Telemetry {
+        Telemetry {
+            axes: states
+                .iter()
+                .map(|&(state, fault)| AxisTelemetry {
+                    state: Some(state),
+                    statusword: if fault { FAULT_BIT } else { 0 },
+                    error_code: if fault { 0xFF86 } else { 0 },
+                    ..AxisTelemetry::default()
+                })
+                .collect(),
+            ..Telemetry::default()
+        }
+    }
+
+    fn quick() -> Recovery {
+        Recovery {
+            settle: Duration::ZERO,
+            fault_clear_limit: Duration::from_millis(30),
+            enable_limit: Duration::from_millis(30),
+            ..Recovery::default()
+        }
+    }
+
+    const SOD: State = State::SwitchOnDisabled;
+    const OE: State = State::OperationEnabled;
+
+    #[test]
+    fn one_reset_per_faulted_axis_and_episode_then_enable_then_run() {
+        let mut r = quick();
+        let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
+        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
+        // Still in Fault: the master pulses bit 7; no second request.
+        assert_eq!(r.next(&faulted, false), Action::None);
+        let idle = telemetry(&[(SOD, false), (SOD, false)]);
+        assert_eq!(r.next(&idle, false), Action::Enable);
+        assert_eq!(r.next(&idle, false), Action::None);
+        let enabled = telemetry(&[(OE, false), (OE, false)]);
+        assert_eq!(r.next(&enabled, true), Action::RunProgram);
+        // A new fault is a new episode: a new reset.
+        let both = telemetry(&[(State::Fault, true), (State::Fault, true)]);
+        assert_eq!(r.next(&both, false), Action::FaultReset(vec![0, 1]));
+    }
+
+    #[test]
+    fn a_fault_during_the_enable_cancels_it_and_recovery_starts_again() {
+        let mut r = quick();
+        let idle = telemetry(&[(SOD, false), (SOD, false)]);
+        assert_eq!(r.next(&idle, false), Action::Enable);
+        let faulted = telemetry(&[(State::Fault, true), (State::Fault, true)]);
+        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0, 1]));
+        std::thread::sleep(Duration::from_millis(10));
+        assert_eq!(r.next(&idle, false), Action::Enable);
+    }
+
+    #[test]
+    fn a_fault_that_stays_and_an_enable_that_never_comes_are_unhandled() {
+        let mut r = quick();
+        let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
+        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
+        std::thread::sleep(Duration::from_millis(40));
+        let Action::Unhandled(what) = r.next(&faulted, false) else {
+            panic!("a fault that stays must be reported");
+        };
+        assert!(what.contains("axis 0") && what.contains("0xFF86"), "{what}");
+
+        let mut r = quick();
+        let idle = telemetry(&[(SOD, false), (SOD, false)]);
+        assert_eq!(r.next(&idle, false), Action::Enable);
+        std::thread::sleep(Duration::from_millis(40));
+        let Action::Unhandled(what) = r.next(&idle, false) else {
+            panic!("an enable that never comes must be reported");
+        };
+        assert!(what.contains("not enabled"), "{what}");
+    }
+
+    #[test]
+    fn energised_axes_are_left_to_stop_first() {
+        let mut r = quick();
+        let stopping = telemetry(&[(State::QuickStopActive, false), (SOD, false)]);
+        assert_eq!(r.next(&stopping, false), Action::None);
+    }
 }

@@ -72,6 +72,21 @@ fn print_text(r: &SoakReport) {
         }
     );
     println!("  wake-ups more than a cycle late: {}", c.late_wakeups);
+    let w = &r.wake_latency_ns;
+    if w.count > 0 {
+        println!(
+            "  wake-up latency (µs) p50 {:.1}, p99.9 {:.1}, max {:.1} over {} cycles{}",
+            w.p50 as f64 / 1e3,
+            w.p999 as f64 / 1e3,
+            w.max as f64 / 1e3,
+            w.count,
+            if c.restarts > 0 {
+                " (since the last re-start)"
+            } else {
+                ""
+            }
+        );
+    }
     println!(
         "  programs completed {}, recoveries after a controlled stop {}, re-starts {}",
         c.programs_completed, c.recoveries, c.restarts
