@@ -121,6 +121,30 @@ fn bdhde_packet_loss() {
     assert_eq!(w.state(0), State::Fault);
 }
 
+/// A long gap (a stalled master: 40 ms without data) raises the alarm once; the counter stands
+/// still while the alarm is present and the reset starts it at 0 (\[REC\] for both drives), so
+/// the next single lost frame after the reset does not raise the alarm again.
+#[test]
+fn after_a_long_gap_a_reset_starts_the_loss_counter_afresh() {
+    for p in [MR, BD] {
+        let mut w = enabled(p, 1_000_000);
+        for _ in 0..40 {
+            w.skip_cycle();
+        }
+        assert!(w.drive(0).alarm().is_some(), "{}", p.name);
+        w.cycle();
+        w.cycle();
+        assert_eq!(w.state(0), State::Fault, "{}", p.name);
+        w.command(0, 0x0000);
+        assert_eq!(w.command(0, 0x0080) & 0x4F, 0x40, "{}: reset", p.name);
+        assert_eq!(w.drive(0).sync_error_counter(), 0, "{}", p.name);
+        w.skip_cycle();
+        w.cycle();
+        assert!(w.drive(0).alarm().is_none(), "{}: alarm again", p.name);
+        assert_eq!(w.state(0), State::SwitchOnDisabled, "{}", p.name);
+    }
+}
+
 /// The recommended mapping plus the incremental counters: 0x2D23 (DL) at the end of the
 /// outputs, 0x2D24 (UL) at the end of the inputs.
 fn with_counter(p: &DriveProfile) -> Mapping {

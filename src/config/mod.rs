@@ -354,7 +354,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
                 return Err(cx.err(sim.span(), "sim.devices", "name at least one device"));
             }
             for (i, d) in s.devices.iter().enumerate() {
-                if let Err(e) = crate::sim::devices::by_name(d.get_ref(), i) {
+                if let Err(e) = crate::sim::devices::check_name(d.get_ref()) {
                     return Err(cx.err(d.span(), format!("sim.devices[{i}]"), e.to_string()));
                 }
             }

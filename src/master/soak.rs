@@ -274,7 +274,12 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
                 counts.recoveries += 1;
                 running_program = false;
             }
-            Action::Unhandled(what) => unhandled(&mut counts, what),
+            Action::Unhandled(what, reset) => {
+                unhandled(&mut counts, what);
+                for i in reset {
+                    m.command(Command::FaultReset(Axes::One(i)))?;
+                }
+            }
         }
     }
     let seconds = start.elapsed().as_secs_f64();
@@ -325,6 +330,8 @@ const SETTLE: Duration = Duration::from_millis(50);
 /// How long a fault may stay shown after the reset was requested (the master's planner pulses
 /// bit 7 until the drive leaves Fault); longer is an unhandled error.
 const FAULT_CLEAR_LIMIT: Duration = Duration::from_secs(5);
+/// A fault still (or again) shown this long after the last reset request gets another.
+const RESET_RETRY: Duration = Duration::from_secs(1);
 /// How long the axes may take to reach Operation enabled after the request (no fault meanwhile).
 const ENABLE_LIMIT: Duration = Duration::from_secs(5);
 
@@ -336,17 +343,19 @@ enum Action {
     /// Reset the fault of these axes.
     FaultReset(Vec<u16>),
     Enable,
-    Unhandled(String),
+    /// An unhandled error, and the axes whose reset is requested again.
+    Unhandled(String, Vec<u16>),
 }
 
 /// The soak's recovery after a controlled stop, as an application would do it: while a fault
-/// is shown, request one reset per faulted axis and fault episode (the master then pulses
-/// bit 7 until the drive leaves Fault); once no axis shows a fault and none is energised,
-/// wait a moment and enable them all; once all are enabled, run the programs.
+/// is shown, request a reset of the faulted axis (the master then pulses bit 7 until the drive
+/// leaves Fault), and again every [`RESET_RETRY`] while it is still or again shown; once no
+/// axis shows a fault and none is energised, wait a moment and enable them all; once all are
+/// enabled, run the programs.
 ///
 /// A fault that appears while the enable is under way cancels it (the master refuses to
 /// energise a faulted drive); the reset and the enable then start again. It is an unhandled
-/// error when a fault stays shown [`FAULT_CLEAR_LIMIT`] after its reset was requested, or the
+/// error when a fault stays shown [`FAULT_CLEAR_LIMIT`] after its first reset request, or the
 /// axes are not enabled [`ENABLE_LIMIT`] after the request without a fault meanwhile.
 #[derive(Debug)]
 struct Recovery {
@@ -356,8 +365,10 @@ struct Recovery {
     fault_clear_limit: Duration,
     /// [`ENABLE_LIMIT`].
     enable_limit: Duration,
-    /// When each axis's reset was requested, in this fault episode.
-    reset_at: Vec<Option<Instant>>,
+    /// [`RESET_RETRY`].
+    reset_retry: Duration,
+    /// Per axis, in this fault episode: when the first and the last reset were requested.
+    reset_at: Vec<Option<(Instant, Instant)>>,
     /// Since when no axis has been energised nor faulted.
     idle_since: Option<Instant>,
     /// When the enable was requested.
@@ -370,6 +381,7 @@ impl Default for Recovery {
             settle: SETTLE,
             fault_clear_limit: FAULT_CLEAR_LIMIT,
             enable_limit: ENABLE_LIMIT,
+            reset_retry: RESET_RETRY,
             reset_at: Vec::new(),
             idle_since: None,
             enable_at: None,
@@ -382,6 +394,7 @@ impl Recovery {
         self.reset_at.resize(t.axes.len(), None);
         let now = Instant::now();
         let mut reset = Vec::new();
+        let mut unhandled = None;
         for (i, a) in t.axes.iter().enumerate() {
             let Some(slot) = self.reset_at.get_mut(i) else {
                 continue;
@@ -393,19 +406,29 @@ impl Recovery {
             }
             match *slot {
                 None => {
-                    *slot = Some(now);
+                    *slot = Some((now, now));
                     reset.push(i as u16);
                 }
-                Some(at) if now.duration_since(at) > self.fault_clear_limit => {
-                    *slot = Some(now);
-                    return Action::Unhandled(format!(
-                        "axis {i}: fault (0x603F = 0x{:04X}, state {:?}) still shown {:?} \
-                         after its reset was requested",
-                        a.error_code, a.state, self.fault_clear_limit
+                Some((first, _)) if now.duration_since(first) > self.fault_clear_limit => {
+                    *slot = Some((now, now));
+                    reset.push(i as u16);
+                    unhandled = Some(format!(
+                        "axis {i}: fault (0x603F = 0x{:04X}, state {:?}, statusword 0x{:04X}, \
+                         controlword 0x{:04X}) still shown {:?} after its reset was requested",
+                        a.error_code, a.state, a.statusword, a.controlword, self.fault_clear_limit
                     ));
+                }
+                Some((first, last)) if now.duration_since(last) > self.reset_retry => {
+                    // Shown again (a new fault right after the reset, between two looks) or
+                    // still: ask again, as an application would.
+                    *slot = Some((first, now));
+                    reset.push(i as u16);
                 }
                 Some(_) => {}
             }
+        }
+        if let Some(what) = unhandled {
+            return Action::Unhandled(what, reset);
         }
         let faulted = self.reset_at.iter().any(Option::is_some);
         if faulted {
@@ -426,11 +449,14 @@ impl Recovery {
         if let Some(at) = self.enable_at {
             if now.duration_since(at) > self.enable_limit {
                 self.enable_at = None;
-                return Action::Unhandled(format!(
-                    "the axes are not enabled {:?} after the request (states {:?})",
-                    self.enable_limit,
-                    t.axes.iter().map(|a| a.state).collect::<Vec<_>>()
-                ));
+                return Action::Unhandled(
+                    format!(
+                        "the axes are not enabled {:?} after the request (states {:?})",
+                        self.enable_limit,
+                        t.axes.iter().map(|a| a.state).collect::<Vec<_>>()
+                    ),
+                    Vec::new(),
+                );
             }
             return Action::None;
         }
@@ -472,6 +498,7 @@ mod tests {
     fn quick() -> Recovery {
         Recovery {
             settle: Duration::ZERO,
+            reset_retry: Duration::from_millis(15),
             fault_clear_limit: Duration::from_millis(30),
             enable_limit: Duration::from_millis(30),
             ..Recovery::default()
@@ -486,7 +513,7 @@ mod tests {
         let mut r = quick();
         let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
         assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        // Still in Fault: the master pulses bit 7; no second request.
+        // Still in Fault within the retry time: the master pulses bit 7; no second request.
         assert_eq!(r.next(&faulted, false), Action::None);
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
         assert_eq!(r.next(&idle, false), Action::Enable);
@@ -514,17 +541,21 @@ mod tests {
         let mut r = quick();
         let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
         assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        std::thread::sleep(Duration::from_millis(40));
-        let Action::Unhandled(what) = r.next(&faulted, false) else {
+        std::thread::sleep(Duration::from_millis(20));
+        // Still shown after the retry time: asked again.
+        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
+        std::thread::sleep(Duration::from_millis(20));
+        let Action::Unhandled(what, again) = r.next(&faulted, false) else {
             panic!("a fault that stays must be reported");
         };
         assert!(what.contains("axis 0") && what.contains("0xFF86"), "{what}");
+        assert_eq!(again, vec![0]);
 
         let mut r = quick();
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
         assert_eq!(r.next(&idle, false), Action::Enable);
         std::thread::sleep(Duration::from_millis(40));
-        let Action::Unhandled(what) = r.next(&idle, false) else {
+        let Action::Unhandled(what, _) = r.next(&idle, false) else {
             panic!("an enable that never comes must be reported");
         };
         assert!(what.contains("not enabled"), "{what}");

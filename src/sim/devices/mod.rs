@@ -90,6 +90,19 @@ pub fn known_names() -> String {
         .join(", ")
 }
 
+/// Check a device name without building the device (cheap: no ESI parse, no dictionary):
+/// the error [`by_name`] would give for an unknown name.
+pub fn check_name(name: &str) -> Result<(), DeviceError> {
+    if device_names().iter().any(|(n, _)| *n == name) {
+        Ok(())
+    } else {
+        Err(DeviceError::Unknown {
+            name: name.into(),
+            known: known_names(),
+        })
+    }
+}
+
 /// Create a device by name (see [`device_names`]). `position` makes serial numbers unique.
 pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
     let serial = u32::try_from(position).unwrap_or(u32::MAX);
@@ -109,5 +122,26 @@ pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceErr
                 known: known_names(),
             }),
         },
+    }
+}
+
+#[cfg(test)]
+mod name_tests {
+    use super::*;
+
+    #[test]
+    fn check_name_accepts_exactly_what_by_name_builds() {
+        for (name, _) in device_names() {
+            assert!(check_name(name).is_ok(), "{name}");
+            assert!(by_name(name, 0).is_ok(), "{name}");
+        }
+        for bad in ["", "mr-j4", "MR-J4-TM ", "nonsense"] {
+            assert!(check_name(bad).is_err(), "{bad:?}");
+            assert!(by_name(bad, 0).is_err(), "{bad:?}");
+            assert_eq!(
+                check_name(bad).err().map(|e| e.to_string()),
+                by_name(bad, 0).err().map(|e| e.to_string())
+            );
+        }
     }
 }

@@ -298,12 +298,14 @@ pub const REC_POWER_ON: &[PowerOnValue] = &[
 
 /// \[REC\] Loss of cyclic data (MANUAL GAP: the manual names the fault, not the rule): the
 /// ETG.1020 error counter, +3 per SYNC0 without data, −1 per cycle with data; 0x818D "EtherCAT
-/// Packet Loss" after 7 ms of consecutive misses, the MR-J4-TM's automatic threshold.
+/// Packet Loss" after 7 ms of consecutive misses, the MR-J4-TM's automatic threshold; the
+/// counter stands still while a fault is present and a fault reset starts it at 0.
 pub const REC_LOSS: LossDetection = LossDetection {
     increment: 3,
     decrement: 1,
     limit: LossLimit::Milliseconds(7),
     alarm: "Fb8",
+    restart_on_reset: true,
 };
 
 /// \[REC\] Leaving OP with the motor energised raises 0xF080 "CAN/EtherCAT State Not

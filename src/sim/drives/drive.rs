@@ -688,6 +688,9 @@ impl EmulatedDrive {
     fn clear_alarm(&mut self) {
         self.alarm = None;
         self.stats.resets += 1;
+        if self.spec.loss.restart_on_reset {
+            self.loss_counter = 0;
+        }
         let rep = self.spec.reporting;
         let d = self.od.dict_mut();
         let _ = d.set_uint(obj::ERROR_REGISTER, 0);
@@ -740,9 +743,12 @@ impl EmulatedDrive {
     /// Loss-of-data and cycle-counter supervision of one DC cycle.
     fn supervise_cycle(&mut self, fresh: bool, cycle_ns: u32) {
         let loss = self.spec.loss;
-        if fresh {
+        // While an alarm is present the counter may stand still (see
+        // `LossDetection::restart_on_reset`).
+        let counting = !(loss.restart_on_reset && self.alarm.is_some());
+        if counting && fresh {
             self.loss_counter = self.loss_counter.saturating_sub(loss.decrement);
-        } else {
+        } else if counting {
             self.loss_counter = self.loss_counter.saturating_add(loss.increment);
             if self.loss_counter >= loss.threshold(cycle_ns) && self.pending.is_none() {
                 self.pending = self.alarm_by_id(Some(loss.alarm));

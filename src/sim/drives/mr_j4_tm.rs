@@ -172,6 +172,7 @@ pub static SPEC: DriveSpec = DriveSpec {
         decrement: REC_LOSS_DECREMENT,
         limit: LossLimit::Milliseconds(7),
         alarm: "AL.86.1",
+        restart_on_reset: REC_LOSS_RESTART_ON_RESET,
     },
     counter_alarm: Some("AL.86.2"),
     leave_op_alarm: REC_LEAVE_OP_ALARM,
@@ -353,6 +354,11 @@ pub const REC_POWER_ON: &[PowerOnValue] = &[
 /// \[REC\] The error counter goes down by 1 per cycle with data (the ETG.1020 convention; the
 /// manual states only the +3).
 pub const REC_LOSS_DECREMENT: u32 = 1;
+
+/// \[REC\] MANUAL GAP (§7.3.1(10) gives the +3 and the threshold, not what an alarm reset does
+/// to the counter): the error counter stands still while an alarm is present and an alarm reset
+/// starts it at 0, so that [AL. 86.1] can be reset once the data arrives again.
+pub const REC_LOSS_RESTART_ON_RESET: bool = true;
 
 /// \[REC\] Leaving OP while the motor is energised raises [AL. 86.1] (§1.4.4: disconnecting
 /// without stopping, Shutdown and PRE-OP "may" raise it).

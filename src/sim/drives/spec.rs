@@ -122,6 +122,12 @@ pub struct LossDetection {
     pub limit: LossLimit,
     /// The alarm.
     pub alarm: &'static str,
+    /// `true`: while an alarm is present the counter stands still, and resetting the alarm
+    /// starts it again at 0 (the supervision begins afresh). `false`: it keeps counting the
+    /// SYNC0s without data in Fault, so that after a long gap a reset is followed by the same
+    /// alarm at the next missed frame. Neither manual says; each drive's value is marked
+    /// \[REC\].
+    pub restart_on_reset: bool,
 }
 
 /// The error-counter limit of a [`LossDetection`].
