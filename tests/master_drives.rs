@@ -107,13 +107,16 @@ fn both_drives_reach_op_with_dc_at_1ms_and_500us_over_veth() {
             .expect("server");
         let (r, _) = run_to_op_and_stop(veth.open_host_socket().expect("host socket"), cycle);
         assert!(r.shutdown_ok, "{cycle:?}");
-        // The far end runs at normal priority on a shared machine: an isolated late reply
-        // (held set-point, counted) may happen; anything else may not.
+        // The far end is a thread on a shared machine: a late reply or two in a row (held
+        // set-points, counted, below `lost_before_stop`, so no stop) may happen; anything else
+        // may not.
         let other: Vec<String> = r
             .history
             .iter()
             .filter(|h| {
-                h.error && !(h.kind == HistoryKind::FrameLost && h.text.contains("(1 in a row)"))
+                h.error
+                    && !(h.kind == HistoryKind::FrameLost
+                        && (h.text.contains("(1 in a row)") || h.text.contains("(2 in a row)")))
             })
             .map(|h| h.text.clone())
             .collect();
