@@ -415,6 +415,7 @@ pub fn run<L: FrameLink>(
     let mut op_requested_at: Option<u64> = None;
     let mut preop_requested_at: Option<u64> = None;
     let mut ending = false;
+    let mut last_telemetry = CycleTelemetry::default();
     let mut steady = false;
     let end;
     let mut last_wake: u64 = 0;
@@ -1081,9 +1082,14 @@ pub fn run<L: FrameLink>(
                 busy_ns: monotonic_ns() - woke,
                 all_op,
                 lost_in_a_row: consecutive_lost,
-                phase: Phase::Cycling,
+                phase: if ending {
+                    Phase::Stopping
+                } else {
+                    Phase::Cycling
+                },
                 restarts: io.restarts,
             };
+            last_telemetry = t.cycle;
             for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
                 *slot = a.tel;
             }
@@ -1141,6 +1147,19 @@ pub fn run<L: FrameLink>(
             // Overrun: skip to the next instant rather than running back-to-back cycles.
             next_wake = monotonic_ns() + cycle_ns / 2;
         }
+    }
+    // The cycle has ended: say so until the session publishes what comes next (a whole
+    // snapshot: the input buffer of the triple buffer holds an older one).
+    {
+        let t = io.telemetry.input_buffer_mut();
+        t.cycle = CycleTelemetry {
+            phase: Phase::Stopping,
+            ..last_telemetry
+        };
+        for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
+            *slot = a.tel;
+        }
+        io.telemetry.publish();
     }
     if let Some(h) = hooks
         && steady

@@ -296,6 +296,10 @@ pub enum Phase {
     Starting,
     /// The cycle runs.
     Cycling,
+    /// The cycle is ending (a controlled stop after the segment was lost, a drive left OP, or
+    /// a stop or re-start was requested); the session then takes the drives down. Commands
+    /// other than stop and re-start may be refused from here on.
+    Stopping,
     /// The cycle ended (segment lost, a drive left OP); waiting for a re-start request.
     WaitingForRestart,
     /// Re-starting the drives (waiting for the segment to answer, then INIT → OP).
