@@ -519,7 +519,7 @@ fn a_slave_reset_to_init_stops_the_others<L: FrameLink + Send + 'static>(
 }
 
 in_process_and_over_veth!(
-    drives_segment(),
+    tolerant_drives_segment(),
     a_slave_reset_to_init_stops_the_others,
     a_slave_reset_to_init_stops_the_others_in_process,
     a_slave_reset_to_init_stops_the_others_over_veth

@@ -24,7 +24,7 @@ use super::telemetry::{
     Telemetry,
 };
 use crate::cia402::{
-    self, Axis, AxisConfig, ErrorCode, Feedback, OperationMode, State, StatusWord,
+    self, Axis, AxisConfig, ErrorCode, Feedback, ModeSwitchPhase, OperationMode, State, StatusWord,
 };
 use crate::ec::register;
 use crate::pdo::Field;
@@ -346,7 +346,7 @@ pub fn run<L: FrameLink>(
             axis,
             fields: d.fields.clone(),
             velocity_unit: d.profile.units.velocity_unit_counts_per_s,
-            runner: Runner::new(d.setup.program.clone()),
+            runner: Runner::new(d.setup.program.clone(), d.setup.mode),
             program: ProgramState::Idle,
             hold: Sample::default(),
             mode: d.setup.mode,
@@ -828,12 +828,21 @@ pub fn run<L: FrameLink>(
                         a.hold = s;
                     }
                     Tick::SwitchMode(m) => {
-                        if a.requested_mode != Some(m) {
+                        let idle = st.mode_switch == ModeSwitchPhase::Idle;
+                        if idle && st.active_mode.as_i8() == m.code() {
+                            // Already in that mode (a run begins by asking for its start
+                            // mode): no switch, no event; go on at once.
+                            a.requested_mode = None;
+                            a.runner.mode_switched(actual);
+                        } else if idle {
+                            // Nothing under way (also when an earlier request of this run was
+                            // cut short): ask for it.
                             a.requested_mode = Some(m);
                             if a.axis
                                 .request_mode(OperationMode::from_i8(m.code()))
                                 .is_err()
                             {
+                                a.requested_mode = None;
                                 emit!(EventKind::CommandRefused {
                                     axis: i as u16,
                                     why: "the program's mode switch was refused"
@@ -841,6 +850,8 @@ pub fn run<L: FrameLink>(
                                 a.program = ProgramState::Idle;
                             }
                         }
+                        // Else a switch is under way: its ModeSwitched event (or the next
+                        // look at the active mode) lets the program go on.
                     }
                     Tick::Finished(s) => {
                         sp = s;
@@ -894,14 +905,17 @@ pub fn run<L: FrameLink>(
                             }
                         }
                     }
-                    cia402::Event::ModeSwitchFailed(_) if a.requested_mode.is_some() => {
-                        // The program asked for this switch and cannot go on without it.
+                    cia402::Event::ModeSwitchFailed(e) if a.requested_mode.is_some() => {
+                        // The program asked for this switch and cannot go on without it. A
+                        // fault cut it short: the fault itself is what gets reported.
                         a.requested_mode = None;
                         a.program = ProgramState::Idle;
-                        emit!(EventKind::CommandRefused {
-                            axis: i as u16,
-                            why: "the program stopped: its mode switch failed"
-                        });
+                        if e.reason != cia402::ModeSwitchFailure::Fault {
+                            emit!(EventKind::CommandRefused {
+                                axis: i as u16,
+                                why: "the program stopped: its mode switch failed"
+                            });
+                        }
                     }
                     cia402::Event::Fault { .. } if !ending => {
                         a.program = ProgramState::Idle;
@@ -1247,6 +1261,7 @@ fn apply(a: &mut AxisRt, cmd: &Command, i: usize) -> Option<&'static str> {
                 return Some("the axis has no program");
             }
             a.runner.restart();
+            a.requested_mode = None;
             a.program = ProgramState::Pending;
             None
         }

@@ -331,9 +331,18 @@ pub enum Tick {
 
 /// Runs a program on one axis. Built before the cycle starts; [`Runner::tick`] does not
 /// allocate.
+///
+/// A program is validated against the mode it starts in ([`validate`]), and its `Mode` steps
+/// change that mode as it goes, so a run can end (or be cut short by a fault) in another mode.
+/// Every run therefore begins by asking for the start mode ([`Tick::SwitchMode`]); when the
+/// axis is already in it the caller confirms at once with [`Runner::mode_switched`].
 #[derive(Debug, Clone)]
 pub struct Runner {
     steps: Vec<Step>,
+    /// The mode the program was validated for.
+    start: CyclicMode,
+    /// The run has not yet confirmed the start mode.
+    entering: bool,
     index: usize,
     planned: Option<Planned>,
     started_at: f64,
@@ -345,10 +354,12 @@ pub struct Runner {
 }
 
 impl Runner {
-    /// A runner for validated steps.
-    pub fn new(steps: Vec<Step>) -> Self {
+    /// A runner for steps validated (with [`validate`]) for the mode `start`.
+    pub fn new(steps: Vec<Step>, start: CyclicMode) -> Self {
         Self {
             steps,
+            start,
+            entering: true,
             index: 0,
             planned: None,
             started_at: 0.0,
@@ -363,6 +374,7 @@ impl Runner {
     /// next tick.
     pub fn restart(&mut self) {
         self.index = 0;
+        self.entering = true;
         self.planned = None;
         self.step_t = 0.0;
         self.waiting_for_mode = false;
@@ -400,18 +412,31 @@ impl Runner {
         self.planned = None;
     }
 
-    /// The drive confirmed the mode switch the runner asked for; continue with the next step
-    /// from `actual`.
+    /// The drive confirmed the mode switch the runner asked for (or was already in that mode);
+    /// continue with the next step from `actual`.
     pub fn mode_switched(&mut self, actual: Sample) {
         if self.waiting_for_mode {
             self.waiting_for_mode = false;
-            self.index += 1;
+            if self.entering {
+                self.entering = false;
+            } else {
+                self.index += 1;
+            }
             self.seed(actual);
         }
     }
 
+    /// The mode the program starts in.
+    pub fn start_mode(&self) -> CyclicMode {
+        self.start
+    }
+
     /// The set-point at time `now` (seconds, any monotonic origin).
     pub fn tick(&mut self, now: f64) -> Tick {
+        if self.entering && self.failed.is_none() && self.index < self.steps.len() {
+            self.waiting_for_mode = true;
+            return Tick::SwitchMode(self.start);
+        }
         loop {
             let Some(step) = self.steps.get(self.index).filter(|_| self.failed.is_none()) else {
                 return Tick::Finished(Sample {
@@ -488,7 +513,7 @@ mod tests {
     use super::*;
 
     fn run(steps: Vec<Step>, dt: f64, seconds: f64) -> (Runner, Vec<Tick>) {
-        let mut r = Runner::new(steps);
+        let mut r = Runner::new(steps, CyclicMode::Csp);
         r.seed(Sample::default());
         let mut out = vec![];
         let mut t = 0.0;
@@ -547,17 +572,23 @@ mod tests {
 
     #[test]
     fn mode_switch_waits_for_confirmation() {
-        let mut r = Runner::new(vec![
-            Step::Mode {
-                mode: CyclicMode::Csv,
-            },
-            Step::Ramp {
-                velocity: 100.0,
-                acceleration: 1000.0,
-                hold: 0.0,
-            },
-        ]);
+        let mut r = Runner::new(
+            vec![
+                Step::Mode {
+                    mode: CyclicMode::Csv,
+                },
+                Step::Ramp {
+                    velocity: 100.0,
+                    acceleration: 1000.0,
+                    hold: 0.0,
+                },
+            ],
+            CyclicMode::Csp,
+        );
         r.seed(Sample::default());
+        // Every run first asks for the start mode.
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csp));
+        r.mode_switched(Sample::default());
         assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csv));
         // Until the drive confirms, the runner keeps asking.
         assert_eq!(r.tick(0.001), Tick::SwitchMode(CyclicMode::Csv));
@@ -569,6 +600,58 @@ mod tests {
             Tick::Setpoint(s) => assert_eq!(s.pos, 42.0),
             t => panic!("{t:?}"),
         }
+    }
+
+    #[test]
+    fn a_restart_first_returns_to_the_start_mode() {
+        let steps = vec![
+            Step::Move {
+                target: Target::By(100.0),
+                velocity: 1000.0,
+                acceleration: 10_000.0,
+                jerk: None,
+            },
+            Step::Mode {
+                mode: CyclicMode::Csv,
+            },
+            Step::Ramp {
+                velocity: 100.0,
+                acceleration: 1000.0,
+                hold: 0.5,
+            },
+        ];
+        validate(&steps, CyclicMode::Csp).unwrap();
+        let mut r = Runner::new(steps, CyclicMode::Csp);
+        r.seed(Sample::default());
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csp));
+        r.mode_switched(Sample::default());
+        assert!(matches!(r.tick(0.0), Tick::Setpoint(_)));
+        // Run into the csv ramp, then cut the run short (a fault) and start over.
+        let mut t = 0.0;
+        while r.step_index() < 2 {
+            t += 0.001;
+            if let Tick::SwitchMode(m) = r.tick(t) {
+                assert_eq!(m, CyclicMode::Csv);
+                r.mode_switched(r.last);
+            }
+        }
+        r.restart();
+        let here = Sample {
+            pos: 500.0,
+            ..Sample::default()
+        };
+        r.seed(here);
+        // The axis is in csv now: the move must not run there; the runner asks for csp first,
+        // keeps asking until it is confirmed, and then plans the move from where the axis is.
+        assert_eq!(r.tick(t), Tick::SwitchMode(CyclicMode::Csp));
+        assert_eq!(r.tick(t + 0.001), Tick::SwitchMode(CyclicMode::Csp));
+        assert_eq!(r.step_index(), 0);
+        r.mode_switched(here);
+        match r.tick(t + 0.002) {
+            Tick::Setpoint(s) => assert!((s.pos - 500.0).abs() < 1.0, "{s:?}"),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(r.step_index(), 0);
     }
 
     #[test]
