@@ -6,7 +6,7 @@ mod support {
 }
 use ecdrive::cia402::State;
 use ecdrive::master::cycle::CycleEnd;
-use ecdrive::master::session::{Master, MasterConfig, RestartPolicy};
+use ecdrive::master::session::{HistoryKind, Master, MasterConfig, RestartPolicy};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, Phase, StopKind};
 use ecdrive::sim::transport::SegmentLink;
@@ -164,9 +164,9 @@ fn after_a_cable_pull_a_restart_on_request_brings_the_drives_back_to_op() {
         std::thread::sleep(Duration::from_millis(10));
     }
     assert!(
-        texts(&m)
-            .iter()
-            .any(|t| t.starts_with("Enable(All) refused: no cycle runs")),
+        m.history().iter().any(|h| h.kind == HistoryKind::NoCycle
+            && h.error
+            && h.text.starts_with("Enable(All) refused: no cycle runs")),
         "{:#?}",
         texts(&m)
     );

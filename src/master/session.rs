@@ -797,7 +797,7 @@ fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) ->
                 Command::Stop(_) => return false,
                 other => note(
                     shared,
-                    HistoryKind::CommandRefused,
+                    HistoryKind::NoCycle,
                     true,
                     format!("{other:?} refused: no cycle runs (waiting for a re-start)"),
                 ),

@@ -201,12 +201,8 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
             let drive = e.drive.as_ref().map_or(String::new(), |d| format!("{d}: "));
             let text = format!("{:.3} s: {drive}{}", start.elapsed().as_secs_f64(), e.text);
             // A command that crossed the end of a cycle (sent on the last `Cycling` snapshot)
-            // is refused with its reason while the session re-starts: handled.
-            let crossed_restart =
-                e.kind == HistoryKind::CommandRefused && e.text.contains("no cycle runs");
-            if matches!(e.kind, HistoryKind::CommandRefused | HistoryKind::Session)
-                && !crossed_restart
-            {
+            // is not carried out while the session re-starts (`NoCycle`): handled.
+            if matches!(e.kind, HistoryKind::CommandRefused | HistoryKind::Session) {
                 counts.unhandled.push(text.clone());
             }
             if counts.errors.len() < MAX_ERRORS {
