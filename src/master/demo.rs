@@ -9,9 +9,10 @@
 use super::cycle::CycleSettings;
 use super::error::{ErrorKind, MasterError};
 use super::program::{CyclicMode, Step, Target};
+use super::recovery::{self, Operator};
 use super::session::{Master, MasterConfig};
 use super::startup::{DriveSetup, Selector};
-use super::telemetry::{Axes, Command, StopKind};
+use super::telemetry::StopKind;
 use crate::drives::{self, DriveProfile};
 use crate::rt::host::HostInfo;
 use crate::rt::{RtReport, RtSettings, Summary};
@@ -19,7 +20,7 @@ use crate::sim::transport::SegmentLink;
 use crate::sim::{EscConfig, HostClock, Segment};
 use serde::Serialize;
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Options of the demo.
 #[derive(Debug, Clone, PartialEq)]
@@ -104,8 +105,15 @@ pub struct DemoReport {
     pub rt: RtReport,
     /// The host.
     pub host: HostInfo,
-    /// Errors in the history (empty on success).
+    /// Times the axes were brought back to motion after the drives stopped on their own
+    /// (reset, enable, run the programs again).
+    pub recoveries: u64,
+    /// Errors in the history: empty on a clean run; after a recovery, the faults it recovered
+    /// from.
     pub errors: Vec<String>,
+    /// Errors the master or the demo did not handle (see [`recovery::unhandled_kind`]); empty
+    /// when the demo succeeded.
+    pub unhandled: Vec<String>,
     /// The whole history, one line per entry (cycle, drive, what happened).
     pub history: Vec<String>,
     /// Whether everything completed.
@@ -204,7 +212,15 @@ pub fn segment() -> Result<Segment, MasterError> {
     Ok(seg)
 }
 
-/// Run the demo.
+/// How long the demo may take to complete the programs once in OP, recoveries included.
+const DEMO_LIMIT: Duration = Duration::from_secs(30);
+/// At most this many recoveries; more fail the demo.
+const MAX_RECOVERIES: u64 = 3;
+
+/// Run the demo: OP, enable, run the programs once, stop. If the drives stop on their own
+/// (a fault) the demo recovers as an application would (at most [`MAX_RECOVERIES`] times) and
+/// the report says so; it succeeds when the programs completed, nothing was left unhandled and
+/// the drives were shut down.
 pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
     let profiles = [&drives::mr_j4_tm::PROFILE, &drives::bdhde::PROFILE];
     let mut cfg = MasterConfig::new(opts.cycle);
@@ -223,14 +239,38 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
     m.wait_until("every drive in OP", Duration::from_secs(10), |t| {
         t.cycle.all_op
     })?;
-    m.command(Command::Enable(Axes::All))?;
-    m.command(Command::RunProgram(Axes::All))?;
-    let done = m.wait_until("the programs to finish", Duration::from_secs(30), |t| {
-        t.axes
-            .iter()
-            .zip(&steps)
-            .all(|(a, n)| !a.program_running && a.program_step as usize >= *n)
-    });
+    // The operator enables the axes and runs the programs; if the drives stop on their own
+    // (their loss supervision trips when the machine stalls the cycle for 7 ms or more) it
+    // resets, enables and runs the programs again, as an application would, and says so.
+    let mut op = Operator::new(steps);
+    let mut unhandled = Vec::new();
+    let deadline = Instant::now() + DEMO_LIMIT;
+    loop {
+        std::thread::sleep(recovery::POLL);
+        if !m.is_running() {
+            unhandled.push("the session ended by itself".to_string());
+            break;
+        }
+        let t = m.telemetry().clone();
+        unhandled.extend(op.step(&mut m, &t)?);
+        if op.programs_completed > 0 || !unhandled.is_empty() {
+            break;
+        }
+        if op.recoveries > MAX_RECOVERIES {
+            unhandled.push(format!(
+                "gave up after {MAX_RECOVERIES} recoveries: the drives keep stopping"
+            ));
+            break;
+        }
+        if Instant::now() >= deadline {
+            unhandled.push(format!(
+                "the programs did not finish within {} s",
+                DEMO_LIMIT.as_secs()
+            ));
+            break;
+        }
+    }
+    let done = op.programs_completed > 0;
     let (report, _) = m.stop(StopKind::Ramp);
     let report = report.ok_or_else(|| {
         MasterError::new(
@@ -270,7 +310,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
                     .unwrap_or_default(),
                 max_following_error: fe,
                 max_following_error_rev: fe as f64 / rev,
-                program_done: done.is_ok(),
+                program_done: done,
             }
         })
         .collect();
@@ -294,7 +334,17 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
             }
         })
         .collect();
-    let ok = done.is_ok() && errors.is_empty() && report.shutdown_ok;
+    unhandled.extend(
+        report
+            .history
+            .iter()
+            .filter(|h| h.error && recovery::unhandled_kind(h.kind))
+            .map(|h| match &h.drive {
+                Some(d) => format!("{d}: {}", h.text),
+                None => h.text.clone(),
+            }),
+    );
+    let ok = done && unhandled.is_empty() && report.shutdown_ok;
     Ok(DemoReport {
         cycle_us: opts.cycle.as_micros() as u64,
         drives,
@@ -309,7 +359,9 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         overruns: cycle.overruns,
         rt: cycle.rt.clone(),
         host: HostInfo::read(),
+        recoveries: op.recoveries,
         errors,
+        unhandled,
         history,
         ok,
     })

@@ -9,6 +9,7 @@ pub mod exec;
 pub mod history;
 pub mod io;
 pub mod program;
+pub mod recovery;
 pub mod session;
 pub mod setpoint;
 pub mod soak;

@@ -4,21 +4,22 @@
 //!
 //! The master runs as an application would run it: automatic re-start
 //! ([`RestartPolicy::Auto`]); after a controlled stop (too many lost frames in a row, a drive
-//! fault) the soak resets faults, enables the axes again and restarts the programs. Every
-//! history entry is counted by [`HistoryKind`]. An error is *handled* when the master reacted
-//! as documented (lost cycles held the set-point; a controlled stop; a decoded fault; a
-//! re-start) and the soak could bring the axes back to motion. It is *unhandled* when the
+//! fault) the [`Operator`] resets faults, enables the axes again and restarts the programs.
+//! Every history entry is counted by [`HistoryKind`]. An error is *handled* when the master
+//! reacted as documented (lost cycles held the set-point; a controlled stop; a decoded fault; a
+//! re-start) and the operator could bring the axes back to motion. It is *unhandled* when the
 //! session ended by itself, a command or a recovery failed, an axis stayed enabled while a
-//! fault was shown, or an entry of a kind that lost frames must not cause (state-machine
-//! failures, refused commands, a session error) appeared.
+//! fault was shown, history entries were discarded unread, or an entry of a kind that lost
+//! frames must not cause ([`recovery::unhandled_kind`]: a refused command, a session error)
+//! appeared.
 
 use super::cycle::CycleSettings;
 use super::demo;
 use super::error::{ErrorKind, MasterError};
+use super::recovery::{self, Operator, POLL};
 use super::session::{HistoryKind, Master, MasterConfig, RestartPolicy};
 use super::startup::{DriveSetup, Selector};
-use super::telemetry::{Axes, Command, Phase, StopKind, Telemetry};
-use crate::cia402::State;
+use super::telemetry::{StopKind, Telemetry};
 use crate::drives;
 use crate::rt::{RtSettings, Summary};
 use crate::sim::faults::{Fault, LinkFault};
@@ -161,8 +162,7 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
     let mut counts = SoakCounts::default();
     let mut next_seq = 0u64;
     let mut next_progress = Duration::from_secs(1);
-    let mut running_program = false;
-    let mut rec = Recovery::default();
+    let mut op = Operator::new(steps);
     let mut last_restarts = 0u32;
     let mut cycles_before: u64 = 0;
     let mut last_cycle: u64 = 0;
@@ -202,7 +202,7 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
             let text = format!("{:.3} s: {drive}{}", start.elapsed().as_secs_f64(), e.text);
             // A command that crossed the end of a cycle (sent on the last `Cycling` snapshot)
             // is not carried out while the session re-starts (`NoCycle`): handled.
-            if matches!(e.kind, HistoryKind::CommandRefused | HistoryKind::Session) {
+            if recovery::unhandled_kind(e.kind) {
                 counts.unhandled.push(text.clone());
             }
             if counts.errors.len() < MAX_ERRORS {
@@ -232,57 +232,11 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
                 p(start.elapsed(), &counts);
             }
         }
-        if t.cycle.phase != Phase::Cycling || !t.cycle.all_op {
-            // Stopped, re-starting: the recovery begins again once the drives are in OP.
-            rec = Recovery::default();
-            continue;
+        for what in op.step(&mut m, &t)? {
+            unhandled(&mut counts, what);
         }
-        // A fault must never leave an axis enabled.
-        for (i, a) in t.axes.iter().enumerate() {
-            if a.statusword & FAULT_BIT != 0 && a.state == Some(State::OperationEnabled) {
-                unhandled(&mut counts, format!("axis {i} enabled with a fault shown"));
-            }
-        }
-        let done = t
-            .axes
-            .iter()
-            .zip(&steps)
-            .all(|(a, n)| !a.program_running && a.program_step as usize >= *n);
-        let all_enabled = t
-            .axes
-            .iter()
-            .all(|a| a.state == Some(State::OperationEnabled));
-        let any_running = t.axes.iter().any(|a| a.program_running);
-        if running_program && done && all_enabled {
-            counts.programs_completed += 1;
-            running_program = false;
-        }
-        match rec.next(&t, all_enabled) {
-            Action::None => {}
-            Action::RunProgram => {
-                if !any_running && !running_program {
-                    m.command(Command::RunProgram(Axes::All))?;
-                    running_program = true;
-                }
-            }
-            Action::FaultReset(axes) => {
-                running_program = false;
-                for i in axes {
-                    m.command(Command::FaultReset(Axes::One(i)))?;
-                }
-            }
-            Action::Enable => {
-                m.command(Command::Enable(Axes::All))?;
-                counts.recoveries += 1;
-                running_program = false;
-            }
-            Action::Unhandled(what, reset) => {
-                unhandled(&mut counts, what);
-                for i in reset {
-                    m.command(Command::FaultReset(Axes::One(i)))?;
-                }
-            }
-        }
+        counts.programs_completed = op.programs_completed;
+        counts.recoveries = op.recoveries;
     }
     let seconds = start.elapsed().as_secs_f64();
     let (report, link) = m.stop(StopKind::Ramp);
@@ -313,260 +267,6 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
     })
 }
 
-fn any_energised(t: &Telemetry) -> bool {
-    t.axes
-        .iter()
-        .any(|a| a.state.is_some_and(State::is_energised))
-}
-
 fn kind_counts(totals: &BTreeMap<HistoryKind, u64>) -> BTreeMap<String, u64> {
     totals.iter().map(|(k, n)| (format!("{k:?}"), *n)).collect()
-}
-
-/// How often the soak looks at the telemetry and the history.
-const POLL: Duration = Duration::from_millis(10);
-/// Statusword bit 3, Fault.
-const FAULT_BIT: u16 = 0x0008;
-/// How long the axes stay disabled (no fault) before the soak enables them again.
-const SETTLE: Duration = Duration::from_millis(50);
-/// How long a fault may stay shown after the reset was requested (the master's planner pulses
-/// bit 7 until the drive leaves Fault); longer is an unhandled error.
-const FAULT_CLEAR_LIMIT: Duration = Duration::from_secs(5);
-/// A fault still (or again) shown this long after the last reset request gets another.
-const RESET_RETRY: Duration = Duration::from_secs(1);
-/// How long the axes may take to reach Operation enabled after the request (no fault meanwhile).
-const ENABLE_LIMIT: Duration = Duration::from_secs(5);
-
-/// What the application does next, as the soak's operator would.
-#[derive(Debug, PartialEq)]
-enum Action {
-    None,
-    RunProgram,
-    /// Reset the fault of these axes.
-    FaultReset(Vec<u16>),
-    Enable,
-    /// An unhandled error, and the axes whose reset is requested again.
-    Unhandled(String, Vec<u16>),
-}
-
-/// The soak's recovery after a controlled stop, as an application would do it: while a fault
-/// is shown, request a reset of the faulted axis (the master then pulses bit 7 until the drive
-/// leaves Fault), and again every [`RESET_RETRY`] while it is still or again shown; once no
-/// axis shows a fault and none is energised, wait a moment and enable them all; once all are
-/// enabled, run the programs.
-///
-/// A fault that appears while the enable is under way cancels it (the master refuses to
-/// energise a faulted drive); the reset and the enable then start again. It is an unhandled
-/// error when a fault stays shown [`FAULT_CLEAR_LIMIT`] after its first reset request, or the
-/// axes are not enabled [`ENABLE_LIMIT`] after the request without a fault meanwhile.
-#[derive(Debug)]
-struct Recovery {
-    /// How long the axes stay idle before the enable ([`SETTLE`]).
-    settle: Duration,
-    /// [`FAULT_CLEAR_LIMIT`].
-    fault_clear_limit: Duration,
-    /// [`ENABLE_LIMIT`].
-    enable_limit: Duration,
-    /// [`RESET_RETRY`].
-    reset_retry: Duration,
-    /// Per axis, in this fault episode: when the first and the last reset were requested.
-    reset_at: Vec<Option<(Instant, Instant)>>,
-    /// Since when no axis has been energised nor faulted.
-    idle_since: Option<Instant>,
-    /// When the enable was requested.
-    enable_at: Option<Instant>,
-}
-
-impl Default for Recovery {
-    fn default() -> Self {
-        Self {
-            settle: SETTLE,
-            fault_clear_limit: FAULT_CLEAR_LIMIT,
-            enable_limit: ENABLE_LIMIT,
-            reset_retry: RESET_RETRY,
-            reset_at: Vec::new(),
-            idle_since: None,
-            enable_at: None,
-        }
-    }
-}
-
-impl Recovery {
-    fn next(&mut self, t: &Telemetry, all_enabled: bool) -> Action {
-        self.reset_at.resize(t.axes.len(), None);
-        let now = Instant::now();
-        let mut reset = Vec::new();
-        let mut unhandled = None;
-        for (i, a) in t.axes.iter().enumerate() {
-            let Some(slot) = self.reset_at.get_mut(i) else {
-                continue;
-            };
-            if a.statusword & FAULT_BIT == 0 {
-                // No fault (any more): the next fault is a new episode.
-                *slot = None;
-                continue;
-            }
-            match *slot {
-                None => {
-                    *slot = Some((now, now));
-                    reset.push(i as u16);
-                }
-                Some((first, _)) if now.duration_since(first) > self.fault_clear_limit => {
-                    *slot = Some((now, now));
-                    reset.push(i as u16);
-                    unhandled = Some(format!(
-                        "axis {i}: fault (0x603F = 0x{:04X}, state {:?}, statusword 0x{:04X}, \
-                         controlword 0x{:04X}) still shown {:?} after its reset was requested",
-                        a.error_code, a.state, a.statusword, a.controlword, self.fault_clear_limit
-                    ));
-                }
-                Some((first, last)) if now.duration_since(last) > self.reset_retry => {
-                    // Shown again (a new fault right after the reset, between two looks) or
-                    // still: ask again, as an application would.
-                    *slot = Some((first, now));
-                    reset.push(i as u16);
-                }
-                Some(_) => {}
-            }
-        }
-        if let Some(what) = unhandled {
-            return Action::Unhandled(what, reset);
-        }
-        let faulted = self.reset_at.iter().any(Option::is_some);
-        if faulted {
-            // A fault cancels an enable under way; it starts again after the reset.
-            self.enable_at = None;
-            self.idle_since = None;
-            return if reset.is_empty() {
-                Action::None
-            } else {
-                Action::FaultReset(reset)
-            };
-        }
-        if all_enabled {
-            self.enable_at = None;
-            self.idle_since = None;
-            return Action::RunProgram;
-        }
-        if let Some(at) = self.enable_at {
-            if now.duration_since(at) > self.enable_limit {
-                self.enable_at = None;
-                return Action::Unhandled(
-                    format!(
-                        "the axes are not enabled {:?} after the request (states {:?})",
-                        self.enable_limit,
-                        t.axes.iter().map(|a| a.state).collect::<Vec<_>>()
-                    ),
-                    Vec::new(),
-                );
-            }
-            return Action::None;
-        }
-        if any_energised(t) {
-            // Still stopping (a ramp, a quick stop): wait.
-            self.idle_since = None;
-            return Action::None;
-        }
-        let since = *self.idle_since.get_or_insert(now);
-        if now.duration_since(since) < self.settle {
-            return Action::None;
-        }
-        self.idle_since = None;
-        self.enable_at = Some(now);
-        Action::Enable
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::master::telemetry::AxisTelemetry;
-
-    fn telemetry(states: &[(State, bool)]) -> Telemetry {
-        Telemetry {
-            axes: states
-                .iter()
-                .map(|&(state, fault)| AxisTelemetry {
-                    state: Some(state),
-                    statusword: if fault { FAULT_BIT } else { 0 },
-                    error_code: if fault { 0xFF86 } else { 0 },
-                    ..AxisTelemetry::default()
-                })
-                .collect(),
-            ..Telemetry::default()
-        }
-    }
-
-    fn quick() -> Recovery {
-        Recovery {
-            settle: Duration::ZERO,
-            reset_retry: Duration::from_millis(15),
-            fault_clear_limit: Duration::from_millis(30),
-            enable_limit: Duration::from_millis(30),
-            ..Recovery::default()
-        }
-    }
-
-    const SOD: State = State::SwitchOnDisabled;
-    const OE: State = State::OperationEnabled;
-
-    #[test]
-    fn one_reset_per_faulted_axis_and_episode_then_enable_then_run() {
-        let mut r = quick();
-        let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        // Still in Fault within the retry time: the master pulses bit 7; no second request.
-        assert_eq!(r.next(&faulted, false), Action::None);
-        let idle = telemetry(&[(SOD, false), (SOD, false)]);
-        assert_eq!(r.next(&idle, false), Action::Enable);
-        assert_eq!(r.next(&idle, false), Action::None);
-        let enabled = telemetry(&[(OE, false), (OE, false)]);
-        assert_eq!(r.next(&enabled, true), Action::RunProgram);
-        // A new fault is a new episode: a new reset.
-        let both = telemetry(&[(State::Fault, true), (State::Fault, true)]);
-        assert_eq!(r.next(&both, false), Action::FaultReset(vec![0, 1]));
-    }
-
-    #[test]
-    fn a_fault_during_the_enable_cancels_it_and_recovery_starts_again() {
-        let mut r = quick();
-        let idle = telemetry(&[(SOD, false), (SOD, false)]);
-        assert_eq!(r.next(&idle, false), Action::Enable);
-        let faulted = telemetry(&[(State::Fault, true), (State::Fault, true)]);
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0, 1]));
-        std::thread::sleep(Duration::from_millis(10));
-        assert_eq!(r.next(&idle, false), Action::Enable);
-    }
-
-    #[test]
-    fn a_fault_that_stays_and_an_enable_that_never_comes_are_unhandled() {
-        let mut r = quick();
-        let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        std::thread::sleep(Duration::from_millis(20));
-        // Still shown after the retry time: asked again.
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        std::thread::sleep(Duration::from_millis(20));
-        let Action::Unhandled(what, again) = r.next(&faulted, false) else {
-            panic!("a fault that stays must be reported");
-        };
-        assert!(what.contains("axis 0") && what.contains("0xFF86"), "{what}");
-        assert_eq!(again, vec![0]);
-
-        let mut r = quick();
-        let idle = telemetry(&[(SOD, false), (SOD, false)]);
-        assert_eq!(r.next(&idle, false), Action::Enable);
-        std::thread::sleep(Duration::from_millis(40));
-        let Action::Unhandled(what, _) = r.next(&idle, false) else {
-            panic!("an enable that never comes must be reported");
-        };
-        assert!(what.contains("not enabled"), "{what}");
-    }
-
-    #[test]
-    fn energised_axes_are_left_to_stop_first() {
-        let mut r = quick();
-        let stopping = telemetry(&[(State::QuickStopActive, false), (SOD, false)]);
-        assert_eq!(r.next(&stopping, false), Action::None);
-    }
 }

@@ -97,12 +97,31 @@ fn print_text(r: &DemoReport) {
     println!("{}", row("exchange", &r.timing.exchange));
     println!("{}", row("busy", &r.timing.busy));
     println!();
-    if r.ok {
-        println!("result: OK — both drives ran csp, csv and cst and were stopped and disabled");
-    } else {
-        println!("result: FAILED");
-        for e in &r.errors {
-            println!("  {e}");
+    let what = "both drives ran csp, csv and cst and were stopped and disabled";
+    match (r.ok, r.recoveries) {
+        (true, 0) => println!("result: OK — {what}"),
+        (true, n) => {
+            println!(
+                "result: OK after {n} recover{} — {what}",
+                if n == 1 { "y" } else { "ies" }
+            );
+            println!(
+                "  the drives stopped on their own (the cycle thread woke up to {} late) and \
+                 were reset, enabled and run again:",
+                us(r.timing.wake_latency.max)
+            );
+            for e in &r.errors {
+                println!("  {e}");
+            }
+        }
+        (false, _) => {
+            println!("result: FAILED");
+            for e in &r.unhandled {
+                println!("  unhandled: {e}");
+            }
+            for e in &r.errors {
+                println!("  {e}");
+            }
         }
     }
 }
