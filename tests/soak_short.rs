@@ -38,3 +38,29 @@ fn a_short_soak_with_frame_loss_ends_with_no_unhandled_error() {
     // The programs ran (a program takes about 4 s).
     assert!(c.programs_completed >= 1, "{c:#?}");
 }
+
+/// Ctrl-C (the stop flag) ends an hour-long soak early in a controlled way, with its report:
+/// nothing counted so far is lost.
+#[test]
+fn a_soak_stopped_early_reports_what_it_counted() {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let stop = Arc::new(AtomicBool::new(false));
+    let opts = SoakOptions {
+        duration: Duration::from_secs(3600),
+        drop: 0.01,
+        stop: Some(stop.clone()),
+        ..SoakOptions::default()
+    };
+    let t = std::thread::spawn(move || {
+        std::thread::sleep(Duration::from_secs(2));
+        stop.store(true, Ordering::Release);
+    });
+    let r = soak::run(&opts).expect("the soak starts");
+    t.join().unwrap();
+    assert!(r.interrupted);
+    assert!(r.seconds < 30.0, "{} s", r.seconds);
+    assert!(r.counts.cycles > 1_000, "{} cycles", r.counts.cycles);
+    assert!(r.shutdown_ok);
+    assert!(r.counts.unhandled.is_empty(), "{:#?}", r.counts.unhandled);
+}

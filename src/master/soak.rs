@@ -26,6 +26,8 @@ use crate::sim::faults::{Fault, LinkFault};
 use crate::sim::transport::SegmentLink;
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// Options of a soak run.
@@ -43,6 +45,8 @@ pub struct SoakOptions {
     pub rt: RtSettings,
     /// Progress callback, called about once a second with the elapsed time and the counts.
     pub progress: Option<fn(Duration, &SoakCounts)>,
+    /// Set (e.g. by Ctrl-C) to end the soak early, in a controlled way, with its report.
+    pub stop: Option<Arc<AtomicBool>>,
 }
 
 impl Default for SoakOptions {
@@ -54,6 +58,7 @@ impl Default for SoakOptions {
             seed: 1,
             rt: demo::DemoOptions::default().rt,
             progress: None,
+            stop: None,
         }
     }
 }
@@ -104,6 +109,8 @@ pub struct SoakReport {
     /// Wake-up latency of the cycle thread, ns, over the cycles since the last re-start (the
     /// whole run when there was none): stalls of the machine show in its maximum.
     pub wake_latency_ns: Summary,
+    /// Whether the soak was ended early ([`SoakOptions::stop`], Ctrl-C).
+    pub interrupted: bool,
     /// Whether the drives were taken to INIT at the end.
     pub shutdown_ok: bool,
     /// No unhandled error, the session ran to the end, and the drives were shut down.
@@ -175,8 +182,17 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
             .push(format!("{:.3} s: {what}", start.elapsed().as_secs_f64()));
     };
 
+    let mut interrupted = false;
     while start.elapsed() < opts.duration {
         std::thread::sleep(POLL);
+        if opts
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Acquire))
+        {
+            interrupted = true;
+            break;
+        }
         if !m.is_running() {
             unhandled(&mut counts, "the session ended by itself".into());
             break;
@@ -262,6 +278,7 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
         frames_dropped: stats.dropped,
         counts,
         wake_latency_ns,
+        interrupted,
         shutdown_ok: report.shutdown_ok,
         ok,
     })

@@ -96,12 +96,15 @@ struct Json {
 #[derive(Subcommand)]
 enum Command {
     /// Run the main job on emulated drives: an MR-J4-TM and a BDHDE in-process, brought to OP
-    /// with DC, through a csp, csv and cst sequence. Needs no hardware and no root.
+    /// with DC, through a csp, csv and cst sequence. Needs no hardware and no root. If the
+    /// drives stop on their own (a stall of the machine trips their loss supervision), the
+    /// demo resets, enables and runs again, at most three times, and says so.
     Demo(demo::DemoArgs),
     /// Run the demo's two emulated drives for a long time (default an hour) while the
     /// emulated segment drops a fraction of the frames at random (default 1 %); the programs
     /// repeat, the master recovers from controlled stops and re-starts by itself, and the
     /// report counts what happened and any unhandled error (exit code 5 if there is one).
+    /// Ctrl-C ends it early, in a controlled way, with the report so far.
     Soak(soak::SoakArgs),
     /// List the devices on the segment: position, station address, alias, AL state,
     /// identity, name, matched drive profile, DC support and mailbox protocols. With --can:
@@ -406,6 +409,26 @@ fn parse_duration(s: &str) -> Result<Duration, String> {
 }
 
 /// The exit code for a library error.
+/// A flag that Ctrl-C sets: long runs (`run`, `soak`) poll it and end in a controlled way
+/// (ramp, disable, INIT) with their report. The thread waiting for the signal is left waiting
+/// when the run ends by itself.
+pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let on_signal = stop.clone();
+    let _ = std::thread::Builder::new()
+        .name("ctrl-c".into())
+        .spawn(move || {
+            if let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+                .enable_io()
+                .build()
+                && rt.block_on(tokio::signal::ctrl_c()).is_ok()
+            {
+                on_signal.store(true, std::sync::atomic::Ordering::Release);
+            }
+        });
+    stop
+}
+
 pub fn exit_code(kind: &ErrorKind) -> u8 {
     match kind {
         ErrorKind::Config | ErrorKind::UnknownDevice => exit::USAGE,

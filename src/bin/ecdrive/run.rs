@@ -4,8 +4,6 @@ use crate::{exit, fail, fail_with, print, print_json};
 use ecdrive::master::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
 use std::path::Path;
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 pub fn run(path: &Path, duration: Option<Duration>, check: bool, json: bool) -> ExitCode {
@@ -44,21 +42,8 @@ pub fn run(path: &Path, duration: Option<Duration>, check: bool, json: bool) -> 
         );
         return ExitCode::SUCCESS;
     }
-    let stop = Arc::new(AtomicBool::new(false));
-    let on_signal = stop.clone();
-    // Ctrl-C ends the run in a controlled way (ramp, disable, INIT); the thread is left
-    // waiting when the run ends by itself.
-    let _ = std::thread::Builder::new()
-        .name("ctrl-c".into())
-        .spawn(move || {
-            if let Ok(rt) = tokio::runtime::Builder::new_current_thread()
-                .enable_io()
-                .build()
-                && rt.block_on(tokio::signal::ctrl_c()).is_ok()
-            {
-                on_signal.store(true, Ordering::Release);
-            }
-        });
+    // Ctrl-C ends the run in a controlled way (ramp, disable, INIT).
+    let stop = crate::ctrl_c_flag();
     let opts = RunOptions {
         duration,
         ..RunOptions::default()

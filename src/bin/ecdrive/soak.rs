@@ -54,10 +54,15 @@ fn progress(t: Duration, c: &SoakCounts) {
 fn print_text(r: &SoakReport) {
     let c = &r.counts;
     println!(
-        "ecdrive soak: emulated MR-J4-TM and BDHDE, in-process, {} µs cycle, {:.2} % of frames dropped at random, {:.0} s",
+        "ecdrive soak: emulated MR-J4-TM and BDHDE, in-process, {} µs cycle, {:.2} % of frames dropped at random, {:.0} s{}",
         r.cycle_us,
         f64::from(r.drop) * 100.0,
-        r.seconds
+        r.seconds,
+        if r.interrupted {
+            " (ended early by Ctrl-C)"
+        } else {
+            ""
+        }
     );
     println!(
         "  frames answered {}, dropped by the slave {}; cycles {}, lost {} ({:.3} %)",
@@ -128,6 +133,8 @@ pub fn run(args: SoakArgs) -> ExitCode {
             lock_memory: true,
         },
         progress: (!args.quiet && !args.json).then_some(progress as fn(Duration, &SoakCounts)),
+        // Ctrl-C ends the soak early, with its report.
+        stop: Some(crate::ctrl_c_flag()),
     };
     match soak::run(&opts) {
         Ok(r) => {
