@@ -40,10 +40,11 @@ pub struct SoakArgs {
 
 fn progress(t: Duration, c: &SoakCounts) {
     eprint!(
-        "\r{:>6.0} s  cycles {:>10}  lost {:>7}  programs {:>5}  recoveries {:>4}  re-starts {:>3}  unhandled {}   ",
+        "\r{:>6.0} s  cycles {:>10}  lost {:>7}  late {:>6}  programs {:>5}  recoveries {:>4}  re-starts {:>3}  unhandled {}   ",
         t.as_secs_f64(),
         c.cycles,
         c.lost_cycles,
+        c.late_wakeups,
         c.programs_completed,
         c.recoveries,
         c.restarts,
