@@ -426,11 +426,6 @@ impl Runner {
         }
     }
 
-    /// The mode the program starts in.
-    pub fn start_mode(&self) -> CyclicMode {
-        self.start
-    }
-
     /// The set-point at time `now` (seconds, any monotonic origin).
     pub fn tick(&mut self, now: f64) -> Tick {
         if self.entering && self.failed.is_none() && self.index < self.steps.len() {
