@@ -5,7 +5,7 @@
 //! frees everything when the closure returns. A new session (after a cable pull, say) gets fresh
 //! storage; nothing is leaked and nothing needs `unsafe` re-use of ethercrab's storage.
 
-use super::coe::{CoeClient, CoeError, EmergencyLog};
+use super::coe::{CoeClient, CoeError, EmergencyLog, MailboxSequence};
 use super::error::DriveRef;
 use super::exec::{self, ExecError};
 use super::io::{FrameLink, LossPolicy, MAX_FRAME, Pump};
@@ -95,8 +95,11 @@ pub struct Bus<'sto, L: FrameLink> {
     pump: Pump<'sto, L>,
     emergencies: EmergencyLog,
     opts: BusOptions,
-    /// Last mailbox counter per configured address: the sequence continues across clients.
-    counters: HashMap<u16, u8>,
+    /// Mailbox counters per configured address, over ecdrive's and ethercrab's clients.
+    counters: HashMap<u16, MailboxSequence>,
+    /// The device ethercrab's client wrote a mailbox request to last (to name it when
+    /// ethercrab's step fails).
+    last_ethercrab_mailbox: Option<u16>,
 }
 
 /// Open a session on `link` and run `f` with it. The storage and the link live as long as the
@@ -124,6 +127,7 @@ pub fn with_bus<L: FrameLink, R>(
         emergencies: EmergencyLog::default(),
         opts,
         counters: HashMap::new(),
+        last_ethercrab_mailbox: None,
     };
     let r = f(&mut bus);
     let (_, _, link) = bus.pump.into_parts();
@@ -213,7 +217,30 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
         F: Future,
     {
         let fut = f(&self.md);
-        exec::run(&mut self.pump, what, timeout, fut)
+        // ethercrab may write mailboxes itself (it reads the PDO assignment while it builds
+        // the process image): record its counters.
+        self.pump.set_mailbox_tap(true);
+        let r = exec::run(&mut self.pump, what, timeout, fut);
+        self.pump.set_mailbox_tap(false);
+        for (station, c) in self.pump.take_mailbox_counters() {
+            self.last_ethercrab_mailbox = Some(station);
+            self.counters
+                .entry(station)
+                .or_default()
+                .sent_by_ethercrab(c);
+        }
+        r
+    }
+
+    /// The configured address of the device to which ethercrab sent its last mailbox request
+    /// (in a [`block_on`](Self::block_on) step), if it sent any.
+    pub fn last_ethercrab_mailbox(&self) -> Option<u16> {
+        self.last_ethercrab_mailbox
+    }
+
+    /// The mailbox counters of the device at configured `address`.
+    pub fn mailbox_sequence(&self, address: u16) -> MailboxSequence {
+        self.counters.get(&address).copied().unwrap_or_default()
     }
 
     /// Run `op` with a CoE client for the device at configured `address`. The client is
@@ -232,21 +259,27 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
         let d = drive.clone();
         let what = || format!("{d}: mailbox exchange");
         let md = &self.md;
-        let last = self.counters.get(&address).copied().unwrap_or(0);
-        let mut counter = last;
-        let counter_out = &mut counter;
+        let seq = self.mailbox_sequence(address);
+        let mut counter = seq.last;
+        let mut sm0 = None;
+        let (counter_out, sm0_out) = (&mut counter, &mut sm0);
         let fut = async move {
             let mut c = CoeClient::new(md, address, drive, log)
                 .await?
                 .with_complete_access(complete_access)
                 .with_timeout(mbx_timeout)
-                .with_counter(last);
+                .with_counter(seq.last)
+                .avoiding(seq.ethercrab_next);
+            *sm0_out = Some(c.sms().out_start);
             let r = op(&mut c).await;
             *counter_out = c.counter();
             r
         };
         let r = exec::run(&mut self.pump, &what, timeout, fut);
-        self.counters.insert(address, counter);
+        if let Some(start) = sm0 {
+            self.pump.learn_mailbox(address, start);
+        }
+        self.counters.entry(address).or_default().last = counter;
         match r {
             Ok(Ok(v)) => Ok(v),
             Ok(Err(e)) => Err(SessionError::Coe(e)),

@@ -104,6 +104,44 @@ impl CoeError {
     }
 }
 
+/// The mailbox counters of one device in a bus session, over every client that writes its
+/// mailbox.
+///
+/// A device drops a request whose counter equals the previous request's as a repeat. ecdrive's
+/// [`CoeClient`] and ethercrab's own SDO client (which reads 0x1C12/0x1C13 and the PDOs while
+/// it builds the process image) both write the mailbox, each with its own counter; when the
+/// last counter of one equalled the next of the other, the device ignored the request and the
+/// start-up timed out (on the MR-J4-TM whenever the mapping had 10, 17 or 24 entries). The bus
+/// keeps this record from every request that went out (see `Pump::set_mailbox_tap`), so that
+/// ecdrive continues after the last counter on the wire and never sends the counter ethercrab
+/// will send next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct MailboxSequence {
+    /// The counter of the last request sent to the device by anyone (0: none yet).
+    pub last: u8,
+    /// The counter ethercrab's client will put on its next request.
+    pub ethercrab_next: u8,
+}
+
+impl Default for MailboxSequence {
+    fn default() -> Self {
+        Self {
+            last: 0,
+            // ethercrab 0.7.1 starts each SubDevice's counter at 1 (`SubDevice::mailbox_counter`
+            // returns the value before incrementing) and counts 1..=7.
+            ethercrab_next: 1,
+        }
+    }
+}
+
+impl MailboxSequence {
+    /// A request with `counter` went out from ethercrab's client.
+    pub fn sent_by_ethercrab(&mut self, counter: u8) {
+        self.last = counter;
+        self.ethercrab_next = counter % 7 + 1;
+    }
+}
+
 /// SM status bit 3: mailbox full.
 const MBX_FULL: u8 = 0x08;
 
@@ -114,6 +152,7 @@ pub struct CoeClient<'a> {
     drive: DriveRef,
     sms: MailboxSms,
     counter: u8,
+    avoid: u8,
     complete_access: bool,
     timeout: Duration,
     log: EmergencyLog,
@@ -162,6 +201,7 @@ impl<'a> CoeClient<'a> {
             drive,
             sms,
             counter: 0,
+            avoid: 0,
             complete_access: false,
             timeout: Duration::from_millis(1000),
             log,
@@ -180,6 +220,14 @@ impl<'a> CoeClient<'a> {
     /// repeat, so the sequence must continue across clients of one session.
     pub fn with_counter(mut self, last: u8) -> Self {
         self.counter = last % 8;
+        self
+    }
+
+    /// Never use counter `c` (1–7; 0: no restriction): it is the counter another client of
+    /// this drive (ethercrab's) will send next, so the request before it must not carry it.
+    /// See [`MailboxSequence`].
+    pub fn avoiding(mut self, c: u8) -> Self {
+        self.avoid = c % 8;
         self
     }
 
@@ -215,6 +263,9 @@ impl<'a> CoeClient<'a> {
     fn next_counter(&mut self) -> u8 {
         // Counters run 1..=7; 0 is reserved.
         self.counter = self.counter % 7 + 1;
+        if self.counter == self.avoid {
+            self.counter = self.counter % 7 + 1;
+        }
         self.counter
     }
 

@@ -10,8 +10,11 @@
 //! age, retransmitted a bounded number of times, and finally reported so the caller drops the
 //! waiting future (ethercrab releases the frame slot on drop).
 
+use crate::ec::frame::{EthercatFrame, EthernetFrame};
+use crate::ec::{command::Command, register};
 use crate::rt::monotonic_ns;
 use ethercrab::{PduRx, PduTx};
+use std::collections::HashMap;
 use std::task::Waker;
 use std::time::Duration;
 
@@ -69,6 +72,50 @@ impl Default for LossPolicy {
 /// header (2), command (1).
 const FIRST_IDX_OFFSET: usize = 14 + 2 + 1;
 
+/// Watches the mailbox requests that go out on the wire.
+///
+/// A device drops a mailbox request whose counter equals the previous request's as a repeat
+/// (ETG.1000.4 mailbox header `Cnt`; the slave stacks SOES and the SSC do). Two clients write the
+/// mailboxes of one device in a session: ecdrive's CoE client and ethercrab's own (it reads the
+/// PDO assignment while it builds the process image), each with its own counter. So that the
+/// two sequences never collide, the bus must know every counter that went out, whoever sent it.
+/// The tap learns where each device's SM0 (the write mailbox) starts from the SyncManager
+/// writes it sees (FPWR to 0x0800) or from [`Pump::learn_mailbox`], and records the counter of
+/// every FPWR to that address.
+#[derive(Debug, Default)]
+struct MailboxTap {
+    on: bool,
+    /// Station address → SM0 start.
+    sm0: HashMap<u16, u16>,
+    /// (station address, counter) of each mailbox request sent while the tap was on.
+    seen: Vec<(u16, u8)>,
+}
+
+impl MailboxTap {
+    fn observe(&mut self, frame: &[u8]) {
+        let Ok(eth) = EthernetFrame::new_checked(frame) else {
+            return;
+        };
+        let Ok(ecat) = EthercatFrame::new_checked(eth.payload()) else {
+            return;
+        };
+        for d in ecat.datagrams() {
+            let Ok(d) = d else { break };
+            if d.command() != Some(Command::Fpwr) {
+                continue;
+            }
+            let (station, ado, data) = (d.adp(), d.ado(), d.data());
+            if ado == register::sm(0) && data.len() >= 2 {
+                let start = u16::from_le_bytes([data[0], data[1]]);
+                self.sm0.insert(station, start);
+            } else if self.sm0.get(&station) == Some(&ado) && data.len() >= 6 {
+                // Mailbox header byte 5, bits 4–6: the counter.
+                self.seen.push((station, (data[5] >> 4) & 0x07));
+            }
+        }
+    }
+}
+
 /// Moves frames between ethercrab and a [`FrameLink`]. See the module documentation.
 pub struct Pump<'sto, L: FrameLink> {
     tx: PduTx<'sto>,
@@ -81,6 +128,7 @@ pub struct Pump<'sto, L: FrameLink> {
     stats: PumpStats,
     policy: LossPolicy,
     link_error: Option<String>,
+    tap: MailboxTap,
 }
 
 impl<'sto, L: FrameLink> Pump<'sto, L> {
@@ -97,7 +145,26 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             stats: PumpStats::default(),
             policy,
             link_error: None,
+            tap: MailboxTap::default(),
         }
+    }
+
+    /// Record the counters of mailbox requests sent from now on (off by default; never on in
+    /// the cycle). See [`take_mailbox_counters`](Self::take_mailbox_counters).
+    pub fn set_mailbox_tap(&mut self, on: bool) {
+        self.tap.on = on;
+    }
+
+    /// Tell the tap where the write mailbox (SM0) of the device at `station` starts, when it
+    /// was configured before the tap saw it.
+    pub fn learn_mailbox(&mut self, station: u16, sm0_start: u16) {
+        self.tap.sm0.insert(station, sm0_start);
+    }
+
+    /// The (station address, counter) of every mailbox request sent while the tap was on, in
+    /// order, since the last call.
+    pub fn take_mailbox_counters(&mut self) -> Vec<(u16, u8)> {
+        std::mem::take(&mut self.tap.seen)
     }
 
     /// The link.
@@ -156,12 +223,16 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             }
             let link = &mut self.link;
             let copies = &mut self.copies;
+            let tap = &mut self.tap;
             let mut record = None;
             let mut err = None;
             let res = frame.send_blocking(|bytes| {
                 if let Err(e) = link.send(bytes) {
                     err = Some(e);
                     return Err(ethercrab::error::Error::SendFrame);
+                }
+                if tap.on {
+                    tap.observe(bytes);
                 }
                 if let (Some(i), Some(first)) = (slot_free, bytes.get(FIRST_IDX_OFFSET)) {
                     let len = bytes.len().min(MAX_FRAME);

@@ -638,14 +638,33 @@ pub fn configure<L: FrameLink>(
         })?;
     }
 
-    let group = bus
-        .block_on(
-            &|| "building the process image (PRE-OP)".into(),
-            T_STEP,
-            |md| group.into_pre_op_pdi(md),
-        )
-        .map_err(|e| exec_error(None, e))?
-        .map_err(|e| bus_error(None, "building the process image (PRE-OP)", e))?;
+    let step = "building the process image (PRE-OP)";
+    let r = bus.block_on(&|| step.into(), T_STEP, |md| group.into_pre_op_pdi(md));
+    // ethercrab reads each device's PDO assignment over CoE here; when that fails, its error
+    // names no device: name the one it last talked to.
+    let culprit = || {
+        let addr = bus.last_ethercrab_mailbox()?;
+        devices
+            .iter()
+            .find(|d| d.address == addr)
+            .map(|d| DriveRef {
+                position: d.position,
+                name: d.name.clone(),
+            })
+    };
+    let group = match r {
+        Ok(Ok(g)) => g,
+        Ok(Err(e)) => {
+            let what = match &e {
+                ethercrab::error::Error::Mailbox(_) | ethercrab::error::Error::Timeout(_) => {
+                    format!("{step}: reading the PDO assignment (0x1C12/0x1C13) over CoE")
+                }
+                _ => step.to_string(),
+            };
+            return Err(bus_error(culprit().as_ref(), what, e));
+        }
+        Err(e) => return Err(exec_error(culprit().as_ref(), e)),
+    };
 
     // Resolve each drive's fields and check its image size against its mapping.
     let mut drives = Vec::with_capacity(devices.len());

@@ -273,12 +273,17 @@ enum Command {
     /// A cyclic run from a configuration file: OP, enable, each drive's set-point program,
     /// controlled stop, summary. Progress on a terminal; quiet when piped.
     #[command(
-        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n\nThe configuration file is described in the README (\"Configuration file\")."
+        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n  ecdrive run -c examples/csp_move_sine.toml -i veth0\n\nThe configuration file is described in the README (\"Configuration file\")."
     )]
     Run {
         /// The configuration file (TOML).
         #[arg(short, long, value_name = "FILE")]
         config: PathBuf,
+        /// Run on this interface instead of the file's `interface` (a network interface, or
+        /// sim:DEVICE,… for emulated devices in-process). The file's `[sim]` devices still tell
+        /// the checks which drives to expect.
+        #[arg(short, long, value_name = "IF")]
+        interface: Option<String>,
         /// Stop after this long (e.g. 10s, 500ms), overriding the file's `duration`.
         #[arg(long, value_name = "TIME", value_parser = parse_duration)]
         duration: Option<Duration>,
@@ -847,10 +852,11 @@ fn dispatch(cli: Cli) -> ExitCode {
         },
         Command::Run {
             config,
+            interface,
             duration,
             check,
             json,
-        } => run::run(&config, duration, check, json.json),
+        } => run::run(&config, interface.as_deref(), duration, check, json.json),
         Command::Sim {
             interface,
             devices,

@@ -6,11 +6,23 @@ use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
 
-pub fn run(path: &Path, duration: Option<Duration>, check: bool, json: bool) -> ExitCode {
-    let cfg = match ecdrive::config::load(path) {
+pub fn run(
+    path: &Path,
+    interface: Option<&str>,
+    duration: Option<Duration>,
+    check: bool,
+    json: bool,
+) -> ExitCode {
+    let mut cfg = match ecdrive::config::load(path) {
         Ok(c) => c,
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
+    if let Some(i) = interface {
+        match i.parse() {
+            Ok(t) => cfg.target = t,
+            Err(e) => return fail("run", &e),
+        }
+    }
     if check {
         if json {
             #[derive(serde::Serialize)]
