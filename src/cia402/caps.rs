@@ -131,7 +131,8 @@ impl fmt::Display for QuickStopOption {
 pub struct DriveCaps {
     /// The drive accepts the direct jumps Switch on disabled → Switched on ("switch on"),
     /// Switch on disabled → Operation enabled and Ready to switch on → Operation enabled ("enable
-    /// operation"). MR-J4-TM §5.1: yes. A planner uses them only when this is set.
+    /// operation"). MR-J4-TM §5.1: yes. Describes the drive (the emulation accepts the jumps);
+    /// ecdrive's planner never relies on them and walks the standard transitions.
     pub state_skipping: bool,
     /// Transition 16 (Quick stop active → Operation enabled on "enable operation", quick-stop
     /// codes 5–8) exists. MR-J4-TM: no (§5.1 note); BLV-R: no; BDHDE: yes (with 0x605A = 6).

@@ -7,14 +7,17 @@
 //!
 //! # Paths
 //!
-//! | target | path (without / with state skipping) |
+//! | target | path |
 //! |---|---|
-//! | Operation enabled | Switch on disabled → Shutdown → Switch on → Enable operation / Switch on disabled → Enable operation |
-//! | Switched on | … → Shutdown → Switch on / Switch on disabled → Switch on; from Operation enabled: Disable operation (5) |
+//! | Operation enabled | Switch on disabled → Shutdown (2) → Switch on (3) → Enable operation (4) |
+//! | Switched on | … → Shutdown (2) → Switch on (3); from Operation enabled: Disable operation (5) |
 //! | Switch on disabled | Disable voltage (7, 9, 10) |
 //! | Quick stop | Operation enabled → Quick stop (11); Ready to switch on / Switched on → Quick stop (7, 10), which ends in Switch on disabled |
 //!
-//! State skipping is used only when [`DriveCaps::state_skipping`] says the drive has it.
+//! The planner walks only the standard transitions. Some drives also accept state-skipping
+//! jumps ([`DriveCaps::state_skipping`], e.g. the MR-J4-TM takes Enable operation straight from
+//! Switch on disabled), but that is optional behaviour, and a drive that implements only the
+//! standard transitions must enable too: skipping would save two cycles and is never used.
 //!
 //! # Rules
 //!
@@ -35,7 +38,8 @@
 //!   [`Planner::set_target`].
 //! * **Timeout**: if the observed state does not change for `timeout_cycles` cycles while the
 //!   target is not reached, the planner fails with [`PlannerError::Timeout`], naming the state it
-//!   is stuck in and the likely cause ([`StallCause`]).
+//!   is stuck in, the transition it did not take (the command sent), the statusword and the
+//!   likely cause ([`StallCause`]).
 //! * **Dropping out**: once Operation enabled or Switched on was reached, a later change to
 //!   another (non-fault) state that the planner did not command, e.g. a quick stop from a drive
 //!   input, latches [`PlannerError::LeftTarget`] and replaces the target by Quick stop (if the
@@ -63,7 +67,7 @@
 //! reset and then for its target; the bound covers both together.) Each further reset edge a
 //! drive needs costs `2 × fault_reset_hold_cycles` cycles. The property tests check the bound
 //! against the [`device`](super::device) model for every start state, target, quick-stop code,
-//! with and without state skipping and transition 16, and `L` up to 3.
+//! on drives with and without state skipping and transition 16, and `L` up to 3.
 
 use core::fmt;
 use core::time::Duration;
@@ -126,12 +130,18 @@ pub enum StallCause {
 impl fmt::Display for StallCause {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(match self {
-            StallCause::NoResponse => "the drive does not react to the controlword",
+            StallCause::NoResponse => {
+                "the drive does not react to the controlword; usual causes: a safety or enable \
+                 input open (STO, forced stop), the drive under local or test-mode control, or \
+                 the controlword not reaching it (check its RxPDO mapping)"
+            }
             StallCause::RemoteOff => {
                 "statusword bit 9 (remote) is 0, so the drive ignores the controlword"
             }
             StallCause::NoMainVoltage => {
-                "statusword bit 4 (voltage enabled) is 0: main circuit power missing?"
+                "statusword bit 4 (voltage enabled) is 0: main circuit (DC-bus) power may be off; \
+                 some drives keep bit 4 at 0 until Switched on, so check the safety and enable \
+                 inputs (STO, forced stop) too"
             }
             StallCause::FaultPersists => {
                 "fault reset was sent but the fault is still present or cannot be reset"
@@ -151,7 +161,11 @@ impl fmt::Display for StallCause {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
 pub enum PlannerError {
     /// The drive stayed in one state too long.
-    #[error("drive stuck in {stuck_in} for {cycles} cycles on the way to {target}: {cause}")]
+    #[error(
+        "drive stuck in {stuck_in} for {cycles} cycles on the way to {target}: it did not take \
+         {}, statusword 0x{statusword:04X}; {cause}",
+        transition_name(*stuck_in, *command)
+    )]
     Timeout {
         /// The state it is stuck in.
         stuck_in: State,
@@ -159,6 +173,10 @@ pub enum PlannerError {
         target: Target,
         /// Cycles spent in that state.
         cycles: u32,
+        /// The command the planner kept sending (the transition the drive did not make).
+        command: Command,
+        /// The last statusword (0x6041).
+        statusword: u16,
         /// The likely cause.
         cause: StallCause,
     },
@@ -303,7 +321,6 @@ enum Pulse {
 /// The transition planner. See the [module documentation](self) for the rules.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Planner {
-    skipping: bool,
     transition_16: bool,
     quick_stop_end: QuickStopEnd,
     remote_gates: bool,
@@ -341,7 +358,6 @@ impl Planner {
             });
         }
         Ok(Self {
-            skipping: caps.state_skipping,
             transition_16: caps.transition_16,
             quick_stop_end: qs.end,
             remote_gates: caps.remote_gates_controlword,
@@ -536,6 +552,12 @@ impl Planner {
                 stuck_in: s,
                 target: self.target,
                 cycles: self.stall,
+                command: if s == State::Fault {
+                    Command::FaultReset
+                } else {
+                    cmd
+                },
+                statusword: sw.raw(),
                 cause,
             };
             self.latched = Some(err);
@@ -561,6 +583,8 @@ impl Planner {
                 stuck_in: State::Fault,
                 target: self.target,
                 cycles: self.stall,
+                command: Command::FaultReset,
+                statusword: sw.raw(),
                 cause: if self.edges_sent > 0 {
                     StallCause::FaultPersists
                 } else {
@@ -647,6 +671,8 @@ impl Planner {
         } else {
             StallCause::NoResponse
         };
+        // Without main power (statusword bit 4 clear) a drive refuses the transitions towards
+        // Operation enabled (the BDHDE already transition 2, "bus voltage must be switched on").
         let up = if remote_off {
             StallCause::RemoteOff
         } else if !sw.contains(StatusWord::VOLTAGE_ENABLED) {
@@ -655,13 +681,10 @@ impl Planner {
             StallCause::NoResponse
         };
         let wait = (C::DisableVoltage, InProgress, StallCause::NoResponse);
-        let skip = self.skipping;
         match self.target {
             Target::OperationEnabled => match s {
                 NotReadyToSwitchOn => wait,
-                SwitchOnDisabled if skip => (C::EnableOperation, InProgress, up),
                 SwitchOnDisabled => (C::Shutdown, InProgress, up),
-                ReadyToSwitchOn if skip => (C::EnableOperation, InProgress, up),
                 ReadyToSwitchOn => (C::SwitchOn, InProgress, up),
                 SwitchedOn => (C::EnableOperation, InProgress, up),
                 OperationEnabled => (C::EnableOperation, Reached, StallCause::NoResponse),
@@ -670,7 +693,6 @@ impl Planner {
             },
             Target::SwitchedOn => match s {
                 NotReadyToSwitchOn => wait,
-                SwitchOnDisabled if skip => (C::SwitchOn, InProgress, up),
                 SwitchOnDisabled => (C::Shutdown, InProgress, up),
                 ReadyToSwitchOn => (C::SwitchOn, InProgress, up),
                 SwitchedOn => (C::SwitchOn, Reached, StallCause::NoResponse),
@@ -740,6 +762,41 @@ impl Planner {
                 (Command::DisableVoltage, Progress::InProgress, gate)
             }
         }
+    }
+}
+
+/// The transition `cmd` asks of a drive in `s`, in words: `transition 2 (Shutdown, controlword
+/// 0x0006)`.
+fn transition_name(s: State, cmd: Command) -> String {
+    use Command as C;
+    use State::*;
+    let number = match (s, cmd) {
+        (SwitchOnDisabled, C::Shutdown) => Some(2),
+        (ReadyToSwitchOn, C::SwitchOn) => Some(3),
+        (SwitchedOn, C::EnableOperation) => Some(4),
+        (OperationEnabled, C::DisableOperation) => Some(5),
+        (SwitchedOn | OperationEnabled, C::Shutdown) => Some(if s == SwitchedOn { 6 } else { 8 }),
+        (ReadyToSwitchOn, C::DisableVoltage | C::QuickStop) => Some(7),
+        (OperationEnabled, C::DisableVoltage) => Some(9),
+        (SwitchedOn, C::DisableVoltage | C::QuickStop) => Some(10),
+        (OperationEnabled, C::QuickStop) => Some(11),
+        (QuickStopActive, C::DisableVoltage) => Some(12),
+        (Fault, C::FaultReset) => Some(15),
+        (QuickStopActive, C::EnableOperation) => Some(16),
+        _ => None,
+    };
+    let name = match cmd {
+        C::Shutdown => "Shutdown",
+        C::SwitchOn => "Switch on",
+        C::EnableOperation => "Enable operation",
+        C::DisableVoltage => "Disable voltage",
+        C::QuickStop => "Quick stop",
+        C::DisableOperation => "Disable operation",
+        C::FaultReset => "Fault reset",
+    };
+    match number {
+        Some(n) => format!("transition {n} ({name}, controlword 0x{:04X})", cmd.bits()),
+        None => format!("{name} (controlword 0x{:04X})", cmd.bits()),
     }
 }
 
