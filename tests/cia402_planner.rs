@@ -346,7 +346,11 @@ fn remote_off_is_reported() {
             e_statusword(&e)
         )
     );
-    assert_eq!(e_statusword(&e) & 0x024F, 0x0040, "Switch on disabled, remote 0");
+    assert_eq!(
+        e_statusword(&e) & 0x024F,
+        0x0040,
+        "Switch on disabled, remote 0"
+    );
     assert!(
         d.log
             .iter()

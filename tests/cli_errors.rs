@@ -191,14 +191,23 @@ fn help_documents_exit_codes_and_examples() {
         assert!(c.contains("Examples:"), "{cmd}: {c}");
     }
     let list = ecdrive(&["sim", "--list-devices", "--json"]).json();
+    let devices = &list["devices"];
     assert!(
-        list.as_array()
+        devices
+            .as_array()
             .unwrap()
             .iter()
             .any(|d| d["name"] == "generic-coe")
     );
-    assert_eq!(list[0]["name"], "mr-j4-tm");
-    assert_eq!(list[1]["name"], "bdhde");
+    assert_eq!(devices[0]["name"], "mr-j4-tm");
+    assert_eq!(devices[1]["name"], "bdhde");
+    assert!(
+        list["quirks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|q| q["name"] == "no-state-skipping")
+    );
 }
 
 #[test]

@@ -319,9 +319,20 @@ fn the_readme_configuration_example_runs_over_veth() {
     let file = dir.join("readme.toml");
     std::fs::write(&file, readme_example()).unwrap();
     let file = file.display().to_string();
-    let j = sim
-        .ecdrive(&["run", "-c", &file, "--duration", "4s", "--json"])
-        .json();
+    // The file stops the axes after 3 frames lost in a row; a shared test machine loses that
+    // many over veth now and then. Such a run is tried again (at most twice); a run that ends
+    // for any other reason fails the test.
+    let mut j = serde_json::Value::Null;
+    for _ in 0..3 {
+        let r = sim.ecdrive(&["run", "-c", &file, "--duration", "4s", "--json"]);
+        j = serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:#?}"));
+        let lost = j["history"]
+            .as_array()
+            .is_some_and(|h| h.iter().any(|e| e["kind"] == "FrameLost"));
+        if j["outcome"] == "completed" || !lost {
+            break;
+        }
+    }
     let _ = std::fs::remove_dir_all(&dir);
     check_readme_run(&j);
 }

@@ -83,11 +83,13 @@ fn the_generic_device_runs_a_program_and_reports_it() {
 fn a_refused_configuration_is_exit_4_naming_the_object() {
     let dir = std::env::temp_dir().join(format!("ecdrive-cli-run-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    // The generic profile's own cyclic mapping carries 0x6071, which the test device cannot map.
+    // A mapping with 0x6071, which the test device cannot map.
     let f = dir.join("refused.toml");
     std::fs::write(
         &f,
-        "interface = \"sim\"\n[sim]\ndevices = [\"generic-coe\"]\n[[drive]]\nposition = 0\nprofile = \"generic-cia402\"\n",
+        "interface = \"sim\"\n[sim]\ndevices = [\"generic-coe\"]\n[[drive]]\nposition = 0\nprofile = \"generic-cia402\"\n\
+         [drive.mapping]\nrx = [{ pdo = 0x1600, entries = [\"0x6040:00\", \"0x607A:00\", \"0x60FF:00\", \"0x6071:00\"] }]\n\
+         tx = [{ pdo = 0x1A00, entries = [\"0x6041:00\", \"0x6064:00\"] }]\n",
     )
     .unwrap();
     ecdrive(&["run", "-c", &f.display().to_string()]).fails(

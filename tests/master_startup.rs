@@ -80,15 +80,33 @@ fn reaches_safe_op_with_dc_and_the_configured_image() {
     }
 }
 
+/// A device no profile matches is not driven unless the configuration asks for it: it is an
+/// I/O device, and the reason says why (here: a CiA 402 device, device type 0x…0192, that
+/// `allow_generic` would run). A configuration that names it as a drive gets an error naming
+/// its identity.
 #[test]
 fn unknown_devices_are_named_with_their_identity() {
     let cfg = StartupConfig::new(Duration::from_millis(1));
+    let mut named = cfg.clone();
+    named
+        .drives
+        .push(startup::DriveSetup::new(startup::Selector::Position(0)));
     let (r, _) = with_bus(
         SegmentLink::new(segment(2)),
         BusOptions::default(),
         move |bus| {
             let (_group, devices) = startup::discover(bus).unwrap();
-            startup::plan(&devices, &cfg).map(|_| ())
+            assert!(devices.iter().all(|d| d.coe && d.declares_cia402()));
+            let roles = startup::plan(&devices, &cfg).unwrap();
+            for r in &roles {
+                match r {
+                    startup::Role::Io { why } => {
+                        assert!(why.contains("allow_generic"), "{why}")
+                    }
+                    other => panic!("{other:?}"),
+                }
+            }
+            startup::plan(&devices, &named).map(|_| ())
         },
     )
     .unwrap();

@@ -18,10 +18,10 @@ use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
 use super::program::{CyclicMode, Runner, Tick};
 use super::setpoint::Sample;
-use super::startup::{ConfiguredDrive, DriveFields, Group};
+use super::startup::{ConfiguredDrive, ConfiguredIo, DriveFields, Group};
 use super::telemetry::{
-    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, Phase, StopKind, StopReason,
-    Telemetry,
+    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, IO_TELEMETRY_BYTES, IoTelemetry,
+    Phase, StopKind, StopReason, Telemetry,
 };
 use crate::cia402::{
     self, Axis, AxisConfig, ErrorCode, Feedback, ModeSwitchPhase, OperationMode, State, StatusWord,
@@ -33,6 +33,26 @@ use ethercrab::subdevice_group::{HasDc, SafeOp};
 use ethercrab::{Command as EcCommand, MainDevice, SubDeviceState};
 use std::pin::pin;
 use std::time::Duration;
+
+/// How the master matches a position actual value with the demand it answers, by SYNC0 pulse.
+/// SYNC0 fires at whole multiples of the cycle in DC system time (ethercrab rounds the first
+/// pulse so), so the frame that passed the reference clock at DC time `t` came after pulse
+/// `t / cycle`. The demand a frame carries is taken by the drives at the next pulse; the
+/// position a frame reads was sampled at the last pulse and answers the demand taken at the
+/// pulse before. So the position read by a frame after pulse `s` answers the demand carried by
+/// the frame after pulse `s − 2`: on time, that is the demand computed three cycles earlier
+/// (computed after the exchange of cycle k, carried by the frame of cycle k+1, taken at pulse
+/// k+2, reported at pulse k+3). A frame late enough to cross a pulse changes that count by one;
+/// matching by pulse keeps the error free of it. A drive whose position loop adds its own
+/// delay shows it as a constant part of the error at constant speed.
+pub const FEEDBACK_PULSES: u64 = 2;
+
+/// Demands remembered per axis, with the pulse after which their frame passed.
+const CARRIED: usize = 4;
+
+/// Cycles of motion in csp, with the master's following error above 0, after which a 0x60F4
+/// that never left 0 is flagged ([`EventKind::DriveFollowingErrorStuck`]).
+pub const DRIVE_FE_STUCK_CYCLES: u32 = 500;
 
 /// Settings of the cycle.
 #[derive(Debug, Clone, PartialEq)]
@@ -126,13 +146,14 @@ pub struct SupervisorIo {
     pub telemetry: triple_buffer::Output<Telemetry>,
 }
 
-/// Create both ends for `axes` axes.
-pub fn channels(axes: usize) -> (CycleIo, SupervisorIo) {
+/// Create both ends for `axes` axes and `io` I/O devices.
+pub fn channels(axes: usize, io: usize) -> (CycleIo, SupervisorIo) {
     let (ctx, crx) = rtrb::RingBuffer::new(256);
     let (etx, erx) = rtrb::RingBuffer::new(4096);
     let initial = Telemetry {
         cycle: CycleTelemetry::default(),
         axes: vec![AxisTelemetry::default(); axes],
+        io: vec![IoTelemetry::default(); io],
     };
     let (tin, tout) = triple_buffer::TripleBuffer::new(&initial).split();
     (
@@ -159,8 +180,8 @@ pub enum CycleEnd {
     Stopped,
     /// The drives did not reach OP: this axis (its raw AL state).
     OpFailed {
-        /// Axis index.
-        axis: u16,
+        /// Position of the first device not in OP.
+        device: u16,
         /// AL state register value.
         al_state: u8,
     },
@@ -172,8 +193,8 @@ pub enum CycleEnd {
     /// A drive left OP on its own; every axis was stopped and disabled, the others taken to
     /// PRE-OP.
     DriveLeftOp {
-        /// Axis index.
-        axis: u16,
+        /// Position of the device (a drive or an I/O device).
+        device: u16,
         /// Its AL status (0x0130) when seen.
         al_state: u8,
         /// Its AL status code (0x0134), if it could be read.
@@ -214,8 +235,12 @@ pub struct CycleReport {
     pub timing: Timing,
     /// What the RT set-up got.
     pub rt: RtReport,
-    /// Per axis: the largest |following error| while enabled.
+    /// Per axis: the largest |following error| while enabled in csp, as the master computes it.
     pub max_following_error: Vec<i64>,
+    /// Per axis: the largest |0x60F4| the drive reported meanwhile (`None`: not mapped).
+    pub max_following_error_drive: Vec<Option<i64>>,
+    /// Per axis: 0x60F4 stayed 0 while the axis moved ([`EventKind::DriveFollowingErrorStuck`]).
+    pub following_error_drive_stuck: Vec<bool>,
     /// Per axis: the modes it ran set-points in.
     pub modes_run: Vec<Vec<CyclicMode>>,
     /// Per axis: the largest change of the streamed set-point from one cycle to the next while
@@ -259,6 +284,8 @@ enum Stopping {
 }
 
 struct AxisRt {
+    /// Position on the segment (index in the group).
+    sub: usize,
     axis: Axis,
     fields: DriveFields,
     velocity_unit: f64,
@@ -269,11 +296,19 @@ struct AxisRt {
     mode: CyclicMode,
     requested_mode: Option<CyclicMode>,
     fe_limit: Option<u32>,
+    /// 0x60F4 was seen other than 0 while the axis moved in csp.
+    fe_drive_alive: bool,
+    /// Cycles of motion in csp with 0x60F4 at 0 while it was never seen otherwise.
+    fe_drive_zero_cycles: u32,
     stopping: Stopping,
     pos_raw: i32,
     pos: i64,
     pos_valid: bool,
-    demand_hist: [i64; 2],
+    /// (pulse, demand carried) of the last frames with a reply, see [`FEEDBACK_PULSES`].
+    carried: [(u64, i64); CARRIED],
+    carried_next: usize,
+    /// The demand computed in the last cycle: the next frame carries it.
+    last_demand: Option<i64>,
     counter: u8,
     al_state: u8,
     tel: AxisTelemetry,
@@ -311,6 +346,7 @@ pub fn run<L: FrameLink>(
     pump: &mut Pump<'_, L>,
     group: &Group<SafeOp, HasDc>,
     drives: &[ConfiguredDrive],
+    others: &[ConfiguredIo],
     settings: &CycleSettings,
     io: &mut CycleIo,
     hooks: Option<&dyn CycleHooks>,
@@ -343,6 +379,7 @@ pub fn run<L: FrameLink>(
             },
         };
         axes.push(AxisRt {
+            sub: usize::from(d.info.position),
             axis,
             fields: d.fields.clone(),
             velocity_unit: d.profile.units.velocity_unit_counts_per_s,
@@ -352,11 +389,15 @@ pub fn run<L: FrameLink>(
             mode: d.setup.mode,
             requested_mode: None,
             fe_limit: d.setup.following_error_limit,
+            fe_drive_alive: false,
+            fe_drive_zero_cycles: 0,
             stopping: Stopping::No,
             pos_raw: 0,
             pos: 0,
             pos_valid: false,
-            demand_hist: [0; 2],
+            carried: [(u64::MAX, 0); CARRIED],
+            carried_next: 0,
+            last_demand: None,
             counter: 0,
             al_state: 0,
             tel: AxisTelemetry::default(),
@@ -368,8 +409,8 @@ pub fn run<L: FrameLink>(
         });
     }
     // Outputs that carry fixed values from the first cycle on.
-    for (i, a) in axes.iter().enumerate() {
-        if let Ok(sd) = group.subdevice(md, i) {
+    for a in axes.iter() {
+        if let Ok(sd) = group.subdevice(md, a.sub) {
             let mut io = sd.io_raw_mut();
             let out = io.outputs();
             for (f, v) in &a.fields.output_defaults {
@@ -381,16 +422,35 @@ pub fn run<L: FrameLink>(
     {
         let t = io.telemetry.input_buffer_mut();
         t.axes.resize(axes.len(), AxisTelemetry::default());
+        t.io.resize(others.len(), IoTelemetry::default());
     }
     let mut timing = Timing::default();
+    // Every device counts: an LRW adds 2 for each device with outputs, 1 for each with inputs.
+    let wkc = |outputs: usize, inputs: usize| u16::from(outputs > 0) * 2 + u16::from(inputs > 0);
     let wkc_expected: u16 = drives
         .iter()
         .map(|d| {
-            let rx = d.layout.bytes(crate::pdo::Direction::Rx) > 0;
-            let tx = d.layout.bytes(crate::pdo::Direction::Tx) > 0;
-            u16::from(rx) * 2 + u16::from(tx)
+            wkc(
+                d.layout.bytes(crate::pdo::Direction::Rx),
+                d.layout.bytes(crate::pdo::Direction::Tx),
+            )
         })
+        .chain(others.iter().map(|o| wkc(o.outputs, o.inputs)))
         .sum();
+    // Every device by position: its station address and last AL state.
+    let n_devices = group.len();
+    let mut addresses = vec![0u16; n_devices];
+    for d in drives {
+        if let Some(a) = addresses.get_mut(usize::from(d.info.position)) {
+            *a = d.info.address;
+        }
+    }
+    for o in others {
+        if let Some(a) = addresses.get_mut(usize::from(o.info.position)) {
+            *a = o.info.address;
+        }
+    }
+    let mut al_states = vec![0u8; n_devices];
 
     // ---- the loop (no allocation from here on) -------------------------------------------
     let mut cycle: u64 = 0;
@@ -505,18 +565,21 @@ pub fn run<L: FrameLink>(
                     if raw != 8 {
                         every_op = false;
                     }
-                    if let Some(a) = axes.get_mut(i)
-                        && a.al_state != raw
-                    {
-                        let was_op = a.al_state == 8;
+                    if let Some(a) = axes.iter_mut().find(|a| a.sub == i) {
                         a.al_state = raw;
+                    }
+                    if let Some(prev) = al_states.get_mut(i)
+                        && *prev != raw
+                    {
+                        let was_op = *prev == 8;
+                        *prev = raw;
                         emit!(EventKind::AlState {
-                            axis: i as u16,
+                            device: i as u16,
                             state: raw
                         });
                         if was_op && raw != 8 && !ending {
-                            // A drive left OP on its own: decode why, stop every axis, end.
-                            let addr = drives.get(i).map_or(0, |d| d.info.address);
+                            // A device left OP on its own: decode why, stop every axis, end.
+                            let addr = addresses.get(i).copied().unwrap_or(0);
                             let code = {
                                 let fut = pin!(
                                     EcCommand::fprd(addr, register::AL_STATUS_CODE)
@@ -528,14 +591,14 @@ pub fn run<L: FrameLink>(
                                 }
                             };
                             emit!(EventKind::LeftOp {
-                                axis: i as u16,
+                                device: i as u16,
                                 state: raw,
                                 code
                             });
                             if left_op.is_none() {
                                 left_op = Some((i as u16, raw));
                                 end_reason = Some(CycleEnd::DriveLeftOp {
-                                    axis: i as u16,
+                                    device: i as u16,
                                     al_state: raw,
                                     code,
                                 });
@@ -543,16 +606,16 @@ pub fn run<L: FrameLink>(
                         }
                     }
                 }
-                if let Some((axis, _)) = left_op {
+                if let Some((device, _)) = left_op {
                     emit!(EventKind::Stopping {
-                        reason: StopReason::DriveLeftOp { axis }
+                        reason: StopReason::DriveLeftOp { device }
                     });
                     ending = true;
                     for a in axes.iter_mut() {
                         begin_stop(a, StopKind::Ramp, tick, cycle);
                     }
                 }
-                if !all_op && every_op && !axes.is_empty() {
+                if !all_op && every_op && n_devices > 0 {
                     all_op = true;
                     if io.restarting {
                         io.restarting = false;
@@ -634,8 +697,7 @@ pub fn run<L: FrameLink>(
         if !all_op {
             match op_requested_at {
                 None if cycle >= u64::from(settings.safeop_cycles) => {
-                    for d in drives {
-                        let addr = d.info.address;
+                    for &addr in &addresses {
                         let fut =
                             pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(md, 0x0008u16));
                         let _ = exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 2);
@@ -643,14 +705,14 @@ pub fn run<L: FrameLink>(
                     op_requested_at = Some(cycle);
                 }
                 Some(at) if (cycle - at) * cycle_ns > settings.op_timeout.as_nanos() as u64 => {
-                    let (axis, al_state) = axes
+                    let (device, al_state) = al_states
                         .iter()
                         .enumerate()
-                        .find(|(_, a)| a.al_state != 8)
-                        .map(|(i, a)| (i as u16, a.al_state))
+                        .find(|(_, s)| **s != 8)
+                        .map(|(i, s)| (i as u16, *s))
                         .unwrap_or((0, 0));
-                    emit!(EventKind::OpTimeout { axis, al_state });
-                    end = CycleEnd::OpFailed { axis, al_state };
+                    emit!(EventKind::OpTimeout { device, al_state });
+                    end = CycleEnd::OpFailed { device, al_state };
                     break;
                 }
                 _ => {}
@@ -711,8 +773,10 @@ pub fn run<L: FrameLink>(
         // stale: every axis holds its set-point (the outputs go out again unchanged), only the
         // drive's cycle counter (if mapped) advances, as the drive expects one per cycle.
         let now_s = tick as f64 * dt;
+        // The SYNC0 pulse the frame of this cycle came after (see FEEDBACK_PULSES).
+        let pulse = dc_time / cycle_ns.max(1);
         for (i, a) in axes.iter_mut().enumerate() {
-            let Ok(sd) = group.subdevice(md, i) else {
+            let Ok(sd) = group.subdevice(md, a.sub) else {
                 continue;
             };
             if !good {
@@ -722,6 +786,26 @@ pub fn run<L: FrameLink>(
                     write_i(c, io_w.outputs(), i64::from(a.counter));
                 }
                 continue;
+            }
+            if a.al_state & 0x0F != 8 {
+                // Below OP nothing of the drive is judged: a slave may serve stale inputs until
+                // OP (a mode display of 0, a statusword of 0), and it should not act on the
+                // outputs. They stay safe all the same, for a slave that does: Disable voltage.
+                let mut io_w = sd.io_raw_mut();
+                let o = io_w.outputs();
+                write_i(&a.fields.controlword, o, 0);
+                if let Some((c, _)) = &a.fields.counter {
+                    a.counter = a.counter.wrapping_add(1);
+                    write_i(c, o, i64::from(a.counter));
+                }
+                a.tel.state = None;
+                a.tel.al_state = a.al_state;
+                continue;
+            }
+            // The frame just exchanged carried the demand of the last cycle.
+            if let Some(d) = a.last_demand {
+                a.carried[a.carried_next] = (pulse, d);
+                a.carried_next = (a.carried_next + 1) % CARRIED;
             }
             // Inputs.
             let fb = {
@@ -745,9 +829,7 @@ pub fn run<L: FrameLink>(
                 a.tel.torque_actual = f.torque.as_ref().map_or(0, |v| read_i(v, inp) as i16);
                 a.tel.mode_display = f.mode_display.as_ref().map_or(0, |v| read_i(v, inp) as i8);
                 a.tel.error_code = f.error_code.as_ref().map_or(0, |v| read_u(v, inp) as u16);
-                if let Some(fe) = &f.following_error {
-                    a.tel.following_error = read_i(fe, inp);
-                }
+                a.tel.following_error_drive = f.following_error.as_ref().map(|fe| read_i(fe, inp));
                 Feedback {
                     statusword: StatusWord::from_raw(sw),
                     mode_display: f
@@ -1004,15 +1086,37 @@ pub fn run<L: FrameLink>(
             };
             let state = StatusWord::from_raw(a.tel.statusword).state();
             let energised = state.is_some_and(State::is_energised);
-            if a.fields.following_error.is_none() {
-                // The actual value of this exchange answers the demand of two cycles ago.
-                a.tel.following_error = a.demand_hist[1] - a.pos;
+            // The master's own following error, whatever the drive reports in 0x60F4: the
+            // actual value of this exchange against the demand it answers (FEEDBACK_PULSES).
+            // Without that demand (lost frames just before) the last value stands.
+            if let Some(s) = pulse.checked_sub(FEEDBACK_PULSES)
+                && let Some(&(_, d)) = a.carried.iter().find(|(p, _)| *p == s)
+            {
+                a.tel.following_error = d - a.pos;
             }
-            a.demand_hist = [demand, a.demand_hist[0]];
+            a.last_demand = Some(demand);
             if energised && a.mode == CyclicMode::Csp {
                 let fe = a.tel.following_error.abs();
                 if fe > a.tel.max_following_error {
                     a.tel.max_following_error = fe;
+                }
+                if let Some(d) = a.tel.following_error_drive {
+                    a.tel.max_following_error_drive = a.tel.max_following_error_drive.max(d.abs());
+                    // 0x60F4 that never leaves 0 while the axis follows a moving set-point is
+                    // not computed by the drive: flag it once, never trust it.
+                    if d != 0 {
+                        a.fe_drive_alive = true;
+                    } else if fe > 0 && !a.fe_drive_alive && !a.tel.following_error_drive_stuck {
+                        a.fe_drive_zero_cycles += 1;
+                        if a.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
+                            a.tel.following_error_drive_stuck = true;
+                            emit!(EventKind::DriveFollowingErrorStuck {
+                                axis: i as u16,
+                                cycles: a.fe_drive_zero_cycles,
+                                master: a.tel.max_following_error
+                            });
+                        }
+                    }
                 }
                 if let Some(limit) = a.fe_limit
                     && fe > i64::from(limit)
@@ -1107,6 +1211,20 @@ pub fn run<L: FrameLink>(
             for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
                 *slot = a.tel;
             }
+            // Every field of every slot each time: the triple buffer hands out three buffers in
+            // turn.
+            for (slot, o) in t.io.iter_mut().zip(others) {
+                let pos = usize::from(o.info.position);
+                slot.position = o.info.position;
+                slot.al_state = al_states.get(pos).copied().unwrap_or(0);
+                if good && let Ok(sd) = group.subdevice(md, pos) {
+                    let img = sd.io_raw();
+                    let inp = img.inputs();
+                    let n = inp.len().min(IO_TELEMETRY_BYTES);
+                    slot.inputs[..n].copy_from_slice(&inp[..n]);
+                    slot.input_len = n as u16;
+                }
+            }
             io.telemetry.publish();
         }
 
@@ -1127,8 +1245,7 @@ pub fn run<L: FrameLink>(
             // and end once no drive is in OP any more.
             match preop_requested_at {
                 None => {
-                    for d in drives {
-                        let addr = d.info.address;
+                    for &addr in &addresses {
                         let fut =
                             pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(md, 0x0002u16));
                         let _ = exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 2);
@@ -1136,7 +1253,7 @@ pub fn run<L: FrameLink>(
                     preop_requested_at = Some(cycle);
                 }
                 Some(at) => {
-                    let out_of_op = axes.iter().all(|a| a.al_state & 0x0F != 8);
+                    let out_of_op = al_states.iter().all(|s| s & 0x0F != 8);
                     if out_of_op || (cycle - at) * cycle_ns > 1_000_000_000 {
                         emit!(EventKind::Stopped);
                         end = end_reason.unwrap_or(CycleEnd::Stopped);
@@ -1188,6 +1305,19 @@ pub fn run<L: FrameLink>(
         timing,
         rt,
         max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
+        max_following_error_drive: axes
+            .iter()
+            .map(|a| {
+                a.fields
+                    .following_error
+                    .as_ref()
+                    .map(|_| a.tel.max_following_error_drive)
+            })
+            .collect(),
+        following_error_drive_stuck: axes
+            .iter()
+            .map(|a| a.tel.following_error_drive_stuck)
+            .collect(),
         modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
         max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
         states: axes.iter().map(|a| a.states.clone()).collect(),

@@ -35,6 +35,9 @@ pub enum ErrorKind {
     AlState(AlStatusCode),
     /// Distributed clocks did not settle.
     DcSettle,
+    /// A setting the drive holds fixed (a read-only synchronisation object, say) does not fit
+    /// the configuration.
+    Incompatible,
     /// The bus did not answer in time.
     Timeout,
     /// The link (interface, socket) failed.

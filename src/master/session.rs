@@ -100,11 +100,27 @@ pub struct DriveSummary {
     pub mode: &'static str,
 }
 
+/// One device of a running master that is not driven (an I/O device): in OP with its own PDO
+/// configuration, its process data exchanged every cycle.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct IoSummary {
+    /// How messages name it.
+    pub device: DriveRef,
+    /// What discovery learned.
+    pub info: DeviceInfo,
+    /// Output and input image sizes.
+    pub image_bytes: (usize, usize),
+    /// Why it is not driven.
+    pub why: String,
+}
+
 /// What a master run did.
 #[derive(Debug, Clone)]
 pub struct SessionReport {
     /// The drives.
     pub drives: Vec<DriveSummary>,
+    /// The devices that are not driven.
+    pub io: Vec<IoSummary>,
     /// The cycle's report.
     pub cycle: Option<CycleReport>,
     /// The history: the latest [`MasterConfig::history_capacity`] entries.
@@ -152,12 +168,14 @@ pub struct Master<L: FrameLink + Send + 'static> {
     telemetry: triple_buffer::Output<Telemetry>,
     shared: Arc<Shared>,
     drives: Vec<DriveSummary>,
+    io: Vec<IoSummary>,
     thread: Option<JoinHandle<SessionOutcome<L>>>,
 }
 
 /// What a successful start-up hands to the [`Master`].
 struct Started {
     drives: Vec<DriveSummary>,
+    io: Vec<IoSummary>,
     commands: rtrb::Producer<Command>,
     telemetry: triple_buffer::Output<Telemetry>,
 }
@@ -166,12 +184,23 @@ struct Started {
 /// if the thread never received the link.
 type SessionOutcome<L> = Option<(Option<SessionReport>, L)>;
 
-/// Names and alarm tables of the drives, for decoding events outside the cycle.
+/// Names and alarm tables of the drives (by axis), and the names of every device (by position),
+/// for decoding events outside the cycle.
 struct Decoder {
     drives: Vec<(DriveRef, &'static [ErrorEntry])>,
+    devices: Vec<DriveRef>,
 }
 
 impl Decoder {
+    fn device(&self, position: u16) -> Option<DriveRef> {
+        self.devices.get(position as usize).cloned()
+    }
+
+    fn device_name(&self, position: u16) -> String {
+        self.device(position)
+            .map_or_else(|| format!("device {position}"), |d| d.to_string())
+    }
+
     fn drive(&self, axis: u16) -> Option<DriveRef> {
         self.drives.get(axis as usize).map(|(d, _)| d.clone())
     }
@@ -196,8 +225,8 @@ impl Decoder {
     fn entry(&self, e: &Event) -> Option<HistoryEntry> {
         let (drive, error, text) = match e.kind {
             EventKind::AllOp => (None, false, "every drive is in OP".to_string()),
-            EventKind::OpTimeout { axis, al_state } => (
-                self.drive(axis),
+            EventKind::OpTimeout { device, al_state } => (
+                self.device(device),
                 true,
                 format!(
                     "did not reach OP (AL status {})",
@@ -258,19 +287,19 @@ impl Decoder {
                 expected,
                 missing,
             } => (
-                missing.and_then(|m| self.drive(m)),
+                missing.and_then(|m| self.device(m)),
                 true,
                 format!(
                     "working counter {got}, expected {expected}{}",
                     if missing.is_some() {
-                        " (this drive did not answer)"
+                        " (this device did not answer)"
                     } else {
                         ""
                     }
                 ),
             ),
-            EventKind::AlState { axis, state } => (
-                self.drive(axis),
+            EventKind::AlState { device, state } => (
+                self.device(device),
                 state != 8 && state & 0x10 != 0,
                 format!("AL state {}", cycle::al_state_name(state)),
             ),
@@ -291,8 +320,12 @@ impl Decoder {
                     self.all_drives()
                 ),
             ),
-            EventKind::LeftOp { axis, state, code } => (
-                self.drive(axis),
+            EventKind::LeftOp {
+                device,
+                state,
+                code,
+            } => (
+                self.device(device),
                 true,
                 format!(
                     "left OP on its own: AL status {}, AL status code {}",
@@ -313,6 +346,19 @@ impl Decoder {
                 format!(
                     "the segment stopped answering ({cycles} cycles without a reply); drives: {}",
                     self.all_drives()
+                ),
+            ),
+            EventKind::DriveFollowingErrorStuck {
+                axis,
+                cycles,
+                master,
+            } => (
+                self.drive(axis),
+                false,
+                format!(
+                    "warning: 0x60F4 stayed 0 over {cycles} cycles of motion while the master's \
+                     own following error reached {master}: the drive's value is not trusted (the \
+                     master's is shown and checked against the limit)"
                 ),
             ),
             EventKind::FollowingError { axis, value, limit } => (
@@ -336,7 +382,9 @@ impl Decoder {
                     StopReason::FramesLost { cycles } => {
                         format!("{cycles} cycles in a row without a reply")
                     }
-                    StopReason::DriveLeftOp { axis } => format!("{} left OP", self.name(axis)),
+                    StopReason::DriveLeftOp { device } => {
+                        format!("{} left OP", self.device_name(device))
+                    }
                     StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
                 };
                 (
@@ -367,6 +415,7 @@ impl Decoder {
                 HistoryKind::SegmentLost
             }
             EventKind::FollowingError { .. } => HistoryKind::FollowingError,
+            EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
             EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
             EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,
         };
@@ -427,6 +476,7 @@ impl<L: FrameLink + Send + 'static> Master<L> {
         match rx.recv() {
             Ok(Ok(Started {
                 drives,
+                io,
                 commands,
                 telemetry,
             })) => Ok(Self {
@@ -434,6 +484,7 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                 telemetry,
                 shared,
                 drives,
+                io,
                 thread: Some(thread),
             }),
             Ok(Err(error)) => match thread.join() {
@@ -460,6 +511,11 @@ impl<L: FrameLink + Send + 'static> Master<L> {
     /// The drives.
     pub fn drives(&self) -> &[DriveSummary] {
         &self.drives
+    }
+
+    /// The devices that are not driven (I/O devices), in segment order.
+    pub fn io(&self) -> &[IoSummary] {
+        &self.io
     }
 
     /// Send a command to the cycle.
@@ -604,6 +660,7 @@ struct Persist {
     events: rtrb::Consumer<Event>,
     decoder: Decoder,
     summaries: Vec<DriveSummary>,
+    io: Vec<IoSummary>,
     last_cycle: Option<CycleReport>,
     emergencies: Vec<EmergencyRecord>,
     restarts: u32,
@@ -626,6 +683,10 @@ impl Persist {
         };
         t.axes.clear();
         t.axes.resize(n, AxisTelemetry::default());
+        for slot in t.io.iter_mut() {
+            slot.al_state = 0;
+            slot.input_len = 0;
+        }
         self.cycle_io.telemetry.publish();
     }
 }
@@ -769,6 +830,7 @@ fn session<L: FrameLink + Send>(
     (
         Some(SessionReport {
             drives: p.summaries,
+            io: p.io,
             cycle: p.last_cycle,
             history,
             history_discarded,
@@ -812,8 +874,23 @@ fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) ->
 
 /// Whether the segment holds the drives the session started with (a re-start must find the
 /// same drives at the same positions).
-fn same_drives(summaries: &[DriveSummary], devices: &[DeviceInfo]) -> Result<(), MasterError> {
-    for s in summaries {
+/// A device as it was seen before a re-start.
+struct Seen<'a> {
+    drive: &'a DriveRef,
+    info: &'a DeviceInfo,
+}
+
+fn same_drives(
+    summaries: &[DriveSummary],
+    io: &[IoSummary],
+    devices: &[DeviceInfo],
+) -> Result<(), MasterError> {
+    let before = summaries
+        .iter()
+        .map(|s| (&s.drive, &s.info))
+        .chain(io.iter().map(|s| (&s.device, &s.info)));
+    for (drive, info) in before {
+        let s = Seen { drive, info };
         let found = devices.iter().find(|d| d.position == s.info.position);
         match found {
             Some(d)
@@ -822,7 +899,7 @@ fn same_drives(summaries: &[DriveSummary], devices: &[DeviceInfo]) -> Result<(),
                     && d.serial == s.info.serial => {}
             Some(d) => {
                 return Err(MasterError::new(
-                    Some(&s.drive),
+                    Some(s.drive),
                     "re-start",
                     ErrorKind::Config,
                     format!(
@@ -839,7 +916,7 @@ fn same_drives(summaries: &[DriveSummary], devices: &[DeviceInfo]) -> Result<(),
             }
             None => {
                 return Err(MasterError::new(
-                    Some(&s.drive),
+                    Some(s.drive),
                     "re-start",
                     ErrorKind::Bus,
                     format!(
@@ -865,7 +942,7 @@ fn run<L: FrameLink + Send>(
     let started = (|| {
         let (group, devices) = startup::discover(bus)?;
         if let Some(p) = persist.as_ref() {
-            same_drives(&p.summaries, &devices)?;
+            same_drives(&p.summaries, &p.io, &devices)?;
         }
         let plan = startup::plan(&devices, &cfg.startup)?;
         startup::configure(bus, group, devices, plan, &cfg.startup)
@@ -874,6 +951,19 @@ fn run<L: FrameLink + Send>(
         Ok(s) => s,
         Err(e) => return RunEnd::StartFailed(e),
     };
+    for (drive, w) in &started.warnings {
+        push_history(
+            shared,
+            HistoryEntry {
+                time_ns: monotonic_ns(),
+                cycle: None,
+                drive: Some(drive.clone()),
+                error: false,
+                kind: HistoryKind::Warning,
+                text: format!("warning: {w}"),
+            },
+        );
+    }
     if persist.is_none() {
         let summaries: Vec<DriveSummary> = started
             .drives
@@ -886,18 +976,40 @@ fn run<L: FrameLink + Send>(
                 mode: d.setup.mode.name(),
             })
             .collect();
+        let io: Vec<IoSummary> = started
+            .io
+            .iter()
+            .map(|o| IoSummary {
+                device: o.info.drive_ref(),
+                info: o.info.clone(),
+                image_bytes: (o.outputs, o.inputs),
+                why: o.why.clone(),
+            })
+            .collect();
         let decoder = Decoder {
             drives: started
                 .drives
                 .iter()
                 .map(|d| (d.drive.clone(), d.profile.caps.error_table))
                 .collect(),
+            devices: started
+                .devices
+                .iter()
+                .map(|d| {
+                    started
+                        .drives
+                        .iter()
+                        .find(|x| x.info.position == d.position)
+                        .map_or_else(|| d.drive_ref(), |x| x.drive.clone())
+                })
+                .collect(),
         };
-        // The channels, sized for exactly these drives (every telemetry buffer holds one
-        // entry per drive); they live as long as the session, across re-starts.
-        let (cycle_io, sup) = cycle::channels(started.drives.len());
+        // The channels, sized for exactly these drives and I/O devices (every telemetry buffer
+        // holds one entry each); they live as long as the session, across re-starts.
+        let (cycle_io, sup) = cycle::channels(started.drives.len(), started.io.len());
         let _ = started_tx.send(Ok(Started {
             drives: summaries.clone(),
+            io: io.clone(),
             commands: sup.commands,
             telemetry: sup.telemetry,
         }));
@@ -906,6 +1018,7 @@ fn run<L: FrameLink + Send>(
             events: sup.events,
             decoder,
             summaries,
+            io,
             last_cycle: None,
             emergencies: Vec::new(),
             restarts: 0,
@@ -968,6 +1081,7 @@ fn run<L: FrameLink + Send>(
     cycle_io.rt_report = Some(rt_tx);
     let hooks = cfg.hooks.clone();
     let drives = &started.drives;
+    let others = &started.io;
     let group = &started.group;
     let mbx_timeout = cfg.bus.mailbox_timeout;
     let addrs: Vec<(u16, DriveRef, bool)> = drives
@@ -981,7 +1095,9 @@ fn run<L: FrameLink + Send>(
             .stack_size(8 * 1024 * 1024)
             .spawn_scoped(s, || {
                 let hooks_ref = hooks.as_deref().map(|h| h as &dyn CycleHooks);
-                cycle::run(md, pump, group, drives, &cfg.cycle, cycle_io, hooks_ref)
+                cycle::run(
+                    md, pump, group, drives, others, &cfg.cycle, cycle_io, hooks_ref,
+                )
             });
         let h = match h {
             Ok(h) => h,
@@ -1061,10 +1177,11 @@ fn run<L: FrameLink + Send>(
     let end = report.as_ref().map(|r| r.end);
     let mut shutdown_ok = true;
     if !matches!(end, Some(CycleEnd::SegmentLost | CycleEnd::LinkFailed)) {
-        for d in drives {
-            let addr = d.info.address;
+        for d in &started.devices {
+            let addr = d.address;
+            let name = decoder.device_name(d.position);
             let r = bus.block_on(
-                &|| format!("{}: requesting INIT", d.drive),
+                &|| format!("{name}: requesting INIT"),
                 Duration::from_secs(2),
                 |md| async move {
                     EcCommand::fpwr(addr, register::AL_CONTROL)
@@ -1087,10 +1204,10 @@ fn run<L: FrameLink + Send>(
     *last_cycle = report;
     match end {
         None | Some(CycleEnd::Stopped | CycleEnd::LinkFailed) => RunEnd::Over,
-        Some(CycleEnd::OpFailed { axis, al_state }) => {
+        Some(CycleEnd::OpFailed { device, al_state }) => {
             if restarting {
                 RunEnd::StartFailed(MasterError::new(
-                    decoder.drive(axis).as_ref(),
+                    decoder.device(device).as_ref(),
                     "re-start",
                     ErrorKind::Timeout,
                     format!(

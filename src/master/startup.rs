@@ -159,6 +159,30 @@ pub struct DeviceInfo {
     pub dc: bool,
     /// The matched profile's name, if any.
     pub profile: Option<&'static str>,
+    /// Whether the SII announces a CoE mailbox (standard mailbox sizes and protocol CoE):
+    /// ecdrive speaks CoE only to such devices.
+    pub coe: bool,
+    /// The device type (0x1000), read over CoE from devices no profile matches; the low 16
+    /// bits are the device profile (0x0192 = 402: a CiA 402 drive).
+    pub device_type: Option<u32>,
+}
+
+impl DeviceInfo {
+    /// Whether the device says it is a CiA 402 drive: a known drive profile, or device type
+    /// 0x….0192.
+    pub fn declares_cia402(&self) -> bool {
+        self.profile.is_some() || self.device_type.is_some_and(|t| t & 0xFFFF == 402)
+    }
+
+    /// How messages name it.
+    pub fn drive_ref(&self) -> DriveRef {
+        DriveRef {
+            position: self.position,
+            name: self
+                .profile
+                .map_or_else(|| self.name.clone(), str::to_string),
+        }
+    }
 }
 
 /// Resolved process-image fields of one drive. Outputs are in the drive's output (RxPDO)
@@ -218,14 +242,33 @@ pub struct ConfiguredDrive {
     pub setup: DriveSetup,
 }
 
+/// A device that is not driven ([`Role::Io`]): in OP with its own PDO configuration, its
+/// process data exchanged every cycle.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ConfiguredIo {
+    /// What discovery learned.
+    pub info: DeviceInfo,
+    /// Output bytes (master → device).
+    pub outputs: usize,
+    /// Input bytes (device → master).
+    pub inputs: usize,
+    /// Why it is not driven.
+    pub why: String,
+}
+
 /// The result of start-up: the group in SAFE-OP with DC running, and the drives.
 pub struct Started {
     /// The group.
     pub group: Group<SafeOp, HasDc>,
     /// The drives, in segment order.
     pub drives: Vec<ConfiguredDrive>,
+    /// The devices that are not driven, in segment order.
+    pub io: Vec<ConfiguredIo>,
     /// Every device found, in segment order.
     pub devices: Vec<DeviceInfo>,
+    /// What start-up accepted but the user should know (a drive without 0x1C32, a read-only
+    /// cycle time), per drive.
+    pub warnings: Vec<(DriveRef, String)>,
 }
 
 const T_INIT: Duration = Duration::from_secs(30);
@@ -274,17 +317,82 @@ pub fn discover<L: FrameLink>(
             serial: id.serial,
             dc: sd.dc_support().any(),
             profile: crate::drives::by_identity(id.vendor_id, id.product_id).map(|p| p.name),
+            coe: false,
+            device_type: None,
         });
+    }
+    // The mailbox from the SII (words 0x18–0x1C: receive/send mailbox offset and size, the
+    // protocols), and for devices no profile matches, their device type over CoE.
+    for d in devices.iter_mut() {
+        let pos = usize::from(d.position);
+        let words = bus
+            .block_on(
+                &|| format!("device {pos}: reading the SII mailbox words (0x18–0x1C)"),
+                T_STEP,
+                |md| {
+                    let group = &group;
+                    async move {
+                        let sd = group.subdevice(md, pos)?;
+                        let mut buf = [0u8; 10];
+                        sd.eeprom_read_raw(md, 0x18, &mut buf).await?;
+                        Ok::<_, ethercrab::error::Error>(buf)
+                    }
+                },
+            )
+            .map_err(|e| exec_error(Some(&d.drive_ref()), e))?
+            .map_err(|e| bus_error(Some(&d.drive_ref()), "reading the SII mailbox words", e))?;
+        let w = |i: usize| u16::from_le_bytes([words[2 * i], words[2 * i + 1]]);
+        d.coe = w(1) > 0 && w(3) > 0 && w(4) & 0x0004 != 0;
+        if d.coe && d.profile.is_none() {
+            d.device_type = bus
+                .with_coe(d.address, d.drive_ref(), false, T_STEP, async |c| {
+                    c.upload(ObjectAddress::new(0x1000, 0), false).await
+                })
+                .ok()
+                .filter(|v| v.len() >= 4)
+                .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
+        }
     }
     Ok((group, devices))
 }
 
-/// Assign a setup and a profile to every device. Fails on unknown devices (unless allowed) and
-/// on setups that select nothing or the same device twice.
-pub fn plan(
-    devices: &[DeviceInfo],
-    cfg: &StartupConfig,
-) -> Result<Vec<(DriveSetup, &'static DriveProfile)>, MasterError> {
+/// What start-up does with a device.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Role {
+    /// Driven through CiA 402 with this setup and profile.
+    Drive {
+        /// The setup (from the configuration, or the profile's defaults).
+        setup: DriveSetup,
+        /// The profile.
+        profile: &'static DriveProfile,
+    },
+    /// Not driven: taken to OP with its own PDO configuration (SII or default mapping), its
+    /// process data exchanged; no CoE from ecdrive.
+    Io {
+        /// Why it is not driven, in words.
+        why: String,
+    },
+}
+
+impl Role {
+    /// The drive's setup and profile, if it is one.
+    pub fn drive(&self) -> Option<(&DriveSetup, &'static DriveProfile)> {
+        match self {
+            Role::Drive { setup, profile } => Some((setup, profile)),
+            Role::Io { .. } => None,
+        }
+    }
+}
+
+/// Decide what to do with every device: a drive (a setup and a profile) or an I/O device.
+///
+/// A device is driven when a profile matches its identity, when the configuration forces a
+/// profile (which must match its identity; the generic CiA 402 profile only a device that does
+/// not declare another device profile), or when `allow_generic` is set and it declares CiA 402
+/// (device type 0x….0192). Every other device is an I/O device. Fails on setups that select
+/// nothing, on a device the configuration names that cannot be driven, and on a forced profile
+/// that does not fit.
+pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
     let mut chosen: Vec<Option<DriveSetup>> = vec![None; devices.len()];
     for setup in &cfg.drives {
         let pos = devices.iter().position(|d| {
@@ -319,38 +427,123 @@ pub fn plan(
     }
     let mut out = Vec::with_capacity(devices.len());
     for (d, setup) in devices.iter().zip(chosen) {
+        let named = setup.is_some();
         let setup = setup.unwrap_or_else(|| DriveSetup::new(Selector::Position(d.position)));
-        let profile = match setup.profile {
-            Some(p) => p,
-            None => {
-                crate::drives::identify(d.vendor_id, d.product_code, d.revision, cfg.allow_generic)
-                    .map_err(|e| {
-                        MasterError::new(
-                            Some(&DriveRef {
-                                position: d.position,
-                                name: d.name.clone(),
-                            }),
-                            "matching a drive profile",
-                            ErrorKind::UnknownDevice,
-                            format!("{e} (serial {})", d.serial),
-                        )
-                    })?
-            }
+        let dref = DriveRef {
+            position: d.position,
+            name: d.name.clone(),
         };
-        out.push((setup, profile));
+        let generic = &crate::drives::generic::GENERIC_CIA402;
+        let profile = match setup.profile {
+            Some(p) if core::ptr::eq(p, generic) || p.key == generic.key => {
+                if !d.coe {
+                    return Err(MasterError::new(
+                        Some(&dref),
+                        "matching a drive profile",
+                        ErrorKind::Config,
+                        "the configuration runs it with the generic CiA 402 profile, but it has \
+                         no CoE mailbox",
+                    ));
+                }
+                if !d.declares_cia402() && d.device_type.is_some() {
+                    return Err(MasterError::new(
+                        Some(&dref),
+                        "matching a drive profile",
+                        ErrorKind::Config,
+                        format!(
+                            "the configuration runs it with the generic CiA 402 profile, but its \
+                             device type 0x1000 is 0x{:08X} (profile {}, not 402)",
+                            d.device_type.unwrap_or(0),
+                            d.device_type.unwrap_or(0) & 0xFFFF
+                        ),
+                    ));
+                }
+                p
+            }
+            Some(p) => {
+                if p.identity.vendor_id != d.vendor_id || p.identity.product_code != d.product_code
+                {
+                    return Err(MasterError::new(
+                        Some(&dref),
+                        "matching a drive profile",
+                        ErrorKind::Config,
+                        format!(
+                            "the configuration forces the {} profile (vendor 0x{:08X}, product \
+                             0x{:08X}), but the device is vendor 0x{:08X}, product 0x{:08X} \
+                             ({:?}); use the generic-cia402 profile for a drive ecdrive has no \
+                             profile for",
+                            p.name,
+                            p.identity.vendor_id,
+                            p.identity.product_code,
+                            d.vendor_id,
+                            d.product_code,
+                            d.name
+                        ),
+                    ));
+                }
+                p
+            }
+            None => match crate::drives::by_identity(d.vendor_id, d.product_code) {
+                Some(p) => p,
+                None if cfg.allow_generic && d.declares_cia402() => generic,
+                None if named => {
+                    // The configuration names it as a drive: say why it cannot run it.
+                    let e = crate::drives::identify(d.vendor_id, d.product_code, d.revision, false)
+                        .err()
+                        .map(|e| e.to_string())
+                        .unwrap_or_default();
+                    let why = if !d.coe {
+                        "it has no CoE mailbox, so it is no CiA 402 drive".to_string()
+                    } else if d.declares_cia402() {
+                        "it declares CiA 402 (device type 0x….0192): allow_generic = true runs it \
+                         with the generic CiA 402 profile"
+                            .to_string()
+                    } else {
+                        format!(
+                            "its device type is {}, not a CiA 402 drive",
+                            d.device_type
+                                .map_or("unreadable".into(), |t| format!("0x{t:08X}"))
+                        )
+                    };
+                    return Err(MasterError::new(
+                        Some(&dref),
+                        "matching a drive profile",
+                        ErrorKind::UnknownDevice,
+                        format!("{e} (serial {}); {why}", d.serial),
+                    ));
+                }
+                None => {
+                    let why = if !d.coe {
+                        "no mailbox".to_string()
+                    } else if d.declares_cia402() {
+                        "a CiA 402 device ecdrive has no profile for (allow_generic = true runs \
+                         it with the generic CiA 402 profile)"
+                            .to_string()
+                    } else {
+                        format!(
+                            "not a CiA 402 drive (device type {})",
+                            d.device_type
+                                .map_or("unreadable".into(), |t| format!("0x{t:08X}"))
+                        )
+                    };
+                    out.push(Role::Io { why });
+                    continue;
+                }
+            },
+        };
+        out.push(Role::Drive { setup, profile });
     }
     Ok(out)
 }
 
 /// Check every drive's configuration against its profile before anything is written.
 pub fn validate(
-    devices: &[DeviceInfo],
-    plan: &[(DriveSetup, &'static DriveProfile)],
+    drives: &[(&DeviceInfo, &DriveSetup, &'static DriveProfile)],
     cfg: &StartupConfig,
 ) -> Result<Vec<Mapping>, MasterError> {
     let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
-    let mut mappings = Vec::with_capacity(plan.len());
-    for (d, (setup, profile)) in devices.iter().zip(plan) {
+    let mut mappings = Vec::with_capacity(drives.len());
+    for &(d, setup, profile) in drives {
         let drive = DriveRef {
             position: d.position,
             name: profile.name.to_string(),
@@ -466,53 +659,367 @@ fn encode(profile: &DriveProfile, addr: ObjectAddress, v: &Value) -> Result<Vec<
     v.encode(dt).map_err(|e| e.to_string())
 }
 
+/// What a synchronisation-object write sets.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SyncWhat {
+    /// 0x1C32:01 synchronisation type.
+    Type,
+    /// 0x1C32:02 cycle time, ns.
+    CycleTime,
+}
+
+/// One synchronisation object to set (ETG.1020).
+#[derive(Debug, Clone, Copy)]
+struct SyncWrite {
+    address: ObjectAddress,
+    value: u32,
+    len: usize,
+    what: SyncWhat,
+}
+
+impl SyncWrite {
+    fn describe(&self) -> String {
+        match self.what {
+            SyncWhat::Type => "synchronisation type = DC SYNC0 (2)".into(),
+            SyncWhat::CycleTime => format!("cycle time = {} ns", self.value),
+        }
+    }
+
+    fn bytes(&self) -> Vec<u8> {
+        self.value.to_le_bytes()[..self.len.min(4)].to_vec()
+    }
+}
+
+/// The ETG.1020 names of 0x1C32:01 values.
+fn sync_type_name(v: u32) -> &'static str {
+    match v {
+        0 => "free run",
+        1 => "synchronous with the SM2 event",
+        2 => "DC SYNC0",
+        3 => "DC SYNC1",
+        34 => "synchronous with the SM3 event",
+        _ => "unknown",
+    }
+}
+
+/// How a drive took a synchronisation object.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SyncOutcome {
+    /// It already held the value: nothing written.
+    AlreadySet,
+    /// Written.
+    Written,
+    /// The drive has no such object.
+    Absent,
+    /// The drive refused the write as read-only (or not writable now): what it holds, and for
+    /// the cycle time its minimum cycle time (0x1C32:05), where readable.
+    ReadOnly {
+        has: Option<u32>,
+        min_cycle: Option<u32>,
+    },
+}
+
+fn le_u32(b: &[u8]) -> u32 {
+    let mut v = [0u8; 4];
+    for (d, s) in v.iter_mut().zip(b) {
+        *d = *s;
+    }
+    u32::from_le_bytes(v)
+}
+
+/// Set a synchronisation object the way a careful engineer does on a drive they did not
+/// write: read it first and write only when it differs; a drive without the object, or one
+/// that refuses the write as read-only, is not an error by itself (see [`SyncOutcome::judge`]).
+async fn write_sync(
+    c: &mut super::coe::CoeClient<'_>,
+    w: &SyncWrite,
+) -> Result<SyncOutcome, super::coe::CoeError> {
+    use crate::od::SdoAbortCode as A;
+    let absent =
+        |e: &super::coe::CoeError| matches!(e.abort_code(), Some(A::NO_OBJECT | A::NO_SUBINDEX));
+    let has = match c.upload(w.address, false).await {
+        Ok(v) => Some(le_u32(&v)),
+        Err(e) if absent(&e) => return Ok(SyncOutcome::Absent),
+        Err(e) if e.abort_code().is_some() => None,
+        Err(e) => return Err(e),
+    };
+    if has == Some(w.value) {
+        return Ok(SyncOutcome::AlreadySet);
+    }
+    match c.download(w.address, &w.bytes(), false).await {
+        Ok(()) => Ok(SyncOutcome::Written),
+        Err(e) if absent(&e) => Ok(SyncOutcome::Absent),
+        Err(e)
+            if matches!(
+                e.abort_code(),
+                Some(
+                    A::READ_ONLY
+                        | A::UNSUPPORTED_ACCESS
+                        | A::CANNOT_STORE
+                        | A::LOCAL_CONTROL
+                        | A::DEVICE_STATE
+                )
+            ) =>
+        {
+            let min_cycle = if w.what == SyncWhat::CycleTime {
+                c.upload(ObjectAddress::new(w.address.index, 5), false)
+                    .await
+                    .ok()
+                    .map(|v| le_u32(&v))
+                    .filter(|m| *m > 0)
+            } else {
+                None
+            };
+            Ok(SyncOutcome::ReadOnly { has, min_cycle })
+        }
+        Err(e) => Err(e),
+    }
+}
+
+impl SyncOutcome {
+    /// Whether the run can go on: `Ok(None)` silently, `Ok(Some(warning))`, or `Err(why)`
+    /// naming the value the drive has and the value needed.
+    fn judge(&self, w: &SyncWrite, profile: &DriveProfile) -> Result<Option<String>, String> {
+        let a = w.address;
+        match (*self, w.what) {
+            (SyncOutcome::AlreadySet | SyncOutcome::Written, _) => Ok(None),
+            (SyncOutcome::Absent, _) => Ok(Some(format!(
+                "has no {a} (which the {} profile names for the {}); taken to synchronise to \
+                 SYNC0 by its slave-controller registers alone",
+                profile.name,
+                match w.what {
+                    SyncWhat::Type => "synchronisation type",
+                    SyncWhat::CycleTime => "cycle time",
+                }
+            ))),
+            (SyncOutcome::ReadOnly { has: Some(v), .. }, SyncWhat::Type) => Err(format!(
+                "{a} is read-only and holds {v} ({}); DC SYNC0 needs 2",
+                sync_type_name(v)
+            )),
+            (SyncOutcome::ReadOnly { has: None, .. }, SyncWhat::Type) => Ok(Some(format!(
+                "{a} (synchronisation type) can be neither read nor written; continuing with DC \
+                 SYNC0"
+            ))),
+            (SyncOutcome::ReadOnly { has, min_cycle }, SyncWhat::CycleTime) => {
+                let holds = has.map_or("cannot be read".to_string(), |v| format!("holds {v} ns"));
+                if let Some(m) = min_cycle
+                    && w.value < m
+                {
+                    return Err(format!(
+                        "{a} (cycle time) is read-only ({holds}) and the drive's minimum cycle \
+                         time 0x{:04X}:05 is {m} ns; the cycle needs {} ns",
+                        a.index, w.value
+                    ));
+                }
+                Ok(Some(format!(
+                    "{a} (cycle time) is read-only ({holds}): the drive takes its cycle from \
+                     SYNC0 (ETG.1020); checked again once SYNC0 runs"
+                )))
+            }
+        }
+    }
+}
+
+/// Drives on the generic CiA 402 profile whose configuration gives no mapping: a drive ecdrive
+/// has no profile for has a mapping of its own, and its PDOs accept what its dictionary says,
+/// not what a profile assumes. Read the drive's current mapping (0x1C12/0x1C13, 0x16xx/0x1Axx);
+/// when it carries the controlword, the statusword and the set-point of the start mode, use it
+/// unchanged (no remap); otherwise map the smallest standard set the drive has (controlword,
+/// set-point, mode; statusword, actual position, mode display) into its first PDO of each
+/// direction. Returns the positions of the drives that keep their own mapping.
+fn generic_mappings<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    devices: &[DeviceInfo],
+    plan: &mut [Role],
+    warnings: &mut Vec<(DriveRef, String)>,
+) -> Result<Vec<u16>, MasterError> {
+    let generic = &crate::drives::generic::GENERIC_CIA402;
+    let mut own = Vec::new();
+    for (d, role) in devices.iter().zip(plan.iter_mut()) {
+        let Role::Drive { setup, profile } = role else {
+            continue;
+        };
+        if profile.key != generic.key || setup.mapping.is_some() {
+            continue;
+        }
+        let drive = DriveRef {
+            position: d.position,
+            name: profile.name.to_string(),
+        };
+        if !d.coe {
+            return Err(MasterError::new(
+                Some(&drive),
+                "reading the PDO mapping",
+                ErrorKind::Config,
+                "the device has no CoE mailbox: it cannot be run as a CiA 402 drive",
+            ));
+        }
+        let addr = d.address;
+        let current = crate::pdo::read_mapping_sync(|a: ObjectAddress, dt: DataType| {
+            let bytes = bus.with_coe(addr, drive.clone(), false, T_STEP, async |c| {
+                c.upload(a, false).await
+            })?;
+            Ok::<u32, super::bus::SessionError>(match dt {
+                DataType::Unsigned8 => u32::from(bytes.first().copied().unwrap_or(0)),
+                DataType::Unsigned16 => u32::from(u16::from_le_bytes([
+                    bytes.first().copied().unwrap_or(0),
+                    bytes.get(1).copied().unwrap_or(0),
+                ])),
+                _ => le_u32(&bytes),
+            })
+        })
+        .map_err(|e| match e {
+            crate::pdo::ReadbackError::Upload { source, .. } => {
+                let mut e = MasterError::from(source);
+                e.step = format!("reading the PDO mapping (generic profile): {}", e.step);
+                e
+            }
+            other => MasterError::new(
+                Some(&drive),
+                "reading the PDO mapping (generic profile)",
+                ErrorKind::Bus,
+                other,
+            ),
+        })?;
+        let setpoint = setpoint_object(setup.mode);
+        if current.contains(Direction::Rx, CW)
+            && current.contains(Direction::Tx, SW)
+            && current.contains(Direction::Rx, setpoint)
+        {
+            warnings.push((
+                drive,
+                format!(
+                    "runs with the generic CiA 402 profile on its own PDO mapping ({} output, {} \
+                     input bytes)",
+                    Layout::new(&current).bytes(Direction::Rx),
+                    Layout::new(&current).bytes(Direction::Tx)
+                ),
+            ));
+            setup.mapping = Some(current);
+            own.push(d.position);
+            continue;
+        }
+        // The smallest standard mapping of what the drive has.
+        let mut exists = |a: ObjectAddress| -> Result<bool, MasterError> {
+            match bus.with_coe(addr, drive.clone(), false, T_STEP, async |c| {
+                c.upload(a, false).await
+            }) {
+                Ok(_) => Ok(true),
+                Err(super::bus::SessionError::Coe(e)) if e.abort_code().is_some() => Ok(false),
+                Err(e) => Err(e.into()),
+            }
+        };
+        let entry = |a: ObjectAddress| {
+            let bits = standard_type(a)
+                .and_then(DataType::bit_len)
+                .unwrap_or(32)
+                .min(64) as u8;
+            crate::pdo::PdoEntry::new(a.index, a.sub, bits)
+        };
+        let mut rx = vec![entry(CW), entry(setpoint)];
+        if exists(MODE)? {
+            rx.push(entry(MODE));
+        }
+        let mut tx = vec![entry(SW)];
+        for a in [ObjectAddress::new(0x6064, 0), ObjectAddress::new(0x6061, 0)] {
+            if exists(a)? {
+                tx.push(entry(a));
+            }
+        }
+        let rx_index = current
+            .pdos(Direction::Rx)
+            .first()
+            .map_or(0x1600, |p| p.index);
+        let tx_index = current
+            .pdos(Direction::Tx)
+            .first()
+            .map_or(0x1A00, |p| p.index);
+        let m = Mapping::owned(
+            vec![crate::pdo::Pdo::owned(rx_index, rx)],
+            vec![crate::pdo::Pdo::owned(tx_index, tx)],
+        );
+        warnings.push((
+            drive,
+            format!(
+                "runs with the generic CiA 402 profile; its own mapping lacks what {} needs, so \
+                 ecdrive maps the standard minimum ({} output, {} input bytes)",
+                setup.mode.name(),
+                Layout::new(&m).bytes(Direction::Rx),
+                Layout::new(&m).bytes(Direction::Tx)
+            ),
+        ));
+        setup.mapping = Some(m);
+    }
+    Ok(own)
+}
+
 /// Configure every drive in PRE-OP (mapping, sync, start-up SDOs, mode), build the process
 /// image, run DC to SAFE-OP. `devices`/`plan` come from [`discover`] and [`plan`].
 pub fn configure<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     mut group: Group<PreOp>,
     devices: Vec<DeviceInfo>,
-    plan: Vec<(DriveSetup, &'static DriveProfile)>,
+    mut plan: Vec<Role>,
     cfg: &StartupConfig,
 ) -> Result<Started, MasterError> {
-    let mappings = validate(&devices, &plan, cfg)?;
+    let mut warnings: Vec<(DriveRef, String)> = Vec::new();
+    // Drives on the generic profile without a mapping in the configuration: their own mapping
+    // when it carries what the mode needs, else the smallest standard one they have.
+    let own = generic_mappings(bus, &devices, &mut plan, &mut warnings)?;
+    let drives_plan: Vec<(&DeviceInfo, &DriveSetup, &'static DriveProfile)> = devices
+        .iter()
+        .zip(&plan)
+        .filter_map(|(d, r)| r.drive().map(|(s, p)| (d, s, p)))
+        .collect();
+    let mappings = validate(&drives_plan, cfg)?;
     let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
+    // Read-only cycle times, checked again once SYNC0 runs.
+    let mut recheck: Vec<(u16, DriveRef, ObjectAddress)> = Vec::new();
 
-    for ((d, (setup, profile)), mapping) in devices.iter().zip(&plan).zip(&mappings) {
+    for (&(d, setup, profile), mapping) in drives_plan.iter().zip(&mappings) {
         let drive = DriveRef {
             position: d.position,
             name: profile.name.to_string(),
         };
         let mut writes: Vec<(ObjectAddress, Vec<u8>, String)> = Vec::new();
-        // PDO assignment and mapping.
-        let seq = pdo::remap_sequence(
-            mapping,
-            &RemapOptions::for_drive(
-                &profile.pdo_limits,
-                Some(od::Dictionary::new(profile.dictionary)),
-            ),
-        )
-        .map_err(|e| {
-            MasterError::new(Some(&drive), "building the PDO remap", ErrorKind::Config, e)
-        })?;
+        // PDO assignment and mapping (not when the drive's own mapping is used).
+        let seq = if own.contains(&d.position) {
+            Vec::new()
+        } else {
+            pdo::remap_sequence(
+                mapping,
+                &RemapOptions::for_drive(
+                    &profile.pdo_limits,
+                    Some(od::Dictionary::new(profile.dictionary)),
+                ),
+            )
+            .map_err(|e| {
+                MasterError::new(Some(&drive), "building the PDO remap", ErrorKind::Config, e)
+            })?
+        };
         for w in seq {
             writes.push((w.address, w.bytes(), w.description.clone()));
         }
-        // Synchronisation type and cycle time.
+        let remap_len = writes.len();
+        // Synchronisation type and cycle time: read first, written only when different, and
+        // a drive that does not take them by SDO is checked for compatibility (`write_sync`).
+        let mut sync_writes: Vec<SyncWrite> = Vec::new();
         if let Some(a) = profile.sync.sync_type_object {
-            writes.push((
-                a,
-                2u16.to_le_bytes().to_vec(),
-                "synchronisation type = DC SYNC0".into(),
-            ));
+            sync_writes.push(SyncWrite {
+                address: a,
+                value: 2,
+                len: 2,
+                what: SyncWhat::Type,
+            });
         }
         match profile.sync.cycle_time_object {
             Some(CycleTimeObject::Nanoseconds(a)) => {
-                writes.push((
-                    a,
-                    cycle_ns.to_le_bytes().to_vec(),
-                    format!("cycle time = {cycle_ns} ns"),
-                ));
+                sync_writes.push(SyncWrite {
+                    address: a,
+                    value: cycle_ns,
+                    len: 4,
+                    what: SyncWhat::CycleTime,
+                });
             }
             Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index: _ }) => {
                 let v = cycle_ns / unit_ns.max(1);
@@ -597,6 +1104,9 @@ pub fn configure<L: FrameLink>(
         }
 
         let complete_access = profile.complete_access;
+        let mut outcomes: Vec<SyncOutcome> = Vec::new();
+        let n_writes = writes.len();
+        let (pdo_writes, later) = writes.split_at(remap_len.min(n_writes));
         bus.with_coe(
             d.address,
             drive.clone(),
@@ -604,7 +1114,13 @@ pub fn configure<L: FrameLink>(
             T_STEP,
             async |c| {
                 c.drain().await?;
-                for (addr, bytes, _why) in &writes {
+                for (addr, bytes, _why) in pdo_writes {
+                    c.download(*addr, bytes, false).await?;
+                }
+                for w in &sync_writes {
+                    outcomes.push(write_sync(c, w).await?);
+                }
+                for (addr, bytes, _why) in later {
                     c.download(*addr, bytes, false).await?;
                 }
                 Ok(())
@@ -615,20 +1131,46 @@ pub fn configure<L: FrameLink>(
             // Name the purpose of the write that failed.
             if let Some((_, _, why)) = writes.iter().find(|(a, _, _)| e.step == a.to_string()) {
                 e.step = format!("writing {} ({why})", e.step);
+            } else if let Some(w) = sync_writes.iter().find(|w| e.step == w.address.to_string()) {
+                e.step = format!("writing {} ({})", e.step, w.describe());
             }
             e
         })?;
+        for (w, o) in sync_writes.iter().zip(&outcomes) {
+            match o.judge(w, profile) {
+                Ok(None) => {}
+                Ok(Some(note)) => {
+                    tracing::warn!("{drive}: {note}");
+                    warnings.push((drive.clone(), note));
+                }
+                Err(why) => {
+                    return Err(MasterError::new(
+                        Some(&drive),
+                        format!("writing {} ({})", w.address, w.describe()),
+                        ErrorKind::Incompatible,
+                        why,
+                    ));
+                }
+            }
+            if matches!(o, SyncOutcome::ReadOnly { .. }) && w.what == SyncWhat::CycleTime {
+                recheck.push((d.address, drive.clone(), w.address));
+            }
+        }
         tracing::info!("{drive}: configured ({} SDO writes)", writes.len());
     }
 
-    // SYNC0 on every DC drive; the SYNC0 start itself comes with `configure_dc_sync`.
-    for mut sd in group.iter_mut(bus.md()) {
-        sd.set_dc_sync(DcSync::Sync0);
+    // SYNC0 on every drive; the SYNC0 start itself comes with `configure_dc_sync`. I/O devices
+    // run free (SM-synchronous): the process data frame updates them.
+    let driven: Vec<u16> = drives_plan.iter().map(|(d, _, _)| d.position).collect();
+    for (i, mut sd) in group.iter_mut(bus.md()).enumerate() {
+        if driven.contains(&(i as u16)) {
+            sd.set_dc_sync(DcSync::Sync0);
+        }
     }
 
-    // Drain every mailbox: ethercrab reads the PDO configuration through its own SDO client,
-    // which panics if an emergency is waiting (ethercrab 0.7.1).
-    for (d, (_, profile)) in devices.iter().zip(&plan) {
+    // Drain every drive's mailbox: ethercrab reads the PDO configuration through its own SDO
+    // client, which panics if an emergency is waiting (ethercrab 0.7.1).
+    for &(d, _, profile) in &drives_plan {
         let drive = DriveRef {
             position: d.position,
             name: profile.name.to_string(),
@@ -667,8 +1209,8 @@ pub fn configure<L: FrameLink>(
     };
 
     // Resolve each drive's fields and check its image size against its mapping.
-    let mut drives = Vec::with_capacity(devices.len());
-    for ((d, (setup, profile)), mapping) in devices.iter().zip(plan).zip(mappings) {
+    let mut drives = Vec::with_capacity(drives_plan.len());
+    for ((d, setup, profile), mapping) in drives_plan.into_iter().zip(mappings) {
         let drive = DriveRef {
             position: d.position,
             name: profile.name.to_string(),
@@ -708,7 +1250,22 @@ pub fn configure<L: FrameLink>(
             mapping,
             layout,
             fields,
-            setup,
+            setup: setup.clone(),
+        });
+    }
+    // The I/O devices: their images as ethercrab sized them from their own configuration.
+    let mut io = Vec::new();
+    for (d, r) in devices.iter().zip(&plan) {
+        let Role::Io { why } = r else { continue };
+        let sd = group
+            .subdevice(bus.md(), d.position as usize)
+            .map_err(|e| bus_error(Some(&d.drive_ref()), "reading the process image", e))?;
+        let img = sd.io_raw();
+        io.push(ConfiguredIo {
+            info: d.clone(),
+            outputs: img.outputs().len(),
+            inputs: img.inputs().len(),
+            why: why.clone(),
         });
     }
 
@@ -750,10 +1307,45 @@ pub fn configure<L: FrameLink>(
             ));
         }
     };
+    // A read-only cycle time shows the SYNC0 cycle once SYNC0 runs (ETG.1020): check it, from
+    // the first SYNC0 on (after the start delay) for some cycles.
+    let wait = cfg.dc.start_delay + cfg.cycle * 20 + Duration::from_millis(200);
+    for (addr, drive, object) in recheck {
+        let until = crate::rt::monotonic_ns() + wait.as_nanos() as u64;
+        let reads = loop {
+            let v = bus.with_coe(addr, drive.clone(), false, T_STEP, async |c| {
+                c.upload(object, false).await
+            })?;
+            let v = le_u32(&v);
+            if v == cycle_ns || crate::rt::monotonic_ns() > until {
+                break v;
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        };
+        match reads {
+            x if x == cycle_ns => {}
+            0 => warnings.push((
+                drive,
+                format!("{object} (cycle time) still reads 0 with SYNC0 running at {cycle_ns} ns"),
+            )),
+            x => {
+                return Err(MasterError::new(
+                    Some(&drive),
+                    format!("checking {object} (cycle time) in SAFE-OP"),
+                    ErrorKind::Incompatible,
+                    format!(
+                        "the drive reports a cycle of {x} ns with SYNC0 running at {cycle_ns} ns"
+                    ),
+                ));
+            }
+        }
+    }
     Ok(Started {
         group,
         drives,
+        io,
         devices,
+        warnings,
     })
 }
 

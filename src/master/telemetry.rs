@@ -90,10 +90,10 @@ pub enum StopReason {
     },
     /// A re-start was requested.
     Restart,
-    /// A drive left OP.
+    /// A device (a drive or an I/O device) left OP.
     DriveLeftOp {
-        /// Axis index.
-        axis: u16,
+        /// Its position on the segment.
+        device: u16,
     },
     /// The working counter stayed wrong.
     WorkingCounter,
@@ -104,10 +104,10 @@ pub enum StopReason {
 pub enum EventKind {
     /// Every drive reached OP.
     AllOp,
-    /// A drive did not reach OP in time.
+    /// A device did not reach OP in time.
     OpTimeout {
-        /// Axis index.
-        axis: u16,
+        /// Its position on the segment.
+        device: u16,
         /// Its AL state register value.
         al_state: u8,
     },
@@ -125,21 +125,21 @@ pub enum EventKind {
         got: u16,
         /// Expected.
         expected: u16,
-        /// First axis whose state check came back without an answer (the missing drive).
+        /// Position of the first device whose state check came back without an answer.
         missing: Option<u16>,
     },
-    /// A drive's AL state changed.
+    /// A device's AL state changed.
     AlState {
-        /// Axis index.
-        axis: u16,
+        /// Its position on the segment.
+        device: u16,
         /// The raw AL status value.
         state: u8,
     },
     /// A drive left OP without being asked: its AL status and AL status code (0x0134), read
     /// in the cycle it was seen.
     LeftOp {
-        /// Axis index.
-        axis: u16,
+        /// Its position on the segment.
+        device: u16,
         /// The raw AL status value (0x0130).
         state: u8,
         /// The AL status code (0x0134); `None` if reading it failed.
@@ -168,6 +168,16 @@ pub enum EventKind {
     SegmentGone {
         /// Consecutive lost cycles.
         cycles: u32,
+    },
+    /// 0x60F4 stayed 0 for `cycles` cycles of motion in csp while the master's own following
+    /// error reached `master`: the drive does not compute it; it is flagged and not trusted.
+    DriveFollowingErrorStuck {
+        /// Axis index.
+        axis: u16,
+        /// Cycles of motion seen.
+        cycles: u32,
+        /// The master's largest |following error| so far, position units.
+        master: i64,
     },
     /// The master-side following-error monitor tripped.
     FollowingError {
@@ -243,10 +253,19 @@ pub struct AxisTelemetry {
     pub torque_demand: i16,
     /// Torque actual, drive units.
     pub torque_actual: i16,
-    /// Following error: 0x60F4 if mapped, otherwise demand − actual.
+    /// Following error as the master computes it: the position demand of
+    /// [`FEEDBACK_DELAY_CYCLES`](super::cycle::FEEDBACK_DELAY_CYCLES) cycles ago − the actual
+    /// position. The master-side limit uses this value.
     pub following_error: i64,
-    /// Largest |following error| seen while enabled.
+    /// Largest |following error| (the master's) seen while energised in csp.
     pub max_following_error: i64,
+    /// 0x60F4 as the drive reports it, if mapped (shown beside the master's value, never used
+    /// for the limit).
+    pub following_error_drive: Option<i64>,
+    /// Largest |0x60F4| seen while energised in csp.
+    pub max_following_error_drive: i64,
+    /// 0x60F4 stayed 0 while the axis moved: the drive does not compute it.
+    pub following_error_drive_stuck: bool,
     /// 0x603F, if mapped.
     pub error_code: u16,
     /// AL state register value.
@@ -308,6 +327,41 @@ pub enum Phase {
     Ended,
 }
 
+/// Input bytes of an I/O device a snapshot carries at most.
+pub const IO_TELEMETRY_BYTES: usize = 32;
+
+/// One I/O device (not driven) in a snapshot.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct IoTelemetry {
+    /// Position on the segment.
+    pub position: u16,
+    /// AL state register value.
+    pub al_state: u8,
+    /// The first [`IO_TELEMETRY_BYTES`] input bytes of the last exchange with a reply.
+    #[serde(skip)]
+    pub inputs: [u8; IO_TELEMETRY_BYTES],
+    /// How many of them are valid.
+    pub input_len: u16,
+}
+
+impl Default for IoTelemetry {
+    fn default() -> Self {
+        Self {
+            position: 0,
+            al_state: 0,
+            inputs: [0; IO_TELEMETRY_BYTES],
+            input_len: 0,
+        }
+    }
+}
+
+impl IoTelemetry {
+    /// The valid input bytes.
+    pub fn inputs(&self) -> &[u8] {
+        &self.inputs[..usize::from(self.input_len).min(IO_TELEMETRY_BYTES)]
+    }
+}
+
 /// The latest snapshot of the cycle.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Telemetry {
@@ -315,4 +369,6 @@ pub struct Telemetry {
     pub cycle: CycleTelemetry,
     /// One entry per axis.
     pub axes: Vec<AxisTelemetry>,
+    /// One entry per I/O device (not driven), in segment order.
+    pub io: Vec<IoTelemetry>,
 }

@@ -169,6 +169,14 @@ pub trait Device: AsAny + Send {
     /// and abort segmented transfers.
     fn mailbox_reset(&mut self) {}
 
+    /// The foreign-device behaviour this device shows ([`super::quirks`]). The ESC applies the
+    /// process-data ones itself ([`Quirk::StaleInputsUntilOp`](super::quirks::Quirk::StaleInputsUntilOp),
+    /// [`Quirk::OutputsInSafeOp`](super::quirks::Quirk::OutputsInSafeOp)); the device applies
+    /// the rest.
+    fn quirks(&self) -> super::quirks::Quirks {
+        super::quirks::Quirks::NONE
+    }
+
     /// Apply an injected fault ([`super::faults`]); `false` if the device does not support it.
     /// Must not allocate: it runs on the thread that processes frames.
     fn inject(&mut self, fault: &super::faults::DeviceFault) -> bool {

@@ -15,6 +15,8 @@
 //!   alarms, SDO aborts, emergencies in the middle of an SDO transfer;
 //! - [`clock`]: host and manual time sources;
 //! - [`probe`]: a minimal datagram sender for tests and tools;
+//! - [`quirks`]: behaviour of devices ecdrive did not write, switchable on the emulated devices
+//!   (`bdhde+no-state-skipping`);
 //! - [`run`]: serving named devices on an interface (`ecdrive sim`);
 //! - [`rec`]: the emulation's own choices (\[REC\]) in one place.
 //!
@@ -40,6 +42,7 @@ pub mod drives;
 pub mod esc;
 pub mod faults;
 pub mod probe;
+pub mod quirks;
 pub mod rec;
 pub mod run;
 pub mod segment;

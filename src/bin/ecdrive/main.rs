@@ -296,13 +296,14 @@ enum Command {
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
     /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves.
     #[command(
-        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde\n  ecdrive sim -i veth1 -d mr-j4-tm -d bdhde --drop 1% --seed 7 --delay 5%:200us\n  ecdrive sim -i veth1 -d mr-j4-tm --disconnect-at 5s --reconnect-at 8s --alarm 0:AL.52@12s\n\nFault times (T) count from the start of serving and need a unit (500ms, 5s); positions (POS)\nare 0-based in --device order; numbers are decimal or 0x hex. The counters of injected faults\nare printed when ecdrive sim stops (and are in its --json output)."
+        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde\n  ecdrive sim -i veth1 -d mr-j4-tm -d bdhde --drop 1% --seed 7 --delay 5%:200us\n  ecdrive sim -i veth1 -d mr-j4-tm --disconnect-at 5s --reconnect-at 8s --alarm 0:AL.52@12s\n  ecdrive sim -i veth1 -d bdhde+no-state-skipping -d generic-coe+cycle-time-read-only\n\nA device takes quirks after '+' (behaviour of devices ecdrive did not write; listed by\n--list-devices). Fault times (T) count from the start of serving and need a unit (500ms, 5s); positions (POS)\nare 0-based in --device order; numbers are decimal or 0x hex. The counters of injected faults\nare printed when ecdrive sim stops (and are in its --json output)."
     )]
     Sim {
         /// Interface to serve on (e.g. one end of a veth pair).
         #[arg(long, short, required_unless_present = "list_devices")]
         interface: Option<String>,
-        /// A device, in line order; repeat for more devices.
+        /// A device, in line order; repeat for more devices. NAME+QUIRK[+QUIRK…] makes it
+        /// behave like a device ecdrive did not write (see --list-devices).
         #[arg(long = "device", short = 'd', value_name = "NAME")]
         devices: Vec<String>,
         /// SM watchdog reset value in units of 100 µs (0 disables it; default: the ESC reset
@@ -313,7 +314,7 @@ enum Command {
         /// [Pr. PN06]/[Pr. PN02] so set): for masters that cannot keep the cycle.
         #[arg(long)]
         no_loss_detection: bool,
-        /// List the device names and exit.
+        /// List the device names and the quirks, and exit.
         #[arg(long)]
         list_devices: bool,
         #[command(flatten)]
@@ -438,7 +439,10 @@ pub fn exit_code(kind: &ErrorKind) -> u8 {
     match kind {
         ErrorKind::Config | ErrorKind::UnknownDevice => exit::USAGE,
         ErrorKind::Discovery | ErrorKind::Timeout | ErrorKind::Link | ErrorKind::Bus => exit::BUS,
-        ErrorKind::Sdo(_) | ErrorKind::AlState(_) | ErrorKind::DcSettle => exit::REFUSED,
+        ErrorKind::Sdo(_)
+        | ErrorKind::AlState(_)
+        | ErrorKind::DcSettle
+        | ErrorKind::Incompatible => exit::REFUSED,
         ErrorKind::DriveFault => exit::FAULT,
     }
 }

@@ -511,7 +511,39 @@ pub fn run_report(r: &RunReport) {
         r.run_seconds,
         r.cycle_ns / 1000
     );
-    for d in &r.drives {
+    let last = r
+        .drives
+        .iter()
+        .map(|d| d.position)
+        .chain(r.io.iter().map(|o| o.position))
+        .max();
+    for pos in 0..=last.unwrap_or(0) {
+        if let Some(o) = r.io.iter().find(|o| o.position == pos) {
+            println!();
+            println!(
+                "Device {} {} (vendor 0x{:08X} product 0x{:08X}), not driven: {}",
+                o.position, o.device.name, o.device.vendor_id, o.device.product_code, o.why
+            );
+            println!(
+                "  Process data:        {} output, {} input bytes",
+                o.outputs, o.inputs
+            );
+            println!(
+                "  Last inputs:         {}",
+                if o.last_inputs.is_empty() {
+                    "none".to_string()
+                } else {
+                    o.last_inputs
+                        .iter()
+                        .map(|b| format!("{b:02X}"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                }
+            );
+        }
+        let Some(d) = r.drives.iter().find(|d| d.position == pos) else {
+            continue;
+        };
         println!();
         println!(
             "Drive {} {} ({}, vendor 0x{:08X} product 0x{:08X}), start mode {}",
@@ -526,12 +558,21 @@ pub fn run_report(r: &RunReport) {
                 d.modes_run.join(", ")
             }
         );
+        let drive_fe = if d.following_error_drive_stuck {
+            "; the drive's 0x60F4 stayed 0 while moving (not trusted)".to_string()
+        } else {
+            d.max_following_error_drive
+                .map_or(String::new(), |v| format!("; drive's 0x60F4 at most {v}"))
+        };
         match (&d.units, d.max_following_error_units) {
             (Some(u), Some(v)) => println!(
-                "  Max following error: {} counts ({v:.4} {})",
+                "  Max following error: {} counts ({v:.4} {}){drive_fe}",
                 d.max_following_error, u.name
             ),
-            _ => println!("  Max following error: {} counts", d.max_following_error),
+            _ => println!(
+                "  Max following error: {} counts{drive_fe}",
+                d.max_following_error
+            ),
         }
         println!(
             "  Program:             {}/{} steps{}",

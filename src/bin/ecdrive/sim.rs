@@ -437,20 +437,40 @@ pub fn sim(
 ) -> ExitCode {
     if list_devices {
         let names = ecdrive::sim::devices::device_names();
+        use ecdrive::sim::quirks::Quirk;
         if json {
             #[derive(serde::Serialize)]
             struct Dev {
                 name: &'static str,
                 description: String,
             }
-            let list: Vec<Dev> = names
-                .into_iter()
-                .map(|(name, description)| Dev { name, description })
-                .collect();
+            #[derive(serde::Serialize)]
+            struct List {
+                devices: Vec<Dev>,
+                quirks: Vec<Dev>,
+            }
+            let list = List {
+                devices: names
+                    .into_iter()
+                    .map(|(name, description)| Dev { name, description })
+                    .collect(),
+                quirks: Quirk::ALL
+                    .into_iter()
+                    .map(|q| Dev {
+                        name: q.name(),
+                        description: q.describe().into(),
+                    })
+                    .collect(),
+            };
             return print_json("sim", &list);
         }
         for (name, what) in names {
             println!("{name:14} {what}");
+        }
+        println!();
+        println!("Quirks (behaviour of devices ecdrive did not write): DEVICE+QUIRK[+QUIRK…]");
+        for q in Quirk::ALL {
+            println!("  {:22} {}", q.name(), q.describe());
         }
         return ExitCode::SUCCESS;
     }

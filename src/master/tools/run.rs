@@ -106,8 +106,13 @@ pub struct DriveRunReport {
     pub states: Vec<String>,
     /// Modes it ran set-points in, in order.
     pub modes_run: Vec<String>,
-    /// Largest |following error| while energised in csp, position counts.
+    /// Largest |following error| while energised in csp, position counts, as the master
+    /// computes it (demand − actual with the cycle's transport delay); the limit uses it.
     pub max_following_error: i64,
+    /// Largest |0x60F4| the drive reported meanwhile, if it is mapped.
+    pub max_following_error_drive: Option<i64>,
+    /// 0x60F4 stayed 0 while the axis moved: the drive does not compute it (not trusted).
+    pub following_error_drive_stuck: bool,
     /// The same in user units, if the file gives units.
     pub max_following_error_units: Option<f64>,
     /// The user units.
@@ -118,6 +123,24 @@ pub struct DriveRunReport {
     pub steps_done: usize,
     /// Faults and errors the history records for this drive.
     pub errors: Vec<String>,
+}
+
+/// One device that was not driven (an I/O device) after a run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IoRunReport {
+    /// Position on the segment.
+    pub position: u16,
+    /// Identity and SII name.
+    pub device: DeviceInfo,
+    /// Why it was not driven.
+    pub why: String,
+    /// Output bytes.
+    pub outputs: usize,
+    /// Input bytes.
+    pub inputs: usize,
+    /// The input bytes of the last cycle with a reply before the stop (at most
+    /// [`crate::master::telemetry::IO_TELEMETRY_BYTES`]).
+    pub last_inputs: Vec<u8>,
 }
 
 /// What a run did.
@@ -137,6 +160,9 @@ pub struct RunReport {
     pub run_seconds: f64,
     /// Per drive, in segment order.
     pub drives: Vec<DriveRunReport>,
+    /// The devices that were not driven, in segment order: in OP with their own PDO
+    /// configuration, their process data exchanged.
+    pub io: Vec<IoRunReport>,
     /// Cycle timing.
     pub cycle: Option<CycleSummary>,
     /// Whether every drive reached INIT at the end.
@@ -377,6 +403,23 @@ pub fn run(
         .map(|a| usize::from(a.program_step))
         .collect();
     let summaries = m.drives().to_vec();
+    let io: Vec<IoRunReport> = m
+        .io()
+        .iter()
+        .map(|o| IoRunReport {
+            position: o.info.position,
+            device: o.info.clone(),
+            why: o.why.clone(),
+            outputs: o.image_bytes.0,
+            inputs: o.image_bytes.1,
+            last_inputs: t
+                .io
+                .iter()
+                .find(|x| x.position == o.info.position)
+                .map(|x| x.inputs().to_vec())
+                .unwrap_or_default(),
+        })
+        .collect();
     let (report, _link) = m.stop(StopKind::Ramp);
     let Some(report) = report else {
         return Err(MasterError::new(
@@ -447,6 +490,12 @@ pub fn run(
                     .map(|v| v.iter().map(|m| m.name().to_string()).collect())
                     .unwrap_or_default(),
                 max_following_error: max_fe,
+                max_following_error_drive: cycle
+                    .and_then(|c| c.max_following_error_drive.get(i).copied())
+                    .flatten(),
+                following_error_drive_stuck: cycle
+                    .and_then(|c| c.following_error_drive_stuck.get(i).copied())
+                    .unwrap_or(false),
                 max_following_error_units: units
                     .as_ref()
                     .map(|u| max_fe as f64 / u.counts_per_unit),
@@ -479,6 +528,7 @@ pub fn run(
         cycle_ns: cfg.master.cycle.cycle.as_nanos() as u64,
         run_seconds,
         drives,
+        io,
         cycle: cycle.map(|c| CycleSummary {
             cycles: c.cycles,
             lost: c.lost,

@@ -37,6 +37,7 @@ use crate::ec::mailbox::{
     SdoInfoRequest, SdoRequest, SdoResponse, list_type, value_info,
 };
 use crate::od::{ConstValue, EntryDesc, SdoAbortCode};
+use crate::sim::quirks::{self, Quirk, Quirks};
 use std::collections::VecDeque;
 
 // ---------------------------------------------------------------------------------------------
@@ -74,6 +75,10 @@ pub struct CoeConfig {
     /// Largest object value or complete-access image transferred, in bytes. A longer segmented
     /// download is refused at its start (0x06070012).
     pub max_object_size: usize,
+    /// Foreign-device behaviour (see [`crate::sim::quirks`]); the server applies
+    /// [`Quirk::NoSdoInfo`], [`Quirk::NoCompleteAccess`], [`Quirk::SdoInfoBadEntry`],
+    /// [`Quirk::SdoInfoShortEntry`] and [`Quirk::OddAbort`].
+    pub quirks: Quirks,
 }
 
 impl Default for CoeConfig {
@@ -85,6 +90,7 @@ impl Default for CoeConfig {
             sdo_info: true,
             emergency_queue_len: DEFAULT_EMERGENCY_QUEUE_LEN,
             max_object_size: DEFAULT_MAX_OBJECT_SIZE,
+            quirks: Quirks::NONE,
         }
     }
 }
@@ -310,11 +316,17 @@ impl CoeServer {
         };
         match coe.service() {
             Some(CoeService::SdoRequest) => self.handle_sdo(coe.payload(), state, od, reply),
-            Some(CoeService::SdoInfo) if self.config.sdo_info => {
+            Some(CoeService::SdoInfo)
+                if self.config.sdo_info && !self.config.quirks.has(Quirk::NoSdoInfo) =>
+            {
                 self.handle_info(coe.payload(), od, reply)
             }
             _ => self.mailbox_error(MailboxErrorDetail::ServiceNotSupported, reply),
         }
+    }
+
+    fn complete_access(&self) -> bool {
+        self.config.complete_access && !self.config.quirks.has(Quirk::NoCompleteAccess)
     }
 
     // -----------------------------------------------------------------------------------------
@@ -370,6 +382,15 @@ impl CoeServer {
             },
             reply,
         )?;
+        if self.config.quirks.has(Quirk::OddAbort) {
+            // CoE header bytes 6–7 (service in bits 12–15), SDO command byte 8.
+            if let Some(h) = reply.get_mut(7) {
+                *h = (*h & 0x0F) | ((CoeService::SdoRequest as u8) << 4);
+            }
+            if let Some(c) = reply.get_mut(8) {
+                *c = quirks::ODD_ABORT_COMMAND;
+            }
+        }
         self.stats.aborts_sent += 1;
         Some(n)
     }
@@ -516,7 +537,7 @@ impl CoeServer {
     ) -> Option<usize> {
         // A new initiate ends any transfer in progress, as on a device with one SDO channel.
         self.transfer = Transfer::Idle;
-        if complete_access && !self.config.complete_access {
+        if complete_access && !self.complete_access() {
             return self.abort(index, sub, SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED, reply);
         }
         self.data.clear();
@@ -639,7 +660,7 @@ impl CoeServer {
         od: &mut dyn ObjectStore,
         reply: &mut [u8],
     ) -> Option<usize> {
-        if complete_access && !self.config.complete_access {
+        if complete_access && !self.complete_access() {
             return self.abort(index, sub, SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED, reply);
         }
         let written = if complete_access {
@@ -679,7 +700,7 @@ impl CoeServer {
             );
         }
         // Segmented: refuse early what cannot succeed.
-        if complete_access && !self.config.complete_access {
+        if complete_access && !self.complete_access() {
             return self.abort(index, sub, SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED, reply);
         }
         let exists = if complete_access {
@@ -788,12 +809,25 @@ impl CoeServer {
             }
             SdoInfoRequest::ObjectDescription { index } => object_description(od, index, &mut info)
                 .map(|()| SdoInfoOpcode::ObjectDescriptionResponse),
+            SdoInfoRequest::EntryDescription { index, sub, .. }
+                if self.config.quirks.has(Quirk::SdoInfoBadEntry)
+                    && (index, sub) == quirks::BAD_INFO_ENTRY =>
+            {
+                Err(SdoAbortCode(0))
+            }
             SdoInfoRequest::EntryDescription {
                 index,
                 sub,
                 value_info,
-            } => entry_description(od, index, sub, value_info, &mut info)
-                .map(|()| SdoInfoOpcode::EntryDescriptionResponse),
+            } => entry_description(od, index, sub, value_info, &mut info).map(|()| {
+                if self.config.quirks.has(Quirk::SdoInfoShortEntry)
+                    && (index, sub) == quirks::SHORT_INFO_ENTRY
+                {
+                    // Index, sub-index and value info only.
+                    info.truncate(4);
+                }
+                SdoInfoOpcode::EntryDescriptionResponse
+            }),
         };
         self.info = info;
         match built {

@@ -11,6 +11,7 @@ use crate::pdo::{Direction, Mapping, PdoEntry, PdoLimits, ReadbackError, read_ma
 use core::ops::{Deref, DerefMut};
 
 use super::{MAX_UNSIZED_STRING, RECORD_DATA_TYPE};
+use crate::sim::quirks::{Quirk, Quirks};
 
 /// Why a descriptor table cannot be served.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -699,6 +700,20 @@ impl OdHooks for NoHooks {}
 pub struct OdStore {
     dict: ValueStore,
     hooks: Box<dyn OdHooks>,
+    /// [`Quirk::SyncObjectsAbsent`] / [`Quirk::CycleTimeReadOnly`] as the master sees them.
+    sync_objects: SyncObjects,
+}
+
+/// How 0x1C32/0x1C33 (the SyncManager parameters) appear to the master.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum SyncObjects {
+    AsDescribed,
+    ReadOnly,
+    Absent,
+}
+
+fn is_sync_object(index: u16) -> bool {
+    matches!(index, 0x1C32 | 0x1C33)
 }
 
 impl core::fmt::Debug for OdStore {
@@ -715,7 +730,40 @@ impl OdStore {
         Ok(Self {
             dict: ValueStore::new(objects)?,
             hooks: Box::new(NoHooks),
+            sync_objects: SyncObjects::AsDescribed,
         })
+    }
+
+    /// With the object-dictionary quirks among `quirks` ([`Quirk::CycleTimeReadOnly`],
+    /// [`Quirk::SyncObjectsAbsent`]); the others are not the store's.
+    pub fn with_quirks(mut self, quirks: Quirks) -> Self {
+        self.set_quirks(quirks);
+        self
+    }
+
+    /// [`with_quirks`](Self::with_quirks) on a store already built.
+    pub fn set_quirks(&mut self, quirks: Quirks) {
+        self.sync_objects = if quirks.has(Quirk::SyncObjectsAbsent) {
+            SyncObjects::Absent
+        } else if quirks.has(Quirk::CycleTimeReadOnly) {
+            SyncObjects::ReadOnly
+        } else {
+            SyncObjects::AsDescribed
+        };
+    }
+
+    /// Whether the master sees the object at `index` (the device itself always does).
+    fn visible(&self, index: u16) -> bool {
+        !(self.sync_objects == SyncObjects::Absent && is_sync_object(index))
+    }
+
+    /// The access the master sees for entry `e` of the object at `index`.
+    fn access(&self, index: u16, e: &EntryDesc) -> EntryAccess {
+        if self.sync_objects == SyncObjects::ReadOnly && is_sync_object(index) && e.sub == 2 {
+            e.access - EntryAccess::W
+        } else {
+            e.access
+        }
     }
 
     /// With device hooks.
@@ -746,6 +794,9 @@ impl OdStore {
     }
 
     fn lookup(&self, index: u16, sub: u8) -> Result<&'static EntryDesc, SdoAbortCode> {
+        if !self.visible(index) {
+            return Err(SdoAbortCode::NO_OBJECT);
+        }
         let obj = self
             .dict
             .object_desc(index)
@@ -770,6 +821,9 @@ impl DerefMut for OdStore {
 
 impl ObjectStore for OdStore {
     fn object(&self, index: u16) -> Option<ObjectInfo> {
+        if !self.visible(index) {
+            return None;
+        }
         let o = self.dict.object_desc(index)?;
         let max_sub = o.entries.iter().map(|e| e.sub).max().unwrap_or(0);
         let data_type = match o.code {
@@ -795,7 +849,9 @@ impl ObjectStore for OdStore {
     }
 
     fn entry(&self, index: u16, sub: u8) -> Result<EntryDesc, SdoAbortCode> {
-        self.lookup(index, sub).copied()
+        let mut e = *self.lookup(index, sub)?;
+        e.access = self.access(index, &e);
+        Ok(e)
     }
 
     fn next_index(&self, after: Option<u16>) -> Option<u16> {
@@ -806,7 +862,13 @@ impl ObjectStore for OdStore {
                 Err(p) => p,
             },
         };
-        self.dict.objects.get(start).map(|o| o.index)
+        self.dict
+            .objects
+            .get(start..)
+            .unwrap_or(&[])
+            .iter()
+            .map(|o| o.index)
+            .find(|i| self.visible(*i))
     }
 
     fn read(
@@ -843,9 +905,10 @@ impl ObjectStore for OdStore {
         let obj = self
             .dict
             .object_desc(index)
+            .filter(|_| self.visible(index))
             .ok_or(SdoAbortCode::NO_OBJECT)?;
         let e = obj.entry(sub).ok_or(SdoAbortCode::NO_SUBINDEX)?;
-        if !e.access.writable() {
+        if !self.access(index, e).writable() {
             return Err(SdoAbortCode::READ_ONLY);
         }
         if !allowed_in(e.access, state, true) {

@@ -16,6 +16,7 @@ use crate::pdo::{Direction, Mapping};
 use crate::sim::coe::hooks::{AllowedValues, Chain, Mirror};
 use crate::sim::coe::{CoeConfig, CoeServer, Emergency, OdError, OdStore};
 use crate::sim::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
+use crate::sim::quirks::{Capabilities, Quirk, Quirks};
 use crate::sim::sii::{
     CoeDetails, DcOpMode, DeviceDescription, FmmuUsage, Identity, MailboxDesc, MailboxProtocols,
     SmDesc, SmEnable, SmType,
@@ -364,6 +365,7 @@ pub struct GenericCoeDevice {
     tx: Vec<Slot>,
     power: PowerState,
     prev_cw: u16,
+    quirks: Quirks,
     /// What the device has seen.
     pub seen: CoeObservations,
 }
@@ -415,8 +417,30 @@ impl GenericCoeDevice {
             tx: Vec::new(),
             power: PowerState::SwitchOnDisabled,
             prev_cw: 0,
+            quirks: Quirks::NONE,
             seen: CoeObservations::default(),
         })
+    }
+
+    /// What the device has, for [`Quirks::check_for`]: a CoE mailbox and CiA 402 device
+    /// control, but no 0x60F4.
+    pub const CAPABILITIES: Capabilities = Capabilities {
+        coe: true,
+        cia402: true,
+        following_error: false,
+    };
+
+    /// The same device behaving like one ecdrive did not write ([`crate::sim::quirks`]).
+    /// [`Quirk::FollowingErrorZero`] does not apply (it has no 0x60F4).
+    pub fn with_quirks(mut self, quirks: Quirks) -> Result<Self, String> {
+        quirks.check_for(GENERIC_COE_ORDER, Self::CAPABILITIES)?;
+        self.quirks = quirks;
+        self.coe = CoeServer::new(CoeConfig {
+            quirks,
+            ..CoeConfig::default()
+        });
+        self.od.set_quirks(quirks);
+        Ok(self)
     }
 
     /// The object dictionary (device view).
@@ -473,7 +497,16 @@ impl GenericCoeDevice {
     fn application(&mut self, event: &SyncEvent) {
         let cw = self.od.dict().uint(CONTROLWORD).unwrap_or(0) as u16;
         let mut power = if event.outputs_enabled {
-            self.power.next(cw, self.prev_cw)
+            let p = self.power.next(cw, self.prev_cw);
+            if self.quirks.has(Quirk::NoStateSkipping)
+                && self.power == PowerState::ReadyToSwitchOn
+                && p == PowerState::OperationEnabled
+            {
+                // Switch on and enable operation at once (3 + 4) is not taken.
+                self.power
+            } else {
+                p
+            }
         } else if self.power == PowerState::OperationEnabled || self.power == PowerState::SwitchedOn
         {
             // Outputs invalid (SAFE-OP): a drive drops its power stage.
@@ -554,6 +587,10 @@ fn copy_bits(src: &[u8], from: usize, dst: &mut [u8], to: usize, bits: usize) {
 }
 
 impl Device for GenericCoeDevice {
+    fn quirks(&self) -> Quirks {
+        self.quirks
+    }
+
     fn description(&self) -> DeviceDescription {
         DeviceDescription {
             identity: Identity {
@@ -573,8 +610,11 @@ impl Device for GenericCoeDevice {
                 protocols: MailboxProtocols::COE,
                 bootstrap: None,
             }),
-            coe_details: CoeDetails::SDO
-                | CoeDetails::SDO_INFO
+            coe_details: if self.quirks.has(Quirk::NoSdoInfo) {
+                CoeDetails::empty()
+            } else {
+                CoeDetails::SDO_INFO
+            } | CoeDetails::SDO
                 | CoeDetails::PDO_ASSIGN
                 | CoeDetails::PDO_CONFIG
                 | CoeDetails::COMPLETE_ACCESS,
@@ -753,6 +793,9 @@ impl Device for GenericCoeDevice {
         inputs: &mut [u8],
     ) -> Result<(), AlStatusCode> {
         self.seen.cycles += 1;
+        if self.quirks.has(Quirk::CycleTimeReadOnly) {
+            crate::sim::quirks::show_sync0_cycle(self.od.dict_mut(), event);
+        }
         if event.kind == SyncKind::Sync0 {
             self.seen.sync0_events += 1;
             self.seen.sync0_cycle_ns = event.cycle_time_ns;

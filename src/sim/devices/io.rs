@@ -2,6 +2,7 @@
 
 use crate::ec::{AlState, AlStatusCode};
 use crate::sim::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
+use crate::sim::quirks::{Capabilities, Quirks};
 use crate::sim::sii::{
     DcOpMode, DeviceDescription, FmmuUsage, Identity, PdoDesc, PdoEntryDesc, SmDesc, SmEnable,
     SmType,
@@ -43,6 +44,7 @@ pub struct IoDevice {
     serial: u32,
     refuse: Option<(AlState, AlStatusCode)>,
     counter: u16,
+    quirks: Quirks,
     /// What the device has seen.
     pub seen: IoObservations,
 }
@@ -56,8 +58,17 @@ impl IoDevice {
             serial: 0,
             refuse: None,
             counter: 0,
+            quirks: Quirks::NONE,
             seen: IoObservations::default(),
         }
+    }
+
+    /// The same device behaving like one ecdrive did not write ([`crate::sim::quirks`]):
+    /// only the process-data quirks apply (it has no mailbox and no CiA 402).
+    pub fn with_quirks(mut self, quirks: Quirks) -> Result<Self, String> {
+        quirks.check_for("generic-io", Capabilities::default())?;
+        self.quirks = quirks;
+        Ok(self)
     }
 
     /// With a serial number.
@@ -87,6 +98,10 @@ impl IoDevice {
 }
 
 impl Device for IoDevice {
+    fn quirks(&self) -> Quirks {
+        self.quirks
+    }
+
     fn description(&self) -> DeviceDescription {
         let mut sync_managers = Vec::new();
         let mut fmmus = Vec::new();

@@ -22,6 +22,7 @@ pub use generic_coe::{CoeObservations, GenericCoeDevice};
 pub use io::{IoDevice, IoObservations, TEST_VENDOR_ID};
 
 use super::device::Device;
+use super::quirks::split_name;
 
 /// Why [`by_name`] cannot create a device.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -33,6 +34,14 @@ pub enum DeviceError {
         name: String,
         /// The names accepted.
         known: String,
+    },
+    /// A quirk is unknown or does not apply to the device.
+    #[error("device {name:?}: {reason}")]
+    Quirk {
+        /// The device name as given.
+        name: String,
+        /// Why.
+        reason: String,
     },
     /// The device's built-in data is inconsistent.
     #[error("device {name:?} cannot be built: {reason}")]
@@ -91,34 +100,57 @@ pub fn known_names() -> String {
 }
 
 /// Check a device name without building the device (cheap: no ESI parse, no dictionary):
-/// the error [`by_name`] would give for an unknown name.
+/// the error [`by_name`] would give for an unknown name or quirk.
 pub fn check_name(name: &str) -> Result<(), DeviceError> {
-    if device_names().iter().any(|(n, _)| *n == name) {
+    let (base, _) = split_name(name).map_err(|reason| DeviceError::Quirk {
+        name: name.into(),
+        reason,
+    })?;
+    if device_names().iter().any(|(n, _)| *n == base) {
         Ok(())
     } else {
         Err(DeviceError::Unknown {
-            name: name.into(),
+            name: base.into(),
             known: known_names(),
         })
     }
 }
 
-/// Create a device by name (see [`device_names`]). `position` makes serial numbers unique.
+/// Create a device by name (see [`device_names`]), with the quirks named after `+`
+/// (`bdhde+no-state-skipping`, see [`crate::sim::quirks`]). `position` makes serial numbers
+/// unique.
 pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
     let serial = u32::try_from(position).unwrap_or(u32::MAX);
-    match name {
+    let (base, quirks) = split_name(name).map_err(|reason| DeviceError::Quirk {
+        name: name.into(),
+        reason,
+    })?;
+    let quirk_error = |reason: String| DeviceError::Quirk {
+        name: name.into(),
+        reason,
+    };
+    match base {
         "generic-coe" => GenericCoeDevice::new(serial)
-            .map(|d| Box::new(d) as Box<dyn Device>)
             .map_err(|e| DeviceError::Build {
                 name: name.into(),
                 reason: e.to_string(),
-            }),
-        "generic-io" => Ok(Box::new(IoDevice::new(2, 4).with_serial(serial))),
-        "echo-mailbox" => Ok(Box::new(EchoMailbox::new().with_serial(serial))),
-        _ => match crate::drives::all().iter().find(|p| p.key == name) {
-            Some(p) => super::drives::emulated(p, serial),
+            })?
+            .with_quirks(quirks)
+            .map(|d| Box::new(d) as Box<dyn Device>)
+            .map_err(quirk_error),
+        "generic-io" => IoDevice::new(2, 4)
+            .with_serial(serial)
+            .with_quirks(quirks)
+            .map(|d| Box::new(d) as Box<dyn Device>)
+            .map_err(quirk_error),
+        "echo-mailbox" if quirks.is_empty() => Ok(Box::new(EchoMailbox::new().with_serial(serial))),
+        "echo-mailbox" => Err(quirk_error(
+            "the echo-mailbox device takes no quirks".into(),
+        )),
+        _ => match crate::drives::all().iter().find(|p| p.key == base) {
+            Some(p) => super::drives::emulated_with(p, serial, quirks),
             None => Err(DeviceError::Unknown {
-                name: name.into(),
+                name: base.into(),
                 known: known_names(),
             }),
         },

@@ -15,6 +15,7 @@ use crate::pdo::Direction;
 use crate::sim::coe::hooks::{AllowedValues, Chain, Mirror, RefuseMappedWrites, RefuseWrites};
 use crate::sim::coe::{CoeConfig, CoeServer, OdError, OdStore};
 use crate::sim::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
+use crate::sim::quirks::{Quirk, Quirks};
 use crate::sim::sii::DeviceDescription;
 
 /// Object addresses the engine reads and writes.
@@ -212,6 +213,7 @@ pub struct EmulatedDrive {
     last_emcy: Option<Emergency>,
     last_dt_ns: u32,
     stats: DriveStats,
+    quirks: Quirks,
 }
 
 impl core::fmt::Debug for EmulatedDrive {
@@ -321,6 +323,7 @@ impl EmulatedDrive {
             last_emcy: None,
             last_dt_ns: 1_000_000,
             stats: DriveStats::default(),
+            quirks: Quirks::NONE,
         };
         d.power_on();
         Ok(d)
@@ -610,7 +613,33 @@ impl EmulatedDrive {
         if self.qs_immediate {
             qs = QuickStopOption::vendor(qs.code, StopRamp::Immediate, qs.end);
         }
-        DeviceConfig::from_caps(caps, qs)
+        let mut c = DeviceConfig::from_caps(caps, qs);
+        if self.quirks.has(Quirk::NoStateSkipping) {
+            c.state_skipping = false;
+        }
+        c
+    }
+
+    /// What an emulated drive has, for [`Quirks::check_for`]: everything.
+    pub const CAPABILITIES: crate::sim::quirks::Capabilities = crate::sim::quirks::Capabilities {
+        coe: true,
+        cia402: true,
+        following_error: true,
+    };
+
+    /// The same drive behaving like a device ecdrive did not write ([`crate::sim::quirks`]):
+    /// every quirk applies (the drive has a CoE mailbox and CiA 402 device control).
+    pub fn with_quirks(mut self, quirks: Quirks) -> Self {
+        self.quirks = quirks;
+        self.coe = CoeServer::new(CoeConfig {
+            complete_access: self.spec.profile.complete_access,
+            sdo_info: esi_sdo_info(self.spec),
+            quirks,
+            ..CoeConfig::default()
+        });
+        self.od.set_quirks(quirks);
+        self.fsa = Fsa::with_state(self.fsa_config(), self.fsa.state());
+        self
     }
 
     /// Rebuild the state machine when the quick-stop behaviour changed (0x605A, or the
@@ -818,7 +847,12 @@ impl EmulatedDrive {
             self.fe_flag = false;
         }
         let fe_i = (fe.round() as i64).clamp(i64::from(i32::MIN), i64::from(i32::MAX));
-        let _ = self.od.dict_mut().set_int(obj::FOLLOWING_ERROR, fe_i);
+        let shown = if self.quirks.has(Quirk::FollowingErrorZero) {
+            0
+        } else {
+            fe_i
+        };
+        let _ = self.od.dict_mut().set_int(obj::FOLLOWING_ERROR, shown);
     }
 
     /// Torque and speed limits of the next cycle.
@@ -1416,9 +1450,18 @@ fn esi_sdo_info(spec: &DriveSpec) -> bool {
 }
 
 impl Device for EmulatedDrive {
+    fn quirks(&self) -> Quirks {
+        self.quirks
+    }
+
     fn description(&self) -> DeviceDescription {
         match super::description(self.spec.profile, self.serial) {
-            Ok(d) => d,
+            Ok(mut d) => {
+                if self.quirks.has(Quirk::NoSdoInfo) {
+                    d.coe_details.remove(crate::sim::sii::CoeDetails::SDO_INFO);
+                }
+                d
+            }
             Err(e) => {
                 // The profile's ESI is part of the build and checked by the tests; an error here
                 // is a programming error, reported and answered with an empty device.
@@ -1595,6 +1638,9 @@ impl Device for EmulatedDrive {
         outputs: &[u8],
         inputs: &mut [u8],
     ) -> Result<(), AlStatusCode> {
+        if self.quirks.has(Quirk::CycleTimeReadOnly) {
+            crate::sim::quirks::show_sync0_cycle(self.od.dict_mut(), event);
+        }
         self.cycle(event, outputs);
         for s in &self.tx {
             if let Some(v) = self.od.dict().raw(s.addr) {

@@ -63,6 +63,7 @@ pub use spec::DriveSpec;
 
 use super::device::Device;
 use super::devices::DeviceError;
+use super::quirks::Quirks;
 use super::sii::DeviceDescription;
 use crate::drives::DriveProfile;
 
@@ -84,12 +85,28 @@ pub fn spec_for(profile: &DriveProfile) -> Option<&'static DriveSpec> {
 /// The emulated drive of `profile` with serial number `serial`, ready to push onto a
 /// [`crate::sim::Segment`].
 pub fn emulated(profile: &DriveProfile, serial: u32) -> Result<Box<dyn Device>, DeviceError> {
+    emulated_with(profile, serial, Quirks::NONE)
+}
+
+/// [`emulated`], behaving like a device ecdrive did not write ([`crate::sim::quirks`]; every
+/// quirk applies to the emulated drives).
+pub fn emulated_with(
+    profile: &DriveProfile,
+    serial: u32,
+    quirks: Quirks,
+) -> Result<Box<dyn Device>, DeviceError> {
     let spec = spec_for(profile).ok_or_else(|| DeviceError::Build {
         name: profile.key.to_string(),
         reason: format!("ecdrive has no emulation of the {}", profile.name),
     })?;
+    quirks
+        .check_for(profile.key, EmulatedDrive::CAPABILITIES)
+        .map_err(|reason| DeviceError::Quirk {
+            name: profile.key.to_string(),
+            reason,
+        })?;
     EmulatedDrive::new(spec, serial)
-        .map(|d| Box::new(d) as Box<dyn Device>)
+        .map(|d| Box::new(d.with_quirks(quirks)) as Box<dyn Device>)
         .map_err(|e| DeviceError::Build {
             name: profile.key.to_string(),
             reason: e.to_string(),

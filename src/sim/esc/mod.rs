@@ -18,6 +18,7 @@ pub use regs::{IMPLEMENTED, REG_SPACE, RegisterMap, TRIGGER};
 pub use timing::TimingStats;
 
 use super::device::{DcSyncStatus, Device, StateRequest, SyncEvent, SyncKind};
+use super::quirks::Quirk;
 use super::rec;
 use super::sii::{self, DeviceDescription, SiiError, SiiImage, SmType};
 use crate::ec::{AlState, AlStatusCode, Command};
@@ -199,6 +200,8 @@ struct ProcessRt {
     outputs_received: u32,
     last_outputs_ns: Option<u64>,
     frame_cycles: u64,
+    /// Where a device with [`Quirk::StaleInputsUntilOp`] writes its inputs below OP.
+    scratch: Vec<u8>,
 }
 
 /// One emulated ESC.
@@ -1821,6 +1824,7 @@ impl Esc {
                 stats.sync0_without_outputs += 1;
             }
         }
+        let quirks = dev.quirks();
         let ev = SyncEvent {
             kind,
             time_ns: t,
@@ -1829,15 +1833,29 @@ impl Esc {
             state: self.state,
             outputs_received: core::mem::take(&mut self.pd.outputs_received),
             last_outputs_ns: self.pd.last_outputs_ns,
-            outputs_enabled: self.state == AlState::Op,
+            outputs_enabled: self.state == AlState::Op
+                || (self.state == AlState::SafeOp && quirks.has(Quirk::OutputsInSafeOp)),
         };
         let range = self.pd_sm_range(self.sm_in_pd);
         let outputs = core::mem::take(&mut self.pd.outputs);
-        let inputs: &mut [u8] = match range {
-            Some((s, e)) => self.mem.get_mut(s..e).unwrap_or(&mut []),
-            None => &mut [],
+        let r = if self.state != AlState::Op && quirks.has(Quirk::StaleInputsUntilOp) {
+            // The device runs, but its inputs do not reach the image before OP.
+            let mut scratch = core::mem::take(&mut self.pd.scratch);
+            let len = range.map_or(0, |(s, e)| e - s);
+            if scratch.len() < len {
+                // Sized once, at the first cycle below OP.
+                scratch.resize(len, 0);
+            }
+            let r = dev.sync(&ev, &outputs, scratch.get_mut(..len).unwrap_or(&mut []));
+            self.pd.scratch = scratch;
+            r
+        } else {
+            let inputs: &mut [u8] = match range {
+                Some((s, e)) => self.mem.get_mut(s..e).unwrap_or(&mut []),
+                None => &mut [],
+            };
+            dev.sync(&ev, &outputs, inputs)
         };
-        let r = dev.sync(&ev, &outputs, inputs);
         self.pd.outputs = outputs;
         if self.mailbox.running {
             // The application may have queued a mailbox message.
