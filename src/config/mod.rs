@@ -556,7 +556,8 @@ fn drive(
             } => crate::drives::by_identity(vendor_id, product_code),
             Selector::Position(p) => sim
                 .and_then(|names| names.get(usize::from(p)))
-                .and_then(|n| crate::drives::by_key(n)),
+                .and_then(|n| crate::sim::quirks::split_name(n).ok())
+                .and_then(|(n, _)| crate::drives::by_key(n)),
             Selector::Alias(_) => None,
         },
     };

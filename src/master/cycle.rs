@@ -50,8 +50,8 @@ pub const FEEDBACK_PULSES: u64 = 2;
 /// Demands remembered per axis, with the pulse after which their frame passed.
 const CARRIED: usize = 4;
 
-/// Cycles of motion in csp, with the master's following error above 0, after which a 0x60F4
-/// that never left 0 is flagged ([`EventKind::DriveFollowingErrorStuck`]).
+/// Cycles of motion in csp (the position demand changed) after which a 0x60F4 that never left
+/// 0 is flagged ([`EventKind::DriveFollowingErrorStuck`]).
 pub const DRIVE_FE_STUCK_CYCLES: u32 = 500;
 
 /// Settings of the cycle.
@@ -1094,6 +1094,7 @@ pub fn run<L: FrameLink>(
             {
                 a.tel.following_error = d - a.pos;
             }
+            let moving = a.last_demand.is_some_and(|l| l != demand);
             a.last_demand = Some(demand);
             if energised && a.mode == CyclicMode::Csp {
                 let fe = a.tel.following_error.abs();
@@ -1106,7 +1107,7 @@ pub fn run<L: FrameLink>(
                     // not computed by the drive: flag it once, never trust it.
                     if d != 0 {
                         a.fe_drive_alive = true;
-                    } else if fe > 0 && !a.fe_drive_alive && !a.tel.following_error_drive_stuck {
+                    } else if moving && !a.fe_drive_alive && !a.tel.following_error_drive_stuck {
                         a.fe_drive_zero_cycles += 1;
                         if a.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
                             a.tel.following_error_drive_stuck = true;

@@ -1531,3 +1531,75 @@ fn settle_dc<L: FrameLink>(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn w(what: SyncWhat, value: u32) -> SyncWrite {
+        SyncWrite {
+            address: ObjectAddress::new(0x1C32, if what == SyncWhat::Type { 1 } else { 2 }),
+            value,
+            len: if what == SyncWhat::Type { 2 } else { 4 },
+            what,
+        }
+    }
+
+    const P: &DriveProfile = &crate::drives::generic::GENERIC_CIA402;
+
+    #[test]
+    fn a_read_only_sync_type_that_is_not_dc_sync0_fails_naming_both_values() {
+        let o = SyncOutcome::ReadOnly {
+            has: Some(0),
+            min_cycle: None,
+        };
+        let e = o.judge(&w(SyncWhat::Type, 2), P).unwrap_err();
+        assert_eq!(
+            e,
+            "0x1C32:01 is read-only and holds 0 (free run); DC SYNC0 needs 2"
+        );
+    }
+
+    #[test]
+    fn a_read_only_cycle_time_is_judged_by_the_minimum_cycle_time() {
+        let ok = SyncOutcome::ReadOnly {
+            has: Some(250_000),
+            min_cycle: Some(250_000),
+        };
+        let note = ok
+            .judge(&w(SyncWhat::CycleTime, 1_000_000), P)
+            .unwrap()
+            .unwrap();
+        assert!(note.contains("read-only (holds 250000 ns)"), "{note}");
+        let too_fast = SyncOutcome::ReadOnly {
+            has: Some(500_000),
+            min_cycle: Some(500_000),
+        };
+        let e = too_fast
+            .judge(&w(SyncWhat::CycleTime, 250_000), P)
+            .unwrap_err();
+        assert!(
+            e.contains("holds 500000 ns")
+                && e.contains("minimum cycle time 0x1C32:05 is 500000 ns")
+                && e.contains("the cycle needs 250000 ns"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn set_or_absent_objects_need_no_more_than_a_warning() {
+        assert_eq!(
+            SyncOutcome::AlreadySet.judge(&w(SyncWhat::Type, 2), P),
+            Ok(None)
+        );
+        assert_eq!(
+            SyncOutcome::Written.judge(&w(SyncWhat::CycleTime, 1_000_000), P),
+            Ok(None)
+        );
+        let n = SyncOutcome::Absent
+            .judge(&w(SyncWhat::Type, 2), P)
+            .unwrap()
+            .unwrap();
+        assert!(n.starts_with("has no 0x1C32:01"), "{n}");
+    }
+}

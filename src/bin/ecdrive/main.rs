@@ -34,6 +34,9 @@ pub mod exit {
     pub const REFUSED: u8 = 4;
     /// A drive faulted during `run` (fault, following error).
     pub const FAULT: u8 = 5;
+    /// The output is incomplete: `sdos` printed what it could read and names what it could
+    /// not.
+    pub const INCOMPLETE: u8 = 6;
 }
 
 const EXIT_CODES: &str = "\
@@ -43,7 +46,8 @@ Exit codes:
   2  usage or input error (bad arguments, configuration or ESI file, position or value out of range)
   3  bus or link error (interface missing or down, no permission, no answer, timeout)
   4  a drive refused (SDO abort, AL state change refused, OP not reached)
-  5  a drive faulted during `run` (fault, following error)";
+  5  a drive faulted during `run` (fault, following error)
+  6  incomplete output: `sdos` listed what it could read and names, on stderr, what it could not";
 
 /// EtherCAT master for CiA 402 servo drives: IgH-style tools, cyclic runs from a configuration
 /// file, and a software EtherCAT slave. No kernel module needed.
@@ -650,10 +654,37 @@ fn dispatch(cli: Cli) -> ExitCode {
             });
             bar.finish_and_clear();
             match r {
-                Ok(r) if json.json => print_json("sdos", &r),
                 Ok(r) => {
-                    print::sdos(&r);
-                    ExitCode::SUCCESS
+                    let printed = if json.json {
+                        print_json("sdos", &r)
+                    } else {
+                        print::sdos(&r);
+                        ExitCode::SUCCESS
+                    };
+                    if printed != ExitCode::SUCCESS {
+                        return printed;
+                    }
+                    match r.problems.first() {
+                        None => ExitCode::SUCCESS,
+                        Some(p) => {
+                            eprintln!(
+                                "ecdrive sdos: drive {} ({}): the listing is incomplete: {} item(s) \
+                                 could not be read{}, the first {} {}: {}",
+                                r.position,
+                                r.drive,
+                                r.problems.len(),
+                                if r.problems.iter().any(|p| p.stopped) {
+                                    " and the drive stopped answering"
+                                } else {
+                                    ""
+                                },
+                                p.what,
+                                p.address,
+                                p.reason
+                            );
+                            ExitCode::from(exit::INCOMPLETE)
+                        }
+                    }
                 }
                 Err(code) => code,
             }

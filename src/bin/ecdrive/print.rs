@@ -206,6 +206,19 @@ pub fn sdos(listing: &OdListing) {
             );
         }
     }
+    for p in &listing.problems {
+        println!(
+            "(not listed: {} {}: {}{})",
+            p.what,
+            p.address,
+            p.reason,
+            if p.stopped {
+                "; the listing stopped here"
+            } else {
+                ""
+            }
+        );
+    }
 }
 
 pub fn pdos(r: &PdoReport) {

@@ -414,6 +414,37 @@ pub struct OdListing {
     pub note: Option<String>,
     /// The objects in index order.
     pub objects: Vec<OdObject>,
+    /// What could not be read: the listing went on without it (an object or entry whose
+    /// description came back as an error or malformed), or stopped there (the drive stopped
+    /// answering).
+    pub problems: Vec<OdProblem>,
+    /// Whether every object and entry the drive lists is in `objects`.
+    pub complete: bool,
+}
+
+/// An object or entry `sdos` could not read.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct OdProblem {
+    /// `0xINDEX` for an object, `0xINDEX:SUB` for an entry.
+    pub address: String,
+    /// What was being read: `object description`, `entry description`.
+    pub what: String,
+    /// Why it failed.
+    pub reason: String,
+    /// Whether the listing stopped here (the drive stopped answering) instead of going on.
+    pub stopped: bool,
+}
+
+/// Whether an SDO-information failure concerns only the item asked for (an error reply, an
+/// abort, a reply that does not decode): the listing goes on without it.
+fn item_only(e: &CoeError) -> bool {
+    matches!(
+        e.kind,
+        CoeErrorKind::Abort(_)
+            | CoeErrorKind::InfoError(_)
+            | CoeErrorKind::Protocol(_)
+            | CoeErrorKind::MailboxError(_)
+    )
 }
 
 /// Upload `addr` and render it for a listing: `0x0250 592`, a string, or the abort.
@@ -452,12 +483,14 @@ pub fn sdos<L: FrameLink>(
     let mut found = None;
     let d = selected(bus, position, &mut found)?.clone();
     let drive = drive_ref(&d);
-    let listing = |source, note, objects| OdListing {
+    let listing = |source, note, objects, problems: Vec<OdProblem>| OdListing {
         position,
         drive: drive.name.clone(),
         source,
         note,
         objects,
+        complete: problems.is_empty(),
+        problems,
     };
     let indices = match bus.with_coe(d.address, drive.clone(), false, T_SDO, async |c| {
         c.od_list(crate::ec::mailbox::list_type::ALL).await
@@ -477,7 +510,24 @@ pub fn sdos<L: FrameLink>(
                 e.kind, p.name
             );
             let objects = profile_objects(bus, &d, &drive, p, values, progress)?;
-            return Ok(listing(OdSource::Profile, Some(note), objects));
+            return Ok(listing(OdSource::Profile, Some(note), objects, Vec::new()));
+        }
+        Err(crate::master::bus::SessionError::Coe(e))
+            if matches!(
+                e.kind,
+                CoeErrorKind::MailboxError(_) | CoeErrorKind::InfoError(_)
+            ) =>
+        {
+            return Err(MasterError::new(
+                Some(&drive),
+                "reading the object list (SDO information)",
+                ErrorKind::Incompatible,
+                format!(
+                    "{}; the drive offers no SDO information and ecdrive has no profile with its \
+                     dictionary, so there is nothing to list (upload single objects instead)",
+                    e.kind
+                ),
+            ));
         }
         Err(e) => {
             let mut e = coe_error(e);
@@ -487,52 +537,92 @@ pub fn sdos<L: FrameLink>(
     };
     let total = indices.len();
     let mut out = Vec::with_capacity(total);
+    let mut problems: Vec<OdProblem> = Vec::new();
     for (n, index) in indices.into_iter().enumerate() {
-        let obj = bus
-            .with_coe(d.address, drive.clone(), false, T_SDO * 4, async |c| {
-                let o = c.object_description(index).await?;
-                let subs: Vec<u8> = match ObjectCode::from_code(o.object_code) {
-                    Some(ObjectCode::Var) | None => vec![0],
-                    _ => (0..=o.max_sub).collect(),
-                };
-                let mut entries = Vec::with_capacity(subs.len());
-                for sub in subs {
-                    let addr = ObjectAddress::new(index, sub);
-                    let e = match c.entry_description(addr).await {
-                        Ok(e) => e,
-                        Err(e) if is_missing(&e) => continue,
-                        Err(e) => return Err(e),
-                    };
-                    let value = if values && e.access.readable() {
-                        Some(value_text(c, addr, DataType::from_code(e.data_type)).await?)
-                    } else {
-                        None
-                    };
-                    entries.push(OdEntry {
-                        sub,
-                        address: addr.to_string(),
-                        name: e.name,
-                        data_type: type_name(e.data_type),
-                        bit_len: e.bit_len,
-                        access: access_text(e.access),
-                        pdo_mapping: mapping_text(e.access),
-                        value,
+        let r = bus.with_coe(d.address, drive.clone(), false, T_SDO * 4, async |c| {
+            let mut bad = Vec::new();
+            let o = match c.object_description(index).await {
+                Ok(o) => o,
+                Err(e) if item_only(&e) => {
+                    bad.push(OdProblem {
+                        address: format!("0x{index:04X}"),
+                        what: "object description".into(),
+                        reason: e.kind.to_string(),
+                        stopped: false,
                     });
+                    return Ok((None, bad));
                 }
-                Ok(OdObject {
+                Err(e) => return Err(e),
+            };
+            let subs: Vec<u8> = match ObjectCode::from_code(o.object_code) {
+                Some(ObjectCode::Var) | None => vec![0],
+                _ => (0..=o.max_sub).collect(),
+            };
+            let mut entries = Vec::with_capacity(subs.len());
+            for sub in subs {
+                let addr = ObjectAddress::new(index, sub);
+                let e = match c.entry_description(addr).await {
+                    Ok(e) => e,
+                    Err(e) if is_missing(&e) => continue,
+                    Err(e) if item_only(&e) => {
+                        bad.push(OdProblem {
+                            address: addr.to_string(),
+                            what: "entry description".into(),
+                            reason: e.kind.to_string(),
+                            stopped: false,
+                        });
+                        continue;
+                    }
+                    Err(e) => return Err(e),
+                };
+                let value = if values && e.access.readable() {
+                    Some(value_text(c, addr, DataType::from_code(e.data_type)).await?)
+                } else {
+                    None
+                };
+                entries.push(OdEntry {
+                    sub,
+                    address: addr.to_string(),
+                    name: e.name,
+                    data_type: type_name(e.data_type),
+                    bit_len: e.bit_len,
+                    access: access_text(e.access),
+                    pdo_mapping: mapping_text(e.access),
+                    value,
+                });
+            }
+            Ok((
+                Some(OdObject {
                     index,
                     name: o.name,
                     object_code: ObjectCode::from_code(o.object_code)
                         .map_or_else(|| o.object_code.to_string(), |c| c.name().to_string()),
                     max_sub: o.max_sub,
                     entries,
-                })
-            })
-            .map_err(coe_error)?;
-        out.push(obj);
+                }),
+                bad,
+            ))
+        });
+        match r {
+            Ok((obj, bad)) => {
+                out.extend(obj);
+                problems.extend(bad);
+            }
+            Err(e) => {
+                // The drive stopped answering (a timeout, the bus): what was read stands.
+                let e = coe_error(e);
+                problems.push(OdProblem {
+                    address: format!("0x{index:04X}"),
+                    what: "object description".into(),
+                    reason: e.reason,
+                    stopped: true,
+                });
+                break;
+            }
+        }
         progress(n + 1, total);
     }
-    Ok(listing(OdSource::SdoInfo, None, out))
+    Ok(listing(OdSource::SdoInfo, None, out, problems))
 }
 
 /// The objects of a profile's dictionary, as a listing (values uploaded with `values`).
