@@ -414,10 +414,13 @@ fn no_complete_access_is_not_needed() {
     assert_eq!(out.code, Some(0), "{out:#?}");
 }
 
-/// A link that records every datagram the master sends: (command, ADP, ADO, length).
+/// (command, ADP, ADO, length) of a datagram.
+type Seen = (u8, u16, u16, usize);
+
+/// A link that records every datagram the master sends.
 struct Recording<L> {
     inner: L,
-    seen: Arc<Mutex<Vec<(u8, u16, u16, usize)>>>,
+    seen: Arc<Mutex<Vec<Seen>>>,
 }
 
 impl<L: FrameLink> FrameLink for Recording<L> {
