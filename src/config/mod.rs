@@ -56,7 +56,7 @@ use crate::master::session::MasterConfig;
 use crate::master::startup::{DriveSetup, Selector};
 use crate::master::tools::{SimSettings, Target};
 use crate::od::{Dictionary, ObjectAddress, Value};
-use crate::pdo::{Mapping, Pdo, PdoEntry};
+use crate::pdo::{Direction, Mapping, Pdo, PdoEntry};
 use std::ops::Range;
 use std::path::Path;
 use std::time::Duration;
@@ -131,6 +131,12 @@ pub struct RunConfig {
     /// The drive entries, in file order (index = the `setup` index in
     /// `master.startup.drives`).
     pub drives: Vec<DriveConfig>,
+    /// What the check found questionable but not wrong (a program beyond what the drive
+    /// documents), one line each, naming the key.
+    pub warnings: Vec<String>,
+    /// What the check could not judge without the bus (a drive whose profile is not known
+    /// from the file), one line each; start-up checks it.
+    pub unchecked: Vec<String>,
 }
 
 impl core::fmt::Debug for RunConfig {
@@ -421,7 +427,28 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
             return Err(cx.err(p.span(), "rt.priority", "SCHED_FIFO priorities are 1–99"));
         }
         master.cycle.rt.priority = rt.priority.as_ref().map(|p| *p.get_ref());
-        master.cycle.rt.cpu = rt.cpu;
+        if let Some(cpu) = &rt.cpu {
+            let ids: Vec<usize> = core_affinity::get_core_ids()
+                .unwrap_or_default()
+                .into_iter()
+                .map(|c| c.id)
+                .collect();
+            if !ids.is_empty() && !ids.contains(cpu.get_ref()) {
+                return Err(cx.err(
+                    cpu.span(),
+                    "rt.cpu",
+                    format!(
+                        "CPU {} does not exist here or is not available to this process (CPUs {})",
+                        cpu.get_ref(),
+                        ids.iter()
+                            .map(usize::to_string)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        }
+        master.cycle.rt.cpu = rt.cpu.as_ref().map(|c| *c.get_ref());
         master.cycle.rt.lock_memory = rt.lock_memory;
     }
     if let Some(sv) = &f.supervision {
@@ -451,8 +478,30 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
     master.startup.allow_generic = f.allow_generic;
 
     let mut drives = Vec::with_capacity(f.drive.len());
+    let mut warnings = Vec::new();
+    let mut unchecked = Vec::new();
     for (i, d) in f.drive.iter().enumerate() {
-        let (setup, dc) = drive(&cx, i, d, sim_names.as_deref(), cycle, &f.cycle)?;
+        let (setup, dc) = drive(
+            &cx,
+            i,
+            d,
+            sim_names.as_deref(),
+            cycle,
+            &f.cycle,
+            &mut warnings,
+        )?;
+        if dc.profile.is_none() {
+            unchecked.push(format!(
+                "drive[{i}] ({}): its profile is not known from the file (name a profile, select \
+                 by identity, or list the device in [sim]): its mode, cycle time, mapping sizes \
+                 and start-up values are checked at start-up",
+                match setup.select {
+                    Selector::Position(p) => format!("position {p}"),
+                    Selector::Alias(a) => format!("alias {a}"),
+                    Selector::Identity { .. } => "by identity".into(),
+                }
+            ));
+        }
         // The same device twice.
         if let Some(j) = master.startup.drives.iter().position(|s: &DriveSetup| {
             s.select == setup.select && !matches!(s.select, Selector::Identity { .. })
@@ -466,6 +515,53 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         master.startup.drives.push(setup);
         drives.push(dc);
     }
+    // The emulated devices the file has no [[drive]] table for run their profile's defaults:
+    // the cycle time must suit them too.
+    if let Some(names) = &sim_names {
+        for (pos, name) in names.iter().enumerate() {
+            let pos16 = u16::try_from(pos).unwrap_or(u16::MAX);
+            if drives
+                .iter()
+                .any(|d: &DriveConfig| d.select == Selector::Position(pos16))
+            {
+                continue;
+            }
+            let Some(p) = crate::sim::quirks::split_name(name)
+                .ok()
+                .and_then(|(n, _)| crate::drives::by_key(n))
+            else {
+                continue;
+            };
+            let ns = u32::try_from(cycle.as_nanos()).unwrap_or(u32::MAX);
+            if !p.sync.cycle_times.contains(ns) {
+                let span = f
+                    .cycle
+                    .as_ref()
+                    .map_or_else(|| f.interface.span(), Spanned::span);
+                return Err(cx.err(
+                    span,
+                    if f.cycle.is_some() {
+                        "cycle"
+                    } else {
+                        "interface"
+                    },
+                    format!(
+                        "{} µs is not a cycle time the {} (emulated device {pos}, run with its \
+                         defaults) accepts ({})",
+                        cycle.as_micros(),
+                        p.name,
+                        p.sync.cycle_times.describe()
+                    ),
+                ));
+            }
+        }
+    } else {
+        unchecked.push(
+            "devices without a [[drive]] table: what they are is known only from the bus; \
+             start-up checks them"
+                .to_string(),
+        );
+    }
     Ok(RunConfig {
         source: source.to_string(),
         target,
@@ -473,6 +569,8 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         master,
         duration,
         drives,
+        warnings,
+        unchecked,
     })
 }
 
@@ -495,6 +593,7 @@ fn drive(
     sim: Option<&[String]>,
     cycle: Duration,
     cycle_key: &Option<Spanned<String>>,
+    warnings: &mut Vec<String>,
 ) -> Result<(DriveSetup, DriveConfig), ConfigError> {
     let key = |k: &str| {
         if k.is_empty() {
@@ -561,6 +660,51 @@ fn drive(
             Selector::Alias(_) => None,
         },
     };
+    // The emulated device at the position, when the file lists them: a forced profile must
+    // fit it (start-up refuses a profile whose identity does not match the device).
+    if let (Selector::Position(p), Some(names)) = (select, sim)
+        && let Some(name) = names.get(usize::from(p))
+    {
+        let base = crate::sim::quirks::split_name(name).map_or(name.as_str(), |(b, _)| b);
+        let device_profile = crate::drives::by_key(base);
+        let drivable = device_profile.is_some() || base == "generic-coe";
+        let span = r.profile.as_ref().map_or_else(
+            || r.position.as_ref().map_or(d.span(), Spanned::span),
+            Spanned::span,
+        );
+        if !drivable {
+            return Err(cx.err(
+                span,
+                key(if r.profile.is_some() {
+                    "profile"
+                } else {
+                    "position"
+                }),
+                format!(
+                    "emulated device {p} is a {base}, which is no CiA 402 drive (no CoE \
+                     mailbox or no device control); leave it out of the [[drive]] tables: it \
+                     runs as an I/O device"
+                ),
+            ));
+        }
+        if let (Some(forced), Some(actual)) = (r.profile.as_ref().and(profile), device_profile)
+            && forced.key != actual.key
+            && forced.key != "generic-cia402"
+        {
+            return Err(cx.err(
+                span,
+                key("profile"),
+                format!(
+                    "the {} profile does not fit emulated device {p}, a {} (vendor 0x{:08X} \
+                     product 0x{:08X})",
+                    forced.name,
+                    actual.name,
+                    actual.identity.vendor_id,
+                    actual.identity.product_code
+                ),
+            ));
+        }
+    }
     if let (Selector::Position(p), Some(names), Some(pos)) = (select, sim, &r.position)
         && usize::from(p) >= names.len()
     {
@@ -689,6 +833,9 @@ fn drive(
         described.push(describe(s.get_ref(), &uname));
         steps.push(step);
     }
+    if let Some(p) = profile {
+        rated(i, p, r, k, warnings);
+    }
     program::validate(&steps, mode).map_err(|e| {
         let n = match &e {
             program::ProgramError::WrongMode { index, .. }
@@ -705,6 +852,45 @@ fn drive(
             if let Some(p) = profile {
                 crate::pdo::validate(&mapping, &p.pdo_limits, Some(p.dictionary))
                     .map_err(|e| cx.err(m.span(), key("mapping"), e.to_string()))?;
+            }
+            // What the cycle needs of every drive, and the set-point of every mode the
+            // program runs in (start-up refuses the same).
+            let mut modes = vec![mode];
+            for s in &steps {
+                if let Step::Mode { mode } = s
+                    && !modes.contains(mode)
+                {
+                    modes.push(*mode);
+                }
+            }
+            let a = ObjectAddress::new;
+            let mut need = vec![
+                (Direction::Rx, a(0x6040, 0), "the controlword".to_string()),
+                (Direction::Tx, a(0x6041, 0), "the statusword".to_string()),
+            ];
+            for m in &modes {
+                let (obj, what) = match m {
+                    CyclicMode::Csp => (a(0x607A, 0), "target position"),
+                    CyclicMode::Csv => (a(0x60FF, 0), "target velocity"),
+                    CyclicMode::Cst => (a(0x6071, 0), "target torque"),
+                };
+                need.push((Direction::Rx, obj, format!("the {what} of {}", m.name())));
+            }
+            if modes.len() > 1 {
+                need.push((
+                    Direction::Rx,
+                    a(0x6060, 0),
+                    "the mode of operation (the program switches modes)".to_string(),
+                ));
+            }
+            for (dir, obj, what) in need {
+                if !mapping.contains(dir, obj) {
+                    return Err(cx.err(
+                        m.span(),
+                        key("mapping"),
+                        format!("{what} ({obj}) must be mapped in the {}", dir.name()),
+                    ));
+                }
             }
             Some(mapping)
         }
@@ -1010,6 +1196,51 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
             _ => Ok(()),
         },
         raw::Step::Mode { .. } | raw::Step::Dwell { .. } => Ok(()),
+    }
+}
+
+/// Warnings for program steps beyond what the drive documents independently of the motor
+/// ([`DriveProfile::ratings`]); `k` counts per user unit.
+fn rated(i: usize, p: &DriveProfile, r: &raw::Drive, k: f64, warnings: &mut Vec<String>) {
+    let speed = |counts_per_s: f64| counts_per_s / p.units.counts_per_rev;
+    for (n, s) in r.program.iter().enumerate() {
+        let at = format!("drive[{i}].program[{n}]");
+        let velocity = match *s.get_ref() {
+            raw::Step::Move { velocity, .. }
+            | raw::Step::Ramp { velocity, .. }
+            | raw::Step::Jog { velocity, .. } => Some(velocity.abs()),
+            raw::Step::Sine {
+                amplitude,
+                frequency,
+                ..
+            } => Some((amplitude * 2.0 * std::f64::consts::PI * frequency).abs()),
+            _ => None,
+        };
+        if let (Some(v), Some(rating)) = (velocity, p.ratings.max_speed_rev_s) {
+            let rev_s = speed(v * k);
+            if rev_s > rating.value {
+                warnings.push(format!(
+                    "{at}: {:.1} r/min is beyond the {}'s {:.0} r/min ({})",
+                    rev_s * 60.0,
+                    p.name,
+                    rating.value * 60.0,
+                    rating.source
+                ));
+            }
+        }
+        if let (raw::Step::Torque { torque, .. }, Some(rating)) =
+            (s.get_ref(), p.ratings.max_torque)
+            && torque.abs() > rating.value
+        {
+            warnings.push(format!(
+                "{at}: torque {} ({}) is beyond the {}'s {} ({})",
+                torque.abs(),
+                p.units.torque_unit,
+                p.name,
+                rating.value,
+                rating.source
+            ));
+        }
     }
 }
 

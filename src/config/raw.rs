@@ -34,7 +34,7 @@ pub(super) struct Rt {
     #[serde(default)]
     pub priority: Option<Spanned<u8>>,
     #[serde(default)]
-    pub cpu: Option<usize>,
+    pub cpu: Option<Spanned<usize>>,
     #[serde(default)]
     pub lock_memory: bool,
 }

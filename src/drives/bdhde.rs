@@ -473,6 +473,18 @@ pub static PROFILE: DriveProfile = DriveProfile {
     complete_access: false,
     esi: include_str!("../../esi/Servotronix_BDHDE.xml"),
     zero_speed_flag: None,
+    ratings: RATINGS,
+};
+
+/// What the manual documents independently of the motor: 0x6072 (max torque) takes 0 to 5000
+/// (object 6072h, p. 184), read as per mille of the rated torque (\[REC\]: the manual gives no
+/// unit). No speed independent of the motor (0x6080 is the motor's, default 0: MANUAL GAP).
+pub const RATINGS: crate::drives::Ratings = crate::drives::Ratings {
+    max_torque: Some(crate::drives::Rating {
+        value: 5000.0,
+        source: "0x6072 max torque, range 0–5000 (object 6072h, p. 184; per mille [REC])",
+    }),
+    max_speed_rev_s: None,
 };
 
 /// Vendor ID (0x1018:01, §7 1018h).
@@ -498,7 +510,9 @@ pub const REVISION: u32 = 0;
 // - [`UNITS`]: the 2^20 units per revolution follow from [`REC_STARTUP`];
 // - complete access off (MANUAL GAP);
 // - dictionary: 0x60C2:02 INTEGER8 (the manual prints UNSIGNED8 for −4); 0x1C12/0x1C13 as ETG
-//   arrays (\[REC\]); 0x60C2:01 range 1–64 (DISCREPANCY, [`FBITPRD_MIN`]).
+//   arrays (\[REC\]); 0x60C2:01 range 1–64 (DISCREPANCY, [`FBITPRD_MIN`]);
+// - [`RATINGS`]: 0x6072 in per mille of the rated torque (\[REC\]: the manual gives its units
+//   as "not applicable"); no speed rating (MANUAL GAP).
 
 /// MANUAL GAP: the ESI AssignActivate word of the DC mode; 0x0300 (SYNC0 only) is the usual
 /// "DC-Synchronous" value.

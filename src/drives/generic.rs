@@ -217,4 +217,5 @@ pub static GENERIC_CIA402: DriveProfile = DriveProfile {
     complete_access: false,
     esi: "",
     zero_speed_flag: None,
+    ratings: crate::drives::Ratings::NONE,
 };

@@ -44,5 +44,6 @@ pub use registry::{UnknownDevice, all, by_identity, by_key, identify};
 
 pub use profile::{
     CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch,
-    OutputDefault, StartupSdo, StartupWhen, StatusFlag, SyncSpec, SyncWrite, Units,
+    OutputDefault, Rating, Ratings, StartupSdo, StartupWhen, StatusFlag, SyncSpec, SyncWrite,
+    Units,
 };

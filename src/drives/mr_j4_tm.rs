@@ -497,6 +497,22 @@ pub static PROFILE: DriveProfile = DriveProfile {
         address: ObjectAddress::new(0x2D12, 0),
         bit: 3,
     }),
+    ratings: RATINGS,
+};
+
+/// What the manual documents independently of the motor: the torque limits 0x60E0/0x60E1
+/// default to 10000 (1000.0 % of the rated torque) and 0x607F (max profile velocity) to
+/// 2000000 × 0.01 r/min = 20000 r/min. The motor's own maxima are lower and motor-dependent
+/// (0x6072, 0x6080 report them).
+pub const RATINGS: crate::drives::Ratings = crate::drives::Ratings {
+    max_torque: Some(crate::drives::Rating {
+        value: 10000.0,
+        source: "0x60E0/0x60E1 torque limit default 10000 = 1000.0 % of rated torque (§5.4 object tables)",
+    }),
+    max_speed_rev_s: Some(crate::drives::Rating {
+        value: 20000.0 / 60.0,
+        source: "0x607F max profile velocity default 2000000 × 0.01 r/min = 20000 r/min (§5.4.6 (1))",
+    }),
 };
 
 /// Vendor ID (0x1018:01, §7.3.1(9); the manual prints the 7-digit "0000A1Eh").

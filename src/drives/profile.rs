@@ -227,6 +227,35 @@ pub struct DriveProfile {
     /// A status bit the drive sets at zero speed, which the CiA 402 engine uses (when mapped)
     /// to decide standstill before a mode switch that needs it (MR-J4-TM: 0x2D12 bit 3 S_ZSP).
     pub zero_speed_flag: Option<StatusFlag>,
+    /// The largest torque and speed the drive itself documents, whatever the motor: a program
+    /// beyond them gets a warning when the configuration is checked.
+    pub ratings: Ratings,
+}
+
+/// One documented maximum, with where it comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Rating {
+    /// The value (unit given by the field it is in).
+    pub value: f64,
+    /// The manual's words for it, with the section.
+    pub source: &'static str,
+}
+
+/// The largest torque and speed a drive documents independently of the motor it drives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ratings {
+    /// Largest torque, in the drive's torque unit ([`Units::torque_unit`]).
+    pub max_torque: Option<Rating>,
+    /// Largest speed, motor revolutions per second.
+    pub max_speed_rev_s: Option<Rating>,
+}
+
+impl Ratings {
+    /// Nothing documented (the motor decides).
+    pub const NONE: Ratings = Ratings {
+        max_torque: None,
+        max_speed_rev_s: None,
+    };
 }
 
 /// One bit of a mapped status object.

@@ -84,6 +84,7 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
     complete_access: false,
     esi: "",
     zero_speed_flag: None,
+    ratings: crate::drives::Ratings::NONE,
 };
 
 /// Why the emulated line cannot be built.

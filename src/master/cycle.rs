@@ -413,6 +413,9 @@ pub fn run<L: FrameLink>(
         if let Ok(sd) = group.subdevice(md, a.sub) {
             let mut io = sd.io_raw_mut();
             let out = io.outputs();
+            for (f, v) in &a.fields.held_outputs {
+                let _ = f.write_raw(out, *v);
+            }
             for (f, v) in &a.fields.output_defaults {
                 write_i(f, out, *v);
             }

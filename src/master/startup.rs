@@ -221,6 +221,9 @@ pub struct DriveFields {
     pub zero_speed: Option<(Field, u8)>,
     /// Outputs that carry a fixed value from the first cycle on.
     pub output_defaults: Vec<(Field, i64)>,
+    /// Mapped outputs the master does not drive (a limit, an offset): they carry the raw value
+    /// the drive had before they were mapped, so that mapping an object does not set it to 0.
+    pub held_outputs: Vec<(Field, u64)>,
 }
 
 /// One drive after start-up.
@@ -659,6 +662,10 @@ fn encode(profile: &DriveProfile, addr: ObjectAddress, v: &Value) -> Result<Vec<
     v.encode(dt).map_err(|e| e.to_string())
 }
 
+/// A mapped output the cycle does not drive, and its value read before it was mapped (or why
+/// it could not be read).
+type HeldValue = (ObjectAddress, Result<Vec<u8>, String>);
+
 /// What a synchronisation-object write sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum SyncWhat {
@@ -975,6 +982,8 @@ pub fn configure<L: FrameLink>(
     let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
     // Read-only cycle times, checked again once SYNC0 runs.
     let mut recheck: Vec<(u16, DriveRef, ObjectAddress)> = Vec::new();
+    // Per drive: the values of the mapped outputs the cycle does not drive.
+    let mut held_values: Vec<Vec<HeldValue>> = Vec::new();
 
     for (&(d, setup, profile), mapping) in drives_plan.iter().zip(&mappings) {
         let drive = DriveRef {
@@ -1103,6 +1112,26 @@ pub fn configure<L: FrameLink>(
             ));
         }
 
+        // The mapped outputs the cycle does not drive: read their values while they are not
+        // yet mapped, and send those (`held_outputs`).
+        let driven: Vec<ObjectAddress> = [CW, MODE]
+            .into_iter()
+            .chain(
+                [CyclicMode::Csp, CyclicMode::Csv, CyclicMode::Cst]
+                    .into_iter()
+                    .map(setpoint_object),
+            )
+            .chain(profile.cycle_counter.map(|c| c.output))
+            .chain(profile.output_defaults.iter().map(|o| o.address))
+            .collect();
+        let undriven: Vec<ObjectAddress> = mapping
+            .pdos(Direction::Rx)
+            .iter()
+            .flat_map(|p| p.entries.iter())
+            .filter(|e| !e.is_padding() && !driven.contains(&e.address()))
+            .map(|e| e.address())
+            .collect();
+        let mut held: Vec<HeldValue> = Vec::new();
         let complete_access = profile.complete_access;
         let mut outcomes: Vec<SyncOutcome> = Vec::new();
         let n_writes = writes.len();
@@ -1114,6 +1143,12 @@ pub fn configure<L: FrameLink>(
             T_STEP,
             async |c| {
                 c.drain().await?;
+                for a in &undriven {
+                    held.push((
+                        *a,
+                        c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
+                    ));
+                }
                 for (addr, bytes, _why) in pdo_writes {
                     c.download(*addr, bytes, false).await?;
                 }
@@ -1157,6 +1192,18 @@ pub fn configure<L: FrameLink>(
             }
         }
         tracing::info!("{drive}: configured ({} SDO writes)", writes.len());
+        for (a, r) in &held {
+            if let Err(why) = r {
+                warnings.push((
+                    drive.clone(),
+                    format!(
+                        "{a} is mapped but the master does not drive it and cannot read its \
+                         value ({why}): it is sent as 0"
+                    ),
+                ));
+            }
+        }
+        held_values.push(held);
     }
 
     // SYNC0 on every drive; the SYNC0 start itself comes with `configure_dc_sync`. I/O devices
@@ -1210,7 +1257,9 @@ pub fn configure<L: FrameLink>(
 
     // Resolve each drive's fields and check its image size against its mapping.
     let mut drives = Vec::with_capacity(drives_plan.len());
-    for ((d, setup, profile), mapping) in drives_plan.into_iter().zip(mappings) {
+    for (((d, setup, profile), mapping), held) in
+        drives_plan.into_iter().zip(mappings).zip(held_values)
+    {
         let drive = DriveRef {
             position: d.position,
             name: profile.name.to_string(),
@@ -1235,7 +1284,7 @@ pub fn configure<L: FrameLink>(
                 ),
             ));
         }
-        let fields = resolve_fields(&layout, profile).map_err(|e| {
+        let mut fields = resolve_fields(&layout, profile).map_err(|e| {
             MasterError::new(
                 Some(&drive),
                 "resolving the process image",
@@ -1243,6 +1292,15 @@ pub fn configure<L: FrameLink>(
                 e,
             )
         })?;
+        for (a, bytes) in held {
+            if let (Ok(f), Ok(bytes)) = (layout.raw_field(Direction::Rx, a, false), bytes) {
+                let mut raw = [0u8; 8];
+                for (d, s) in raw.iter_mut().zip(&bytes) {
+                    *d = *s;
+                }
+                fields.held_outputs.push((f, u64::from_le_bytes(raw)));
+            }
+        }
         drives.push(ConfiguredDrive {
             info: d.clone(),
             drive,
@@ -1467,6 +1525,7 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
         counter,
         zero_speed,
         output_defaults,
+        held_outputs: Vec::new(),
     })
 }
 

@@ -81,6 +81,7 @@ pub static GENERIC_TEST: DriveProfile = DriveProfile {
     complete_access: false,
     esi: "",
     zero_speed_flag: None,
+    ratings: ecdrive::drives::Ratings::NONE,
 };
 
 /// A segment of `n` generic CoE devices (SM watchdog off: CI machines stall).

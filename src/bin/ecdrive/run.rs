@@ -32,6 +32,8 @@ pub fn run(
                 cycle_ns: u64,
                 drives: usize,
                 valid: bool,
+                warnings: &'a [String],
+                unchecked: &'a [String],
             }
             return print_json(
                 "run",
@@ -41,6 +43,8 @@ pub fn run(
                     cycle_ns: cfg.master.cycle.cycle.as_nanos() as u64,
                     drives: cfg.drives.len(),
                     valid: true,
+                    warnings: &cfg.warnings,
+                    unchecked: &cfg.unchecked,
                 },
             );
         }
@@ -52,7 +56,16 @@ pub fn run(
             cfg.master.cycle.cycle.as_micros(),
             cfg.target
         );
+        for w in &cfg.warnings {
+            println!("warning: {w}");
+        }
+        for u in &cfg.unchecked {
+            println!("not checked: {u}");
+        }
         return ExitCode::SUCCESS;
+    }
+    for w in &cfg.warnings {
+        eprintln!("ecdrive run: warning: {w}");
     }
     // Ctrl-C ends the run in a controlled way (ramp, disable, INIT).
     let stop = crate::ctrl_c_flag();
