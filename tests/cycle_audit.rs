@@ -1,5 +1,6 @@
 //! Proof that the cycle, once the drives are in OP, allocates nothing and makes no syscall but
-//! the sleep (in-process link: the frame I/O is a function call).
+//! the sleep (in-process link: the frame I/O is a function call), under load: two drives and an
+//! I/O device between them, the axes enabled and running programs with a mode switch.
 //!
 //! A counting global allocator counts allocations made by the cycle thread inside a window; a
 //! per-thread perf counter on the `raw_syscalls:sys_enter` tracepoint counts the cycle
@@ -9,19 +10,23 @@
 mod support {
     pub mod generic;
 }
+use ecdrive::cia402::State;
 use ecdrive::link::FrameLink;
 use ecdrive::link::netns::{VethPair, require_root};
 use ecdrive::master::cycle::CycleHooks;
+use ecdrive::master::program::{CyclicMode, Step, Target};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
-use ecdrive::master::telemetry::StopKind;
+use ecdrive::master::telemetry::{Axes, Command, StopKind};
 use ecdrive::rt::audit::{
     self, AllocCounts, CountingAlloc, SyscallCounter, SyscallCounts, skip_or_fail,
 };
+use ecdrive::sim::devices::{GenericCoeDevice, IoDevice};
 use ecdrive::sim::transport::{RawServer, SegmentLink};
+use ecdrive::sim::{EscConfig, HostClock, Segment};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use support::generic::{GENERIC_TEST, generic_segment};
+use support::generic::GENERIC_TEST;
 
 #[global_allocator]
 static ALLOC: CountingAlloc = CountingAlloc;
@@ -78,7 +83,27 @@ impl Audit {
     }
 }
 
-/// Run two devices to OP on `link`, audit 300 steady cycles, stop; check the counts.
+/// A realistic segment: two drives with an I/O device between them.
+fn segment() -> Segment {
+    let esc = EscConfig {
+        sm_watchdog: 0,
+        ..Default::default()
+    };
+    let mut seg = Segment::new(Arc::new(HostClock));
+    let devices: [Box<dyn ecdrive::sim::Device>; 3] = [
+        Box::new(GenericCoeDevice::new(700).unwrap()),
+        Box::new(IoDevice::new(2, 4).with_serial(900)),
+        Box::new(GenericCoeDevice::new(701).unwrap()),
+    ];
+    for d in devices {
+        seg.push(d, esc.clone()).unwrap();
+    }
+    seg
+}
+
+/// Run the two drives and the I/O device to OP on `link`; with the window open, enable the
+/// axes and run their programs (a move, a mode switch, a ramp, a dwell) for at least 300
+/// cycles; stop; check the counts.
 fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_long], what: &str) {
     let audit = Arc::new(Audit::new(allowed));
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
@@ -86,19 +111,47 @@ fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_
     cfg.emergency_poll = None;
     cfg.hooks = Some(audit.clone());
     cfg.cycle.segment_lost_after = 50;
-    for p in 0..2 {
+    for p in [0, 2] {
         cfg.startup.drives.push(DriveSetup {
             profile: Some(&GENERIC_TEST),
+            program: vec![
+                Step::Move {
+                    target: Target::By(20_000.0),
+                    velocity: 100_000.0,
+                    acceleration: 1_000_000.0,
+                    jerk: None,
+                },
+                Step::Mode {
+                    mode: CyclicMode::Csv,
+                },
+                Step::Ramp {
+                    velocity: 50_000.0,
+                    acceleration: 1_000_000.0,
+                    hold: 0.05,
+                },
+                Step::Dwell { seconds: 0.2 },
+            ],
             ..DriveSetup::new(Selector::Position(p))
         });
     }
     let mut m = Master::start(link, cfg).unwrap();
+    assert_eq!((m.drives().len(), m.io().len()), (2, 1));
     m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
         .unwrap();
     let c0 = m.telemetry().cycle.cycle;
-    m.wait_until("300 cycles in OP", Duration::from_secs(20), |t| {
-        t.cycle.cycle > c0 + 300
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.wait_until("enabled", Duration::from_secs(10), |t| {
+        t.axes
+            .iter()
+            .all(|a| a.state == Some(State::OperationEnabled))
     })
+    .unwrap();
+    m.command(Command::RunProgram(Axes::All)).unwrap();
+    m.wait_until(
+        "the programs and 300 cycles",
+        Duration::from_secs(20),
+        |t| t.cycle.cycle > c0 + 300 && t.axes.iter().all(|a| a.program_step >= 4),
+    )
     .unwrap();
     let (report, _) = m.stop(StopKind::Ramp);
     assert!(report.unwrap().shutdown_ok);
@@ -133,7 +186,7 @@ fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_
 #[test]
 fn steady_cycle_in_process_allocates_nothing_and_only_sleeps() {
     audit_run(
-        SegmentLink::new(generic_segment(2)),
+        SegmentLink::new(segment()),
         &[libc::SYS_clock_nanosleep],
         "in-process",
     );
@@ -146,11 +199,8 @@ fn steady_cycle_over_veth_allocates_nothing_and_only_does_frame_io_and_sleeps() 
         return;
     }
     let veth = VethPair::create().expect("veth pair");
-    let server = RawServer::spawn(
-        veth.open_peer_socket().expect("peer socket"),
-        generic_segment(2),
-    )
-    .expect("server");
+    let server =
+        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), segment()).expect("server");
     audit_run(
         veth.open_host_socket().expect("host socket"),
         &[

@@ -482,12 +482,25 @@ fn run_case(c: &Case) -> Result<(), TestCaseError> {
                     && to != modes[n]
                     && d.kind != Kind::GenericCoe
                 {
+                    // Done when the drive shows the mode in 0x6061 (when it is mapped; else
+                    // when the master sends it): a second switch while one is under way is
+                    // refused.
+                    let display = match &d.mapping {
+                        Some(map) => map.contains(Direction::Tx, A(0x6061, 0)),
+                        None => d.kind.profile().is_some_and(|p| {
+                            p.cyclic_mapping.contains(Direction::Tx, A(0x6061, 0))
+                        }),
+                    };
                     m.command(Command::Mode(Axes::One(n as u16), to))
                         .map_err(|e| TestCaseError::fail(e.to_string()))?;
                     check(&mut m, "the mode switch", 10, |t| {
-                        t.axes
-                            .get(n)
-                            .is_some_and(|a| a.mode_display == to.code() || a.mode == to.code())
+                        t.axes.get(n).is_some_and(|a| {
+                            if display {
+                                a.mode_display == to.code()
+                            } else {
+                                a.mode == to.code()
+                            }
+                        })
                     })?;
                     modes[n] = to;
                 }
