@@ -134,7 +134,7 @@ fn drives_without_state_skipping_enable_over_veth() {
         config(&["mr-j4-tm", "bdhde"], &(move_at(0) + &move_at(1))),
     )
     .unwrap();
-    let j = run_over_veth(&sim, &file);
+    let j = sim.run_json(&file.display().to_string(), &[]);
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(j["outcome"], "completed", "{j:#}");
     for d in j["drives"].as_array().unwrap() {
@@ -190,7 +190,7 @@ fn a_generic_run_against_a_read_only_cycle_time_over_veth() {
         )),
     )
     .unwrap();
-    let j = run_over_veth(&sim, &file);
+    let j = sim.run_json(&file.display().to_string(), &[]);
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(j["outcome"], "completed", "{j:#}");
     assert!(
@@ -534,7 +534,7 @@ fn a_mixed_segment_runs_over_veth() {
         ),
     )
     .unwrap();
-    let j = run_over_veth(&sim, &file);
+    let j = sim.run_json(&file.display().to_string(), &[]);
     let text = sim.ecdrive(&["run", "-c", &file.display().to_string()]);
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(j["outcome"], "completed", "{j:#}");
@@ -552,22 +552,4 @@ fn tempdir(what: &str) -> std::path::PathBuf {
     let d = std::env::temp_dir().join(format!("ecdrive-foreign-{what}-{}", std::process::id()));
     std::fs::create_dir_all(&d).unwrap();
     d
-}
-
-/// `ecdrive run -c FILE -i <veth> --json`; a run ended by frames lost on a loaded machine is
-/// tried again (at most twice), any other end is returned as it is.
-fn run_over_veth(sim: &SimOnVeth, file: &std::path::Path) -> serde_json::Value {
-    let file = file.display().to_string();
-    let mut j = serde_json::Value::Null;
-    for _ in 0..3 {
-        let r = sim.ecdrive(&["run", "-c", &file, "--json"]);
-        j = serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:#?}"));
-        let lost = j["history"]
-            .as_array()
-            .is_some_and(|h| h.iter().any(|e| e["kind"] == "FrameLost"));
-        if j["outcome"] == "completed" || !lost {
-            break;
-        }
-    }
-    j
 }

@@ -827,6 +827,50 @@ impl SyncOutcome {
     }
 }
 
+/// Read a device's PDO assignment and mapping over CoE (0x1C12/0x1C13, 0x16xx/0x1Axx); `what`
+/// names the step in errors.
+pub fn read_mapping<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    address: u16,
+    drive: &DriveRef,
+    what: &str,
+) -> Result<Mapping, MasterError> {
+    crate::pdo::read_mapping_sync(|a: ObjectAddress, dt: DataType| {
+        let bytes = bus.with_coe(address, drive.clone(), false, T_STEP, async |c| {
+            c.upload(a, false).await
+        })?;
+        let v = Value::decode(dt, &bytes).map_err(|e| {
+            super::bus::SessionError::Coe(super::coe::CoeError {
+                drive: drive.clone(),
+                address: Some(a),
+                kind: super::coe::CoeErrorKind::Protocol(e.to_string()),
+            })
+        })?;
+        match v {
+            Value::Uint(u) => u32::try_from(u).map_err(|_| {
+                super::bus::SessionError::Coe(super::coe::CoeError {
+                    drive: drive.clone(),
+                    address: Some(a),
+                    kind: super::coe::CoeErrorKind::Protocol(format!("{u} does not fit 32 bits")),
+                })
+            }),
+            other => Err(super::bus::SessionError::Coe(super::coe::CoeError {
+                drive: drive.clone(),
+                address: Some(a),
+                kind: super::coe::CoeErrorKind::Protocol(format!("unexpected value {other}")),
+            })),
+        }
+    })
+    .map_err(|e| match e {
+        crate::pdo::ReadbackError::Upload { source, .. } => {
+            let mut e = MasterError::from(source);
+            e.step = format!("{what}: {}", e.step);
+            e
+        }
+        other => MasterError::new(Some(drive), what, ErrorKind::Bus, other),
+    })
+}
+
 /// Drives on the generic CiA 402 profile whose configuration gives no mapping: a drive ecdrive
 /// has no profile for has a mapping of its own, and its PDOs accept what its dictionary says,
 /// not what a profile assumes. Read the drive's current mapping (0x1C12/0x1C13, 0x16xx/0x1Axx);
@@ -862,32 +906,12 @@ fn generic_mappings<L: FrameLink>(
             ));
         }
         let addr = d.address;
-        let current = crate::pdo::read_mapping_sync(|a: ObjectAddress, dt: DataType| {
-            let bytes = bus.with_coe(addr, drive.clone(), false, T_STEP, async |c| {
-                c.upload(a, false).await
-            })?;
-            Ok::<u32, super::bus::SessionError>(match dt {
-                DataType::Unsigned8 => u32::from(bytes.first().copied().unwrap_or(0)),
-                DataType::Unsigned16 => u32::from(u16::from_le_bytes([
-                    bytes.first().copied().unwrap_or(0),
-                    bytes.get(1).copied().unwrap_or(0),
-                ])),
-                _ => le_u32(&bytes),
-            })
-        })
-        .map_err(|e| match e {
-            crate::pdo::ReadbackError::Upload { source, .. } => {
-                let mut e = MasterError::from(source);
-                e.step = format!("reading the PDO mapping (generic profile): {}", e.step);
-                e
-            }
-            other => MasterError::new(
-                Some(&drive),
-                "reading the PDO mapping (generic profile)",
-                ErrorKind::Bus,
-                other,
-            ),
-        })?;
+        let current = read_mapping(
+            bus,
+            addr,
+            &drive,
+            "reading the PDO mapping (generic profile)",
+        )?;
         let setpoint = setpoint_object(setup.mode);
         if current.contains(Direction::Rx, CW)
             && current.contains(Direction::Tx, SW)

@@ -5,8 +5,8 @@ use super::{discover, drive_ref};
 use crate::link::FrameLink;
 use crate::master::bus::Bus;
 use crate::master::error::{ErrorKind, MasterError};
-use crate::od::{DataType, Dictionary, ObjectAddress, Value};
-use crate::pdo::{Direction, Mapping, PdoEntry, read_mapping_sync};
+use crate::od::{Dictionary, ObjectAddress};
+use crate::pdo::{Direction, Mapping, PdoEntry};
 use serde::Serialize;
 use std::time::Duration;
 
@@ -88,13 +88,6 @@ pub struct PdoReport {
     pub sync_managers: Vec<SmReport>,
 }
 
-fn decode_u32(dt: DataType, b: &[u8]) -> Result<u32, String> {
-    match Value::decode(dt, b).map_err(|e| e.to_string())? {
-        Value::Uint(u) => u32::try_from(u).map_err(|_| format!("{u} does not fit 32 bits")),
-        other => Err(format!("unexpected value {other}")),
-    }
-}
-
 /// The PDO configuration of the device at `position`: its SyncManagers from the SII, and the
 /// assignment and mapping read over CoE (0x1C12/0x1C13, 0x16xx/0x1Axx), or the SII's PDO
 /// categories for devices without CoE.
@@ -109,31 +102,7 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
     let coe = sii.protocol_bits & 0x0004 != 0 && sii.mailbox.is_some();
     let (mapping, source) = if coe {
         let addr = d.address;
-        let m = read_mapping_sync(|a: ObjectAddress, dt: DataType| {
-            let bytes = bus.with_coe(addr, drive.clone(), false, T_SDO, async |c| {
-                c.upload(a, false).await
-            })?;
-            decode_u32(dt, &bytes).map_err(|why| {
-                crate::master::bus::SessionError::Coe(crate::master::coe::CoeError {
-                    drive: drive.clone(),
-                    address: Some(a),
-                    kind: crate::master::coe::CoeErrorKind::Protocol(why),
-                })
-            })
-        })
-        .map_err(|e| match e {
-            crate::pdo::ReadbackError::Upload { source, .. } => {
-                let mut e = MasterError::from(source);
-                e.step = format!("reading the PDO mapping: {}", e.step);
-                e
-            }
-            other => MasterError::new(
-                Some(&drive),
-                "reading the PDO mapping",
-                ErrorKind::Bus,
-                other,
-            ),
-        })?;
+        let m = crate::master::startup::read_mapping(bus, addr, &drive, "reading the PDO mapping")?;
         (m, PdoSource::Coe)
     } else {
         let pdo = |p: &super::sii::SiiPdo| {
