@@ -364,11 +364,11 @@ fn programs_are_checked_against_mode_parameters_and_limits() {
 fn mappings_and_start_up_values_are_checked() {
     check(
         &format!(
-            "{HEAD}[[drive]]\nposition = 0\n[drive.mapping]\nrx = [{{ pdo = 0x1600, entries = [\"0x6040:00\"] }}]\n"
+            "{HEAD}[[drive]]\nposition = 0\n[drive.mapping]\nrx = [{{ pdo = 0x1600, entries = [\"0x6040:00\", \"0x2000:00\"] }}]\n"
         ),
         7,
-        Some("drive[0].mapping.rx[0].entries[0]"),
-        "not known without a drive profile",
+        Some("drive[0].mapping.rx[0].entries[1]"),
+        "not known without a drive profile (only the standard CiA 402 objects are)",
     );
     check(
         &format!(

@@ -993,9 +993,14 @@ fn build_mapping(
                             s.parse().map_err(|er: crate::od::AddressParseError| {
                                 cx.err(e.span(), k.clone(), er.to_string())
                             })?;
+                        // Without a profile the standard CiA 402 objects still have their
+                        // standard sizes.
+                        let standard =
+                            Dictionary::new(crate::drives::generic::GENERIC_CIA402.dictionary);
                         let bits = dict
                             .as_ref()
-                            .and_then(|dict| dict.entry(a))
+                            .unwrap_or(&standard)
+                            .entry(a)
                             .map(|en| en.bit_len)
                             .ok_or_else(|| {
                                 cx.err(
@@ -1004,7 +1009,7 @@ fn build_mapping(
                                     match profile {
                                         Some(p) => format!("{a} is not in the {} dictionary", p.name),
                                         None => format!(
-                                            "the size of {a} is not known without a drive profile; write {{ object = \"{s}\", bits = N }}"
+                                            "the size of {a} is not known without a drive profile (only the standard CiA 402 objects are); write {{ object = \"{s}\", bits = N }} or name the drive's profile"
                                         ),
                                     },
                                 )

@@ -600,6 +600,9 @@ pub fn run_report(r: &RunReport) {
         for e in &d.errors {
             println!("  Error:               {e}");
         }
+        for w in &d.warnings {
+            println!("  Warning:             {w}");
+        }
     }
     if let Some(c) = &r.cycle {
         println!();

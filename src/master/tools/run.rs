@@ -123,6 +123,9 @@ pub struct DriveRunReport {
     pub steps_done: usize,
     /// Faults and errors the history records for this drive.
     pub errors: Vec<String>,
+    /// Warnings the history records for this drive (what start-up accepted but the user should
+    /// know: a read-only cycle time, a drive on the generic profile, a 0x60F4 not computed).
+    pub warnings: Vec<String>,
 }
 
 /// One device that was not driven (an I/O device) after a run.
@@ -516,6 +519,18 @@ pub fn run(
                                 .is_some_and(|d| d.position == s.info.position)
                     })
                     .map(|h| h.text.clone())
+                    .collect(),
+                warnings: report
+                    .history
+                    .iter()
+                    .filter(|h| {
+                        h.kind == crate::master::history::HistoryKind::Warning
+                            && !h.error
+                            && h.drive
+                                .as_ref()
+                                .is_some_and(|d| d.position == s.info.position)
+                    })
+                    .map(|h| h.text.trim_start_matches("warning: ").to_string())
                     .collect(),
             }
         })
