@@ -176,7 +176,7 @@ fn a_cpu_that_does_not_exist() {
         "cpu.toml",
         "interface = \"eth9\"\n[rt]\ncpu = 4096\n",
         "rt.cpu",
-        &["CPU 4096 does not exist"],
+        &["CPU 4096 does not exist on this machine"],
     );
 }
 

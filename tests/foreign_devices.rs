@@ -263,12 +263,13 @@ fn stale_inputs_and_outputs_applied_in_safe_op() {
     }
 }
 
-/// A 0x60F4 that stays 0 while the axis moves is flagged and not trusted: the master's own
-/// following error is reported (and checked) instead.
+/// A 0x60F4 that stays 0 while the axis moves (and the master sees an error) is flagged and not
+/// trusted: the master's own following error is reported (and checked) instead. A sine keeps
+/// the axis accelerating, so that the error is never 0 for long.
 #[test]
 fn a_following_error_object_stuck_at_zero_is_flagged() {
     let _one = one_at_a_time();
-    let long = "[[drive]]\nposition = 0\nprogram = [{ step = \"move\", by = 1000000, velocity = 400000, acceleration = 4000000 }]\n";
+    let long = "[[drive]]\nposition = 0\nprogram = [{ step = \"sine\", amplitude = 400000, frequency = 2, periods = 3 }]\n";
     let r = run_text(&config(&["mr-j4-tm+following-error-zero", "bdhde"], long));
     completed(&r);
     let d = &r.drives[0];

@@ -454,8 +454,8 @@ fn run_case(c: &Case) -> Result<(), TestCaseError> {
                 check(&mut m, "quick stop", 10, |t| {
                     all_axes(t, |s| s != Some(State::OperationEnabled))
                 })?;
-                // Let the quick stop end (standstill) before enabling again.
-                std::thread::sleep(Duration::from_millis(100));
+                // Enabling again leaves Quick stop active once the axis stands still (the
+                // planner waits for it).
                 m.command(Command::Enable(Axes::All))
                     .map_err(|e| TestCaseError::fail(e.to_string()))?;
                 check(&mut m, "enabled after a quick stop", 10, enabled)?;

@@ -113,6 +113,9 @@ impl fmt::Display for Target {
 pub enum StallCause {
     /// The drive did not react to the command (no further clue in the statusword).
     NoResponse,
+    /// The drive stays in Not ready to switch on: it has not finished its own initialisation
+    /// (transition 1 is the drive's, not the master's).
+    Initialising,
     /// Statusword bit 9 (remote) is 0 and the drive ignores the controlword then.
     RemoteOff,
     /// Statusword bit 4 (voltage enabled) is 0: no main/DC-bus power.
@@ -134,6 +137,10 @@ impl fmt::Display for StallCause {
                 "the drive does not react to the controlword; usual causes: a safety or enable \
                  input open (STO, forced stop), the drive under local or test-mode control, or \
                  the controlword not reaching it (check its RxPDO mapping)"
+            }
+            StallCause::Initialising => {
+                "the drive has not finished its own initialisation (look at its display or alarm \
+                 for a hardware or parameter fault)"
             }
             StallCause::RemoteOff => {
                 "statusword bit 9 (remote) is 0, so the drive ignores the controlword"
@@ -681,9 +688,10 @@ impl Planner {
             StallCause::NoResponse
         };
         let wait = (C::DisableVoltage, InProgress, StallCause::NoResponse);
+        let init = (C::DisableVoltage, InProgress, StallCause::Initialising);
         match self.target {
             Target::OperationEnabled => match s {
-                NotReadyToSwitchOn => wait,
+                NotReadyToSwitchOn => init,
                 SwitchOnDisabled => (C::Shutdown, InProgress, up),
                 ReadyToSwitchOn => (C::SwitchOn, InProgress, up),
                 SwitchedOn => (C::EnableOperation, InProgress, up),
@@ -692,7 +700,7 @@ impl Planner {
                 FaultReactionActive | Fault => wait,
             },
             Target::SwitchedOn => match s {
-                NotReadyToSwitchOn => wait,
+                NotReadyToSwitchOn => init,
                 SwitchOnDisabled => (C::Shutdown, InProgress, up),
                 ReadyToSwitchOn => (C::SwitchOn, InProgress, up),
                 SwitchedOn => (C::SwitchOn, Reached, StallCause::NoResponse),
@@ -770,6 +778,13 @@ impl Planner {
 fn transition_name(s: State, cmd: Command) -> String {
     use Command as C;
     use State::*;
+    if s == NotReadyToSwitchOn {
+        return format!(
+            "transition 1, the drive's own initialisation (the master waits, sending controlword \
+             0x{:04X})",
+            cmd.bits()
+        );
+    }
     let number = match (s, cmd) {
         (SwitchOnDisabled, C::Shutdown) => Some(2),
         (ReadyToSwitchOn, C::SwitchOn) => Some(3),

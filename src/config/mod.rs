@@ -12,6 +12,7 @@
 //! lock_memory = true         # mlockall
 //!
 //! [supervision]              # how the cycle reacts to the bus (optional)
+//! lost_before_stop = 3       # consecutive cycles without a reply before the axes are stopped
 //! lost_cycles = 3            # consecutive cycles without a reply before the segment counts as lost
 //! wkc_errors = 3             # consecutive wrong working counters before the axes are stopped
 //! op_timeout = "5s"          # how long the drives may take to reach OP
@@ -427,26 +428,23 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
             return Err(cx.err(p.span(), "rt.priority", "SCHED_FIFO priorities are 1–99"));
         }
         master.cycle.rt.priority = rt.priority.as_ref().map(|p| *p.get_ref());
-        if let Some(cpu) = &rt.cpu {
-            let ids: Vec<usize> = core_affinity::get_core_ids()
-                .unwrap_or_default()
-                .into_iter()
-                .map(|c| c.id)
-                .collect();
-            if !ids.is_empty() && !ids.contains(cpu.get_ref()) {
-                return Err(cx.err(
-                    cpu.span(),
-                    "rt.cpu",
-                    format!(
-                        "CPU {} does not exist here or is not available to this process (CPUs {})",
-                        cpu.get_ref(),
-                        ids.iter()
-                            .map(usize::to_string)
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
-                ));
-            }
+        if let Some(cpu) = &rt.cpu
+            && let Some(online) = online_cpus()
+            && !online.contains(cpu.get_ref())
+        {
+            return Err(cx.err(
+                cpu.span(),
+                "rt.cpu",
+                format!(
+                    "CPU {} does not exist on this machine (online CPUs: {})",
+                    cpu.get_ref(),
+                    online
+                        .iter()
+                        .map(usize::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
         }
         master.cycle.rt.cpu = rt.cpu.as_ref().map(|c| *c.get_ref());
         master.cycle.rt.lock_memory = rt.lock_memory;
@@ -457,6 +455,11 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
                 "supervision.lost_cycles",
                 &sv.lost_cycles,
                 &mut master.cycle.segment_lost_after,
+            ),
+            (
+                "supervision.lost_before_stop",
+                &sv.lost_before_stop,
+                &mut master.cycle.lost_before_stop,
             ),
             (
                 "supervision.wkc_errors",
@@ -572,6 +575,24 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         warnings,
         unchecked,
     })
+}
+
+/// The CPUs online on this machine (`/sys/devices/system/cpu/online`, e.g. `0-3,6`), isolated
+/// ones included (an RT cycle is usually pinned to an isolated CPU); `None` when it cannot be
+/// read (then the CPU is not checked).
+fn online_cpus() -> Option<Vec<usize>> {
+    let text = std::fs::read_to_string("/sys/devices/system/cpu/online").ok()?;
+    let mut out = Vec::new();
+    for part in text.trim().split(',').filter(|p| !p.is_empty()) {
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b): (usize, usize) = (a.parse().ok()?, b.parse().ok()?);
+                out.extend(a..=b.min(a.saturating_add(4096)));
+            }
+            None => out.push(part.parse().ok()?),
+        }
+    }
+    Some(out)
 }
 
 fn profile_keys() -> String {

@@ -45,6 +45,8 @@ pub(super) struct Supervision {
     #[serde(default)]
     pub lost_cycles: Option<Spanned<u32>>,
     #[serde(default)]
+    pub lost_before_stop: Option<Spanned<u32>>,
+    #[serde(default)]
     pub wkc_errors: Option<Spanned<u32>>,
     #[serde(default)]
     pub op_timeout: Option<Spanned<String>>,

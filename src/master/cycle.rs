@@ -50,8 +50,8 @@ pub const FEEDBACK_PULSES: u64 = 2;
 /// Demands remembered per axis, with the pulse after which their frame passed.
 const CARRIED: usize = 4;
 
-/// Cycles of motion in csp (the position demand changed) after which a 0x60F4 that never left
-/// 0 is flagged ([`EventKind::DriveFollowingErrorStuck`]).
+/// Cycles of motion in csp (the position demand changed) with a master-side following error
+/// other than 0, after which a 0x60F4 that never left 0 is flagged ([`EventKind::DriveFollowingErrorStuck`]).
 pub const DRIVE_FE_STUCK_CYCLES: u32 = 500;
 
 /// Settings of the cycle.
@@ -235,6 +235,9 @@ pub struct CycleReport {
     pub timing: Timing,
     /// What the RT set-up got.
     pub rt: RtReport,
+    /// Why the axes were first stopped (the event that ended the run), if the cycle stopped
+    /// them; `Requested` for a stop that was asked for.
+    pub first_stop: Option<StopReason>,
     /// Per axis: the largest |following error| while enabled in csp, as the master computes it.
     pub max_following_error: Vec<i64>,
     /// Per axis: the largest |0x60F4| the drive reported meanwhile (`None`: not mapped).
@@ -454,6 +457,8 @@ pub fn run<L: FrameLink>(
         }
     }
     let mut al_states = vec![0u8; n_devices];
+    // The I/O devices as last seen (a lost cycle keeps the inputs of the last reply).
+    let mut io_last = vec![IoTelemetry::default(); others.len()];
 
     // ---- the loop (no allocation from here on) -------------------------------------------
     let mut cycle: u64 = 0;
@@ -478,6 +483,8 @@ pub fn run<L: FrameLink>(
     let mut op_requested_at: Option<u64> = None;
     let mut preop_requested_at: Option<u64> = None;
     let mut ending = false;
+    // Why the axes were first stopped (what ended the run), if they were.
+    let mut first_stop: Option<StopReason> = None;
     let mut last_telemetry = CycleTelemetry::default();
     let mut steady = false;
     let end;
@@ -490,10 +497,16 @@ pub fn run<L: FrameLink>(
 
     macro_rules! emit {
         ($kind:expr) => {{
+            let kind = $kind;
+            if let EventKind::Stopping { reason } = kind
+                && first_stop.is_none()
+            {
+                first_stop = Some(reason);
+            }
             let _ = io.events.push(Event {
                 cycle,
                 time_ns: monotonic_ns(),
-                kind: $kind,
+                kind,
             });
         }};
     }
@@ -738,6 +751,16 @@ pub fn run<L: FrameLink>(
                     {
                         h.steady_end();
                         steady = false;
+                    }
+                    if ending && kind == StopKind::QuickStop {
+                        // Asked again to stop, in a hurry: the axes still on their ramp make a
+                        // quick stop instead (and are disabled after it, as always).
+                        for a in axes.iter_mut() {
+                            if matches!(a.stopping, Stopping::Ramp { .. }) {
+                                a.axis.request_quick_stop();
+                                a.stopping = Stopping::Quick { at: cycle };
+                            }
+                        }
                     }
                     if !ending {
                         ending = true;
@@ -1092,10 +1115,19 @@ pub fn run<L: FrameLink>(
             // The master's own following error, whatever the drive reports in 0x60F4: the
             // actual value of this exchange against the demand it answers (FEEDBACK_PULSES).
             // Without that demand (lost frames just before) the last value stands.
-            if let Some(s) = pulse.checked_sub(FEEDBACK_PULSES)
-                && let Some(&(_, d)) = a.carried.iter().find(|(p, _)| *p == s)
-            {
-                a.tel.following_error = d - a.pos;
+            // The newest demand whose frame passed by pulse s − 2 (two frames after one pulse:
+            // the later one's demand is what the drive took).
+            if let Some(s) = pulse.checked_sub(FEEDBACK_PULSES) {
+                let newest_first = (1..=CARRIED).map(|k| (a.carried_next + CARRIED - k) % CARRIED);
+                for k in newest_first {
+                    if let Some(&(p, d)) = a.carried.get(k)
+                        && p != u64::MAX
+                        && p <= s
+                    {
+                        a.tel.following_error = d - a.pos;
+                        break;
+                    }
+                }
             }
             let moving = a.last_demand.is_some_and(|l| l != demand);
             a.last_demand = Some(demand);
@@ -1110,7 +1142,11 @@ pub fn run<L: FrameLink>(
                     // not computed by the drive: flag it once, never trust it.
                     if d != 0 {
                         a.fe_drive_alive = true;
-                    } else if moving && !a.fe_drive_alive && !a.tel.following_error_drive_stuck {
+                    } else if moving
+                        && fe > 0
+                        && !a.fe_drive_alive
+                        && !a.tel.following_error_drive_stuck
+                    {
                         a.fe_drive_zero_cycles += 1;
                         if a.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
                             a.tel.following_error_drive_stuck = true;
@@ -1217,17 +1253,18 @@ pub fn run<L: FrameLink>(
             }
             // Every field of every slot each time: the triple buffer hands out three buffers in
             // turn.
-            for (slot, o) in t.io.iter_mut().zip(others) {
+            for ((slot, last), o) in t.io.iter_mut().zip(io_last.iter_mut()).zip(others) {
                 let pos = usize::from(o.info.position);
-                slot.position = o.info.position;
-                slot.al_state = al_states.get(pos).copied().unwrap_or(0);
+                last.position = o.info.position;
+                last.al_state = al_states.get(pos).copied().unwrap_or(0);
                 if good && let Ok(sd) = group.subdevice(md, pos) {
                     let img = sd.io_raw();
                     let inp = img.inputs();
                     let n = inp.len().min(IO_TELEMETRY_BYTES);
-                    slot.inputs[..n].copy_from_slice(&inp[..n]);
-                    slot.input_len = n as u16;
+                    last.inputs[..n].copy_from_slice(&inp[..n]);
+                    last.input_len = n as u16;
                 }
+                *slot = *last;
             }
             io.telemetry.publish();
         }
@@ -1308,6 +1345,7 @@ pub fn run<L: FrameLink>(
         overruns: recorded_overruns,
         timing,
         rt,
+        first_stop,
         max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
         max_following_error_drive: axes
             .iter()

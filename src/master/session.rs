@@ -616,6 +616,25 @@ impl<L: FrameLink + Send + 'static> Master<L> {
         self.join()
     }
 
+    /// [`Master::stop`], watching `hurry` meanwhile: once it is set (a second stop request), the
+    /// axes still ramping down are quick stopped instead. Every axis is disabled either way.
+    pub fn stop_watching(
+        mut self,
+        kind: StopKind,
+        hurry: Option<&std::sync::atomic::AtomicBool>,
+    ) -> (Option<SessionReport>, L) {
+        let _ = self.commands.push(Command::Stop(kind));
+        let mut hurried = kind == StopKind::QuickStop;
+        while self.thread.as_ref().is_some_and(|t| !t.is_finished()) {
+            if !hurried && hurry.is_some_and(|h| h.load(std::sync::atomic::Ordering::Acquire)) {
+                hurried = true;
+                let _ = self.commands.push(Command::Stop(StopKind::QuickStop));
+            }
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        self.join()
+    }
+
     /// Wait for the session to end by itself and return its report and the link. With
     /// [`RestartPolicy::Never`] it ends when its cycle does (segment lost, a drive fell out of
     /// OP, OP not reached); with the other policies only on [`Master::stop`].
@@ -874,6 +893,36 @@ fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) ->
 
 /// Whether the segment holds the drives the session started with (a re-start must find the
 /// same drives at the same positions).
+/// On a re-start the same devices must be drives and I/O devices as before (the channels, the
+/// telemetry and the summaries are sized and named for them).
+fn same_roles(
+    summaries: &[DriveSummary],
+    devices: &[DeviceInfo],
+    plan: &[startup::Role],
+) -> Result<(), MasterError> {
+    for (d, r) in devices.iter().zip(plan) {
+        let was_drive = summaries.iter().any(|s| s.info.position == d.position);
+        let is_drive = r.drive().is_some();
+        if was_drive != is_drive {
+            return Err(MasterError::new(
+                Some(&d.drive_ref()),
+                "re-start",
+                ErrorKind::Config,
+                format!(
+                    "it was {} and would now be {}: start the master afresh",
+                    if was_drive {
+                        "a drive"
+                    } else {
+                        "an I/O device"
+                    },
+                    if is_drive { "a drive" } else { "an I/O device" }
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A device as it was seen before a re-start.
 struct Seen<'a> {
     drive: &'a DriveRef,
@@ -885,6 +934,19 @@ fn same_drives(
     io: &[IoSummary],
     devices: &[DeviceInfo],
 ) -> Result<(), MasterError> {
+    // Fewer devices: the first missing one is named below.
+    if devices.len() > summaries.len() + io.len() {
+        return Err(MasterError::new(
+            None,
+            "re-start",
+            ErrorKind::Config,
+            format!(
+                "the segment has {} device(s) now, it had {}: start the master afresh",
+                devices.len(),
+                summaries.len() + io.len()
+            ),
+        ));
+    }
     let before = summaries
         .iter()
         .map(|s| (&s.drive, &s.info))
@@ -945,6 +1007,9 @@ fn run<L: FrameLink + Send>(
             same_drives(&p.summaries, &p.io, &devices)?;
         }
         let plan = startup::plan(&devices, &cfg.startup)?;
+        if let Some(p) = persist.as_ref() {
+            same_roles(&p.summaries, &devices, &plan)?;
+        }
         startup::configure(bus, group, devices, plan, &cfg.startup)
     })();
     let started = match started {
@@ -1056,9 +1121,11 @@ fn run<L: FrameLink + Send>(
     let drain_emcy = |seen: &mut usize| {
         if let Ok(l) = log.lock() {
             for r in l.iter().skip(*seen) {
+                // By segment position: the drive's alarm table, or none for an I/O device.
                 let table = decoder
                     .drives
-                    .get(r.position as usize)
+                    .iter()
+                    .find(|(d, _)| d.position == r.position)
                     .map_or(&[][..], |(_, t)| *t);
                 let d = ErrorCode(r.error_code).describe(table);
                 push_history(
@@ -1066,7 +1133,7 @@ fn run<L: FrameLink + Send>(
                     HistoryEntry {
                         time_ns: r.time_ns,
                         cycle: None,
-                        drive: decoder.drive(r.position),
+                        drive: decoder.device(r.position),
                         error: r.error_code != 0,
                         kind: HistoryKind::Emergency,
                         text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),

@@ -222,7 +222,8 @@ pub struct DriveFields {
     /// Outputs that carry a fixed value from the first cycle on.
     pub output_defaults: Vec<(Field, i64)>,
     /// Mapped outputs the master does not drive (a limit, an offset): they carry the raw value
-    /// the drive had before they were mapped, so that mapping an object does not set it to 0.
+    /// the drive holds at the end of the PRE-OP configuration (its own, or a start-up value),
+    /// so that mapping an object does not set it to 0.
     pub held_outputs: Vec<(Field, u64)>,
 }
 
@@ -370,7 +371,9 @@ pub enum Role {
         profile: &'static DriveProfile,
     },
     /// Not driven: taken to OP with its own PDO configuration (SII or default mapping), its
-    /// process data exchanged; no CoE from ecdrive.
+    /// process data exchanged. ecdrive's only request to its mailbox is the read of its device
+    /// type (0x1000, when no profile matches); it reads out waiting emergencies before ethercrab
+    /// reads the PDO assignment. A device without a mailbox gets no mailbox traffic at all.
     Io {
         /// Why it is not driven, in words.
         why: String,
@@ -1136,8 +1139,8 @@ pub fn configure<L: FrameLink>(
             ));
         }
 
-        // The mapped outputs the cycle does not drive: read their values while they are not
-        // yet mapped, and send those (`held_outputs`).
+        // The mapped outputs the cycle does not drive: read their values once every start-up
+        // value is written, and send those (`held_outputs`).
         let driven: Vec<ObjectAddress> = [CW, MODE]
             .into_iter()
             .chain(
@@ -1167,12 +1170,6 @@ pub fn configure<L: FrameLink>(
             T_STEP,
             async |c| {
                 c.drain().await?;
-                for a in &undriven {
-                    held.push((
-                        *a,
-                        c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
-                    ));
-                }
                 for (addr, bytes, _why) in pdo_writes {
                     c.download(*addr, bytes, false).await?;
                 }
@@ -1181,6 +1178,13 @@ pub fn configure<L: FrameLink>(
                 }
                 for (addr, bytes, _why) in later {
                     c.download(*addr, bytes, false).await?;
+                }
+                // Last, so that a start-up value written to such an object is what it keeps.
+                for a in &undriven {
+                    held.push((
+                        *a,
+                        c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
+                    ));
                 }
                 Ok(())
             },
@@ -1239,13 +1243,21 @@ pub fn configure<L: FrameLink>(
         }
     }
 
-    // Drain every drive's mailbox: ethercrab reads the PDO configuration through its own SDO
-    // client, which panics if an emergency is waiting (ethercrab 0.7.1).
-    for &(d, _, profile) in &drives_plan {
-        let drive = DriveRef {
-            position: d.position,
-            name: profile.name.to_string(),
-        };
+    // Drain the mailbox of every device with CoE (drives and CoE I/O devices): ethercrab reads
+    // the PDO configuration through its own SDO client, which panics if an emergency is
+    // waiting (ethercrab 0.7.1). Draining only reads what is waiting; a device without a
+    // mailbox gets nothing.
+    for d in devices.iter().filter(|d| d.coe) {
+        let drive = drives_plan
+            .iter()
+            .find(|(x, _, _)| x.position == d.position)
+            .map_or_else(
+                || d.drive_ref(),
+                |(_, _, p)| DriveRef {
+                    position: d.position,
+                    name: p.name.to_string(),
+                },
+            );
         bus.with_coe(d.address, drive, false, T_STEP, async |c| {
             c.drain().await.map(|_| ())
         })?;

@@ -422,21 +422,60 @@ fn parse_duration(s: &str) -> Result<Duration, String> {
 /// A flag that Ctrl-C sets: long runs (`run`, `soak`) poll it and end in a controlled way
 /// (ramp, disable, INIT) with their report. The thread waiting for the signal is left waiting
 /// when the run ends by itself.
-pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let on_signal = stop.clone();
+/// Stop requests by signal. SIGINT (Ctrl-C), SIGTERM (systemd, docker, `timeout`) and SIGHUP
+/// (the terminal went away) all ask for a controlled stop (`stop`: ramp, disable, INIT,
+/// summary); a second one asks to hurry (`hurry`: a quick stop instead of the ramp, the drives
+/// still disabled before the process ends).
+pub struct StopSignals {
+    /// The first signal came.
+    pub stop: std::sync::Arc<std::sync::atomic::AtomicBool>,
+    /// A second signal came.
+    pub hurry: std::sync::Arc<std::sync::atomic::AtomicBool>,
+}
+
+pub fn stop_signals() -> StopSignals {
+    use std::sync::atomic::Ordering;
+    use tokio::signal::unix::{SignalKind, signal};
+    let s = StopSignals {
+        stop: std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false)),
+        hurry: std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false)),
+    };
+    let (stop, hurry) = (s.stop.clone(), s.hurry.clone());
     let _ = std::thread::Builder::new()
-        .name("ctrl-c".into())
+        .name("signals".into())
         .spawn(move || {
-            if let Ok(rt) = tokio::runtime::Builder::new_current_thread()
+            let Ok(rt) = tokio::runtime::Builder::new_current_thread()
                 .enable_io()
                 .build()
-                && rt.block_on(tokio::signal::ctrl_c()).is_ok()
-            {
-                on_signal.store(true, std::sync::atomic::Ordering::Release);
-            }
+            else {
+                return;
+            };
+            rt.block_on(async move {
+                let (Ok(mut int), Ok(mut term), Ok(mut hup)) = (
+                    signal(SignalKind::interrupt()),
+                    signal(SignalKind::terminate()),
+                    signal(SignalKind::hangup()),
+                ) else {
+                    return;
+                };
+                loop {
+                    tokio::select! {
+                        _ = int.recv() => {}
+                        _ = term.recv() => {}
+                        _ = hup.recv() => {}
+                    }
+                    if stop.swap(true, Ordering::AcqRel) {
+                        hurry.store(true, Ordering::Release);
+                    }
+                }
+            });
         });
-    stop
+    s
+}
+
+/// The first stop signal ([`stop_signals`]) as a flag.
+pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    stop_signals().stop
 }
 
 pub fn exit_code(kind: &ErrorKind) -> u8 {

@@ -67,10 +67,13 @@ pub fn run(
     for w in &cfg.warnings {
         eprintln!("ecdrive run: warning: {w}");
     }
-    // Ctrl-C ends the run in a controlled way (ramp, disable, INIT).
-    let stop = crate::ctrl_c_flag();
+    // Ctrl-C, SIGTERM and SIGHUP end the run in a controlled way (ramp, disable, INIT); a
+    // second one turns the ramp into a quick stop.
+    let signals = crate::stop_signals();
+    let stop = signals.stop;
     let opts = RunOptions {
         duration,
+        hurry: Some(signals.hurry),
         ..RunOptions::default()
     };
     let bar = print::run_progress();

@@ -609,11 +609,17 @@ pub fn sdos<L: FrameLink>(
                 problems.extend(bad);
             }
             Err(e) => {
-                // The drive stopped answering (a timeout, the bus): what was read stands.
+                // The drive stopped answering (a timeout, the bus): what was read stands. The
+                // problem names the object or entry being read then.
                 let e = coe_error(e);
+                let address = if e.step.starts_with("0x") {
+                    e.step.clone()
+                } else {
+                    format!("0x{index:04X}")
+                };
                 problems.push(OdProblem {
-                    address: format!("0x{index:04X}"),
-                    what: "object description".into(),
+                    address,
+                    what: "SDO information (the drive stopped answering)".into(),
                     reason: e.reason,
                     stopped: true,
                 });

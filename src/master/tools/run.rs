@@ -13,9 +13,10 @@ use crate::cia402::State;
 use crate::config::{RunConfig, UserUnits};
 use crate::master::cycle::CycleEnd;
 use crate::master::error::{ErrorKind, MasterError};
+use crate::master::history::HistoryKind;
 use crate::master::session::{HistoryEntry, Master};
 use crate::master::startup::{DeviceInfo, Selector};
-use crate::master::telemetry::{Axes, Command, StopKind, Telemetry};
+use crate::master::telemetry::{Axes, Command, StopKind, StopReason, Telemetry};
 use crate::rt::Summary;
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -175,7 +176,7 @@ pub struct RunReport {
 }
 
 /// What can change how [`run`] runs a file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Override the file's duration.
     pub duration: Option<Duration>,
@@ -184,6 +185,9 @@ pub struct RunOptions {
     pub op_timeout: Duration,
     /// How long the axes may take to be enabled.
     pub enable_timeout: Duration,
+    /// Set while the run stops (a second Ctrl-C or SIGTERM): the axes still ramping are quick
+    /// stopped instead; they are disabled all the same.
+    pub hurry: Option<std::sync::Arc<AtomicBool>>,
 }
 
 impl Default for RunOptions {
@@ -192,6 +196,7 @@ impl Default for RunOptions {
             duration: None,
             op_timeout: Duration::from_secs(15),
             enable_timeout: Duration::from_secs(5),
+            hurry: None,
         }
     }
 }
@@ -423,7 +428,7 @@ pub fn run(
                 .unwrap_or_default(),
         })
         .collect();
-    let (report, _link) = m.stop(StopKind::Ramp);
+    let (report, _link) = m.stop_watching(StopKind::Ramp, opts.hurry.as_deref());
     let Some(report) = report else {
         return Err(MasterError::new(
             None,
@@ -433,12 +438,75 @@ pub fn run(
         ));
     };
     let cycle = report.cycle.as_ref();
+    // The outcome comes from the event that ended the run: the first reason the cycle had to
+    // stop the axes, or how the cycle ended, else what the watching above saw.
+    let entry = |kind: HistoryKind, position: Option<u16>| {
+        report
+            .history
+            .iter()
+            .find(|h| {
+                h.kind == kind
+                    && h.error
+                    && position.is_none_or(|p| h.drive.as_ref().is_some_and(|d| d.position == p))
+            })
+            .map(|h| match &h.drive {
+                Some(d) => format!("{d}: {}", h.text),
+                None => h.text.clone(),
+            })
+    };
+    let drive_name = |axis: u16| {
+        summaries
+            .get(usize::from(axis))
+            .map_or_else(|| format!("axis {axis}"), |s| s.drive.to_string())
+    };
+    let mut ended_by: Option<String> = None;
     if let Some(c) = cycle {
-        match c.end {
-            CycleEnd::SegmentLost | CycleEnd::LinkFailed => outcome = Outcome::BusLost,
-            CycleEnd::DriveLeftOp { .. } => outcome = Outcome::DriveFault,
-            CycleEnd::OpFailed { .. } if outcome != Outcome::DriveFault => {
-                outcome = Outcome::Refused
+        match (c.end, c.first_stop) {
+            (CycleEnd::SegmentLost | CycleEnd::LinkFailed, _) => {
+                outcome = Outcome::BusLost;
+                ended_by = entry(HistoryKind::SegmentLost, None)
+                    .or_else(|| Some("the link failed".to_string()));
+            }
+            (_, Some(StopReason::FramesLost { cycles })) => {
+                outcome = Outcome::BusLost;
+                ended_by = Some(format!(
+                    "{cycles} cycles in a row without a reply: the axes were stopped in a \
+                     controlled way (a bus problem, no drive fault)"
+                ));
+            }
+            (_, Some(StopReason::WorkingCounter)) => {
+                outcome = Outcome::BusLost;
+                ended_by = Some(format!(
+                    "the working counter stayed wrong (a device does not exchange its process \
+                     data): the axes were stopped in a controlled way{}",
+                    entry(HistoryKind::WorkingCounter, None)
+                        .map_or(String::new(), |e| format!("; first: {e}"))
+                ));
+            }
+            (_, Some(StopReason::DriveFault { axis })) => {
+                outcome = Outcome::DriveFault;
+                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
+                ended_by = entry(HistoryKind::DriveFault, pos)
+                    .or_else(|| Some(format!("{} faulted", drive_name(axis))));
+            }
+            (_, Some(StopReason::FollowingError { axis })) => {
+                outcome = Outcome::DriveFault;
+                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
+                ended_by = entry(HistoryKind::FollowingError, pos).or_else(|| {
+                    Some(format!(
+                        "the following error of {} exceeded its limit",
+                        drive_name(axis)
+                    ))
+                });
+            }
+            (CycleEnd::DriveLeftOp { device, .. }, _)
+            | (_, Some(StopReason::DriveLeftOp { device })) => {
+                outcome = Outcome::DriveFault;
+                ended_by = entry(HistoryKind::AlState, Some(device));
+            }
+            (CycleEnd::OpFailed { device, .. }, _) => {
+                outcome = Outcome::Refused;
+                ended_by = entry(HistoryKind::AlState, Some(device));
             }
             _ => {}
         }
@@ -451,20 +519,29 @@ pub fn run(
             Some(d) => format!("{d}: {}", h.text),
             None => h.text.clone(),
         });
-    if reason.is_empty() || outcome != Outcome::Interrupted {
-        match (outcome, first_error) {
-            (Outcome::Completed, _) => {
-                reason = match duration {
-                    Some(d) if steps_total == 0 || run_seconds >= d.as_secs_f64() => {
-                        format!("ran for {} s", d.as_secs_f64())
-                    }
-                    _ => "every program finished".into(),
+    match (outcome, ended_by) {
+        (Outcome::Interrupted, _) => reason = "stopped on request (Ctrl-C or a signal)".into(),
+        (Outcome::Completed, _) => {
+            reason = match duration {
+                Some(d) if steps_total == 0 || run_seconds >= d.as_secs_f64() => {
+                    format!("ran for {} s", d.as_secs_f64())
                 }
+                _ => "every program finished".into(),
             }
-            (_, Some(e)) => reason = e,
-            (_, None) if reason.is_empty() => reason = format!("{outcome:?}"),
-            _ => {}
         }
+        (_, Some(e)) => reason = e,
+        (_, None) if reason.is_empty() => {
+            reason = first_error.unwrap_or_else(|| format!("{outcome:?}"))
+        }
+        (Outcome::Refused, None) => {
+            // Why an axis was not enabled: the state machine's own account.
+            if let Some(e) = entry(HistoryKind::StateMachine, None)
+                .or_else(|| entry(HistoryKind::CommandRefused, None))
+            {
+                reason = format!("{reason}: {e}");
+            }
+        }
+        _ => {}
     }
     let drives = summaries
         .iter()
