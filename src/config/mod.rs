@@ -5,6 +5,7 @@
 //! cycle = "1ms"              # cycle time (ns, us, ms, s); default 1 ms
 //! dc_shift = "0us"           # offset of the master's frame from SYNC0
 //! duration = "10s"           # stop after this long (default: when every program has finished)
+//! reset_faults = false       # clear faults latched before the run (default: refuse, saying how)
 //!
 //! [rt]                       # real-time set-up of the cycle thread (optional)
 //! priority = 80              # SCHED_FIFO priority 1–99
@@ -132,6 +133,9 @@ pub struct RunConfig {
     /// The drive entries, in file order (index = the `setup` index in
     /// `master.startup.drives`).
     pub drives: Vec<DriveConfig>,
+    /// Clear faults latched before the run (a reset edge to each drive in Fault after OP)
+    /// instead of refusing to run.
+    pub reset_faults: bool,
     /// What the check found questionable but not wrong (a program beyond what the drive
     /// documents), one line each, naming the key.
     pub warnings: Vec<String>,
@@ -572,6 +576,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         master,
         duration,
         drives,
+        reset_faults: f.reset_faults,
         warnings,
         unchecked,
     })

@@ -19,6 +19,8 @@ pub(super) struct File {
     #[serde(default)]
     pub allow_generic: bool,
     #[serde(default)]
+    pub reset_faults: bool,
+    #[serde(default)]
     pub rt: Option<Rt>,
     #[serde(default)]
     pub supervision: Option<Supervision>,

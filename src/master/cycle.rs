@@ -801,6 +801,10 @@ pub fn run<L: FrameLink>(
         let now_s = tick as f64 * dt;
         // The SYNC0 pulse the frame of this cycle came after (see FEEDBACK_PULSES).
         let pulse = dc_time / cycle_ns.max(1);
+        // Whether any axis was energised or running a program as of the last cycle.
+        let any_energised_before = axes.iter().any(|a| {
+            a.program != ProgramState::Idle || a.tel.state.is_some_and(State::is_energised)
+        });
         for (i, a) in axes.iter_mut().enumerate() {
             let Ok(sd) = group.subdevice(md, a.sub) else {
                 continue;
@@ -1031,10 +1035,13 @@ pub fn run<L: FrameLink>(
                             axis: i as u16,
                             event: ev
                         });
-                        // The other axes are stopped after this loop.
-                        emit!(EventKind::Stopping {
-                            reason: StopReason::DriveFault { axis: i as u16 }
-                        });
+                        // The other axes are stopped after this loop. A fault while nothing
+                        // was energised (latched before the run) stops nothing.
+                        if any_energised_before {
+                            emit!(EventKind::Stopping {
+                                reason: StopReason::DriveFault { axis: i as u16 }
+                            });
+                        }
                         continue;
                     }
                     _ => {}

@@ -142,6 +142,17 @@ pub fn run_remote<F: Future>(
     timeout: Duration,
     fut: F,
 ) -> Result<F::Output, ExecError> {
+    run_remote_unless(what, timeout, fut, &|| false)
+}
+
+/// [`run_remote`], given up (as a timeout) as soon as `abort` says so: the pumping thread has
+/// ended, say, and no reply can come.
+pub fn run_remote_unless<F: Future>(
+    what: &dyn Fn() -> String,
+    timeout: Duration,
+    fut: F,
+    abort: &dyn Fn() -> bool,
+) -> Result<F::Output, ExecError> {
     let deadline = monotonic_ns().saturating_add(timeout.as_nanos() as u64);
     let tw = Arc::new(ThreadWaker {
         thread: std::thread::current(),
@@ -156,7 +167,7 @@ pub fn run_remote<F: Future>(
             return Ok(v);
         }
         let now = monotonic_ns();
-        if now >= deadline {
+        if now >= deadline || abort() {
             return Err(ExecError::Timeout {
                 what: what(),
                 timeout_ms: timeout.as_millis() as u64,
@@ -217,6 +228,19 @@ mod tests {
     use ethercrab::{Command, MainDevice, MainDeviceConfig, PduStorage, Timeouts};
     use std::collections::VecDeque;
     use std::pin::pin;
+
+    /// A poll whose answer can no longer come (the pumping thread ended) is given up at once,
+    /// whatever its timeout: the session must not wait for it.
+    #[test]
+    fn run_remote_unless_gives_up_when_told() {
+        let r = run_remote_unless(
+            &|| "polling".into(),
+            Duration::from_secs(3600),
+            std::future::pending::<()>(),
+            &|| true,
+        );
+        assert!(matches!(r, Err(ExecError::Timeout { .. })), "{r:?}");
+    }
 
     /// A link whose "segment" is two slaves that answer every BRD by OR-ing 0x11 into the data
     /// and adding 2 to the working counter. It can swallow frames to simulate loss.

@@ -923,6 +923,9 @@ fn same_roles(
     Ok(())
 }
 
+/// How long one supervisory mailbox poll during the cycle may take.
+const POLL_TIMEOUT: Duration = Duration::from_millis(250);
+
 /// A device as it was seen before a re-start.
 struct Seen<'a> {
     drive: &'a DriveRef,
@@ -1212,11 +1215,17 @@ fn run<L: FrameLink + Send>(
             {
                 next_poll = monotonic_ns() + every.as_nanos() as u64;
                 for ((addr, drive, ca), counter) in addrs.iter().zip(counters.iter_mut()) {
+                    if h.is_finished() {
+                        break;
+                    }
                     let log = log.clone();
                     let last = *counter;
-                    let r = exec::run_remote(
+                    // A poll only reads what is waiting: a few cycles. It gives up at once when
+                    // the cycle ends (no frame carries it then), so that a lost segment does not
+                    // hold the session up.
+                    let r = exec::run_remote_unless(
                         &|| format!("{drive}: polling the mailbox"),
-                        mbx_timeout,
+                        mbx_timeout.min(POLL_TIMEOUT),
                         async {
                             let mut c = CoeClient::new(md, *addr, drive.clone(), log)
                                 .await?
@@ -1225,6 +1234,7 @@ fn run<L: FrameLink + Send>(
                             c.drain().await?;
                             Ok::<_, super::coe::CoeError>(c.counter())
                         },
+                        &|| h.is_finished(),
                     );
                     if let Ok(Ok(c)) = r {
                         *counter = c;

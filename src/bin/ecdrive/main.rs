@@ -228,6 +228,26 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
+    /// Clear the faults the drives have latched: a short cyclic session that gives each drive
+    /// in Fault the rising edge on controlword bit 7, reports what it had latched (0x603F with
+    /// the drive's alarm name) and whether it cleared, and takes the drives down again. A fault
+    /// that does not clear (the cause is still there, or the drive needs a power cycle) is said
+    /// so, with exit code 4.
+    #[command(
+        after_help = "Examples:\n  ecdrive reset -i eth1\n  ecdrive reset -i eth1 -p 0 --json"
+    )]
+    Reset {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Only this drive (default: every drive).
+        #[arg(short, long, value_name = "POS")]
+        position: Option<u16>,
+        /// Cycle time of the session, µs.
+        #[arg(long, value_name = "US", default_value_t = 1000)]
+        cycle_us: u32,
+        #[command(flatten)]
+        json: Json,
+    },
     /// Read or write ESC registers of one device.
     #[command(
         after_help = "Examples:\n  ecdrive reg -i eth1 -p 0 read 0x0130 2\n  ecdrive reg -i eth1 -p 0 read 0x0910 --type u64\n  ecdrive reg -i eth1 -p 0 write 0x0120 2 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 \"34 12\""
@@ -740,6 +760,52 @@ fn dispatch(cli: Cli) -> ExitCode {
             }
             Err(code) => code,
         },
+        Command::Reset {
+            bus,
+            position,
+            cycle_us,
+            json,
+        } => {
+            let target: Target = match bus.interface.parse() {
+                Ok(t) => t,
+                Err(e) => return fail("reset", &e),
+            };
+            let link = match target.open() {
+                Ok(l) => l,
+                Err(e) => return fail("reset", &e),
+            };
+            let opts = tools::reset::ResetOptions {
+                position,
+                cycle: Duration::from_micros(u64::from(cycle_us)),
+                ..tools::reset::ResetOptions::default()
+            };
+            let r = match tools::reset::reset(link, &opts) {
+                Ok(r) => r,
+                Err(e) => return fail("reset", &e),
+            };
+            if json.json {
+                let c = print_json("reset", &r);
+                if c != ExitCode::SUCCESS {
+                    return c;
+                }
+            } else {
+                print::reset(&r);
+            }
+            match r.drives.iter().find(|d| d.cleared == Some(false)) {
+                None => ExitCode::SUCCESS,
+                Some(d) => {
+                    eprintln!(
+                        "ecdrive reset: drive {} ({}): still in {} after the reset edge ({}): its \
+                         cause is still present, or the drive needs a power cycle",
+                        d.position,
+                        d.drive,
+                        d.after,
+                        d.fault.as_deref().unwrap_or("fault")
+                    );
+                    ExitCode::from(exit::REFUSED)
+                }
+            }
+        }
         Command::States {
             bus,
             position,

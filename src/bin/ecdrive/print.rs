@@ -221,6 +221,22 @@ pub fn sdos(listing: &OdListing) {
     }
 }
 
+pub fn reset(r: &ecdrive::master::tools::reset::ResetReport) {
+    for d in &r.drives {
+        match (&d.fault, d.cleared) {
+            (Some(f), Some(true)) => println!(
+                "drive {} ({}): {}: {f}; reset, now {}",
+                d.position, d.drive, d.before, d.after
+            ),
+            (Some(f), _) => println!(
+                "drive {} ({}): {}: {f}; NOT cleared, still {}",
+                d.position, d.drive, d.before, d.after
+            ),
+            (None, _) => println!("drive {} ({}): {}, no fault", d.position, d.drive, d.before),
+        }
+    }
+}
+
 pub fn pdos(r: &PdoReport) {
     for sm in &r.sync_managers {
         let size = match sm.mapped_bytes {

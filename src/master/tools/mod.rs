@@ -12,6 +12,7 @@
 //! | `sii` | [`sii::sii_read`], then [`sii::SiiInfo::decode`] / [`sii::esi_skeleton`] | [`sii::SiiDump`] |
 //! | `esi` | [`esi::show`], [`esi::check`] | [`esi::EsiSummary`], [`esi::EsiCheck`] |
 //! | `run` | [`run::run`] (with a [`crate::config::RunConfig`]) | [`run::RunReport`] |
+//! | `reset` | [`reset::reset`] | [`reset::ResetReport`] |
 //!
 //! ecdrive is not a resident master: every operation starts with a fresh discovery
 //! ([`startup::discover`]: ethercrab resets every device to INIT, assigns station addresses,
@@ -41,6 +42,7 @@ pub mod esi;
 mod od;
 mod pdos;
 mod reg;
+pub mod reset;
 pub mod run;
 pub mod sii;
 mod slaves;

@@ -167,6 +167,8 @@ pub struct RunReport {
     /// The devices that were not driven, in segment order: in OP with their own PDO
     /// configuration, their process data exchanged.
     pub io: Vec<IoRunReport>,
+    /// The faults cleared before the run (`reset_faults = true`).
+    pub resets: Vec<super::reset::DriveReset>,
     /// Cycle timing.
     pub cycle: Option<CycleSummary>,
     /// Whether every drive reached INIT at the end.
@@ -310,6 +312,58 @@ pub fn run(
             break;
         }
         std::thread::sleep(Duration::from_millis(20));
+    }
+
+    // Faults latched before this run (a loss alarm of the last one, say): cleared with
+    // `reset_faults`, else the run is refused, saying how to clear them.
+    let mut resets = Vec::new();
+    let mut faulted_before = false;
+    if outcome == Outcome::Completed && n_axes > 0 {
+        tick(
+            "checking for faults",
+            &m.telemetry().clone(),
+            Duration::ZERO,
+        );
+        if cfg.reset_faults {
+            resets = super::reset::clear_faults(&mut m, None, Duration::from_secs(2))?;
+            if let Some(d) = resets.iter().find(|d| d.cleared == Some(false)) {
+                outcome = Outcome::Refused;
+                reason = format!(
+                    "drive {} ({}): {} did not clear on reset: its cause is still present, or \
+                     the drive needs a power cycle",
+                    d.position,
+                    d.drive,
+                    d.fault.as_deref().unwrap_or("the fault")
+                );
+            }
+        } else {
+            m.wait_until("every drive's state", Duration::from_secs(5), |t| {
+                t.axes.iter().all(|a| a.state.is_some())
+            })?;
+            let t = m.telemetry().clone();
+            if let Some((i, _)) = t
+                .axes
+                .iter()
+                .enumerate()
+                .take(n_axes)
+                .find(|(_, a)| is_fault(a.state))
+            {
+                let fault = super::reset::latched(&mut m, i);
+                let d = &m.drives()[i];
+                outcome = Outcome::Refused;
+                faulted_before = true;
+                reason = format!(
+                    "{} is in Fault from before this run ({fault}); clear it with `ecdrive reset \
+                     -i {} -p {}`, or set reset_faults = true in the file",
+                    d.drive,
+                    match &cfg.target {
+                        Target::Interface(i) => i.clone(),
+                        Target::Sim(_) => cfg.target.to_string(),
+                    },
+                    d.info.position
+                );
+            }
+        }
     }
 
     // Enable, then run the programs.
@@ -460,7 +514,7 @@ pub fn run(
             .map_or_else(|| format!("axis {axis}"), |s| s.drive.to_string())
     };
     let mut ended_by: Option<String> = None;
-    if let Some(c) = cycle {
+    if let Some(c) = cycle.filter(|_| !faulted_before) {
         match (c.end, c.first_stop) {
             (CycleEnd::SegmentLost | CycleEnd::LinkFailed, _) => {
                 outcome = Outcome::BusLost;
@@ -533,7 +587,7 @@ pub fn run(
         (_, None) if reason.is_empty() => {
             reason = first_error.unwrap_or_else(|| format!("{outcome:?}"))
         }
-        (Outcome::Refused, None) => {
+        (Outcome::Refused, None) if !faulted_before => {
             // Why an axis was not enabled: the state machine's own account.
             if let Some(e) = entry(HistoryKind::StateMachine, None)
                 .or_else(|| entry(HistoryKind::CommandRefused, None))
@@ -621,6 +675,7 @@ pub fn run(
         run_seconds,
         drives,
         io,
+        resets,
         cycle: cycle.map(|c| CycleSummary {
             cycles: c.cycles,
             lost: c.lost,
