@@ -45,6 +45,7 @@ fn the_generic_device_runs_a_program_and_reports_it() {
         [
             "starting",
             "waiting for OP",
+            "checking for faults",
             "enabling",
             "running",
             "stopping"

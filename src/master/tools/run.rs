@@ -55,7 +55,8 @@ impl Outcome {
 /// Where a run is, for progress displays.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunProgress {
-    /// What is happening (`starting`, `waiting for OP`, `enabling`, `running`, `stopping`).
+    /// What is happening (`starting`, `waiting for OP`, `checking for faults`, `enabling`,
+    /// `running`, `stopping`).
     pub phase: &'static str,
     /// Time since the programs started.
     pub elapsed: Duration,
