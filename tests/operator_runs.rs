@@ -222,3 +222,32 @@ fn lost_frames_are_a_bus_problem_and_the_thresholds_are_the_files() {
     assert_eq!(j["outcome"], "completed", "{j:#}");
     assert!(j["cycle"]["lost"].as_u64().unwrap() >= 3, "{j:#}");
 }
+
+/// `ecdrive sim` survives its interface going down and coming back, as a real line keeps its
+/// slaves powered: it counts it, and the slaves answer again.
+#[test]
+fn ecdrive_sim_survives_its_interface_going_down() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(sim) = SimOnVeth::start(
+        "ecdrive_sim_survives_its_interface_going_down",
+        &["mr-j4-tm"],
+    ) else {
+        return;
+    };
+    sim.ecdrive(&["slaves"]).ok();
+    sim.set_peer_link(false);
+    std::thread::sleep(Duration::from_millis(200));
+    sim.set_peer_link(true);
+    // The link needs a moment to be up on both ends again.
+    let mut out = sim.ecdrive(&["slaves"]);
+    for _ in 0..20 {
+        if out.code == Some(0) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(100));
+        out = sim.ecdrive(&["slaves"]);
+    }
+    assert!(out.ok().contains("MR-J4-TM"), "{out:#?}");
+    let rest = sim.stop();
+    assert!(rest.contains("the interface went down 1 time(s)"), "{rest}");
+}

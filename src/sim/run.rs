@@ -222,6 +222,11 @@ pub struct SimOptions {
     pub loss_detection: bool,
     /// Faults to inject, in any order.
     pub faults: Vec<ScheduledFault>,
+    /// SCHED_FIFO priority of the serving thread (`None`: normal scheduling). An ESC answers
+    /// in hardware time; at normal priority a loaded machine turns into lost frames.
+    pub priority: Option<u8>,
+    /// Pin the serving thread to this CPU.
+    pub cpu: Option<usize>,
 }
 
 /// Why a segment cannot be served.
@@ -403,6 +408,20 @@ impl Prepared {
     /// Serve until `stop` is set, injecting the scheduled faults at their times (counted from
     /// now).
     pub fn serve(&mut self, stop: &AtomicBool) -> Result<ServeStats, SimError> {
+        self.serve_rt(stop, &crate::rt::RtSettings::default())
+    }
+
+    /// [`serve`](Self::serve) with the calling thread set up as `rt` says (priority, CPU);
+    /// what could not be granted is logged as a warning.
+    pub fn serve_rt(
+        &mut self,
+        stop: &AtomicBool,
+        rt: &crate::rt::RtSettings,
+    ) -> Result<ServeStats, SimError> {
+        let got = rt.apply_to_current_thread();
+        for w in &got.warnings {
+            tracing::warn!("{w}");
+        }
         let start = Instant::now();
         let done = AtomicBool::new(false);
         let schedule = std::mem::take(&mut self.schedule);
@@ -459,7 +478,14 @@ fn inject_on_time(
 
 /// Serve the devices of `opts` on its interface until `stop` is set.
 pub fn serve_interface(opts: &SimOptions, stop: &AtomicBool) -> Result<ServeStats, SimError> {
-    Prepared::new(opts)?.serve(stop)
+    Prepared::new(opts)?.serve_rt(
+        stop,
+        &crate::rt::RtSettings {
+            priority: opts.priority,
+            cpu: opts.cpu,
+            lock_memory: false,
+        },
+    )
 }
 
 #[cfg(test)]

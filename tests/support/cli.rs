@@ -173,6 +173,24 @@ impl SimOnVeth {
         j
     }
 
+    /// Take the simulator's end of the pair down or up (`ip link set … down|up` in its
+    /// namespace), as a cable pull at the slaves' side does.
+    pub fn set_peer_link(&self, up: bool) {
+        let st = Command::new("ip")
+            .args([
+                "netns",
+                "exec",
+                self.veth.netns().name(),
+                "ip",
+                "link",
+                "set",
+            ])
+            .args([self.veth.peer(), if up { "up" } else { "down" }])
+            .status()
+            .expect("ip link set");
+        assert!(st.success());
+    }
+
     /// Stop the simulator with SIGINT and return what it printed after the banner.
     pub fn stop(mut self) -> String {
         self.stop_inner()

@@ -338,6 +338,14 @@ enum Command {
         /// [Pr. PN06]/[Pr. PN02] so set): for masters that cannot keep the cycle.
         #[arg(long)]
         no_loss_detection: bool,
+        /// SCHED_FIFO priority of the serving thread, 1–99, or 0 for normal scheduling: an
+        /// ESC answers in hardware time, and at normal priority a loaded machine loses frames.
+        /// Without the privilege it serves at normal priority, with a warning.
+        #[arg(long, value_name = "N", default_value_t = 70, value_parser = clap::value_parser!(u8).range(0..=99))]
+        priority: u8,
+        /// Pin the serving thread to this CPU.
+        #[arg(long, value_name = "CPU")]
+        cpu: Option<usize>,
         /// List the device names and the quirks, and exit.
         #[arg(long)]
         list_devices: bool,
@@ -1002,10 +1010,16 @@ fn dispatch(cli: Cli) -> ExitCode {
             devices,
             sm_watchdog,
             no_loss_detection,
+            priority,
+            cpu,
             list_devices,
             faults,
             json,
         } => sim::sim(
+            sim::SimRt {
+                priority: Some(priority),
+                cpu,
+            },
             interface,
             devices,
             sm_watchdog,

@@ -5,8 +5,6 @@ use crate::{exit, fail_with, print_json};
 use ecdrive::sim::faults::{Corruption, DropLeg, LinkFault};
 use ecdrive::sim::run::{FaultSpec, ScheduledFault, SimError};
 use std::process::ExitCode;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 /// Where dropped frames are lost.
@@ -426,7 +424,16 @@ struct Report {
     segment: ecdrive::sim::segment::SegmentStats,
 }
 
+/// The serving thread's real-time set-up (`--priority`, `--cpu`).
+pub struct SimRt {
+    /// SCHED_FIFO priority (0: normal scheduling).
+    pub priority: Option<u8>,
+    /// CPU to pin to.
+    pub cpu: Option<usize>,
+}
+
 pub fn sim(
+    rt: SimRt,
     interface: Option<String>,
     devices: Vec<String>,
     sm_watchdog: Option<u16>,
@@ -483,6 +490,8 @@ pub fn sim(
         sm_watchdog,
         loss_detection,
         faults: faults.faults(),
+        priority: rt.priority.filter(|p| *p > 0),
+        cpu: rt.cpu,
     };
     let mut prepared = match ecdrive::sim::run::Prepared::new(&opts) {
         Ok(p) => p,
@@ -502,27 +511,25 @@ pub fn sim(
     for line in prepared.describe() {
         eprintln!("  {line}");
     }
-    let stop = Arc::new(AtomicBool::new(false));
-    let on_signal = stop.clone();
-    let waiter = std::thread::spawn(move || {
-        let rt = tokio::runtime::Builder::new_current_thread()
-            .enable_io()
-            .build();
-        match rt {
-            Ok(rt) => {
-                let _ = rt.block_on(tokio::signal::ctrl_c());
-            }
-            Err(e) => eprintln!("ecdrive sim: cannot wait for Ctrl-C ({e}); stopping"),
-        }
-        on_signal.store(true, Ordering::Release);
-    });
-    match prepared.serve(&stop) {
+    // Ctrl-C, SIGTERM and SIGHUP stop serving.
+    let stop = crate::stop_signals().stop;
+    let settings = ecdrive::rt::RtSettings {
+        priority: opts.priority,
+        cpu: opts.cpu,
+        lock_memory: false,
+    };
+    match prepared.serve_rt(&stop, &settings) {
         Ok(stats) => {
-            let _ = waiter.join();
             let seg = prepared.segment_stats();
             eprintln!(
-                "ecdrive sim: stopped; {} frames answered, {} dropped",
-                stats.frames, stats.dropped
+                "ecdrive sim: stopped; {} frames answered, {} dropped{}",
+                stats.frames,
+                stats.dropped,
+                if stats.link_down > 0 {
+                    format!("; the interface went down {} time(s)", stats.link_down)
+                } else {
+                    String::new()
+                }
             );
             if !faults.is_empty() {
                 eprintln!(

@@ -26,6 +26,9 @@ pub struct ServeStats {
     pub lost: u64,
     /// Replies sent late because of an injected delay.
     pub delayed: u64,
+    /// Times the interface went down (a real line keeps its slaves powered: they go on, see
+    /// no frames, and answer again once it is back up).
+    pub link_down: u64,
 }
 
 /// SCHED_FIFO priority of a [`RawServer`] thread (a master's cycle thread defaults to 80).
@@ -47,14 +50,28 @@ pub fn serve(
     let mut stats = ServeStats::default();
     let mut buf = vec![0u8; socket.max_frame_len().max(MAX_FRAME_LEN)];
     let mut held = HeldReplies::new(HELD);
+    let mut down = false;
+    // While the interface is down: no frames, the slaves run on their own clock.
+    let link_down = |down: &mut bool, stats: &mut ServeStats, timeout: Duration| {
+        if !*down {
+            *down = true;
+            stats.link_down += 1;
+            tracing::warn!("the interface is down; serving again once it is up");
+        }
+        std::thread::sleep(timeout.min(Duration::from_millis(10)));
+        lock(segment).poll();
+    };
     while !stop.load(Ordering::Acquire) {
         let (now, deadline) = {
             let seg = lock(segment);
             (seg.clock().now_ns(), seg.next_deadline())
         };
         while let Some(f) = held.pop_due(now) {
-            socket.send(f)?;
-            stats.frames += 1;
+            match socket.send(f) {
+                Ok(()) => stats.frames += 1,
+                Err(LinkError::InterfaceDown { .. }) => {}
+                Err(e) => return Err(e),
+            }
         }
         let next = match (deadline, held.next_due()) {
             (Some(a), Some(b)) => Some(a.min(b)),
@@ -65,6 +82,7 @@ pub fn serve(
             .unwrap_or(MAX_WAIT);
         match socket.recv(&mut buf, Some(timeout)) {
             Ok(Some(n)) => {
+                down = false;
                 let Some(frame) = buf.get_mut(..n) else {
                     continue;
                 };
@@ -75,8 +93,16 @@ pub fn serve(
                             continue;
                         };
                         if r.delay_ns == 0 {
-                            socket.send(f)?;
-                            stats.frames += 1;
+                            match socket.send(f) {
+                                Ok(()) => {
+                                    down = false;
+                                    stats.frames += 1;
+                                }
+                                Err(LinkError::InterfaceDown { .. }) => {
+                                    link_down(&mut down, &mut stats, timeout)
+                                }
+                                Err(e) => return Err(e),
+                            }
                         } else if held.push(f, r.due_ns) {
                             stats.delayed += 1;
                         } else {
@@ -89,6 +115,7 @@ pub fn serve(
             }
             Ok(None) => lock(segment).poll(),
             Err(LinkError::Truncated { .. }) => stats.dropped += 1,
+            Err(LinkError::InterfaceDown { .. }) => link_down(&mut down, &mut stats, timeout),
             Err(e) => return Err(e),
         }
     }
