@@ -251,3 +251,20 @@ fn ecdrive_sim_survives_its_interface_going_down() {
     let rest = sim.stop();
     assert!(rest.contains("the interface went down 1 time(s)"), "{rest}");
 }
+
+/// An interface with no EtherCAT device on it fails at once and says so, instead of after the
+/// 30 s discovery timeout: on the loopback every frame comes back unprocessed.
+#[test]
+fn an_interface_without_ethercat_devices_fails_at_once() {
+    if !ecdrive::link::netns::require_root("an_interface_without_ethercat_devices_fails_at_once") {
+        return;
+    }
+    support::cli::ecdrive(&["slaves", "-i", "lo"]).fails(
+        3,
+        &[
+            "discovering the segment on interface lo",
+            "no EtherCAT device answered",
+            "came back unprocessed",
+        ],
+    );
+}

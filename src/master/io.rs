@@ -38,6 +38,9 @@ pub struct PumpStats {
     pub stale: u64,
     /// Frames on the link that were not EtherCAT replies or that ethercrab rejected.
     pub rejected: u64,
+    /// Our own frames coming back unprocessed (the source address without the bit every
+    /// slave controller sets): a loopback or a reflecting switch, no EtherCAT device.
+    pub echoes: u64,
 }
 
 #[derive(Clone, Copy)]
@@ -309,6 +312,17 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             self.stats.stale += 1;
             return false;
         };
+        // A frame no slave controller forwarded keeps the source address we sent (each ESC
+        // sets its locally-administered bit): an echo, not a reply. Left in flight, it times
+        // out, and discovery says nothing answered, at once instead of after its timeout.
+        if let (Some(sent), Some(got)) = (
+            self.copies.get(slot).and_then(|c| c.get(6..12)),
+            frame.get(6..12),
+        ) && sent == got
+        {
+            self.stats.echoes += 1;
+            return false;
+        }
         let was_lost = matches!(self.inflight.get(slot), Some(Some(f)) if f.lost);
         if let Some(s) = self.inflight.get_mut(slot) {
             *s = None;

@@ -290,7 +290,26 @@ pub fn discover<L: FrameLink>(
             T_INIT,
             |md| md.init_single_group::<MAX_SUBDEVICES, MAX_PDI>(ethercrab::std::ethercat_now),
         )
-        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| match e {
+            // The very first frames got no reply: nothing on this interface speaks EtherCAT.
+            super::exec::ExecError::FrameLost { .. } => {
+                let echoes = bus.pump().stats().echoes;
+                MasterError::new(
+                    None,
+                    format!("discovering the segment on {link}"),
+                    ErrorKind::Discovery,
+                    if echoes > 0 {
+                        "no EtherCAT device answered: the frames came back unprocessed (a \
+                         loopback or a switch, not an EtherCAT segment?)"
+                            .to_string()
+                    } else {
+                        "no EtherCAT device answered (is the segment connected and powered?)"
+                            .to_string()
+                    },
+                )
+            }
+            e => exec_error(None, e),
+        })?
         .map_err(|e| {
             let kind = if matches!(e, ethercrab::error::Error::NotFound { .. }) {
                 ErrorKind::Discovery
