@@ -207,3 +207,21 @@ fn without_profiles_it_says_what_it_could_not_check() {
     let j = ecdrive(&["run", "-c", &f, "--check", "--json"]).json();
     assert_eq!(j["unchecked"].as_array().unwrap().len(), 1, "{j:#}");
 }
+
+/// A selector that matches nothing on the segment is named as a user writes it (no Rust
+/// `Debug` text such as `Identity { vendor_id: 737, … }`).
+#[test]
+fn a_selector_matching_nothing_is_named_plainly() {
+    let files = Files::new();
+    let f = files.write(
+        "nomatch.toml",
+        "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nidentity = { vendor_id = 0x2E1, product_code = 1 }\n",
+    );
+    ecdrive(&["run", "-c", &f]).fails(
+        2,
+        &[
+            "no device on the segment matches vendor 0x000002E1 product 0x00000001",
+            "0 BDHDE",
+        ],
+    );
+}

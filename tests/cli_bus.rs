@@ -507,7 +507,7 @@ program = [
     );
     let j = support::cli::ecdrive(&["run", "-c", &path, "--json"]).json();
     assert_eq!(j["outcome"], "completed");
-    assert_eq!(j["target"]["Interface"], sim.host());
+    assert_eq!(j["target"]["interface"], sim.host());
     for (i, mode) in ["csp", "csv"].into_iter().enumerate() {
         let d = &j["drives"][i];
         assert_eq!(d["name"], profile(i).name);

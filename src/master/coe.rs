@@ -142,6 +142,16 @@ impl MailboxSequence {
     }
 }
 
+/// The kind of a reply for a message, without its fields (`UploadExpedited`, `SdoInfo`).
+fn kind_of(m: &impl core::fmt::Debug) -> String {
+    let d = format!("{m:?}");
+    d.split(['{', '(', ' '])
+        .next()
+        .unwrap_or_default()
+        .trim()
+        .to_string()
+}
+
 /// SM status bit 3: mailbox full.
 const MBX_FULL: u8 = 0x08;
 
@@ -490,7 +500,7 @@ impl<'a> CoeClient<'a> {
             }
             Ok((_, m)) => Err(self.error(
                 Some(addr),
-                CoeErrorKind::Protocol(format!("unexpected reply {m:?}")),
+                CoeErrorKind::Protocol(format!("unexpected reply: {}", kind_of(&m))),
             )),
             Err(e) => Err(self.error(Some(addr), CoeErrorKind::Protocol(e.to_string()))),
         }
@@ -541,7 +551,10 @@ impl<'a> CoeClient<'a> {
             other => {
                 return Err(self.error(
                     Some(addr),
-                    CoeErrorKind::Protocol(format!("unexpected reply to an upload: {other:?}")),
+                    CoeErrorKind::Protocol(format!(
+                        "unexpected reply to an upload: {}",
+                        kind_of(&other)
+                    )),
                 ));
             }
         };
@@ -570,7 +583,8 @@ impl<'a> CoeClient<'a> {
                     return Err(self.error(
                         Some(addr),
                         CoeErrorKind::Protocol(format!(
-                            "unexpected reply to an upload segment: {other:?}"
+                            "unexpected reply to an upload segment: {}",
+                            kind_of(&other)
                         )),
                     ));
                 }
@@ -639,7 +653,10 @@ impl<'a> CoeClient<'a> {
             other => {
                 return Err(self.error(
                     Some(addr),
-                    CoeErrorKind::Protocol(format!("unexpected reply to a download: {other:?}")),
+                    CoeErrorKind::Protocol(format!(
+                        "unexpected reply to a download: {}",
+                        kind_of(&other)
+                    )),
                 ));
             }
         }
@@ -658,7 +675,8 @@ impl<'a> CoeClient<'a> {
                     return Err(self.error(
                         Some(addr),
                         CoeErrorKind::Protocol(format!(
-                            "unexpected reply to a download segment: {other:?}"
+                            "unexpected reply to a download segment: {}",
+                            kind_of(&other)
                         )),
                     ));
                 }

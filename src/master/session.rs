@@ -261,7 +261,7 @@ impl Decoder {
                         };
                         (false, format!("state {} → {}", name(from), name(to)))
                     }
-                    cia402::Event::TargetReached(t) => (false, format!("reached {t:?}")),
+                    cia402::Event::TargetReached(t) => (false, format!("reached {t}")),
                     cia402::Event::FaultCleared => (false, "fault cleared".into()),
                     cia402::Event::WarningChanged(w) => (
                         false,
@@ -880,7 +880,7 @@ fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) ->
                     shared,
                     HistoryKind::NoCycle,
                     true,
-                    format!("{other:?} refused: no cycle runs (waiting for a re-start)"),
+                    format!("{other} refused: no cycle runs (waiting for a re-start)"),
                 ),
             }
         }

@@ -48,6 +48,19 @@ pub enum Selector {
     },
 }
 
+impl core::fmt::Display for Selector {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match *self {
+            Selector::Position(p) => write!(f, "position {p}"),
+            Selector::Alias(a) => write!(f, "alias {a}"),
+            Selector::Identity {
+                vendor_id,
+                product_code,
+            } => write!(f, "vendor 0x{vendor_id:08X} product 0x{product_code:08X}"),
+        }
+    }
+}
+
 /// How one drive is to be configured and run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriveSetup {
@@ -437,12 +450,12 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                 "matching the configuration to the segment",
                 ErrorKind::Config,
                 format!(
-                    "no device on the segment matches {:?} ({} device(s) found: {})",
+                    "no device on the segment matches {} ({} device(s) found: {})",
                     setup.select,
                     devices.len(),
                     devices
                         .iter()
-                        .map(|d| format!("{} {:?}", d.position, d.name))
+                        .map(|d| format!("{} {}", d.position, d.name))
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),

@@ -68,6 +68,33 @@ pub enum Command {
     Restart,
 }
 
+impl core::fmt::Display for Axes {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Axes::All => f.write_str("every axis"),
+            Axes::One(a) => write!(f, "axis {a}"),
+        }
+    }
+}
+
+impl core::fmt::Display for Command {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Command::Enable(a) => write!(f, "enable {a}"),
+            Command::Disable(a) => write!(f, "disable {a}"),
+            Command::QuickStop(a) => write!(f, "quick stop {a}"),
+            Command::FaultReset(a) => write!(f, "fault reset {a}"),
+            Command::Mode(a, m) => write!(f, "switch {a} to {}", m.name()),
+            Command::RunProgram(a) => write!(f, "run the program of {a}"),
+            Command::HoldProgram(a) => write!(f, "hold the program of {a}"),
+            Command::Setpoint(a, v) => write!(f, "set-point {v} for axis {a}"),
+            Command::Stop(StopKind::Ramp) => f.write_str("stop (ramp)"),
+            Command::Stop(StopKind::QuickStop) => f.write_str("stop (quick stop)"),
+            Command::Restart => f.write_str("re-start"),
+        }
+    }
+}
+
 /// Why the cycle stopped the axes on its own.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum StopReason {

@@ -72,11 +72,15 @@ fn set_fifo(prio: u8) -> Result<(), String> {
         RealtimeThreadSchedulePolicy, ThreadPriority, ThreadPriorityValue, ThreadSchedulePolicy,
         set_thread_priority_and_policy, thread_native_id,
     };
-    let value = ThreadPriorityValue::try_from(prio).map_err(|e| format!("{e:?}"))?;
+    let value = ThreadPriorityValue::try_from(prio)
+        .map_err(|_| format!("priority {prio} is not one of 1–99"))?;
     set_thread_priority_and_policy(
         thread_native_id(),
         ThreadPriority::Crossplatform(value),
         ThreadSchedulePolicy::Realtime(RealtimeThreadSchedulePolicy::Fifo),
     )
-    .map_err(|e| format!("{e:?}"))
+    .map_err(|e| match e {
+        thread_priority::Error::OS(code) => std::io::Error::from_raw_os_error(code).to_string(),
+        other => other.to_string(),
+    })
 }

@@ -26,6 +26,12 @@ impl Run {
     #[track_caller]
     pub fn ok(&self) -> &str {
         assert_eq!(self.code, Some(0), "{self:#?}");
+        let json = self.stdout.trim_start().starts_with(['{', '['])
+            && serde_json::from_str::<serde_json::Value>(&self.stdout).is_ok();
+        if !json {
+            no_debug_text(&self.stdout);
+        }
+        no_debug_text(&self.stderr);
         &self.stdout
     }
 
@@ -49,6 +55,7 @@ impl Run {
         assert_eq!(lines.len(), 1, "not one line: {self:#?}");
         let line = lines[0];
         assert!(line.starts_with("ecdrive"), "{line}");
+        no_debug_text(line);
         for h in has {
             assert!(line.contains(h), "{line:?} does not mention {h:?}");
         }
@@ -61,6 +68,17 @@ impl Run {
             assert!(!self.stderr.contains(bad), "{self:#?}");
         }
         line.to_string()
+    }
+}
+
+/// User output carries no Rust `Debug` text (`Some(…)`, `Identity { vendor_id: … }`, `OS(1)`).
+#[track_caller]
+pub fn no_debug_text(text: &str) {
+    for bad in ["Some(", "None)", " { ", "OS("] {
+        assert!(
+            !text.contains(bad),
+            "Rust Debug text ({bad:?}) in the output:\n{text}"
+        );
     }
 }
 

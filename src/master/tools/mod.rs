@@ -70,8 +70,9 @@ use ethercrab::subdevice_group::PreOp;
 use std::str::FromStr;
 use std::time::Duration;
 
-/// Where the segment is.
+/// Where the segment is. In JSON: `{"interface": "eth1"}` or `{"sim": ["mr-j4-tm", …]}`.
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Target {
     /// A network interface (raw socket; needs `CAP_NET_RAW`).
     Interface(String),

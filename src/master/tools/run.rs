@@ -586,7 +586,7 @@ pub fn run(
         }
         (_, Some(e)) => reason = e,
         (_, None) if reason.is_empty() => {
-            reason = first_error.unwrap_or_else(|| format!("{outcome:?}"))
+            reason = first_error.unwrap_or_else(|| outcome.describe().to_string())
         }
         (Outcome::Refused, None) if !faulted_before => {
             // Why an axis was not enabled: the state machine's own account.
