@@ -1019,11 +1019,11 @@ fn dispatch(cli: Cli) -> ExitCode {
             sim::SimRt {
                 priority: Some(priority),
                 cpu,
+                sm_watchdog,
+                loss_detection: !no_loss_detection,
             },
             interface,
             devices,
-            sm_watchdog,
-            !no_loss_detection,
             list_devices,
             faults,
             json.json,

@@ -424,20 +424,23 @@ struct Report {
     segment: ecdrive::sim::segment::SegmentStats,
 }
 
-/// The serving thread's real-time set-up (`--priority`, `--cpu`).
+/// How the devices are served: the serving thread's real-time set-up (`--priority`, `--cpu`)
+/// and the slaves' supervision (`--sm-watchdog`, `--no-loss-detection`).
 pub struct SimRt {
     /// SCHED_FIFO priority (0: normal scheduling).
     pub priority: Option<u8>,
     /// CPU to pin to.
     pub cpu: Option<usize>,
+    /// SM watchdog reset value.
+    pub sm_watchdog: Option<u16>,
+    /// The emulated drives supervise the cyclic data.
+    pub loss_detection: bool,
 }
 
 pub fn sim(
     rt: SimRt,
     interface: Option<String>,
     devices: Vec<String>,
-    sm_watchdog: Option<u16>,
-    loss_detection: bool,
     list_devices: bool,
     faults: Box<FaultArgs>,
     json: bool,
@@ -487,8 +490,8 @@ pub fn sim(
     let opts = ecdrive::sim::run::SimOptions {
         interface,
         devices,
-        sm_watchdog,
-        loss_detection,
+        sm_watchdog: rt.sm_watchdog,
+        loss_detection: rt.loss_detection,
         faults: faults.faults(),
         priority: rt.priority.filter(|p| *p > 0),
         cpu: rt.cpu,
