@@ -268,3 +268,31 @@ fn an_interface_without_ethercat_devices_fails_at_once() {
         ],
     );
 }
+
+/// The master's following-error monitor speaks the user's units when the file gives them (the
+/// limit was written in them): in-process, a limit of 0.001 deg that a fast sine exceeds.
+#[test]
+fn a_following_error_is_reported_in_the_users_units() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let dir = Dir::new("fe");
+    let f = dir.file(
+        "fe.toml",
+        "interface = \"sim\"\n[sim]\ndevices = [\"mr-j4-tm\"]\nloss_detection = false\n\
+         [[drive]]\nposition = 0\nunits = { name = \"deg\", counts_per_unit = 11650.844444 }\n\
+         limits = { following_error = 0.001 }\n\
+         program = [{ step = \"sine\", amplitude = 90, frequency = 4, periods = 4 }]\n",
+    );
+    let r = support::cli::ecdrive(&["run", "-c", &f]);
+    let line = r.fails(
+        5,
+        &[
+            "drive fault",
+            "drive 0 (MR-J4-TM)",
+            "master-side following error",
+        ],
+    );
+    assert!(
+        line.contains(" deg (") && line.contains("exceeds the limit of 0.0010 deg (12 counts)"),
+        "{line}"
+    );
+}

@@ -95,14 +95,7 @@ impl core::fmt::Display for ConfigError {
 
 impl std::error::Error for ConfigError {}
 
-/// User units of one drive: program values and limits are multiplied by `counts_per_unit`.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct UserUnits {
-    /// Unit name (`deg`, `mm`).
-    pub name: String,
-    /// Position counts per unit.
-    pub counts_per_unit: f64,
-}
+pub use crate::master::startup::UserUnits;
 
 /// One `[[drive]]` entry after checking.
 #[derive(Debug, Clone, PartialEq)]
@@ -979,6 +972,7 @@ fn drive(
             mapping,
             sdos,
             following_error_limit: fe_limit,
+            units: units.clone(),
             program: steps,
         },
         DriveConfig {

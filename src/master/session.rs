@@ -189,6 +189,8 @@ type SessionOutcome<L> = Option<(Option<SessionReport>, L)>;
 struct Decoder {
     drives: Vec<(DriveRef, &'static [ErrorEntry])>,
     devices: Vec<DriveRef>,
+    /// Per axis: the user's units, for following errors.
+    units: Vec<Option<startup::UserUnits>>,
 }
 
 impl Decoder {
@@ -364,7 +366,19 @@ impl Decoder {
             EventKind::FollowingError { axis, value, limit } => (
                 self.drive(axis),
                 true,
-                format!("master-side following error {value} exceeds {limit}"),
+                match self.units.get(axis as usize).and_then(Option::as_ref) {
+                    Some(u) => format!(
+                        "master-side following error {:.4} {n} ({value} counts) exceeds the \
+                         limit of {:.4} {n} ({limit} counts)",
+                        value as f64 / u.counts_per_unit,
+                        f64::from(limit) / u.counts_per_unit,
+                        n = u.name
+                    ),
+                    None => format!(
+                        "master-side following error {value} counts exceeds the limit of {limit} \
+                         counts"
+                    ),
+                },
             ),
             EventKind::ProgramStep { axis, step } => {
                 (self.drive(axis), false, format!("program step {step}"))
@@ -1059,6 +1073,11 @@ fn run<L: FrameLink + Send>(
                 .drives
                 .iter()
                 .map(|d| (d.drive.clone(), d.profile.caps.error_table))
+                .collect(),
+            units: started
+                .drives
+                .iter()
+                .map(|d| d.setup.units.clone())
                 .collect(),
             devices: started
                 .devices

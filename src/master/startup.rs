@@ -61,6 +61,15 @@ impl core::fmt::Display for Selector {
     }
 }
 
+/// User units of one drive: program values and limits are multiplied by `counts_per_unit`.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct UserUnits {
+    /// Unit name (`deg`, `mm`).
+    pub name: String,
+    /// Position counts per unit.
+    pub counts_per_unit: f64,
+}
+
 /// How one drive is to be configured and run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriveSetup {
@@ -76,6 +85,8 @@ pub struct DriveSetup {
     pub sdos: Vec<(ObjectAddress, Value)>,
     /// Master-side following-error limit (position units); `None` = no master-side check.
     pub following_error_limit: Option<u32>,
+    /// The user's units, for messages (a following error is then also said in them).
+    pub units: Option<UserUnits>,
     /// The set-point program.
     pub program: Vec<Step>,
 }
@@ -90,6 +101,7 @@ impl DriveSetup {
             mapping: None,
             sdos: Vec::new(),
             following_error_limit: None,
+            units: None,
             program: Vec::new(),
         }
     }
