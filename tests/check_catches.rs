@@ -12,8 +12,11 @@ use support::cli::ecdrive;
 struct Files(std::path::PathBuf);
 
 impl Files {
+    /// A directory of its own for each test: tests run in parallel and each removes its own.
     fn new() -> Self {
-        let d = std::env::temp_dir().join(format!("ecdrive-check-{}", std::process::id()));
+        static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let d = std::env::temp_dir().join(format!("ecdrive-check-{}-{n}", std::process::id()));
         std::fs::create_dir_all(&d).unwrap();
         Self(d)
     }

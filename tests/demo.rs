@@ -8,7 +8,7 @@ fn demo_runs_both_drives_through_csp_csv_cst() {
     let r = run(&DemoOptions::default()).unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&r).unwrap());
     for h in &r.history {
-        eprintln!("{h}");
+        eprintln!("{:?} {:?}: {}", h.cycle, h.drive, h.text);
     }
     assert!(r.ok, "{:#?}\n{:#?}", r.unhandled, r.errors);
     assert!(r.unhandled.is_empty());
@@ -24,4 +24,8 @@ fn demo_runs_both_drives_through_csp_csv_cst() {
     for d in &r.drives {
         assert!(d.program_done, "{}", d.name);
     }
+    // The history has `ecdrive run`'s shape: objects with a cycle, a drive and a text.
+    let j = serde_json::to_value(&r).unwrap();
+    let first = &j["history"][0];
+    assert!(first.is_object() && first["text"].is_string(), "{first}");
 }

@@ -10,7 +10,7 @@ use super::cycle::CycleSettings;
 use super::error::{ErrorKind, MasterError};
 use super::program::{CyclicMode, Step, Target};
 use super::recovery::{self, Operator};
-use super::session::{Master, MasterConfig};
+use super::session::{HistoryEntry, Master, MasterConfig};
 use super::startup::{DriveSetup, Selector};
 use super::telemetry::StopKind;
 use crate::drives::{self, DriveProfile};
@@ -114,8 +114,8 @@ pub struct DemoReport {
     /// Errors the master or the demo did not handle (see [`recovery::unhandled_kind`]); empty
     /// when the demo succeeded.
     pub unhandled: Vec<String>,
-    /// The whole history, one line per entry (cycle, drive, what happened).
-    pub history: Vec<String>,
+    /// The whole history, as `ecdrive run` reports it (one shape for every command's JSON).
+    pub history: Vec<HistoryEntry>,
     /// Whether everything completed.
     pub ok: bool,
 }
@@ -323,17 +323,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
             None => h.text.clone(),
         })
         .collect();
-    let history: Vec<String> = report
-        .history
-        .iter()
-        .map(|h| {
-            let cycle = h.cycle.map_or(String::from("-"), |c| c.to_string());
-            match &h.drive {
-                Some(d) => format!("[{cycle}] {d}: {}", h.text),
-                None => format!("[{cycle}] {}", h.text),
-            }
-        })
-        .collect();
+    let history = report.history.clone();
     unhandled.extend(
         report
             .history

@@ -130,6 +130,33 @@ fn print_text(r: &DemoReport) {
 pub fn run(args: DemoArgs) -> ExitCode {
     if args.canopen {
         return match ecdrive::canopen::demo::run(&ecdrive::canopen::demo::DemoOptions::default()) {
+            Ok(s) if args.json => {
+                let j = serde_json::json!({
+                    "scan": s.scan,
+                    "drives": s.drives.iter().map(|d| serde_json::json!({
+                        "node": d.node,
+                        "drive": d.drive,
+                        "ok": d.ok(),
+                        "steps": d.steps.iter().map(|st| serde_json::json!({
+                            "step": st.step,
+                            "ok": st.outcome.is_ok(),
+                            "outcome": match &st.outcome { Ok(t) | Err(t) => t },
+                            "time_us": st.time_us,
+                        })).collect::<Vec<_>>(),
+                    })).collect::<Vec<_>>(),
+                    "sim_time_us": s.sim_time_us,
+                    "frames_sent": s.frames.0,
+                    "frames_received": s.frames.1,
+                    "events": s.events,
+                    "ok": s.ok(),
+                });
+                let code = crate::print_json("demo", &j);
+                if s.ok() {
+                    code
+                } else {
+                    ExitCode::from(crate::exit::FAULT)
+                }
+            }
             Ok(s) => {
                 println!("{s}");
                 if s.ok() {
