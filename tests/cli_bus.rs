@@ -54,7 +54,8 @@ fn slaves_lists_both_drives_in_text_and_json() {
         let cells: Vec<&str> = row.split_whitespace().collect();
         assert_eq!(cells[0], i.to_string(), "{row}");
         assert_eq!(cells[1], format!("0x{:04X}", 0x1000 + i), "{row}");
-        assert_eq!(cells[3], "PREOP", "{row}");
+        // The state as found: a fresh segment is in INIT (discovery leaves it in PREOP).
+        assert_eq!(cells[3], "INIT", "{row}");
         assert_eq!(cells[4], format!("0x{:08X}", p.identity.vendor_id), "{row}");
         assert_eq!(
             cells[5],
@@ -73,6 +74,7 @@ fn slaves_lists_both_drives_in_text_and_json() {
         let d = &list[i];
         assert_eq!(d["position"], i as u64);
         assert_eq!(d["address"], 0x1000 + i as u64);
+        assert_eq!(d["found"]["state"], "PREOP");
         assert_eq!(d["al"]["state"], "PREOP");
         assert_eq!(d["vendor_id"], u64::from(p.identity.vendor_id));
         assert_eq!(d["product_code"], u64::from(p.identity.product_code));
@@ -311,6 +313,28 @@ fn states_are_requested_and_reported() {
         r.stderr.contains("drive 0 (MR-J4-TM) did not reach BOOT"),
         "{r:#?}"
     );
+    // `slaves` shows the state each device was left in, as found, before discovery resets it:
+    // the refused BOOT request left the MR-J4-TM with the error flag and its code (ETG.1000.6
+    // 0x0013 "Bootstrap not supported"); the BDHDE in PREOP, where that command's discovery
+    // took it.
+    let text = sim.ecdrive(&["slaves"]).ok().to_string();
+    let row0 = text.lines().nth(1).unwrap();
+    assert!(row0.contains(" INIT+ERR(0x0013) "), "{text}");
+    assert!(text.lines().nth(2).unwrap().contains(" PREOP "), "{text}");
+    sim.ecdrive(&["states", "-p", "0", "BOOT"]);
+    let found = sim.ecdrive(&["slaves", "--json"]).json();
+    assert_eq!(found[0]["found"]["state"], "INIT+ERR", "{found:#}");
+    assert_eq!(found[0]["found"]["error"], true, "{found:#}");
+    assert_eq!(found[0]["found"]["code"], 0x0013, "{found:#}");
+    assert_eq!(found[0]["al"]["state"], "PREOP", "{found:#}");
+    assert_eq!(found[0]["al"]["error"], false, "{found:#}");
+    assert_eq!(found[1]["found"]["state"], "PREOP", "{found:#}");
+    sim.ecdrive(&["states", "-p", "1", "SAFEOP"]).ok();
+    let v = sim.ecdrive(&["slaves", "--verbose"]).ok().to_string();
+    assert!(
+        v.contains("State when found: SAFEOP\nState after discovery: PREOP"),
+        "{v}"
+    );
 }
 
 #[test]
@@ -334,8 +358,16 @@ fn registers_and_the_eeprom() {
     assert_eq!(j["drive"], "BDHDE");
     // Write and read back ESC memory that discovery does not touch (process data RAM outside
     // every SyncManager): bytes in address order, then a typed value.
-    sim.ecdrive(&["reg", "-p", "0", "write", "0x1F00", "78 56 34 12"])
-        .ok();
+    sim.ecdrive(&[
+        "reg",
+        "-p",
+        "0",
+        "write",
+        "0x1F00",
+        "78 56 34 12",
+        "--bytes",
+    ])
+    .ok();
     let back = sim
         .ecdrive(&["reg", "-p", "0", "read", "0x1F00", "--type", "u32"])
         .ok()
@@ -352,6 +384,20 @@ fn registers_and_the_eeprom() {
         .ok()
         .to_string();
     assert_eq!(r.trim(), "0x1F00: fe ff 34 12");
+    // A number is written little-endian for its --type, decimal or 0x alike (the register
+    // holds it so); without --type or --bytes the command says which to give.
+    for value in ["258", "0x0102"] {
+        let w = sim
+            .ecdrive(&[
+                "reg", "-p", "0", "write", "0x1F00", value, "--type", "u16", "--json",
+            ])
+            .json();
+        assert_eq!(w["bytes"], "0201", "{value}");
+    }
+    sim.ecdrive(&["reg", "-p", "0", "write", "0x1F00", "258"])
+        .fails(2, &["--type", "--bytes"]);
+    sim.ecdrive(&["reg", "-p", "0", "write", "0x1F00", "258", "--bytes"])
+        .fails(2, &["\"258\"", "hex bytes"]);
 
     // The EEPROM of each drive: summary, raw bytes, JSON, and an ESI skeleton that agrees
     // with the drive's ESI file.

@@ -83,3 +83,60 @@ fn bad_arguments_are_named() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("--device generic-coe:0"), "{stderr}");
 }
+
+mod support {
+    pub mod cli;
+}
+
+/// `jitter -i IF` measures the drives the far end serves without `--device` repeating them:
+/// it discovers them (issue "operator-grade runs").
+#[test]
+fn over_an_interface_it_discovers_the_far_ends_drives() {
+    let Some(sim) = support::cli::SimOnVeth::start(
+        "jitter_cli::over_an_interface_it_discovers_the_far_ends_drives",
+        &["mr-j4-tm", "bdhde"],
+    ) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("ecdrive-jitter-if-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("out.json");
+    let r = sim.ecdrive(&[
+        "jitter",
+        "--cycles",
+        "200",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_eq!(r.code, Some(0), "{r:#?}");
+    assert!(r.stderr.contains("discovering the drives on"), "{r:#?}");
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    assert_eq!(
+        v["settings"]["drives"],
+        serde_json::json!(["mr-j4-tm", "bdhde"])
+    );
+    assert_eq!(
+        v["settings"]["profiles"],
+        serde_json::json!(["MR-J4-TM", "BDHDE"])
+    );
+    assert_eq!(v["settings"]["transport"], "interface");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A device the harness cannot drive is named, with its identity, and the run does not start.
+#[test]
+fn over_an_interface_a_device_without_a_drive_profile_is_named() {
+    let Some(sim) = support::cli::SimOnVeth::start(
+        "jitter_cli::over_an_interface_a_device_without_a_drive_profile_is_named",
+        &["mr-j4-tm", "generic-io"],
+    ) else {
+        return;
+    };
+    let r = sim.ecdrive(&["jitter", "--cycles", "200"]);
+    assert_eq!(r.code, Some(2), "{r:#?}");
+    assert!(
+        r.stderr.contains("device 1 on") && r.stderr.contains("matches no drive profile"),
+        "{r:#?}"
+    );
+}

@@ -66,7 +66,7 @@ impl fmt::Display for AlState {
 }
 
 /// The AL status register (0x0130): the current state, the error flag and the ID flag.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub struct AlStatus {
     /// Raw register value.
     pub raw: u16,

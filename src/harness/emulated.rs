@@ -146,6 +146,16 @@ pub fn profile_for(name: &str, position: usize) -> Result<&'static DriveProfile,
     })
 }
 
+/// The profile the master uses for a device with this identity: the harness's own for the
+/// sim's generic CoE device, otherwise the registered profile.
+pub fn profile_of_identity(vendor_id: u32, product_code: u32) -> Option<&'static DriveProfile> {
+    let g = &GENERIC_COE_PROFILE.identity;
+    if vendor_id == g.vendor_id && product_code == g.product_code {
+        return Some(&GENERIC_COE_PROFILE);
+    }
+    drives::by_identity(vendor_id, product_code)
+}
+
 /// Profiles for a line of sim devices, in order.
 pub fn profiles(names: &[String]) -> Result<Vec<&'static DriveProfile>, EmulationError> {
     if names.is_empty() {

@@ -138,7 +138,8 @@ pub struct JitterConfig {
     /// Real-time set-up of every run's cycle thread.
     pub rt: RtSettings,
     /// The emulated drives (sim device names, see [`crate::sim::devices::DEVICE_NAMES`]), in
-    /// line order.
+    /// line order. Empty with [`Transport::Interface`]: the drives on the far end are
+    /// discovered (each must match a drive profile).
     pub drives: Vec<String>,
     /// How long the drives may take to reach OP.
     pub op_timeout: Duration,
@@ -196,6 +197,45 @@ pub enum HarnessError {
     /// The interface could not be opened.
     #[error(transparent)]
     Link(#[from] LinkError),
+    /// The drives on the far end of the interface could not be discovered.
+    #[error("discovering the drives on {interface}: {reason}")]
+    Discovery {
+        /// The interface.
+        interface: String,
+        /// Why.
+        reason: String,
+    },
+}
+
+/// The drives on the far end of `interface`, by discovery: each device's profile key (as
+/// `drives` in the report) and its profile. Every device must be a drive with a profile.
+fn discover_far_end(
+    interface: &str,
+) -> Result<(Vec<String>, Vec<&'static crate::drives::DriveProfile>), HarnessError> {
+    use crate::master::tools::{Target, session};
+    let target = Target::Interface(interface.to_string());
+    let devices = session(&target, |bus| {
+        crate::master::startup::discover(bus).map(|(_, devices)| devices)
+    })
+    .map_err(|e| HarnessError::Discovery {
+        interface: interface.to_string(),
+        reason: e.to_string(),
+    })?;
+    let mut names = Vec::with_capacity(devices.len());
+    let mut profiles = Vec::with_capacity(devices.len());
+    for d in &devices {
+        let p = emulated::profile_of_identity(d.vendor_id, d.product_code).ok_or_else(|| {
+            HarnessError::Settings(format!(
+                "device {} on {interface} ({}, vendor 0x{:08X}, product 0x{:08X}) matches no \
+                 drive profile: the harness measures a line of drives (name them with --device \
+                 to say what the far end serves)",
+                d.position, d.name, d.vendor_id, d.product_code
+            ))
+        })?;
+        names.push(p.key.to_string());
+        profiles.push(p);
+    }
+    Ok((names, profiles))
 }
 
 fn drive_timings(segment: &Segment, names: &[String]) -> Vec<DriveTiming> {
@@ -232,7 +272,13 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
             cfg.cycles
         )));
     }
-    let profiles = emulated::profiles(&cfg.drives)?;
+    let (drives, profiles) = match &cfg.transport {
+        Transport::Interface(i) if cfg.drives.is_empty() => {
+            progress(&format!("discovering the drives on {i}"));
+            discover_far_end(i)?
+        }
+        _ => (cfg.drives.clone(), emulated::profiles(&cfg.drives)?),
+    };
     let sync0_shift = cfg.sync0_shift.unwrap_or(cfg.cycle / 2);
     if sync0_shift >= cfg.cycle {
         return Err(HarnessError::Settings(format!(
@@ -331,7 +377,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         }
     };
     if let Some(seg) = &seg {
-        ethercrab.drives = drive_timings(seg, &cfg.drives);
+        ethercrab.drives = drive_timings(seg, &drives);
     }
 
     // 3. ecdrive.
@@ -363,7 +409,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         }
     };
     if let Some(seg) = &seg {
-        ecd.drives = drive_timings(seg, &cfg.drives);
+        ecd.drives = drive_timings(seg, &drives);
     }
     if interface.is_some() && veth.is_none() {
         for r in [&mut ethercrab, &mut ecd] {
@@ -407,7 +453,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
             priority: cfg.rt.priority,
             cpu: cfg.rt.cpu,
             lock_memory: cfg.rt.lock_memory,
-            drives: cfg.drives.clone(),
+            drives,
             profiles: profiles.iter().map(|p| p.name.to_string()).collect(),
             ecdrive_axes: "enabled in csp once in OP, holding position".into(),
         },

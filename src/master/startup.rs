@@ -190,6 +190,20 @@ pub struct DeviceInfo {
     /// The device type (0x1000), read over CoE from devices no profile matches; the low 16
     /// bits are the device profile (0x0192 = 402: a CiA 402 drive).
     pub device_type: Option<u32>,
+    /// The AL status the device had when discovery found it, before ecdrive reset it to INIT
+    /// (a device left in SAFEOP+ERR by an earlier master shows it here); `None` if it did not
+    /// answer the read.
+    pub found: Option<FoundState>,
+}
+
+/// A device's AL status (0x0130) and AL status code (0x0134) as discovery found them, read by
+/// position before anything was written to the segment.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct FoundState {
+    /// AL status.
+    pub status: crate::ec::AlStatus,
+    /// AL status code (meaningful when the error flag is set).
+    pub code: crate::ec::AlStatusCode,
 }
 
 impl DeviceInfo {
@@ -309,32 +323,60 @@ pub fn discover<L: FrameLink>(
     bus: &mut Bus<'_, L>,
 ) -> Result<(Group<PreOp>, Vec<DeviceInfo>), MasterError> {
     let link = bus.pump().link_name();
+    let lost = |bus: &mut Bus<'_, L>, e: super::exec::ExecError| match e {
+        // The very first frames got no reply: nothing on this interface speaks EtherCAT.
+        super::exec::ExecError::FrameLost { .. } => {
+            let echoes = bus.pump().stats().echoes;
+            MasterError::new(
+                None,
+                format!("discovering the segment on {link}"),
+                ErrorKind::Discovery,
+                if echoes > 0 {
+                    "no EtherCAT device answered: the frames came back unprocessed (a \
+                     loopback or a switch, not an EtherCAT segment?)"
+                        .to_string()
+                } else {
+                    "no EtherCAT device answered (is the segment connected and powered?)"
+                        .to_string()
+                },
+            )
+        }
+        e => exec_error(None, e),
+    };
+    // Each device's state as found, by position (auto-increment addressing: ethercrab's `aprd`
+    // takes the position and negates it), before ethercrab resets the segment; until a
+    // position no device answers.
+    let found = bus
+        .block_on(
+            &|| format!("discovering the segment on {link}: reading each device's AL status"),
+            T_STEP,
+            |md| async move {
+                let mut found = Vec::new();
+                for i in 0..MAX_SUBDEVICES as u16 {
+                    match ethercrab::Command::aprd(i, crate::ec::register::AL_STATUS)
+                        .receive::<[u8; 6]>(md)
+                        .await
+                    {
+                        Ok(b) => found.push(FoundState {
+                            status: crate::ec::AlStatus {
+                                raw: u16::from_le_bytes([b[0], b[1]]),
+                            },
+                            code: crate::ec::AlStatusCode(u16::from_le_bytes([b[4], b[5]])),
+                        }),
+                        Err(_) => break,
+                    }
+                }
+                found
+            },
+        )
+        .map_err(|e| lost(bus, e))?;
     let group = bus
         .block_on(
             &|| format!("discovering the segment on {link}"),
             T_INIT,
             |md| md.init_single_group::<MAX_SUBDEVICES, MAX_PDI>(ethercrab::std::ethercat_now),
         )
-        .map_err(|e| match e {
-            // The very first frames got no reply: nothing on this interface speaks EtherCAT.
-            super::exec::ExecError::FrameLost { .. } => {
-                let echoes = bus.pump().stats().echoes;
-                MasterError::new(
-                    None,
-                    format!("discovering the segment on {link}"),
-                    ErrorKind::Discovery,
-                    if echoes > 0 {
-                        "no EtherCAT device answered: the frames came back unprocessed (a \
-                         loopback or a switch, not an EtherCAT segment?)"
-                            .to_string()
-                    } else {
-                        "no EtherCAT device answered (is the segment connected and powered?)"
-                            .to_string()
-                    },
-                )
-            }
-            e => exec_error(None, e),
-        })?
+        .map_err(|e| lost(bus, e))?
         .map_err(|e| {
             let kind = if matches!(e, ethercrab::error::Error::NotFound { .. }) {
                 ErrorKind::Discovery
@@ -367,6 +409,7 @@ pub fn discover<L: FrameLink>(
             profile: crate::drives::by_identity(id.vendor_id, id.product_id).map(|p| p.name),
             coe: false,
             device_type: None,
+            found: found.get(i).copied(),
         });
     }
     // The mailbox from the SII (words 0x18–0x1C: receive/send mailbox offset and size, the

@@ -79,6 +79,16 @@ pub enum ValueError {
         /// The data type it was meant for.
         data_type: DataType,
     },
+    /// The text is not a sequence of hex bytes (for an OCTET STRING or DOMAIN).
+    #[error(
+        "{text:?} is not hex bytes for {data_type} (two hex digits per byte, in order: \"34 12\" or 0x3412)"
+    )]
+    NotHexBytes {
+        /// The text given.
+        text: String,
+        /// The data type it was meant for.
+        data_type: DataType,
+    },
     /// The byte length does not match the data type.
     #[error("{data_type} needs {expected} bytes, got {got}")]
     WrongLength {
@@ -268,6 +278,10 @@ impl Value {
         match dt {
             DataType::VisibleString | DataType::UnicodeString => Ok(Self::Str(text.to_string())),
             DataType::OctetString | DataType::Domain => {
+                let nan = || ValueError::NotHexBytes {
+                    text: text.to_string(),
+                    data_type: dt,
+                };
                 let digits = t
                     .strip_prefix("0x")
                     .or_else(|| t.strip_prefix("0X"))

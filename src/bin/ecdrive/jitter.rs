@@ -31,7 +31,8 @@ pub struct JitterArgs {
     #[arg(long, conflicts_with = "interface")]
     veth: bool,
     /// Run over this interface; its far end must already serve the drives (e.g. `ecdrive sim`
-    /// on the other end of a veth pair). Needs root or CAP_NET_RAW.
+    /// on the other end of a veth pair), which are discovered unless --device names them.
+    /// Needs root or CAP_NET_RAW.
     #[arg(long, short, value_name = "IF")]
     interface: Option<String>,
     /// SCHED_FIFO priority of every run's cycle thread (0: normal scheduling).
@@ -44,7 +45,7 @@ pub struct JitterArgs {
     #[arg(long)]
     no_mlock: bool,
     /// An emulated drive, in line order, optionally repeated (`generic-coe:64`); repeat the
-    /// option for more. Default: generic-coe:2.
+    /// option for more. Default: generic-coe:2, or with --interface the drives discovered there.
     #[arg(long = "device", short = 'd', value_name = "NAME[:COUNT]")]
     devices: Vec<String>,
     /// How long the drives may take to reach OP, in seconds.
@@ -65,9 +66,14 @@ pub struct JitterArgs {
     svg: Option<PathBuf>,
 }
 
-fn expand(devices: &[String]) -> Result<Vec<String>, String> {
+fn expand(devices: &[String], interface: bool) -> Result<Vec<String>, String> {
     if devices.is_empty() {
-        return Ok(vec!["generic-coe".into(), "generic-coe".into()]);
+        // Over an interface, the harness discovers what the far end serves.
+        return Ok(if interface {
+            Vec::new()
+        } else {
+            vec!["generic-coe".into(), "generic-coe".into()]
+        });
     }
     let mut out = Vec::new();
     for d in devices {
@@ -91,7 +97,7 @@ fn expand(devices: &[String]) -> Result<Vec<String>, String> {
 
 /// Run `ecdrive jitter`.
 pub fn run(args: JitterArgs) -> ExitCode {
-    let drives = match expand(&args.devices) {
+    let drives = match expand(&args.devices, args.interface.is_some()) {
         Ok(d) => d,
         Err(e) => {
             eprintln!("ecdrive jitter: {e}");
@@ -124,9 +130,10 @@ pub fn run(args: JitterArgs) -> ExitCode {
             eprintln!("ecdrive jitter: {e}");
             return ExitCode::from(match e {
                 HarnessError::Settings(_) | HarnessError::Emulation(_) => exit::USAGE,
-                HarnessError::Run { .. } | HarnessError::Netns(_) | HarnessError::Link(_) => {
-                    exit::BUS
-                }
+                HarnessError::Run { .. }
+                | HarnessError::Netns(_)
+                | HarnessError::Link(_)
+                | HarnessError::Discovery { .. } => exit::BUS,
             });
         }
     };

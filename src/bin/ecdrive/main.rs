@@ -110,8 +110,10 @@ enum Command {
     /// report counts what happened and any unhandled error (exit code 5 if there is one).
     /// Ctrl-C ends it early, in a controlled way, with the report so far.
     Soak(soak::SoakArgs),
-    /// List the devices on the segment: position, station address, alias, AL state,
-    /// identity, name, matched drive profile, DC support and mailbox protocols. With --can:
+    /// List the devices on the segment: position, station address, alias, the AL state each
+    /// was in when found (with the AL status code if its error flag was set; discovery then
+    /// takes every device to PREOP), identity, name, matched drive profile, DC support and
+    /// mailbox protocols. With --can:
     /// the CANopen nodes (node-ID, NMT state, device type, identity, name, profile).
     #[command(
         after_help = "Examples:\n  ecdrive slaves -i eth1\n  ecdrive slaves -i eth1 --verbose\n  ecdrive slaves -i sim:mr-j4-tm,bdhde --json\n  ecdrive slaves --can can0"
@@ -250,7 +252,7 @@ enum Command {
     },
     /// Read or write ESC registers of one device.
     #[command(
-        after_help = "Examples:\n  ecdrive reg -i eth1 -p 0 read 0x0130 2\n  ecdrive reg -i eth1 -p 0 read 0x0910 --type u64\n  ecdrive reg -i eth1 -p 0 write 0x0120 2 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 \"34 12\""
+        after_help = "Examples:\n  ecdrive reg -i eth1 -p 0 read 0x0130 2\n  ecdrive reg -i eth1 -p 0 read 0x0910 --type u64\n  ecdrive reg -i eth1 -p 0 write 0x0120 2 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 0x1234 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 \"34 12\" --bytes"
     )]
     Reg {
         #[command(flatten)]
@@ -373,17 +375,23 @@ enum RegOp {
         #[arg(short = 't', long = "type", value_name = "T", value_parser = parse_type)]
         data_type: Option<DataType>,
     },
-    /// Write VALUE to ADDR: as --type (little-endian), or hex bytes in address order.
+    /// Write VALUE to ADDR: a number as --type (decimal or 0x, written little-endian, as the
+    /// register is), or with --bytes hex bytes in address order.
+    #[command(group(clap::ArgGroup::new("encoding").required(true).args(["data_type", "bytes"])))]
     Write {
         /// Register address (decimal or 0x hex).
         #[arg(value_name = "ADDR", value_parser = parse_u16)]
         address: u16,
-        /// The value.
+        /// The value: a number for --type (`258`, `0x0102`, `-2`), hex bytes for --bytes
+        /// (`"02 01"`, `0201`).
         #[arg(value_name = "VALUE", allow_hyphen_values = true)]
         value: String,
-        /// Encode the value as this type (little-endian).
+        /// Encode the value as this type, little-endian (u8, u16, u32, i16, …).
         #[arg(short = 't', long = "type", value_name = "T", value_parser = parse_type)]
         data_type: Option<DataType>,
+        /// VALUE is hex bytes, written as given, the first byte to ADDR.
+        #[arg(long)]
+        bytes: bool,
     },
 }
 
@@ -889,6 +897,7 @@ fn dispatch(cli: Cli) -> ExitCode {
                     address,
                     value,
                     data_type,
+                    bytes: _,
                 } => session("reg", &bus.interface, move |b| {
                     tools::reg_write(b, position, address, &value, data_type)
                 }),

@@ -57,7 +57,14 @@ pub fn slaves(list: &[SlaveReport], verbose: bool) {
             s.position.to_string(),
             format!("0x{:04X}", s.address),
             s.alias.to_string(),
-            s.al.state.clone(),
+            // The state the device was in when found: discovery takes every device to PREOP.
+            match &s.found {
+                Some(f) => match f.code {
+                    Some(c) => format!("{}(0x{c:04X})", f.state),
+                    None => f.state.clone(),
+                },
+                None => "?".into(),
+            },
             format!("0x{:08X}", s.vendor_id),
             format!("0x{:08X}", s.product_code),
             format!("0x{:08X}", s.revision),
@@ -88,10 +95,15 @@ fn slave_verbose(s: &SlaveReport) {
         println!("Description: {d}");
     }
     println!("Alias: {}", s.alias);
-    match (&s.al.code, &s.al.code_text) {
-        (Some(c), Some(t)) => println!("State: {} (AL status code 0x{c:04X}: {t})", s.al.state),
-        _ => println!("State: {}", s.al.state),
+    let state = |al: &ecdrive::master::tools::AlStatusReport| match (&al.code, &al.code_text) {
+        (Some(c), Some(t)) => format!("{} (AL status code 0x{c:04X}: {t})", al.state),
+        _ => al.state.clone(),
+    };
+    match &s.found {
+        Some(f) => println!("State when found: {}", state(f)),
+        None => println!("State when found: unknown (no reply to the AL status read)"),
     }
+    println!("State after discovery: {}", state(&s.al));
     println!("Identity:");
     println!("  Vendor Id:       0x{:08X}", s.vendor_id);
     println!("  Product code:    0x{:08X}", s.product_code);

@@ -1,7 +1,7 @@
 //! `ecdrive slaves`: what each device on the segment is.
 
 use super::{Discovered, T_STEP, al_state_text, discover, drive_ref, read_al_status};
-use crate::ec::register;
+use crate::ec::{AlStatus, AlStatusCode, register};
 use crate::link::FrameLink;
 use crate::master::bus::Bus;
 use crate::master::error::{DriveRef, MasterError, bus_error, exec_error};
@@ -21,6 +21,20 @@ pub struct AlStatusReport {
     pub code_text: Option<String>,
 }
 
+impl AlStatusReport {
+    /// The report of an AL status and its status code.
+    pub fn new(status: AlStatus, code: AlStatusCode) -> Self {
+        Self {
+            state: al_state_text(status),
+            error: status.error(),
+            code: status.error().then_some(code.0),
+            code_text: status
+                .error()
+                .then(|| code.text().unwrap_or("unknown AL status code").to_string()),
+        }
+    }
+}
+
 /// One device on the segment.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct SlaveReport {
@@ -30,7 +44,10 @@ pub struct SlaveReport {
     pub address: u16,
     /// Configured station alias (from the SII).
     pub alias: u16,
-    /// AL status.
+    /// The AL status the device was in when found, before discovery reset it to INIT and took
+    /// it to PRE-OP (`None` if it did not answer that read).
+    pub found: Option<AlStatusReport>,
+    /// AL status now, after discovery (PRE-OP, unless the device refused it).
     pub al: AlStatusReport,
     /// Vendor ID.
     pub vendor_id: u32,
@@ -209,14 +226,8 @@ pub fn slaves<L: FrameLink>(
             position: d.position,
             address: d.address,
             alias: d.alias,
-            al: AlStatusReport {
-                state: al_state_text(status),
-                error: status.error(),
-                code: status.error().then_some(code.0),
-                code_text: status
-                    .error()
-                    .then(|| code.text().unwrap_or("unknown AL status code").to_string()),
-            },
+            found: d.found.map(|f| AlStatusReport::new(f.status, f.code)),
+            al: AlStatusReport::new(status, code),
             vendor_id: d.vendor_id,
             product_code: d.product_code,
             revision: d.revision,
