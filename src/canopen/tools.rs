@@ -323,3 +323,190 @@ pub fn format_value(v: &Value, dt: DataType) -> String {
         other => other.to_string(),
     }
 }
+
+/// The emulated CANopen drives `ecdrive sim --can` serves, by name, with the node-ID each
+/// takes unless one is given (the [`DEMO_NODES`] IDs).
+pub const EMULATED_NODES: [(&str, &CanDriveProfile, u8); 4] = [
+    ("blv-r", &blv_r::PROFILE, blv_r::EMU_NODE_ID),
+    ("asda-a2", &asda_a2::PROFILE, 0x7F),
+    ("lexium-mdrive", &lexium_mdrive::PROFILE, 0x41),
+    (
+        "lexium-mdrive-closed-loop",
+        &lexium_mdrive::PROFILE_CLOSED_LOOP,
+        0x41,
+    ),
+];
+
+/// One emulated node to serve: `NAME` or `NAME@ID` (`asda-a2@0x20`), a name of
+/// [`EMULATED_NODES`] and a node-ID 1–127 (decimal or 0x hex).
+#[derive(Debug, Clone, Copy)]
+pub struct NodeSpec {
+    /// The node-ID.
+    pub node: u8,
+    /// The emulated drive's profile.
+    pub profile: &'static CanDriveProfile,
+    /// Its name in [`EMULATED_NODES`].
+    pub name: &'static str,
+}
+
+impl FromStr for NodeSpec {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (name, id) = match s.split_once('@') {
+            Some((n, id)) => (n.trim(), Some(id.trim())),
+            None => (s.trim(), None),
+        };
+        let Some(&(name, profile, default)) = EMULATED_NODES.iter().find(|(n, _, _)| *n == name)
+        else {
+            let names: Vec<&str> = EMULATED_NODES.iter().map(|(n, _, _)| *n).collect();
+            return Err(format!(
+                "{name:?} is not an emulated CANopen drive (one of {})",
+                names.join(", ")
+            ));
+        };
+        let node = match id {
+            None => default,
+            Some(t) => {
+                let v = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+                    Some(h) => u8::from_str_radix(h, 16),
+                    None => t.parse(),
+                };
+                match v {
+                    Ok(v @ 1..=127) => v,
+                    _ => return Err(format!("{s:?}: the node-ID must be 1–127, not {t:?}")),
+                }
+            }
+        };
+        Ok(Self {
+            node,
+            profile,
+            name,
+        })
+    }
+}
+
+/// Why `ecdrive sim --can` cannot serve.
+#[derive(Debug, thiserror::Error)]
+pub enum ServeError {
+    /// The nodes cannot be served as given (a node-ID twice, the in-process bus).
+    #[error("{0}")]
+    Invalid(String),
+    /// An emulated node cannot be built.
+    #[error("node {node} ({name}): {reason}")]
+    Node {
+        /// Node-ID.
+        node: u8,
+        /// Its name.
+        name: &'static str,
+        /// Why.
+        reason: String,
+    },
+    /// The bus could not be opened or failed while serving.
+    #[error("CAN bus {bus}: {source}")]
+    Bus {
+        /// The bus.
+        bus: String,
+        /// Why.
+        #[source]
+        source: TransportError,
+    },
+}
+
+/// What [`serve`] did.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct ServeReport {
+    /// The bus.
+    pub bus: String,
+    /// Whether this process ran the `vbus` hub (otherwise one was already there).
+    pub started_hub: bool,
+    /// The nodes served: node-ID and name.
+    pub nodes: Vec<(u8, String)>,
+}
+
+/// Serve emulated CANopen drives on a bus until `keep_going` says no: on a SocketCAN interface,
+/// or on a `vbus:PATH` virtual bus shared by processes (the hub is started at PATH unless one
+/// runs there already; it ends with this call). The nodes keep their state between the
+/// commands that use them, as drives on a real bus do. `started` is called once they are up.
+pub fn serve(
+    bus: &BusSpec,
+    nodes: &[NodeSpec],
+    started: impl FnOnce(&ServeReport),
+    mut keep_going: impl FnMut() -> bool,
+) -> Result<ServeReport, ServeError> {
+    if nodes.is_empty() {
+        return Err(ServeError::Invalid("no nodes to serve".into()));
+    }
+    for (i, a) in nodes.iter().enumerate() {
+        if let Some(b) = nodes[..i].iter().find(|b| b.node == a.node) {
+            return Err(ServeError::Invalid(format!(
+                "node-ID {} (0x{:02X}) is given twice ({} and {}); add @ID to one of them",
+                a.node, a.node, b.name, a.name
+            )));
+        }
+    }
+    let mut emulated = Vec::with_capacity(nodes.len());
+    for n in nodes {
+        emulated.push(
+            EmulatedNode::new(n.profile, n.node).map_err(|e| ServeError::Node {
+                node: n.node,
+                name: n.name,
+                reason: e.to_string(),
+            })?,
+        );
+    }
+    let io = |source| ServeError::Bus {
+        bus: bus.to_string(),
+        source,
+    };
+    let (mut transport, hub): (Box<dyn CanTransport>, _) = match bus {
+        BusSpec::Virtual => {
+            return Err(ServeError::Invalid(
+                "'virtual' is a bus inside each command's own process; serve on vbus:PATH to \
+                 share one between commands (then use --can vbus:PATH with them)"
+                    .into(),
+            ));
+        }
+        BusSpec::SocketCan(i) => (Box::new(SocketCanTransport::open(i).map_err(io)?), None),
+        BusSpec::UnixHub(p) => {
+            // A hub already running there is joined; otherwise this process runs it.
+            let hub = match super::unix_bus::UnixBusHub::spawn(p) {
+                Ok(h) => Some(h),
+                Err(TransportError::Io { source, .. })
+                    if source.kind() == std::io::ErrorKind::AddrInUse =>
+                {
+                    None
+                }
+                Err(e) => return Err(io(e)),
+            };
+            (Box::new(UnixBusPort::connect(p).map_err(io)?), hub)
+        }
+    };
+    // On a bus others may be on, no node-ID may answer already: two nodes with one ID corrupt
+    // each other's frames (a fresh hub of our own has nobody else on it).
+    if hub.is_none() {
+        let probe = open_bus(bus).map_err(io)?;
+        let mut m = Master::new(probe, super::master::MasterConfig::default());
+        let taken = m
+            .probe(nodes.iter().map(|n| n.node), SCAN_WINDOW_US)
+            .map_err(|e| ServeError::Invalid(format!("probing {bus} for the node-IDs: {e}")))?;
+        if let Some(n) = nodes
+            .iter()
+            .find(|n| taken.iter().any(|(id, _)| *id == n.node))
+        {
+            return Err(ServeError::Invalid(format!(
+                "node-ID {} (0x{:02X}) already answers on {bus}: give {} another with @ID",
+                n.node, n.node, n.name
+            )));
+        }
+    }
+    let report = ServeReport {
+        bus: bus.to_string(),
+        started_hub: hub.is_some(),
+        nodes: nodes.iter().map(|n| (n.node, n.name.to_string())).collect(),
+    };
+    started(&report);
+    super::emu::serve(transport.as_mut(), &mut emulated, 250, |_| keep_going()).map_err(io)?;
+    drop(transport);
+    drop(hub);
+    Ok(report)
+}

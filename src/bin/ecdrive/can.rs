@@ -98,7 +98,7 @@ pub fn slaves(bus: &str, json: bool) -> ExitCode {
     for n in &nodes {
         rows.push(vec![
             format!("{} (0x{:02X})", n.node, n.node),
-            n.nmt.map_or("?", |s| s.name()).to_string(),
+            n.nmt.map_or("unknown", |s| s.name()).to_string(),
             hex(n.vendor_id),
             hex(n.product_code),
             hex(n.device_type),
@@ -198,4 +198,69 @@ pub fn download(
         _ => println!("node {node} {addr} = {text}"),
     }
     ExitCode::SUCCESS
+}
+
+/// `ecdrive sim --can BUS [--node NAME[@ID]…]`: serve emulated CANopen drives until a stop
+/// signal.
+pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
+    use ecdrive::canopen::tools::{DEMO_NODES, EMULATED_NODES, NodeSpec};
+    let spec: BusSpec = match bus.parse() {
+        Ok(s) => s,
+        Err(e) => return fail_with("sim", &format!("--can {bus}: {e}"), exit::USAGE),
+    };
+    let nodes: Vec<NodeSpec> = if nodes.is_empty() {
+        DEMO_NODES
+            .iter()
+            .filter_map(|(id, p)| {
+                EMULATED_NODES
+                    .iter()
+                    .find(|(_, q, _)| std::ptr::eq(*q, *p))
+                    .map(|(name, _, _)| NodeSpec {
+                        node: *id,
+                        profile: p,
+                        name,
+                    })
+            })
+            .collect()
+    } else {
+        match nodes.iter().map(|n| n.parse()).collect() {
+            Ok(n) => n,
+            Err(e) => return fail_with("sim", &format!("--node: {e}"), exit::USAGE),
+        }
+    };
+    let stop = crate::stop_signals().stop;
+    let r = tools::serve(
+        &spec,
+        &nodes,
+        |rep| {
+            eprintln!(
+                "ecdrive sim: serving {} CANopen node(s) on {}{} — Ctrl-C to stop",
+                rep.nodes.len(),
+                rep.bus,
+                if rep.started_hub {
+                    " (hub started here)"
+                } else {
+                    ""
+                }
+            );
+            for n in &nodes {
+                eprintln!(
+                    "  node {} (0x{:02X}): {} ({})",
+                    n.node, n.node, n.profile.name, n.name
+                );
+            }
+        },
+        || !stop.load(std::sync::atomic::Ordering::Relaxed),
+    );
+    match r {
+        Ok(rep) => {
+            eprintln!("ecdrive sim: stopped");
+            if json {
+                return print_json("sim", &rep);
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e @ tools::ServeError::Bus { .. }) => fail_with("sim", &e.to_string(), exit::BUS),
+        Err(e) => fail_with("sim", &e.to_string(), exit::USAGE),
+    }
 }

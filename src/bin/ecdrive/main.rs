@@ -84,8 +84,9 @@ struct AnyBusArgs {
     )]
     interface: Option<String>,
     /// CANopen: a SocketCAN interface (`can0`), `virtual` (in-process bus with the emulated
-    /// BLV-R, ASDA-A2 and Lexium at nodes 1, 0x7F and 0x41) or `vbus:/path` (a virtual bus
-    /// hub shared between processes).
+    /// BLV-R, ASDA-A2 and Lexium at nodes 1, 0x7F and 0x41, fresh for every command) or
+    /// `vbus:/path` (a virtual bus shared between processes; `ecdrive sim --can vbus:/path`
+    /// serves emulated drives there that keep their state across commands).
     #[arg(long, value_name = "IF")]
     can: Option<String>,
 }
@@ -320,14 +321,25 @@ enum Command {
         json: Json,
     },
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
-    /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves.
+    /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves. With --can:
+    /// emulated CANopen drives on a CAN bus (a SocketCAN interface, or vbus:PATH, a virtual
+    /// bus other commands share with --can vbus:PATH).
     #[command(
-        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde\n  ecdrive sim -i veth1 -d mr-j4-tm -d bdhde --drop 1% --seed 7 --delay 5%:200us\n  ecdrive sim -i veth1 -d mr-j4-tm --disconnect-at 5s --reconnect-at 8s --alarm 0:AL.52@12s\n  ecdrive sim -i veth1 -d bdhde+no-state-skipping -d generic-coe+cycle-time-read-only\n\nA device takes quirks after '+' (behaviour of devices ecdrive did not write; listed by\n--list-devices). Fault times (T) count from the start of serving and need a unit (500ms, 5s); positions (POS)\nare 0-based in --device order; numbers are decimal or 0x hex. The counters of injected faults\nare printed when ecdrive sim stops (and are in its --json output)."
+        after_help = "Examples:\n  ecdrive sim --list-devices\n  ecdrive sim -i veth1 --device mr-j4-tm --device bdhde\n  ecdrive sim -i veth1 -d mr-j4-tm -d bdhde --drop 1% --seed 7 --delay 5%:200us\n  ecdrive sim -i veth1 -d mr-j4-tm --disconnect-at 5s --reconnect-at 8s --alarm 0:AL.52@12s\n  ecdrive sim -i veth1 -d bdhde+no-state-skipping -d generic-coe+cycle-time-read-only\n  ecdrive sim --can vbus:/tmp/can.sock\n  ecdrive sim --can vcan0 --node asda-a2@0x20 --node blv-r\n\nA device takes quirks after '+' (behaviour of devices ecdrive did not write; listed by\n--list-devices). Fault times (T) count from the start of serving and need a unit (500ms, 5s); positions (POS)\nare 0-based in --device order; numbers are decimal or 0x hex. The counters of injected faults\nare printed when ecdrive sim stops (and are in its --json output)."
     )]
     Sim {
         /// Interface to serve on (e.g. one end of a veth pair).
-        #[arg(long, short, required_unless_present = "list_devices")]
+        #[arg(long, short, required_unless_present_any = ["list_devices", "can"], conflicts_with = "can")]
         interface: Option<String>,
+        /// Serve emulated CANopen drives on this CAN bus instead: a SocketCAN interface (vcan0,
+        /// can0) or vbus:PATH (a virtual bus shared between processes; the hub starts at PATH
+        /// unless one runs there).
+        #[arg(long, value_name = "BUS", conflicts_with = "devices")]
+        can: Option<String>,
+        /// With --can: an emulated CANopen drive, NAME or NAME@ID; repeat for more. Default:
+        /// blv-r@1, asda-a2@0x7F, lexium-mdrive@0x41 (see --list-devices).
+        #[arg(long = "node", value_name = "NAME[@ID]", requires = "can")]
+        nodes: Vec<String>,
         /// A device, in line order; repeat for more devices. NAME+QUIRK[+QUIRK…] makes it
         /// behave like a device ecdrive did not write (see --list-devices).
         #[arg(long = "device", short = 'd', value_name = "NAME")]
@@ -1015,7 +1027,15 @@ fn dispatch(cli: Cli) -> ExitCode {
             json,
         } => run::run(&config, interface.as_deref(), duration, check, json.json),
         Command::Sim {
+            can: Some(bus),
+            nodes,
+            json,
+            ..
+        } => can::sim(&bus, &nodes, json.json),
+        Command::Sim {
             interface,
+            can: None,
+            nodes: _,
             devices,
             sm_watchdog,
             no_loss_detection,

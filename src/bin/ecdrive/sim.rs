@@ -446,6 +446,7 @@ pub fn sim(
     json: bool,
 ) -> ExitCode {
     if list_devices {
+        use ecdrive::canopen::tools::EMULATED_NODES;
         let names = ecdrive::sim::devices::device_names();
         use ecdrive::sim::quirks::Quirk;
         if json {
@@ -458,6 +459,13 @@ pub fn sim(
             struct List {
                 devices: Vec<Dev>,
                 quirks: Vec<Dev>,
+                can_nodes: Vec<CanNode>,
+            }
+            #[derive(serde::Serialize)]
+            struct CanNode {
+                name: &'static str,
+                profile: &'static str,
+                node: u8,
             }
             let list = List {
                 devices: names
@@ -471,6 +479,14 @@ pub fn sim(
                         description: q.describe().into(),
                     })
                     .collect(),
+                can_nodes: EMULATED_NODES
+                    .iter()
+                    .map(|(name, p, node)| CanNode {
+                        name,
+                        profile: p.name,
+                        node: *node,
+                    })
+                    .collect(),
             };
             return print_json("sim", &list);
         }
@@ -481,6 +497,14 @@ pub fn sim(
         println!("Quirks (behaviour of devices ecdrive did not write): DEVICE+QUIRK[+QUIRK…]");
         for q in Quirk::ALL {
             println!("  {:22} {}", q.name(), q.describe());
+        }
+        println!();
+        println!("CANopen drives (ecdrive sim --can BUS --node NAME[@ID]), default node-ID:");
+        for (name, p, node) in EMULATED_NODES {
+            println!(
+                "  {name:26} {} ({}), node {node} (0x{node:02X})",
+                p.name, p.source
+            );
         }
         return ExitCode::SUCCESS;
     }
