@@ -429,7 +429,7 @@ mod tests {
             assert!(
                 matches!(
                     Value::parse(bad, DataType::OctetString),
-                    Err(ValueError::NotANumber { .. })
+                    Err(ValueError::NotHexBytes { .. })
                 ),
                 "{bad:?}"
             );
