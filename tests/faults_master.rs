@@ -329,7 +329,15 @@ fn late_and_corrupted_replies_are_counted<L: FrameLink + Send + 'static>(
     how: &str,
 ) {
     let mut m = moving(config(3.0, RestartPolicy::Never), link, how);
-    // One reply delayed past the cycle's budget, then one corrupted datagram.
+    let counted = |m: &Master<L>| {
+        m.history()
+            .iter()
+            .filter(|h| matches!(h.kind, HistoryKind::FrameLost | HistoryKind::WorkingCounter))
+            .count()
+    };
+    // Replies delayed past the cycle's budget until the master has counted one (events, not
+    // time: a loaded machine may take a while to get there), then no more delay.
+    let lost = m.telemetry().cycle.lost;
     inject(
         &mut faults,
         Fault::Link(LinkFault::Delay {
@@ -337,7 +345,7 @@ fn late_and_corrupted_replies_are_counted<L: FrameLink + Send + 'static>(
             delay_ns: 1_500_000,
         }),
     );
-    std::thread::sleep(Duration::from_millis(2));
+    wait(&mut m, "a late reply counted", |t| t.cycle.lost > lost);
     inject(
         &mut faults,
         Fault::Link(LinkFault::Delay {
@@ -345,9 +353,18 @@ fn late_and_corrupted_replies_are_counted<L: FrameLink + Send + 'static>(
             delay_ns: 0,
         }),
     );
-    std::thread::sleep(Duration::from_millis(200));
-    inject(&mut faults, Fault::Link(LinkFault::CorruptNext(1)));
-    std::thread::sleep(Duration::from_millis(200));
+    // Then one corrupted datagram; the next frame may be supervisory (a mailbox poll, retried
+    // without a trace in the cycle), so corrupt again until the cycle has seen one.
+    let before = counted(&m);
+    let guard = std::time::Instant::now() + T;
+    while counted(&m) <= before {
+        assert!(
+            std::time::Instant::now() < guard,
+            "{how}: no corrupted cycle counted"
+        );
+        inject(&mut faults, Fault::Link(LinkFault::CorruptNext(1)));
+        std::thread::sleep(Duration::from_millis(20));
+    }
     let t = m.telemetry().clone();
     assert!(t.cycle.all_op, "{how}");
     let (r, _) = m.stop(StopKind::Ramp);

@@ -166,7 +166,8 @@ fn after_a_cable_pull_a_restart_on_request_brings_the_drives_back_to_op() {
     assert!(
         m.history().iter().any(|h| h.kind == HistoryKind::NoCycle
             && h.error
-            && h.text.starts_with("enable every axis refused: no cycle runs")),
+            && h.text
+                .starts_with("enable every axis refused: no cycle runs")),
         "{:#?}",
         texts(&m)
     );
