@@ -296,3 +296,35 @@ fn a_following_error_is_reported_in_the_users_units() {
         "{line}"
     );
 }
+
+/// The README's example of a drive fault is what `run` prints: the BDHDE's J3 (excessive
+/// position error) raised during the README's own csp example.
+#[test]
+fn the_readmes_fault_example_is_what_run_prints() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(sim) = SimOnVeth::start_with(
+        "the_readmes_fault_example_is_what_run_prints",
+        &["mr-j4-tm", "bdhde"],
+        &["--no-loss-detection", "--alarm", "1:J3@1s"],
+    ) else {
+        return;
+    };
+    let readme =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let example = readme
+        .split('`')
+        .find(|s| s.starts_with("drive 1 (BDHDE): fault ("))
+        .expect("the README's fault example");
+    // The state in parentheses is the one the drive was seen in (Fault reaction active or
+    // Fault, by timing); the rest is fixed.
+    let (head, tail) = example.split_once("): error code").unwrap();
+    let head = &head[..head.find("fault (").unwrap() + "fault (".len()];
+    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/csp_move_sine.toml");
+    let r = sim.ecdrive(&["run", "-c", file]);
+    assert_eq!(r.code, Some(5), "{r:#?}");
+    let line = stderr_line(&r);
+    assert!(
+        line.contains(head) && line.contains(&format!("): error code{tail}")),
+        "{line:?} is not the README's {example:?}"
+    );
+}
