@@ -493,3 +493,41 @@ fn bdhde_dictionary_objects() {
     assert_eq!(w.entries.len(), 4);
     assert_eq!(uint(&e(0x1018).default), Some(4));
 }
+
+/// The most PDOs of one direction that can be assigned together by the ESI's `<Exclude>`s
+/// (PDOs none of which excludes another), by brute force over the (at most four) PDOs.
+fn most_assignable(pdos: &[EsiPdo]) -> usize {
+    let n = pdos.len();
+    (0u32..1 << n)
+        .filter(|set| {
+            (0..n).all(|i| {
+                set & (1 << i) == 0
+                    || (0..n)
+                        .all(|j| set & (1 << j) == 0 || !pdos[i].excludes.contains(&pdos[j].index))
+            })
+        })
+        .map(|set| set.count_ones() as usize)
+        .max()
+        .unwrap_or(0)
+}
+
+/// The ESI and the profile agree on how many PDOs a SyncManager holds (issue "independent
+/// evidence": the MR-J4-TM's ESI offered four while the profile and the emulation allow one).
+#[test]
+fn the_esi_and_the_profile_agree_on_pdos_per_sync_manager() {
+    for (path, key) in [(MRJ4, "mr-j4-tm"), (BDHDE, "bdhde")] {
+        let f = load(path);
+        let p = ecdrive::drives::by_key(key).unwrap();
+        let d = &f.devices[0];
+        assert_eq!(
+            most_assignable(d.pdos(Direction::Rx)),
+            usize::from(p.pdo_limits.rx.max_assigned),
+            "{key}: RxPDOs per SyncManager"
+        );
+        assert_eq!(
+            most_assignable(d.pdos(Direction::Tx)),
+            usize::from(p.pdo_limits.tx.max_assigned),
+            "{key}: TxPDOs per SyncManager"
+        );
+    }
+}
