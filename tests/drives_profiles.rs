@@ -341,6 +341,21 @@ fn units_and_alarm_names() {
 
     let d = mr_j4_tm::PROFILE.describe_error(0xFF86);
     assert_eq!((d.name, d.text), ("AL.86", "Network communication error"));
+    // The warnings the MR-J4-TM manual names are in its table, with the manual's names
+    // ([AL. 92 Battery cable disconnection warning], [AL. 9F Battery warning], line 1253;
+    // [AL. E3 Absolute position counter warning], line 1276; [AL. F4 Positioning warning],
+    // line 1153; [AL. 90 Home position return incomplete warning], line 1878).
+    for (code, name, text) in [
+        (0xFF90, "AL.90", "Home position return incomplete warning"),
+        (0xFF92, "AL.92", "Battery cable disconnection warning"),
+        (0xFF98, "AL.98", "Software limit warning"),
+        (0xFF9F, "AL.9F", "Battery warning"),
+        (0xFFE3, "AL.E3", "Absolute position counter warning"),
+        (0xFFF4, "AL.F4", "Positioning warning"),
+    ] {
+        let d = mr_j4_tm::PROFILE.describe_error(code);
+        assert_eq!((d.name, d.text), (name, text));
+    }
     let d = bdhde::PROFILE.describe_error(0x8689);
     assert_eq!((d.name, d.text), ("J3 (FLT 87)", "Excessive PE Value"));
     // Shared codes name every fault they may be.

@@ -564,6 +564,15 @@ fn check_profile(p: &ProfileView, facts: &[Fact], gaps: &mut Vec<String>) -> Vec
                     .as_deref()
                     .and_then(|s| number(&toml::Value::String(s.into())))
                 else {
+                    // No code in the manual: the alarm should still be named in the table.
+                    if let Some(al) = &f.alarm
+                        && !p.caps.error_table.iter().any(|e| norm(e.name) == norm(al))
+                    {
+                        gaps.push(format!(
+                            "{}: {al} is not named in the profile's alarm table ({})",
+                            p.name, f.id
+                        ));
+                    }
                     continue;
                 };
                 let table: &[ErrorEntry] = p.caps.error_table;

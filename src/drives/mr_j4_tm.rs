@@ -358,6 +358,15 @@ pub const ERRORS: &[ErrorEntry] = &[
     REC_ALARMS[1],
     ErrorEntry::exact(0xFF69, "AL.69", "Command error"),
     ErrorEntry::exact(0xFF86, "AL.86", "Network communication error"),
+    // The warnings this manual names (statusword bit 7 "W", §5.x; S_BWNG for AL.92/AL.9F in
+    // 0x2D11). MANUAL GAP: the manual gives the 0xFF00 + number rule for alarms and does not
+    // say whether 0x603F carries a warning; should one come with that rule, it is named.
+    ErrorEntry::exact(0xFF90, "AL.90", "Home position return incomplete warning"),
+    ErrorEntry::exact(0xFF92, "AL.92", "Battery cable disconnection warning"),
+    ErrorEntry::exact(0xFF98, "AL.98", "Software limit warning"),
+    ErrorEntry::exact(0xFF9F, "AL.9F", "Battery warning"),
+    ErrorEntry::exact(0xFFE3, "AL.E3", "Absolute position counter warning"),
+    ErrorEntry::exact(0xFFF4, "AL.F4", "Positioning warning"),
     ErrorEntry {
         code: 0xFF00,
         mask: 0xFF00,
