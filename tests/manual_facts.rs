@@ -1172,3 +1172,82 @@ fn a_changed_profile_value_fails_the_oracle() {
         "a changed default PDO entry was not caught"
     );
 }
+
+/// A drive refuses a wrong remap (PRE-OP, as SOEM or TwinCAT users write it) with an abort
+/// code its manual lists, not one of the emulation's own choosing: an object that cannot go
+/// into an RxPDO, a non-PDO index in the assignment, more
+/// entries than the mapping object has, an object that does not exist.
+#[test]
+fn remap_errors_abort_with_codes_the_manual_lists() {
+    for d in ["mr-j4-tm", "bdhde"] {
+        let file = load(d);
+        let listed: Vec<u32> = file
+            .fact
+            .iter()
+            .filter(|f| f.kind == "abort_code")
+            .filter_map(|f| f.code.as_deref())
+            .filter_map(|c| number(&toml::Value::String(c.into())))
+            .map(|c| c as u32)
+            .collect();
+        assert!(listed.len() >= 10, "{d}: {listed:?}");
+        let target = Target::Sim(vec![d.to_string()]);
+        let results = tools::session(&target, |bus| {
+            let mut w = |a: ObjectAddress, hex: &str| -> Result<(), String> {
+                tools::download(bus, 0, a, hex, Some(DataType::OctetString))
+                    .map(|_| ())
+                    .map_err(|e| e.to_string())
+            };
+            let mut out = Vec::new();
+            // (Whether a mapping may change while it is assigned neither manual says: not
+            // tested.) Unassign and clear the mapping, as the remap sequence does, then the
+            // wrong writes.
+            let unassign = w(ObjectAddress::new(0x1C12, 0), "00")
+                .and_then(|()| w(ObjectAddress::new(0x1600, 0), "00"));
+            out.push((
+                "a TxPDO object (0x6041) in an RxPDO",
+                w(ObjectAddress::new(0x1600, 1), "10004160"),
+            ));
+            out.push((
+                "the identity (0x1018:01) in an RxPDO",
+                w(ObjectAddress::new(0x1600, 1), "20011810"),
+            ));
+            out.push((
+                "0x1700 in the RxPDO assignment",
+                w(ObjectAddress::new(0x1C12, 1), "0017"),
+            ));
+            out.push((
+                "64 entries in 0x1600",
+                w(ObjectAddress::new(0x1600, 0), "40"),
+            ));
+            out.push((
+                "an entry written while 0x1600:00 is not 0",
+                w(ObjectAddress::new(0x1600, 1), "10004060")
+                    .and_then(|()| w(ObjectAddress::new(0x1600, 0), "01"))
+                    .and_then(|()| w(ObjectAddress::new(0x1600, 2), "10004060")),
+            ));
+            out.push((
+                "an object that does not exist (0x5FFF)",
+                w(ObjectAddress::new(0x5FFF, 0), "00"),
+            ));
+            Ok((unassign, out))
+        })
+        .unwrap();
+        let (unassign, out) = results;
+        assert!(
+            unassign.is_ok(),
+            "{d}: unassigning 0x1C12, clearing 0x1600: {unassign:?}"
+        );
+        for (what, r) in out {
+            match r {
+                Ok(()) => panic!("{d}: {what} was accepted"),
+                Err(e) => {
+                    let code = abort_in(&e).unwrap_or_else(|| panic!("{d}: {what}: {e}"));
+                    assert!(
+                        listed.contains(&code),
+                        "{d}: {what} aborted 0x{code:08X}, which its manual does not list ({e})"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -73,6 +73,8 @@ fn reaches_safe_op_with_dc_and_the_configured_image() {
             dev.od().dict().uint(ObjectAddress::new(0x1C32, 2)),
             Some(1_000_000)
         );
+        // The device's download counter counts (the refused case below reads 0 from it).
+        assert!(dev.coe_stats().downloads_accepted > 0);
         assert_eq!(
             link.segment().slave(p).unwrap().esc.al_state(),
             ecdrive::ec::AlState::SafeOp
@@ -156,8 +158,10 @@ fn a_mapping_over_the_limit_is_refused_before_anything_is_written() {
     let e = r.unwrap_err();
     assert_eq!(e.kind, ErrorKind::Config);
     assert!(e.to_string().contains("0x1600 has 9 entries"), "{e}");
-    // Nothing was written: the device still has its power-on assignment and no cycle time.
+    // Nothing was written: the device accepted no SDO download at all (its own counter), and
+    // still has its power-on assignment and no cycle time.
     let dev = link.segment().device::<GenericCoeDevice>(0).unwrap();
+    assert_eq!(dev.coe_stats().downloads_accepted, 0);
     assert_eq!(dev.od().dict().uint(ObjectAddress::new(0x1C32, 2)), Some(0));
     assert_eq!(dev.od().dict().uint(ObjectAddress::new(0x1600, 0)), Some(2));
 }

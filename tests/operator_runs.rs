@@ -129,7 +129,15 @@ fn sigterm_stops_a_run_in_a_controlled_way() {
         return;
     };
     let dir = Dir::new("sigterm");
-    let f = dir.file("jog.toml", &jog(30.0, ""));
+    // A loaded machine may stall the veth for a few cycles: that must not end the run before
+    // the signal does (this test is about the signal).
+    let f = dir.file(
+        "jog.toml",
+        &jog(
+            30.0,
+            "[supervision]\nlost_before_stop = 1000\nlost_cycles = 1000\n",
+        ),
+    );
     let child = Command::new(ECDRIVE)
         .args(["run", "-i", sim.host(), "-c", &f, "--json"])
         .stdin(Stdio::null())

@@ -137,6 +137,8 @@ pub struct CoeStats {
     pub mailbox_errors_sent: u64,
     /// Replies or unsolicited messages that did not fit the reply buffer and were not sent.
     pub replies_too_large: u64,
+    /// SDO downloads the object store accepted (every write that changed the dictionary).
+    pub downloads_accepted: u64,
 }
 
 /// The CoE server of one emulated slave. See the [module documentation](self).
@@ -669,7 +671,10 @@ impl CoeServer {
             od.write(index, sub, state, data)
         };
         match written {
-            Ok(()) => self.respond(SdoResponse::Download { index, sub }, reply),
+            Ok(()) => {
+                self.stats.downloads_accepted += 1;
+                self.respond(SdoResponse::Download { index, sub }, reply)
+            }
             Err(code) => self.abort(index, sub, code, reply),
         }
     }
@@ -780,7 +785,10 @@ impl CoeServer {
         };
         self.data = value;
         match written {
-            Ok(()) => self.respond(SdoResponse::DownloadSegment { toggle }, reply),
+            Ok(()) => {
+                self.stats.downloads_accepted += 1;
+                self.respond(SdoResponse::DownloadSegment { toggle }, reply)
+            }
             Err(code) => self.abort(index, sub, code, reply),
         }
     }

@@ -702,6 +702,8 @@ pub struct OdStore {
     hooks: Box<dyn OdHooks>,
     /// [`Quirk::SyncObjectsAbsent`] / [`Quirk::CycleTimeReadOnly`] as the master sees them.
     sync_objects: SyncObjects,
+    /// The device's own codes for standard refusals ([`OdStore::with_abort_codes`]).
+    abort_codes: &'static [(SdoAbortCode, SdoAbortCode)],
 }
 
 /// How 0x1C32/0x1C33 (the SyncManager parameters) appear to the master.
@@ -731,6 +733,7 @@ impl OdStore {
             dict: ValueStore::new(objects)?,
             hooks: Box::new(NoHooks),
             sync_objects: SyncObjects::AsDescribed,
+            abort_codes: &[],
         })
     }
 
@@ -776,6 +779,20 @@ impl OdStore {
     pub fn with_limits(mut self, limits: PdoLimits) -> Self {
         self.dict.set_limits(Some(limits));
         self
+    }
+
+    /// Answer with a device's own abort codes where it has one for a standard refusal:
+    /// `(standard, the device's)`.
+    pub fn with_abort_codes(mut self, codes: &'static [(SdoAbortCode, SdoAbortCode)]) -> Self {
+        self.abort_codes = codes;
+        self
+    }
+
+    fn device_code(&self, c: SdoAbortCode) -> SdoAbortCode {
+        self.abort_codes
+            .iter()
+            .find(|(std, _)| *std == c)
+            .map_or(c, |(_, own)| *own)
     }
 
     /// The dictionary (values, mapping).
@@ -896,6 +913,19 @@ impl ObjectStore for OdStore {
     }
 
     fn write(
+        &mut self,
+        index: u16,
+        sub: u8,
+        state: AlState,
+        data: &[u8],
+    ) -> Result<(), SdoAbortCode> {
+        self.write_checked(index, sub, state, data)
+            .map_err(|c| self.device_code(c))
+    }
+}
+
+impl OdStore {
+    fn write_checked(
         &mut self,
         index: u16,
         sub: u8,

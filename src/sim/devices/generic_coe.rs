@@ -443,6 +443,11 @@ impl GenericCoeDevice {
         Ok(self)
     }
 
+    /// The CoE server's counters (SDO downloads accepted, aborts sent, …).
+    pub fn coe_stats(&self) -> crate::sim::coe::CoeStats {
+        self.coe.stats()
+    }
+
     /// The object dictionary (device view).
     pub fn od(&self) -> &OdStore {
         &self.od

@@ -212,6 +212,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     ],
     homing_on_current_position: REC_HOMING_ON_CURRENT_POSITION,
     sync_cycle_mismatch: AlStatusCode::DC_INVALID_CYCLE_TIME,
+    abort_codes: REC_ABORT_CODES,
 };
 
 // ============================================================================================
@@ -319,3 +320,13 @@ pub const REC_EMCY_ON_RESET: bool = true;
 /// the home offset 0x607C; the emulator has no switches, so every other method reports a homing
 /// error (statusword bit 13).
 pub const REC_HOMING_ON_CURRENT_POSITION: &[i8] = &[35];
+
+/// \[REC\] The BDHDE's SDO abort codes (Table 10-2) have no "object cannot be mapped" and no
+/// "PDO length exceeded" (0x06040041/0x06040042); the emulated drive answers a mapping entry
+/// naming an object that cannot be mapped with the listed "Invalid value for parameter"
+/// 0x06090030, and a mapping or assignment beyond the PDO budget with "Value of parameter
+/// written too high" 0x06090031.
+pub const REC_ABORT_CODES: &[(SdoAbortCode, SdoAbortCode)] = &[
+    (SdoAbortCode::NOT_MAPPABLE, SdoAbortCode::VALUE_RANGE),
+    (SdoAbortCode::PDO_TOO_LONG, SdoAbortCode::VALUE_TOO_HIGH),
+];

@@ -260,6 +260,7 @@ fn build_store(spec: &'static DriveSpec) -> Result<OdStore, OdError> {
     }
     Ok(OdStore::new(spec.profile.dictionary)?
         .with_limits(spec.profile.pdo_limits)
+        .with_abort_codes(spec.abort_codes)
         .with_hooks(chain))
 }
 
@@ -462,6 +463,11 @@ impl EmulatedDrive {
     /// Counters.
     pub fn stats(&self) -> DriveStats {
         self.stats
+    }
+
+    /// The CoE server's counters (SDO downloads accepted, aborts sent, …).
+    pub fn coe_stats(&self) -> crate::sim::coe::CoeStats {
+        self.coe.stats()
     }
 
     /// The object dictionary (device view).

@@ -262,6 +262,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     ],
     homing_on_current_position: &[35, 37],
     sync_cycle_mismatch: REC_SYNC_CYCLE_MISMATCH,
+    abort_codes: REC_ABORT_CODES,
 };
 
 // ============================================================================================
@@ -379,6 +380,29 @@ pub const REC_EMCY_DATA: EmcyData = EmcyData::DetailLe;
 
 /// \[REC\] An EMCY with code 0x0000 when an alarm is reset.
 pub const REC_EMCY_ON_RESET: bool = true;
+
+/// \[REC\] The MR-J4-TM's abort code list (§4.2 SDO Abort Code) has no specific code for the
+/// standard remap refusals (an entry written while sub 0 is not 0, an object that cannot be
+/// mapped, a PDO too long, a bit length that does not match the object); the emulated drive
+/// answers them with the listed "General parameter incompatibility reason" 0x06040043.
+pub const REC_ABORT_CODES: &[(SdoAbortCode, SdoAbortCode)] = &[
+    (
+        SdoAbortCode::SUBINDEX0_NOT_ZERO,
+        SdoAbortCode::PARAMETER_INCOMPATIBLE,
+    ),
+    (
+        SdoAbortCode::NOT_MAPPABLE,
+        SdoAbortCode::PARAMETER_INCOMPATIBLE,
+    ),
+    (
+        SdoAbortCode::PDO_TOO_LONG,
+        SdoAbortCode::PARAMETER_INCOMPATIBLE,
+    ),
+    (
+        SdoAbortCode::LENGTH_MISMATCH,
+        SdoAbortCode::PARAMETER_INCOMPATIBLE,
+    ),
+];
 
 /// \[REC\] SAFE-OP → OP with a SYNC0 cycle that differs from 0x1C32:02 (or that the drive does
 /// not support) is refused with AL status 0x0035 "invalid sync cycle time".

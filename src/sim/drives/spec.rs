@@ -376,6 +376,10 @@ pub struct DriveSpec {
     pub homing_on_current_position: &'static [i8],
     /// SAFE-OP → OP refusal when the SYNC0 cycle does not match the drive's cycle object.
     pub sync_cycle_mismatch: crate::ec::AlStatusCode,
+    /// The drive's own abort codes for refusals the store reports with the standard ones
+    /// (ETG.1000.6 / CiA 301): `(standard, this drive's)`. A drive whose manual lists fewer codes
+    /// answers with those it lists.
+    pub abort_codes: &'static [(SdoAbortCode, SdoAbortCode)],
 }
 
 impl DriveSpec {
