@@ -693,3 +693,31 @@ fn apply_action(axis: &mut Axis, drive: Option<&mut SimServo>, action: &Action) 
         }
     }
 }
+
+/// A drive whose profile says csp starts on bit 4's edge gets bit 4 from the first streaming
+/// cycle in csp (0 before: the edge); other drives never get it in csp.
+#[test]
+fn csp_start_edge_sets_bit_4_while_streaming() {
+    for (edge, want) in [(true, true), (false, false)] {
+        let caps = DriveCaps {
+            csp_start_edge: edge,
+            ..GENERIC
+        };
+        let mut drive = SimServo::new(caps, State::SwitchOnDisabled, CSP);
+        let mut axis = Axis::new(caps, config(&caps, CSP)).unwrap();
+        axis.request_enable().expect("enable accepted");
+        let (mut before, mut while_streaming) = (false, false);
+        for _ in 0..60 {
+            let out = cycle(&mut axis, &mut drive);
+            let bit4 = out.controlword.contains(ControlWord::NEW_SET_POINT);
+            if axis.status().streaming {
+                while_streaming |= bit4;
+            } else {
+                before |= bit4;
+            }
+        }
+        assert!(axis.status().streaming);
+        assert!(!before, "bit 4 before streaming (edge {edge})");
+        assert_eq!(while_streaming, want, "edge {edge}");
+    }
+}

@@ -31,6 +31,11 @@ fn enable(w: &mut Wire, mode: i8) {
     for cw in [0x0006, 0x0007, 0x000F] {
         w.command(0, cw);
     }
+    if mode == 8 {
+        // csp starts on bit 4's edge on the BDHDE (its manual's CSP example); reserved in csp
+        // elsewhere. ecdrive's axis gives it to every drive whose profile says so.
+        w.command(0, 0x001F);
+    }
     assert_eq!(w.state(0), State::OperationEnabled);
     assert_eq!(cyclic::mode(w.inputs(0)), mode);
 }
@@ -461,6 +466,56 @@ fn profile_modes() {
             cyclic::sw(w.inputs(0)) & 0x0400,
             0,
             "{}: torque reached",
+            p.name
+        );
+    }
+}
+
+/// The BDHDE starts csp motion on controlword bit 4's 0→1 edge (its manual's CSP example:
+/// "Bit 4: New Target Value 0 » 1 Starts a movement to a target position"): without it the
+/// emulated drive holds its position whatever the target; with it, it follows. The MR-J4-TM
+/// follows without it (bit 4 is reserved in its csp).
+#[test]
+fn the_bdhde_starts_csp_on_bit_4s_edge() {
+    for (p, needs_edge) in [(BD, true), (MR, false)] {
+        let mut w = Wire::op_cyclic(&[p], 1_000_000);
+        let pos = cyclic::position(w.inputs(0));
+        let o = w.outputs_mut(0);
+        cyclic::set_mode(o, 8);
+        cyclic::set_target(o, pos);
+        for cw in [0x0006, 0x0007, 0x000F] {
+            w.command(0, cw);
+        }
+        assert_eq!(w.state(0), State::OperationEnabled, "{}", p.name);
+        // A small step of the target, bit 4 still 0.
+        let step = (counts_per_rev(p) / 100.0) as i32;
+        cyclic::set_target(w.outputs_mut(0), pos.wrapping_add(step));
+        for _ in 0..20 {
+            w.cycle();
+        }
+        let moved = cyclic::position(w.inputs(0)).wrapping_sub(pos);
+        if needs_edge {
+            assert!(
+                moved.abs() < step / 10,
+                "{}: moved {moved} without the edge",
+                p.name
+            );
+        } else {
+            assert!(
+                moved.abs() > step / 2,
+                "{}: did not follow ({moved})",
+                p.name
+            );
+        }
+        // The edge: now it follows.
+        w.command(0, 0x001F);
+        for _ in 0..50 {
+            w.cycle();
+        }
+        let moved = cyclic::position(w.inputs(0)).wrapping_sub(pos);
+        assert!(
+            (moved - step).abs() < step / 10,
+            "{}: after the edge {moved} of {step}",
             p.name
         );
     }

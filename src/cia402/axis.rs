@@ -805,7 +805,12 @@ impl Axis {
         self.update_set_points(fb);
         let streaming = self.streaming();
         let oms = if streaming {
-            self.mode_bits
+            // A drive that starts csp motion on bit 4's edge gets it now and keeps it.
+            if self.caps.csp_start_edge && self.active_mode == OperationMode::CyclicSyncPosition {
+                self.mode_bits | ControlWord::NEW_SET_POINT
+            } else {
+                self.mode_bits
+            }
         } else if self.halting() {
             ControlWord::HALT
         } else {

@@ -158,6 +158,12 @@ pub struct DriveCaps {
     pub supported_modes: SupportedModes,
     /// The drive's own error-code names, looked up before the standard table.
     pub error_table: &'static [ErrorEntry],
+    /// In csp the drive follows the target only after a 0→1 edge of controlword bit 4 ("new
+    /// target value"), which CiA 402 leaves reserved in csp (BDHDE manual, CSP example: "Bit
+    /// 4: New Target Value 0 » 1 Starts a movement to a target position"). The axis then
+    /// raises bit 4 when csp starts streaming and keeps it set; drives without the rule
+    /// ignore the bit.
+    pub csp_start_edge: bool,
 }
 
 impl DriveCaps {
@@ -174,6 +180,7 @@ impl DriveCaps {
         remote_gates_controlword: false,
         supported_modes: SupportedModes::ALL_STANDARD,
         error_table: &[],
+        csp_start_edge: false,
     };
 
     /// Whether `mode` is a position mode on this drive: the standard ones, plus the listed

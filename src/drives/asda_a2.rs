@@ -308,6 +308,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     remote_gates_controlword: false,
     supported_modes: SUPPORTED_MODES,
     error_table: ERROR_TABLE,
+    csp_start_edge: false,
 };
 
 // ============================================================================================

@@ -384,6 +384,10 @@ pub const CAPS: DriveCaps = DriveCaps {
     remote_gates_controlword: true,
     supported_modes: SupportedModes::from_raw(0x0000_03AD),
     error_table: ERRORS,
+    // BDHDE manual, CSP example ("Starting the Operating Mode … Bit 4: New Target Value 0 » 1
+    // Starts a movement to a target position"): read as written, the drive follows the target
+    // only after the edge. ecdrive's choice: give the edge (harmless where bit 4 is reserved).
+    csp_start_edge: true,
 };
 
 // ============================================================================================

@@ -193,6 +193,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     remote_gates_controlword: true,
     supported_modes: SUPPORTED_MODES,
     error_table: ERROR_TABLE,
+    csp_start_edge: false,
 };
 
 /// The closed-loop capability set: as [`CAPS`] plus tq.

@@ -394,6 +394,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     remote_gates_controlword: false,
     supported_modes: SupportedModes::from_raw(0x000B_03AD).with_vendor_bits(VENDOR_MODE_BITS),
     error_table: ERRORS,
+    csp_start_edge: false,
 };
 
 // ============================================================================================

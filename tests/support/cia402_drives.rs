@@ -53,4 +53,5 @@ pub const BLV_R: DriveCaps = DriveCaps {
     remote_gates_controlword: true,
     supported_modes: SupportedModes::from_raw(0x0000_002D),
     error_table: BLV_R_ERRORS,
+    csp_start_edge: false,
 };

@@ -191,6 +191,8 @@ pub struct EmulatedDrive {
     pp: ProfilePosition,
     homing: Homing,
     prev_cw: u16,
+    /// csp motion started by bit 4's edge ([`DriveSpec::csp_start_edge`]).
+    csp_started: bool,
     /// Time inside the position window / velocity window / velocity threshold so far (0:
     /// outside).
     in_window_ns: u64,
@@ -306,6 +308,7 @@ impl EmulatedDrive {
             pp: ProfilePosition::default(),
             homing: Homing::default(),
             prev_cw: 0,
+            csp_started: false,
             in_window_ns: 0,
             speed_window_ns: 0,
             speed_zero_ns: 0,
@@ -671,6 +674,7 @@ impl EmulatedDrive {
         self.demand = actual;
         self.demand_prev = actual;
         self.last_target = None;
+        self.csp_started = false;
         self.velocity_demand = self.motor.speed_rev_s();
         self.torque_demand_permille = 0.0;
         self.pp = ProfilePosition {
@@ -920,6 +924,14 @@ impl EmulatedDrive {
                 if halt && self.spec.halt_in_cyclic_modes {
                     self.ramp_to_stop(decel, dt);
                     return;
+                }
+                if self.spec.csp_start_edge && !self.csp_started {
+                    if !edge4 {
+                        // Not started: hold where the axis is.
+                        self.plan_position(dt);
+                        return;
+                    }
+                    self.csp_started = true;
                 }
                 let target = self.int(obj::TARGET_POSITION) as i32;
                 let base = self.last_target.unwrap_or_else(|| {

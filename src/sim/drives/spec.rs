@@ -365,6 +365,9 @@ pub struct DriveSpec {
     pub torque_mode_quick_stop_immediate: bool,
     /// Halt (controlword bit 8) acts in the cyclic modes.
     pub halt_in_cyclic_modes: bool,
+    /// In csp the drive holds its position until controlword bit 4 goes 0→1 in Operation
+    /// enabled, then follows the target (until it leaves Operation enabled or the mode).
+    pub csp_start_edge: bool,
     /// Mode rules.
     pub modes: ModeRules,
     /// Monitors kept up to date.
