@@ -15,8 +15,7 @@ fn socketcan_transport_on_every_can_interface() {
     if ifs.is_empty() {
         let msg = "SKIPPED: no CAN interface on this machine (no /sys/class/net/*/type == 280); \
                    the SocketCAN transport is built but not exercised";
-        println!("{msg}");
-        eprintln!("{msg}");
+        ecdrive::rt::audit::announce_skip(msg);
         return;
     }
     let tx_allowed = std::env::var("ECDRIVE_CAN_TX_TEST").is_ok_and(|v| v == "1");

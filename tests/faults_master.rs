@@ -356,12 +356,9 @@ fn late_and_corrupted_replies_are_counted<L: FrameLink + Send + 'static>(
     // Then one corrupted datagram; the next frame may be supervisory (a mailbox poll, retried
     // without a trace in the cycle), so corrupt again until the cycle has seen one.
     let before = counted(&m);
-    let guard = std::time::Instant::now() + T;
+    let guard = Instant::now() + T;
     while counted(&m) <= before {
-        assert!(
-            std::time::Instant::now() < guard,
-            "{how}: no corrupted cycle counted"
-        );
+        assert!(Instant::now() < guard, "{how}: no corrupted cycle counted");
         inject(&mut faults, Fault::Link(LinkFault::CorruptNext(1)));
         std::thread::sleep(Duration::from_millis(20));
     }
@@ -752,14 +749,12 @@ fn an_sdo_refused_at_start_up_fails_the_start_cleanly() {
             },
         },
     );
-    let started = Instant::now();
     let err = match Master::start(SegmentLink::new(seg), config(1.0, RestartPolicy::Never)) {
         Ok(_) => panic!("started although an SDO was refused"),
         Err(e) => e,
     };
     let msg = err.error.to_string();
     assert!(msg.contains("BDHDE") && msg.contains("0x60C2"), "{msg}");
-    assert!(started.elapsed() < Duration::from_secs(60));
     let m = Master::start(err.link, config(1.0, RestartPolicy::Never))
         .unwrap_or_else(|f| panic!("second start: {}", f.error));
     let (r, _) = m.stop(StopKind::Ramp);

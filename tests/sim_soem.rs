@@ -125,7 +125,7 @@ fn soem_brings_devices_to_op() {
         if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
             panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
         }
-        eprintln!("\n*** SKIPPED (needs pysoem: pip install pysoem): sim_soem ***\n");
+        ecdrive::rt::audit::announce_skip("SKIPPED (needs pysoem: pip install pysoem): sim_soem");
         return;
     }
     let veth = VethPair::create().expect("veth pair");
@@ -331,7 +331,7 @@ fn soem_runs_the_emulated_drives() {
         if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
             panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
         }
-        eprintln!("\n*** SKIPPED (needs pysoem: pip install pysoem): sim_soem ***\n");
+        ecdrive::rt::audit::announce_skip("SKIPPED (needs pysoem: pip install pysoem): sim_soem");
         return;
     }
     let drives = ["mr-j4-tm", "bdhde"];

@@ -42,9 +42,9 @@ pub fn require_root(test: &str) -> bool {
     if std::env::var_os(CI_ENV).is_some() {
         panic!("{test} needs root (raw sockets, network namespaces) and {CI_ENV} is set");
     }
-    eprintln!(
-        "\n*** SKIPPED (needs root): {test} — run as root for raw sockets and network namespaces ***\n"
-    );
+    crate::rt::audit::announce_skip(&format!(
+        "SKIPPED (needs root): {test} — run as root for raw sockets and network namespaces"
+    ));
     false
 }
 

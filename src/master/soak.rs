@@ -35,6 +35,9 @@ use std::time::{Duration, Instant};
 pub struct SoakOptions {
     /// How long to run.
     pub duration: Duration,
+    /// End after this many cycles instead of after [`SoakOptions::duration`] (tests count
+    /// cycles, not seconds).
+    pub cycles: Option<u64>,
     /// Cycle time.
     pub cycle: Duration,
     /// Fraction of frames the software slave drops at random (0.01 = 1 %).
@@ -53,6 +56,7 @@ impl Default for SoakOptions {
     fn default() -> Self {
         Self {
             duration: Duration::from_secs(3600),
+            cycles: None,
             cycle: Duration::from_millis(1),
             drop: 0.01,
             seed: 1,
@@ -183,7 +187,10 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
     };
 
     let mut interrupted = false;
-    while start.elapsed() < opts.duration {
+    while match opts.cycles {
+        Some(n) => counts.cycles < n,
+        None => start.elapsed() < opts.duration,
+    } {
         std::thread::sleep(POLL);
         if opts
             .stop

@@ -259,7 +259,15 @@ pub fn skip_or_fail(why: &str) {
     if std::env::var_os("ECDRIVE_CI").is_some() {
         panic!("ECDRIVE_CI is set but this test cannot run: {why}");
     }
-    eprintln!("\n*** SKIPPED: {why} ***\n");
+    announce_skip(&format!("SKIPPED: {why}"));
+}
+
+/// Print a test's skip line where the user sees it in a normal `cargo test` run: straight to
+/// the process's stderr, which the test harness does not capture (it captures `eprintln!`,
+/// and shows that only for failed tests).
+pub fn announce_skip(line: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "\n*** {line} ***");
 }
 
 #[cfg(test)]

@@ -125,6 +125,7 @@ fn print_text(r: &SoakReport) {
 pub fn run(args: SoakArgs) -> ExitCode {
     let opts = SoakOptions {
         duration: args.duration,
+        cycles: None,
         cycle: Duration::from_micros(args.cycle_us),
         drop: args.drop,
         seed: args.seed,
