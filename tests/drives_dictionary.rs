@@ -500,21 +500,23 @@ fn bdhde_remap_and_write_rules() {
         w.write_u8(0, 0x607E, 0, 0x40),
         Err(c(SdoAbortCode::VALUE_RANGE))
     );
-    // 0x60C2: :01 = 1..64 (§2.4), :02 fixed.
+    // 0x60C2: −4 at power-on (the drive's 250 µs unit, §2.4); the standard form its own
+    // set-up example writes (1 and −3 for 1 ms) is taken too; :01 is never 0, :02 a power of
+    // ten of seconds down to −9.
+    assert_eq!(w.upload(0, 0x60C2, 2).unwrap(), vec![0xFC], "-4");
     assert_eq!(
         w.write_u8(0, 0x60C2, 1, 0),
         Err(c(SdoAbortCode::VALUE_TOO_LOW))
     );
-    assert_eq!(
-        w.write_u8(0, 0x60C2, 1, 65),
-        Err(c(SdoAbortCode::VALUE_TOO_HIGH))
-    );
     w.write_u8(0, 0x60C2, 1, 2).unwrap();
+    w.write_u8(0, 0x60C2, 2, 0xFD).unwrap();
+    assert_eq!(w.upload(0, 0x60C2, 2).unwrap(), vec![0xFD], "-3");
     assert_eq!(
-        w.write_u8(0, 0x60C2, 2, 0xFD),
-        Err(c(SdoAbortCode::READ_ONLY))
+        w.write_u8(0, 0x60C2, 2, 0xF6),
+        Err(c(SdoAbortCode::VALUE_TOO_LOW)),
+        "-10"
     );
-    assert_eq!(w.upload(0, 0x60C2, 2).unwrap(), vec![0xFC], "-4");
+    w.write_u8(0, 0x60C2, 2, 0xFC).unwrap();
     // No 0x1C32 on this drive.
     assert_eq!(
         w.write_u16(0, 0x1C32, 1, 2),

@@ -187,7 +187,9 @@ async fn ethercrab_runs_both_emulated_drives() {
                 0x0040 | 0x0060 => 0x0006,
                 0x0021 => 0x0007,
                 0x0023 => 0x000F,
-                0x0027 => 0x000F,
+                // In Operation enabled, bit 4 too: the BDHDE starts csp on its 0→1 edge (its
+                // manual's CSP example); the MR-J4-TM ignores it in csp.
+                0x0027 => 0x001F,
                 _ => 0x0000,
             };
             let cpr = PROFILES[i].units.counts_per_rev as i32;

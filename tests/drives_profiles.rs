@@ -314,15 +314,33 @@ fn sync_writes_per_drive() {
         e.to_string(),
         "the MR-J4-TM does not accept a cycle of 750000 ns; it accepts 250, 500, 1000, 2000 µs"
     );
+    // The BDHDE: the standard form its own set-up example writes (1 and −3 for 1 ms), index
+    // first, never −4 as a power of ten (the drive reads −4 as its 250 µs unit); no 0x1C32.
     let bd = &bdhde::PROFILE;
-    for (cycle, value) in [(250_000, 1), (500_000, 2), (1_000_000, 4), (16_000_000, 64)] {
+    for (cycle, value, index) in [
+        (250_000, 25, -5),
+        (500_000, 50, -5),
+        (1_000_000, 1, -3),
+        (1_250_000, 125, -5),
+        (16_000_000, 16, -3),
+    ] {
         let w = bd.sync_writes(cycle, true).unwrap();
-        assert_eq!(w.len(), 1, "no 0x1C32 on the BDHDE");
+        let got: Vec<(ObjectAddress, i64)> = w.iter().map(|w| (w.address, w.value)).collect();
         assert_eq!(
-            (w[0].address, w[0].value),
-            (ObjectAddress::new(0x60C2, 1), value)
+            got,
+            [
+                (ObjectAddress::new(0x60C2, 2), index),
+                (ObjectAddress::new(0x60C2, 1), value)
+            ],
+            "{cycle} ns"
         );
     }
+    // 2.75 ms has no standard form within UNSIGNED8: the drive's own unit (11 × 250 µs).
+    let w = bd.sync_writes(2_750_000, true).unwrap();
+    assert_eq!(
+        (w.len(), w[0].address, w[0].value),
+        (1, ObjectAddress::new(0x60C2, 1), 11)
+    );
     assert!(bd.sync_writes(1_100_000, true).is_err());
     assert!(bd.sync_writes(16_250_000, true).is_err());
     let e = bd.sync_writes(1_000_000, false).unwrap_err();

@@ -554,3 +554,38 @@ fn tempdir(what: &str) -> std::path::PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// 0x60C2 on the BDHDE: the master writes the standard form the drive's own set-up example
+/// uses (1 ms = 1 × 10^−3 s); a drive whose 0x60C2:02 is read-only at −4 (as the BDHDE's object
+/// table prints it) gets 0x60C2:01 in its 250 µs unit instead, and reaches OP either way.
+#[test]
+fn the_bdhde_interpolation_period_in_either_form() {
+    use ecdrive::ec::AlState;
+    use ecdrive::master::tools::{self, StatesOptions, Target};
+    use ecdrive::od::{DataType, ObjectAddress};
+    for (device, value, index) in [
+        ("bdhde", "1", "-3"),
+        ("bdhde+interpolation-index-read-only", "4", "-4"),
+    ] {
+        let target = Target::Sim(vec![device.to_string()]);
+        let (states, v, i) = tools::session(&target, |bus| {
+            let s = tools::states(bus, &StatesOptions::new(AlState::Op))?;
+            let v = tools::upload(
+                bus,
+                0,
+                ObjectAddress::new(0x60C2, 1),
+                Some(DataType::Unsigned8),
+            )?;
+            let i = tools::upload(
+                bus,
+                0,
+                ObjectAddress::new(0x60C2, 2),
+                Some(DataType::Integer8),
+            )?;
+            Ok((s, v.text, i.text))
+        })
+        .unwrap_or_else(|e| panic!("{device}: {e}"));
+        assert!(states.iter().all(|s| s.ok), "{device}: {states:?}");
+        assert_eq!((v.as_str(), i.as_str()), (value, index), "{device}");
+    }
+}

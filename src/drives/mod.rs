@@ -45,5 +45,5 @@ pub use registry::{UnknownDevice, all, by_identity, by_key, identify};
 pub use profile::{
     CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch,
     OutputDefault, Rating, Ratings, StartupSdo, StartupWhen, StatusFlag, SyncSpec, SyncWrite,
-    Units,
+    Units, interpolation_cycle_ns, interpolation_standard_form,
 };

@@ -80,16 +80,50 @@ impl CycleTimes {
 pub enum CycleTimeObject {
     /// The cycle in ns goes into this object (MR-J4-TM: 0x1C32:02).
     Nanoseconds(ObjectAddress),
-    /// 0x60C2 interpolation time period: `:01 = cycle / unit` with `:02` fixed at `index` and
-    /// read-only (BDHDE: 250 µs units, `:02 = -4`).
+    /// 0x60C2 interpolation time period with a vendor reading of one index: while `:02` holds
+    /// `index`, `:01` counts `unit_ns` (BDHDE: FBITIDX −4 stands for 250 µs, §2.4); any other
+    /// index is the standard `:01 × 10^(:02)` s. The master writes the standard form, as the
+    /// drive's own set-up example does (1 and −3 for 1 ms), never with `index` as the power of
+    /// ten; where `:02` cannot be written and holds `index`, it writes `:01` in `unit_ns`.
     InterpolationFixedIndex {
-        /// The time unit of `:01`, ns.
+        /// The time unit of `:01` while `:02` holds `index`, ns.
         unit_ns: u32,
-        /// The fixed value of `:02`.
+        /// The vendor's index.
         index: i8,
     },
     /// 0x60C2 in the standard CiA 402 form `:01 × 10^(:02)` s.
     InterpolationStandard,
+}
+
+/// The standard 0x60C2 form of `cycle_ns`: `(value, index)` with `value × 10^index` s, the
+/// largest index from −3 down to −9 that keeps `value` an integer of at most 255, never `avoid`
+/// (a vendor's own reading of that index, see [`CycleTimeObject::InterpolationFixedIndex`]).
+/// `None` when the cycle has no such form.
+pub fn interpolation_standard_form(cycle_ns: u32, avoid: Option<i8>) -> Option<(u8, i8)> {
+    (-9i8..=-3)
+        .rev()
+        .filter(|i| Some(*i) != avoid)
+        .find_map(|index| {
+            let unit = 10u64.pow(u32::from((9 + index) as u8));
+            let c = u64::from(cycle_ns);
+            (c % unit == 0)
+                .then(|| c / unit)
+                .and_then(|v| u8::try_from(v).ok())
+                .filter(|v| *v > 0)
+                .map(|v| (v, index))
+        })
+}
+
+/// The cycle a drive's 0x60C2 tells, ns: `value × unit_ns` while `index` is the vendor's
+/// (`vendor = Some((index, unit_ns))`), `value × 10^index` s otherwise.
+pub fn interpolation_cycle_ns(value: u64, index: i8, vendor: Option<(i8, u32)>) -> Option<u64> {
+    match vendor {
+        Some((i, unit)) if i == index => value.checked_mul(u64::from(unit)),
+        _ if (-9..=0).contains(&index) => {
+            value.checked_mul(10u64.pow(u32::from((9 + index) as u8)))
+        }
+        _ => None,
+    }
 }
 
 /// Synchronisation the drive supports, and what the master must write for it.
@@ -335,15 +369,34 @@ impl SyncSpec {
                 value: i64::from(cycle_ns),
                 why: "cycle time, ns",
             }),
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, .. }) => {
-                if unit_ns == 0 || cycle_ns % unit_ns != 0 {
-                    return Err(refuse());
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
+                // The standard form, index first (the drive's own set-up example writes 1 and
+                // −3 for 1 ms); the vendor's unit where the cycle has no standard form.
+                match interpolation_standard_form(cycle_ns, Some(index)) {
+                    Some((value, power)) => {
+                        out.push(SyncWrite {
+                            address: ObjectAddress::new(0x60C2, 2),
+                            value: i64::from(power),
+                            why: "interpolation time index (power of ten of seconds)",
+                        });
+                        out.push(SyncWrite {
+                            address: ObjectAddress::new(0x60C2, 1),
+                            value: i64::from(value),
+                            why: "interpolation time period value",
+                        });
+                    }
+                    None => {
+                        if unit_ns == 0 || cycle_ns % unit_ns != 0 {
+                            return Err(refuse());
+                        }
+                        out.push(SyncWrite {
+                            address: ObjectAddress::new(0x60C2, 1),
+                            value: i64::from(cycle_ns / unit_ns),
+                            why: "interpolation time period in the drive's unit for its own \
+                                  index (0x60C2:02)",
+                        });
+                    }
                 }
-                out.push(SyncWrite {
-                    address: ObjectAddress::new(0x60C2, 1),
-                    value: i64::from(cycle_ns / unit_ns),
-                    why: "interpolation time period in the drive's fixed time unit (0x60C2:02)",
-                });
             }
             Some(CycleTimeObject::InterpolationStandard) => {
                 // value × 10^index s with the smallest index that keeps value an integer ≤ 255.

@@ -827,6 +827,72 @@ fn le_u32(b: &[u8]) -> u32 {
 /// Set a synchronisation object the way a careful engineer does on a drive they did not
 /// write: read it first and write only when it differs; a drive without the object, or one
 /// that refuses the write as read-only, is not an error by itself (see [`SyncOutcome::judge`]).
+/// 0x60C2 on a drive with a vendor reading of one index ([`CycleTimeObject::InterpolationFixedIndex`]):
+/// 0x60C2:02 is read first; the standard form is written (index, then value), as the drive's
+/// own set-up example does; where 0x60C2:02 cannot be changed and holds the vendor's index,
+/// 0x60C2:01 is written in the vendor's unit. `Ok(Err(why))` when neither form can tell the
+/// cycle.
+async fn write_interpolation(
+    c: &mut super::coe::CoeClient<'_>,
+    cycle_ns: u32,
+    unit_ns: u32,
+    vendor: i8,
+) -> Result<Result<String, String>, super::coe::CoeError> {
+    use crate::od::SdoAbortCode as A;
+    let index_at = ObjectAddress::new(0x60C2, 2);
+    let value_at = ObjectAddress::new(0x60C2, 1);
+    let has = c
+        .upload(index_at, false)
+        .await
+        .ok()
+        .and_then(|v| v.first().map(|b| *b as i8));
+    if let Some((value, index)) = crate::drives::interpolation_standard_form(cycle_ns, Some(vendor))
+    {
+        let set = if has == Some(index) {
+            Ok(())
+        } else {
+            c.download(index_at, &[index as u8], false).await
+        };
+        match set {
+            Ok(()) => {
+                c.download(value_at, &[value], false).await?;
+                return Ok(Ok(format!("{value} × 10^{index} s")));
+            }
+            Err(e)
+                if matches!(
+                    e.abort_code(),
+                    Some(
+                        A::READ_ONLY
+                            | A::UNSUPPORTED_ACCESS
+                            | A::VALUE_RANGE
+                            | A::VALUE_TOO_HIGH
+                            | A::VALUE_TOO_LOW
+                    )
+                ) => {}
+            Err(e) => return Err(e),
+        }
+    }
+    // The vendor's unit: with its index in 0x60C2:02 (set back if the drive takes it).
+    let vendor_index = has == Some(vendor)
+        || (has.is_some() && c.download(index_at, &[vendor as u8], false).await.is_ok());
+    if vendor_index
+        && unit_ns > 0
+        && cycle_ns % unit_ns == 0
+        && let Ok(v) = u8::try_from(cycle_ns / unit_ns)
+    {
+        c.download(value_at, &[v], false).await?;
+        return Ok(Ok(format!(
+            "{v} × {} µs (0x60C2:02 = {vendor}, the drive's own unit)",
+            unit_ns / 1000
+        )));
+    }
+    Ok(Err(format!(
+        "0x60C2:02 {} and does not take the standard form: a cycle of {cycle_ns} ns cannot be \
+         told",
+        has.map_or("cannot be read".to_string(), |h| format!("holds {h}"))
+    )))
+}
+
 async fn write_sync(
     c: &mut super::coe::CoeClient<'_>,
     w: &SyncWrite,
@@ -1127,6 +1193,8 @@ pub fn configure<L: FrameLink>(
         // Synchronisation type and cycle time: read first, written only when different, and
         // a drive that does not take them by SDO is checked for compatibility (`write_sync`).
         let mut sync_writes: Vec<SyncWrite> = Vec::new();
+        // 0x60C2 with a vendor index: decided against what the drive holds (`write_interpolation`).
+        let mut interpolation: Option<(u32, i8)> = None;
         if let Some(a) = profile.sync.sync_type_object {
             sync_writes.push(SyncWrite {
                 address: a,
@@ -1144,21 +1212,8 @@ pub fn configure<L: FrameLink>(
                     what: SyncWhat::CycleTime,
                 });
             }
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index: _ }) => {
-                let v = cycle_ns / unit_ns.max(1);
-                let v = u8::try_from(v).map_err(|_| {
-                    MasterError::new(
-                        Some(&drive),
-                        "computing 0x60C2:01 (interpolation period)",
-                        ErrorKind::Config,
-                        format!("{cycle_ns} ns is {v} units of {unit_ns} ns, more than 255"),
-                    )
-                })?;
-                writes.push((
-                    ObjectAddress::new(0x60C2, 1),
-                    vec![v],
-                    format!("interpolation period = {v} × {} µs", unit_ns / 1000),
-                ));
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
+                interpolation = Some((unit_ns, index));
             }
             Some(CycleTimeObject::InterpolationStandard) => {
                 // cycle = value × 10^index s, with the largest index that keeps value ≤ 255.
@@ -1248,6 +1303,7 @@ pub fn configure<L: FrameLink>(
         let mut held: Vec<HeldValue> = Vec::new();
         let complete_access = profile.complete_access;
         let mut outcomes: Vec<SyncOutcome> = Vec::new();
+        let mut interpolated: Option<Result<String, String>> = None;
         let n_writes = writes.len();
         let (pdo_writes, later) = writes.split_at(remap_len.min(n_writes));
         bus.with_coe(
@@ -1262,6 +1318,9 @@ pub fn configure<L: FrameLink>(
                 }
                 for w in &sync_writes {
                     outcomes.push(write_sync(c, w).await?);
+                }
+                if let Some((unit_ns, index)) = interpolation {
+                    interpolated = Some(write_interpolation(c, cycle_ns, unit_ns, index).await?);
                 }
                 for (addr, bytes, _why) in later {
                     c.download(*addr, bytes, false).await?;
@@ -1286,6 +1345,18 @@ pub fn configure<L: FrameLink>(
             }
             e
         })?;
+        match interpolated {
+            Some(Err(why)) => {
+                return Err(MasterError::new(
+                    Some(&drive),
+                    "writing 0x60C2 (interpolation time period)",
+                    ErrorKind::Incompatible,
+                    why,
+                ));
+            }
+            Some(Ok(form)) => tracing::info!("{drive}: interpolation time period {form}"),
+            None => {}
+        }
         for (w, o) in sync_writes.iter().zip(&outcomes) {
             match o.judge(w, profile) {
                 Ok(None) => {}

@@ -24,6 +24,7 @@
 //! | `stale-inputs-until-op` | below OP the input image is not updated: it keeps what it held (zeros after power-on) | slaves that serve inputs only in OP |
 //! | `outputs-in-safeop` | the outputs are applied already in SAFE-OP (the CiA 402 state machine follows the controlword there) | slaves that do not treat SAFE-OP outputs as safe state |
 //! | `following-error-zero` | 0x60F4 can be mapped but always reads 0 | drives that do not compute it in every mode |
+//! | `interpolation-index-read-only` | 0x60C2:02 (interpolation time index) is read-only at its power-on value | the BDHDE as its object table prints it |
 
 use core::fmt;
 
@@ -52,6 +53,8 @@ pub enum Quirk {
     OutputsInSafeOp,
     /// 0x60F4 always 0.
     FollowingErrorZero,
+    /// 0x60C2:02 read-only.
+    InterpolationIndexReadOnly,
 }
 
 /// The entry whose description [`Quirk::SdoInfoBadEntry`] breaks: every CoE device has it.
@@ -88,7 +91,7 @@ pub struct Capabilities {
 
 impl Quirk {
     /// Every quirk, in the order of the table above.
-    pub const ALL: [Quirk; 11] = [
+    pub const ALL: [Quirk; 12] = [
         Quirk::NoStateSkipping,
         Quirk::CycleTimeReadOnly,
         Quirk::SyncObjectsAbsent,
@@ -100,6 +103,7 @@ impl Quirk {
         Quirk::StaleInputsUntilOp,
         Quirk::OutputsInSafeOp,
         Quirk::FollowingErrorZero,
+        Quirk::InterpolationIndexReadOnly,
     ];
 
     /// The name after `+` in a device name.
@@ -116,6 +120,7 @@ impl Quirk {
             Quirk::StaleInputsUntilOp => "stale-inputs-until-op",
             Quirk::OutputsInSafeOp => "outputs-in-safeop",
             Quirk::FollowingErrorZero => "following-error-zero",
+            Quirk::InterpolationIndexReadOnly => "interpolation-index-read-only",
         }
     }
 
@@ -139,6 +144,9 @@ impl Quirk {
             Quirk::StaleInputsUntilOp => "inputs updated only in OP (zeros before)",
             Quirk::OutputsInSafeOp => "outputs applied already in SAFE-OP",
             Quirk::FollowingErrorZero => "0x60F4 always reads 0",
+            Quirk::InterpolationIndexReadOnly => {
+                "0x60C2:02 (interpolation time index) read-only at its power-on value"
+            }
         }
     }
 

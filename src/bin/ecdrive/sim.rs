@@ -496,7 +496,7 @@ pub fn sim(
         println!();
         println!("Quirks (behaviour of devices ecdrive did not write): DEVICE+QUIRK[+QUIRK…]");
         for q in Quirk::ALL {
-            println!("  {:22} {}", q.name(), q.describe());
+            println!("  {:30} {}", q.name(), q.describe());
         }
         println!();
         println!("CANopen drives (ecdrive sim --can BUS --node NAME[@ID]), default node-ID:");

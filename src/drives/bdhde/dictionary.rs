@@ -818,12 +818,16 @@ pub static DICTIONARY: &[ObjectDesc] = &[
             EntryDesc::new(0, "Number of entries", U8, RO)
                 .default(u(2))
                 .range(u(2), u(2)),
+            // DISCREPANCY: the object table gives :01 4–64 in 250 µs units and :02 read-only
+            // −4; the drive's own set-up example (Beckhoff) writes :01 = 1 and :02 = −3 for
+            // 1 ms, the standard form. ecdrive takes the set-up's reading: :02 writable, :01
+            // any UNSIGNED8 (the cycle they tell must still be 250 µs–16 ms in 250 µs steps).
             EntryDesc::new(1, "Interpolation time period value", U8, RW)
                 .default(u(4))
-                .range(u(1), u(64)),
-            EntryDesc::new(2, "Interpolation time index", I8, RO)
+                .range(u(1), u(255)),
+            EntryDesc::new(2, "Interpolation time index", I8, RW)
                 .default(i(-4))
-                .range(i(-4), i(-4)),
+                .range(i(-9), i(-3)),
         ],
     },
     ObjectDesc {

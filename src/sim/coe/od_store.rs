@@ -704,6 +704,8 @@ pub struct OdStore {
     sync_objects: SyncObjects,
     /// The device's own codes for standard refusals ([`OdStore::with_abort_codes`]).
     abort_codes: &'static [(SdoAbortCode, SdoAbortCode)],
+    /// [`Quirk::InterpolationIndexReadOnly`].
+    interpolation_index_read_only: bool,
 }
 
 /// How 0x1C32/0x1C33 (the SyncManager parameters) appear to the master.
@@ -734,6 +736,7 @@ impl OdStore {
             hooks: Box::new(NoHooks),
             sync_objects: SyncObjects::AsDescribed,
             abort_codes: &[],
+            interpolation_index_read_only: false,
         })
     }
 
@@ -746,6 +749,7 @@ impl OdStore {
 
     /// [`with_quirks`](Self::with_quirks) on a store already built.
     pub fn set_quirks(&mut self, quirks: Quirks) {
+        self.interpolation_index_read_only = quirks.has(Quirk::InterpolationIndexReadOnly);
         self.sync_objects = if quirks.has(Quirk::SyncObjectsAbsent) {
             SyncObjects::Absent
         } else if quirks.has(Quirk::CycleTimeReadOnly) {
@@ -762,7 +766,9 @@ impl OdStore {
 
     /// The access the master sees for entry `e` of the object at `index`.
     fn access(&self, index: u16, e: &EntryDesc) -> EntryAccess {
-        if self.sync_objects == SyncObjects::ReadOnly && is_sync_object(index) && e.sub == 2 {
+        if (self.sync_objects == SyncObjects::ReadOnly && is_sync_object(index) && e.sub == 2)
+            || (self.interpolation_index_read_only && index == 0x60C2 && e.sub == 2)
+        {
             e.access - EntryAccess::W
         } else {
             e.access

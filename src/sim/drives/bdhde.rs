@@ -5,12 +5,14 @@
 //! - the object dictionary of the profile with its documented defaults, including the unusable
 //!   ones a master must replace (one unit per revolution, 0x6065 = 1, 0x607F = 1; §6, §9);
 //!   0x605A accepts 0, 2 and 6, 0x6060 the modes of 0x6502 (§9); remapping only in PRE-OP with
-//!   sub-index 0 cleared first (abort 0x06010003); 0x60C2:02 read-only −4 (§2.4);
+//!   sub-index 0 cleared first (abort 0x06010003); 0x60C2:02 −4 at power-on (§2.4), writable
+//!   for the standard form its set-up example writes;
 //! - the CiA 402 state machine without state skipping; quick-stop codes 0 (disable at once),
 //!   2 (ramp, then Switch on disabled) and 6 (ramp and stay, transition 16 on Enable operation);
 //!   halt in csp/csv slows down on the profile deceleration (605Dh = 1); the controlword acts
 //!   only with statusword bit 9 (COMMmode 1);
-//! - the cycle told by 0x60C2:01 × 250 µs; SAFE-OP → OP needs SYNC0 with that cycle;
+//! - the cycle told by 0x60C2: :01 × 250 µs while :02 is −4, :01 × 10^(:02) s otherwise;
+//!   SAFE-OP → OP needs SYNC0 with that cycle;
 //! - the factor group: units per revolution = (0x6091:01/:02) × (0x6092:01/:02), velocity in
 //!   units/s, acceleration in units/s² (§6.2–§6.4); torque in ‰ of 0x6076 (§6.6);
 //! - faults latch 0x603F with the codes of Table 10-4 and send one EMCY each (§10.2); a fault

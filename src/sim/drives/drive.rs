@@ -755,8 +755,8 @@ impl EmulatedDrive {
     fn free_run_cycle_ns(&self) -> u32 {
         let ns = match self.spec.profile.sync.cycle_time_object {
             Some(CycleTimeObject::Nanoseconds(a)) => self.od.dict().uint(a).unwrap_or(0),
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, .. }) => {
-                self.od.dict().uint(obj::INTERPOLATION_PERIOD).unwrap_or(0) * u64::from(unit_ns)
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
+                self.interpolation_ns(unit_ns, index).unwrap_or(0)
             }
             _ => 0,
         };
@@ -766,15 +766,26 @@ impl EmulatedDrive {
         }
     }
 
+    /// The cycle 0x60C2 tells: `:01` in the drive's unit while `:02` holds its own index, the
+    /// standard `:01 × 10^(:02)` s otherwise (the form its set-up example writes).
+    fn interpolation_ns(&self, unit_ns: u32, index: i8) -> Option<u64> {
+        let d = self.od.dict();
+        let value = d.uint(obj::INTERPOLATION_PERIOD)?;
+        let power = d.int(ObjectAddress::new(0x60C2, 2))?;
+        crate::drives::interpolation_cycle_ns(
+            value,
+            i8::try_from(power).ok()?,
+            Some((index, unit_ns)),
+        )
+    }
+
     /// The cycle the drive is configured for (SYNC0 must match it).
     fn configured_cycle_ns(&self) -> Option<u64> {
         match self.spec.profile.sync.cycle_time_object {
             Some(CycleTimeObject::Nanoseconds(a)) => self.od.dict().uint(a),
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, .. }) => self
-                .od
-                .dict()
-                .uint(obj::INTERPOLATION_PERIOD)
-                .map(|v| v * u64::from(unit_ns)),
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
+                self.interpolation_ns(unit_ns, index)
+            }
             _ => None,
         }
     }
