@@ -468,9 +468,11 @@ fn bdhde_dc_and_interpolation_period() {
     assert_eq!(p.code, ObjectCode::Record);
     assert_eq!(p.entry(1).unwrap().default, Some(Value::Uint(4)));
     assert_eq!(p.entry(1).unwrap().min, Some(Value::Uint(1)));
-    assert_eq!(p.entry(1).unwrap().max, Some(Value::Uint(64)));
+    // Any UNSIGNED8 value and a writable index: the standard form of the drive's own set-up
+    // example (1 and −3 for 1 ms); −4 at power-on is the drive's 250 µs unit.
+    assert_eq!(p.entry(1).unwrap().max, Some(Value::Uint(255)));
     assert_eq!(p.entry(2).unwrap().default, Some(Value::Int(-4)));
-    assert_eq!(p.entry(2).unwrap().access, EntryAccess::RO);
+    assert_eq!(p.entry(2).unwrap().access, EntryAccess::RW);
 }
 
 #[test]

@@ -546,7 +546,10 @@ fn a_drive_alarm_stops_both_and_is_decoded<L: FrameLink + Send + 'static>(
     mut faults: FaultHandle,
     how: &str,
 ) {
-    let mut m = moving(config(30.0, RestartPolicy::Never), link, how);
+    // With the default emergency polling: the drive's EMCY is read during OP.
+    let mut cfg = config(30.0, RestartPolicy::Never);
+    cfg.emergency_poll = MasterConfig::new(Duration::from_millis(1)).emergency_poll;
+    let mut m = moving(cfg, link, how);
     inject(
         &mut faults,
         Fault::Device {
@@ -557,6 +560,12 @@ fn a_drive_alarm_stops_both_and_is_decoded<L: FrameLink + Send + 'static>(
     wait(&mut m, "both axes out of Operation enabled", |t| {
         none_enabled(t) && t.axes[1].state == Some(State::SwitchOnDisabled)
     });
+    // The emergency comes with the next mailbox poll (every 50 ms by default).
+    let guard = Instant::now() + T;
+    while !m.history().iter().any(|h| h.kind == HistoryKind::Emergency) {
+        assert!(Instant::now() < guard, "{how}: no emergency read");
+        std::thread::sleep(Duration::from_millis(10));
+    }
     let (r, _) = m.stop(StopKind::Ramp);
     let r = r.unwrap();
     let lines = report_lines(&r);
@@ -567,6 +576,19 @@ fn a_drive_alarm_stops_both_and_is_decoded<L: FrameLink + Send + 'static>(
         .unwrap_or_else(|| panic!("{how}: {lines:#?}"));
     assert_eq!(fault.drive.as_ref().map(|d| d.position), Some(0), "{how}");
     assert!(fault.text.contains("AL.52"), "{how}: {}", fault.text);
+    // The drive's emergency, pushed while in OP, is in the history decoded with the drive's
+    // alarm name (its 0x603F code 0xFF52 through the MR-J4-TM's table).
+    let emcy = r
+        .history
+        .iter()
+        .find(|h| h.kind == HistoryKind::Emergency)
+        .unwrap_or_else(|| panic!("{how}: no Emergency entry: {lines:#?}"));
+    assert_eq!(emcy.drive.as_ref().map(|d| d.position), Some(0), "{how}");
+    assert!(
+        emcy.text.contains("0xFF52") && emcy.text.contains("AL.52"),
+        "{how}: {}",
+        emcy.text
+    );
     assert!(
         has(
             &r.history,
