@@ -764,9 +764,11 @@ fn an_sdo_refused_at_start_up_fails_the_start_cleanly() {
         &mut faults,
         Fault::Device {
             position: 1,
+            // The interpolation period value (0x60C2:02 is read first, and its read may fail
+            // without harm).
             fault: DeviceFault::AbortSdo {
                 index: 0x60C2,
-                subindex: None,
+                subindex: Some(1),
                 code: SdoAbortCode::CANNOT_STORE.0,
             },
         },

@@ -442,7 +442,8 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     var!(0x2740, "Clear locked rotor", U8, RW_R, u(0)),
     var!(0x2741, "hMT status", U8, RO_T, u(0x80)),
     // --- 6000h group (§6, §8.4) --------------------------------------------------------------
-    var!(0x6007, "Abort connection option code", I16, RW, i(0)),
+    // DISCREPANCY (mappable): see the end of this file.
+    var!(0x6007, "Abort connection option code", I16, RW_R, i(0)),
     var!(0x603F, "Error code", U16, RO_T, u(0)),
     var!(0x6040, "Controlword", U16, RW_R, u(0)),
     var!(0x6041, "Statusword", U16, RO_T, u(0)),
@@ -650,6 +651,12 @@ pub const PROFILE_CLOSED_LOOP: CanDriveProfile = CanDriveProfile {
 // - DISCREPANCY: headings 60F8h shown as 60FFh, 6068h as 6066h, 2002h as 2003h: the table
 //   indices of §8.2–8.4 used.
 // - 6065h default `0000 0512h` is printed in hex (= 1298); kept as printed.
+// - DISCREPANCY: 6007h PDO-mappable "Yes" in its own description (§6.3.1), no PDO entry in the
+//   §8.4 table and not in Table 3.9: mappable (RxPDO), as the object's own description says.
+// - DISCREPANCY: which PDOs are valid at power-on. The object tables (§8.2) give every COB-ID
+//   as base + node-ID without the invalid bit, and §3.4 says all 4 + 4 PDOs run; §3.3.3 says
+//   only R_PDO1 and T_PDO1 are active (example "8000 04xxh": R_PDO3 not activated). Used:
+//   §3.3.3 (PDOs 2–4 invalid at power-on, bit 31 set); the master writes every PDO it uses.
 
 /// **MANUAL GAP** → \[REC\] 1018h:04 serial number of the emulated node (the manual's example
 /// serial 341070398 = 1454523Eh, §5.6).
