@@ -255,7 +255,7 @@ fn mode_specific_bit_aliases() {
     assert_eq!(StatusWord::REMOTE.raw(), 1 << 9);
 }
 
-/// 0x6060 values (CiA 402; MR-J4-TM §5.4.1 adds −100, −101, −103).
+/// 0x6060 values (CiA 402; MR-J4-TM §7.3.8(6) adds −100, −101, −103).
 #[test]
 fn operation_mode_values() {
     let table = [

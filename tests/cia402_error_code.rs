@@ -94,7 +94,7 @@ fn bdhde_codes_with_the_drive_table() {
     assert_eq!(ErrorCode(0x6320).describe(&[]).text, "parameter error");
 }
 
-/// MR-J4-TM §10: 0x603F = 0xFF00 + alarm number (SW B2+); 0x1000 generic on SW ≤ B1.
+/// MR-J4-TM §7.3.1(3), §7.3.8(1): 0x603F = 0xFF00 + alarm number (SW B2+); 0x1000 generic on SW ≤ B1.
 #[test]
 fn mr_j4_alarm_codes() {
     let t = drives::MR_J4_ERRORS;

@@ -326,7 +326,7 @@ pub const REQUIRED_OBJECTS: &[RequiredObjects] = &[
 ];
 
 // ============================================================================================
-// CiA 402 behaviour (§5.1, §5.4, §5.6, §7.3.8, §10)
+// CiA 402 behaviour (§5.1, §5.4, §5.6, §7.3.1(3), §7.3.8)
 // ============================================================================================
 
 /// 0x6502 vendor bits (§7.3.8(8)): bit 16 jg (−100), bit 17 pt (−101), bit 19 idx (−103).
@@ -346,7 +346,7 @@ pub const VENDOR_MODE_BITS: &[VendorModeBit] = &[
 ];
 
 /// The alarms this manual names, as 0x603F / 0x1003 / EMCY codes: 0xFF00 + the main alarm
-/// number (software B2 and later; §7.3.1(8), §7.3.8(1)). Several details share one code
+/// number (software B2 and later; §7.3.1(3), §7.3.8(1)). Several details share one code
 /// (AL.86.1 and AL.86.2 are both 0xFF86); 0x2A41 carries the detail. Two rows come from the
 /// MELSERVO-J4 alarm numbering rather than from this manual (see [`REC_ALARMS`]). The last row
 /// names any other alarm by its number.
@@ -358,7 +358,7 @@ pub const ERRORS: &[ErrorEntry] = &[
     REC_ALARMS[1],
     ErrorEntry::exact(0xFF69, "AL.69", "Command error"),
     ErrorEntry::exact(0xFF86, "AL.86", "Network communication error"),
-    // The warnings this manual names (statusword bit 7 "W", §5.x; S_BWNG for AL.92/AL.9F in
+    // The warnings this manual names (statusword bit 7 "W", §5.3.1; S_BWNG for AL.92/AL.9F in
     // 0x2D11). MANUAL GAP: the manual gives the 0xFF00 + number rule for alarms and does not
     // say whether 0x603F carries a warning; should one come with that rule, it is named.
     ErrorEntry::exact(0xFF90, "AL.90", "Home position return incomplete warning"),
@@ -398,7 +398,7 @@ pub const CAPS: DriveCaps = DriveCaps {
 };
 
 // ============================================================================================
-// Synchronisation (§1.1, §1.3, §2.4, §7.3.3(4), (5))
+// Synchronisation (§1.1, §1.3, §7.3.3(4), (5))
 // ============================================================================================
 
 /// The PDO / SYNC0 cycle times the drive accepts in 0x1C32:02, ns (§1.3, §7.3.3(4)); any other

@@ -20,7 +20,7 @@
 //!   counter 0x2D23 raises [AL. 86.2] when it is not advanced by 1 per cycle, and 0x2D24 echoes
 //!   it + 1 (§6.2);
 //! - 0x603F = 0xFF00 + alarm number, kept after a reset ("latest error since power-on"),
-//!   0x2A41 = alarm << 16 | detail, 0x1003 history, 0x1001 bit 0 (§7.3.1(3), (8), §7.3.5);
+//!   0x2A41 = alarm << 16 | detail, 0x1003 history, 0x1001 bit 0 (§7.3.1(2), (3), §7.3.5, §7.3.8(1));
 //! - a csp command outside the 32-bit range raises [AL. 69] (§5.8);
 //! - statusword bit 13 when the droop exceeds 0x6065 for longer than 0x6066 (§5.4.3).
 //!
@@ -125,7 +125,7 @@ pub const WRITE_RULES: &[WriteRule] = &[
         values: &[0x00, 0xC0, 0xE0],
         code: SdoAbortCode::VALUE_RANGE,
     },
-    // The magic values of §7.1, §6.4, §6.5.2.
+    // The magic values of §7.1, §7.3.1(8) (1011h "load"), §7.3.5(3) (2A40h 1EA5h), §6.5.2.
     WriteRule::Allowed {
         address: a(0x1010, 1),
         values: &[0x6576_6173],
@@ -288,7 +288,7 @@ pub const REC_MOTOR: MotorSpec = MotorSpec {
 
 /// \[REC\] What the hardware reports at power-on: the motor's data (0x6072 300 %, 0x6080
 /// 6000 r/min, 0x608F:01 and 0x6092:01 4 194 304 pulses, 0x2D28 3000 r/min), the SI velocity
-/// unit 0.01 r/min (0x60A9 = 0xFEB44700, §8.3), the position range ±2³¹ (0x607B), the versions
+/// unit 0.01 r/min (0x60A9 = 0xFEB44700, §7.3.14(6)), the position range ±2³¹ (0x607B), the versions
 /// and names of the emulated module and amplifier, and the serial number.
 pub const REC_POWER_ON: &[PowerOnValue] = &[
     PowerOnValue {
