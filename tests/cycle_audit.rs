@@ -1,6 +1,8 @@
 //! Proof that the cycle, once the drives are in OP, allocates nothing and makes no syscall but
 //! the sleep (in-process link: the frame I/O is a function call), under load: two drives and an
-//! I/O device between them, the axes enabled and running programs with a mode switch.
+//! I/O device between them, the axes enabled and running programs with a mode switch. With the
+//! emulated MR-J4-TM and BDHDE and the default emergency polling, the one more syscall is the
+//! futex that hands each poll's reply to the supervising thread.
 //!
 //! A counting global allocator counts allocations made by the cycle thread inside a window; a
 //! per-thread perf counter on the `raw_syscalls:sys_enter` tracepoint counts the cycle
@@ -84,17 +86,32 @@ impl Audit {
 }
 
 /// A realistic segment: two drives with an I/O device between them.
-fn segment() -> Segment {
+/// What runs: generic servo devices on the test profile without emergency polling, or the
+/// emulated MR-J4-TM and BDHDE on their own profiles with the default emergency polling.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Load {
+    Generic,
+    Drives,
+}
+
+fn segment(load: Load) -> Segment {
     let esc = EscConfig {
         sm_watchdog: 0,
         ..Default::default()
     };
     let mut seg = Segment::new(Arc::new(HostClock));
-    let devices: [Box<dyn ecdrive::sim::Device>; 3] = [
-        Box::new(GenericCoeDevice::new(700).unwrap()),
-        Box::new(IoDevice::new(2, 4).with_serial(900)),
-        Box::new(GenericCoeDevice::new(701).unwrap()),
-    ];
+    let devices: [Box<dyn ecdrive::sim::Device>; 3] = match load {
+        Load::Generic => [
+            Box::new(GenericCoeDevice::new(700).unwrap()),
+            Box::new(IoDevice::new(2, 4).with_serial(900)),
+            Box::new(GenericCoeDevice::new(701).unwrap()),
+        ],
+        Load::Drives => [
+            ecdrive::sim::devices::by_name("mr-j4-tm", 0).unwrap(),
+            Box::new(IoDevice::new(2, 4).with_serial(900)),
+            ecdrive::sim::devices::by_name("bdhde", 2).unwrap(),
+        ],
+    };
     for d in devices {
         seg.push(d, esc.clone()).unwrap();
     }
@@ -104,16 +121,22 @@ fn segment() -> Segment {
 /// Run the two drives and the I/O device to OP on `link`; with the window open, enable the
 /// axes and run their programs (a move, a mode switch, a ramp, a dwell) for at least 300
 /// cycles; stop; check the counts.
-fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_long], what: &str) {
+fn audit_run<L: FrameLink + Send + 'static>(
+    link: L,
+    load: Load,
+    allowed: &'static [libc::c_long],
+    what: &str,
+) {
     let audit = Arc::new(Audit::new(allowed));
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
-    // No supervisory mailbox traffic during the window: its replies wake another thread.
-    cfg.emergency_poll = None;
+    if load == Load::Generic {
+        cfg.emergency_poll = None;
+    }
     cfg.hooks = Some(audit.clone());
     cfg.cycle.segment_lost_after = 50;
     for p in [0, 2] {
         cfg.startup.drives.push(DriveSetup {
-            profile: Some(&GENERIC_TEST),
+            profile: (load == Load::Generic).then_some(&GENERIC_TEST),
             program: vec![
                 Step::Move {
                     target: Target::By(20_000.0),
@@ -186,9 +209,24 @@ fn audit_run<L: FrameLink + Send + 'static>(link: L, allowed: &'static [libc::c_
 #[test]
 fn steady_cycle_in_process_allocates_nothing_and_only_sleeps() {
     audit_run(
-        SegmentLink::new(segment()),
+        SegmentLink::new(segment(Load::Generic)),
+        Load::Generic,
         &[libc::SYS_clock_nanosleep],
         "in-process",
+    );
+}
+
+/// The same with the emulated MR-J4-TM and BDHDE on their own profiles and the default
+/// emergency polling: the supervisor's mailbox polls ride in the cycle's frames, and the cycle
+/// thread hands each reply over by waking the supervising thread (futex): no allocation, and
+/// no other syscall.
+#[test]
+fn steady_cycle_with_the_emulated_drives_and_emergency_polling() {
+    audit_run(
+        SegmentLink::new(segment(Load::Drives)),
+        Load::Drives,
+        &[libc::SYS_clock_nanosleep, libc::SYS_futex],
+        "in-process, MR-J4-TM and BDHDE, emergency polling",
     );
 }
 
@@ -199,10 +237,14 @@ fn steady_cycle_over_veth_allocates_nothing_and_only_does_frame_io_and_sleeps() 
         return;
     }
     let veth = VethPair::create().expect("veth pair");
-    let server =
-        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), segment()).expect("server");
+    let server = RawServer::spawn(
+        veth.open_peer_socket().expect("peer socket"),
+        segment(Load::Generic),
+    )
+    .expect("server");
     audit_run(
         veth.open_host_socket().expect("host socket"),
+        Load::Generic,
         &[
             libc::SYS_clock_nanosleep,
             libc::SYS_sendto,
