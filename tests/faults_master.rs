@@ -784,3 +784,33 @@ fn an_sdo_refused_at_start_up_fails_the_start_cleanly() {
     let (r, _) = m.stop(StopKind::Ramp);
     assert!(r.unwrap().shutdown_ok);
 }
+
+/// A slave clock the DC loop cannot lock (10 % fast, far beyond what a slave controller's
+/// drift loop corrects) ends start-up with a DC-settle error naming the drive and its last
+/// 0x092C readings.
+#[test]
+fn a_clock_that_cannot_lock_fails_start_up_naming_the_drive() {
+    let _one = serial();
+    let mut seg = tolerant_drives_segment();
+    assert!(seg.apply(&Fault::Slave {
+        position: 1,
+        fault: SlaveFault::ClockDrift(100_000_000),
+    }));
+    let mut cfg = config(1.0, RestartPolicy::Never);
+    cfg.startup.dc.settle_timeout = Duration::from_secs(1);
+    let err = match Master::start(SegmentLink::new(seg), cfg) {
+        Ok(_) => panic!("started although a clock cannot lock"),
+        Err(e) => e,
+    };
+    assert_eq!(
+        err.error.kind,
+        ecdrive::master::error::ErrorKind::DcSettle,
+        "{}",
+        err.error
+    );
+    let msg = err.error.to_string();
+    assert!(
+        msg.contains("drive 1 (BDHDE)") && msg.contains("0x092C") && msg.contains("last readings"),
+        "{msg}"
+    );
+}

@@ -1732,6 +1732,10 @@ fn settle_dc<L: FrameLink>(
     dc: &DcSettings,
 ) -> Result<(), MasterError> {
     let deadline = crate::rt::monotonic_ns() + dc.settle_timeout.as_nanos() as u64;
+    // The last readings of each drive's 0x092C (newest last), for the error.
+    const KEEP: usize = 5;
+    let mut last: Vec<std::collections::VecDeque<u32>> =
+        vec![std::collections::VecDeque::with_capacity(KEEP); drives.len()];
     loop {
         bus.block_on(
             &|| "synchronising distributed clocks".into(),
@@ -1762,6 +1766,12 @@ fn settle_dc<L: FrameLink>(
                     )
                 })?;
             let diff = raw & 0x7FFF_FFFF;
+            if let Some(l) = last.get_mut(i) {
+                if l.len() == KEEP {
+                    l.pop_front();
+                }
+                l.push_back(diff);
+            }
             if diff >= dc.settle_threshold_ns && worst.is_none_or(|(_, w)| diff > w) {
                 worst = Some((i, diff));
             }
@@ -1776,9 +1786,16 @@ fn settle_dc<L: FrameLink>(
                 "waiting for distributed clocks to settle (0x092C)",
                 ErrorKind::DcSettle,
                 format!(
-                    "system-time difference still {diff} ns after {} ms (threshold {} ns)",
+                    "system-time difference still {diff} ns after {} ms (threshold {} ns); \
+                     its last readings of 0x092C: {} ns (its clock does not lock to the \
+                     reference: a clock beyond the slave controller's drift range?)",
                     dc.settle_timeout.as_millis(),
-                    dc.settle_threshold_ns
+                    dc.settle_threshold_ns,
+                    last.get(i).map_or(String::new(), |l| l
+                        .iter()
+                        .map(u32::to_string)
+                        .collect::<Vec<_>>()
+                        .join(", "))
                 ),
             ));
         }
