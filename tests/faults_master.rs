@@ -814,3 +814,41 @@ fn a_clock_that_cannot_lock_fails_start_up_naming_the_drive() {
         "{msg}"
     );
 }
+
+/// Drift compensation, shown by the drifting slave itself: 80 ppm fast for 2000 cycles (160 µs
+/// of drift without compensation), and its system-time difference (0x092C, recorded by the
+/// emulated slave controller after each of the master's compensation writes in OP) stays
+/// within 10 µs. A master that did no drift compensation leaves no such writes (the count
+/// below would be 0) and a difference growing by 80 ns per cycle.
+#[test]
+fn drift_compensation_keeps_the_drifting_clock_within_10_us() {
+    let _one = serial();
+    let mut seg = tolerant_drives_segment();
+    assert!(seg.apply(&Fault::Slave {
+        position: 1,
+        fault: SlaveFault::ClockDrift(80_000),
+    }));
+    if let Some(s) = seg.slave_mut(1) {
+        s.esc.enable_timing_stats();
+    }
+    let mut m = moving(
+        config(3.0, RestartPolicy::Never),
+        SegmentLink::new(seg),
+        "in-process",
+    );
+    let c0 = m.telemetry().cycle.cycle;
+    wait(&mut m, "2000 cycles of drift", |t| {
+        t.cycle.cycle > c0 + 2000
+    });
+    let (r, link) = m.stop(StopKind::Ramp);
+    assert!(r.unwrap().shutdown_ok);
+    let seg = link.into_segment();
+    let stats = seg
+        .slave(1)
+        .and_then(|s| s.esc.timing_stats())
+        .expect("timing statistics of the drifting slave");
+    let n = stats.dc_difference.len();
+    let max = stats.dc_difference.max();
+    assert!(n >= 1000, "{n} drift-compensation writes seen in OP");
+    assert!(max <= 10_000, "0x092C up to {max} ns over {n} writes");
+}
