@@ -14,12 +14,15 @@ use ecdrive::sim::{EscConfig, HostClock, Segment};
 use std::process::Command;
 use std::sync::Arc;
 
-const SCRIPT: &str = r#"
+/// What both scripts start with: the interface from argv[1], generous SOEM timeouts (µs: a
+/// loaded CI machine stalls for milliseconds), an opened master `m` and the output `out`.
+macro_rules! prelude {
+    () => {
+        r#"
 import json, struct, sys, time
 import pysoem
 
 ifname = sys.argv[1]
-# Generous timeouts (µs): a loaded CI machine stalls for milliseconds.
 t = pysoem.settings.timeouts
 t.ret = 50_000
 t.safe = 200_000
@@ -30,7 +33,13 @@ t.state = 5_000_000
 out = {}
 m = pysoem.Master()
 m.open(ifname)
-try:
+"#
+    };
+}
+
+const SCRIPT: &str = concat!(
+    prelude!(),
+    r#"try:
     n = m.config_init()
     out["count"] = n
     out["slaves"] = [
@@ -107,7 +116,8 @@ try:
 finally:
     m.close()
 print(json.dumps(out))
-"#;
+"#
+);
 
 fn pysoem_available() -> bool {
     Command::new("python3")
@@ -187,22 +197,10 @@ fn soem_brings_devices_to_op() {
     }
 }
 
-const DRIVES_SCRIPT: &str = r#"
-import json, struct, sys, time
-import pysoem
-
-ifname = sys.argv[1]
+const DRIVES_SCRIPT: &str = concat!(
+    prelude!(),
+    r#"
 reads = json.loads(sys.argv[2])   # [[position, index, sub], ...]
-t = pysoem.settings.timeouts
-t.ret = 50_000
-t.safe = 200_000
-t.eeprom = 200_000
-t.tx_mailbox = 200_000
-t.rx_mailbox = 2_000_000
-t.state = 5_000_000
-out = {}
-m = pysoem.Master()
-m.open(ifname)
 try:
     out["count"] = m.config_init()
     out["slaves"] = [{"name": s.name, "man": s.man, "id": s.id} for s in m.slaves]
@@ -271,7 +269,8 @@ try:
 finally:
     m.close()
 print(json.dumps(out))
-"#;
+"#
+);
 
 /// A number as the manual facts write it.
 fn fact_number(v: &toml::Value) -> Option<u64> {
