@@ -33,6 +33,29 @@ t.state = 5_000_000
 out = {}
 m = pysoem.Master()
 m.open(ifname)
+
+
+def dc_sync0_to_op():
+    """DC with SYNC0 at 1 ms, SAFE-OP, then OP with process data flowing while requesting it,
+    as SOEM applications do; the states reached go to out["safeop"] and out["op"]."""
+    m.config_dc()
+    for s in m.slaves:
+        s.dc_sync(True, 1_000_000)
+    out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+    m.send_processdata()
+    m.receive_processdata(200_000)
+    m.state = pysoem.OP_STATE
+    m.write_state()
+    op = False
+    for _ in range(2000):
+        m.send_processdata()
+        m.receive_processdata(200_000)
+        if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
+            op = True
+            break
+        time.sleep(0.001)
+    out["op"] = op
+
 "#
     };
 }
@@ -67,24 +90,7 @@ const SCRIPT: &str = concat!(
     out["iomap"] = iomap
     out["sizes"] = [[len(s.output), len(s.input)] for s in m.slaves]
     out["expected_wkc"] = m.expected_wkc
-    m.config_dc()
-    for s in m.slaves:
-        s.dc_sync(True, 1_000_000)
-    out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
-    # Keep process data flowing while requesting OP, as SOEM applications do.
-    m.send_processdata()
-    m.receive_processdata(200_000)
-    m.state = pysoem.OP_STATE
-    m.write_state()
-    op = False
-    for _ in range(2000):
-        m.send_processdata()
-        m.receive_processdata(200_000)
-        if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
-            op = True
-            break
-        time.sleep(0.001)
-    out["op"] = op
+    dc_sync0_to_op()
     wkcs = []
     echo = False
     enabled = [False, False]
@@ -235,23 +241,7 @@ try:
         [m.slaves[p].sdo_read(0x1600, 0).hex(), m.slaves[p].sdo_read(0x1A00, 2).hex()]
         for p in range(len(m.slaves))
     ]
-    m.config_dc()
-    for s in m.slaves:
-        s.dc_sync(True, 1_000_000)
-    out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
-    m.send_processdata()
-    m.receive_processdata(200_000)
-    m.state = pysoem.OP_STATE
-    m.write_state()
-    op = False
-    for _ in range(2000):
-        m.send_processdata()
-        m.receive_processdata(200_000)
-        if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
-            op = True
-            break
-        time.sleep(0.001)
-    out["op"] = op
+    dc_sync0_to_op()
     out["al_codes"] = [s.al_status for s in m.slaves]
     # 1000 cycles of process data, every output zero (no drive is enabled).
     wkcs = []
