@@ -54,7 +54,7 @@ fn own(table: &[(SdoAbortCode, SdoAbortCode)], c: SdoAbortCode) -> u32 {
 #[test]
 fn every_object_reads_over_coe_as_the_esi_and_the_profile_say() {
     for p in PROFILES {
-        let spec = spec_for(p).unwrap();
+        let spec = spec_for(p.key).unwrap();
         let runtime = spec.runtime_objects();
         let esi = esi_objects(p);
         let mut w = Wire::drives(&[p]);

@@ -40,7 +40,7 @@ fn segment() -> Segment {
         // A master that is not real-time, on a shared machine, in a debug build, misses SYNC0s
         // now and then; the drives' loss-of-data detection (tested in drives_comm) would
         // fault them. Off here, as the MR-J4-TM allows with [Pr. PN06]/[Pr. PN02].
-        let spec = ecdrive::sim::drives::spec_for(p).unwrap();
+        let spec = ecdrive::sim::drives::spec_for(p.key).unwrap();
         let drive = EmulatedDrive::new(spec, 100 + i as u32)
             .unwrap()
             .without_loss_detection();

@@ -116,7 +116,7 @@ fn csp_sine_is_followed_within_one_cycle_of_motion() {
         );
         assert!(w.drive(0).alarm().is_none());
         // No limit was hit: the torque stayed below the peak.
-        let peak = spec_for(p).unwrap().motor.peak_torque_permille;
+        let peak = spec_for(p.key).unwrap().motor.peak_torque_permille;
         assert!(f64::from(cyclic::torque(w.inputs(0)).abs()) < peak);
     }
 }
@@ -161,7 +161,7 @@ fn an_oversized_step_raises_the_drives_fault() {
         }
         assert_eq!(cyclic::torque(w.inputs(0)), 0, "{}", p.name);
         let v = w.drive(0).speed_rev_s().abs();
-        match spec_for(p).unwrap().motor.power_off {
+        match spec_for(p.key).unwrap().motor.power_off {
             ecdrive::sim::drives::spec::PowerOff::DynamicBrake => assert!(v < 0.1, "{v}"),
             ecdrive::sim::drives::spec::PowerOff::Coast => assert!(v > 1.0, "{v}"),
         }
@@ -266,7 +266,7 @@ fn csv_ramp_and_cst_step() {
 
         // cst from rest: 20 % torque.
         let mut w = enabled(p, 1_000_000, 10);
-        let spec = spec_for(p).unwrap();
+        let spec = spec_for(p.key).unwrap();
         cyclic::set_torque(w.outputs_mut(0), 200);
         for _ in 0..3 {
             w.cycle();
@@ -373,12 +373,15 @@ fn op_with(drive: EmulatedDrive, p: &DriveProfile) -> Wire {
 /// (MR-J4-TM with [Pr. PA01] = ___2, and the BDHDE).
 #[test]
 fn profile_modes() {
-    let mr = EmulatedDrive::new(spec_for(MR).unwrap(), 1)
+    let mr = EmulatedDrive::new(spec_for(MR.key).unwrap(), 1)
         .unwrap()
         .with_stored(ObjectAddress::new(0x2001, 0), 2);
     for (p, drive) in [
         (MR, mr),
-        (BD, EmulatedDrive::new(spec_for(BD).unwrap(), 1).unwrap()),
+        (
+            BD,
+            EmulatedDrive::new(spec_for(BD.key).unwrap(), 1).unwrap(),
+        ),
     ] {
         let mut w = op_with(drive, p);
         let cpr = counts_per_rev(p);

@@ -224,13 +224,13 @@ fn sii_follows_the_esi_text() {
     let f = EsiFile::parse(&text).unwrap();
     let d = ecdrive::sim::sii::from_esi(f.vendor.id, &f.devices[0], 9).unwrap();
     assert_eq!(d.mailbox.unwrap().rx_size, 256);
-    let d = ecdrive::sim::drives::description(p, 9).unwrap();
+    let d = ecdrive::sim::drives::description(p.key, 9).unwrap();
     assert_eq!(d.mailbox.as_ref().unwrap().rx_size, 128);
     assert_eq!(d.identity.serial, 9);
     // The generic profile has no ESI file and no emulation.
     let g = &ecdrive::drives::generic::GENERIC_CIA402;
-    assert!(ecdrive::sim::drives::description(g, 0).is_err());
-    assert!(ecdrive::sim::drives::emulated(g, 0).is_err());
+    assert!(ecdrive::sim::drives::description(g.key, 0).is_err());
+    assert!(ecdrive::sim::drives::emulated(g.key, 0).is_err());
 }
 
 /// `ecdrive sim --device` names: the registry's drives plus the test devices.

@@ -37,7 +37,7 @@ const T: Duration = Duration::from_secs(10);
 fn drives_segment() -> Segment {
     let mut seg = Segment::new(Arc::new(HostClock));
     for (i, p) in PROFILES.iter().enumerate() {
-        let mut d = EmulatedDrive::new(spec_for(p).unwrap(), 3000 + i as u32).unwrap();
+        let mut d = EmulatedDrive::new(spec_for(p.key).unwrap(), 3000 + i as u32).unwrap();
         if !is_root() {
             d = d.without_loss_detection();
         }
@@ -54,7 +54,7 @@ fn drives_segment() -> Segment {
 fn tolerant_drives_segment() -> Segment {
     let mut seg = Segment::new(Arc::new(HostClock));
     for (i, p) in PROFILES.iter().enumerate() {
-        let d = EmulatedDrive::new(spec_for(p).unwrap(), 3000 + i as u32)
+        let d = EmulatedDrive::new(spec_for(p.key).unwrap(), 3000 + i as u32)
             .unwrap()
             .without_loss_detection();
         seg.push(Box::new(d), EscConfig::default()).unwrap();

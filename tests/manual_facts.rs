@@ -12,7 +12,10 @@
 //! - `pdo_default` / `pdo_assign_default`: the profile's power-on mapping, and the emulated
 //!   drive's mapping and assignment objects read over SDO;
 //! - `modes`: the profile's supported modes and 0x6502 read over SDO;
-//! - `cycle_times`, `quick_stop_option`, `pdo_limits`, `alarm`: the profile's tables.
+//! - `quick_stop_option`: the profile's codes, and each code written to 0x605A over SDO;
+//! - `cycle_times`: the profile's cycle times, and over SDO each one written to 0x1C32:02
+//!   where the drive takes its cycle there;
+//! - `pdo_limits`, `alarm`: the profile's tables.
 //!
 //! Entries the manual lists and a side does not have are printed as coverage gaps, not failures:
 //! a failure is a contradiction of the manual.
@@ -934,6 +937,40 @@ fn check_emulation(
                     wrong(format!(
                         "0x{sm:04X} reads {have:04X?}, the manual's default is {want:04X?}"
                     ));
+                }
+            }
+            "quick_stop_option" => {
+                // Every code the manual lists is accepted in 0x605A.
+                let a = ObjectAddress::new(0x605A, 0);
+                if !matches!(port.upload(a), Sdo::Bytes(_)) {
+                    continue;
+                }
+                for v in f.values.iter().flatten() {
+                    let code = *v as i16;
+                    match port.download(a, &code.to_le_bytes()) {
+                        Sdo::Bytes(_) => {}
+                        Sdo::Abort(c) => {
+                            wrong(format!("0x605A = {v} refused with abort 0x{c:08X}"))
+                        }
+                        Sdo::Failed(e) => wrong(format!("0x605A = {v}: {e}")),
+                    }
+                }
+            }
+            "cycle_times" => {
+                // A drive told its cycle in ns (0x1C32:02) accepts every cycle the manual lists.
+                let a = ObjectAddress::new(0x1C32, 2);
+                if !matches!(port.upload(a), Sdo::Bytes(_)) {
+                    continue;
+                }
+                for us in f.cycle_times_us.iter().flatten() {
+                    let ns = (*us as u32).saturating_mul(1000);
+                    match port.download(a, &ns.to_le_bytes()) {
+                        Sdo::Bytes(_) => {}
+                        Sdo::Abort(c) => wrong(format!(
+                            "0x1C32:02 = {ns} ns ({us} µs) refused with abort 0x{c:08X}"
+                        )),
+                        Sdo::Failed(e) => wrong(format!("0x1C32:02 = {ns} ns: {e}")),
+                    }
                 }
             }
             _ => {}

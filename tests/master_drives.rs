@@ -35,7 +35,7 @@ const PROFILES: [&DriveProfile; 2] = [&mr_j4_tm::PROFILE, &bdhde::PROFILE];
 fn segment() -> Segment {
     let mut seg = Segment::new(Arc::new(HostClock));
     for (i, p) in PROFILES.iter().enumerate() {
-        let d = EmulatedDrive::new(spec_for(p).unwrap(), 2000 + i as u32)
+        let d = EmulatedDrive::new(spec_for(p.key).unwrap(), 2000 + i as u32)
             .unwrap()
             .without_loss_detection();
         seg.push(Box::new(d), EscConfig::default()).unwrap();

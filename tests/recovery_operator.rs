@@ -28,7 +28,7 @@ fn after_a_drive_alarm_mid_program_the_operator_recovers_and_the_programs_comple
     // counts below would differ).
     let mut seg = Segment::new(Arc::new(HostClock));
     for (i, p) in PROFILES.iter().enumerate() {
-        let d = EmulatedDrive::new(spec_for(p).unwrap(), 4000 + i as u32)
+        let d = EmulatedDrive::new(spec_for(p.key).unwrap(), 4000 + i as u32)
             .unwrap()
             .without_loss_detection();
         seg.push(Box::new(d), EscConfig::default()).unwrap();

@@ -96,6 +96,40 @@ pub fn linear_point(from: i32, to: i32, cycles: u32, k: u32) -> i32 {
     i32::try_from(p).unwrap_or(to)
 }
 
+// ---------------------------------------------------------------------------------------------
+// 0x60C2 interpolation time period: `:01 × 10^(:02)` s (CiA 402).
+
+/// The standard 0x60C2 form of `cycle_ns`: `(value, index)` with `value × 10^index` s, the
+/// largest index from −3 down to −9 that keeps `value` an integer of at most 255, never `avoid`
+/// (a vendor's own reading of that index, e.g. the BDHDE's 250 µs unit for −4).
+/// `None` when the cycle has no such form.
+pub fn interpolation_standard_form(cycle_ns: u32, avoid: Option<i8>) -> Option<(u8, i8)> {
+    (-9i8..=-3)
+        .rev()
+        .filter(|i| Some(*i) != avoid)
+        .find_map(|index| {
+            let unit = 10u64.pow(u32::from((9 + index) as u8));
+            let c = u64::from(cycle_ns);
+            (c % unit == 0)
+                .then(|| c / unit)
+                .and_then(|v| u8::try_from(v).ok())
+                .filter(|v| *v > 0)
+                .map(|v| (v, index))
+        })
+}
+
+/// The cycle a drive's 0x60C2 tells, ns: `value × unit_ns` while `index` is the vendor's
+/// (`vendor = Some((index, unit_ns))`), `value × 10^index` s otherwise.
+pub fn interpolation_cycle_ns(value: u64, index: i8, vendor: Option<(i8, u32)>) -> Option<u64> {
+    match vendor {
+        Some((i, unit)) if i == index => value.checked_mul(u64::from(unit)),
+        _ if (-9..=0).contains(&index) => {
+            value.checked_mul(10u64.pow(u32::from((9 + index) as u8)))
+        }
+        _ => None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

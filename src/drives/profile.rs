@@ -6,6 +6,7 @@
 //! names) and by the tests. Quirks are fields here, not `if vendor == …` in the logic.
 
 use crate::cia402::DriveCaps;
+pub use crate::cia402::interpolated::{interpolation_cycle_ns, interpolation_standard_form};
 use crate::od::{ConstValue, ObjectAddress, ObjectDesc};
 use crate::pdo::{Mapping, PdoLimits, RequiredObjects};
 
@@ -95,37 +96,6 @@ pub enum CycleTimeObject {
     InterpolationStandard,
 }
 
-/// The standard 0x60C2 form of `cycle_ns`: `(value, index)` with `value × 10^index` s, the
-/// largest index from −3 down to −9 that keeps `value` an integer of at most 255, never `avoid`
-/// (a vendor's own reading of that index, see [`CycleTimeObject::InterpolationFixedIndex`]).
-/// `None` when the cycle has no such form.
-pub fn interpolation_standard_form(cycle_ns: u32, avoid: Option<i8>) -> Option<(u8, i8)> {
-    (-9i8..=-3)
-        .rev()
-        .filter(|i| Some(*i) != avoid)
-        .find_map(|index| {
-            let unit = 10u64.pow(u32::from((9 + index) as u8));
-            let c = u64::from(cycle_ns);
-            (c % unit == 0)
-                .then(|| c / unit)
-                .and_then(|v| u8::try_from(v).ok())
-                .filter(|v| *v > 0)
-                .map(|v| (v, index))
-        })
-}
-
-/// The cycle a drive's 0x60C2 tells, ns: `value × unit_ns` while `index` is the vendor's
-/// (`vendor = Some((index, unit_ns))`), `value × 10^index` s otherwise.
-pub fn interpolation_cycle_ns(value: u64, index: i8, vendor: Option<(i8, u32)>) -> Option<u64> {
-    match vendor {
-        Some((i, unit)) if i == index => value.checked_mul(u64::from(unit)),
-        _ if (-9..=0).contains(&index) => {
-            value.checked_mul(10u64.pow(u32::from((9 + index) as u8)))
-        }
-        _ => None,
-    }
-}
-
 /// Synchronisation the drive supports, and what the master must write for it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SyncSpec {
@@ -148,7 +118,8 @@ pub struct SyncSpec {
 pub enum StartupWhen {
     /// Always.
     Always,
-    /// Only if the object is not mapped in the RxPDO (drives refuse SDO writes to mapped objects).
+    /// By SDO if the object is not mapped in the RxPDO (drives refuse SDO writes to mapped
+    /// objects); if it is mapped, the value is sent in that output from the first cycle on.
     IfNotMapped,
 }
 

@@ -192,7 +192,7 @@ pub fn segment() -> Result<Segment, MasterError> {
         .iter()
         .enumerate()
     {
-        let dev = crate::sim::drives::emulated(p, 1000 + i as u32).map_err(|e| {
+        let dev = crate::sim::drives::emulated(p.key, 1000 + i as u32).map_err(|e| {
             MasterError::new(
                 None,
                 format!("building the emulated {}", p.name),

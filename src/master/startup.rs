@@ -1238,11 +1238,12 @@ pub fn configure<L: FrameLink>(
             }
             None => {}
         }
-        // Start-up SDOs of the profile, then the user's.
+        // Start-up SDOs of the profile, then the user's. A value whose object is mapped as an
+        // output goes there instead (`carried`): the drive gets it in every cycle.
+        let mut carried: Vec<(ObjectAddress, Vec<u8>)> = Vec::new();
         for s in profile.startup {
-            if s.when == StartupWhen::IfNotMapped && mapping.contains(Direction::Rx, s.address) {
-                continue;
-            }
+            let mapped =
+                s.when == StartupWhen::IfNotMapped && mapping.contains(Direction::Rx, s.address);
             let v = s.value.to_value().ok_or_else(|| {
                 MasterError::new(
                     Some(&drive),
@@ -1259,7 +1260,11 @@ pub fn configure<L: FrameLink>(
                     e,
                 )
             })?;
-            writes.push((s.address, bytes, s.why.to_string()));
+            if mapped {
+                carried.push((s.address, bytes));
+            } else {
+                writes.push((s.address, bytes, s.why.to_string()));
+            }
         }
         for (a, v) in &setup.sdos {
             let bytes = encode(profile, *a, v).map_err(|e| {
@@ -1327,10 +1332,11 @@ pub fn configure<L: FrameLink>(
                 }
                 // Last, so that a start-up value written to such an object is what it keeps.
                 for a in &undriven {
-                    held.push((
-                        *a,
-                        c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
-                    ));
+                    let value = match carried.iter().find(|(c, _)| c == a) {
+                        Some((_, bytes)) => Ok(bytes.clone()),
+                        None => c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
+                    };
+                    held.push((*a, value));
                 }
                 Ok(())
             },

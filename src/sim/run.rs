@@ -156,7 +156,7 @@ impl ScheduledFault {
                     let names: Vec<&str> = spec.alarms.iter().map(|a| a.id).collect();
                     return Err(bad(format!(
                         "the {} at position {position} has no alarm {id:?} (it has {})",
-                        spec.profile.name,
+                        spec.name,
                         names.join(", ")
                     )));
                 };

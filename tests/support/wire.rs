@@ -92,7 +92,7 @@ impl Wire {
             profiles
                 .iter()
                 .enumerate()
-                .map(|(i, p)| emulated(p, i as u32 + 1).unwrap())
+                .map(|(i, p)| emulated(p.key, i as u32 + 1).unwrap())
                 .collect(),
         )
     }

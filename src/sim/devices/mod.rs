@@ -70,21 +70,20 @@ pub const DEVICE_NAMES: &[(&str, &str)] = &[
     ),
 ];
 
-/// Every name [`by_name`] accepts, with a one-line description: each emulated drive of the
-/// registry ([`crate::drives::all`], by its `--device` key), then the test devices.
+/// Every name [`by_name`] accepts, with a one-line description: each emulated drive
+/// ([`super::drives::specs`], by its `--device` key, identity from its ESI file), then the test
+/// devices.
 pub fn device_names() -> Vec<(&'static str, String)> {
-    let drives = crate::drives::all()
-        .iter()
-        .filter(|p| super::drives::spec_for(p).is_some())
-        .map(|p| {
-            (
-                p.key,
-                format!(
-                    "emulated {} {} (vendor 0x{:08X}, product 0x{:08X}), SII from its ESI file",
-                    p.vendor, p.name, p.identity.vendor_id, p.identity.product_code
-                ),
-            )
-        });
+    let drives = super::drives::specs().iter().map(|s| {
+        let text = match s.model() {
+            Ok(m) => format!(
+                "emulated {} {} (vendor 0x{:08X}, product 0x{:08X}), SII from its ESI file",
+                m.vendor_name, s.name, m.vendor_id, m.product_code
+            ),
+            Err(e) => format!("emulated {} (unusable: {e})", s.name),
+        };
+        (s.key, text)
+    });
     drives
         .chain(DEVICE_NAMES.iter().map(|(n, d)| (*n, (*d).to_string())))
         .collect()
@@ -106,7 +105,9 @@ pub fn check_name(name: &str) -> Result<(), DeviceError> {
         name: name.into(),
         reason,
     })?;
-    if device_names().iter().any(|(n, _)| *n == base) {
+    let known = super::drives::specs().iter().any(|s| s.key == base)
+        || DEVICE_NAMES.iter().any(|(n, _)| *n == base);
+    if known {
         Ok(())
     } else {
         Err(DeviceError::Unknown {
@@ -147,8 +148,8 @@ pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceErr
         "echo-mailbox" => Err(quirk_error(
             "the echo-mailbox device takes no quirks".into(),
         )),
-        _ => match crate::drives::all().iter().find(|p| p.key == base) {
-            Some(p) => super::drives::emulated_with(p, serial, quirks),
+        _ => match super::drives::spec_for(base) {
+            Some(spec) => super::drives::emulated_with(spec.key, serial, quirks),
             None => Err(DeviceError::Unknown {
                 name: base.into(),
                 known: known_names(),

@@ -1,5 +1,6 @@
-//! The emulated BDHDE: the emulator's model of the drive on top of
-//! [`crate::drives::bdhde::PROFILE`].
+//! The emulated BDHDE: its ESI file (`esi/Servotronix_BDHDE.xml`: identity, dictionary, CoE
+//! details, synchronisation modes and cycle times, SII) plus the emulator's model of the
+//! drive, written from the manual independently of the master's profile.
 //!
 //! What it does, with the manual sections (EtherCAT Reference Manual rev. 0.0.2):
 //! - the object dictionary of the profile with its documented defaults, including the unusable
@@ -22,13 +23,63 @@
 //! The emulator's own choices are in the section "Values that are ours" below.
 
 use super::spec::{
-    AlarmDef, CommandCheck, Condition, DriveSpec, EmcyData, ErrorReporting, FollowingErrorSpec,
-    LossDetection, LossLimit, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData, PowerOnValue,
-    Quantity, Scaling, StatusBit, TorqueLimits, TorqueSlopeUnit, WriteRule,
+    AlarmDef, CommandCheck, Condition, CycleSource, DriveSpec, EmcyData, ErrorReporting,
+    FollowingErrorSpec, LossDetection, LossLimit, ModeRules, Monitor, MotorSpec, PowerOff,
+    PowerOnData, PowerOnValue, Quantity, Scaling, StateMachineSpec, StatusBit, SyncObjects,
+    TorqueLimits, TorqueSlopeUnit, WriteRule,
 };
-use crate::drives::bdhde::PROFILE;
+use crate::cia402::QuickStopOption;
 use crate::ec::AlStatusCode;
 use crate::od::{ObjectAddress, SdoAbortCode};
+use crate::pdo::{DirectionLimits, PdoLimits, PdoRange};
+use std::sync::OnceLock;
+
+/// The state machine (§3, §9 605Ah): no state skipping; 0x605A accepts 0 (disable drive at
+/// once, the power-on value), 2 (ramp, then Switch on disabled) and 6 (ramp and stay, so
+/// transition 16 exists); the controlword acts only with statusword bit 9 set (COMMmode 1).
+pub const STATE_MACHINE: StateMachineSpec = StateMachineSpec {
+    state_skipping: false,
+    transition_16: true,
+    quick_stop_options: &[
+        QuickStopOption::DISABLE_DRIVE,
+        QuickStopOption::QUICK_STOP_RAMP,
+        QuickStopOption::QUICK_STOP_RAMP_STAY,
+    ],
+    default_quick_stop_option: QuickStopOption::DISABLE_DRIVE,
+    position_mode_switch_needs_zero_speed: false,
+    vendor_position_modes: &[],
+    remote_gates_controlword: true,
+};
+
+/// PDO rules (chapter 7 objects 1600h–1603h, 1A00h–1A03h; §5.2.2): 0x1600/0x1A00 up to 8
+/// entries, 0x1601–0x1603/0x1A01–0x1A03 up to 2; one PDO per direction (0x1C12/0x1C13 are
+/// single variables in the manual). \[REC\] at most 8 entries and 32 bytes per direction
+/// (MANUAL GAP: no budget is stated; 8 entries of at most 32 bits).
+pub const PDO_LIMITS: PdoLimits = PdoLimits {
+    drive: "BDHDE",
+    rx: DirectionLimits {
+        pdos: &[
+            PdoRange::single(0x1600, 8),
+            PdoRange::new(0x1601, 0x1603, 2),
+        ],
+        max_assigned: 1,
+        max_entries: 8,
+        max_bytes: 32,
+    },
+    tx: DirectionLimits {
+        pdos: &[
+            PdoRange::single(0x1A00, 8),
+            PdoRange::new(0x1A01, 0x1A03, 2),
+        ],
+        max_assigned: 1,
+        max_entries: 8,
+        max_bytes: 32,
+    },
+    assignment_writable: true,
+};
+
+/// The unit of 0x60C2:01 while 0x60C2:02 holds −4 (FBITPRD × 250 µs, §2.4).
+pub const INTERPOLATION_UNIT_NS: u32 = 250_000;
 
 const fn a(index: u16, sub: u8) -> ObjectAddress {
     ObjectAddress::new(index, sub)
@@ -144,7 +195,21 @@ pub const WRITE_RULES: &[WriteRule] = &[
 
 /// The emulated BDHDE.
 pub static SPEC: DriveSpec = DriveSpec {
-    profile: &PROFILE,
+    key: "bdhde",
+    name: "BDHDE",
+    esi: include_str!("../../../esi/Servotronix_BDHDE.xml"),
+    product_code: 0x000B_E2EB,
+    model: OnceLock::new(),
+    state_machine: STATE_MACHINE,
+    pdo_limits: PDO_LIMITS,
+    // No 0x1C32/0x1C33 (§4.4.1: DC-Synchronous only); the cycle is told in 0x60C2.
+    sync: SyncObjects {
+        sync_type: None,
+        cycle: Some(CycleSource::Interpolation {
+            vendor: Some((-4, INTERPOLATION_UNIT_NS)),
+        }),
+    },
+    cycle_counter: None,
     alarms: ALARMS,
     reporting: ErrorReporting {
         current_alarm: None,

@@ -2,12 +2,11 @@
 
 use super::motor::{Drive, Limits, Motor};
 use super::spec::{
-    AlarmDef, Condition, DriveSpec, EmcyData, PowerOnData, Quantity, Scaling, TorqueSlopeUnit,
-    WriteRule,
+    AlarmDef, Condition, CycleSource, DriveSpec, EmcyData, PowerOnData, Quantity, Scaling,
+    TorqueSlopeUnit, WriteRule,
 };
 use crate::cia402::device::{Device as Fsa, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{ControlWord, OperationMode, QuickStopOption, State, StatusWord, StopRamp};
-use crate::drives::CycleTimeObject;
 use crate::ec::mailbox::Emergency;
 use crate::ec::{AlState, AlStatusCode};
 use crate::od::ObjectAddress;
@@ -221,7 +220,7 @@ pub struct EmulatedDrive {
 impl core::fmt::Debug for EmulatedDrive {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.debug_struct("EmulatedDrive")
-            .field("drive", &self.spec.profile.name)
+            .field("drive", &self.spec.name)
             .field("serial", &self.serial)
             .field("al", &self.al)
             .field("state", &self.fsa.state())
@@ -260,8 +259,12 @@ fn build_store(spec: &'static DriveSpec) -> Result<OdStore, OdError> {
             WriteRule::Mirror(a, b) => chain.with(Mirror { a, b }),
         };
     }
-    Ok(OdStore::new(spec.profile.dictionary)?
-        .with_limits(spec.profile.pdo_limits)
+    let model = spec.model().map_err(|e| OdError {
+        at: "ESI".into(),
+        reason: e.to_string(),
+    })?;
+    Ok(OdStore::new(model.dictionary)?
+        .with_limits(spec.pdo_limits)
         .with_abort_codes(spec.abort_codes)
         .with_hooks(chain))
 }
@@ -272,11 +275,11 @@ impl EmulatedDrive {
     pub fn new(spec: &'static DriveSpec, serial: u32) -> Result<Self, OdError> {
         let od = build_store(spec)?;
         let coe = CoeServer::new(CoeConfig {
-            complete_access: spec.profile.complete_access,
+            complete_access: spec.model().is_ok_and(|m| m.complete_access),
             sdo_info: esi_sdo_info(spec),
             ..CoeConfig::default()
         });
-        let qs = spec.profile.caps.default_quick_stop_option;
+        let qs = spec.state_machine.default_quick_stop_option;
         let mut d = Self {
             spec,
             serial,
@@ -286,7 +289,7 @@ impl EmulatedDrive {
             rx: Vec::new(),
             tx: Vec::new(),
             al: AlState::Init,
-            fsa: Fsa::new(DeviceConfig::from_caps(&spec.profile.caps, qs)),
+            fsa: Fsa::new(spec.state_machine.device_config(qs)),
             qs_code: qs.code,
             qs_immediate: false,
             motor: Motor::new(spec.motor),
@@ -364,7 +367,7 @@ impl EmulatedDrive {
                 PowerOnData::Text(t) => self.od.dict_mut().set_raw(p.address, t.as_bytes()),
             };
             if let Err(code) = r {
-                tracing::warn!(drive = spec.profile.name, address = %p.address, %code, "power-on value not accepted");
+                tracing::warn!(drive = spec.name, address = %p.address, %code, "power-on value not accepted");
             }
         }
         let _ = self
@@ -373,7 +376,7 @@ impl EmulatedDrive {
             .set_uint(obj::SERIAL, u64::from(self.serial));
         for &(a, v) in &self.stored {
             if let Err(code) = self.od.dict_mut().set_int(a, v) {
-                tracing::warn!(drive = spec.profile.name, address = %a, %code, "stored value not accepted");
+                tracing::warn!(drive = spec.name, address = %a, %code, "stored value not accepted");
             }
         }
         let rules = spec.modes;
@@ -395,7 +398,7 @@ impl EmulatedDrive {
             .od
             .dict_mut()
             .set_int(obj::MODES_DISPLAY, i64::from(initial));
-        self.qs_code = self.spec.profile.caps.default_quick_stop_option.code;
+        self.qs_code = self.spec.state_machine.default_quick_stop_option.code;
         self.fsa = Fsa::new(self.fsa_config());
         self.plan = Drive::Off;
         self.offset_units = 0.0;
@@ -494,7 +497,7 @@ impl EmulatedDrive {
     /// Raise the alarm named `id` (see [`DriveSpec::alarms`]) at the next cycle.
     pub fn raise_alarm(&mut self, id: &str) -> Result<(), UnknownAlarm> {
         let a = self.spec.alarm(id).ok_or_else(|| UnknownAlarm {
-            drive: self.spec.profile.name,
+            drive: self.spec.name,
             id: id.to_string(),
             known: self
                 .spec
@@ -615,14 +618,14 @@ impl EmulatedDrive {
     // The cycle.
 
     fn fsa_config(&self) -> DeviceConfig {
-        let caps = &self.spec.profile.caps;
-        let mut qs = caps
+        let sm = &self.spec.state_machine;
+        let mut qs = sm
             .quick_stop_option(self.qs_code)
-            .unwrap_or(caps.default_quick_stop_option);
+            .unwrap_or(sm.default_quick_stop_option);
         if self.qs_immediate {
             qs = QuickStopOption::vendor(qs.code, StopRamp::Immediate, qs.end);
         }
-        let mut c = DeviceConfig::from_caps(caps, qs);
+        let mut c = sm.device_config(qs);
         if self.quirks.has(Quirk::NoStateSkipping) {
             c.state_skipping = false;
         }
@@ -641,7 +644,7 @@ impl EmulatedDrive {
     pub fn with_quirks(mut self, quirks: Quirks) -> Self {
         self.quirks = quirks;
         self.coe = CoeServer::new(CoeConfig {
-            complete_access: self.spec.profile.complete_access,
+            complete_access: self.spec.model().is_ok_and(|m| m.complete_access),
             sdo_info: esi_sdo_info(self.spec),
             quirks,
             ..CoeConfig::default()
@@ -655,7 +658,7 @@ impl EmulatedDrive {
     /// torque-mode rule).
     fn refresh_fsa_config(&mut self) {
         let code = self.int(obj::QUICK_STOP_OPTION) as i16;
-        let code = if self.spec.profile.caps.quick_stop_option(code).is_some() {
+        let code = if self.spec.state_machine.quick_stop_option(code).is_some() {
             code
         } else {
             self.qs_code
@@ -715,7 +718,7 @@ impl EmulatedDrive {
             data,
         });
         self.loss_counter = 0;
-        tracing::debug!(drive = self.spec.profile.name, alarm = a.id, "alarm");
+        tracing::debug!(drive = self.spec.name, alarm = a.id, "alarm");
     }
 
     fn emit(&mut self, e: Emergency) {
@@ -753,13 +756,7 @@ impl EmulatedDrive {
     }
 
     fn free_run_cycle_ns(&self) -> u32 {
-        let ns = match self.spec.profile.sync.cycle_time_object {
-            Some(CycleTimeObject::Nanoseconds(a)) => self.od.dict().uint(a).unwrap_or(0),
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
-                self.interpolation_ns(unit_ns, index).unwrap_or(0)
-            }
-            _ => 0,
-        };
+        let ns = self.configured_cycle_ns().unwrap_or(0);
         match u32::try_from(ns) {
             Ok(n) if n > 0 => n,
             _ => 1_000_000,
@@ -768,25 +765,22 @@ impl EmulatedDrive {
 
     /// The cycle 0x60C2 tells: `:01` in the drive's unit while `:02` holds its own index, the
     /// standard `:01 × 10^(:02)` s otherwise (the form its set-up example writes).
-    fn interpolation_ns(&self, unit_ns: u32, index: i8) -> Option<u64> {
+    fn interpolation_ns(&self, vendor: Option<(i8, u32)>) -> Option<u64> {
         let d = self.od.dict();
         let value = d.uint(obj::INTERPOLATION_PERIOD)?;
         let power = d.int(ObjectAddress::new(0x60C2, 2))?;
-        crate::drives::interpolation_cycle_ns(
+        crate::cia402::interpolated::interpolation_cycle_ns(
             value,
             i8::try_from(power).ok()?,
-            Some((index, unit_ns)),
+            vendor,
         )
     }
 
     /// The cycle the drive is configured for (SYNC0 must match it).
     fn configured_cycle_ns(&self) -> Option<u64> {
-        match self.spec.profile.sync.cycle_time_object {
-            Some(CycleTimeObject::Nanoseconds(a)) => self.od.dict().uint(a),
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
-                self.interpolation_ns(unit_ns, index)
-            }
-            _ => None,
+        match self.spec.sync.cycle? {
+            CycleSource::Nanoseconds(a) => self.od.dict().uint(a),
+            CycleSource::Interpolation { vendor } => self.interpolation_ns(vendor),
         }
     }
 
@@ -805,8 +799,7 @@ impl EmulatedDrive {
             }
         }
         // The incremental counter: +1 per cycle, checked when it arrives.
-        let (Some(cc), Some(alarm)) = (self.spec.profile.cycle_counter, self.spec.counter_alarm)
-        else {
+        let (Some(cc), Some(alarm)) = (self.spec.cycle_counter, self.spec.counter_alarm) else {
             return;
         };
         if !self.od.dict().is_mapped(Direction::Rx, cc.output) {
@@ -905,9 +898,9 @@ impl EmulatedDrive {
         if requested == self.mode || requested == 0 || !self.allowed_modes.contains(&requested) {
             return;
         }
-        let caps = &self.spec.profile.caps;
-        let pos = |m: i8| caps.is_position_mode(OperationMode::from_i8(m));
-        if caps.position_mode_switch_needs_zero_speed
+        let sm = &self.spec.state_machine;
+        let pos = |m: i8| sm.is_position_mode(OperationMode::from_i8(m));
+        if sm.position_mode_switch_needs_zero_speed
             && (pos(requested) || pos(self.mode))
             && !self.motor.stopped()
         {
@@ -1406,7 +1399,7 @@ impl EmulatedDrive {
         match state {
             State::OperationEnabled => self.operate(cw, dt_ns),
             State::QuickStopActive if !self.qs_immediate => {
-                let qs = self.spec.profile.caps.quick_stop_option(self.qs_code);
+                let qs = self.spec.state_machine.quick_stop_option(self.qs_code);
                 let addr = match qs.map(|q| q.ramp) {
                     Some(StopRamp::SlowDown) => obj::PROFILE_DECELERATION,
                     _ => obj::QUICK_STOP_DECELERATION,
@@ -1466,16 +1459,7 @@ fn push_error_history(d: &mut crate::sim::coe::ValueStore, code: u16) {
 }
 
 fn esi_sdo_info(spec: &DriveSpec) -> bool {
-    spec.profile
-        .esi_file()
-        .and_then(Result::ok)
-        .and_then(|f| {
-            f.device(spec.profile.identity.product_code, None)
-                .and_then(|d| d.mailbox.as_ref())
-                .and_then(|m| m.coe.as_ref())
-                .map(|c| c.sdo_info)
-        })
-        .unwrap_or(true)
+    spec.model().map_or(true, |m| m.sdo_info)
 }
 
 impl Device for EmulatedDrive {
@@ -1484,7 +1468,7 @@ impl Device for EmulatedDrive {
     }
 
     fn description(&self) -> DeviceDescription {
-        match super::description(self.spec.profile, self.serial) {
+        match self.spec.model().and_then(|m| m.description(self.serial)) {
             Ok(mut d) => {
                 if self.quirks.has(Quirk::NoSdoInfo) {
                     d.coe_details.remove(crate::sim::sii::CoeDetails::SDO_INFO);
@@ -1492,9 +1476,9 @@ impl Device for EmulatedDrive {
                 d
             }
             Err(e) => {
-                // The profile's ESI is part of the build and checked by the tests; an error here
+                // The drive's ESI is part of the build and checked by the tests; an error here
                 // is a programming error, reported and answered with an empty device.
-                tracing::error!(drive = self.spec.profile.name, error = %e, "ESI cannot be turned into an SII");
+                tracing::error!(drive = self.spec.name, error = %e, "ESI cannot be turned into an SII");
                 DeviceDescription::default()
             }
         }
@@ -1518,24 +1502,26 @@ impl Device for EmulatedDrive {
                     .mapping()
                     .map_err(|_| AlStatusCode::INVALID_OUTPUT_MAPPING)?;
                 self.spec
-                    .profile
                     .pdo_limits
                     .validate(&m, None)
                     .map_err(|_| AlStatusCode::INVALID_OUTPUT_MAPPING)?;
                 Ok(())
             }
             (AlState::SafeOp, AlState::Op) => {
-                let sync = self.spec.profile.sync;
-                let dc = match sync.sync_type_object {
+                let model = self
+                    .spec
+                    .model()
+                    .map_err(|_| AlStatusCode::INVALID_DC_SYNC_CONFIG)?;
+                let dc = match self.spec.sync.sync_type {
                     Some(a) => self.od.dict().uint(a).unwrap_or(0) == 2,
                     None => r.dc.sync0_active,
                 };
                 if dc {
-                    if !r.dc.sync0_active || !sync.dc_sync0 {
+                    if !r.dc.sync0_active || model.dc_sync0.is_none() {
                         return Err(AlStatusCode::INVALID_DC_SYNC_CONFIG);
                     }
                     let cycle = r.dc.sync0_cycle_ns;
-                    if !sync.cycle_times.contains(cycle) {
+                    if !model.accepts_cycle(true, cycle) {
                         return Err(self.spec.sync_cycle_mismatch);
                     }
                     if let Some(want) = self.configured_cycle_ns()
@@ -1543,7 +1529,7 @@ impl Device for EmulatedDrive {
                     {
                         return Err(self.spec.sync_cycle_mismatch);
                     }
-                } else if !sync.free_run {
+                } else if model.free_run.is_none() {
                     return Err(AlStatusCode::INVALID_DC_SYNC_CONFIG);
                 }
                 Ok(())

@@ -1,16 +1,19 @@
 //! The emulated drives: the MR-J4-TM and the BDHDE as the software slave presents them, built
-//! from their profiles ([`crate::drives`]) and their ESI files.
+//! from their ESI files and the emulator's own model of each drive.
 //!
 //! One engine, [`EmulatedDrive`], runs every drive; what differs is data, a [`DriveSpec`]:
-//! the profile (identity, dictionary, PDO rules, synchronisation, CiA 402 capabilities, units)
-//! plus the emulator's model (alarms, write rules, loss-of-data detection, motor and load,
-//! monitors). Each drive's spec is in its own file ([`mr_j4_tm`], [`bdhde`]) with the values
-//! that are ours (\[REC\]) in one labelled section.
+//! the ESI file (identity, dictionary, CoE details, synchronisation modes and cycle times, SII;
+//! [`esi_model`]) plus the emulator's model (CiA 402 state machine, PDO rules, write rules,
+//! alarms, loss-of-data detection, motor and load, monitors). Nothing is taken from the
+//! master's drive profiles: the two are written separately from the manuals and checked
+//! against them (`tests/manual_facts/`), so a wrong value on one side is a disagreement, not
+//! a shared mistake. Each drive's spec is in its own file ([`mr_j4_tm`], [`bdhde`]) with the
+//! values that are ours (\[REC\]) in one labelled section.
 //!
 //! - **SII**: built from the drive's ESI file ([`description`], through
 //!   [`crate::sim::sii::from_esi`]), so the EEPROM a master reads and the ESI a user reads
 //!   cannot drift apart.
-//! - **CoE**: the profile's dictionary in an [`crate::sim::coe::OdStore`] with the drive's PDO
+//! - **CoE**: the ESI file's dictionary in an [`crate::sim::coe::OdStore`] with the drive's PDO
 //!   limits and write rules; complete access and SDO information as the ESI file says.
 //! - **Cycle**: at every SYNC0 (or, in free run, every process-data frame) the drive moves the
 //!   motor over the cycle that ended, supervises it, reads the new outputs, steps the CiA 402
@@ -36,36 +39,35 @@
 //! beyond [`EmulatedDrive::with_stored`]).
 //!
 //! ```
-//! use ecdrive::drives;
 //! use ecdrive::sim::drives::{EmulatedDrive, emulated};
 //! use ecdrive::sim::{ManualClock, Segment};
 //! use std::sync::Arc;
 //!
 //! let mut segment = Segment::new(Arc::new(ManualClock::new(0)));
 //! for key in ["mr-j4-tm", "bdhde"] {
-//!     let profile = drives::by_key(key).unwrap();
-//!     segment.push_device(emulated(profile, 1).unwrap()).unwrap();
+//!     segment.push_device(emulated(key, 1).unwrap()).unwrap();
 //! }
 //! let mr = segment.device_mut::<EmulatedDrive>(0).unwrap();
-//! assert_eq!(mr.spec().profile.name, "MR-J4-TM");
+//! assert_eq!(mr.spec().name, "MR-J4-TM");
 //! mr.raise_alarm("AL.86.1").unwrap();
 //! assert!(mr.raise_alarm("AL.99").is_err());
 //! ```
 
 pub mod bdhde;
 mod drive;
+pub mod esi_model;
 pub mod motor;
 pub mod mr_j4_tm;
 pub mod spec;
 
 pub use drive::{DriveStats, EmulatedDrive, UnknownAlarm};
+pub use esi_model::{EsiModel, EsiModelError};
 pub use spec::DriveSpec;
 
 use super::device::Device;
 use super::devices::DeviceError;
 use super::quirks::Quirks;
 use super::sii::DeviceDescription;
-use crate::drives::DriveProfile;
 
 static SPECS: [&DriveSpec; 2] = [&mr_j4_tm::SPEC, &bdhde::SPEC];
 
@@ -74,90 +76,56 @@ pub fn specs() -> &'static [&'static DriveSpec] {
     &SPECS
 }
 
-/// The emulation of `profile`, if there is one.
-pub fn spec_for(profile: &DriveProfile) -> Option<&'static DriveSpec> {
-    SPECS
-        .iter()
-        .copied()
-        .find(|s| core::ptr::eq(s.profile, profile) || s.profile.key == profile.key)
+/// The emulated drive with `--device` name `key` (`"mr-j4-tm"`, `"bdhde"`), if there is one.
+pub fn spec_for(key: &str) -> Option<&'static DriveSpec> {
+    SPECS.iter().copied().find(|s| s.key == key)
 }
 
-/// The emulated drive of `profile` with serial number `serial`, ready to push onto a
+/// The emulated drive `key` with serial number `serial`, ready to push onto a
 /// [`crate::sim::Segment`].
-pub fn emulated(profile: &DriveProfile, serial: u32) -> Result<Box<dyn Device>, DeviceError> {
-    emulated_with(profile, serial, Quirks::NONE)
+pub fn emulated(key: &str, serial: u32) -> Result<Box<dyn Device>, DeviceError> {
+    emulated_with(key, serial, Quirks::NONE)
 }
 
 /// [`emulated`], behaving like a device ecdrive did not write ([`crate::sim::quirks`]; every
 /// quirk applies to the emulated drives).
 pub fn emulated_with(
-    profile: &DriveProfile,
+    key: &str,
     serial: u32,
     quirks: Quirks,
 ) -> Result<Box<dyn Device>, DeviceError> {
-    let spec = spec_for(profile).ok_or_else(|| DeviceError::Build {
-        name: profile.key.to_string(),
-        reason: format!("ecdrive has no emulation of the {}", profile.name),
+    let spec = spec_for(key).ok_or_else(|| DeviceError::Build {
+        name: key.to_string(),
+        reason: format!("ecdrive has no emulation of {key:?}"),
     })?;
     quirks
-        .check_for(profile.key, EmulatedDrive::CAPABILITIES)
+        .check_for(spec.key, EmulatedDrive::CAPABILITIES)
         .map_err(|reason| DeviceError::Quirk {
-            name: profile.key.to_string(),
+            name: key.to_string(),
             reason,
         })?;
     EmulatedDrive::new(spec, serial)
         .map(|d| Box::new(d.with_quirks(quirks)) as Box<dyn Device>)
         .map_err(|e| DeviceError::Build {
-            name: profile.key.to_string(),
+            name: key.to_string(),
             reason: e.to_string(),
         })
 }
 
-/// Why the SII description of a profile cannot be built.
+/// Why the SII description of an emulated drive cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum DescriptionError {
-    /// The profile has no ESI file.
-    #[error("the {0} profile has no ESI file")]
-    NoEsi(&'static str),
-    /// The ESI file does not parse.
-    #[error("the {drive} ESI file: {error}")]
-    Esi {
-        /// Drive name.
-        drive: &'static str,
-        /// The parser's error.
-        error: String,
-    },
-    /// The ESI file has no device with the profile's identity.
-    #[error("the {drive} ESI file has no device with product code 0x{product_code:08X}")]
-    NoDevice {
-        /// Drive name.
-        drive: &'static str,
-        /// The product code looked for.
-        product_code: u32,
-    },
-    /// The ESI device cannot be described in the SII.
+    /// No emulated drive has this key.
+    #[error("ecdrive has no emulation of {0:?}")]
+    Unknown(String),
+    /// The drive's ESI file cannot be read or described in the SII.
     #[error(transparent)]
-    Sii(#[from] crate::sim::sii::FromEsiError),
+    Esi(#[from] EsiModelError),
 }
 
-/// The SII description of the drive of `profile`, built from its ESI file, with serial number
-/// `serial`.
-pub fn description(
-    profile: &DriveProfile,
-    serial: u32,
-) -> Result<DeviceDescription, DescriptionError> {
-    let file = profile
-        .esi_file()
-        .ok_or(DescriptionError::NoEsi(profile.name))?
-        .map_err(|e| DescriptionError::Esi {
-            drive: profile.name,
-            error: e.to_string(),
-        })?;
-    let device = file
-        .device(profile.identity.product_code, Some(profile.revision))
-        .ok_or(DescriptionError::NoDevice {
-            drive: profile.name,
-            product_code: profile.identity.product_code,
-        })?;
-    Ok(crate::sim::sii::from_esi(file.vendor.id, device, serial)?)
+/// The SII description of the emulated drive `key`, built from its ESI file, with serial
+/// number `serial`.
+pub fn description(key: &str, serial: u32) -> Result<DeviceDescription, DescriptionError> {
+    let spec = spec_for(key).ok_or_else(|| DescriptionError::Unknown(key.to_string()))?;
+    Ok(spec.model()?.description(serial)?)
 }

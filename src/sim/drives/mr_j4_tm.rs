@@ -1,5 +1,6 @@
-//! The emulated MR-J4-TM: the emulator's model of the drive on top of
-//! [`crate::drives::mr_j4_tm::PROFILE`].
+//! The emulated MR-J4-TM: its ESI file (`esi/Mitsubishi_MR-J4-TM.xml`: identity, dictionary,
+//! CoE details, synchronisation modes and cycle times, SII) plus the emulator's model of the
+//! drive, written from the manual independently of the master's profile.
 //!
 //! What it does, with the manual sections (SH(NA)030208ENG):
 //! - the object dictionary of the profile, with the drive's write rules: SDO downloads to an
@@ -27,13 +28,58 @@
 //! The emulator's own choices are in the section "Values that are ours" below.
 
 use super::spec::{
-    AlarmDef, CommandCheck, Condition, DriveSpec, EmcyData, ErrorReporting, FollowingErrorSpec,
-    LossDetection, LossLimit, ModeGroup, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData,
-    PowerOnValue, Quantity, Scaling, StatusBit, TorqueLimits, TorqueSlopeUnit, WriteRule,
+    AlarmDef, CommandCheck, Condition, CycleCounterSpec, CycleSource, DriveSpec, EmcyData,
+    ErrorReporting, FollowingErrorSpec, LossDetection, LossLimit, ModeGroup, ModeRules, Monitor,
+    MotorSpec, PowerOff, PowerOnData, PowerOnValue, Quantity, Scaling, StateMachineSpec, StatusBit,
+    SyncObjects, TorqueLimits, TorqueSlopeUnit, WriteRule,
 };
-use crate::drives::mr_j4_tm::{COUNTS_PER_REV, CYCLE_TIMES_NS, PROFILE};
+use crate::cia402::QuickStopOption;
 use crate::ec::AlStatusCode;
 use crate::od::{ObjectAddress, SdoAbortCode};
+use crate::pdo::{DirectionLimits, PdoLimits, PdoRange};
+use std::sync::OnceLock;
+
+/// Position units per motor revolution in the cyclic modes: encoder pulses of the MR-J4 rotary
+/// motors, 22 bits (§5.4.3; 0x608F:01 reports the resolution).
+pub const PULSES_PER_REV: f64 = 4_194_304.0;
+
+/// 0x1C32:02 accepts these cycles only, ns (§1.3, §7.3.3(4)).
+const CYCLES: [u64; 4] = [250_000, 500_000, 1_000_000, 2_000_000];
+
+/// The state machine (§5.1, §5.2): Switch on (0x0007) or Enable operation (0x000F) from Switch
+/// on disabled, and Enable operation from Ready to switch on, jump straight there; 0x605A
+/// has the one code 2 (range 2–2, §7.3.8); transition 16 "not supported" (§5.1 table);
+/// switching to or from a position mode needs zero speed (§5.4.2), the point table (−101) and
+/// indexer (−103) modes position the axis.
+pub const STATE_MACHINE: StateMachineSpec = StateMachineSpec {
+    state_skipping: true,
+    transition_16: false,
+    quick_stop_options: &[QuickStopOption::QUICK_STOP_RAMP],
+    default_quick_stop_option: QuickStopOption::QUICK_STOP_RAMP,
+    position_mode_switch_needs_zero_speed: true,
+    vendor_position_modes: &[-101, -103],
+    remote_gates_controlword: false,
+};
+
+/// PDO rules (§1.3 "RxPDO: 1 channel, TxPDO: 1 channel", §3.4, §7.3.2): mapping tables
+/// 0x1600–0x1603 and 0x1A00–0x1A03 of up to 32 entries, at most 64 bytes per direction, one
+/// PDO assigned per SyncManager.
+pub const PDO_LIMITS: PdoLimits = PdoLimits {
+    drive: "MR-J4-TM",
+    rx: DirectionLimits {
+        pdos: &[PdoRange::new(0x1600, 0x1603, 32)],
+        max_assigned: 1,
+        max_entries: 32,
+        max_bytes: 64,
+    },
+    tx: DirectionLimits {
+        pdos: &[PdoRange::new(0x1A00, 0x1A03, 32)],
+        max_assigned: 1,
+        max_entries: 32,
+        max_bytes: 64,
+    },
+    assignment_writable: true,
+};
 
 const fn a(index: u16, sub: u8) -> ObjectAddress {
     ObjectAddress::new(index, sub)
@@ -51,7 +97,7 @@ const fn alarm(id: &'static str, text: &'static str, number: u16, detail: u16) -
 }
 
 /// The alarms the emulated MR-J4-TM raises. Names from the manual, except AL.35 and AL.52
-/// (\[REC\], see [`crate::drives::mr_j4_tm::REC_ALARMS`]).
+/// (\[REC\]: from the MELSERVO-J4 alarm numbering; this manual does not list them).
 pub const ALARMS: &[AlarmDef] = &[
     alarm("AL.10", "Undervoltage", 0x10, 1),
     AlarmDef {
@@ -67,13 +113,6 @@ pub const ALARMS: &[AlarmDef] = &[
     alarm("AL.69", "Command error", 0x69, 1),
     alarm("AL.86.1", "Network communication error 1", 0x86, 1),
     alarm("AL.86.2", "Network communication error 2", 0x86, 2),
-];
-
-static CYCLES: [u64; 4] = [
-    CYCLE_TIMES_NS[0] as u64,
-    CYCLE_TIMES_NS[1] as u64,
-    CYCLE_TIMES_NS[2] as u64,
-    CYCLE_TIMES_NS[3] as u64,
 ];
 
 /// 0x6060 values of 0x6502 (§7.3.8(6)): 0, pp, pv, tq, hm, csp, csv, cst, jg, pt, idx (the
@@ -150,7 +189,24 @@ pub const WRITE_RULES: &[WriteRule] = &[
 
 /// The emulated MR-J4-TM.
 pub static SPEC: DriveSpec = DriveSpec {
-    profile: &PROFILE,
+    key: "mr-j4-tm",
+    name: "MR-J4-TM",
+    esi: include_str!("../../../esi/Mitsubishi_MR-J4-TM.xml"),
+    product_code: 0x0000_0201,
+    model: OnceLock::new(),
+    state_machine: STATE_MACHINE,
+    pdo_limits: PDO_LIMITS,
+    // §7.3.3(4): 0x1C32:01 0 = free run, 2 = DC SYNC0; 0x1C32:02 the cycle in ns.
+    sync: SyncObjects {
+        sync_type: Some(a(0x1C32, 1)),
+        cycle: Some(CycleSource::Nanoseconds(a(0x1C32, 2))),
+    },
+    // §6.2, §7.3.7(22), (23): 0x2D23 advanced by 1 every cycle, else [AL. 86.2]; 0x2D24 echoes
+    // it + 1.
+    cycle_counter: Some(CycleCounterSpec {
+        output: a(0x2D23, 0),
+        echo: Some(a(0x2D24, 0)),
+    }),
     alarms: ALARMS,
     reporting: ErrorReporting {
         current_alarm: Some(a(0x2A41, 0)),
@@ -164,7 +220,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     power_on: REC_POWER_ON,
     motor: REC_MOTOR,
     scaling: Scaling::Fixed {
-        position_per_rev: COUNTS_PER_REV,
+        position_per_rev: PULSES_PER_REV,
         velocity_per_rev_s: 6000.0,
     },
     loss: LossDetection {

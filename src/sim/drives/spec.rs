@@ -1,13 +1,102 @@
-//! What an emulated drive is, as data: the profile it emulates plus the emulator's own model of
-//! the drive's behaviour (alarms, loss-of-data detection, motor, write rules, monitors).
+//! What an emulated drive is, as data: its ESI file (identity, dictionary, CoE details,
+//! synchronisation modes, SII) plus the emulator's own model of the drive's behaviour (state
+//! machine, PDO rules, write rules, alarms, loss-of-data detection, motor, monitors).
 //!
 //! The engine ([`super::EmulatedDrive`]) reads a [`DriveSpec`] and never asks which vendor it
-//! emulates. Everything the drive's manual states lives in the [`DriveProfile`]; what the
-//! emulator adds is in the spec, and each drive's spec file keeps its \[REC\] values in one
-//! labelled section.
+//! emulates. Nothing here comes from the master's drive profiles: the emulation is a model of
+//! the drive as its manual describes it, written separately, so that a wrong value on either
+//! side shows up as a disagreement in the tests (`tests/manual_facts/` checks both against the
+//! manuals). Each drive's spec file keeps its \[REC\] values in one labelled section.
 
-use crate::drives::DriveProfile;
-use crate::od::{ObjectAddress, SdoAbortCode};
+use super::esi_model::{EsiModel, EsiModelError};
+use crate::cia402::device::DeviceConfig;
+use crate::cia402::{OperationMode, QuickStopOption};
+use crate::od::{ObjectAddress, ObjectDesc, SdoAbortCode};
+use crate::pdo::PdoLimits;
+use std::sync::OnceLock;
+
+/// The CiA 402 state machine as the drive implements it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StateMachineSpec {
+    /// The direct jumps Switch on disabled → Switched on / Operation enabled and Ready to
+    /// switch on → Operation enabled are accepted.
+    pub state_skipping: bool,
+    /// Transition 16 (Quick stop active → Operation enabled) exists.
+    pub transition_16: bool,
+    /// The quick-stop option codes 0x605A accepts.
+    pub quick_stop_options: &'static [QuickStopOption],
+    /// 0x605A at power-on.
+    pub default_quick_stop_option: QuickStopOption,
+    /// Switching 0x6060 to or from a position mode needs zero speed; otherwise the request is
+    /// ignored.
+    pub position_mode_switch_needs_zero_speed: bool,
+    /// Vendor modes (negative 0x6060 values) that count as position modes for that rule.
+    pub vendor_position_modes: &'static [i8],
+    /// While statusword bit 9 (remote) is 0 only quick stop, fault reset and halt act.
+    pub remote_gates_controlword: bool,
+}
+
+impl StateMachineSpec {
+    /// The quick-stop option with 0x605A value `code`, if the drive accepts it.
+    pub fn quick_stop_option(&self, code: i16) -> Option<QuickStopOption> {
+        self.quick_stop_options
+            .iter()
+            .copied()
+            .find(|o| o.code == code)
+    }
+
+    /// Whether `mode` is a position mode on this drive.
+    pub fn is_position_mode(&self, mode: OperationMode) -> bool {
+        match mode {
+            OperationMode::Vendor(v) => self.vendor_position_modes.contains(&v),
+            m => m.is_position_mode(),
+        }
+    }
+
+    /// The device model's configuration with quick-stop option `quick_stop` in effect.
+    pub const fn device_config(&self, quick_stop: QuickStopOption) -> DeviceConfig {
+        DeviceConfig {
+            state_skipping: self.state_skipping,
+            transition_16: self.transition_16,
+            quick_stop,
+            remote_gates_controlword: self.remote_gates_controlword,
+            init_cycles: 0,
+        }
+    }
+}
+
+/// How the drive learns its cycle over CoE.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CycleSource {
+    /// The cycle in ns is written into this object (0x1C32:02).
+    Nanoseconds(ObjectAddress),
+    /// 0x60C2 interpolation time period, `:01 × 10^(:02)` s; with `vendor = Some((index,
+    /// unit_ns))` the drive reads `:01` in `unit_ns` while `:02` holds `index`.
+    Interpolation {
+        /// The drive's own reading of one index.
+        vendor: Option<(i8, u32)>,
+    },
+}
+
+/// The synchronisation objects of the drive. Which modes it offers (free run, DC SYNC0) and
+/// the cycle times each allows come from its ESI file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SyncObjects {
+    /// Where the master writes the synchronisation type (0x1C32:01: 0 free run, 2 DC SYNC0);
+    /// without it the drive runs DC whenever SYNC0 is active.
+    pub sync_type: Option<ObjectAddress>,
+    /// How the drive learns its cycle, if at all.
+    pub cycle: Option<CycleSource>,
+}
+
+/// A counter the master advances by one every cycle, and the drive's echo of it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CycleCounterSpec {
+    /// The master's counter (RxPDO).
+    pub output: ObjectAddress,
+    /// The drive's echo (TxPDO), `output + 1`, if any.
+    pub echo: Option<ObjectAddress>,
+}
 
 /// One alarm (fault) the emulated drive can raise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -327,11 +416,28 @@ pub struct ModeRules {
     pub initial: i8,
 }
 
-/// The emulated drive: its profile and the emulator's model of it.
+/// The emulated drive: its ESI file and the emulator's model of it.
 #[derive(Debug)]
 pub struct DriveSpec {
-    /// The profile (identity, dictionary, PDO rules, sync, caps, units).
-    pub profile: &'static DriveProfile,
+    /// The `--device` name of `ecdrive sim` (`"mr-j4-tm"`).
+    pub key: &'static str,
+    /// The drive's name in messages (`"MR-J4-TM"`).
+    pub name: &'static str,
+    /// The drive's ESI file (XML text): identity, dictionary, CoE details, synchronisation
+    /// modes and cycle times, SII.
+    pub esi: &'static str,
+    /// The product code of the device the file describes (a file may hold several).
+    pub product_code: u32,
+    /// The ESI model, built on first use ([`DriveSpec::model`]).
+    pub(super) model: OnceLock<Result<EsiModel, EsiModelError>>,
+    /// The CiA 402 state machine.
+    pub state_machine: StateMachineSpec,
+    /// PDO rules enforced on the master's mapping writes and at PRE-OP → SAFE-OP.
+    pub pdo_limits: PdoLimits,
+    /// Synchronisation objects.
+    pub sync: SyncObjects,
+    /// A counter to advance every cycle when mapped, checked with [`DriveSpec::counter_alarm`].
+    pub cycle_counter: Option<CycleCounterSpec>,
     /// The alarms the emulator can raise.
     pub alarms: &'static [AlarmDef],
     /// How alarms are reported.
@@ -346,8 +452,8 @@ pub struct DriveSpec {
     pub scaling: Scaling,
     /// Loss of cyclic data in DC mode.
     pub loss: LossDetection,
-    /// The alarm when 0x2D23-style cycle counter updates are wrong (with the profile's
-    /// [`DriveProfile::cycle_counter`]); checked in DC mode only.
+    /// The alarm when 0x2D23-style cycle counter updates are wrong (with
+    /// [`DriveSpec::cycle_counter`]); checked in DC mode only.
     pub counter_alarm: Option<&'static str>,
     /// The alarm when OP is left (by the master or the SM watchdog) while the motor is
     /// energised.
@@ -386,6 +492,19 @@ pub struct DriveSpec {
 }
 
 impl DriveSpec {
+    /// What the drive takes from its ESI file (parsed once per process).
+    pub fn model(&self) -> Result<&EsiModel, EsiModelError> {
+        self.model
+            .get_or_init(|| EsiModel::build(self.name, self.esi, self.product_code))
+            .as_ref()
+            .map_err(Clone::clone)
+    }
+
+    /// The object dictionary (from the ESI file); empty if the file cannot be read.
+    pub fn dictionary(&self) -> &'static [ObjectDesc] {
+        self.model().map(|m| m.dictionary).unwrap_or(&[])
+    }
+
     /// The alarm with this id.
     pub fn alarm(&self, id: &str) -> Option<&'static AlarmDef> {
         self.alarms.iter().find(|a| a.id.eq_ignore_ascii_case(id))
@@ -413,10 +532,10 @@ impl DriveSpec {
         out.extend(self.monitors.iter().map(|m| m.address));
         out.extend(self.status_bits.iter().map(|b| b.address));
         out.extend(self.power_on.iter().map(|p| p.address));
-        if let Some(c) = self.profile.cycle_counter {
+        if let Some(c) = self.cycle_counter {
             out.extend(c.echo);
         }
-        let od = self.profile.od();
+        let od = crate::od::Dictionary::new(self.dictionary());
         out.retain(|a| od.entry(*a).is_some());
         out.sort_unstable_by_key(|a| (a.index, a.sub));
         out.dedup();
