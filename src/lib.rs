@@ -19,11 +19,13 @@
 //! | [`master`] | the ethercrab integration: start-up, PDO and DC configuration, the cyclic loop |
 //! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
 //! | [`harness`] | the cycle-jitter harness behind `ecdrive jitter`: ecdrive's cycle against a bare sleep loop and plain ethercrab |
-//! | [`canopen`] | the same CiA 402 layer over CANopen |
+//! | [`can`] | CANopen (CiA 301) wire vocabulary and protocols shared by master and emulated nodes: frames, NMT, SDO, EMCY, transports, the CANopen drive-profile type |
+//! | [`canopen`] | the CANopen master: the same CiA 402 layer over CANopen |
 //! | [`config`] | the `ecdrive run` configuration file (TOML) → master configuration |
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
+pub mod can;
 pub mod canopen;
 pub mod cia402;
 pub mod config;

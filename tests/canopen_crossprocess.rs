@@ -6,7 +6,6 @@
 //! Timeouts are generous failure guards, not timing assertions.
 
 use ecdrive::canopen::demo;
-use ecdrive::canopen::emu::{self, EmulatedNode};
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
 use ecdrive::canopen::nmt::NmtState;
 use ecdrive::canopen::tools;
@@ -14,6 +13,7 @@ use ecdrive::canopen::unix_bus::{UnixBusHub, UnixBusPort};
 use ecdrive::cia402::SetPoint;
 use ecdrive::drives::blv_r;
 use ecdrive::od::{ObjectAddress, Value};
+use ecdrive::sim::canopen::{self as emu, EmulatedNode};
 use std::path::Path;
 use std::process::Command;
 use std::time::{Duration, Instant};

@@ -7,7 +7,6 @@ mod canopen_util;
 
 use canopen_util::{T, bus, events, node_int, setup};
 use ecdrive::canopen::demo;
-use ecdrive::canopen::emu::{EmulatedNode, SimBus};
 use ecdrive::canopen::master::{Master, MasterEvent};
 use ecdrive::canopen::nmt::NmtState;
 use ecdrive::canopen::profile::CanDriveProfile;
@@ -15,6 +14,7 @@ use ecdrive::canopen::tools;
 use ecdrive::cia402::{OperationMode, SetPoint, State};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::od::ObjectAddress;
+use ecdrive::sim::canopen::{EmulatedNode, SimBus};
 
 struct Case {
     profile: &'static CanDriveProfile,

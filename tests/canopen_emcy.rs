@@ -5,10 +5,10 @@ mod canopen_util;
 
 use canopen_util::{T, bus, events, node_int, ready};
 use ecdrive::canopen::emcy::Emergency;
-use ecdrive::canopen::emu::SimBus;
 use ecdrive::canopen::master::{EmcyRecord, Master, MasterEvent};
 use ecdrive::cia402::{ErrorSource, Event, Phase, State, StatusWord};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
+use ecdrive::sim::canopen::SimBus;
 
 fn emcys(m: &mut Master<SimBus>) -> Vec<EmcyRecord> {
     events(m)

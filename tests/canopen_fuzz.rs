@@ -3,7 +3,6 @@
 //! SDO requests). After garbage a node still boots and answers SDO.
 
 use ecdrive::canopen::emcy::Emergency;
-use ecdrive::canopen::emu::{EmulatedNode, SimBus};
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
 use ecdrive::canopen::nmt::{ErrorControl, NmtCommand};
 use ecdrive::canopen::profile::CanDriveProfile;
@@ -11,6 +10,7 @@ use ecdrive::canopen::sdo::{SdoRequest, SdoResponse, SdoServer};
 use ecdrive::canopen::{CanFrame, CanTransport, TransportError};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::od::ObjectAddress;
+use ecdrive::sim::canopen::{EmulatedNode, SimBus};
 use proptest::prelude::*;
 use std::collections::VecDeque;
 

@@ -8,13 +8,13 @@ mod canopen_util;
 use canopen_util::{T, bus, events, node_int, ready, setup, write};
 use ecdrive::canopen::CanTransport;
 use ecdrive::canopen::demo;
-use ecdrive::canopen::emu::SimBus;
 use ecdrive::canopen::error::CanErrorKind;
 use ecdrive::canopen::master::{Master, MasterEvent, Supervision};
 use ecdrive::canopen::nmt::{NmtCommand, NmtState};
 use ecdrive::cia402::{OperationMode, ProfileVelocity, State};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::od::{ObjectAddress, SdoAbortCode, Value};
+use ecdrive::sim::canopen::SimBus;
 
 fn state(m: &Master<SimBus>, id: u8) -> State {
     m.transport().node(id).unwrap().state()

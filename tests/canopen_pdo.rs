@@ -8,13 +8,13 @@ mod canopen_util;
 use canopen_util::{T, bus, events, node_int, ready, setup};
 use ecdrive::canopen::CanFrame;
 use ecdrive::canopen::CanTransport;
-use ecdrive::canopen::emu::SimBus;
 use ecdrive::canopen::error::CanErrorKind;
 use ecdrive::canopen::master::{Master, MasterConfig, MasterEvent};
 use ecdrive::canopen::pdo_plan::{CanPdo, PdoPlan, PdoPlanError};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::od::{ObjectAddress, SdoAbortCode};
 use ecdrive::pdo::{MappingError, PdoEntry};
+use ecdrive::sim::canopen::SimBus;
 
 fn a(i: u16, s: u8) -> ObjectAddress {
     ObjectAddress::new(i, s)

@@ -693,7 +693,7 @@ struct CanPort {
 }
 
 impl CanPort {
-    fn master(&self) -> Master<ecdrive::canopen::emu::SimBus> {
+    fn master(&self) -> Master<ecdrive::sim::canopen::SimBus> {
         Master::new(cantools::demo_bus(), MasterConfig::default())
     }
 }

@@ -185,13 +185,15 @@ fn a_cable_pull_ends_the_run_as_bus_lost() {
     );
 }
 
-/// (e) Four frames lost in a row and no drive fault: a controlled stop reported as a bus
-/// problem (exit 3), not a drive fault; with `[supervision] lost_before_stop` raised the same
-/// loss only holds the set-points and the run completes.
+/// (e) Frames lost in a row (the line down for 20 ms: far more than the 3 cycles the default
+/// allows, far less than the 200 ms after which the segment counts as gone, whatever the host's
+/// timing) and no drive fault: a controlled stop reported as a bus problem (exit 3), not a
+/// drive fault; with `[supervision] lost_before_stop` raised the same loss only holds the
+/// set-points and the run completes.
 #[test]
 fn lost_frames_are_a_bus_problem_and_the_thresholds_are_the_files() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let pull = ["--disconnect-at", "2500ms", "--reconnect-at", "2504ms"];
+    let pull = ["--disconnect-at", "2500ms", "--reconnect-at", "2520ms"];
     let dir = Dir::new("lost");
     let f = dir.file("jog.toml", &jog(4.0, ""));
     {
@@ -228,7 +230,9 @@ fn lost_frames_are_a_bus_problem_and_the_thresholds_are_the_files() {
     };
     let j = sim.run_json(&tolerant, &[]);
     assert_eq!(j["outcome"], "completed", "{j:#}");
-    assert!(j["cycle"]["lost"].as_u64().unwrap() >= 3, "{j:#}");
+    // How many cycles fall into the 20 ms without a line depends on the host's timing; some
+    // did, and the run went on.
+    assert!(j["cycle"]["lost"].as_u64().unwrap() >= 1, "{j:#}");
 }
 
 /// `ecdrive sim` survives its interface going down and coming back, as a real line keeps its

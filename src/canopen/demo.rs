@@ -9,8 +9,41 @@
 //!
 //! The step functions ([`home`], [`move_pp`], [`run_pv`], [`run_tq`], [`run_ip`]) are public so
 //! other front ends can reuse them.
+//!
+//! # Running a drive
+//!
+//! ```
+//! use ecdrive::sim::canopen::{EmulatedNode, SimBus};
+//! use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
+//! use ecdrive::cia402::{ProfilePosition, SetPoint};
+//! use ecdrive::drives::blv_r;
+//!
+//! let mut bus = SimBus::new();
+//! bus.add_node(EmulatedNode::new(&blv_r::PROFILE, 3).unwrap());
+//! let mut m = Master::new(bus, MasterConfig::default());
+//! let mut setup = DriveSetup::new(&blv_r::PROFILE);
+//! setup.settings = ecdrive::canopen::demo::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
+//! m.configure_drive(3, setup).unwrap(); // identity, supervision, PDOs, mode
+//! m.start(3).unwrap(); // NMT start
+//! m.enable(3, 1_000_000).unwrap(); // Axis → Operation enabled
+//! let mut pp = ProfilePosition::default();
+//! pp.push(SetPoint::absolute(36_000)).unwrap();
+//! loop {
+//!     let mut done = false;
+//!     m.cycle_step(|d| {
+//!         let sw = d.statusword();
+//!         let st = pp.step(d.axis_mut(), sw);
+//!         done = st.target_reached && st.acknowledged == 1;
+//!     })
+//!     .unwrap();
+//!     if done {
+//!         break;
+//!     }
+//! }
+//! assert_eq!(m.transport().node(3).unwrap().position(), 36_000);
+//! m.shutdown_node(3, 1_000_000).unwrap(); // disable, then NMT stop
+//! ```
 
-use super::emu::SimBus;
 use super::error::{CanError, CanErrorKind, NodeRef};
 use super::master::{DriveSetup, Master, MasterConfig, MasterEvent};
 use super::profile::CanDriveProfile;
@@ -22,6 +55,7 @@ use crate::cia402::{
     ProfileVelocity, SetPoint,
 };
 use crate::od::{ObjectAddress, Value};
+use crate::sim::canopen::SimBus;
 use core::fmt;
 
 /// **\[REC\]** Demo motion: profile velocity 10 rev/s, ramps 100 rev/s², homing 5 / 0.5 rev/s.

@@ -3,8 +3,8 @@
 //!
 //! Blocking operations (SDO transfers, boot-up waits, configuration) keep receiving while they
 //! wait: every frame that arrives meanwhile — heartbeats, EMCYs, TPDOs — is handled, so nothing
-//! is lost. Time comes from the transport ([`CanTransport::now_us`]), which makes the in-process
-//! [`SimBus`](super::emu::SimBus) run on simulated time.
+//! is lost. Time comes from the transport ([`CanTransport::now_us`]), which lets the software slave's
+//! in-process simulated bus run on simulated time.
 //!
 //! # Safety rules (behaviour, tested)
 //!
@@ -388,7 +388,7 @@ impl<T: CanTransport> Master<T> {
         &self.t
     }
 
-    /// The transport, mutably (e.g. the [`SimBus`](super::emu::SimBus)'s nodes in tests).
+    /// The transport, mutably (e.g. the nodes of the software slave's simulated bus in tests).
     pub fn transport_mut(&mut self) -> &mut T {
         &mut self.t
     }

@@ -10,16 +10,12 @@
 //!
 //! | module | what |
 //! |---|---|
-//! | [`frame`] | classic CAN frames, the pre-defined connection set, node-IDs |
-//! | [`nmt`], [`sdo`], [`emcy`] | the protocols as typed views and pure state machines (SDO client and server) |
-//! | [`transport`] | [`CanTransport`] (send, receive with timeout, time) and the virtual bus [`Hub`] / [`VirtualBus`] |
+//! | [`frame`], [`nmt`], [`sdo`], [`emcy`], [`transport`], [`profile`] | re-exported from [`crate::can`]: the wire vocabulary and protocols the master shares with the emulated nodes |
 //! | [`can_socket`] | SocketCAN for real adapters (the `socketcan` crate) |
 //! | [`unix_bus`] | the virtual bus across processes: a hub on a Unix datagram socket |
-//! | [`profile`] | the drive-profile type and `const` dictionary builders |
 //! | [`pdo_plan`] | a drive's PDO configuration, checked against its limits, and the SDO sequence that installs it |
 //! | [`master`] | the master: NMT (with the enabled-drive rule), SDO client (paced), SYNC producer, heartbeat consumer, node guarding, EMCY consumer, drive configuration, the cycle |
 //! | [`drive`] | a configured drive: process images, fields, and its [`Axis`](crate::cia402::Axis) |
-//! | [`emu`] | emulated nodes of the three drives and the deterministic simulated bus [`emu::SimBus`] |
 //! | [`tools`] | what `ecdrive slaves/upload/download --can` need |
 //! | [`demo`] | `ecdrive demo --canopen` |
 //! | [`error`] | errors naming node, drive, object and reason |
@@ -45,53 +41,19 @@
 //!
 //! # Running a drive
 //!
-//! ```
-//! use ecdrive::canopen::emu::{EmulatedNode, SimBus};
-//! use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
-//! use ecdrive::cia402::{ProfilePosition, SetPoint};
-//! use ecdrive::drives::blv_r;
-//!
-//! let mut bus = SimBus::new();
-//! bus.add_node(EmulatedNode::new(&blv_r::PROFILE, 3).unwrap());
-//! let mut m = Master::new(bus, MasterConfig::default());
-//! let mut setup = DriveSetup::new(&blv_r::PROFILE);
-//! setup.settings = ecdrive::canopen::demo::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
-//! m.configure_drive(3, setup).unwrap(); // identity, supervision, PDOs, mode
-//! m.start(3).unwrap(); // NMT start
-//! m.enable(3, 1_000_000).unwrap(); // Axis → Operation enabled
-//! let mut pp = ProfilePosition::default();
-//! pp.push(SetPoint::absolute(36_000)).unwrap();
-//! loop {
-//!     let mut done = false;
-//!     m.cycle_step(|d| {
-//!         let sw = d.statusword();
-//!         let st = pp.step(d.axis_mut(), sw);
-//!         done = st.target_reached && st.acknowledged == 1;
-//!     })
-//!     .unwrap();
-//!     if done {
-//!         break;
-//!     }
-//! }
-//! assert_eq!(m.transport().node(3).unwrap().position(), 36_000);
-//! m.shutdown_node(3, 1_000_000).unwrap(); // disable, then NMT stop
-//! ```
+//! The example in [`demo`] runs the BLV-R on the software slave's simulated bus: configure,
+//! start, enable, a pp move, shut down.
 
 pub mod can_socket;
 pub mod demo;
 pub mod drive;
-pub mod emcy;
-pub mod emu;
 pub mod error;
-pub mod frame;
 pub mod master;
-pub mod nmt;
 pub mod pdo_plan;
-pub mod profile;
-pub mod sdo;
 pub mod tools;
-pub mod transport;
 pub mod unix_bus;
+
+pub use crate::can::{emcy, frame, nmt, profile, sdo, transport};
 
 pub use frame::{CanFrame, FrameError, NodeId, Service};
 pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};

@@ -19,7 +19,6 @@
 //! ```
 
 use super::can_socket::SocketCanTransport;
-use super::emu::{EmulatedNode, SimBus};
 use super::error::{CanError, CanErrorKind};
 use super::master::Master;
 use super::nmt::NmtState;
@@ -29,6 +28,7 @@ use super::transport::{CanTransport, TransportError};
 use super::unix_bus::UnixBusPort;
 use crate::drives::{asda_a2, blv_r, lexium_mdrive};
 use crate::od::{DataType, ObjectAddress, SdoAbortCode, Value};
+use crate::sim::canopen::{EmulatedNode, SimBus};
 use core::fmt;
 use core::ops::RangeInclusive;
 use core::str::FromStr;
@@ -505,7 +505,8 @@ pub fn serve(
         nodes: nodes.iter().map(|n| (n.node, n.name.to_string())).collect(),
     };
     started(&report);
-    super::emu::serve(transport.as_mut(), &mut emulated, 250, |_| keep_going()).map_err(io)?;
+    crate::sim::canopen::serve(transport.as_mut(), &mut emulated, 250, |_| keep_going())
+        .map_err(io)?;
     drop(transport);
     drop(hub);
     Ok(report)

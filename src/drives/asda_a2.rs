@@ -22,11 +22,11 @@
 //!
 //! Every value the manual does not give is in the **MANUAL GAP / \[REC\]** section at the end.
 
-use crate::canopen::profile::od::{
+use crate::can::profile::od::{
     I8, I16, I32, RO, RO_T, RW, RW_R, RW_RT, U8, U16, U32, count, e, error_history, i, pdo_comm,
     pdo_map, store_record, u,
 };
-use crate::canopen::profile::{
+use crate::can::profile::{
     AccelUnit, Alarm, Bit3Enable, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat,
     EmulationQuirks, EnableConditions, EnabledNmtReaction, HomingSupport, Identity, ParamSetting,
     PdoDefault, TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,

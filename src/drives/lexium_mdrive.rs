@@ -26,11 +26,11 @@
 //!   times (2034h/2035h) delay Operation enabled. Home and limit inputs must be assigned
 //!   (2002h) before homing.
 
-use crate::canopen::profile::od::{
+use crate::can::profile::od::{
     I8, I16, I32, RO, RO_T, RW, RW_R, STR, U8, U16, U32, count, e, error_history, i, pdo_comm,
     pdo_map, store_record, u,
 };
-use crate::canopen::profile::{
+use crate::can::profile::{
     AccelUnit, Alarm, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat, EmulationQuirks,
     EnableConditions, EnabledNmtReaction, HomingSupport, Identity, PdoDefault, TorqueSlopeUnit,
     TransmissionTypes, Units, VelocityUnit,

@@ -13,7 +13,7 @@
 //! - [`generic`]: plain CiA 402 ([`generic::GENERIC_CIA402`]), for devices ecdrive does not
 //!   know, used only when the user asks for it.
 //!
-//! CANopen drives (their profiles are [`crate::canopen::profile`] values):
+//! CANopen drives (their profiles are [`crate::can::profile`] values):
 //! - [`blv_r`]: Oriental Motor BLV series R type (CANopen).
 //! - [`asda_a2`]: Delta ASDA-A2 (CANopen).
 //! - [`lexium_mdrive`]: Schneider Electric Lexium MDrive (CANopen).

@@ -9,8 +9,8 @@
 use super::setpoint::{Jog, Move, ProfileError, Sample, Sine, TorqueStep, VelocityRamp};
 use serde::{Deserialize, Serialize};
 
-// The configuration file's TOML form of programs is `crate::config` (with file positions in its
-// errors); these types only serialize, for reports.
+// The configuration file (the application's) reads the TOML form of programs, with file
+// positions in its errors; these types only serialize, for reports.
 
 /// The cyclic synchronous modes a program can run in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]

@@ -9,7 +9,10 @@
 //!   in-process, or as a synchronous [`link::FrameLink`](crate::link::FrameLink);
 //! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
 //! - [`devices`]: ready-made test devices (generic CoE servo, EEPROM-only I/O, mailbox echo);
-//! - [`drives`]: the emulated drives (MR-J4-TM, BDHDE), built from their profiles and ESI files;
+//! - [`drives`]: the emulated drives (MR-J4-TM, BDHDE), built from their ESI files and their
+//!   own behaviour tables;
+//! - [`canopen`]: the emulated CANopen drives (BLV-R, ASDA-A2, Lexium MDrive) and the
+//!   deterministic simulated CAN bus [`canopen::SimBus`];
 //! - [`faults`]: fault injection from any thread, without locks or allocation: lost, delayed
 //!   and corrupted frames, a pulled cable, a slave restarting to INIT, clock drift, drive
 //!   alarms, SDO aborts, emergencies in the middle of an SDO transfer;
@@ -34,6 +37,7 @@
 //! assert_eq!((reply.wkc, reply.adp), (3, 3));
 //! ```
 
+pub mod canopen;
 pub mod clock;
 pub mod coe;
 pub mod device;

@@ -3,10 +3,10 @@
 #![allow(dead_code)]
 
 use ecdrive::canopen::demo;
-use ecdrive::canopen::emu::{EmulatedNode, SimBus};
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
 use ecdrive::canopen::profile::CanDriveProfile;
 use ecdrive::od::{ObjectAddress, Value};
+use ecdrive::sim::canopen::{EmulatedNode, SimBus};
 
 /// Simulated-time timeout for one step, µs.
 pub const T: u64 = 20_000_000;

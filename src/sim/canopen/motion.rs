@@ -8,7 +8,7 @@
 //! Every number here that is not from a manual is in [`World`] or the constants below, labelled
 //! \[REC\].
 
-use crate::canopen::profile::{CanDriveProfile, HomingSupport, Units};
+use crate::can::profile::{CanDriveProfile, HomingSupport, Units};
 use crate::cia402::{ControlWord, OperationMode, State, StatusWord};
 
 /// **\[REC\]** Velocity below which the motor counts as stopped, rev/s.

@@ -89,7 +89,7 @@ impl CanFrame {
 
     /// A data frame from a fixed 8-byte buffer of which the first `len` bytes count; `id` and
     /// `len` are clamped to 0x7FF and 8. For builders that already hold valid values.
-    pub(crate) const fn from_parts(id: u16, data: [u8; 8], len: u8) -> Self {
+    pub const fn from_parts(id: u16, data: [u8; 8], len: u8) -> Self {
         let len = if len > 8 { 8 } else { len };
         let mut d = [0u8; 8];
         let mut i = 0;

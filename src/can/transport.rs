@@ -3,9 +3,9 @@
 //! A [`CanTransport`] sends and receives classic CAN frames and tells the time. Time belongs to
 //! the transport so that a simulated bus can run on simulated time: the master never reads a
 //! clock of its own, which makes every SYNC, heartbeat, guarding and SDO-rate rule testable
-//! without sleeping ([`SimBus`](super::emu::SimBus) advances its clock while the master waits).
-//! Real transports ([`SocketCanTransport`](super::can_socket::SocketCanTransport),
-//! [`VirtualPort`], [`UnixBusPort`](super::unix_bus::UnixBusPort)) use `CLOCK_MONOTONIC`.
+//! without sleeping (the software slave's simulated CAN bus advances its clock while the master
+//! waits). Real transports (the CANopen master's SocketCAN and Unix-socket transports, and
+//! [`VirtualPort`]) use `CLOCK_MONOTONIC`.
 //!
 //! The bus model: every frame a port sends reaches every *other* port, in order (a CAN bus has
 //! no addressing, only identifiers). [`Hub`] is that model with one bounded receive queue per

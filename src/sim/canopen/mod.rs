@@ -1,15 +1,15 @@
 //! Emulated CANopen drives on the virtual bus.
 //!
 //! - [`EmulatedNode`]: one drive, generic, with all drive differences taken from its
-//!   [`CanDriveProfile`](super::profile::CanDriveProfile) ([`node`]).
+//!   [`CanDriveProfile`](crate::can::profile::CanDriveProfile) ([`node`]).
 //! - [`motion`]: the drive side of pp, pv, tq, hm, ip and a simple motor.
 //! - [`SimBus`]: the deterministic in-process world: a [`Hub`] with the master's port and one
 //!   port per node, and a **simulated clock** that advances only while the master waits in
 //!   [`CanTransport::recv`]. Tests and the demo run on it without threads and without sleeping.
 //! - [`serve`]: runs nodes in real time on any transport (another thread's [`VirtualPort`], the
-//!   cross-process [`UnixBusPort`](super::unix_bus::UnixBusPort), even SocketCAN).
+//!   cross-process `UnixBusPort` of the CANopen master, even SocketCAN).
 //!
-//! [`VirtualPort`]: super::transport::VirtualPort
+//! [`VirtualPort`]: crate::can::transport::VirtualPort
 
 pub mod motion;
 pub mod node;
@@ -17,8 +17,8 @@ pub mod node;
 pub use motion::World;
 pub use node::{EmuError, EmulatedNode, NodeStats};
 
-use super::frame::CanFrame;
-use super::transport::{CanTransport, Hub, PortId, TransportError};
+use crate::can::frame::CanFrame;
+use crate::can::transport::{CanTransport, Hub, PortId, TransportError};
 
 /// **\[REC\]** Step of the simulated clock: nodes run every 250 µs of simulated time (the BLV-R's
 /// SYNC granularity).

@@ -13,11 +13,11 @@ use super::motion::{
     DEFAULT_SPEED_WINDOW_REV_S, DEFAULT_ZERO_SPEED_REV_S, FALLBACK_ACCEL_REV_S2, Motion, Params,
     STEP_ACCEL_REV_S2, World,
 };
-use crate::canopen::emcy::Emergency;
-use crate::canopen::frame::{CanFrame, cob};
-use crate::canopen::nmt::{ErrorControl, NmtCommand, NmtState};
-use crate::canopen::profile::{Alarm, CanDriveProfile, EnabledNmtReaction, Transmission, od};
-use crate::canopen::sdo::{SdoObjects, SdoServer};
+use crate::can::emcy::Emergency;
+use crate::can::frame::{CanFrame, cob};
+use crate::can::nmt::{ErrorControl, NmtCommand, NmtState};
+use crate::can::profile::{Alarm, CanDriveProfile, EnabledNmtReaction, Transmission, od};
+use crate::can::sdo::{SdoObjects, SdoServer};
 use crate::cia402::device::{Device, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{ControlWord, OperationMode, State, StopRamp};
 use crate::od::{DataType, EntryAccess, ObjectAddress, SdoAbortCode, Value};

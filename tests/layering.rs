@@ -1,0 +1,147 @@
+//! The module layering of ARCHITECTURE.md, checked on the source: each part of the library may
+//! reach only the top-level modules its layer allows (`crate::m`, `ecdrive::m`, or `m` inside a
+//! `crate::{…}` group; doc links count, since they would break when the layers become crates).
+//!
+//! - the core (`ec`, `od`, `pdo`, `cia402`, `esi`, `drives`, `link`, `rt`, `can`) reaches only
+//!   the core;
+//! - the software slave (`sim`) reaches the core except the master's drive profiles
+//!   (`drives`), see also `tests/emulation_independence.rs`;
+//! - the EtherCAT master's core (`master/` without its applications `demo`, `soak`,
+//!   `recovery`, `tools`) and the CANopen master (`canopen/` without `demo` and `tools`)
+//!   reach the core only: never the software slave, the configuration file or the harness;
+//! - applications (the rest) may reach everything.
+
+use std::path::{Path, PathBuf};
+
+const CORE: &[&str] = &[
+    "ec", "od", "pdo", "cia402", "esi", "drives", "link", "rt", "can",
+];
+const ALL: &[&str] = &[
+    "ec", "od", "pdo", "cia402", "esi", "drives", "link", "rt", "can", "sim", "master", "canopen",
+    "config", "harness",
+];
+
+/// What the file at `rel` (relative to `src/`) may reach, or `None` for an application.
+fn allowed(rel: &str) -> Option<Vec<&'static str>> {
+    let top = rel.split('/').next().unwrap_or("");
+    let file = rel.rsplit('/').next().unwrap_or("");
+    let app_master = ["demo.rs", "soak.rs", "recovery.rs"];
+    match top {
+        t if CORE.contains(&t) => Some(CORE.to_vec()),
+        "sim" => Some(
+            CORE.iter()
+                .copied()
+                .filter(|m| *m != "drives")
+                .chain(["sim"])
+                .collect(),
+        ),
+        "master" if rel.starts_with("master/tools/") || app_master.contains(&file) => None,
+        "master" => Some(CORE.iter().copied().chain(["master"]).collect()),
+        "canopen" if ["demo.rs", "tools.rs"].contains(&file) => None,
+        "canopen" => Some(CORE.iter().copied().chain(["canopen"]).collect()),
+        _ => None,
+    }
+}
+
+fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            rust_files(&p, out);
+        } else if p.extension().is_some_and(|x| x == "rs") {
+            out.push(p);
+        }
+    }
+}
+
+/// Every top-level module `text` reaches from the crate root, with its line.
+fn reached(text: &str) -> Vec<(usize, String)> {
+    let mut out = Vec::new();
+    let line_of = |pos: usize| text[..pos].matches('\n').count() + 1;
+    for root in ["crate::", "ecdrive::"] {
+        let mut from = 0;
+        while let Some(i) = text[from..].find(root) {
+            let at = from + i;
+            let prev = text[..at].chars().next_back();
+            from = at + root.len();
+            if prev.is_some_and(|c| c.is_alphanumeric() || c == '_') {
+                continue;
+            }
+            let rest = &text[from..];
+            let ident = |s: &str| -> String {
+                s.chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect()
+            };
+            if let Some(group) = rest.strip_prefix('{') {
+                let end = group.find('}').unwrap_or(group.len());
+                for item in group[..end].split(',') {
+                    out.push((line_of(at), ident(item.trim())));
+                }
+            } else {
+                out.push((line_of(at), ident(rest)));
+            }
+        }
+    }
+    out.retain(|(_, m)| ALL.contains(&m.as_str()));
+    out
+}
+
+#[test]
+fn each_layer_reaches_only_the_layers_below() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    assert!(files.len() > 100, "found only {} files", files.len());
+    let mut found = Vec::new();
+    let mut checked = 0;
+    for f in &files {
+        let rel = f
+            .strip_prefix(&src)
+            .unwrap_or(f)
+            .to_string_lossy()
+            .replace('\\', "/");
+        let Some(ok) = allowed(&rel) else {
+            continue;
+        };
+        checked += 1;
+        let text = std::fs::read_to_string(f).unwrap_or_else(|e| panic!("{rel}: {e}"));
+        for (line, m) in reached(&text) {
+            if !ok.contains(&m.as_str()) {
+                found.push(format!("src/{rel}:{line}: reaches crate::{m}"));
+            }
+        }
+    }
+    assert!(checked > 80, "only {checked} library files checked");
+    assert!(
+        found.is_empty(),
+        "layering violations (see ARCHITECTURE.md):\n{}",
+        found.join("\n")
+    );
+}
+
+/// The check sees each form and judges by layer.
+#[test]
+fn the_check_sees_every_form() {
+    let mods = |t: &str| reached(t).into_iter().map(|(_, m)| m).collect::<Vec<_>>();
+    assert_eq!(mods("use crate::sim::Segment;"), ["sim"]);
+    assert_eq!(
+        mods("use crate::{od::Value, config::Raw};"),
+        ["od", "config"]
+    );
+    assert_eq!(mods("/// [`crate::harness`]"), ["harness"]);
+    assert!(mods("use super::sim; my_crate::sim").is_empty());
+    assert_eq!(allowed("od/value.rs"), Some(CORE.to_vec()));
+    assert!(!allowed("sim/esc/mod.rs").unwrap().contains(&"drives"));
+    assert!(!allowed("master/cycle.rs").unwrap().contains(&"sim"));
+    assert_eq!(allowed("master/tools/od.rs"), None);
+    assert_eq!(allowed("master/demo.rs"), None);
+    assert!(!allowed("canopen/master.rs").unwrap().contains(&"sim"));
+    assert_eq!(allowed("canopen/tools.rs"), None);
+    assert_eq!(allowed("config/mod.rs"), None);
+    assert_eq!(allowed("lib.rs"), None);
+}
