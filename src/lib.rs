@@ -4,7 +4,8 @@
 //! slave that emulates the drives on the wire.
 //!
 //! The layers, from the wire up (data flows one way: wire → slave/master → process image →
-//! cia402 → application):
+//! cia402 → application). The core layers are the crate `ecdrive-core` (re-exported here under
+//! the same names); the rest is this crate:
 //!
 //! | module | what it is |
 //! |---|---|
@@ -25,19 +26,12 @@
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-pub mod can;
+pub use ecdrive_core::{can, cia402, drives, ec, esi, link, od, pdo, rt};
+
 pub mod canopen;
-pub mod cia402;
 pub mod config;
-pub mod drives;
-pub mod ec;
-pub mod esi;
 pub mod harness;
-pub mod link;
 pub mod master;
-pub mod od;
-pub mod pdo;
-pub mod rt;
 pub mod sim;
 
 /// The README's Rust examples, compiled by `cargo test --doc`.

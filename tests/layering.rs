@@ -1,9 +1,13 @@
-//! The module layering of ARCHITECTURE.md, checked on the source: each part of the library may
-//! reach only the top-level modules its layer allows (`crate::m`, `ecdrive::m`, or `m` inside a
-//! `crate::{…}` group; doc links count, since they would break when the layers become crates).
+//! The layering of ARCHITECTURE.md, checked on the source and the manifests.
 //!
-//! - the core (`ec`, `od`, `pdo`, `cia402`, `esi`, `drives`, `link`, `rt`, `can`) reaches only
-//!   the core;
+//! - the core (`ec`, `od`, `pdo`, `cia402`, `esi`, `drives`, `link`, `rt`, `can`) is the crate
+//!   `ecdrive-core`: the compiler keeps it from reaching anything above, and its manifest may
+//!   not gain a dependency on a bus master, an async runtime, the CLI or another ecdrive crate;
+//!
+//! In this crate each part may reach only the top-level modules its layer allows (`crate::m`,
+//! `ecdrive::m`, or `m` inside a `crate::{…}` group; doc links count, since they would break
+//! when the layers become crates):
+//!
 //! - the software slave (`sim`) reaches the core except the master's drive profiles
 //!   (`drives`), see also `tests/emulation_independence.rs`;
 //! - the EtherCAT master's core (`master/` without its applications `demo`, `soak`,
@@ -96,7 +100,7 @@ fn each_layer_reaches_only_the_layers_below() {
     let mut files = Vec::new();
     rust_files(&src, &mut files);
     files.sort();
-    assert!(files.len() > 100, "found only {} files", files.len());
+    assert!(files.len() > 60, "found only {} files", files.len());
     let mut found = Vec::new();
     let mut checked = 0;
     for f in &files {
@@ -116,7 +120,7 @@ fn each_layer_reaches_only_the_layers_below() {
             }
         }
     }
-    assert!(checked > 80, "only {checked} library files checked");
+    assert!(checked > 40, "only {checked} library files checked");
     assert!(
         found.is_empty(),
         "layering violations (see ARCHITECTURE.md):\n{}",
@@ -144,4 +148,50 @@ fn the_check_sees_every_form() {
     assert_eq!(allowed("canopen/tools.rs"), None);
     assert_eq!(allowed("config/mod.rs"), None);
     assert_eq!(allowed("lib.rs"), None);
+}
+
+/// The dependencies (normal ones) of the manifest at `path`.
+fn dependencies(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let doc: toml::Table = text
+        .parse()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    doc.get("dependencies")
+        .and_then(|d| d.as_table())
+        .map(|t| t.keys().cloned().collect())
+        .unwrap_or_default()
+}
+
+/// Crates the core may never depend on.
+const NOT_IN_CORE: &[&str] = &[
+    "ethercrab",
+    "tokio",
+    "async-io",
+    "clap",
+    "indicatif",
+    "socketcan",
+    "toml",
+    "toml_edit",
+    "serde_json",
+    "rtrb",
+    "triple_buffer",
+    "crc",
+];
+
+#[test]
+fn the_core_crate_depends_on_no_master_runtime_or_application_crate() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let core = dependencies(&root.join("crates/ecdrive-core/Cargo.toml"));
+    assert!(core.iter().any(|d| d == "roxmltree"), "{core:?}");
+    let bad: Vec<&String> = core
+        .iter()
+        .filter(|d| NOT_IN_CORE.contains(&d.as_str()) || d.starts_with("ecdrive"))
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "ecdrive-core may not depend on {bad:?} (ARCHITECTURE.md: the core has no bus master, \
+         no async runtime, no application code)"
+    );
+    // The application package depends on the core, not the other way round.
+    assert!(dependencies(&root.join("Cargo.toml")).contains(&"ecdrive-core".to_string()));
 }

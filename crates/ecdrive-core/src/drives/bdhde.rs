@@ -475,7 +475,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
     // MANUAL GAP: complete access is not described; the abort list names 0x06010004
     // "cannot be accessed via complete access". Off, as in the ESI file.
     complete_access: false,
-    esi: include_str!("../../esi/Servotronix_BDHDE.xml"),
+    esi: include_str!("../../../../esi/Servotronix_BDHDE.xml"),
     zero_speed_flag: None,
     ratings: RATINGS,
 };

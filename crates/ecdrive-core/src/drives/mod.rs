@@ -19,7 +19,7 @@
 //! - [`lexium_mdrive`]: Schneider Electric Lexium MDrive (CANopen).
 //!
 //! ```
-//! use ecdrive::drives;
+//! use ecdrive_core::drives;
 //!
 //! let p = drives::by_identity(0x0000_0A1E, 0x0000_0201).unwrap();
 //! assert_eq!(p.key, "mr-j4-tm");

@@ -7,8 +7,8 @@
 //! checks drive profiles against them.
 //!
 //! ```
-//! use ecdrive::esi::EsiFile;
-//! use ecdrive::pdo::Direction;
+//! use ecdrive_core::esi::EsiFile;
+//! use ecdrive_core::pdo::Direction;
 //!
 //! let xml = r##"<EtherCATInfo>
 //!   <Vendor><Id>#x00000A1E</Id><Name>Example</Name></Vendor>

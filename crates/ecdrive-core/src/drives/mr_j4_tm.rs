@@ -502,7 +502,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
     units: UNITS,
     // §4.1: "Complete Access: not supported".
     complete_access: false,
-    esi: include_str!("../../esi/Mitsubishi_MR-J4-TM.xml"),
+    esi: include_str!("../../../../esi/Mitsubishi_MR-J4-TM.xml"),
     zero_speed_flag: Some(StatusFlag {
         address: ObjectAddress::new(0x2D12, 0),
         bit: 3,

@@ -646,7 +646,7 @@ pub struct DatagramParts<'a> {
 /// Writes an EtherCAT frame datagram by datagram into a caller-provided buffer.
 ///
 /// ```
-/// use ecdrive::ec::{Command, frame::{FrameBuilder, MacAddress}};
+/// use ecdrive_core::ec::{Command, frame::{FrameBuilder, MacAddress}};
 /// let mut buf = [0u8; 64];
 /// let mut b = FrameBuilder::new(&mut buf, MacAddress([0x10; 6])).unwrap();
 /// b.push(Command::Brd, 0, 0x0000_0000, &[0]).unwrap();

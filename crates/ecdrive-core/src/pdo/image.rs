@@ -301,7 +301,7 @@ impl fmt::Display for Field {
 /// layout's size, then read and written by [`Field`] handle.
 ///
 /// ```
-/// use ecdrive::pdo::{Field, ImageView};
+/// use ecdrive_core::pdo::{Field, ImageView};
 /// let statusword = Field::unsigned(8, 16).unwrap();
 /// let mut view = ImageView::new_checked([0u8; 4], 3).unwrap();
 /// view.write(statusword, 0x0237u16).unwrap();

@@ -2,7 +2,7 @@
 //! root check for tests that need raw sockets.
 //!
 //! ```no_run
-//! use ecdrive::link::netns::{VethPair, require_root};
+//! use ecdrive_core::link::netns::{VethPair, require_root};
 //! if !require_root("my_veth_test") {
 //!     return; // not root, not CI: a loud SKIPPED line was printed
 //! }
