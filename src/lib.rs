@@ -27,12 +27,12 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 pub use ecdrive_core::{can, cia402, drives, ec, esi, link, od, pdo, rt};
+pub use ecdrive_sim as sim;
 
 pub mod canopen;
 pub mod config;
 pub mod harness;
 pub mod master;
-pub mod sim;
 
 /// The README's Rust examples, compiled by `cargo test --doc`.
 #[cfg(doctest)]

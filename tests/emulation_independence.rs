@@ -1,7 +1,7 @@
-//! The software slave is a model of the drives, not of the master: nothing under `src/sim/`
-//! may name the master's drive profiles (`crate::drives`), the master (`crate::master`), the
-//! CANopen master or its profiles (`crate::canopen`), the application (`crate::config`,
-//! `crate::harness`). Shared *types* (object dictionary, CiA 402 bits, PDO and ESI models)
+//! The software slave is a model of the drives, not of the master: nothing in the crate
+//! `ecdrive-sim` may name the master's drive profiles (`ecdrive_core::drives`, which the crate
+//! also leaves out of its core re-exports, so `crate::drives` does not compile), the master,
+//! the CANopen master or the application (`master`, `canopen`, `config`, `harness`). Shared *types* (object dictionary, CiA 402 bits, PDO and ESI models)
 //! live elsewhere and are fine; shared *values* would let a wrong profile value pass both
 //! sides. The emulated drives are built from their ESI files plus their own behaviour tables
 //! (`src/sim/drives/`), and `tests/manual_facts.rs` checks both sides against the manuals.
@@ -33,7 +33,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn violations(text: &str) -> Vec<(usize, &'static str)> {
     let mut out = Vec::new();
     let line_of = |pos: usize| text[..pos].matches('\n').count() + 1;
-    for root in ["crate::", "ecdrive::"] {
+    for root in ["crate::", "ecdrive::", "ecdrive_core::"] {
         let mut from = 0;
         while let Some(i) = text[from..].find(root) {
             let at = from + i;
@@ -68,7 +68,7 @@ fn violations(text: &str) -> Vec<(usize, &'static str)> {
 
 #[test]
 fn the_software_slave_names_no_master_profile_or_master_module() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src/sim");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/ecdrive-sim/src");
     let mut files = Vec::new();
     rust_files(&root, &mut files);
     files.sort();
@@ -119,6 +119,8 @@ fn the_check_catches_every_form() {
         ["drives"]
     );
     assert_eq!(caught("use crate::master::Bus;"), ["master"]);
+    assert_eq!(caught("use ecdrive_core::drives::bdhde;"), ["drives"]);
+    assert_eq!(caught("use ecdrive_core::{od, drives::all};"), ["drives"]);
     assert_eq!(caught("use crate::canopen::profile::od;"), ["canopen"]);
     assert!(caught("use crate::od::ObjectAddress; use crate::cia402::State;").is_empty());
     assert!(caught("use super::drives::EmulatedDrive;").is_empty());

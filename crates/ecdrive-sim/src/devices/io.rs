@@ -1,14 +1,14 @@
 //! A simple digital-I/O-like device without mailbox.
 
+use crate::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
 use crate::ec::{AlState, AlStatusCode};
-use crate::sim::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
-use crate::sim::quirks::{Capabilities, Quirks};
-use crate::sim::sii::{
+use crate::quirks::{Capabilities, Quirks};
+use crate::sii::{
     DcOpMode, DeviceDescription, FmmuUsage, Identity, PdoDesc, PdoEntryDesc, SmDesc, SmEnable,
     SmType,
 };
 
-pub use crate::sim::rec::TEST_VENDOR_ID;
+pub use crate::rec::TEST_VENDOR_ID;
 
 /// What an [`IoDevice`] has seen, for tests.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -63,7 +63,7 @@ impl IoDevice {
         }
     }
 
-    /// The same device behaving like one ecdrive did not write ([`crate::sim::quirks`]):
+    /// The same device behaving like one ecdrive did not write ([`crate::quirks`]):
     /// only the process-data quirks apply (it has no mailbox and no CiA 402).
     pub fn with_quirks(mut self, quirks: Quirks) -> Result<Self, String> {
         quirks.check_for("generic-io", Capabilities::default())?;

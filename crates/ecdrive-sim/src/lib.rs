@@ -1,3 +1,5 @@
+//! # ecdrive-sim
+//!
 //! The software EtherCAT slave: emulated slave controllers (ESC) with SII, SyncManagers, FMMUs,
 //! mailbox, distributed clocks and the device applications behind them.
 //!
@@ -24,8 +26,8 @@
 //! - [`rec`]: the emulation's own choices (\[REC\]) in one place.
 //!
 //! ```
-//! use ecdrive::ec::Command;
-//! use ecdrive::sim::{ManualClock, Segment, devices::IoDevice, probe::Probe};
+//! use ecdrive_core::ec::Command;
+//! use ecdrive_sim::{ManualClock, Segment, devices::IoDevice, probe::Probe};
 //! use std::sync::Arc;
 //!
 //! let mut segment = Segment::new(Arc::new(ManualClock::new(0)));
@@ -36,6 +38,14 @@
 //! let reply = probe.brd(0x0000, 1).unwrap(); // count the slaves, as masters do
 //! assert_eq!((reply.wkc, reply.adp), (3, 3));
 //! ```
+
+#![warn(missing_docs)]
+#![deny(unsafe_op_in_unsafe_fn)]
+
+// The core layers this crate builds on, under the paths the modules use. The masters' drive
+// profiles (the core's `drives` module) are left out on purpose: the emulated drives are
+// built from their ESI files and their own tables (tests/emulation_independence.rs).
+pub(crate) use ecdrive_core::{can, cia402, ec, esi, link, od, pdo, rt};
 
 pub mod canopen;
 pub mod clock;

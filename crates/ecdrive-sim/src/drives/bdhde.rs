@@ -197,7 +197,7 @@ pub const WRITE_RULES: &[WriteRule] = &[
 pub static SPEC: DriveSpec = DriveSpec {
     key: "bdhde",
     name: "BDHDE",
-    esi: include_str!("../../../esi/Servotronix_BDHDE.xml"),
+    esi: include_str!("../../../../esi/Servotronix_BDHDE.xml"),
     product_code: 0x000B_E2EB,
     model: OnceLock::new(),
     state_machine: STATE_MACHINE,

@@ -11,9 +11,9 @@
 //! values that are ours (\[REC\]) in one labelled section.
 //!
 //! - **SII**: built from the drive's ESI file ([`description`], through
-//!   [`crate::sim::sii::from_esi`]), so the EEPROM a master reads and the ESI a user reads
+//!   [`crate::sii::from_esi`]), so the EEPROM a master reads and the ESI a user reads
 //!   cannot drift apart.
-//! - **CoE**: the ESI file's dictionary in an [`crate::sim::coe::OdStore`] with the drive's PDO
+//! - **CoE**: the ESI file's dictionary in an [`crate::coe::OdStore`] with the drive's PDO
 //!   limits and write rules; complete access and SDO information as the ESI file says.
 //! - **Cycle**: at every SYNC0 (or, in free run, every process-data frame) the drive moves the
 //!   motor over the cycle that ended, supervises it, reads the new outputs, steps the CiA 402
@@ -39,8 +39,8 @@
 //! beyond [`EmulatedDrive::with_stored`]).
 //!
 //! ```
-//! use ecdrive::sim::drives::{EmulatedDrive, emulated};
-//! use ecdrive::sim::{ManualClock, Segment};
+//! use ecdrive_sim::drives::{EmulatedDrive, emulated};
+//! use ecdrive_sim::{ManualClock, Segment};
 //! use std::sync::Arc;
 //!
 //! let mut segment = Segment::new(Arc::new(ManualClock::new(0)));
@@ -82,12 +82,12 @@ pub fn spec_for(key: &str) -> Option<&'static DriveSpec> {
 }
 
 /// The emulated drive `key` with serial number `serial`, ready to push onto a
-/// [`crate::sim::Segment`].
+/// [`crate::Segment`].
 pub fn emulated(key: &str, serial: u32) -> Result<Box<dyn Device>, DeviceError> {
     emulated_with(key, serial, Quirks::NONE)
 }
 
-/// [`emulated`], behaving like a device ecdrive did not write ([`crate::sim::quirks`]; every
+/// [`emulated`], behaving like a device ecdrive did not write ([`crate::quirks`]; every
 /// quirk applies to the emulated drives).
 pub fn emulated_with(
     key: &str,

@@ -12,7 +12,7 @@
 
 use crate::esi::{self, EsiFile};
 use crate::od::{ConstValue, EntryDesc, ObjectDesc, Value};
-use crate::sim::sii::DeviceDescription;
+use crate::sii::DeviceDescription;
 
 /// The parts of a drive's ESI file the emulation is built from.
 #[derive(Debug)]
@@ -139,7 +139,7 @@ impl EsiModel {
             drive: "emulated drive",
             reason: "device index out of range".into(),
         })?;
-        crate::sim::sii::from_esi(self.vendor_id, dev, serial).map_err(|e| EsiModelError {
+        crate::sii::from_esi(self.vendor_id, dev, serial).map_err(|e| EsiModelError {
             drive: "emulated drive",
             reason: e.to_string(),
         })

@@ -252,8 +252,8 @@ impl fmt::Display for Quirks {
 
 /// [`Quirk::CycleTimeReadOnly`]: at a SYNC0 event, 0x1C32:02 and 0x1C33:02 (where they exist)
 /// show the SYNC0 cycle.
-pub fn show_sync0_cycle(dict: &mut crate::sim::coe::ValueStore, event: &crate::sim::SyncEvent) {
-    if event.kind == crate::sim::SyncKind::Sync0 && event.cycle_time_ns > 0 {
+pub fn show_sync0_cycle(dict: &mut crate::coe::ValueStore, event: &crate::SyncEvent) {
+    if event.kind == crate::SyncKind::Sync0 && event.cycle_time_ns > 0 {
         for index in [0x1C32, 0x1C33] {
             let a = crate::od::ObjectAddress::new(index, 2);
             if dict.raw(a).is_some() {

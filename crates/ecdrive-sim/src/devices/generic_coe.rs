@@ -1,5 +1,5 @@
 //! The generic CoE test device: a small CiA 402-style servo with a real CoE mailbox, variable
-//! PDO mapping and DC synchronisation, built on the CoE server ([`crate::sim::coe`]).
+//! PDO mapping and DC synchronisation, built on the CoE server ([`crate::coe`]).
 //!
 //! It is what `ecdrive sim` serves until the emulated drives exist, and what the plain-ethercrab
 //! and SOEM acceptance tests remap in PRE-OP. Its application is deliberately simple but
@@ -7,17 +7,17 @@
 //! csp, integrating the target velocity in csv, the missed-SYNC0 counter in 0x1C32:0B, and the
 //! synchronisation checks a drive makes at SAFE-OP→OP.
 
+use crate::coe::hooks::{AllowedValues, Chain, Mirror};
+use crate::coe::{CoeConfig, CoeServer, Emergency, OdError, OdStore};
+use crate::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
 use crate::ec::{AlState, AlStatusCode};
 use crate::od::{
     ConstValue, DataType, EntryAccess, EntryDesc, ObjectAddress, ObjectCode, ObjectDesc,
     SdoAbortCode,
 };
 use crate::pdo::{Direction, Mapping};
-use crate::sim::coe::hooks::{AllowedValues, Chain, Mirror};
-use crate::sim::coe::{CoeConfig, CoeServer, Emergency, OdError, OdStore};
-use crate::sim::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
-use crate::sim::quirks::{Capabilities, Quirk, Quirks};
-use crate::sim::sii::{
+use crate::quirks::{Capabilities, Quirk, Quirks};
+use crate::sii::{
     CoeDetails, DcOpMode, DeviceDescription, FmmuUsage, Identity, MailboxDesc, MailboxProtocols,
     SmDesc, SmEnable, SmType,
 };
@@ -114,7 +114,7 @@ static SYNC_OUT: [EntryDesc; 10] = sync_params();
 static SYNC_IN: [EntryDesc; 10] = sync_params();
 
 /// Smallest SYNC0 cycle the generic device accepts (0x1C32:05), in ns.
-pub const MIN_CYCLE_NS: u32 = crate::sim::rec::GENERIC_COE_MIN_CYCLE_NS;
+pub const MIN_CYCLE_NS: u32 = crate::rec::GENERIC_COE_MIN_CYCLE_NS;
 
 /// The object dictionary of the generic CoE device.
 pub static OBJECTS: &[ObjectDesc] = &[
@@ -430,7 +430,7 @@ impl GenericCoeDevice {
         following_error: false,
     };
 
-    /// The same device behaving like one ecdrive did not write ([`crate::sim::quirks`]).
+    /// The same device behaving like one ecdrive did not write ([`crate::quirks`]).
     /// [`Quirk::FollowingErrorZero`] does not apply (it has no 0x60F4).
     pub fn with_quirks(mut self, quirks: Quirks) -> Result<Self, String> {
         quirks.check_for(GENERIC_COE_ORDER, Self::CAPABILITIES)?;
@@ -444,7 +444,7 @@ impl GenericCoeDevice {
     }
 
     /// The CoE server's counters (SDO downloads accepted, aborts sent, …).
-    pub fn coe_stats(&self) -> crate::sim::coe::CoeStats {
+    pub fn coe_stats(&self) -> crate::coe::CoeStats {
         self.coe.stats()
     }
 
@@ -753,9 +753,9 @@ impl Device for GenericCoeDevice {
         self.coe.reset();
     }
 
-    fn inject(&mut self, fault: &crate::sim::faults::DeviceFault) -> bool {
+    fn inject(&mut self, fault: &crate::faults::DeviceFault) -> bool {
         match *fault {
-            crate::sim::faults::DeviceFault::Emergency {
+            crate::faults::DeviceFault::Emergency {
                 error_code,
                 error_register,
                 data,
@@ -767,7 +767,7 @@ impl Device for GenericCoeDevice {
                 });
                 true
             }
-            crate::sim::faults::DeviceFault::AbortSdo {
+            crate::faults::DeviceFault::AbortSdo {
                 index,
                 subindex,
                 code,
@@ -775,7 +775,7 @@ impl Device for GenericCoeDevice {
                 self.coe.abort_next_sdo(index, subindex, code);
                 true
             }
-            crate::sim::faults::DeviceFault::EmergencyDuringSdo {
+            crate::faults::DeviceFault::EmergencyDuringSdo {
                 error_code,
                 error_register,
                 data,
@@ -799,7 +799,7 @@ impl Device for GenericCoeDevice {
     ) -> Result<(), AlStatusCode> {
         self.seen.cycles += 1;
         if self.quirks.has(Quirk::CycleTimeReadOnly) {
-            crate::sim::quirks::show_sync0_cycle(self.od.dict_mut(), event);
+            crate::quirks::show_sync0_cycle(self.od.dict_mut(), event);
         }
         if event.kind == SyncKind::Sync0 {
             self.seen.sync0_events += 1;

@@ -1592,7 +1592,7 @@ impl Esc {
     }
 
     /// A local restart of the application controller (an injected
-    /// [`SlaveFault::ResetToInit`](crate::sim::faults::SlaveFault::ResetToInit)): INIT with the
+    /// [`SlaveFault::ResetToInit`](crate::faults::SlaveFault::ResetToInit)): INIT with the
     /// error bit and AL status code 0x0060 "Slave restarted locally"; the mailbox stops, the
     /// device sees the change as a local error. ESC registers (station address, SyncManager
     /// and FMMU configuration) are kept.
@@ -1601,7 +1601,7 @@ impl Esc {
     }
 
     /// Change the local clock's drift against the host clock from host time `host_ns` on (an
-    /// injected [`SlaveFault::ClockDrift`](crate::sim::faults::SlaveFault::ClockDrift)). The
+    /// injected [`SlaveFault::ClockDrift`](crate::faults::SlaveFault::ClockDrift)). The
     /// local time does not jump; a later ESC reset keeps the new drift (it is the oscillator's).
     pub fn set_clock_drift(&mut self, host_ns: u64, drift_ppb: i64) {
         self.dc.set_drift(host_ns, drift_ppb);

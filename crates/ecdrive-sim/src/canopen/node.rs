@@ -20,8 +20,8 @@ use crate::can::profile::{Alarm, CanDriveProfile, EnabledNmtReaction, Transmissi
 use crate::can::sdo::{SdoObjects, SdoServer};
 use crate::cia402::device::{Device, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{ControlWord, OperationMode, State, StopRamp};
+use crate::coe::ValueStore;
 use crate::od::{DataType, EntryAccess, ObjectAddress, SdoAbortCode, Value};
-use crate::sim::coe::ValueStore;
 use std::collections::VecDeque;
 
 /// Why a node cannot be built.

@@ -7,15 +7,15 @@ use super::spec::{
 };
 use crate::cia402::device::{Device as Fsa, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{ControlWord, OperationMode, QuickStopOption, State, StatusWord, StopRamp};
+use crate::coe::hooks::{AllowedValues, Chain, Mirror, RefuseMappedWrites, RefuseWrites};
+use crate::coe::{CoeConfig, CoeServer, OdError, OdStore};
+use crate::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
 use crate::ec::mailbox::Emergency;
 use crate::ec::{AlState, AlStatusCode};
 use crate::od::ObjectAddress;
 use crate::pdo::Direction;
-use crate::sim::coe::hooks::{AllowedValues, Chain, Mirror, RefuseMappedWrites, RefuseWrites};
-use crate::sim::coe::{CoeConfig, CoeServer, OdError, OdStore};
-use crate::sim::device::{Device, ProcessDataSizes, StateRequest, SyncEvent, SyncKind};
-use crate::sim::quirks::{Quirk, Quirks};
-use crate::sim::sii::DeviceDescription;
+use crate::quirks::{Quirk, Quirks};
+use crate::sii::DeviceDescription;
 
 /// Object addresses the engine reads and writes.
 mod obj {
@@ -472,7 +472,7 @@ impl EmulatedDrive {
     }
 
     /// The CoE server's counters (SDO downloads accepted, aborts sent, …).
-    pub fn coe_stats(&self) -> crate::sim::coe::CoeStats {
+    pub fn coe_stats(&self) -> crate::coe::CoeStats {
         self.coe.stats()
     }
 
@@ -633,13 +633,13 @@ impl EmulatedDrive {
     }
 
     /// What an emulated drive has, for [`Quirks::check_for`]: everything.
-    pub const CAPABILITIES: crate::sim::quirks::Capabilities = crate::sim::quirks::Capabilities {
+    pub const CAPABILITIES: crate::quirks::Capabilities = crate::quirks::Capabilities {
         coe: true,
         cia402: true,
         following_error: true,
     };
 
-    /// The same drive behaving like a device ecdrive did not write ([`crate::sim::quirks`]):
+    /// The same drive behaving like a device ecdrive did not write ([`crate::quirks`]):
     /// every quirk applies (the drive has a CoE mailbox and CiA 402 device control).
     pub fn with_quirks(mut self, quirks: Quirks) -> Self {
         self.quirks = quirks;
@@ -1439,7 +1439,7 @@ fn approach(from: f64, to: f64, step: f64) -> f64 {
 }
 
 /// Push `code` into 0x1003 (newest in sub 1), if the object exists.
-fn push_error_history(d: &mut crate::sim::coe::ValueStore, code: u16) {
+fn push_error_history(d: &mut crate::coe::ValueStore, code: u16) {
     let Some(o) = d.object_desc(0x1003) else {
         return;
     };
@@ -1471,7 +1471,7 @@ impl Device for EmulatedDrive {
         match self.spec.model().and_then(|m| m.description(self.serial)) {
             Ok(mut d) => {
                 if self.quirks.has(Quirk::NoSdoInfo) {
-                    d.coe_details.remove(crate::sim::sii::CoeDetails::SDO_INFO);
+                    d.coe_details.remove(crate::sii::CoeDetails::SDO_INFO);
                 }
                 d
             }
@@ -1596,8 +1596,8 @@ impl Device for EmulatedDrive {
         self.coe.reset();
     }
 
-    fn inject(&mut self, fault: &crate::sim::faults::DeviceFault) -> bool {
-        use crate::sim::faults::DeviceFault;
+    fn inject(&mut self, fault: &crate::faults::DeviceFault) -> bool {
+        use crate::faults::DeviceFault;
         match *fault {
             DeviceFault::RaiseAlarm(id) => match self.spec.alarm(id) {
                 // Looked up first: an unknown name must not build an error (allocation).
@@ -1616,7 +1616,7 @@ impl Device for EmulatedDrive {
                 error_register,
                 data,
             } => {
-                self.coe.push_emergency(crate::sim::coe::Emergency {
+                self.coe.push_emergency(crate::coe::Emergency {
                     error_code,
                     error_register,
                     data,
@@ -1636,12 +1636,11 @@ impl Device for EmulatedDrive {
                 error_register,
                 data,
             } => {
-                self.coe
-                    .emergency_during_next_sdo(crate::sim::coe::Emergency {
-                        error_code,
-                        error_register,
-                        data,
-                    });
+                self.coe.emergency_during_next_sdo(crate::coe::Emergency {
+                    error_code,
+                    error_register,
+                    data,
+                });
                 true
             }
         }
@@ -1654,7 +1653,7 @@ impl Device for EmulatedDrive {
         inputs: &mut [u8],
     ) -> Result<(), AlStatusCode> {
         if self.quirks.has(Quirk::CycleTimeReadOnly) {
-            crate::sim::quirks::show_sync0_cycle(self.od.dict_mut(), event);
+            crate::quirks::show_sync0_cycle(self.od.dict_mut(), event);
         }
         self.cycle(event, outputs);
         for s in &self.tx {

@@ -90,7 +90,7 @@ pub enum SlaveFault {
     /// continuous (no step); only its rate changes. The DC drift loop, if the master runs it,
     /// has to follow. The emulated loop's rate correction is limited to ±1000 ppm; its
     /// proportional steps (up to 1000 ppm of the time between two updates, but at least 200 ns
-    /// per update, [`crate::sim::rec`]) come on top, so a master updating every cycle keeps
+    /// per update, [`crate::rec`]) come on top, so a master updating every cycle keeps
     /// larger drifts in check too (about 2000 ppm with an update every millisecond, more with
     /// the back-to-back updates of static drift compensation); a 10 % drift cannot be
     /// followed. `ecdrive sim --drift` accepts ±1000 ppm, the range real oscillators stay far

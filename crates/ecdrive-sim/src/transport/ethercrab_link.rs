@@ -3,8 +3,8 @@
 
 use super::held::HeldReplies;
 use super::lock;
-use crate::sim::clock::Clock;
-use crate::sim::segment::{Segment, SegmentError};
+use crate::clock::Clock;
+use crate::segment::{Segment, SegmentError};
 use ethercrab::{PduRx, PduTx};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -41,7 +41,7 @@ impl Wake for Unpark {
 /// sendable frame through the segment and hands the replies to `PduRx`.
 ///
 /// ```no_run
-/// # use ecdrive::sim::{Segment, HostClock, devices::IoDevice, transport::EthercrabLink};
+/// # use ecdrive_sim::{Segment, HostClock, devices::IoDevice, transport::EthercrabLink};
 /// # use std::sync::Arc;
 /// use ethercrab::PduStorage;
 /// static STORAGE: PduStorage<16, { PduStorage::element_size(1100) }> = PduStorage::new();

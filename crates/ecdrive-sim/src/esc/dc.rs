@@ -10,13 +10,13 @@
 //!   input**: `e = own system time − (received + delay 0x0928)`; 0x092C shows `e` filtered
 //!   (filter depth 0x0934) in sign-magnitude; the loop removes `e` with a proportional step of
 //!   at most 1000 ppm of the elapsed time and integrates the rate error in small, bounded
-//!   steps (gains in [`crate::sim::rec`]);
+//!   steps (gains in [`crate::rec`]);
 //! - a write to 0x0930 or 0x0934 resets the loop (trim, rate and filter);
 //! - **SYNC0**: when 0x0981 bits 0 and 1 are set, pulses start at the start time (0x0990) and
 //!   repeat every 0x09A0 ns of system time (0 = a single pulse). A start time in the past
 //!   starts at the next whole cycle after now and sets 0x0984 bit 2.
 
-use crate::sim::rec::{
+use crate::rec::{
     DC_KI_DIV as KI_DIV, DC_KI_MIN_INTERVAL_NS as KI_MIN_INTERVAL_NS, DC_KP_SHIFT as KP_SHIFT,
     DC_MAX_RATE_PPB as MAX_RATE_PPB, DC_MAX_RATE_STEP_PPB as MAX_RATE_STEP_PPB,
     DC_MIN_STEP_NS as MIN_STEP_NS,

@@ -1,8 +1,8 @@
 //! A mailbox device whose firmware echoes every request.
 
+use crate::device::{Device, ProcessDataSizes};
 use crate::ec::AlState;
-use crate::sim::device::{Device, ProcessDataSizes};
-use crate::sim::sii::{
+use crate::sii::{
     DeviceDescription, FmmuUsage, Identity, MailboxDesc, MailboxProtocols, SmDesc, SmEnable, SmType,
 };
 

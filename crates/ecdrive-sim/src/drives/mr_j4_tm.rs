@@ -191,7 +191,7 @@ pub const WRITE_RULES: &[WriteRule] = &[
 pub static SPEC: DriveSpec = DriveSpec {
     key: "mr-j4-tm",
     name: "MR-J4-TM",
-    esi: include_str!("../../../esi/Mitsubishi_MR-J4-TM.xml"),
+    esi: include_str!("../../../../esi/Mitsubishi_MR-J4-TM.xml"),
     product_code: 0x0000_0201,
     model: OnceLock::new(),
     state_machine: STATE_MACHINE,

@@ -118,7 +118,7 @@ pub fn check_name(name: &str) -> Result<(), DeviceError> {
 }
 
 /// Create a device by name (see [`device_names`]), with the quirks named after `+`
-/// (`bdhde+no-state-skipping`, see [`crate::sim::quirks`]). `position` makes serial numbers
+/// (`bdhde+no-state-skipping`, see [`crate::quirks`]). `position` makes serial numbers
 /// unique.
 pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
     let serial = u32::try_from(position).unwrap_or(u32::MAX);

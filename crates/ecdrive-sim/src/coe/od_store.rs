@@ -11,7 +11,7 @@ use crate::pdo::{Direction, Mapping, PdoEntry, PdoLimits, ReadbackError, read_ma
 use core::ops::{Deref, DerefMut};
 
 use super::{MAX_UNSIZED_STRING, RECORD_DATA_TYPE};
-use crate::sim::quirks::{Quirk, Quirks};
+use crate::quirks::{Quirk, Quirks};
 
 /// Why a descriptor table cannot be served.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -37,7 +37,7 @@ use crate::ec::mailbox::{
     SdoInfoRequest, SdoRequest, SdoResponse, list_type, value_info,
 };
 use crate::od::{ConstValue, EntryDesc, SdoAbortCode};
-use crate::sim::quirks::{self, Quirk, Quirks};
+use crate::quirks::{self, Quirk, Quirks};
 use std::collections::VecDeque;
 
 // ---------------------------------------------------------------------------------------------
@@ -75,7 +75,7 @@ pub struct CoeConfig {
     /// Largest object value or complete-access image transferred, in bytes. A longer segmented
     /// download is refused at its start (0x06070012).
     pub max_object_size: usize,
-    /// Foreign-device behaviour (see [`crate::sim::quirks`]); the server applies
+    /// Foreign-device behaviour (see [`crate::quirks`]); the server applies
     /// [`Quirk::NoSdoInfo`], [`Quirk::NoCompleteAccess`], [`Quirk::SdoInfoBadEntry`],
     /// [`Quirk::SdoInfoShortEntry`] and [`Quirk::OddAbort`].
     pub quirks: Quirks,

@@ -1,10 +1,10 @@
 //! The synchronous in-process link.
 
 use super::held::HeldReplies;
+use crate::clock::Clock;
 use crate::ec::frame::MAX_FRAME_LEN;
 use crate::link::{FrameLink, LinkError};
-use crate::sim::clock::Clock;
-use crate::sim::segment::Segment;
+use crate::segment::Segment;
 use std::time::Duration;
 
 /// Replies that can wait to be received at once; one more `send` is refused.
@@ -18,11 +18,11 @@ const HELD: usize = 4 * IN_FLIGHT;
 /// lost by an injected fault) produce no reply, as on a wire. Buffers are allocated once at
 /// construction.
 ///
-/// A reply delayed by an injected [`LinkFault::Delay`](crate::sim::faults::LinkFault::Delay)
+/// A reply delayed by an injected [`LinkFault::Delay`](crate::faults::LinkFault::Delay)
 /// is handed out once the segment's clock reaches its due time; replies come out earliest due
 /// first (a delayed reply can be overtaken by a later frame's). While a delayed reply is held,
 /// `recv` waits for it as a socket would: until it is due or the timeout passes, whichever
-/// comes first (a real sleep; with a [`ManualClock`](crate::sim::ManualClock) the caller moves
+/// comes first (a real sleep; with a [`ManualClock`](crate::ManualClock) the caller moves
 /// the time instead and passes a zero timeout). With nothing in flight it returns `None` at
 /// once.
 ///

@@ -4,7 +4,7 @@ use super::held::HeldReplies;
 use super::lock;
 use crate::ec::frame::MAX_FRAME_LEN;
 use crate::link::{LinkError, RawSocket};
-use crate::sim::segment::{Segment, SegmentError};
+use crate::segment::{Segment, SegmentError};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;

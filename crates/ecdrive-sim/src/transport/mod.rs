@@ -8,7 +8,7 @@
 //!   segment, for plain-ethercrab tests without root.
 //! - [`RawServer`] / [`serve`]: answer frames on a raw socket (a veth end or a real NIC).
 //!
-//! All three honour the segment's injected link faults ([`crate::sim::faults::LinkFault`]):
+//! All three honour the segment's injected link faults ([`crate::faults::LinkFault`]):
 //! a lost frame gets no reply, a delayed reply is held until its time on the segment's clock,
 //! and while the cable is pulled they keep polling the segment so that its SYNC0 pulses and
 //! watchdogs run.
