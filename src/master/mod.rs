@@ -1,18 +1,10 @@
-//! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic loop.
+//! The EtherCAT master ([`ecdrive_ethercat`], re-exported here under the same paths) and the
+//! applications built on it: the demo, the soak run, recovery and the tools behind the CLI
+//! commands.
 
-pub mod bus;
-pub mod coe;
-pub mod cycle;
+pub use ecdrive_ethercat::*;
+
 pub mod demo;
-pub mod error;
-pub mod exec;
-pub mod history;
-pub mod io;
-pub mod program;
 pub mod recovery;
-pub mod session;
-pub mod setpoint;
 pub mod soak;
-pub mod startup;
-pub mod telemetry;
 pub mod tools;

@@ -224,7 +224,7 @@ pub fn exchange<L: FrameLink, F: Future>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::master::io::{LossPolicy, MAX_FRAME};
+    use crate::io::{LossPolicy, MAX_FRAME};
     use ethercrab::{Command, MainDevice, MainDeviceConfig, PduStorage, Timeouts};
     use std::collections::VecDeque;
     use std::pin::pin;
