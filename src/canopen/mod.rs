@@ -44,16 +44,7 @@
 //! The example in [`demo`] runs the BLV-R on the software slave's simulated bus: configure,
 //! start, enable, a pp move, shut down.
 
-pub mod can_socket;
+pub use ecdrive_canopen::*;
+
 pub mod demo;
-pub mod drive;
-pub mod error;
-pub mod master;
-pub mod pdo_plan;
 pub mod tools;
-pub mod unix_bus;
-
-pub use crate::can::{emcy, frame, nmt, profile, sdo, transport};
-
-pub use frame::{CanFrame, FrameError, NodeId, Service};
-pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};
