@@ -36,9 +36,9 @@ fn blv_r_alarm_codes_ffxx() {
     assert_eq!(
         r.emergency,
         Emergency {
-            code: 0xFF31,
-            register: 0x81,
-            vendor: [0; 5]
+            error_code: 0xFF31,
+            error_register: 0x81,
+            data: [0; 5]
         }
     );
     let d = r.decoded.unwrap();
@@ -64,7 +64,7 @@ fn blv_r_alarm_codes_ffxx() {
     assert_eq!(m.drive(1).unwrap().axis().status().phase, Phase::Faulted);
     // CAN-side codes carry register 11h and no alarm number.
     let r = inject(&mut m, 1, 0x8130);
-    assert_eq!(r.emergency.register, 0x11);
+    assert_eq!(r.emergency.error_register, 0x11);
     assert_eq!(
         r.decoded.unwrap().alarm.unwrap().text,
         "node guarding or heartbeat error"
@@ -77,8 +77,8 @@ fn asda_a2_tells_shared_codes_apart_by_the_panel_number() {
     events(&mut m);
     // AL011 and AL024 share 7305h; bytes 3–4 carry the panel number.
     let r = inject(&mut m, 0x7F, 0x0024);
-    assert_eq!(r.emergency.code, 0x7305);
-    assert_eq!(r.emergency.vendor[..2], [0x24, 0x00]);
+    assert_eq!(r.emergency.error_code, 0x7305);
+    assert_eq!(r.emergency.data[..2], [0x24, 0x00]);
     assert_eq!(r.decoded.unwrap().alarm.unwrap().name, "AL024");
     assert_eq!(node_int(&m, 0x7F, 0x1003, 1), 0x0024_7305);
     // A warning does not fault the drive.
@@ -121,8 +121,8 @@ fn lexium_vendor_code_in_bytes_6_7() {
     m.set_profile(0x41, &lexium_mdrive::PROFILE);
     events(&mut m);
     let r = inject(&mut m, 0x41, 0x0016);
-    assert_eq!(r.emergency.code, 0x4210);
-    assert_eq!(r.emergency.vendor, [0, 0, 0, 0x16, 0]);
+    assert_eq!(r.emergency.error_code, 0x4210);
+    assert_eq!(r.emergency.data, [0, 0, 0, 0x16, 0]);
     assert_eq!(
         r.decoded.unwrap().alarm.unwrap().text,
         "pending over-temperature warning"

@@ -90,7 +90,7 @@ fn asda_a2_raises_al401_on_a_raw_nmt_stop_while_enabled() {
             _ => None,
         })
         .unwrap();
-    assert_eq!(emcy.emergency.code, 0x8100);
+    assert_eq!(emcy.emergency.error_code, 0x8100);
     assert_eq!(emcy.decoded.unwrap().alarm.unwrap().name, "AL401");
     assert!(
         emcy.to_string()
@@ -346,7 +346,7 @@ fn node_guarding_both_ways() {
     let codes: Vec<(u8, u16)> = events(&mut m)
         .iter()
         .filter_map(|e| match e {
-            MasterEvent::Emergency(r) => Some((r.node, r.emergency.code)),
+            MasterEvent::Emergency(r) => Some((r.node, r.emergency.error_code)),
             _ => None,
         })
         .collect();

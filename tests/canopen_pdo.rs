@@ -320,7 +320,7 @@ fn short_and_too_fast_rpdos_raise_the_drive_alarm() {
     let emcy: Vec<u16> = events(&mut m)
         .iter()
         .filter_map(|e| match e {
-            MasterEvent::Emergency(r) => Some(r.emergency.code),
+            MasterEvent::Emergency(r) => Some(r.emergency.error_code),
             _ => None,
         })
         .collect();

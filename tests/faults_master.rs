@@ -617,7 +617,11 @@ fn a_drifting_clock_is_kept_in_sync<L: FrameLink + Send + 'static>(
     mut faults: FaultHandle,
     how: &str,
 ) {
-    let mut m = moving(config(3.0, RestartPolicy::Never), link, how);
+    // The clock is the point, not the host: a stall of this machine that loses a few frames in
+    // a row must not stop the axes (seen once over veth on a 2-core VM).
+    let mut cfg = config(3.0, RestartPolicy::Never);
+    cfg.cycle.lost_before_stop = 50;
+    let mut m = moving(cfg, link, how);
     inject(
         &mut faults,
         Fault::Slave {
@@ -628,7 +632,16 @@ fn a_drifting_clock_is_kept_in_sync<L: FrameLink + Send + 'static>(
     let c0 = m.telemetry().cycle.cycle;
     wait(&mut m, "a second of drift", |t| t.cycle.cycle > c0 + 1000);
     let t = m.telemetry().clone();
-    assert!(t.cycle.all_op && enabled(&t), "{how}: {:?}", t.axes);
+    if !(t.cycle.all_op && enabled(&t)) {
+        let (r, _) = m.stop(StopKind::Ramp);
+        let lines: Vec<String> = r
+            .map(|r| r.history.iter().map(|h| h.text.clone()).collect())
+            .unwrap_or_default();
+        panic!(
+            "{how}: not all enabled in OP: {:?}\nhistory: {lines:#?}",
+            t.axes
+        );
+    }
     let (r, _) = m.stop(StopKind::Ramp);
     let r = r.unwrap();
     // Nothing about the clock: at most the odd lost cycle of a loaded machine.

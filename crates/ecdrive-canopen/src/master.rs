@@ -131,7 +131,7 @@ impl fmt::Display for EmcyRecord {
             None => write!(
                 f,
                 "{node}: EMCY 0x{:04X}, error register 0x{:02X}, data {:02X?}",
-                self.emergency.code, self.emergency.register, self.emergency.vendor
+                self.emergency.error_code, self.emergency.error_register, self.emergency.data
             ),
         }
     }

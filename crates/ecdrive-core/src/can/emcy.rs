@@ -14,10 +14,8 @@ pub struct EmcyFrame<T: AsRef<[u8]>> {
     buffer: T,
 }
 
-/// An EMCY frame with fewer than 8 data bytes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
-#[error("EMCY message has {0} data bytes, expected 8")]
-pub struct EmcyLengthError(pub usize);
+/// An EMCY frame without exactly 8 data bytes (the one CiA 301 error, under its CAN name).
+pub use crate::od::EmergencyLengthError as EmcyLengthError;
 
 impl<T: AsRef<[u8]>> EmcyFrame<T> {
     /// The view, if `buffer` holds 8 bytes.
@@ -55,47 +53,20 @@ impl<T: AsRef<[u8]>> EmcyFrame<T> {
     }
 }
 
-/// An emergency message's content.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Emergency {
-    /// Error code (0000h = error reset).
-    pub code: u16,
-    /// Error register.
-    pub register: u8,
-    /// Bytes 3–7.
-    pub vendor: [u8; 5],
-}
+/// An emergency message's content: the one CiA 301 type ([`crate::od::Emergency`]) both buses
+/// use; this module adds its CAN framing.
+pub use crate::od::Emergency;
 
+/// The CAN framing of an emergency.
 impl Emergency {
-    /// Decode the data bytes of an EMCY frame.
-    pub fn parse(data: &[u8]) -> Result<Self, EmcyLengthError> {
-        let f = EmcyFrame::new_checked(data)?;
-        Ok(Self {
-            code: f.error_code(),
-            register: f.error_register(),
-            vendor: f.vendor(),
-        })
-    }
-
-    /// The frame `node` sends (COB-ID 080h + node unless 1014h moved it: pass `cob_id`).
+    /// The frame on COB-ID `cob_id` (080h + node unless 1014h moved it).
     pub fn frame(&self, cob_id: u16) -> CanFrame {
-        let [c0, c1] = self.code.to_le_bytes();
-        let v = self.vendor;
-        CanFrame::from_parts(
-            cob_id,
-            [c0, c1, self.register, v[0], v[1], v[2], v[3], v[4]],
-            8,
-        )
+        CanFrame::from_parts(cob_id, self.to_bytes(), 8)
     }
 
     /// The frame on the default COB-ID of `node`.
     pub fn default_frame(&self, node: u8) -> CanFrame {
         self.frame(cob::emcy(node))
-    }
-
-    /// Whether this is the "error reset / no error" message.
-    pub const fn is_reset(&self) -> bool {
-        self.code == 0
     }
 }
 
@@ -106,9 +77,9 @@ mod tests {
     #[test]
     fn round_trip() {
         let e = Emergency {
-            code: 0x7305,
-            register: 0x81,
-            vendor: [0x11, 0x00, 0, 0, 0],
+            error_code: 0x7305,
+            error_register: 0x81,
+            data: [0x11, 0x00, 0, 0, 0],
         };
         let f = e.default_frame(0x7F);
         assert_eq!(f.id(), 0xFF);

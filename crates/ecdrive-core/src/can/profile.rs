@@ -388,14 +388,14 @@ impl EmcyFormat {
     pub fn vendor_number(self, e: &Emergency) -> Option<u16> {
         match self {
             EmcyFormat::AlarmInCodeLowByte => {
-                (e.code & 0xFF00 == 0xFF00).then_some(e.code & 0x00FF)
+                (e.error_code & 0xFF00 == 0xFF00).then_some(e.error_code & 0x00FF)
             }
             EmcyFormat::AlarmInBytes3To4 => {
-                let n = u16::from_le_bytes([e.vendor[0], e.vendor[1]]);
+                let n = u16::from_le_bytes([e.data[0], e.data[1]]);
                 (n != 0).then_some(n)
             }
             EmcyFormat::PdoAndVendorCode => {
-                let n = u16::from_le_bytes([e.vendor[3], e.vendor[4]]);
+                let n = u16::from_le_bytes([e.data[3], e.data[4]]);
                 (n != 0).then_some(n)
             }
         }
@@ -574,11 +574,15 @@ impl CanDriveProfile {
         let number = self.emcy.vendor_number(e);
         let alarms: &'static [Alarm] = self.alarms;
         let alarm = number
-            .and_then(|n| alarms.iter().find(|a| a.number == n && a.code == e.code))
+            .and_then(|n| {
+                alarms
+                    .iter()
+                    .find(|a| a.number == n && a.code == e.error_code)
+            })
             .or_else(|| number.and_then(|n| alarms.iter().find(|a| a.number == n)))
             .or_else(|| {
                 // Only the code: unambiguous if exactly one alarm has it.
-                let mut it = alarms.iter().filter(|a| a.code == e.code);
+                let mut it = alarms.iter().filter(|a| a.code == e.error_code);
                 match (it.next(), it.next()) {
                     (Some(a), None) => Some(a),
                     _ => None,
@@ -588,7 +592,7 @@ impl CanDriveProfile {
             emergency: *e,
             vendor_number: number,
             alarm,
-            description: ErrorCode(e.code).describe(self.caps.error_table),
+            description: ErrorCode(e.error_code).describe(self.caps.error_table),
         }
     }
 
@@ -620,14 +624,14 @@ impl fmt::Display for DecodedEmcy {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let e = &self.emergency;
         if e.is_reset() {
-            return write!(f, "error reset (register 0x{:02X})", e.register);
+            return write!(f, "error reset (register 0x{:02X})", e.error_register);
         }
-        write!(f, "EMCY 0x{:04X}", e.code)?;
+        write!(f, "EMCY 0x{:04X}", e.error_code)?;
         match self.alarm {
             Some(a) => write!(f, " {} {}", a.name, a.text)?,
             None => write!(f, " {}", self.description)?,
         }
-        write!(f, ", error register 0x{:02X}", e.register)?;
+        write!(f, ", error register 0x{:02X}", e.error_register)?;
         if let (None, Some(n)) = (self.alarm, self.vendor_number) {
             write!(f, ", vendor number 0x{n:04X}")?;
         }
@@ -806,26 +810,26 @@ mod tests {
     #[test]
     fn emcy_formats() {
         let e = Emergency {
-            code: 0xFF30,
-            register: 0x81,
-            vendor: [0; 5],
+            error_code: 0xFF30,
+            error_register: 0x81,
+            data: [0; 5],
         };
         assert_eq!(EmcyFormat::AlarmInCodeLowByte.vendor_number(&e), Some(0x30));
         let d = Emergency {
-            code: 0x7305,
-            register: 0x01,
-            vendor: EmcyFormat::AlarmInBytes3To4.vendor_bytes(0x0011),
+            error_code: 0x7305,
+            error_register: 0x01,
+            data: EmcyFormat::AlarmInBytes3To4.vendor_bytes(0x0011),
         };
-        assert_eq!(d.vendor, [0x11, 0, 0, 0, 0]);
+        assert_eq!(d.data, [0x11, 0, 0, 0, 0]);
         assert_eq!(EmcyFormat::AlarmInBytes3To4.vendor_number(&d), Some(0x0011));
         assert_eq!(
             EmcyFormat::AlarmInBytes3To4.history_entry(0x7305, 0x0011),
             0x0011_7305
         );
         let l = Emergency {
-            code: 0x4210,
-            register: 0x09,
-            vendor: EmcyFormat::PdoAndVendorCode.vendor_bytes(0x08),
+            error_code: 0x4210,
+            error_register: 0x09,
+            data: EmcyFormat::PdoAndVendorCode.vendor_bytes(0x08),
         };
         assert_eq!(EmcyFormat::PdoAndVendorCode.vendor_number(&l), Some(0x08));
         assert!(TransmissionTypes::ALL.allows(240));

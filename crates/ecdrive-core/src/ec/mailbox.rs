@@ -1597,33 +1597,21 @@ impl<'a> EntryDescription<'a> {
 // ---------------------------------------------------------------------------------------------
 // Emergency and mailbox errors.
 
-/// A CoE emergency message (CoE service 1): CiA 301 error code, error register (0x1001) and
-/// five manufacturer-specific bytes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Emergency {
-    /// Error code (CiA 301 / CiA 402, e.g. 0x2310 over-current; 0x0000 = error reset).
-    pub error_code: u16,
-    /// Error register (object 0x1001).
-    pub error_register: u8,
-    /// Manufacturer-specific data.
-    pub data: [u8; 5],
-}
+/// A CoE emergency message (CoE service 1): the one CiA 301 emergency type
+/// ([`crate::od::Emergency`]) both buses use; this module adds its mailbox framing.
+pub use crate::od::Emergency;
 
+/// The CoE framing of an emergency.
 impl Emergency {
-    /// Size of the emergency data after the CoE header.
-    pub const LEN: usize = 8;
-
-    /// Parse from a CoE payload with service "Emergency".
-    pub fn parse(coe_payload: &[u8]) -> Result<Self, Error> {
+    /// Parse from a CoE payload with service "Emergency" (at least 8 bytes; the rest is the
+    /// mailbox's padding).
+    pub fn parse_coe(coe_payload: &[u8]) -> Result<Self, Error> {
         need("emergency message", Self::LEN, coe_payload.len())?;
-        let mut data = [0u8; 5];
-        if let Some(s) = coe_payload.get(3..8) {
-            data.copy_from_slice(s);
-        }
-        Ok(Self {
-            error_code: rd_u16(coe_payload, 0),
-            error_register: rd_u8(coe_payload, 2),
-            data,
+        let bytes = coe_payload.get(..Self::LEN).unwrap_or(coe_payload);
+        Self::parse(bytes).map_err(|e| Error::Truncated {
+            what: "emergency message",
+            needed: Self::LEN,
+            available: e.0,
         })
     }
 
@@ -1801,7 +1789,7 @@ impl<'a> MailboxMessage<'a> {
                 match coe.service() {
                     Some(CoeService::SdoRequest) => Self::SdoRequest(SdoRequest::parse(data)?),
                     Some(CoeService::SdoResponse) => Self::SdoResponse(SdoResponse::parse(data)?),
-                    Some(CoeService::Emergency) => Self::Emergency(Emergency::parse(data)?),
+                    Some(CoeService::Emergency) => Self::Emergency(Emergency::parse_coe(data)?),
                     Some(CoeService::SdoInfo) => Self::SdoInfo(SdoInfoFragment::parse(data)?),
                     _ => Self::OtherCoe {
                         service: coe.service_raw(),

@@ -10,6 +10,7 @@ mod abort;
 mod address;
 mod desc;
 mod dictionary;
+mod emergency;
 mod types;
 mod value;
 
@@ -17,5 +18,6 @@ pub use abort::SdoAbortCode;
 pub use address::{AddressParseError, ObjectAddress};
 pub use desc::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc};
 pub use dictionary::{Dictionary, DictionaryError};
+pub use emergency::{Emergency, EmergencyLengthError};
 pub use types::DataType;
 pub use value::{ConstValue, Value, ValueError};

@@ -831,9 +831,9 @@ impl EmulatedNode {
 
     fn raise(&mut self, a: &'static Alarm) {
         let e = Emergency {
-            code: a.code,
-            register: a.register,
-            vendor: self.profile.emcy.vendor_bytes(a.number),
+            error_code: a.code,
+            error_register: a.register,
+            data: self.profile.emcy.vendor_bytes(a.number),
         };
         self.push_history(self.profile.emcy.history_entry(a.code, a.number));
         let _ = self
@@ -887,9 +887,9 @@ impl EmulatedNode {
         let _ = self.od.set_uint(ObjectAddress::new(0x603F, 0), 0);
         let _ = self.od.set_uint(ObjectAddress::new(0x1001, 0), 0);
         self.send_emcy(Emergency {
-            code: 0,
-            register: 0,
-            vendor: [0; 5],
+            error_code: 0,
+            error_register: 0,
+            data: [0; 5],
         });
     }
 
@@ -1113,9 +1113,9 @@ impl EmulatedNode {
                 self.inject_alarm(n);
             }
             None => self.send_emcy(Emergency {
-                code: 0x8130,
-                register: 0x11,
-                vendor: [0; 5],
+                error_code: 0x8130,
+                error_register: 0x11,
+                data: [0; 5],
             }),
         }
         // 1029h:01 (ASDA-A2): 0 → Pre-operational if Operational, 2 → Stopped.
