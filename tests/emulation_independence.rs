@@ -9,69 +9,27 @@
 //! This is the CI check of that rule: it reads the source, so it also catches doc links and
 //! grouped imports (`use crate::{drives, …}`).
 
-use std::path::{Path, PathBuf};
+#[path = "support/source_scan.rs"]
+mod source_scan;
+
+use std::path::Path;
 
 /// Module paths the slave must not reach.
 const FORBIDDEN: &[&str] = &["drives", "master", "canopen", "config", "harness"];
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
-}
-
-/// Every place in `text` that reaches a forbidden module from the crate root: `crate::m`,
-/// `ecdrive::m`, or `m` inside a `crate::{…}` / `ecdrive::{…}` group. Returns (line, module).
+/// Every place in `text` that reaches a forbidden module: `crate::m`, `ecdrive::m`,
+/// `ecdrive_core::m`, or `m` inside a `crate::{…}` group. Returns (line, module).
 fn violations(text: &str) -> Vec<(usize, &'static str)> {
-    let mut out = Vec::new();
-    let line_of = |pos: usize| text[..pos].matches('\n').count() + 1;
-    for root in ["crate::", "ecdrive::", "ecdrive_core::"] {
-        let mut from = 0;
-        while let Some(i) = text[from..].find(root) {
-            let at = from + i;
-            // `ecdrive::` inside a longer identifier (`my_ecdrive::`) is not the crate.
-            let prev = text[..at].chars().next_back();
-            from = at + root.len();
-            if prev.is_some_and(|c| c.is_alphanumeric() || c == '_') {
-                continue;
-            }
-            let rest = &text[from..];
-            if let Some(group) = rest.strip_prefix('{') {
-                let end = group.find('}').unwrap_or(group.len());
-                for item in group[..end].split(',') {
-                    let head = item.trim().split("::").next().unwrap_or("").trim();
-                    if let Some(m) = FORBIDDEN.iter().find(|m| **m == head) {
-                        out.push((line_of(from), *m));
-                    }
-                }
-                continue;
-            }
-            let ident: String = rest
-                .chars()
-                .take_while(|c| c.is_alphanumeric() || *c == '_')
-                .collect();
-            if let Some(m) = FORBIDDEN.iter().find(|m| **m == ident) {
-                out.push((line_of(at), *m));
-            }
-        }
-    }
-    out
+    source_scan::reached(text, &["crate::", "ecdrive::", "ecdrive_core::"])
+        .into_iter()
+        .filter_map(|(line, m)| FORBIDDEN.iter().find(|f| **f == m).map(|f| (line, *f)))
+        .collect()
 }
 
 #[test]
 fn the_software_slave_names_no_master_profile_or_master_module() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("crates/ecdrive-sim/src");
-    let mut files = Vec::new();
-    rust_files(&root, &mut files);
-    files.sort();
+    let files = source_scan::rust_files(&root);
     assert!(
         files.len() > 20,
         "found only {} files under {}",

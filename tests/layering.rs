@@ -15,7 +15,10 @@
 //! - the CANopen master is the crate `ecdrive-canopen`: the core only (manifest checked);
 //! - applications (the rest) may reach everything.
 
-use std::path::{Path, PathBuf};
+#[path = "support/source_scan.rs"]
+mod source_scan;
+
+use std::path::Path;
 
 const CORE: &[&str] = &[
     "ec", "od", "pdo", "cia402", "esi", "drives", "link", "rt", "can",
@@ -47,49 +50,9 @@ fn allowed(rel: &str) -> Option<Vec<&'static str>> {
     }
 }
 
-fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    for e in entries.flatten() {
-        let p = e.path();
-        if p.is_dir() {
-            rust_files(&p, out);
-        } else if p.extension().is_some_and(|x| x == "rs") {
-            out.push(p);
-        }
-    }
-}
-
-/// Every top-level module `text` reaches from the crate root, with its line.
+/// Every top-level module of this crate `text` reaches, with its line.
 fn reached(text: &str) -> Vec<(usize, String)> {
-    let mut out = Vec::new();
-    let line_of = |pos: usize| text[..pos].matches('\n').count() + 1;
-    for root in ["crate::", "ecdrive::"] {
-        let mut from = 0;
-        while let Some(i) = text[from..].find(root) {
-            let at = from + i;
-            let prev = text[..at].chars().next_back();
-            from = at + root.len();
-            if prev.is_some_and(|c| c.is_alphanumeric() || c == '_') {
-                continue;
-            }
-            let rest = &text[from..];
-            let ident = |s: &str| -> String {
-                s.chars()
-                    .take_while(|c| c.is_alphanumeric() || *c == '_')
-                    .collect()
-            };
-            if let Some(group) = rest.strip_prefix('{') {
-                let end = group.find('}').unwrap_or(group.len());
-                for item in group[..end].split(',') {
-                    out.push((line_of(at), ident(item.trim())));
-                }
-            } else {
-                out.push((line_of(at), ident(rest)));
-            }
-        }
-    }
+    let mut out = source_scan::reached(text, &["crate::", "ecdrive::"]);
     out.retain(|(_, m)| ALL.contains(&m.as_str()));
     out
 }
@@ -97,9 +60,7 @@ fn reached(text: &str) -> Vec<(usize, String)> {
 #[test]
 fn each_layer_reaches_only_the_layers_below() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
+    let files = source_scan::rust_files(&src);
     assert!(files.len() > 20, "found only {} files", files.len());
     let mut found = Vec::new();
     let mut checked = 0;
@@ -196,21 +157,27 @@ fn the_core_crate_depends_on_no_master_runtime_or_application_crate() {
     assert!(dependencies(&root.join("Cargo.toml")).contains(&"ecdrive-core".to_string()));
 }
 
+/// The dependencies of crate `dir` that break "the core only": another ecdrive crate than the
+/// core, or one of `forbidden`. Also checks that the crate does depend on the core.
+fn beyond_the_core(dir: &str, forbidden: &[&str]) -> Vec<String> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let deps = dependencies(&root.join(dir).join("Cargo.toml"));
+    assert!(deps.iter().any(|d| d == "ecdrive-core"), "{dir}: {deps:?}");
+    deps.into_iter()
+        .filter(|d| {
+            (d.starts_with("ecdrive") && d != "ecdrive-core") || forbidden.contains(&d.as_str())
+        })
+        .collect()
+}
+
 /// The EtherCAT master stands on the core: the software slave only as a dev-dependency of its
 /// tests, never a normal one; no async runtime, no CLI, no progress bars.
 #[test]
 fn the_ethercat_master_crate_depends_on_the_core_only() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let m = dependencies(&root.join("crates/ecdrive-ethercat/Cargo.toml"));
-    assert!(m.iter().any(|d| d == "ecdrive-core"), "{m:?}");
-    assert!(m.iter().any(|d| d == "ethercrab"), "{m:?}");
-    let bad: Vec<&String> = m
-        .iter()
-        .filter(|d| {
-            (d.starts_with("ecdrive") && *d != "ecdrive-core")
-                || ["tokio", "clap", "indicatif", "socketcan", "toml"].contains(&d.as_str())
-        })
-        .collect();
+    let bad = beyond_the_core(
+        "crates/ecdrive-ethercat",
+        &["tokio", "clap", "indicatif", "socketcan", "toml"],
+    );
     assert!(bad.is_empty(), "ecdrive-ethercat may not depend on {bad:?}");
 }
 
@@ -218,16 +185,10 @@ fn the_ethercat_master_crate_depends_on_the_core_only() {
 /// dev-dependency of tests; no async runtime, no CLI.
 #[test]
 fn the_canopen_master_crate_depends_on_the_core_only() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let m = dependencies(&root.join("crates/ecdrive-canopen/Cargo.toml"));
-    assert!(m.iter().any(|d| d == "ecdrive-core"), "{m:?}");
-    let bad: Vec<&String> = m
-        .iter()
-        .filter(|d| {
-            (d.starts_with("ecdrive") && *d != "ecdrive-core")
-                || ["tokio", "clap", "indicatif", "ethercrab", "toml"].contains(&d.as_str())
-        })
-        .collect();
+    let bad = beyond_the_core(
+        "crates/ecdrive-canopen",
+        &["tokio", "clap", "indicatif", "ethercrab", "toml"],
+    );
     assert!(bad.is_empty(), "ecdrive-canopen may not depend on {bad:?}");
 }
 
@@ -235,15 +196,9 @@ fn the_canopen_master_crate_depends_on_the_core_only() {
 /// CLI (it serves ethercrab's in-process transport, so ethercrab is allowed).
 #[test]
 fn the_slave_crate_depends_on_the_core_only() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let sim = dependencies(&root.join("crates/ecdrive-sim/Cargo.toml"));
-    assert!(sim.iter().any(|d| d == "ecdrive-core"), "{sim:?}");
-    let bad: Vec<&String> = sim
-        .iter()
-        .filter(|d| {
-            (d.starts_with("ecdrive") && *d != "ecdrive-core")
-                || ["tokio", "clap", "indicatif", "socketcan", "toml"].contains(&d.as_str())
-        })
-        .collect();
+    let bad = beyond_the_core(
+        "crates/ecdrive-sim",
+        &["tokio", "clap", "indicatif", "socketcan", "toml"],
+    );
     assert!(bad.is_empty(), "ecdrive-sim may not depend on {bad:?}");
 }
