@@ -136,7 +136,6 @@ const NOT_IN_CORE: &[&str] = &[
     "serde_json",
     "rtrb",
     "triple_buffer",
-    "crc",
 ];
 
 #[test]

@@ -16,18 +16,7 @@ pub const DEFAULT_EEPROM_BYTES: usize = 2048;
 
 pub use crate::ec::sii::{FIRST_CATEGORY_WORD, category};
 
-/// The SII checksum: CRC-8, polynomial 0x07, initial value 0xFF, no reflection, stored in the
-/// low byte of word 7 over bytes 0..14 (words 0–6).
-pub const SII_CRC: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::Algorithm {
-    width: 8,
-    poly: 0x07,
-    init: 0xFF,
-    refin: false,
-    refout: false,
-    xorout: 0x00,
-    check: 0xFB,
-    residue: 0x00,
-});
+pub use crate::ec::sii::SII_CRC;
 
 /// Vendor ID, product code, revision and serial number (SII words 8–15).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

@@ -241,23 +241,6 @@ impl Reader<'_> {
     }
 }
 
-/// The SII CRC-8 (polynomial 0x07, initial value 0xFF) over words 0–6.
-fn checksum(bytes: &[u8]) -> Option<u8> {
-    let b = bytes.get(..14)?;
-    let mut crc: u8 = 0xFF;
-    for &x in b {
-        crc ^= x;
-        for _ in 0..8 {
-            crc = if crc & 0x80 != 0 {
-                (crc << 1) ^ 0x07
-            } else {
-                crc << 1
-            };
-        }
-    }
-    Some(crc)
-}
-
 fn fmmu_name(b: u8) -> &'static str {
     match b {
         1 => "Outputs",
@@ -310,7 +293,7 @@ impl SiiInfo {
             sync_impulse_len: w(2)?,
             pdi_config2: w(3)?,
             alias: w(4)?,
-            checksum_ok: checksum(bytes) == bytes.get(14).copied(),
+            checksum_ok: crate::ec::sii::header_checksum(bytes) == bytes.get(14).copied(),
             vendor_id: head.u32(16)?,
             product_code: head.u32(20)?,
             revision: head.u32(24)?,
@@ -867,22 +850,10 @@ mod tests {
     use super::*;
 
     #[test]
-    fn checksum_matches_the_etg_example() {
-        // ETG.2010: words 0–6 of 0x0C80 0x6688 0x0000 0x0000 0x0000 0x0000 0x0000 → 0x??; use
-        // the CRC-8 check value instead: "123456789" → 0xFB for this polynomial and seed.
-        let mut crc: u8 = 0xFF;
-        for &x in b"123456789" {
-            crc ^= x;
-            for _ in 0..8 {
-                crc = if crc & 0x80 != 0 {
-                    (crc << 1) ^ 0x07
-                } else {
-                    crc << 1
-                };
-            }
-        }
-        assert_eq!(crc, 0xFB);
-        assert_eq!(checksum(&[0; 4]), None);
+    fn checksum_is_the_sii_crc_and_needs_the_whole_header() {
+        // The CRC-8 check value for this polynomial and seed: "123456789" → 0xFB.
+        assert_eq!(crate::ec::sii::SII_CRC.checksum(b"123456789"), 0xFB);
+        assert_eq!(crate::ec::sii::header_checksum(&[0; 4]), None);
     }
 
     #[test]

@@ -2,6 +2,25 @@
 //! the category types that follow it. Shared by the software slave (which builds images) and the
 //! master's tools (which decode them).
 
+/// The SII checksum: CRC-8, polynomial 0x07, initial value 0xFF, no reflection, stored in the
+/// low byte of word 7 over bytes 0..14 (words 0–6). One definition for the slave that writes
+/// it and the master's tools that check it.
+pub const SII_CRC: crc::Crc<u8> = crc::Crc::<u8>::new(&crc::Algorithm {
+    width: 8,
+    poly: 0x07,
+    init: 0xFF,
+    refin: false,
+    refout: false,
+    xorout: 0x00,
+    check: 0xFB,
+    residue: 0x00,
+});
+
+/// The checksum of an SII image's header (its first 14 bytes), or `None` if it is shorter.
+pub fn header_checksum(image: &[u8]) -> Option<u8> {
+    image.get(..14).map(|h| SII_CRC.checksum(h))
+}
+
 /// Word address of the first category.
 pub const FIRST_CATEGORY_WORD: u16 = 0x0040;
 
