@@ -17,6 +17,8 @@ use crate::sii::DeviceDescription;
 /// The parts of a drive's ESI file the emulation is built from.
 #[derive(Debug)]
 pub struct EsiModel {
+    /// The drive's name, for errors.
+    drive: &'static str,
     /// The parsed file.
     file: EsiFile,
     /// Which device of the file.
@@ -130,17 +132,18 @@ impl EsiModel {
             dc_sync0: mode(true),
             device,
             file,
+            drive,
         })
     }
 
     /// The SII EEPROM contents with serial number `serial`.
     pub fn description(&self, serial: u32) -> Result<DeviceDescription, EsiModelError> {
         let dev = self.file.devices.get(self.device).ok_or(EsiModelError {
-            drive: "emulated drive",
+            drive: self.drive,
             reason: "device index out of range".into(),
         })?;
         crate::sii::from_esi(self.vendor_id, dev, serial).map_err(|e| EsiModelError {
-            drive: "emulated drive",
+            drive: self.drive,
             reason: e.to_string(),
         })
     }
