@@ -9,9 +9,9 @@
 
 use super::pdo_plan::PdoPlan;
 use super::profile::CanDriveProfile;
-use crate::cia402::{Axis, ErrorCode, Feedback, OperationMode, Output, StatusWord};
-use crate::od::{Dictionary, ObjectAddress};
-use crate::pdo::{Direction, Field, Layout};
+use crate::cia402::{Axis, Feedback, Output, StatusWord};
+use crate::od::Dictionary;
+use crate::pdo::{AxisBinding, Direction, FieldError, Layout};
 
 /// Bytes of an image: four PDOs of eight bytes.
 pub const IMAGE_BYTES: usize = 32;
@@ -29,22 +29,6 @@ pub struct PdoSlot {
     pub len: usize,
 }
 
-#[derive(Debug, Clone, Copy, Default)]
-struct Fields {
-    controlword: Option<Field>,
-    mode: Option<Field>,
-    target_position: Option<Field>,
-    target_velocity: Option<Field>,
-    target_torque: Option<Field>,
-    ip_position: Option<Field>,
-    statusword: Option<Field>,
-    mode_display: Option<Field>,
-    position: Option<Field>,
-    velocity: Option<Field>,
-    torque: Option<Field>,
-    error_code: Option<Field>,
-}
-
 /// A drive the master runs. See the [module documentation](self).
 #[derive(Debug, Clone)]
 pub struct CanDrive {
@@ -57,31 +41,22 @@ pub struct CanDrive {
     rpdos: Vec<PdoSlot>,
     tpdos: Vec<PdoSlot>,
     tpdo_seen_us: [Option<u64>; 4],
-    fields: Fields,
+    binding: AxisBinding,
     last_output: Option<Output>,
 }
 
 impl CanDrive {
-    /// A drive on `node` with the (validated) `plan` and an `axis`.
-    pub fn new(node: u8, profile: &'static CanDriveProfile, plan: PdoPlan, axis: Axis) -> Self {
+    /// A drive on `node` with the (validated) `plan` and an `axis`; an error names a mapped
+    /// CiA 402 object that cannot be read as its type.
+    pub fn new(
+        node: u8,
+        profile: &'static CanDriveProfile,
+        plan: PdoPlan,
+        axis: Axis,
+    ) -> Result<Self, FieldError> {
         let mapping = plan.mapping();
         let layout = Layout::new(&mapping);
-        let dict = Dictionary::new(profile.dictionary);
-        let field = |dir, i: u16, s: u8| layout.resolve(dir, ObjectAddress::new(i, s), &dict).ok();
-        let fields = Fields {
-            controlword: field(Direction::Rx, 0x6040, 0),
-            mode: field(Direction::Rx, 0x6060, 0),
-            target_position: field(Direction::Rx, 0x607A, 0),
-            target_velocity: field(Direction::Rx, 0x60FF, 0),
-            target_torque: field(Direction::Rx, 0x6071, 0),
-            ip_position: field(Direction::Rx, 0x60C1, 1),
-            statusword: field(Direction::Tx, 0x6041, 0),
-            mode_display: field(Direction::Tx, 0x6061, 0),
-            position: field(Direction::Tx, 0x6064, 0),
-            velocity: field(Direction::Tx, 0x606C, 0),
-            torque: field(Direction::Tx, 0x6077, 0),
-            error_code: field(Direction::Tx, 0x603F, 0),
-        };
+        let binding = AxisBinding::resolve(&layout, &Dictionary::new(profile.dictionary))?;
         let slots = |dir: Direction| {
             let mut v: Vec<&super::pdo_plan::CanPdo> = plan.pdos(dir).iter().collect();
             v.sort_by_key(|p| p.number);
@@ -101,7 +76,7 @@ impl CanDrive {
         };
         let rpdos = slots(Direction::Rx);
         let tpdos = slots(Direction::Tx);
-        Self {
+        Ok(Self {
             node,
             profile,
             axis,
@@ -111,9 +86,9 @@ impl CanDrive {
             rpdos,
             tpdos,
             tpdo_seen_us: [None; 4],
-            fields,
+            binding,
             last_output: None,
-        }
+        })
     }
 
     /// The node-ID.
@@ -191,60 +166,26 @@ impl CanDrive {
         Some((s.cob, self.rx.get(s.offset..s.offset + s.len)?))
     }
 
-    fn read_i64(&self, f: Option<Field>) -> Option<i64> {
-        f.and_then(|f| f.read_int(&self.tx).ok())
-            .and_then(|v| i64::try_from(v).ok())
+    /// Where the CiA 402 objects sit in the images (the binding the EtherCAT master uses too).
+    pub const fn binding(&self) -> &AxisBinding {
+        &self.binding
     }
 
     /// The statusword from the input image (0 before the first TPDO).
     pub fn statusword(&self) -> StatusWord {
-        StatusWord::from_raw(self.read_i64(self.fields.statusword).unwrap_or(0) as u16)
+        self.binding.statusword(&self.tx)
     }
 
     /// The feedback for [`Axis::step`] from the input image.
     pub fn feedback(&self) -> Feedback {
-        let mut fb = Feedback::new(self.statusword());
-        fb.mode_display = self
-            .read_i64(self.fields.mode_display)
-            .map(|v| OperationMode::from_i8(v as i8));
-        fb.position = self.read_i64(self.fields.position).map(|v| v as i32);
-        fb.velocity = self.read_i64(self.fields.velocity).map(|v| v as i32);
-        fb.torque = self.read_i64(self.fields.torque).map(|v| v as i16);
-        fb.error_code = self
-            .read_i64(self.fields.error_code)
-            .map(|v| ErrorCode(v as u16));
-        fb
+        self.binding.feedback(&self.tx)
     }
 
     /// Run the axis on this cycle's feedback and write its outputs into the output image (the
     /// target position also into 60C1h:01 when the ip data record is mapped). Allocation-free.
     pub fn step(&mut self) -> Output {
-        let fb = self.feedback();
-        let out = self.axis.step(&fb);
-        let f = self.fields;
-        let w = |img: &mut [u8; IMAGE_BYTES], field: Option<Field>, v: i128| {
-            if let Some(field) = field {
-                let _ = field.write_int(img, v);
-            }
-        };
-        w(
-            &mut self.rx,
-            f.controlword,
-            i128::from(out.controlword.raw()),
-        );
-        w(&mut self.rx, f.mode, i128::from(out.mode.as_i8()));
-        w(
-            &mut self.rx,
-            f.target_position,
-            i128::from(out.target_position),
-        );
-        w(
-            &mut self.rx,
-            f.target_velocity,
-            i128::from(out.target_velocity),
-        );
-        w(&mut self.rx, f.target_torque, i128::from(out.target_torque));
-        w(&mut self.rx, f.ip_position, i128::from(out.target_position));
+        let out = self.axis.step(&self.feedback());
+        self.binding.write(&out, &mut self.rx);
         self.last_output = Some(out);
         out
     }

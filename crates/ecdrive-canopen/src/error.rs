@@ -7,6 +7,7 @@ use super::sdo::{AbortText, SdoError};
 use super::transport::TransportError;
 use crate::cia402::{AxisError, State};
 use crate::od::{ObjectAddress, ValueError};
+use crate::pdo::FieldError;
 use core::fmt;
 
 /// A node as messages name it: `node 3 (BLV-R)`.
@@ -87,6 +88,9 @@ pub enum CanErrorKind {
     /// The axis engine refused a request.
     #[error(transparent)]
     Axis(#[from] AxisError),
+    /// A mapped CiA 402 object cannot be read as its type.
+    #[error(transparent)]
+    Field(#[from] FieldError),
     /// The drive does not follow the controlword because statusword bit 9 (remote) is 0.
     #[error(
         "statusword bit 9 (remote) is 0: the drive ignores the controlword except quick stop, \

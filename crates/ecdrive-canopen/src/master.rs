@@ -1281,7 +1281,8 @@ impl<T: CanTransport> Master<T> {
         };
         let axis =
             Axis::new(caps, axis_cfg).map_err(|e| self.err(node, None, CanErrorKind::Axis(e)))?;
-        let drive = CanDrive::new(node, p, setup.plan, axis);
+        let drive = CanDrive::new(node, p, setup.plan, axis)
+            .map_err(|e| self.err(node, None, CanErrorKind::Field(e)))?;
         // Replace a previous configuration of this node.
         if let Some(old) = self.slot(node).and_then(|s| s.drive) {
             for r in self.tpdo_route.iter_mut() {

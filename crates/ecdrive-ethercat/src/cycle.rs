@@ -24,7 +24,8 @@ use super::telemetry::{
     Phase, StopKind, StopReason, Telemetry,
 };
 use crate::cia402::{
-    self, Axis, AxisConfig, ErrorCode, Feedback, ModeSwitchPhase, OperationMode, State, StatusWord,
+    self, Axis, AxisConfig, AxisStatus, Feedback, ModeSwitchPhase, OperationMode, Output, State,
+    StatusWord,
 };
 use crate::ec::register;
 use crate::pdo::Field;
@@ -286,6 +287,99 @@ enum Stopping {
     Disabling,
 }
 
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ProgramState {
+    Idle,
+    Pending,
+    Running,
+}
+
+/// Where the drives stand on the way to OP.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum OpState {
+    /// Valid outputs go out in SAFE-OP; OP not requested yet.
+    SafeOp,
+    /// OP requested at this cycle.
+    Requested { at: u64 },
+    /// Every device has been in OP.
+    AllOp,
+}
+
+/// Where the run stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum RunPhase {
+    /// Cycling: commands and programs drive the axes.
+    Running,
+    /// Stopping the axes; once every axis is disabled, PRE-OP is requested (at this cycle).
+    Ending { preop_requested_at: Option<u64> },
+}
+
+/// Which cycles the timing histograms and the report's counts cover (see
+/// [`CycleSettings::steady_timing_only`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Window {
+    /// Not yet (steady state has not begun).
+    NotYet,
+    /// From the next cycle on.
+    OpensNext,
+    /// This cycle is recorded.
+    Open,
+    /// This cycle is recorded, the next ones not.
+    ClosesAfter,
+    /// No more.
+    Closed,
+}
+
+impl Window {
+    fn recording(self) -> bool {
+        matches!(self, Self::Open | Self::ClosesAfter)
+    }
+}
+
+/// Events out of the cycle, stamped with the cycle number; remembers why the axes were first
+/// stopped.
+struct Emitter<'a> {
+    out: &'a mut rtrb::Producer<Event>,
+    cycle: u64,
+    first_stop: Option<StopReason>,
+}
+
+impl Emitter<'_> {
+    fn emit(&mut self, kind: EventKind) {
+        if let EventKind::Stopping { reason } = kind
+            && self.first_stop.is_none()
+        {
+            self.first_stop = Some(reason);
+        }
+        let _ = self.out.push(Event {
+            cycle: self.cycle,
+            time_ns: monotonic_ns(),
+            kind,
+        });
+    }
+}
+
+/// What every axis's step of one cycle shares.
+#[derive(Debug, Clone, Copy)]
+struct StepContext {
+    /// The cycle number.
+    cycle: u64,
+    /// Cycles with a reply so far: the clock of the programs and the stop ramps.
+    tick: u64,
+    /// The cycle time in seconds.
+    dt: f64,
+    /// The SYNC0 pulse the frame of this cycle came after (see [`FEEDBACK_PULSES`]).
+    pulse: u64,
+    /// The run is stopping.
+    ending: bool,
+    /// Whether any axis was energised or running a program as of the last cycle.
+    any_energised_before: bool,
+    stop_ramp_cycles: u64,
+    stop_timeout_cycles: u64,
+}
+
+/// One axis in the cycle: its engine, its place in the process image, its program and what
+/// the cycle remembers of it.
 struct AxisRt {
     /// Position on the segment (index in the group).
     sub: usize,
@@ -322,66 +416,19 @@ struct AxisRt {
     last_out: Option<(i32, i32, i16)>,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ProgramState {
-    Idle,
-    Pending,
-    Running,
-}
-
-fn read_u(f: &Field, buf: &[u8]) -> u64 {
-    f.read_raw(buf).unwrap_or(0)
-}
-
-fn read_i(f: &Field, buf: &[u8]) -> i64 {
-    f.read_int(buf).map(|v| v as i64).unwrap_or(0)
-}
-
-fn write_i(f: &Field, buf: &mut [u8], v: i64) {
-    let _ = f.write_int(buf, v as i128);
-}
-
-/// Run the cycle until it ends. Call on the thread that is to be the cycle thread (the
-/// settings' RT priority, CPU and memory locking are applied to it).
-#[allow(clippy::too_many_arguments)]
-pub fn run<L: FrameLink>(
-    md: &MainDevice<'_>,
-    pump: &mut Pump<'_, L>,
-    group: &Group<SafeOp, HasDc>,
-    drives: &[ConfiguredDrive],
-    others: &[ConfiguredIo],
-    settings: &CycleSettings,
-    io: &mut CycleIo,
-    hooks: Option<&dyn CycleHooks>,
-) -> CycleReport {
-    let rt = settings.rt.apply_to_current_thread();
-    if let Some(tx) = io.rt_report.take() {
-        let _ = tx.send(rt.clone());
-    }
-    let cycle_ns = settings.cycle.as_nanos() as u64;
-    let dt = settings.cycle.as_secs_f64();
-    let n = drives.len();
-
-    // ---- set-up (allocations allowed) ----------------------------------------------------
-    let mut axes: Vec<AxisRt> = Vec::with_capacity(n);
-    for d in drives {
+impl AxisRt {
+    /// The axis of drive `d` (set-up: allocations allowed), or `None` if its engine cannot be
+    /// built.
+    fn new(d: &ConfiguredDrive, cycle: Duration) -> Option<Self> {
+        let caps = d.profile.caps;
         let initial = OperationMode::from_i8(d.setup.mode.code());
-        let cfg = AxisConfig::for_cycle_time(&d.profile.caps, settings.cycle, initial);
-        let axis = match Axis::new(d.profile.caps, cfg) {
-            Ok(a) => a,
-            Err(_) => match Axis::new(
-                d.profile.caps,
-                AxisConfig::for_cycle_time(
-                    &d.profile.caps,
-                    settings.cycle,
-                    OperationMode::CyclicSyncPosition,
-                ),
-            ) {
-                Ok(a) => a,
-                Err(_) => continue,
-            },
-        };
-        axes.push(AxisRt {
+        let axis = Axis::new(caps, AxisConfig::for_cycle_time(&caps, cycle, initial))
+            .or_else(|_| {
+                let csp = OperationMode::CyclicSyncPosition;
+                Axis::new(caps, AxisConfig::for_cycle_time(&caps, cycle, csp))
+            })
+            .ok()?;
+        Some(Self {
             sub: usize::from(d.info.position),
             axis,
             fields: d.fields.clone(),
@@ -409,1054 +456,1342 @@ pub fn run<L: FrameLink>(
             modes_run: Vec::with_capacity(8),
             steps: SetpointSteps::default(),
             last_out: None,
-        });
-    }
-    // Outputs that carry fixed values from the first cycle on.
-    for a in axes.iter() {
-        if let Ok(sd) = group.subdevice(md, a.sub) {
-            let mut io = sd.io_raw_mut();
-            let out = io.outputs();
-            for (f, v) in &a.fields.held_outputs {
-                let _ = f.write_raw(out, *v);
-            }
-            for (f, v) in &a.fields.output_defaults {
-                write_i(f, out, *v);
-            }
-            write_i(&a.fields.controlword, out, 0);
-        }
-    }
-    {
-        let t = io.telemetry.input_buffer_mut();
-        t.axes.resize(axes.len(), AxisTelemetry::default());
-        t.io.resize(others.len(), IoTelemetry::default());
-    }
-    let mut timing = Timing::default();
-    // Every device counts: an LRW adds 2 for each device with outputs, 1 for each with inputs.
-    let wkc = |outputs: usize, inputs: usize| u16::from(outputs > 0) * 2 + u16::from(inputs > 0);
-    let wkc_expected: u16 = drives
-        .iter()
-        .map(|d| {
-            wkc(
-                d.layout.bytes(crate::pdo::Direction::Rx),
-                d.layout.bytes(crate::pdo::Direction::Tx),
-            )
         })
-        .chain(others.iter().map(|o| wkc(o.outputs, o.inputs)))
-        .sum();
-    // Every device by position: its station address and last AL state.
-    let n_devices = group.len();
-    let mut addresses = vec![0u16; n_devices];
-    for d in drives {
-        if let Some(a) = addresses.get_mut(usize::from(d.info.position)) {
-            *a = d.info.address;
+    }
+
+    /// Outputs that carry fixed values from the first cycle on, and Disable voltage.
+    fn initial_outputs(&self, out: &mut [u8]) {
+        for (f, v) in &self.fields.held_outputs {
+            let _ = f.write_raw(out, *v);
+        }
+        for (f, v) in &self.fields.output_defaults {
+            write_i(f, out, *v);
+        }
+        self.fields.axis.write_disable_voltage(out);
+    }
+
+    /// Advance the drive's cycle counter (if mapped) in `out`: one per cycle, as the drive
+    /// expects, also on a cycle whose outputs are otherwise unchanged.
+    fn count(&mut self, out: &mut [u8]) {
+        if let Some((c, _)) = &self.fields.counter {
+            self.counter = self.counter.wrapping_add(1);
+            write_i(c, out, i64::from(self.counter));
         }
     }
-    for o in others {
-        if let Some(a) = addresses.get_mut(usize::from(o.info.position)) {
-            *a = o.info.address;
-        }
+
+    /// Below OP nothing of the drive is judged: a slave may serve stale inputs until OP (a mode
+    /// display of 0, a statusword of 0), and it should not act on the outputs. They stay safe
+    /// all the same, for a slave that does: Disable voltage.
+    fn below_op(&mut self, out: &mut [u8]) {
+        self.fields.axis.write_disable_voltage(out);
+        self.count(out);
+        self.tel.state = None;
+        self.tel.al_state = self.al_state;
     }
-    let mut al_states = vec![0u8; n_devices];
-    // The I/O devices as last seen (a lost cycle keeps the inputs of the last reply).
-    let mut io_last = vec![IoTelemetry::default(); others.len()];
 
-    // ---- the loop (no allocation from here on) -------------------------------------------
-    let mut cycle: u64 = 0;
-    // Cycles with a reply: the clock of the programs and the stop ramps (a lost cycle holds
-    // the set-point, so the motion resumes where it stood).
-    let mut tick: u64 = 0;
-    let mut end_reason: Option<CycleEnd> = None;
-    let mut segment_lost = false;
-    let segment_gone_cycles = (settings.segment_gone_after.as_nanos() as u64 / cycle_ns.max(1))
-        .max(u64::from(settings.segment_lost_after));
-    let mut lost_total: u64 = 0;
-    let mut consecutive_lost: u32 = 0;
-    let mut wkc_errors: u32 = 0;
-    let mut overruns: u64 = 0;
-    // What the timing histograms and the report's counts cover (see `steady_timing_only`).
-    let mut recording = !settings.steady_timing_only;
-    let mut recording_from_next = false;
-    let mut recording_ends = false;
-    let mut recorded_lost: u64 = 0;
-    let mut recorded_overruns: u64 = 0;
-    let mut all_op = false;
-    let mut op_requested_at: Option<u64> = None;
-    let mut preop_requested_at: Option<u64> = None;
-    let mut ending = false;
-    // Why the axes were first stopped (what ended the run), if they were.
-    let mut first_stop: Option<StopReason> = None;
-    let mut last_telemetry = CycleTelemetry::default();
-    let mut steady = false;
-    let end;
-    let mut last_wake: u64 = 0;
-    let mut next_wake = monotonic_ns() + cycle_ns;
-    let mut dc_time: u64 = 0;
-    let mut last_wkc: u16 = 0;
-    let stop_ramp_cycles = (settings.stop_ramp.as_nanos() as u64 / cycle_ns.max(1)).max(1);
-    let stop_timeout_cycles = (settings.stop_timeout.as_nanos() as u64 / cycle_ns.max(1)).max(1);
-
-    macro_rules! emit {
-        ($kind:expr) => {{
-            let kind = $kind;
-            if let EventKind::Stopping { reason } = kind
-                && first_stop.is_none()
-            {
-                first_stop = Some(reason);
+    /// Read this cycle's inputs (the frame just exchanged carried the demand of the last
+    /// cycle): the feedback for the engine, the unwrapped position and the telemetry.
+    fn read_inputs(&mut self, inputs: &[u8], pulse: u64) -> Feedback {
+        if let Some(d) = self.last_demand {
+            self.carried[self.carried_next] = (pulse, d);
+            self.carried_next = (self.carried_next + 1) % CARRIED;
+        }
+        let b = &self.fields.axis;
+        let fb = b.feedback(inputs);
+        if let Some(p) = fb.position {
+            if self.pos_valid {
+                self.pos += i64::from(p.wrapping_sub(self.pos_raw));
+            } else {
+                self.pos = i64::from(p);
+                self.pos_valid = true;
             }
-            let _ = io.events.push(Event {
-                cycle,
-                time_ns: monotonic_ns(),
-                kind,
+            self.pos_raw = p;
+        }
+        let t = &mut self.tel;
+        t.statusword = fb.statusword.raw();
+        t.position_actual = self.pos;
+        t.velocity_actual = fb.velocity.unwrap_or(0);
+        t.torque_actual = fb.torque.unwrap_or(0);
+        t.mode_display = fb.mode_display.map_or(0, OperationMode::as_i8);
+        t.error_code = fb.error_code.map_or(0, |e| e.0);
+        t.following_error_drive = b.following_error(inputs);
+        fb
+    }
+
+    /// The actual values as a set-point sample.
+    fn actual(&self) -> Sample {
+        Sample {
+            pos: self.pos as f64,
+            vel: self.tel.velocity_actual as f64 * self.velocity_unit,
+            acc: 0.0,
+            torque: f64::from(self.tel.torque_actual),
+            done: false,
+        }
+    }
+
+    /// One cycle with a reply in OP: inputs → program and stop ramp → engine → outputs, with
+    /// the engine's events, the set-point statistics, the following error and the telemetry.
+    fn step(&mut self, i: usize, inputs: &[u8], ctx: &StepContext, ev: &mut Emitter) -> Output {
+        let fb = self.read_inputs(inputs, ctx.pulse);
+        let actual = self.actual();
+        let st = self.axis.status();
+        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+        if self.program == ProgramState::Pending && enabled {
+            self.runner.seed(actual);
+            self.program = ProgramState::Running;
+            ev.emit(EventKind::ProgramStep {
+                axis: i as u16,
+                step: self.runner.step_index() as u16,
             });
-        }};
+        }
+        let mut sp = self.stop_setpoint(&st, enabled, ctx);
+        if self.stopping == Stopping::No && self.program == ProgramState::Running && enabled {
+            if let Some(s) = self.program_setpoint(i, &st, actual, ctx, ev) {
+                sp = s;
+            }
+        }
+        if enabled {
+            self.command(sp, &st);
+        } else if self.stopping == Stopping::No {
+            // Not enabled: track the actual values so enabling starts without a jump.
+            self.hold = actual;
+        }
+        let out = self.axis.step(&fb);
+        self.engine_events(i, actual, ctx, ev);
+        self.record_steps(&out, enabled, ctx.cycle);
+        self.follow(i, &out, ctx, ev);
+        out
     }
 
-    loop {
-        if recording_from_next {
-            recording_from_next = false;
-            recording = true;
-        }
-        sleep_until_ns(next_wake);
-        let woke = monotonic_ns();
-        let latency = woke.saturating_sub(next_wake);
-        if recording {
-            timing.wake_latency.record(latency);
-            if last_wake != 0 {
-                timing.period.record(woke - last_wake);
+    /// The set-point of a controlled stop (ramp to standstill, or waiting out a quick stop),
+    /// or the one held.
+    fn stop_setpoint(&mut self, st: &AxisStatus, enabled: bool, ctx: &StepContext) -> Sample {
+        match self.stopping {
+            Stopping::Ramp { from, at, .. } => {
+                let k = ctx.tick.saturating_sub(at) as f64 / ctx.stop_ramp_cycles as f64;
+                let sp = if k >= 1.0 || !enabled {
+                    self.axis.request_disable();
+                    self.stopping = Stopping::Disabling;
+                    Sample {
+                        vel: 0.0,
+                        torque: 0.0,
+                        ..from
+                    }
+                } else {
+                    // Linear velocity (and torque) ramp to zero; position integrates.
+                    let t = ctx.tick.saturating_sub(at) as f64 * ctx.dt;
+                    let total = ctx.stop_ramp_cycles as f64 * ctx.dt;
+                    Sample {
+                        pos: from.pos + from.vel * (t - t * t / (2.0 * total)),
+                        vel: from.vel * (1.0 - k),
+                        acc: 0.0,
+                        torque: from.torque * (1.0 - k),
+                        done: false,
+                    }
+                };
+                self.hold = sp;
+                sp
             }
-        }
-        if latency > cycle_ns {
-            overruns += 1;
-            if recording {
-                recorded_overruns += 1;
+            Stopping::Quick { at } => {
+                // Disable once the quick stop has run: the drive left Quick stop active
+                // (option codes ending in Switch on disabled), or stands still in it.
+                let in_qs = st.state == Some(State::QuickStopActive);
+                let done = ctx.cycle - at > 2 && (!in_qs || st.standstill);
+                if done || ctx.cycle - at > ctx.stop_timeout_cycles {
+                    self.axis.request_disable();
+                    self.stopping = Stopping::Disabling;
+                }
+                self.hold
             }
+            Stopping::Disabling | Stopping::No => self.hold,
         }
-        last_wake = woke;
-        cycle += 1;
+    }
 
-        // 1. Exchange the process data.
-        let deadline = woke + (cycle_ns as f64 * settings.reply_budget) as u64;
-        let t_ex = monotonic_ns();
-        let result = {
-            let fut = pin!(group.tx_rx_dc(md));
-            exec::exchange(pump, fut, deadline)
-        };
-        let t_ex_done = monotonic_ns();
-        let mut next_wait: Option<u64> = None;
-        let mut good = false;
-        match result {
-            Ok(Ok(resp)) => {
-                good = true;
-                tick += 1;
-                if recording {
-                    timing.exchange.record(t_ex_done - t_ex);
-                }
-                if consecutive_lost > 0 {
-                    emit!(EventKind::FramesResumed {
-                        lost: consecutive_lost
-                    });
-                }
-                consecutive_lost = 0;
-                segment_lost = false;
-                dc_time = resp.extra.dc_system_time;
-                last_wkc = resp.working_counter;
-                next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
-                // AL states (state checks ride along with the LRW).
-                let mut missing: Option<u16> = None;
-                let mut every_op = true;
-                let mut left_op: Option<(u16, u8)> = None;
-                for (i, st) in resp.subdevice_states.iter().enumerate() {
-                    let raw: u8 = match st {
-                        SubDeviceState::None => 0,
-                        SubDeviceState::Init => 1,
-                        SubDeviceState::PreOp => 2,
-                        SubDeviceState::Bootstrap => 3,
-                        SubDeviceState::SafeOp => 4,
-                        SubDeviceState::Op => 8,
-                        SubDeviceState::Other(v) => *v,
-                    };
-                    if raw == 0 && missing.is_none() {
-                        missing = Some(i as u16);
-                    }
-                    if raw != 8 {
-                        every_op = false;
-                    }
-                    if let Some(a) = axes.iter_mut().find(|a| a.sub == i) {
-                        a.al_state = raw;
-                    }
-                    if let Some(prev) = al_states.get_mut(i)
-                        && *prev != raw
+    /// One tick of the running program: its set-point (`None`: hold), a mode switch it asks
+    /// for, or its end.
+    fn program_setpoint(
+        &mut self,
+        i: usize,
+        st: &AxisStatus,
+        actual: Sample,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+    ) -> Option<Sample> {
+        let mut sp = None;
+        match self.runner.tick(ctx.tick as f64 * ctx.dt) {
+            Tick::Setpoint(s) => {
+                sp = Some(s);
+                self.hold = s;
+            }
+            Tick::SwitchMode(m) => {
+                let idle = st.mode_switch == ModeSwitchPhase::Idle;
+                if idle && st.active_mode.as_i8() == m.code() {
+                    // Already in that mode (a run begins by asking for its start mode): no
+                    // switch, no event; go on at once.
+                    self.requested_mode = None;
+                    self.runner.mode_switched(actual);
+                } else if idle {
+                    // Nothing under way (also when an earlier request of this run was cut
+                    // short): ask for it.
+                    self.requested_mode = Some(m);
+                    if self
+                        .axis
+                        .request_mode(OperationMode::from_i8(m.code()))
+                        .is_err()
                     {
-                        let was_op = *prev == 8;
-                        *prev = raw;
-                        emit!(EventKind::AlState {
-                            device: i as u16,
-                            state: raw
+                        self.requested_mode = None;
+                        ev.emit(EventKind::CommandRefused {
+                            axis: i as u16,
+                            why: "the program's mode switch was refused",
                         });
-                        if was_op && raw != 8 && !ending {
-                            // A device left OP on its own: decode why, stop every axis, end.
-                            let addr = addresses.get(i).copied().unwrap_or(0);
-                            let code = {
-                                let fut = pin!(
-                                    EcCommand::fprd(addr, register::AL_STATUS_CODE)
-                                        .receive::<u16>(md)
-                                );
-                                match exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 4) {
-                                    Ok(Ok(c)) => Some(c),
-                                    _ => None,
-                                }
-                            };
-                            emit!(EventKind::LeftOp {
-                                device: i as u16,
-                                state: raw,
-                                code
-                            });
-                            if left_op.is_none() {
-                                left_op = Some((i as u16, raw));
-                                end_reason = Some(CycleEnd::DriveLeftOp {
-                                    device: i as u16,
-                                    al_state: raw,
-                                    code,
-                                });
-                            }
-                        }
+                        self.program = ProgramState::Idle;
                     }
                 }
-                if let Some((device, _)) = left_op {
-                    emit!(EventKind::Stopping {
-                        reason: StopReason::DriveLeftOp { device }
-                    });
-                    ending = true;
-                    for a in axes.iter_mut() {
-                        begin_stop(a, StopKind::Ramp, tick, cycle);
-                    }
-                }
-                if !all_op && every_op && n_devices > 0 {
-                    all_op = true;
-                    if io.restarting {
-                        io.restarting = false;
-                        io.restarts += 1;
-                    }
-                    emit!(EventKind::AllOp);
-                    if settings.steady_timing_only {
-                        recording_from_next = true;
-                    }
-                    if let Some(h) = hooks {
-                        h.steady_begin();
-                        steady = true;
-                    }
-                }
-                if all_op && !ending {
-                    if resp.working_counter != wkc_expected {
-                        wkc_errors += 1;
-                        emit!(EventKind::WorkingCounter {
-                            got: resp.working_counter,
-                            expected: wkc_expected,
-                            missing
-                        });
-                        if wkc_errors == settings.wkc_errors_before_stop && !ending {
-                            emit!(EventKind::Stopping {
-                                reason: StopReason::WorkingCounter
-                            });
-                            for a in axes.iter_mut() {
-                                begin_stop(a, StopKind::Ramp, tick, cycle);
-                            }
-                        }
-                    } else {
-                        wkc_errors = 0;
-                    }
-                }
+                // Else a switch is under way: its ModeSwitched event (or the next look at the
+                // active mode) lets the program go on.
             }
-            Ok(Err(_)) | Err(ExchangeError::Late) => {
-                lost_total += 1;
-                if recording {
-                    recorded_lost += 1;
-                }
-                consecutive_lost += 1;
-                // Each lost cycle up to the stop and the detection; after that the segment
-                // counts as lost, and the count comes with `FramesResumed` or `SegmentGone`.
-                if consecutive_lost <= settings.lost_before_stop.max(settings.segment_lost_after) {
-                    emit!(EventKind::FrameLost {
-                        consecutive: consecutive_lost
-                    });
-                }
-                if consecutive_lost == settings.lost_before_stop && !ending {
-                    emit!(EventKind::Stopping {
-                        reason: StopReason::FramesLost {
-                            cycles: consecutive_lost
-                        }
-                    });
-                    stop_moving_axes(&mut axes, tick, cycle);
-                }
-                if consecutive_lost == settings.segment_lost_after && !segment_lost {
-                    segment_lost = true;
-                    emit!(EventKind::SegmentLost {
-                        cycles: consecutive_lost
-                    });
-                    stop_moving_axes(&mut axes, tick, cycle);
-                }
-                if u64::from(consecutive_lost) >= segment_gone_cycles {
-                    emit!(EventKind::SegmentGone {
-                        cycles: consecutive_lost
-                    });
-                    end = CycleEnd::SegmentLost;
-                    break;
-                }
-            }
-            Err(ExchangeError::Link(_)) => {
-                end = CycleEnd::LinkFailed;
-                break;
+            Tick::Finished(s) => {
+                sp = Some(s);
+                self.hold = s;
+                self.program = ProgramState::Idle;
+                ev.emit(EventKind::ProgramDone { axis: i as u16 });
             }
         }
+        let idx = self.runner.step_index() as u16;
+        if idx != self.tel.program_step {
+            ev.emit(EventKind::ProgramStep {
+                axis: i as u16,
+                step: idx,
+            });
+        }
+        sp
+    }
 
-        // 2. OP: request it after some cycles of valid outputs, then wait for it.
-        if !all_op {
-            match op_requested_at {
-                None if cycle >= u64::from(settings.safeop_cycles) => {
-                    for &addr in &addresses {
-                        let fut =
-                            pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(md, 0x0008u16));
-                        let _ = exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 2);
+    /// The set-point into the engine, in the active mode.
+    fn command(&mut self, sp: Sample, st: &AxisStatus) {
+        let mode = CyclicMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        self.mode = mode;
+        let _ = match mode {
+            CyclicMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
+            CyclicMode::Csv => self.axis.set_velocity(
+                (sp.vel / self.velocity_unit)
+                    .round()
+                    .clamp(i32::MIN as f64, i32::MAX as f64) as i32,
+            ),
+            CyclicMode::Cst => self
+                .axis
+                .set_torque(sp.torque.round().clamp(i16::MIN as f64, i16::MAX as f64) as i16),
+        };
+        if self.modes_run.last() != Some(&mode) && self.modes_run.len() < self.modes_run.capacity()
+        {
+            self.modes_run.push(mode);
+        }
+    }
+
+    /// The engine's events of this step: mode switches the program waits for, faults.
+    fn engine_events(&mut self, i: usize, actual: Sample, ctx: &StepContext, ev: &mut Emitter) {
+        while let Some(e) = self.axis.poll_event() {
+            match e {
+                cia402::Event::ModeSwitched { to, .. } => {
+                    if let Some(m) = CyclicMode::from_code(to.as_i8()) {
+                        self.mode = m;
+                        if self.requested_mode == Some(m) {
+                            self.requested_mode = None;
+                            self.runner.mode_switched(actual);
+                        }
                     }
-                    op_requested_at = Some(cycle);
                 }
-                Some(at) if (cycle - at) * cycle_ns > settings.op_timeout.as_nanos() as u64 => {
-                    let (device, al_state) = al_states
-                        .iter()
-                        .enumerate()
-                        .find(|(_, s)| **s != 8)
-                        .map(|(i, s)| (i as u16, *s))
-                        .unwrap_or((0, 0));
-                    emit!(EventKind::OpTimeout { device, al_state });
-                    end = CycleEnd::OpFailed { device, al_state };
-                    break;
+                cia402::Event::ModeSwitchFailed(f) if self.requested_mode.is_some() => {
+                    // The program asked for this switch and cannot go on without it. A fault
+                    // cut it short: the fault itself is what gets reported.
+                    self.requested_mode = None;
+                    self.program = ProgramState::Idle;
+                    if f.reason != cia402::ModeSwitchFailure::Fault {
+                        ev.emit(EventKind::CommandRefused {
+                            axis: i as u16,
+                            why: "the program stopped: its mode switch failed",
+                        });
+                    }
+                }
+                cia402::Event::Fault { .. } if !ctx.ending => {
+                    self.program = ProgramState::Idle;
+                    ev.emit(EventKind::Axis {
+                        axis: i as u16,
+                        event: e,
+                    });
+                    // The other axes are stopped after the per-axis steps. A fault while
+                    // nothing was energised (latched before the run) stops nothing.
+                    if ctx.any_energised_before {
+                        ev.emit(EventKind::Stopping {
+                            reason: StopReason::DriveFault { axis: i as u16 },
+                        });
+                    }
+                    continue;
                 }
                 _ => {}
             }
+            ev.emit(EventKind::Axis {
+                axis: i as u16,
+                event: e,
+            });
         }
+    }
 
-        // 3. Commands.
-        while let Ok(cmd) = io.commands.pop() {
-            match cmd {
-                Command::Stop(_) | Command::Restart => {
-                    let kind = match cmd {
-                        Command::Stop(k) => k,
-                        _ => StopKind::Ramp,
-                    };
-                    if settings.steady_timing_only {
-                        recording_ends = true;
-                    }
-                    if let Some(h) = hooks
-                        && steady
-                    {
-                        h.steady_end();
-                        steady = false;
-                    }
-                    if ending && kind == StopKind::QuickStop {
-                        // Asked again to stop, in a hurry: the axes still on their ramp make a
-                        // quick stop instead (and are disabled after it, as always).
-                        for a in axes.iter_mut() {
-                            if matches!(a.stopping, Stopping::Ramp { .. }) {
-                                a.axis.request_quick_stop();
-                                a.stopping = Stopping::Quick { at: cycle };
-                            }
-                        }
-                    }
-                    if !ending {
-                        ending = true;
-                        let restart = cmd == Command::Restart;
-                        end_reason = Some(if restart {
-                            CycleEnd::Restart
-                        } else {
-                            CycleEnd::Stopped
-                        });
-                        emit!(EventKind::Stopping {
-                            reason: if restart {
-                                StopReason::Restart
-                            } else {
-                                StopReason::Requested
-                            }
-                        });
-                        for a in axes.iter_mut() {
-                            begin_stop(a, kind, tick, cycle);
-                        }
-                    }
+    /// The engine's outputs into the process image, and the cycle counter.
+    fn write_outputs(&mut self, out: &Output, image: &mut [u8]) {
+        self.fields.axis.write(out, image);
+        self.count(image);
+    }
+
+    /// Set-point steps while enabled, in the mode the drive runs (confirmed by 0x6061): the
+    /// other targets only track the actual values.
+    fn record_steps(&mut self, out: &Output, enabled: bool, cycle: u64) {
+        let running = self.axis.status();
+        if !(enabled && running.streaming) {
+            self.last_out = None;
+            return;
+        }
+        if let Some((p, v, t)) = self.last_out {
+            let s = &mut self.steps;
+            let (d, max, at) = match CyclicMode::from_code(running.active_mode.as_i8()) {
+                Some(CyclicMode::Csp) => (
+                    i64::from(out.target_position.wrapping_sub(p)).abs(),
+                    &mut s.position,
+                    0,
+                ),
+                Some(CyclicMode::Csv) => (
+                    (i64::from(out.target_velocity) - i64::from(v)).abs(),
+                    &mut s.velocity,
+                    1,
+                ),
+                Some(CyclicMode::Cst) => (
+                    (i64::from(out.target_torque) - i64::from(t)).abs(),
+                    &mut s.torque,
+                    2,
+                ),
+                None => (0, &mut s.position, 0),
+            };
+            if d > *max {
+                *max = d;
+                s.at_cycle[at] = cycle;
+            }
+        }
+        self.last_out = Some((out.target_position, out.target_velocity, out.target_torque));
+    }
+
+    /// The master's following error (the actual value of this exchange against the demand it
+    /// answers, [`FEEDBACK_PULSES`]), the drive's 0x60F4 judged against it, the following
+    /// error limit, and the rest of the telemetry.
+    fn follow(&mut self, i: usize, out: &Output, ctx: &StepContext, ev: &mut Emitter) {
+        let demand = if self.pos_valid {
+            self.pos + i64::from(out.target_position.wrapping_sub(self.pos_raw))
+        } else {
+            i64::from(out.target_position)
+        };
+        let state = StatusWord::from_raw(self.tel.statusword).state();
+        let energised = state.is_some_and(State::is_energised);
+        // Without the demand (lost frames just before) the last value stands. The newest
+        // demand whose frame passed by pulse s − 2 (two frames after one pulse: the later
+        // one's demand is what the drive took).
+        if let Some(s) = ctx.pulse.checked_sub(FEEDBACK_PULSES) {
+            let newest_first = (1..=CARRIED).map(|k| (self.carried_next + CARRIED - k) % CARRIED);
+            for k in newest_first {
+                if let Some(&(p, d)) = self.carried.get(k)
+                    && p != u64::MAX
+                    && p <= s
+                {
+                    self.tel.following_error = d - self.pos;
+                    break;
                 }
+            }
+        }
+        let moving = self.last_demand.is_some_and(|l| l != demand);
+        self.last_demand = Some(demand);
+        if energised && self.mode == CyclicMode::Csp {
+            self.judge_following_error(i, moving, ctx.cycle, ev);
+        }
+        let t = &mut self.tel;
+        t.controlword = out.controlword.raw();
+        t.mode = out.mode.as_i8();
+        t.position_demand = demand;
+        t.velocity_demand = out.target_velocity;
+        t.torque_demand = out.target_torque;
+        t.state = state;
+        t.al_state = self.al_state;
+        t.program_step = self.runner.step_index() as u16;
+        t.program_running = self.program == ProgramState::Running;
+        if state != self.last_state {
+            self.last_state = state;
+            if let Some(s) = state
+                && self.states.last() != Some(&s)
+                && self.states.len() < self.states.capacity()
+            {
+                self.states.push(s);
+            }
+        }
+    }
+
+    /// Energised in csp: the largest following errors, a 0x60F4 that never leaves 0, and the
+    /// following error limit (a quick stop).
+    fn judge_following_error(&mut self, i: usize, moving: bool, cycle: u64, ev: &mut Emitter) {
+        let fe = self.tel.following_error.abs();
+        if fe > self.tel.max_following_error {
+            self.tel.max_following_error = fe;
+        }
+        if let Some(d) = self.tel.following_error_drive {
+            self.tel.max_following_error_drive = self.tel.max_following_error_drive.max(d.abs());
+            // 0x60F4 that never leaves 0 while the axis follows a moving set-point is not
+            // computed by the drive: flag it once, never trust it.
+            if d != 0 {
+                self.fe_drive_alive = true;
+            } else if moving
+                && fe > 0
+                && !self.fe_drive_alive
+                && !self.tel.following_error_drive_stuck
+            {
+                self.fe_drive_zero_cycles += 1;
+                if self.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
+                    self.tel.following_error_drive_stuck = true;
+                    ev.emit(EventKind::DriveFollowingErrorStuck {
+                        axis: i as u16,
+                        cycles: self.fe_drive_zero_cycles,
+                        master: self.tel.max_following_error,
+                    });
+                }
+            }
+        }
+        if let Some(limit) = self.fe_limit
+            && fe > i64::from(limit)
+            && self.stopping == Stopping::No
+        {
+            ev.emit(EventKind::FollowingError {
+                axis: i as u16,
+                value: fe,
+                limit,
+            });
+            ev.emit(EventKind::Stopping {
+                reason: StopReason::FollowingError { axis: i as u16 },
+            });
+            self.stopping = Stopping::Quick { at: cycle };
+            self.axis.request_quick_stop();
+        }
+    }
+
+    /// Begin a controlled stop at good cycle `tick` (the ramp's clock) and cycle `cycle` (the
+    /// timeout's).
+    fn begin_stop(&mut self, kind: StopKind, tick: u64, cycle: u64) {
+        self.program = ProgramState::Idle;
+        let st = self.axis.status();
+        if !st.state.is_some_and(State::is_energised) {
+            self.axis.request_disable();
+            self.stopping = Stopping::Disabling;
+            return;
+        }
+        self.stopping = match kind {
+            StopKind::Ramp => Stopping::Ramp {
+                from: self.hold,
+                at: tick,
+                since: cycle,
+            },
+            StopKind::QuickStop => {
+                self.axis.request_quick_stop();
+                Stopping::Quick { at: cycle }
+            }
+        };
+    }
+
+    /// A controlled stop that takes too long: disable regardless. A disabled axis is no longer
+    /// stopping (unless the run ends).
+    fn supervise_stop(&mut self, cycle: u64, stop_timeout_cycles: u64, ending: bool) {
+        if let Stopping::Ramp { since: at, .. } | Stopping::Quick { at } = self.stopping
+            && cycle - at > stop_timeout_cycles
+        {
+            self.axis.request_disable();
+            self.stopping = Stopping::Disabling;
+        }
+        if self.stopping == Stopping::Disabling
+            && !self.axis.status().state.is_some_and(State::is_energised)
+            && !ending
+        {
+            self.stopping = Stopping::No;
+        }
+    }
+
+    /// Apply a command to this axis (number `i`); `Some(reason)` if it was refused.
+    fn apply(&mut self, cmd: &Command, i: usize) -> Option<&'static str> {
+        match *cmd {
+            Command::Enable(ax) if ax.includes(i) => {
+                self.stopping = Stopping::No;
+                self.axis
+                    .request_enable()
+                    .err()
+                    .map(|_| "enable refused (fault present?)")
+            }
+            Command::Disable(ax) if ax.includes(i) => {
+                self.program = ProgramState::Idle;
+                self.axis.request_disable();
+                None
+            }
+            Command::QuickStop(ax) if ax.includes(i) => {
+                self.program = ProgramState::Idle;
+                self.axis.request_quick_stop();
+                None
+            }
+            Command::FaultReset(ax) if ax.includes(i) => {
+                if self.axis.request_fault_reset() {
+                    None
+                } else {
+                    Some("fault reset ignored: the drive shows no fault")
+                }
+            }
+            Command::Mode(ax, m) if ax.includes(i) => self
+                .axis
+                .request_mode(OperationMode::from_i8(m.code()))
+                .err()
+                .map(|_| "mode switch refused"),
+            Command::RunProgram(ax) if ax.includes(i) => {
+                if self.runner.steps().is_empty() {
+                    return Some("the axis has no program");
+                }
+                self.runner.restart();
+                self.requested_mode = None;
+                self.program = ProgramState::Pending;
+                None
+            }
+            Command::HoldProgram(ax) if ax.includes(i) => {
+                self.program = ProgramState::Idle;
+                None
+            }
+            Command::Setpoint(axis, v) if axis as usize == i => {
+                match self.mode {
+                    CyclicMode::Csp => self.hold.pos = v,
+                    CyclicMode::Csv => self.hold.vel = v,
+                    CyclicMode::Cst => self.hold.torque = v,
+                }
+                None
+            }
+            _ => None,
+        }
+    }
+}
+
+fn write_i(f: &Field, buf: &mut [u8], v: i64) {
+    let _ = f.write_int(buf, v as i128);
+}
+
+/// The raw AL state (0x0130 low byte) ethercrab read for a device.
+fn raw_al_state(st: &SubDeviceState) -> u8 {
+    match st {
+        SubDeviceState::None => 0,
+        SubDeviceState::Init => 1,
+        SubDeviceState::PreOp => 2,
+        SubDeviceState::Bootstrap => 3,
+        SubDeviceState::SafeOp => 4,
+        SubDeviceState::Op => 8,
+        SubDeviceState::Other(v) => *v,
+    }
+}
+
+/// How the exchange of one cycle went.
+enum Exchanged {
+    /// A reply came.
+    Reply,
+    /// No reply in time.
+    Lost,
+}
+
+/// The constants of one run, derived from the settings and the drives.
+struct Constants {
+    cycle_ns: u64,
+    dt: f64,
+    /// The working counter every reply should show.
+    wkc_expected: u16,
+    segment_gone_cycles: u64,
+    stop_ramp_cycles: u64,
+    stop_timeout_cycles: u64,
+}
+
+/// The clock of the run and the timing of the current cycle.
+#[derive(Default)]
+struct Clock {
+    /// Cycles so far.
+    cycle: u64,
+    /// Cycles with a reply so far: the clock of the programs and the stop ramps (a lost cycle
+    /// holds the set-point, so the motion resumes where it stood).
+    tick: u64,
+    last_wake: u64,
+    next_wake: u64,
+    woke: u64,
+    latency: u64,
+    t_ex: u64,
+    t_ex_done: u64,
+    /// The wait to the next DC-aligned instant, when the reference clock answered.
+    next_wait: Option<u64>,
+    dc_time: u64,
+}
+
+/// Counts of lost frames, wrong working counters and overruns.
+#[derive(Default)]
+struct Counts {
+    lost_total: u64,
+    consecutive_lost: u32,
+    segment_lost: bool,
+    wkc_errors: u32,
+    last_wkc: u16,
+    overruns: u64,
+    recorded_lost: u64,
+    recorded_overruns: u64,
+}
+
+/// One run of the cycle: what it drives, where it stands and what it has seen. See the
+/// [module documentation](self).
+struct Cycle<'a, 'p, L: FrameLink> {
+    md: &'a MainDevice<'a>,
+    pump: &'a mut Pump<'p, L>,
+    group: &'a Group<SafeOp, HasDc>,
+    others: &'a [ConfiguredIo],
+    settings: &'a CycleSettings,
+    hooks: Option<&'a dyn CycleHooks>,
+    commands: &'a mut rtrb::Consumer<Command>,
+    telemetry: &'a mut triple_buffer::Input<Telemetry>,
+    restarts: &'a mut u32,
+    restarting: &'a mut bool,
+    ev: Emitter<'a>,
+    k: Constants,
+    axes: Vec<AxisRt>,
+    /// Every device by position: its station address and last AL state.
+    addresses: Vec<u16>,
+    al_states: Vec<u8>,
+    /// The I/O devices as last seen (a lost cycle keeps the inputs of the last reply).
+    io_last: Vec<IoTelemetry>,
+    clock: Clock,
+    counts: Counts,
+    timing: Timing,
+    window: Window,
+    op: OpState,
+    phase: RunPhase,
+    /// The hooks were told steady state began (and not yet that it ended).
+    steady: bool,
+    end_reason: Option<CycleEnd>,
+    last_telemetry: CycleTelemetry,
+}
+
+/// Run the cycle until it ends. Call on the thread that is to be the cycle thread (the
+/// settings' RT priority, CPU and memory locking are applied to it).
+#[allow(clippy::too_many_arguments)]
+pub fn run<L: FrameLink>(
+    md: &MainDevice<'_>,
+    pump: &mut Pump<'_, L>,
+    group: &Group<SafeOp, HasDc>,
+    drives: &[ConfiguredDrive],
+    others: &[ConfiguredIo],
+    settings: &CycleSettings,
+    io: &mut CycleIo,
+    hooks: Option<&dyn CycleHooks>,
+) -> CycleReport {
+    let rt = settings.rt.apply_to_current_thread();
+    if let Some(tx) = io.rt_report.take() {
+        let _ = tx.send(rt.clone());
+    }
+    let mut c = Cycle::new(md, pump, group, drives, others, settings, io, hooks);
+    let end = loop {
+        if let Some(end) = c.turn() {
+            break end;
+        }
+    };
+    c.finish(end, rt)
+}
+
+impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
+    /// Set up a run (allocations allowed): the axes, the initial outputs, the constants.
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        md: &'a MainDevice<'a>,
+        pump: &'a mut Pump<'p, L>,
+        group: &'a Group<SafeOp, HasDc>,
+        drives: &[ConfiguredDrive],
+        others: &'a [ConfiguredIo],
+        settings: &'a CycleSettings,
+        io: &'a mut CycleIo,
+        hooks: Option<&'a dyn CycleHooks>,
+    ) -> Self {
+        let cycle_ns = (settings.cycle.as_nanos() as u64).max(1);
+        let axes: Vec<AxisRt> = drives
+            .iter()
+            .filter_map(|d| AxisRt::new(d, settings.cycle))
+            .collect();
+        for a in &axes {
+            if let Ok(sd) = group.subdevice(md, a.sub) {
+                a.initial_outputs(sd.io_raw_mut().outputs());
+            }
+        }
+        let CycleIo {
+            commands,
+            events,
+            telemetry,
+            restarts,
+            restarting,
+            ..
+        } = io;
+        {
+            let t = telemetry.input_buffer_mut();
+            t.axes.resize(axes.len(), AxisTelemetry::default());
+            t.io.resize(others.len(), IoTelemetry::default());
+        }
+        // Every device counts: an LRW adds 2 for each device with outputs, 1 for each with
+        // inputs.
+        let wkc =
+            |outputs: usize, inputs: usize| u16::from(outputs > 0) * 2 + u16::from(inputs > 0);
+        let wkc_expected: u16 = drives
+            .iter()
+            .map(|d| {
+                wkc(
+                    d.layout.bytes(crate::pdo::Direction::Rx),
+                    d.layout.bytes(crate::pdo::Direction::Tx),
+                )
+            })
+            .chain(others.iter().map(|o| wkc(o.outputs, o.inputs)))
+            .sum();
+        let n_devices = group.len();
+        let mut addresses = vec![0u16; n_devices];
+        let placed = drives
+            .iter()
+            .map(|d| (d.info.position, d.info.address))
+            .chain(others.iter().map(|o| (o.info.position, o.info.address)));
+        for (position, address) in placed {
+            if let Some(a) = addresses.get_mut(usize::from(position)) {
+                *a = address;
+            }
+        }
+        let cycles = |d: Duration| d.as_nanos() as u64 / cycle_ns;
+        Self {
+            md,
+            pump,
+            group,
+            others,
+            settings,
+            hooks,
+            commands,
+            telemetry,
+            restarts,
+            restarting,
+            ev: Emitter {
+                out: events,
+                cycle: 0,
+                first_stop: None,
+            },
+            k: Constants {
+                cycle_ns,
+                dt: settings.cycle.as_secs_f64(),
+                wkc_expected,
+                segment_gone_cycles: cycles(settings.segment_gone_after)
+                    .max(u64::from(settings.segment_lost_after)),
+                stop_ramp_cycles: cycles(settings.stop_ramp).max(1),
+                stop_timeout_cycles: cycles(settings.stop_timeout).max(1),
+            },
+            axes,
+            addresses,
+            al_states: vec![0u8; n_devices],
+            io_last: vec![IoTelemetry::default(); others.len()],
+            clock: Clock {
+                next_wake: monotonic_ns() + cycle_ns,
+                ..Clock::default()
+            },
+            counts: Counts::default(),
+            timing: Timing::default(),
+            window: if settings.steady_timing_only {
+                Window::NotYet
+            } else {
+                Window::Open
+            },
+            op: OpState::SafeOp,
+            phase: RunPhase::Running,
+            steady: false,
+            end_reason: None,
+            last_telemetry: CycleTelemetry::default(),
+        }
+    }
+
+    fn ending(&self) -> bool {
+        matches!(self.phase, RunPhase::Ending { .. })
+    }
+
+    fn all_op(&self) -> bool {
+        self.op == OpState::AllOp
+    }
+
+    /// One cycle; `Some` when the run ends. No allocation from here on.
+    fn turn(&mut self) -> Option<CycleEnd> {
+        if self.window == Window::OpensNext {
+            self.window = Window::Open;
+        }
+        self.wake();
+        let good = match self.exchange() {
+            Ok(Exchanged::Reply) => true,
+            Ok(Exchanged::Lost) => {
+                if let Some(end) = self.on_lost() {
+                    return Some(end);
+                }
+                false
+            }
+            Err(end) => return Some(end),
+        };
+        if let Some(end) = self.request_op() {
+            return Some(end);
+        }
+        self.apply_commands();
+        self.step_axes(good);
+        self.supervise_axes();
+        self.publish(good);
+        if let Some(end) = self.leave_op() {
+            return Some(end);
+        }
+        if self.window.recording() {
+            self.timing.busy.record(monotonic_ns() - self.clock.woke);
+        }
+        if self.window == Window::ClosesAfter {
+            self.window = Window::Closed;
+        }
+        self.schedule_next();
+        None
+    }
+
+    /// Sleep until the instant; record the wake-up.
+    fn wake(&mut self) {
+        let c = &mut self.clock;
+        sleep_until_ns(c.next_wake);
+        c.woke = monotonic_ns();
+        c.latency = c.woke.saturating_sub(c.next_wake);
+        let recording = self.window.recording();
+        if recording {
+            self.timing.wake_latency.record(c.latency);
+            if c.last_wake != 0 {
+                self.timing.period.record(c.woke - c.last_wake);
+            }
+        }
+        if c.latency > self.k.cycle_ns {
+            self.counts.overruns += 1;
+            if recording {
+                self.counts.recorded_overruns += 1;
+            }
+        }
+        c.last_wake = c.woke;
+        c.cycle += 1;
+        self.ev.cycle = c.cycle;
+    }
+
+    /// Exchange the process data (the AL states ride along with the LRW) and look at what came
+    /// back; `Err` when the link failed.
+    fn exchange(&mut self) -> Result<Exchanged, CycleEnd> {
+        let deadline =
+            self.clock.woke + (self.k.cycle_ns as f64 * self.settings.reply_budget) as u64;
+        self.clock.t_ex = monotonic_ns();
+        let group = self.group;
+        let result = {
+            let fut = pin!(group.tx_rx_dc(self.md));
+            exec::exchange(self.pump, fut, deadline)
+        };
+        self.clock.t_ex_done = monotonic_ns();
+        self.clock.next_wait = None;
+        match result {
+            Ok(Ok(resp)) => {
+                self.clock.tick += 1;
+                if self.window.recording() {
+                    let took = self.clock.t_ex_done - self.clock.t_ex;
+                    self.timing.exchange.record(took);
+                }
+                if self.counts.consecutive_lost > 0 {
+                    self.ev.emit(EventKind::FramesResumed {
+                        lost: self.counts.consecutive_lost,
+                    });
+                }
+                self.counts.consecutive_lost = 0;
+                self.counts.segment_lost = false;
+                self.clock.dc_time = resp.extra.dc_system_time;
+                self.counts.last_wkc = resp.working_counter;
+                self.clock.next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
+                let mut scan = StateScan::default();
+                for (i, st) in resp.subdevice_states.iter().enumerate() {
+                    self.on_al_state(i, raw_al_state(st), &mut scan);
+                }
+                self.supervise_bus(scan, resp.working_counter);
+                Ok(Exchanged::Reply)
+            }
+            Ok(Err(_)) | Err(ExchangeError::Late) => Ok(Exchanged::Lost),
+            Err(ExchangeError::Link(_)) => Err(CycleEnd::LinkFailed),
+        }
+    }
+
+    /// Device `i` is in AL state `raw`: note it, and a device that left OP on its own.
+    fn on_al_state(&mut self, i: usize, raw: u8, scan: &mut StateScan) {
+        if raw == 0 && scan.missing.is_none() {
+            scan.missing = Some(i as u16);
+        }
+        if raw != 8 {
+            scan.every_op = false;
+        }
+        if let Some(a) = self.axes.iter_mut().find(|a| a.sub == i) {
+            a.al_state = raw;
+        }
+        let Some(prev) = self.al_states.get_mut(i) else {
+            return;
+        };
+        if *prev == raw {
+            return;
+        }
+        let was_op = *prev == 8;
+        *prev = raw;
+        self.ev.emit(EventKind::AlState {
+            device: i as u16,
+            state: raw,
+        });
+        if was_op && raw != 8 && !self.ending() {
+            // A device left OP on its own: decode why, stop every axis, end.
+            let code = self.al_status_code(i);
+            self.ev.emit(EventKind::LeftOp {
+                device: i as u16,
+                state: raw,
+                code,
+            });
+            if scan.left_op.is_none() {
+                scan.left_op = Some(i as u16);
+                self.end_reason = Some(CycleEnd::DriveLeftOp {
+                    device: i as u16,
+                    al_state: raw,
+                    code,
+                });
+            }
+        }
+    }
+
+    /// Device `i`'s AL status code (0x0134), if it answers within a quarter cycle.
+    fn al_status_code(&mut self, i: usize) -> Option<u16> {
+        let addr = self.addresses.get(i).copied().unwrap_or(0);
+        let fut = pin!(EcCommand::fprd(addr, register::AL_STATUS_CODE).receive::<u16>(self.md));
+        match exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns / 4) {
+            Ok(Ok(c)) => Some(c),
+            _ => None,
+        }
+    }
+
+    /// After a reply: a device that left OP stops every axis; every device in OP begins steady
+    /// state; in OP, the working counter is checked.
+    fn supervise_bus(&mut self, scan: StateScan, wkc: u16) {
+        let (tick, cycle) = (self.clock.tick, self.clock.cycle);
+        if let Some(device) = scan.left_op {
+            self.ev.emit(EventKind::Stopping {
+                reason: StopReason::DriveLeftOp { device },
+            });
+            self.begin_ending();
+            for a in self.axes.iter_mut() {
+                a.begin_stop(StopKind::Ramp, tick, cycle);
+            }
+        }
+        if !self.all_op() && scan.every_op && !self.al_states.is_empty() {
+            self.op = OpState::AllOp;
+            if *self.restarting {
+                *self.restarting = false;
+                *self.restarts += 1;
+            }
+            self.ev.emit(EventKind::AllOp);
+            if self.settings.steady_timing_only && self.window == Window::NotYet {
+                self.window = Window::OpensNext;
+            }
+            if let Some(h) = self.hooks {
+                h.steady_begin();
+                self.steady = true;
+            }
+        }
+        if !self.all_op() || self.ending() {
+            return;
+        }
+        let expected = self.k.wkc_expected;
+        if wkc == expected {
+            self.counts.wkc_errors = 0;
+            return;
+        }
+        self.counts.wkc_errors += 1;
+        self.ev.emit(EventKind::WorkingCounter {
+            got: wkc,
+            expected,
+            missing: scan.missing,
+        });
+        if self.counts.wkc_errors == self.settings.wkc_errors_before_stop {
+            self.ev.emit(EventKind::Stopping {
+                reason: StopReason::WorkingCounter,
+            });
+            for a in self.axes.iter_mut() {
+                a.begin_stop(StopKind::Ramp, tick, cycle);
+            }
+        }
+    }
+
+    /// No reply this cycle: count it, stop the moving axes after a few, end when the segment
+    /// has been silent too long.
+    fn on_lost(&mut self) -> Option<CycleEnd> {
+        let s = self.settings;
+        let c = &mut self.counts;
+        c.lost_total += 1;
+        if self.window.recording() {
+            c.recorded_lost += 1;
+        }
+        c.consecutive_lost += 1;
+        let lost = c.consecutive_lost;
+        // Each lost cycle up to the stop and the detection; after that the segment counts as
+        // lost, and the count comes with `FramesResumed` or `SegmentGone`.
+        if lost <= s.lost_before_stop.max(s.segment_lost_after) {
+            self.ev.emit(EventKind::FrameLost { consecutive: lost });
+        }
+        let (tick, cycle) = (self.clock.tick, self.clock.cycle);
+        if lost == s.lost_before_stop && !self.ending() {
+            self.ev.emit(EventKind::Stopping {
+                reason: StopReason::FramesLost { cycles: lost },
+            });
+            self.stop_moving_axes(tick, cycle);
+        }
+        if lost == s.segment_lost_after && !self.counts.segment_lost {
+            self.counts.segment_lost = true;
+            self.ev.emit(EventKind::SegmentLost { cycles: lost });
+            self.stop_moving_axes(tick, cycle);
+        }
+        if u64::from(lost) >= self.k.segment_gone_cycles {
+            self.ev.emit(EventKind::SegmentGone { cycles: lost });
+            return Some(CycleEnd::SegmentLost);
+        }
+        None
+    }
+
+    /// Begin a ramp stop of every axis not already stopping.
+    fn stop_moving_axes(&mut self, tick: u64, cycle: u64) {
+        for a in self.axes.iter_mut().filter(|a| a.stopping == Stopping::No) {
+            a.begin_stop(StopKind::Ramp, tick, cycle);
+        }
+    }
+
+    fn begin_ending(&mut self) {
+        if !self.ending() {
+            self.phase = RunPhase::Ending {
+                preop_requested_at: None,
+            };
+        }
+    }
+
+    /// OP: request it after some cycles of valid outputs, then wait for it.
+    fn request_op(&mut self) -> Option<CycleEnd> {
+        let cycle = self.clock.cycle;
+        match self.op {
+            OpState::SafeOp if cycle >= u64::from(self.settings.safeop_cycles) => {
+                self.request_al_state(0x0008);
+                self.op = OpState::Requested { at: cycle };
+            }
+            OpState::Requested { at }
+                if (cycle - at) * self.k.cycle_ns > self.settings.op_timeout.as_nanos() as u64 =>
+            {
+                let (device, al_state) = self
+                    .al_states
+                    .iter()
+                    .enumerate()
+                    .find(|(_, s)| **s != 8)
+                    .map(|(i, s)| (i as u16, *s))
+                    .unwrap_or((0, 0));
+                self.ev.emit(EventKind::OpTimeout { device, al_state });
+                return Some(CycleEnd::OpFailed { device, al_state });
+            }
+            _ => {}
+        }
+        None
+    }
+
+    /// Write `state` to every device's AL control register, each within half a cycle.
+    fn request_al_state(&mut self, state: u16) {
+        for &addr in &self.addresses {
+            let fut = pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(self.md, state));
+            let _ = exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns / 2);
+        }
+    }
+
+    /// Take the commands that came in.
+    fn apply_commands(&mut self) {
+        while let Ok(cmd) = self.commands.pop() {
+            match cmd {
+                Command::Stop(kind) => self.stop(kind, false),
+                Command::Restart => self.stop(StopKind::Ramp, true),
                 other => {
-                    for (i, a) in axes.iter_mut().enumerate() {
-                        if let Some(why) = apply(a, &other, i) {
-                            emit!(EventKind::CommandRefused {
+                    for (i, a) in self.axes.iter_mut().enumerate() {
+                        if let Some(why) = a.apply(&other, i) {
+                            self.ev.emit(EventKind::CommandRefused {
                                 axis: i as u16,
-                                why
+                                why,
                             });
                         }
                     }
                 }
             }
         }
+    }
 
-        // 4. Per axis: inputs → program → engine → outputs. On a lost cycle the inputs are
-        // stale: every axis holds its set-point (the outputs go out again unchanged), only the
-        // drive's cycle counter (if mapped) advances, as the drive expects one per cycle.
-        let now_s = tick as f64 * dt;
-        // The SYNC0 pulse the frame of this cycle came after (see FEEDBACK_PULSES).
-        let pulse = dc_time / cycle_ns.max(1);
-        // Whether any axis was energised or running a program as of the last cycle.
-        let any_energised_before = axes.iter().any(|a| {
-            a.program != ProgramState::Idle || a.tel.state.is_some_and(State::is_energised)
-        });
-        for (i, a) in axes.iter_mut().enumerate() {
+    /// A stop (or re-start) was asked for: steady state ends, every axis stops.
+    fn stop(&mut self, kind: StopKind, restart: bool) {
+        if self.settings.steady_timing_only {
+            self.window = match self.window {
+                Window::Open | Window::ClosesAfter => Window::ClosesAfter,
+                Window::NotYet | Window::OpensNext | Window::Closed => Window::Closed,
+            };
+        }
+        if let Some(h) = self.hooks
+            && self.steady
+        {
+            h.steady_end();
+            self.steady = false;
+        }
+        let cycle = self.clock.cycle;
+        if self.ending() {
+            if kind == StopKind::QuickStop {
+                // Asked again to stop, in a hurry: the axes still on their ramp make a quick
+                // stop instead (and are disabled after it, as always).
+                for a in self.axes.iter_mut() {
+                    if matches!(a.stopping, Stopping::Ramp { .. }) {
+                        a.axis.request_quick_stop();
+                        a.stopping = Stopping::Quick { at: cycle };
+                    }
+                }
+            }
+            return;
+        }
+        self.begin_ending();
+        let (end, reason) = if restart {
+            (CycleEnd::Restart, StopReason::Restart)
+        } else {
+            (CycleEnd::Stopped, StopReason::Requested)
+        };
+        self.end_reason = Some(end);
+        self.ev.emit(EventKind::Stopping { reason });
+        let tick = self.clock.tick;
+        for a in self.axes.iter_mut() {
+            a.begin_stop(kind, tick, cycle);
+        }
+    }
+
+    /// Per axis: inputs → program → engine → outputs. On a lost cycle the inputs are stale:
+    /// every axis holds its set-point (the outputs go out again unchanged), only the drive's
+    /// cycle counter (if mapped) advances, as the drive expects one per cycle.
+    fn step_axes(&mut self, good: bool) {
+        let ctx = StepContext {
+            cycle: self.clock.cycle,
+            tick: self.clock.tick,
+            dt: self.k.dt,
+            pulse: self.clock.dc_time / self.k.cycle_ns,
+            ending: self.ending(),
+            any_energised_before: self.axes.iter().any(|a| {
+                a.program != ProgramState::Idle || a.tel.state.is_some_and(State::is_energised)
+            }),
+            stop_ramp_cycles: self.k.stop_ramp_cycles,
+            stop_timeout_cycles: self.k.stop_timeout_cycles,
+        };
+        let (md, group) = (self.md, self.group);
+        for (i, a) in self.axes.iter_mut().enumerate() {
             let Ok(sd) = group.subdevice(md, a.sub) else {
                 continue;
             };
             if !good {
-                if let Some((c, _)) = &a.fields.counter {
-                    a.counter = a.counter.wrapping_add(1);
-                    let mut io_w = sd.io_raw_mut();
-                    write_i(c, io_w.outputs(), i64::from(a.counter));
-                }
+                a.count(sd.io_raw_mut().outputs());
                 continue;
             }
             if a.al_state & 0x0F != 8 {
-                // Below OP nothing of the drive is judged: a slave may serve stale inputs until
-                // OP (a mode display of 0, a statusword of 0), and it should not act on the
-                // outputs. They stay safe all the same, for a slave that does: Disable voltage.
-                let mut io_w = sd.io_raw_mut();
-                let o = io_w.outputs();
-                write_i(&a.fields.controlword, o, 0);
-                if let Some((c, _)) = &a.fields.counter {
-                    a.counter = a.counter.wrapping_add(1);
-                    write_i(c, o, i64::from(a.counter));
-                }
-                a.tel.state = None;
-                a.tel.al_state = a.al_state;
+                a.below_op(sd.io_raw_mut().outputs());
                 continue;
             }
-            // The frame just exchanged carried the demand of the last cycle.
-            if let Some(d) = a.last_demand {
-                a.carried[a.carried_next] = (pulse, d);
-                a.carried_next = (a.carried_next + 1) % CARRIED;
-            }
-            // Inputs.
-            let fb = {
-                let io_r = sd.io_raw();
-                let inp = io_r.inputs();
-                let f = &a.fields;
-                let sw = read_u(&f.statusword, inp) as u16;
-                let pos = f.position.as_ref().map(|p| read_i(p, inp) as i32);
-                if let Some(p) = pos {
-                    if a.pos_valid {
-                        a.pos += i64::from(p.wrapping_sub(a.pos_raw));
-                    } else {
-                        a.pos = i64::from(p);
-                        a.pos_valid = true;
-                    }
-                    a.pos_raw = p;
-                }
-                a.tel.statusword = sw;
-                a.tel.position_actual = a.pos;
-                a.tel.velocity_actual = f.velocity.as_ref().map_or(0, |v| read_i(v, inp) as i32);
-                a.tel.torque_actual = f.torque.as_ref().map_or(0, |v| read_i(v, inp) as i16);
-                a.tel.mode_display = f.mode_display.as_ref().map_or(0, |v| read_i(v, inp) as i8);
-                a.tel.error_code = f.error_code.as_ref().map_or(0, |v| read_u(v, inp) as u16);
-                a.tel.following_error_drive = f.following_error.as_ref().map(|fe| read_i(fe, inp));
-                Feedback {
-                    statusword: StatusWord::from_raw(sw),
-                    mode_display: f
-                        .mode_display
-                        .as_ref()
-                        .map(|_| OperationMode::from_i8(a.tel.mode_display)),
-                    position: pos,
-                    velocity: f.velocity.as_ref().map(|_| a.tel.velocity_actual),
-                    torque: f.torque.as_ref().map(|_| a.tel.torque_actual),
-                    error_code: f.error_code.as_ref().map(|_| ErrorCode(a.tel.error_code)),
-                    zero_speed: f
-                        .zero_speed
-                        .as_ref()
-                        .map(|(z, bit)| read_u(z, inp) >> bit & 1 == 1),
-                }
-            };
+            let out = a.step(i, sd.io_raw().inputs(), &ctx, &mut self.ev);
+            a.write_outputs(&out, sd.io_raw_mut().outputs());
+        }
+    }
 
-            // Program and stop ramps → set-points.
-            let actual = Sample {
-                pos: a.pos as f64,
-                vel: a.tel.velocity_actual as f64 * a.velocity_unit,
-                acc: 0.0,
-                torque: f64::from(a.tel.torque_actual),
-                done: false,
-            };
-            let st = a.axis.status();
-            let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-            if a.program == ProgramState::Pending && enabled {
-                a.runner.seed(actual);
-                a.program = ProgramState::Running;
-                emit!(EventKind::ProgramStep {
-                    axis: i as u16,
-                    step: a.runner.step_index() as u16
-                });
-            }
-            let mut sp = a.hold;
-            match a.stopping {
-                Stopping::Ramp { from, at, .. } => {
-                    let k = tick.saturating_sub(at) as f64 / stop_ramp_cycles as f64;
-                    if k >= 1.0 || !enabled {
-                        a.axis.request_disable();
-                        a.stopping = Stopping::Disabling;
-                        sp = Sample {
-                            vel: 0.0,
-                            torque: 0.0,
-                            ..from
-                        };
-                    } else {
-                        // Linear velocity (and torque) ramp to zero; position integrates.
-                        let t = tick.saturating_sub(at) as f64 * dt;
-                        let total = stop_ramp_cycles as f64 * dt;
-                        sp = Sample {
-                            pos: from.pos + from.vel * (t - t * t / (2.0 * total)),
-                            vel: from.vel * (1.0 - k),
-                            acc: 0.0,
-                            torque: from.torque * (1.0 - k),
-                            done: false,
-                        };
-                    }
-                    a.hold = sp;
-                }
-                Stopping::Quick { at } => {
-                    // Disable once the quick stop has run: the drive left Quick stop active
-                    // (option codes ending in Switch on disabled), or stands still in it.
-                    let in_qs = st.state == Some(State::QuickStopActive);
-                    let done = cycle - at > 2 && (!in_qs || st.standstill);
-                    if done || cycle - at > stop_timeout_cycles {
-                        a.axis.request_disable();
-                        a.stopping = Stopping::Disabling;
-                    }
-                }
-                Stopping::Disabling | Stopping::No => {}
-            }
-            if a.stopping == Stopping::No && a.program == ProgramState::Running && enabled {
-                match a.runner.tick(now_s) {
-                    Tick::Setpoint(s) => {
-                        sp = s;
-                        a.hold = s;
-                    }
-                    Tick::SwitchMode(m) => {
-                        let idle = st.mode_switch == ModeSwitchPhase::Idle;
-                        if idle && st.active_mode.as_i8() == m.code() {
-                            // Already in that mode (a run begins by asking for its start
-                            // mode): no switch, no event; go on at once.
-                            a.requested_mode = None;
-                            a.runner.mode_switched(actual);
-                        } else if idle {
-                            // Nothing under way (also when an earlier request of this run was
-                            // cut short): ask for it.
-                            a.requested_mode = Some(m);
-                            if a.axis
-                                .request_mode(OperationMode::from_i8(m.code()))
-                                .is_err()
-                            {
-                                a.requested_mode = None;
-                                emit!(EventKind::CommandRefused {
-                                    axis: i as u16,
-                                    why: "the program's mode switch was refused"
-                                });
-                                a.program = ProgramState::Idle;
-                            }
-                        }
-                        // Else a switch is under way: its ModeSwitched event (or the next
-                        // look at the active mode) lets the program go on.
-                    }
-                    Tick::Finished(s) => {
-                        sp = s;
-                        a.hold = s;
-                        a.program = ProgramState::Idle;
-                        emit!(EventKind::ProgramDone { axis: i as u16 });
-                    }
-                }
-                let idx = a.runner.step_index() as u16;
-                if idx != a.tel.program_step {
-                    emit!(EventKind::ProgramStep {
-                        axis: i as u16,
-                        step: idx
-                    });
-                }
-            }
-            // Set-point into the engine, in the active mode.
-            if enabled {
-                let mode = CyclicMode::from_code(st.active_mode.as_i8()).unwrap_or(a.mode);
-                a.mode = mode;
-                let _ = match mode {
-                    CyclicMode::Csp => a.axis.set_position((sp.pos.round() as i64) as i32),
-                    CyclicMode::Csv => a.axis.set_velocity(
-                        (sp.vel / a.velocity_unit)
-                            .round()
-                            .clamp(i32::MIN as f64, i32::MAX as f64) as i32,
-                    ),
-                    CyclicMode::Cst => a.axis.set_torque(
-                        sp.torque.round().clamp(i16::MIN as f64, i16::MAX as f64) as i16,
-                    ),
-                };
-                if a.modes_run.last() != Some(&mode) && a.modes_run.len() < a.modes_run.capacity() {
-                    a.modes_run.push(mode);
-                }
-            } else if a.stopping == Stopping::No {
-                // Not enabled: track the actual values so enabling starts without a jump.
-                a.hold = actual;
-            }
-
-            let out = a.axis.step(&fb);
-
-            // Engine events.
-            while let Some(ev) = a.axis.poll_event() {
-                match ev {
-                    cia402::Event::ModeSwitched { to, .. } => {
-                        if let Some(m) = CyclicMode::from_code(to.as_i8()) {
-                            a.mode = m;
-                            if a.requested_mode == Some(m) {
-                                a.requested_mode = None;
-                                a.runner.mode_switched(actual);
-                            }
-                        }
-                    }
-                    cia402::Event::ModeSwitchFailed(e) if a.requested_mode.is_some() => {
-                        // The program asked for this switch and cannot go on without it. A
-                        // fault cut it short: the fault itself is what gets reported.
-                        a.requested_mode = None;
-                        a.program = ProgramState::Idle;
-                        if e.reason != cia402::ModeSwitchFailure::Fault {
-                            emit!(EventKind::CommandRefused {
-                                axis: i as u16,
-                                why: "the program stopped: its mode switch failed"
-                            });
-                        }
-                    }
-                    cia402::Event::Fault { .. } if !ending => {
-                        a.program = ProgramState::Idle;
-                        emit!(EventKind::Axis {
-                            axis: i as u16,
-                            event: ev
-                        });
-                        // The other axes are stopped after this loop. A fault while nothing
-                        // was energised (latched before the run) stops nothing.
-                        if any_energised_before {
-                            emit!(EventKind::Stopping {
-                                reason: StopReason::DriveFault { axis: i as u16 }
-                            });
-                        }
-                        continue;
-                    }
-                    _ => {}
-                }
-                emit!(EventKind::Axis {
-                    axis: i as u16,
-                    event: ev
-                });
-            }
-
-            // Outputs.
-            {
-                let mut io_w = sd.io_raw_mut();
-                let o = io_w.outputs();
-                let f = &a.fields;
-                write_i(&f.controlword, o, i64::from(out.controlword.raw()));
-                if let Some(m) = &f.mode {
-                    write_i(m, o, i64::from(out.mode.as_i8()));
-                }
-                if let Some(p) = &f.target_position {
-                    write_i(p, o, i64::from(out.target_position));
-                }
-                if let Some(v) = &f.target_velocity {
-                    write_i(v, o, i64::from(out.target_velocity));
-                }
-                if let Some(t) = &f.target_torque {
-                    write_i(t, o, i64::from(out.target_torque));
-                }
-                if let Some((c, _)) = &f.counter {
-                    a.counter = a.counter.wrapping_add(1);
-                    write_i(c, o, i64::from(a.counter));
-                }
-            }
-
-            // Set-point steps while enabled, in the mode the drive runs (confirmed by 0x6061):
-            // the other targets only track the actual values.
-            let running = a.axis.status();
-            if enabled && running.streaming {
-                if let Some((p, v, t)) = a.last_out {
-                    match CyclicMode::from_code(running.active_mode.as_i8()) {
-                        Some(CyclicMode::Csp) => {
-                            let d = i64::from(out.target_position.wrapping_sub(p)).abs();
-                            if d > a.steps.position {
-                                a.steps.position = d;
-                                a.steps.at_cycle[0] = cycle;
-                            }
-                        }
-                        Some(CyclicMode::Csv) => {
-                            let d = (i64::from(out.target_velocity) - i64::from(v)).abs();
-                            if d > a.steps.velocity {
-                                a.steps.velocity = d;
-                                a.steps.at_cycle[1] = cycle;
-                            }
-                        }
-                        Some(CyclicMode::Cst) => {
-                            let d = (i64::from(out.target_torque) - i64::from(t)).abs();
-                            if d > a.steps.torque {
-                                a.steps.torque = d;
-                                a.steps.at_cycle[2] = cycle;
-                            }
-                        }
-                        None => {}
-                    }
-                }
-                a.last_out = Some((out.target_position, out.target_velocity, out.target_torque));
-            } else {
-                a.last_out = None;
-            }
-
-            // Following error and telemetry.
-            let demand = if a.pos_valid {
-                a.pos + i64::from(out.target_position.wrapping_sub(a.pos_raw))
-            } else {
-                i64::from(out.target_position)
-            };
-            let state = StatusWord::from_raw(a.tel.statusword).state();
-            let energised = state.is_some_and(State::is_energised);
-            // The master's own following error, whatever the drive reports in 0x60F4: the
-            // actual value of this exchange against the demand it answers (FEEDBACK_PULSES).
-            // Without that demand (lost frames just before) the last value stands.
-            // The newest demand whose frame passed by pulse s − 2 (two frames after one pulse:
-            // the later one's demand is what the drive took).
-            if let Some(s) = pulse.checked_sub(FEEDBACK_PULSES) {
-                let newest_first = (1..=CARRIED).map(|k| (a.carried_next + CARRIED - k) % CARRIED);
-                for k in newest_first {
-                    if let Some(&(p, d)) = a.carried.get(k)
-                        && p != u64::MAX
-                        && p <= s
-                    {
-                        a.tel.following_error = d - a.pos;
-                        break;
-                    }
-                }
-            }
-            let moving = a.last_demand.is_some_and(|l| l != demand);
-            a.last_demand = Some(demand);
-            if energised && a.mode == CyclicMode::Csp {
-                let fe = a.tel.following_error.abs();
-                if fe > a.tel.max_following_error {
-                    a.tel.max_following_error = fe;
-                }
-                if let Some(d) = a.tel.following_error_drive {
-                    a.tel.max_following_error_drive = a.tel.max_following_error_drive.max(d.abs());
-                    // 0x60F4 that never leaves 0 while the axis follows a moving set-point is
-                    // not computed by the drive: flag it once, never trust it.
-                    if d != 0 {
-                        a.fe_drive_alive = true;
-                    } else if moving
-                        && fe > 0
-                        && !a.fe_drive_alive
-                        && !a.tel.following_error_drive_stuck
-                    {
-                        a.fe_drive_zero_cycles += 1;
-                        if a.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
-                            a.tel.following_error_drive_stuck = true;
-                            emit!(EventKind::DriveFollowingErrorStuck {
-                                axis: i as u16,
-                                cycles: a.fe_drive_zero_cycles,
-                                master: a.tel.max_following_error
-                            });
-                        }
-                    }
-                }
-                if let Some(limit) = a.fe_limit
-                    && fe > i64::from(limit)
+    /// After the steps: a drive that faulted stops every other axis (outside the per-axis
+    /// steps, so each axis sees the same decision); stops that take too long end in disable.
+    fn supervise_axes(&mut self) {
+        let (tick, cycle) = (self.clock.tick, self.clock.cycle);
+        let ending = self.ending();
+        if !ending && self.axes.iter().any(|a| a.axis.status().fault) {
+            for a in self.axes.iter_mut() {
+                let st = a.axis.status();
+                if !st.fault
                     && a.stopping == Stopping::No
+                    && st.state == Some(State::OperationEnabled)
                 {
-                    emit!(EventKind::FollowingError {
-                        axis: i as u16,
-                        value: fe,
-                        limit
-                    });
-                    emit!(EventKind::Stopping {
-                        reason: StopReason::FollowingError { axis: i as u16 }
-                    });
-                    a.stopping = Stopping::Quick { at: cycle };
-                    a.axis.request_quick_stop();
-                }
-            }
-            a.tel.controlword = out.controlword.raw();
-            a.tel.mode = out.mode.as_i8();
-            a.tel.position_demand = demand;
-            a.tel.velocity_demand = out.target_velocity;
-            a.tel.torque_demand = out.target_torque;
-            a.tel.state = state;
-            a.tel.al_state = a.al_state;
-            a.tel.program_step = a.runner.step_index() as u16;
-            a.tel.program_running = a.program == ProgramState::Running;
-            if state != a.last_state {
-                a.last_state = state;
-                if let Some(s) = state
-                    && a.states.last() != Some(&s)
-                    && a.states.len() < a.states.capacity()
-                {
-                    a.states.push(s);
+                    a.begin_stop(StopKind::Ramp, tick, cycle);
                 }
             }
         }
+        for a in self.axes.iter_mut() {
+            a.supervise_stop(cycle, self.k.stop_timeout_cycles, ending);
+        }
+    }
 
-        // A drive that faulted: stop every other axis (outside the per-axis loop, so each
-        // axis sees the same decision).
-        if !ending {
-            let faulted = axes.iter().any(|a| a.axis.status().fault);
-            if faulted {
-                for a in axes.iter_mut() {
-                    if !a.axis.status().fault && a.stopping == Stopping::No {
-                        let st = a.axis.status();
-                        if st.state == Some(State::OperationEnabled) {
-                            begin_stop(a, StopKind::Ramp, tick, cycle);
-                        }
-                    }
-                }
-            }
+    /// Publish the telemetry: the cycle, every axis, every I/O device.
+    fn publish(&mut self, good: bool) {
+        let c = &self.clock;
+        let t = self.telemetry.input_buffer_mut();
+        t.cycle = CycleTelemetry {
+            cycle: c.cycle,
+            dc_time: c.dc_time,
+            wkc: self.counts.last_wkc,
+            wkc_expected: self.k.wkc_expected,
+            lost: self.counts.lost_total,
+            overruns: self.counts.overruns,
+            wake_latency_ns: c.latency,
+            exchange_ns: c.t_ex_done - c.t_ex,
+            busy_ns: monotonic_ns() - c.woke,
+            all_op: self.op == OpState::AllOp,
+            lost_in_a_row: self.counts.consecutive_lost,
+            phase: if matches!(self.phase, RunPhase::Ending { .. }) {
+                Phase::Stopping
+            } else {
+                Phase::Cycling
+            },
+            restarts: *self.restarts,
+        };
+        self.last_telemetry = t.cycle;
+        for (slot, a) in t.axes.iter_mut().zip(self.axes.iter()) {
+            *slot = a.tel;
         }
-        // A controlled stop that takes too long: disable regardless.
-        for a in axes.iter_mut() {
-            if let Stopping::Ramp { since: at, .. } | Stopping::Quick { at } = a.stopping
-                && cycle - at > stop_timeout_cycles
-            {
-                a.axis.request_disable();
-                a.stopping = Stopping::Disabling;
+        // Every field of every slot each time: the triple buffer hands out three buffers in
+        // turn.
+        let slots =
+            t.io.iter_mut()
+                .zip(self.io_last.iter_mut())
+                .zip(self.others);
+        for ((slot, last), o) in slots {
+            let pos = usize::from(o.info.position);
+            last.position = o.info.position;
+            last.al_state = self.al_states.get(pos).copied().unwrap_or(0);
+            if good && let Ok(sd) = self.group.subdevice(self.md, pos) {
+                let img = sd.io_raw();
+                let inp = img.inputs();
+                let n = inp.len().min(IO_TELEMETRY_BYTES);
+                last.inputs[..n].copy_from_slice(&inp[..n]);
+                last.input_len = n as u16;
             }
-            if a.stopping == Stopping::Disabling
-                && !a.axis.status().state.is_some_and(State::is_energised)
-                && !ending
-            {
-                a.stopping = Stopping::No;
-            }
+            *slot = *last;
         }
+        self.telemetry.publish();
+    }
 
-        // 5. Telemetry.
-        {
-            let t = io.telemetry.input_buffer_mut();
-            t.cycle = CycleTelemetry {
-                cycle,
-                dc_time,
-                wkc: last_wkc,
-                wkc_expected,
-                lost: lost_total,
-                overruns,
-                wake_latency_ns: latency,
-                exchange_ns: t_ex_done - t_ex,
-                busy_ns: monotonic_ns() - woke,
-                all_op,
-                lost_in_a_row: consecutive_lost,
-                phase: if ending {
-                    Phase::Stopping
-                } else {
-                    Phase::Cycling
-                },
-                restarts: io.restarts,
-            };
-            last_telemetry = t.cycle;
-            for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
-                *slot = a.tel;
-            }
-            // Every field of every slot each time: the triple buffer hands out three buffers in
-            // turn.
-            for ((slot, last), o) in t.io.iter_mut().zip(io_last.iter_mut()).zip(others) {
-                let pos = usize::from(o.info.position);
-                last.position = o.info.position;
-                last.al_state = al_states.get(pos).copied().unwrap_or(0);
-                if good && let Ok(sd) = group.subdevice(md, pos) {
-                    let img = sd.io_raw();
-                    let inp = img.inputs();
-                    let n = inp.len().min(IO_TELEMETRY_BYTES);
-                    last.inputs[..n].copy_from_slice(&inp[..n]);
-                    last.input_len = n as u16;
-                }
-                *slot = *last;
-            }
-            io.telemetry.publish();
-        }
-
+    /// Ending and every axis disabled: leave OP while still exchanging process data (drives
+    /// in OP with SYNC0 treat missing data as a communication fault): request PRE-OP, and end
+    /// once no drive is in OP any more.
+    fn leave_op(&mut self) -> Option<CycleEnd> {
+        let RunPhase::Ending { preop_requested_at } = self.phase else {
+            return None;
+        };
         // Energised as last seen (on a lost cycle: as of the last reply). A drive below
         // SAFE-OP sends no valid inputs and takes no outputs (its own state machine has
         // disabled it): its last statusword says nothing, so it does not hold the end up.
-        let any_energised = axes.iter().any(|a| {
+        let any_energised = self.axes.iter().any(|a| {
             matches!(a.al_state & 0x0F, 4 | 8) && a.tel.state.is_some_and(State::is_energised)
         });
-        if ending
-            && !any_energised
-            && axes
-                .iter()
-                .all(|a| !matches!(a.stopping, Stopping::Ramp { .. } | Stopping::Quick { .. }))
-        {
-            // Every axis is disabled. Leave OP while still exchanging process data (drives
-            // in OP with SYNC0 treat missing data as a communication fault): request PRE-OP,
-            // and end once no drive is in OP any more.
-            match preop_requested_at {
-                None => {
-                    for &addr in &addresses {
-                        let fut =
-                            pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(md, 0x0002u16));
-                        let _ = exec::exchange(pump, fut, monotonic_ns() + cycle_ns / 2);
-                    }
-                    preop_requested_at = Some(cycle);
-                }
-                Some(at) => {
-                    let out_of_op = al_states.iter().all(|s| s & 0x0F != 8);
-                    if out_of_op || (cycle - at) * cycle_ns > 1_000_000_000 {
-                        emit!(EventKind::Stopped);
-                        end = end_reason.unwrap_or(CycleEnd::Stopped);
-                        break;
-                    }
+        let stopping = self
+            .axes
+            .iter()
+            .any(|a| matches!(a.stopping, Stopping::Ramp { .. } | Stopping::Quick { .. }));
+        if any_energised || stopping {
+            return None;
+        }
+        let cycle = self.clock.cycle;
+        match preop_requested_at {
+            None => {
+                self.request_al_state(0x0002);
+                self.phase = RunPhase::Ending {
+                    preop_requested_at: Some(cycle),
+                };
+            }
+            Some(at) => {
+                let out_of_op = self.al_states.iter().all(|s| s & 0x0F != 8);
+                if out_of_op || (cycle - at) * self.k.cycle_ns > 1_000_000_000 {
+                    self.ev.emit(EventKind::Stopped);
+                    return Some(self.end_reason.unwrap_or(CycleEnd::Stopped));
                 }
             }
         }
+        None
+    }
 
-        if recording {
-            timing.busy.record(monotonic_ns() - woke);
-        }
-        if recording_ends {
-            recording = false;
-        }
-        // 6. Next instant: DC-aligned when the reference clock answered, else one cycle on.
-        next_wake = match next_wait {
-            Some(w) => t_ex + w,
-            None => next_wake + cycle_ns,
+    /// The next instant: DC-aligned when the reference clock answered, else one cycle on.
+    fn schedule_next(&mut self) {
+        let c = &mut self.clock;
+        c.next_wake = match c.next_wait {
+            Some(w) => c.t_ex + w,
+            None => c.next_wake + self.k.cycle_ns,
         };
-        if next_wake <= monotonic_ns() {
+        if c.next_wake <= monotonic_ns() {
             // Overrun: skip to the next instant rather than running back-to-back cycles.
-            next_wake = monotonic_ns() + cycle_ns / 2;
+            c.next_wake = monotonic_ns() + self.k.cycle_ns / 2;
         }
     }
-    // The cycle has ended: say so until the session publishes what comes next (a whole
-    // snapshot: the input buffer of the triple buffer holds an older one).
-    {
-        let t = io.telemetry.input_buffer_mut();
+
+    /// The run has ended: say so until the session publishes what comes next (a whole
+    /// snapshot: the input buffer of the triple buffer holds an older one), and report.
+    fn finish(self, end: CycleEnd, rt: RtReport) -> CycleReport {
+        let t = self.telemetry.input_buffer_mut();
         t.cycle = CycleTelemetry {
             phase: Phase::Stopping,
-            ..last_telemetry
+            ..self.last_telemetry
         };
-        for (slot, a) in t.axes.iter_mut().zip(axes.iter()) {
+        for (slot, a) in t.axes.iter_mut().zip(self.axes.iter()) {
             *slot = a.tel;
         }
-        io.telemetry.publish();
-    }
-    if let Some(h) = hooks
-        && steady
-    {
-        h.steady_end();
-    }
-    CycleReport {
-        end,
-        cycles: cycle,
-        lost: recorded_lost,
-        overruns: recorded_overruns,
-        timing,
-        rt,
-        first_stop,
-        max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
-        max_following_error_drive: axes
-            .iter()
-            .map(|a| {
-                a.fields
-                    .following_error
-                    .as_ref()
-                    .map(|_| a.tel.max_following_error_drive)
-            })
-            .collect(),
-        following_error_drive_stuck: axes
-            .iter()
-            .map(|a| a.tel.following_error_drive_stuck)
-            .collect(),
-        modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
-        max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
-        states: axes.iter().map(|a| a.states.clone()).collect(),
-    }
-}
-
-/// Begin a ramp stop of every axis not already stopping.
-fn stop_moving_axes(axes: &mut [AxisRt], tick: u64, cycle: u64) {
-    for a in axes.iter_mut().filter(|a| a.stopping == Stopping::No) {
-        begin_stop(a, StopKind::Ramp, tick, cycle);
+        self.telemetry.publish();
+        if let Some(h) = self.hooks
+            && self.steady
+        {
+            h.steady_end();
+        }
+        let axes = &self.axes;
+        CycleReport {
+            end,
+            cycles: self.clock.cycle,
+            lost: self.counts.recorded_lost,
+            overruns: self.counts.recorded_overruns,
+            timing: self.timing,
+            rt,
+            first_stop: self.ev.first_stop,
+            max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
+            max_following_error_drive: axes
+                .iter()
+                .map(|a| {
+                    a.fields
+                        .axis
+                        .following_error
+                        .map(|_| a.tel.max_following_error_drive)
+                })
+                .collect(),
+            following_error_drive_stuck: axes
+                .iter()
+                .map(|a| a.tel.following_error_drive_stuck)
+                .collect(),
+            modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
+            max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
+            states: axes.iter().map(|a| a.states.clone()).collect(),
+        }
     }
 }
 
-/// Begin a controlled stop of one axis at good cycle `tick` (the ramp's clock) and cycle
-/// `cycle` (the timeout's).
-fn begin_stop(a: &mut AxisRt, kind: StopKind, tick: u64, cycle: u64) {
-    a.program = ProgramState::Idle;
-    let st = a.axis.status();
-    if !st.state.is_some_and(State::is_energised) {
-        a.axis.request_disable();
-        a.stopping = Stopping::Disabling;
-        return;
-    }
-    a.stopping = match kind {
-        StopKind::Ramp => Stopping::Ramp {
-            from: a.hold,
-            at: tick,
-            since: cycle,
-        },
-        StopKind::QuickStop => {
-            a.axis.request_quick_stop();
-            Stopping::Quick { at: cycle }
-        }
-    };
+/// What one reply's AL states showed.
+struct StateScan {
+    /// The first device that did not answer.
+    missing: Option<u16>,
+    /// Every device is in OP.
+    every_op: bool,
+    /// The first device that left OP on its own.
+    left_op: Option<u16>,
 }
 
-/// Apply a command to one axis; `Some(reason)` if it was refused.
-fn apply(a: &mut AxisRt, cmd: &Command, i: usize) -> Option<&'static str> {
-    match *cmd {
-        Command::Enable(ax) if ax.includes(i) => {
-            a.stopping = Stopping::No;
-            a.axis
-                .request_enable()
-                .err()
-                .map(|_| "enable refused (fault present?)")
+impl Default for StateScan {
+    fn default() -> Self {
+        Self {
+            missing: None,
+            every_op: true,
+            left_op: None,
         }
-        Command::Disable(ax) if ax.includes(i) => {
-            a.program = ProgramState::Idle;
-            a.axis.request_disable();
-            None
-        }
-        Command::QuickStop(ax) if ax.includes(i) => {
-            a.program = ProgramState::Idle;
-            a.axis.request_quick_stop();
-            None
-        }
-        Command::FaultReset(ax) if ax.includes(i) => {
-            if a.axis.request_fault_reset() {
-                None
-            } else {
-                Some("fault reset ignored: the drive shows no fault")
-            }
-        }
-        Command::Mode(ax, m) if ax.includes(i) => a
-            .axis
-            .request_mode(OperationMode::from_i8(m.code()))
-            .err()
-            .map(|_| "mode switch refused"),
-        Command::RunProgram(ax) if ax.includes(i) => {
-            if a.runner.steps().is_empty() {
-                return Some("the axis has no program");
-            }
-            a.runner.restart();
-            a.requested_mode = None;
-            a.program = ProgramState::Pending;
-            None
-        }
-        Command::HoldProgram(ax) if ax.includes(i) => {
-            a.program = ProgramState::Idle;
-            None
-        }
-        Command::Setpoint(axis, v) if axis as usize == i => {
-            match a.mode {
-                CyclicMode::Csp => a.hold.pos = v,
-                CyclicMode::Csv => a.hold.vel = v,
-                CyclicMode::Cst => a.hold.torque = v,
-            }
-            None
-        }
-        _ => None,
     }
 }
 

@@ -8,7 +8,7 @@
 //! in a controlled way, takes the drives to INIT, and returns the report and the link.
 
 use super::bus::{BusOptions, SESSION_STACK, with_bus};
-use super::coe::{CoeClient, EmergencyRecord};
+use super::coe::{CoeClient, EmergencyLog, EmergencyRecord};
 use super::cycle::{self, CycleEnd, CycleHooks, CycleReport, CycleSettings};
 use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec;
@@ -224,6 +224,69 @@ impl Decoder {
         self.drives.get(axis as usize).map_or(&[], |(_, t)| t)
     }
 
+    /// Whether an engine event of `axis` is an error, and its text.
+    fn axis_event(&self, axis: u16, event: cia402::Event) -> (bool, String) {
+        match event {
+            cia402::Event::Fault { state, error } => (
+                true,
+                match error {
+                    Some(d) => {
+                        // Re-describe with the drive's table (names like "AL.86").
+                        let d = d.code.describe(self.table(axis));
+                        format!(
+                            "fault ({}): {d}",
+                            state.map_or("?".into(), |s| s.to_string())
+                        )
+                    }
+                    None => {
+                        format!("fault ({})", state.map_or("?".into(), |s| s.to_string()))
+                    }
+                },
+            ),
+            cia402::Event::PlannerFailed(p) => (true, format!("state machine: {p}")),
+            cia402::Event::ModeSwitchFailed(m) => (true, format!("mode switch failed: {m}")),
+            cia402::Event::StateChanged { from, to } => {
+                let name = |s: Option<cia402::State>| {
+                    s.map_or("(no state)".to_string(), |s| s.to_string())
+                };
+                (false, format!("state {} → {}", name(from), name(to)))
+            }
+            cia402::Event::TargetReached(t) => (false, format!("reached {t}")),
+            cia402::Event::FaultCleared => (false, "fault cleared".into()),
+            cia402::Event::WarningChanged(w) => (
+                false,
+                if w { "warning set" } else { "warning cleared" }.into(),
+            ),
+            cia402::Event::ModeSwitched { from, to } => (false, format!("mode {from} → {to}")),
+            cia402::Event::ModeDisplayMismatch {
+                expected,
+                displayed,
+            } => (
+                true,
+                format!("0x6061 shows {displayed} instead of {expected}; set-points paused"),
+            ),
+        }
+    }
+
+    /// Why the axes were stopped, in words.
+    fn stop_reason(&self, reason: StopReason) -> String {
+        match reason {
+            StopReason::Requested => "requested".to_string(),
+            StopReason::Restart => "re-start requested".to_string(),
+            StopReason::DriveFault { axis } => format!("{} faulted", self.name(axis)),
+            StopReason::FollowingError { axis } => {
+                format!("following error of {}", self.name(axis))
+            }
+            StopReason::FramesLost { cycles } => {
+                format!("{cycles} cycles in a row without a reply")
+            }
+            StopReason::DriveLeftOp { device } => {
+                format!("{} left OP", self.device_name(device))
+            }
+            StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
+        }
+    }
+
     fn entry(&self, e: &Event) -> Option<HistoryEntry> {
         let (drive, error, text) = match e.kind {
             EventKind::AllOp => (None, false, "every drive is in OP".to_string()),
@@ -236,52 +299,7 @@ impl Decoder {
                 ),
             ),
             EventKind::Axis { axis, event } => {
-                let (error, text) = match event {
-                    cia402::Event::Fault { state, error } => (
-                        true,
-                        match error {
-                            Some(d) => {
-                                // Re-describe with the drive's table (names like "AL.86").
-                                let d = d.code.describe(self.table(axis));
-                                format!(
-                                    "fault ({}): {d}",
-                                    state.map_or("?".into(), |s| s.to_string())
-                                )
-                            }
-                            None => {
-                                format!("fault ({})", state.map_or("?".into(), |s| s.to_string()))
-                            }
-                        },
-                    ),
-                    cia402::Event::PlannerFailed(p) => (true, format!("state machine: {p}")),
-                    cia402::Event::ModeSwitchFailed(m) => {
-                        (true, format!("mode switch failed: {m}"))
-                    }
-                    cia402::Event::StateChanged { from, to } => {
-                        let name = |s: Option<cia402::State>| {
-                            s.map_or("(no state)".to_string(), |s| s.to_string())
-                        };
-                        (false, format!("state {} → {}", name(from), name(to)))
-                    }
-                    cia402::Event::TargetReached(t) => (false, format!("reached {t}")),
-                    cia402::Event::FaultCleared => (false, "fault cleared".into()),
-                    cia402::Event::WarningChanged(w) => (
-                        false,
-                        if w { "warning set" } else { "warning cleared" }.into(),
-                    ),
-                    cia402::Event::ModeSwitched { from, to } => {
-                        (false, format!("mode {from} → {to}"))
-                    }
-                    cia402::Event::ModeDisplayMismatch {
-                        expected,
-                        displayed,
-                    } => (
-                        true,
-                        format!(
-                            "0x6061 shows {displayed} instead of {expected}; set-points paused"
-                        ),
-                    ),
-                };
+                let (error, text) = self.axis_event(axis, event);
                 (self.drive(axis), error, text)
             }
             EventKind::WorkingCounter {
@@ -386,21 +404,7 @@ impl Decoder {
             EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
             EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
             EventKind::Stopping { reason } => {
-                let why = match reason {
-                    StopReason::Requested => "requested".to_string(),
-                    StopReason::Restart => "re-start requested".to_string(),
-                    StopReason::DriveFault { axis } => format!("{} faulted", self.name(axis)),
-                    StopReason::FollowingError { axis } => {
-                        format!("following error of {}", self.name(axis))
-                    }
-                    StopReason::FramesLost { cycles } => {
-                        format!("{cycles} cycles in a row without a reply")
-                    }
-                    StopReason::DriveLeftOp { device } => {
-                        format!("{} left OP", self.device_name(device))
-                    }
-                    StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
-                };
+                let why = self.stop_reason(reason);
                 (
                     None,
                     false,
@@ -409,30 +413,7 @@ impl Decoder {
             }
             EventKind::Stopped => (None, false, "every axis disabled; cycle ended".into()),
         };
-        let kind = match e.kind {
-            EventKind::AllOp
-            | EventKind::AlState { .. }
-            | EventKind::ProgramStep { .. }
-            | EventKind::ProgramDone { .. } => HistoryKind::Info,
-            EventKind::OpTimeout { .. } | EventKind::LeftOp { .. } => HistoryKind::AlState,
-            EventKind::Axis { event, .. } => match event {
-                cia402::Event::Fault { .. } => HistoryKind::DriveFault,
-                cia402::Event::PlannerFailed(_)
-                | cia402::Event::ModeSwitchFailed(_)
-                | cia402::Event::ModeDisplayMismatch { .. } => HistoryKind::StateMachine,
-                cia402::Event::WarningChanged(_) => HistoryKind::Warning,
-                _ => HistoryKind::Info,
-            },
-            EventKind::WorkingCounter { .. } => HistoryKind::WorkingCounter,
-            EventKind::FrameLost { .. } | EventKind::FramesResumed { .. } => HistoryKind::FrameLost,
-            EventKind::SegmentLost { .. } | EventKind::SegmentGone { .. } => {
-                HistoryKind::SegmentLost
-            }
-            EventKind::FollowingError { .. } => HistoryKind::FollowingError,
-            EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
-            EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
-            EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,
-        };
+        let kind = history_kind(&e.kind);
         Some(HistoryEntry {
             time_ns: e.time_ns,
             cycle: Some(e.cycle),
@@ -441,6 +422,32 @@ impl Decoder {
             kind,
             text,
         })
+    }
+}
+
+/// The history category of an event.
+fn history_kind(kind: &EventKind) -> HistoryKind {
+    match *kind {
+        EventKind::AllOp
+        | EventKind::AlState { .. }
+        | EventKind::ProgramStep { .. }
+        | EventKind::ProgramDone { .. } => HistoryKind::Info,
+        EventKind::OpTimeout { .. } | EventKind::LeftOp { .. } => HistoryKind::AlState,
+        EventKind::Axis { event, .. } => match event {
+            cia402::Event::Fault { .. } => HistoryKind::DriveFault,
+            cia402::Event::PlannerFailed(_)
+            | cia402::Event::ModeSwitchFailed(_)
+            | cia402::Event::ModeDisplayMismatch { .. } => HistoryKind::StateMachine,
+            cia402::Event::WarningChanged(_) => HistoryKind::Warning,
+            _ => HistoryKind::Info,
+        },
+        EventKind::WorkingCounter { .. } => HistoryKind::WorkingCounter,
+        EventKind::FrameLost { .. } | EventKind::FramesResumed { .. } => HistoryKind::FrameLost,
+        EventKind::SegmentLost { .. } | EventKind::SegmentGone { .. } => HistoryKind::SegmentLost,
+        EventKind::FollowingError { .. } => HistoryKind::FollowingError,
+        EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
+        EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
+        EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,
     }
 }
 
@@ -701,6 +708,80 @@ struct Persist {
 }
 
 impl Persist {
+    /// What the first start of a session leaves for the runs after it: the summaries, the
+    /// decoder, the channels (sized for exactly these drives and I/O devices: every telemetry
+    /// buffer holds one entry each; they live as long as the session, across re-starts). The
+    /// supervisory ends go to [`Master::start`] through `started_tx`.
+    fn first(
+        started: &startup::Started,
+        started_tx: &mpsc::Sender<Result<Started, MasterError>>,
+    ) -> Self {
+        let summaries: Vec<DriveSummary> = started
+            .drives
+            .iter()
+            .map(|d| DriveSummary {
+                drive: d.drive.clone(),
+                info: d.info.clone(),
+                profile: d.profile.name,
+                image_bytes: (d.layout.bytes(Direction::Rx), d.layout.bytes(Direction::Tx)),
+                mode: d.setup.mode.name(),
+            })
+            .collect();
+        let io: Vec<IoSummary> = started
+            .io
+            .iter()
+            .map(|o| IoSummary {
+                device: o.info.drive_ref(),
+                info: o.info.clone(),
+                image_bytes: (o.outputs, o.inputs),
+                why: o.why.clone(),
+            })
+            .collect();
+        let decoder = Decoder {
+            drives: started
+                .drives
+                .iter()
+                .map(|d| (d.drive.clone(), d.profile.caps.error_table))
+                .collect(),
+            units: started
+                .drives
+                .iter()
+                .map(|d| d.setup.units.clone())
+                .collect(),
+            devices: started
+                .devices
+                .iter()
+                .map(|d| {
+                    started
+                        .drives
+                        .iter()
+                        .find(|x| x.info.position == d.position)
+                        .map_or_else(|| d.drive_ref(), |x| x.drive.clone())
+                })
+                .collect(),
+        };
+        // The channels, sized for exactly these drives and I/O devices (every telemetry buffer
+        // holds one entry each); they live as long as the session, across re-starts.
+        let (cycle_io, sup) = cycle::channels(started.drives.len(), started.io.len());
+        let _ = started_tx.send(Ok(Started {
+            drives: summaries.clone(),
+            io: io.clone(),
+            commands: sup.commands,
+            telemetry: sup.telemetry,
+        }));
+        Persist {
+            cycle_io,
+            events: sup.events,
+            decoder,
+            summaries,
+            io,
+            last_cycle: None,
+            emergencies: Vec::new(),
+            restarts: 0,
+            shutdown_ok: false,
+        }
+    }
+
     /// Publish a snapshot while no cycle runs: the phase and the re-start count. No drive is
     /// in SAFE-OP or OP then (taken to INIT, or out of reach), so no CiA 402 state is known:
     /// every axis shows `state: None`.
@@ -1009,6 +1090,140 @@ fn same_drives(
     Ok(())
 }
 
+/// Put the emergencies logged since `seen` into the history, each described with its drive's
+/// alarm table (by segment position; an I/O device has none).
+fn record_emergencies(log: &EmergencyLog, decoder: &Decoder, shared: &Shared, seen: &mut usize) {
+    let Ok(l) = log.lock() else {
+        return;
+    };
+    for r in l.iter().skip(*seen) {
+        let table = decoder
+            .drives
+            .iter()
+            .find(|(d, _)| d.position == r.position)
+            .map_or(&[][..], |(_, t)| *t);
+        let d = ErrorCode(r.error_code).describe(table);
+        push_history(
+            shared,
+            HistoryEntry {
+                time_ns: r.time_ns,
+                cycle: None,
+                drive: decoder.device(r.position),
+                error: r.error_code != 0,
+                kind: HistoryKind::Emergency,
+                text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),
+            },
+        );
+    }
+    *seen = l.len();
+}
+
+/// Every device to INIT after a run (the cycle has disabled the axes), unless the segment is
+/// gone; whether every device took the request.
+fn shutdown_to_init<L: FrameLink>(
+    bus: &mut super::bus::Bus<'_, L>,
+    devices: &[DeviceInfo],
+    decoder: &Decoder,
+    end: Option<CycleEnd>,
+) -> bool {
+    if matches!(end, Some(CycleEnd::SegmentLost | CycleEnd::LinkFailed)) {
+        return false;
+    }
+    let mut ok = true;
+    for d in devices {
+        let addr = d.address;
+        let name = decoder.device_name(d.position);
+        let r = bus.block_on(
+            &|| format!("{name}: requesting INIT"),
+            Duration::from_secs(2),
+            |md| async move {
+                EcCommand::fpwr(addr, register::AL_CONTROL)
+                    .send(md, 0x0011u16)
+                    .await
+            },
+        );
+        if !matches!(r, Ok(Ok(()))) {
+            ok = false;
+        }
+    }
+    ok
+}
+
+/// What follows a run that ended with `end`.
+fn run_end(end: Option<CycleEnd>, restarting: bool, decoder: &Decoder) -> RunEnd {
+    match end {
+        None | Some(CycleEnd::Stopped | CycleEnd::LinkFailed) => RunEnd::Over,
+        Some(CycleEnd::OpFailed { device, al_state }) if restarting => {
+            RunEnd::StartFailed(MasterError::new(
+                decoder.device(device).as_ref(),
+                "re-start",
+                ErrorKind::Timeout,
+                format!(
+                    "did not reach OP (AL status {})",
+                    cycle::al_state_name(al_state)
+                ),
+            ))
+        }
+        Some(CycleEnd::OpFailed { .. }) => RunEnd::Over,
+        Some(CycleEnd::SegmentLost | CycleEnd::DriveLeftOp { .. }) => RunEnd::Interrupted,
+        Some(CycleEnd::Restart) => RunEnd::Restart,
+    }
+}
+
+/// Read each drive's mailbox once (emergencies land in the log), giving up as soon as
+/// `finished` says the cycle has ended (no frame carries a request then, and a lost segment
+/// must not hold the session up). `counters` carry each drive's mailbox counter across polls.
+fn poll_mailboxes(
+    md: &ethercrab::MainDevice<'_>,
+    drives: &[(u16, DriveRef, bool)],
+    counters: &mut [u8],
+    log: &EmergencyLog,
+    timeout: Duration,
+    finished: &dyn Fn() -> bool,
+) {
+    for ((addr, drive, ca), counter) in drives.iter().zip(counters.iter_mut()) {
+        if finished() {
+            break;
+        }
+        let last = *counter;
+        // A poll only reads what is waiting: a few cycles.
+        let r = exec::run_remote_unless(
+            &|| format!("{drive}: polling the mailbox"),
+            timeout.min(POLL_TIMEOUT),
+            async {
+                let mut c = CoeClient::new(md, *addr, drive.clone(), log.clone())
+                    .await?
+                    .with_complete_access(*ca)
+                    .with_counter(last);
+                c.drain().await?;
+                Ok::<_, super::coe::CoeError>(c.counter())
+            },
+            finished,
+        );
+        if let Ok(Ok(c)) = r {
+            *counter = c;
+        }
+    }
+}
+
+/// Start-up to SAFE-OP; on a re-start, the segment must show the same drives in the same
+/// roles as at the first start.
+fn start_up<L: FrameLink>(
+    bus: &mut super::bus::Bus<'_, L>,
+    cfg: &MasterConfig,
+    persist: Option<&Persist>,
+) -> Result<startup::Started, MasterError> {
+    let (group, devices) = startup::discover(bus)?;
+    if let Some(p) = persist {
+        same_drives(&p.summaries, &p.io, &devices)?;
+    }
+    let plan = startup::plan(&devices, &cfg.startup)?;
+    if let Some(p) = persist {
+        same_roles(&p.summaries, &devices, &plan)?;
+    }
+    startup::configure(bus, group, devices, plan, &cfg.startup)
+}
+
 /// One run: start-up, the cycle with its supervision, shutdown.
 fn run<L: FrameLink + Send>(
     bus: &mut super::bus::Bus<'_, L>,
@@ -1018,18 +1233,7 @@ fn run<L: FrameLink + Send>(
     persist: &mut Option<Persist>,
     restarting: bool,
 ) -> RunEnd {
-    let started = (|| {
-        let (group, devices) = startup::discover(bus)?;
-        if let Some(p) = persist.as_ref() {
-            same_drives(&p.summaries, &p.io, &devices)?;
-        }
-        let plan = startup::plan(&devices, &cfg.startup)?;
-        if let Some(p) = persist.as_ref() {
-            same_roles(&p.summaries, &devices, &plan)?;
-        }
-        startup::configure(bus, group, devices, plan, &cfg.startup)
-    })();
-    let started = match started {
+    let started = match start_up(bus, cfg, persist.as_ref()) {
         Ok(s) => s,
         Err(e) => return RunEnd::StartFailed(e),
     };
@@ -1047,70 +1251,7 @@ fn run<L: FrameLink + Send>(
         );
     }
     if persist.is_none() {
-        let summaries: Vec<DriveSummary> = started
-            .drives
-            .iter()
-            .map(|d| DriveSummary {
-                drive: d.drive.clone(),
-                info: d.info.clone(),
-                profile: d.profile.name,
-                image_bytes: (d.layout.bytes(Direction::Rx), d.layout.bytes(Direction::Tx)),
-                mode: d.setup.mode.name(),
-            })
-            .collect();
-        let io: Vec<IoSummary> = started
-            .io
-            .iter()
-            .map(|o| IoSummary {
-                device: o.info.drive_ref(),
-                info: o.info.clone(),
-                image_bytes: (o.outputs, o.inputs),
-                why: o.why.clone(),
-            })
-            .collect();
-        let decoder = Decoder {
-            drives: started
-                .drives
-                .iter()
-                .map(|d| (d.drive.clone(), d.profile.caps.error_table))
-                .collect(),
-            units: started
-                .drives
-                .iter()
-                .map(|d| d.setup.units.clone())
-                .collect(),
-            devices: started
-                .devices
-                .iter()
-                .map(|d| {
-                    started
-                        .drives
-                        .iter()
-                        .find(|x| x.info.position == d.position)
-                        .map_or_else(|| d.drive_ref(), |x| x.drive.clone())
-                })
-                .collect(),
-        };
-        // The channels, sized for exactly these drives and I/O devices (every telemetry buffer
-        // holds one entry each); they live as long as the session, across re-starts.
-        let (cycle_io, sup) = cycle::channels(started.drives.len(), started.io.len());
-        let _ = started_tx.send(Ok(Started {
-            drives: summaries.clone(),
-            io: io.clone(),
-            commands: sup.commands,
-            telemetry: sup.telemetry,
-        }));
-        *persist = Some(Persist {
-            cycle_io,
-            events: sup.events,
-            decoder,
-            summaries,
-            io,
-            last_cycle: None,
-            emergencies: Vec::new(),
-            restarts: 0,
-            shutdown_ok: false,
-        });
+        *persist = Some(Persist::first(&started, started_tx));
     } else if restarting {
         note(
             shared,
@@ -1140,31 +1281,7 @@ fn run<L: FrameLink + Send>(
 
     let log = bus.emergencies().clone();
     let mut seen_emcy = 0usize;
-    let drain_emcy = |seen: &mut usize| {
-        if let Ok(l) = log.lock() {
-            for r in l.iter().skip(*seen) {
-                // By segment position: the drive's alarm table, or none for an I/O device.
-                let table = decoder
-                    .drives
-                    .iter()
-                    .find(|(d, _)| d.position == r.position)
-                    .map_or(&[][..], |(_, t)| *t);
-                let d = ErrorCode(r.error_code).describe(table);
-                push_history(
-                    shared,
-                    HistoryEntry {
-                        time_ns: r.time_ns,
-                        cycle: None,
-                        drive: decoder.device(r.position),
-                        error: r.error_code != 0,
-                        kind: HistoryKind::Emergency,
-                        text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),
-                    },
-                );
-            }
-            *seen = l.len();
-        }
-    };
+    let drain_emcy = |seen: &mut usize| record_emergencies(&log, decoder, shared, seen);
 
     let (rt_tx, rt_rx) = mpsc::channel();
     cycle_io.rt_report = Some(rt_tx);
@@ -1233,32 +1350,9 @@ fn run<L: FrameLink + Send>(
                 && monotonic_ns() >= next_poll
             {
                 next_poll = monotonic_ns() + every.as_nanos() as u64;
-                for ((addr, drive, ca), counter) in addrs.iter().zip(counters.iter_mut()) {
-                    if h.is_finished() {
-                        break;
-                    }
-                    let log = log.clone();
-                    let last = *counter;
-                    // A poll only reads what is waiting: a few cycles. It gives up at once when
-                    // the cycle ends (no frame carries it then), so that a lost segment does not
-                    // hold the session up.
-                    let r = exec::run_remote_unless(
-                        &|| format!("{drive}: polling the mailbox"),
-                        mbx_timeout.min(POLL_TIMEOUT),
-                        async {
-                            let mut c = CoeClient::new(md, *addr, drive.clone(), log)
-                                .await?
-                                .with_complete_access(*ca)
-                                .with_counter(last);
-                            c.drain().await?;
-                            Ok::<_, super::coe::CoeError>(c.counter())
-                        },
-                        &|| h.is_finished(),
-                    );
-                    if let Ok(Ok(c)) = r {
-                        *counter = c;
-                    }
-                }
+                poll_mailboxes(md, &addrs, &mut counters, &log, mbx_timeout, &|| {
+                    h.is_finished()
+                });
                 drain_emcy(&mut seen_emcy);
             }
             std::thread::sleep(Duration::from_millis(2));
@@ -1268,54 +1362,13 @@ fn run<L: FrameLink + Send>(
     });
     *restarts = cycle_io.restarts;
 
-    // Shutdown: every drive to INIT (the cycle has disabled the axes), unless the segment is
-    // gone.
     let end = report.as_ref().map(|r| r.end);
-    let mut shutdown_ok = true;
-    if !matches!(end, Some(CycleEnd::SegmentLost | CycleEnd::LinkFailed)) {
-        for d in &started.devices {
-            let addr = d.address;
-            let name = decoder.device_name(d.position);
-            let r = bus.block_on(
-                &|| format!("{name}: requesting INIT"),
-                Duration::from_secs(2),
-                |md| async move {
-                    EcCommand::fpwr(addr, register::AL_CONTROL)
-                        .send(md, 0x0011u16)
-                        .await
-                },
-            );
-            if !matches!(r, Ok(Ok(()))) {
-                shutdown_ok = false;
-            }
-        }
-    } else {
-        shutdown_ok = false;
-    }
+    let shutdown_ok = shutdown_to_init(bus, &started.devices, decoder, end);
     drain_emcy(&mut seen_emcy);
     if let Ok(l) = log.lock() {
         emergencies.extend(l.iter().cloned());
     }
     *shutdown_ok_out = shutdown_ok;
     *last_cycle = report;
-    match end {
-        None | Some(CycleEnd::Stopped | CycleEnd::LinkFailed) => RunEnd::Over,
-        Some(CycleEnd::OpFailed { device, al_state }) => {
-            if restarting {
-                RunEnd::StartFailed(MasterError::new(
-                    decoder.device(device).as_ref(),
-                    "re-start",
-                    ErrorKind::Timeout,
-                    format!(
-                        "did not reach OP (AL status {})",
-                        cycle::al_state_name(al_state)
-                    ),
-                ))
-            } else {
-                RunEnd::Over
-            }
-        }
-        Some(CycleEnd::SegmentLost | CycleEnd::DriveLeftOp { .. }) => RunEnd::Interrupted,
-        Some(CycleEnd::Restart) => RunEnd::Restart,
-    }
+    run_end(end, restarting, decoder)
 }

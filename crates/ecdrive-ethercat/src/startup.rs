@@ -22,7 +22,7 @@ use crate::drives::{CycleTimeObject, DriveProfile, StartupWhen};
 use crate::ec::{AlState, AlStatusCode, register};
 use crate::link::FrameLink;
 use crate::od::{self, DataType, ObjectAddress, Value};
-use crate::pdo::{self, Direction, Field, Layout, Mapping, RemapOptions};
+use crate::pdo::{self, AxisBinding, Direction, Field, Layout, Mapping, RemapOptions};
 use ethercrab::subdevice_group::{DcConfiguration, HasDc, PreOp, SafeOp};
 use ethercrab::{Command, DcSync, DefaultLock, SubDeviceGroup};
 use std::time::Duration;
@@ -228,36 +228,11 @@ impl DeviceInfo {
 /// image, inputs in its input (TxPDO) image. Resolved once; used every cycle.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriveFields {
-    /// 0x6040 controlword.
-    pub controlword: Field,
-    /// 0x6060 mode of operation.
-    pub mode: Option<Field>,
-    /// 0x607A target position.
-    pub target_position: Option<Field>,
-    /// 0x60FF target velocity.
-    pub target_velocity: Option<Field>,
-    /// 0x6071 target torque.
-    pub target_torque: Option<Field>,
-    /// 0x6041 statusword.
-    pub statusword: Field,
-    /// 0x6061 mode display.
-    pub mode_display: Option<Field>,
-    /// 0x6064 position actual value.
-    pub position: Option<Field>,
-    /// 0x606C velocity actual value.
-    pub velocity: Option<Field>,
-    /// 0x6077 torque actual value.
-    pub torque: Option<Field>,
-    /// 0x603F error code.
-    pub error_code: Option<Field>,
-    /// 0x60F4 following error actual value.
-    pub following_error: Option<Field>,
-    /// 0x60FD digital inputs.
-    pub digital_inputs: Option<Field>,
+    /// The CiA 402 objects (the binding both buses use); the controlword and the statusword
+    /// are always mapped.
+    pub axis: AxisBinding,
     /// The profile's cycle counter (output) and its echo (input).
     pub counter: Option<(Field, Option<Field>)>,
-    /// The drive's zero-speed flag (input object and bit), if mapped.
-    pub zero_speed: Option<(Field, u8)>,
     /// Outputs that carry a fixed value from the first cycle on.
     pub output_defaults: Vec<(Field, i64)>,
     /// Mapped outputs the master does not drive (a limit, an offset): they carry the raw value
@@ -1097,7 +1072,7 @@ fn generic_mappings<L: FrameLink>(
             }
         };
         let entry = |a: ObjectAddress| {
-            let bits = standard_type(a)
+            let bits = pdo::axis::standard_type(a)
                 .and_then(DataType::bit_len)
                 .unwrap_or(32)
                 .min(64) as u8;
@@ -1164,237 +1139,29 @@ pub fn configure<L: FrameLink>(
     let mut recheck: Vec<(u16, DriveRef, ObjectAddress)> = Vec::new();
     // Per drive: the values of the mapped outputs the cycle does not drive.
     let mut held_values: Vec<Vec<HeldValue>> = Vec::new();
-
     for (&(d, setup, profile), mapping) in drives_plan.iter().zip(&mappings) {
         let drive = DriveRef {
             position: d.position,
             name: profile.name.to_string(),
         };
-        let mut writes: Vec<(ObjectAddress, Vec<u8>, String)> = Vec::new();
-        // PDO assignment and mapping (not when the drive's own mapping is used).
-        let seq = if own.contains(&d.position) {
-            Vec::new()
-        } else {
-            pdo::remap_sequence(
-                mapping,
-                &RemapOptions::for_drive(
-                    &profile.pdo_limits,
-                    Some(od::Dictionary::new(profile.dictionary)),
-                ),
-            )
-            .map_err(|e| {
-                MasterError::new(Some(&drive), "building the PDO remap", ErrorKind::Config, e)
-            })?
-        };
-        for w in seq {
-            writes.push((w.address, w.bytes(), w.description.clone()));
-        }
-        let remap_len = writes.len();
-        // Synchronisation type and cycle time: read first, written only when different, and
-        // a drive that does not take them by SDO is checked for compatibility (`write_sync`).
-        let mut sync_writes: Vec<SyncWrite> = Vec::new();
-        // 0x60C2 with a vendor index: decided against what the drive holds (`write_interpolation`).
-        let mut interpolation: Option<(u32, i8)> = None;
-        if let Some(a) = profile.sync.sync_type_object {
-            sync_writes.push(SyncWrite {
-                address: a,
-                value: 2,
-                len: 2,
-                what: SyncWhat::Type,
-            });
-        }
-        match profile.sync.cycle_time_object {
-            Some(CycleTimeObject::Nanoseconds(a)) => {
-                sync_writes.push(SyncWrite {
-                    address: a,
-                    value: cycle_ns,
-                    len: 4,
-                    what: SyncWhat::CycleTime,
-                });
-            }
-            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
-                interpolation = Some((unit_ns, index));
-            }
-            Some(CycleTimeObject::InterpolationStandard) => {
-                // cycle = value × 10^index s, with the largest index that keeps value ≤ 255.
-                let (mut value, mut index) = (u64::from(cycle_ns), -9i8);
-                while value > 255 || (value % 10 == 0 && value > 0 && index < 0) {
-                    if value % 10 != 0 && value <= 255 {
-                        break;
-                    }
-                    value /= 10;
-                    index += 1;
-                }
-                writes.push((
-                    ObjectAddress::new(0x60C2, 1),
-                    vec![value as u8],
-                    "interpolation period value".into(),
-                ));
-                writes.push((
-                    ObjectAddress::new(0x60C2, 2),
-                    vec![index as u8],
-                    "interpolation period index".into(),
-                ));
-            }
-            None => {}
-        }
-        // Start-up SDOs of the profile, then the user's. A value whose object is mapped as an
-        // output goes there instead (`carried`): the drive gets it in every cycle.
-        let mut carried: Vec<(ObjectAddress, Vec<u8>)> = Vec::new();
-        for s in profile.startup {
-            let mapped =
-                s.when == StartupWhen::IfNotMapped && mapping.contains(Direction::Rx, s.address);
-            let v = s.value.to_value().ok_or_else(|| {
-                MasterError::new(
-                    Some(&drive),
-                    format!("start-up SDO {}", s.address),
-                    ErrorKind::Config,
-                    "has no value",
-                )
-            })?;
-            let bytes = encode(profile, s.address, &v).map_err(|e| {
-                MasterError::new(
-                    Some(&drive),
-                    format!("start-up SDO {}", s.address),
-                    ErrorKind::Config,
-                    e,
-                )
-            })?;
-            if mapped {
-                carried.push((s.address, bytes));
-            } else {
-                writes.push((s.address, bytes, s.why.to_string()));
-            }
-        }
-        for (a, v) in &setup.sdos {
-            let bytes = encode(profile, *a, v).map_err(|e| {
-                MasterError::new(
-                    Some(&drive),
-                    format!("start-up SDO {a}"),
-                    ErrorKind::Config,
-                    e,
-                )
-            })?;
-            writes.push((*a, bytes, format!("user start-up value {v}")));
-        }
-        // Mode of operation: by SDO only when 0x6060 is not mapped.
-        if !mapping.contains(Direction::Rx, MODE) {
-            writes.push((
-                MODE,
-                vec![setup.mode.code() as u8],
-                format!("mode of operation = {}", setup.mode.name()),
-            ));
-        }
-
-        // The mapped outputs the cycle does not drive: read their values once every start-up
-        // value is written, and send those (`held_outputs`).
-        let driven: Vec<ObjectAddress> = [CW, MODE]
-            .into_iter()
-            .chain(
-                [CyclicMode::Csp, CyclicMode::Csv, CyclicMode::Cst]
-                    .into_iter()
-                    .map(setpoint_object),
-            )
-            .chain(profile.cycle_counter.map(|c| c.output))
-            .chain(profile.output_defaults.iter().map(|o| o.address))
-            .collect();
-        let undriven: Vec<ObjectAddress> = mapping
-            .pdos(Direction::Rx)
-            .iter()
-            .flat_map(|p| p.entries.iter())
-            .filter(|e| !e.is_padding() && !driven.contains(&e.address()))
-            .map(|e| e.address())
-            .collect();
-        let mut held: Vec<HeldValue> = Vec::new();
-        let complete_access = profile.complete_access;
-        let mut outcomes: Vec<SyncOutcome> = Vec::new();
-        let mut interpolated: Option<Result<String, String>> = None;
-        let n_writes = writes.len();
-        let (pdo_writes, later) = writes.split_at(remap_len.min(n_writes));
-        bus.with_coe(
-            d.address,
-            drive.clone(),
-            complete_access,
-            T_STEP,
-            async |c| {
-                c.drain().await?;
-                for (addr, bytes, _why) in pdo_writes {
-                    c.download(*addr, bytes, false).await?;
-                }
-                for w in &sync_writes {
-                    outcomes.push(write_sync(c, w).await?);
-                }
-                if let Some((unit_ns, index)) = interpolation {
-                    interpolated = Some(write_interpolation(c, cycle_ns, unit_ns, index).await?);
-                }
-                for (addr, bytes, _why) in later {
-                    c.download(*addr, bytes, false).await?;
-                }
-                // Last, so that a start-up value written to such an object is what it keeps.
-                for a in &undriven {
-                    let value = match carried.iter().find(|(c, _)| c == a) {
-                        Some((_, bytes)) => Ok(bytes.clone()),
-                        None => c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
-                    };
-                    held.push((*a, value));
-                }
-                Ok(())
-            },
-        )
-        .map_err(|e| {
-            let mut e = MasterError::from(e);
-            // Name the purpose of the write that failed.
-            if let Some((_, _, why)) = writes.iter().find(|(a, _, _)| e.step == a.to_string()) {
-                e.step = format!("writing {} ({why})", e.step);
-            } else if let Some(w) = sync_writes.iter().find(|w| e.step == w.address.to_string()) {
-                e.step = format!("writing {} ({})", e.step, w.describe());
-            }
-            e
-        })?;
-        match interpolated {
-            Some(Err(why)) => {
-                return Err(MasterError::new(
-                    Some(&drive),
-                    "writing 0x60C2 (interpolation time period)",
-                    ErrorKind::Incompatible,
-                    why,
-                ));
-            }
-            Some(Ok(form)) => tracing::info!("{drive}: interpolation time period {form}"),
-            None => {}
-        }
-        for (w, o) in sync_writes.iter().zip(&outcomes) {
-            match o.judge(w, profile) {
-                Ok(None) => {}
-                Ok(Some(note)) => {
-                    tracing::warn!("{drive}: {note}");
-                    warnings.push((drive.clone(), note));
-                }
-                Err(why) => {
-                    return Err(MasterError::new(
-                        Some(&drive),
-                        format!("writing {} ({})", w.address, w.describe()),
-                        ErrorKind::Incompatible,
-                        why,
-                    ));
-                }
-            }
-            if matches!(o, SyncOutcome::ReadOnly { .. }) && w.what == SyncWhat::CycleTime {
-                recheck.push((d.address, drive.clone(), w.address));
-            }
-        }
-        tracing::info!("{drive}: configured ({} SDO writes)", writes.len());
-        for (a, r) in &held {
-            if let Err(why) = r {
-                warnings.push((
-                    drive.clone(),
-                    format!(
-                        "{a} is mapped but the master does not drive it and cannot read its \
-                         value ({why}): it is sent as 0"
-                    ),
-                ));
-            }
-        }
+        let writes = DriveWrites::plan(
+            &drive,
+            setup,
+            profile,
+            mapping,
+            !own.contains(&d.position),
+            cycle_ns,
+        )?;
+        let held = configure_drive(
+            bus,
+            d,
+            &drive,
+            profile,
+            writes,
+            cycle_ns,
+            &mut warnings,
+            &mut recheck,
+        )?;
         held_values.push(held);
     }
 
@@ -1427,6 +1194,341 @@ pub fn configure<L: FrameLink>(
         })?;
     }
 
+    let group = build_image(bus, group, &devices)?;
+    let drives = resolve_drives(bus, &group, drives_plan, mappings, held_values)?;
+    // The I/O devices: their images as ethercrab sized them from their own configuration.
+    let mut io = Vec::new();
+    for (d, r) in devices.iter().zip(&plan) {
+        let Role::Io { why } = r else { continue };
+        let sd = group
+            .subdevice(bus.md(), d.position as usize)
+            .map_err(|e| bus_error(Some(&d.drive_ref()), "reading the process image", e))?;
+        let img = sd.io_raw();
+        io.push(ConfiguredIo {
+            info: d.clone(),
+            outputs: img.outputs().len(),
+            inputs: img.inputs().len(),
+            why: why.clone(),
+        });
+    }
+
+    let group = to_safe_op(bus, group, &drives, cfg)?;
+    recheck_cycle_times(bus, recheck, cfg, &mut warnings)?;
+    Ok(Started {
+        group,
+        drives,
+        io,
+        devices,
+        warnings,
+    })
+}
+
+/// What start-up writes to one drive in PRE-OP, in order, and what it reads back.
+struct DriveWrites {
+    /// Every SDO write: (object, bytes, why). The PDO remap comes first (`remap_len` of them).
+    writes: Vec<(ObjectAddress, Vec<u8>, String)>,
+    remap_len: usize,
+    /// Synchronisation type and cycle time: read first, written only when different, and a
+    /// drive that does not take them by SDO is checked for compatibility (`write_sync`).
+    sync_writes: Vec<SyncWrite>,
+    /// 0x60C2 with a vendor index: decided against what the drive holds
+    /// (`write_interpolation`).
+    interpolation: Option<(u32, i8)>,
+    /// Start-up values of objects mapped as outputs: the drive gets them in every cycle.
+    carried: Vec<(ObjectAddress, Vec<u8>)>,
+    /// The mapped outputs the cycle does not drive: their values are read once every start-up
+    /// value is written, and sent (`held_outputs`).
+    undriven: Vec<ObjectAddress>,
+}
+
+impl DriveWrites {
+    /// The writes for `drive` with `mapping` (installed by SDO when `remap`).
+    fn plan(
+        drive: &DriveRef,
+        setup: &DriveSetup,
+        profile: &'static DriveProfile,
+        mapping: &Mapping,
+        remap: bool,
+        cycle_ns: u32,
+    ) -> Result<Self, MasterError> {
+        let mut w = Self {
+            writes: Vec::new(),
+            remap_len: 0,
+            sync_writes: Vec::new(),
+            interpolation: None,
+            carried: Vec::new(),
+            undriven: Vec::new(),
+        };
+        if remap {
+            let seq = pdo::remap_sequence(
+                mapping,
+                &RemapOptions::for_drive(
+                    &profile.pdo_limits,
+                    Some(od::Dictionary::new(profile.dictionary)),
+                ),
+            )
+            .map_err(|e| {
+                MasterError::new(Some(drive), "building the PDO remap", ErrorKind::Config, e)
+            })?;
+            for s in seq {
+                w.writes.push((s.address, s.bytes(), s.description.clone()));
+            }
+        }
+        w.remap_len = w.writes.len();
+        w.plan_sync(profile, cycle_ns);
+        w.plan_startup(drive, setup, profile, mapping)?;
+        // Last, so that a start-up value written to such an object is what it keeps.
+        let driven: Vec<ObjectAddress> = mapping
+            .pdos(Direction::Rx)
+            .iter()
+            .flat_map(|p| p.entries.iter())
+            .map(|e| e.address())
+            .filter(|a| AxisBinding::drives(*a))
+            .chain(profile.cycle_counter.map(|c| c.output))
+            .chain(profile.output_defaults.iter().map(|o| o.address))
+            .collect();
+        w.undriven = mapping
+            .pdos(Direction::Rx)
+            .iter()
+            .flat_map(|p| p.entries.iter())
+            .filter(|e| !e.is_padding() && !driven.contains(&e.address()))
+            .map(|e| e.address())
+            .collect();
+        Ok(w)
+    }
+
+    /// The synchronisation type and the cycle time, in whichever object the drive takes it.
+    fn plan_sync(&mut self, profile: &DriveProfile, cycle_ns: u32) {
+        let writes = &mut self.writes;
+        let sync_writes = &mut self.sync_writes;
+        let interpolation = &mut self.interpolation;
+        if let Some(a) = profile.sync.sync_type_object {
+            sync_writes.push(SyncWrite {
+                address: a,
+                value: 2,
+                len: 2,
+                what: SyncWhat::Type,
+            });
+        }
+        match profile.sync.cycle_time_object {
+            Some(CycleTimeObject::Nanoseconds(a)) => {
+                sync_writes.push(SyncWrite {
+                    address: a,
+                    value: cycle_ns,
+                    len: 4,
+                    what: SyncWhat::CycleTime,
+                });
+            }
+            Some(CycleTimeObject::InterpolationFixedIndex { unit_ns, index }) => {
+                *interpolation = Some((unit_ns, index));
+            }
+            Some(CycleTimeObject::InterpolationStandard) => {
+                // cycle = value × 10^index s, with the largest index that keeps value ≤ 255.
+                let (mut value, mut index) = (u64::from(cycle_ns), -9i8);
+                while value > 255 || (value % 10 == 0 && value > 0 && index < 0) {
+                    if value % 10 != 0 && value <= 255 {
+                        break;
+                    }
+                    value /= 10;
+                    index += 1;
+                }
+                writes.push((
+                    ObjectAddress::new(0x60C2, 1),
+                    vec![value as u8],
+                    "interpolation period value".into(),
+                ));
+                writes.push((
+                    ObjectAddress::new(0x60C2, 2),
+                    vec![index as u8],
+                    "interpolation period index".into(),
+                ));
+            }
+            None => {}
+        }
+    }
+
+    /// The profile's start-up SDOs, the user's, and the mode when 0x6060 is not mapped.
+    fn plan_startup(
+        &mut self,
+        drive: &DriveRef,
+        setup: &DriveSetup,
+        profile: &DriveProfile,
+        mapping: &Mapping,
+    ) -> Result<(), MasterError> {
+        let writes = &mut self.writes;
+        let carried = &mut self.carried;
+        // Start-up SDOs of the profile, then the user's. A value whose object is mapped as an
+        // output goes there instead (`carried`): the drive gets it in every cycle.
+        for s in profile.startup {
+            let mapped =
+                s.when == StartupWhen::IfNotMapped && mapping.contains(Direction::Rx, s.address);
+            let v = s.value.to_value().ok_or_else(|| {
+                MasterError::new(
+                    Some(drive),
+                    format!("start-up SDO {}", s.address),
+                    ErrorKind::Config,
+                    "has no value",
+                )
+            })?;
+            let bytes = encode(profile, s.address, &v).map_err(|e| {
+                MasterError::new(
+                    Some(drive),
+                    format!("start-up SDO {}", s.address),
+                    ErrorKind::Config,
+                    e,
+                )
+            })?;
+            if mapped {
+                carried.push((s.address, bytes));
+            } else {
+                writes.push((s.address, bytes, s.why.to_string()));
+            }
+        }
+        for (a, v) in &setup.sdos {
+            let bytes = encode(profile, *a, v).map_err(|e| {
+                MasterError::new(
+                    Some(drive),
+                    format!("start-up SDO {a}"),
+                    ErrorKind::Config,
+                    e,
+                )
+            })?;
+            writes.push((*a, bytes, format!("user start-up value {v}")));
+        }
+        // Mode of operation: by SDO only when 0x6060 is not mapped.
+        if !mapping.contains(Direction::Rx, MODE) {
+            writes.push((
+                MODE,
+                vec![setup.mode.code() as u8],
+                format!("mode of operation = {}", setup.mode.name()),
+            ));
+        }
+
+        Ok(())
+    }
+}
+
+/// Write one drive's start-up configuration over CoE and judge what it answered; the values
+/// of its mapped outputs the cycle does not drive.
+#[allow(clippy::too_many_arguments)]
+fn configure_drive<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    d: &DeviceInfo,
+    drive: &DriveRef,
+    profile: &DriveProfile,
+    plan: DriveWrites,
+    cycle_ns: u32,
+    warnings: &mut Vec<(DriveRef, String)>,
+    recheck: &mut Vec<(u16, DriveRef, ObjectAddress)>,
+) -> Result<Vec<HeldValue>, MasterError> {
+    let DriveWrites {
+        writes,
+        remap_len,
+        sync_writes,
+        interpolation,
+        carried,
+        undriven,
+    } = plan;
+    let drive = drive.clone();
+    let mut held: Vec<HeldValue> = Vec::new();
+    let complete_access = profile.complete_access;
+    let mut outcomes: Vec<SyncOutcome> = Vec::new();
+    let mut interpolated: Option<Result<String, String>> = None;
+    let n_writes = writes.len();
+    let (pdo_writes, later) = writes.split_at(remap_len.min(n_writes));
+    bus.with_coe(
+        d.address,
+        drive.clone(),
+        complete_access,
+        T_STEP,
+        async |c| {
+            c.drain().await?;
+            for (addr, bytes, _why) in pdo_writes {
+                c.download(*addr, bytes, false).await?;
+            }
+            for w in &sync_writes {
+                outcomes.push(write_sync(c, w).await?);
+            }
+            if let Some((unit_ns, index)) = interpolation {
+                interpolated = Some(write_interpolation(c, cycle_ns, unit_ns, index).await?);
+            }
+            for (addr, bytes, _why) in later {
+                c.download(*addr, bytes, false).await?;
+            }
+            // Last, so that a start-up value written to such an object is what it keeps.
+            for a in &undriven {
+                let value = match carried.iter().find(|(c, _)| c == a) {
+                    Some((_, bytes)) => Ok(bytes.clone()),
+                    None => c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
+                };
+                held.push((*a, value));
+            }
+            Ok(())
+        },
+    )
+    .map_err(|e| {
+        let mut e = MasterError::from(e);
+        // Name the purpose of the write that failed.
+        if let Some((_, _, why)) = writes.iter().find(|(a, _, _)| e.step == a.to_string()) {
+            e.step = format!("writing {} ({why})", e.step);
+        } else if let Some(w) = sync_writes.iter().find(|w| e.step == w.address.to_string()) {
+            e.step = format!("writing {} ({})", e.step, w.describe());
+        }
+        e
+    })?;
+    match interpolated {
+        Some(Err(why)) => {
+            return Err(MasterError::new(
+                Some(&drive),
+                "writing 0x60C2 (interpolation time period)",
+                ErrorKind::Incompatible,
+                why,
+            ));
+        }
+        Some(Ok(form)) => tracing::info!("{drive}: interpolation time period {form}"),
+        None => {}
+    }
+    for (w, o) in sync_writes.iter().zip(&outcomes) {
+        match o.judge(w, profile) {
+            Ok(None) => {}
+            Ok(Some(note)) => {
+                tracing::warn!("{drive}: {note}");
+                warnings.push((drive.clone(), note));
+            }
+            Err(why) => {
+                return Err(MasterError::new(
+                    Some(&drive),
+                    format!("writing {} ({})", w.address, w.describe()),
+                    ErrorKind::Incompatible,
+                    why,
+                ));
+            }
+        }
+        if matches!(o, SyncOutcome::ReadOnly { .. }) && w.what == SyncWhat::CycleTime {
+            recheck.push((d.address, drive.clone(), w.address));
+        }
+    }
+    tracing::info!("{drive}: configured ({} SDO writes)", writes.len());
+    for (a, r) in &held {
+        if let Err(why) = r {
+            warnings.push((
+                drive.clone(),
+                format!(
+                    "{a} is mapped but the master does not drive it and cannot read its \
+                     value ({why}): it is sent as 0"
+                ),
+            ));
+        }
+    }
+    Ok(held)
+}
+
+/// Build the process image (PRE-OP with PDI): ethercrab reads each device's PDO assignment.
+fn build_image<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    group: Group<PreOp>,
+    devices: &[DeviceInfo],
+) -> Result<Group<ethercrab::subdevice_group::PreOpPdi>, MasterError> {
     let step = "building the process image (PRE-OP)";
     let r = bus.block_on(&|| step.into(), T_STEP, |md| group.into_pre_op_pdi(md));
     // ethercrab reads each device's PDO assignment over CoE here; when that fails, its error
@@ -1441,8 +1543,8 @@ pub fn configure<L: FrameLink>(
                 name: d.name.clone(),
             })
     };
-    let group = match r {
-        Ok(Ok(g)) => g,
+    match r {
+        Ok(Ok(g)) => Ok(g),
         Ok(Err(e)) => {
             let what = match &e {
                 ethercrab::error::Error::Mailbox(_) | ethercrab::error::Error::Timeout(_) => {
@@ -1450,12 +1552,20 @@ pub fn configure<L: FrameLink>(
                 }
                 _ => step.to_string(),
             };
-            return Err(bus_error(culprit().as_ref(), what, e));
+            Err(bus_error(culprit().as_ref(), what, e))
         }
-        Err(e) => return Err(exec_error(culprit().as_ref(), e)),
-    };
+        Err(e) => Err(exec_error(culprit().as_ref(), e)),
+    }
+}
 
-    // Resolve each drive's fields and check its image size against its mapping.
+/// Resolve each drive's fields and check its image size against its mapping.
+fn resolve_drives<L: FrameLink>(
+    bus: &Bus<'_, L>,
+    group: &Group<ethercrab::subdevice_group::PreOpPdi>,
+    drives_plan: Vec<(&DeviceInfo, &DriveSetup, &'static DriveProfile)>,
+    mappings: Vec<Mapping>,
+    held_values: Vec<Vec<HeldValue>>,
+) -> Result<Vec<ConfiguredDrive>, MasterError> {
     let mut drives = Vec::with_capacity(drives_plan.len());
     for (((d, setup, profile), mapping), held) in
         drives_plan.into_iter().zip(mappings).zip(held_values)
@@ -1511,24 +1621,17 @@ pub fn configure<L: FrameLink>(
             setup: setup.clone(),
         });
     }
-    // The I/O devices: their images as ethercrab sized them from their own configuration.
-    let mut io = Vec::new();
-    for (d, r) in devices.iter().zip(&plan) {
-        let Role::Io { why } = r else { continue };
-        let sd = group
-            .subdevice(bus.md(), d.position as usize)
-            .map_err(|e| bus_error(Some(&d.drive_ref()), "reading the process image", e))?;
-        let img = sd.io_raw();
-        io.push(ConfiguredIo {
-            info: d.clone(),
-            outputs: img.outputs().len(),
-            inputs: img.inputs().len(),
-            why: why.clone(),
-        });
-    }
+    Ok(drives)
+}
 
-    // DC: let the clocks settle, then start SYNC0 and go to SAFE-OP.
-    settle_dc(bus, &group, &drives, &cfg.dc)?;
+/// DC: let the clocks settle, then start SYNC0 and go to SAFE-OP.
+fn to_safe_op<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    group: Group<ethercrab::subdevice_group::PreOpPdi>,
+    drives: &[ConfiguredDrive],
+    cfg: &StartupConfig,
+) -> Result<Group<SafeOp, HasDc>, MasterError> {
+    settle_dc(bus, &group, drives, &cfg.dc)?;
     let dc_conf = DcConfiguration {
         start_delay: cfg.dc.start_delay,
         sync0_period: cfg.cycle,
@@ -1544,29 +1647,34 @@ pub fn configure<L: FrameLink>(
         .iter()
         .map(|d| (d.info.address, d.drive.clone()))
         .collect();
-    let group = match bus.block_on(&|| "PRE-OP → SAFE-OP".into(), T_STEP, |md| {
+    match bus.block_on(&|| "PRE-OP → SAFE-OP".into(), T_STEP, |md| {
         group.into_safe_op(md)
     }) {
-        Ok(Ok(g)) => g,
-        Ok(Err(e)) => {
-            return Err(explain_transition(
-                bus,
-                &addrs,
-                AlState::SafeOp,
-                bus_error(None, "PRE-OP → SAFE-OP", e),
-            ));
-        }
-        Err(e) => {
-            return Err(explain_transition(
-                bus,
-                &addrs,
-                AlState::SafeOp,
-                exec_error(None, e),
-            ));
-        }
-    };
-    // A read-only cycle time shows the SYNC0 cycle once SYNC0 runs (ETG.1020): check it, from
-    // the first SYNC0 on (after the start delay) for some cycles.
+        Ok(Ok(g)) => Ok(g),
+        Ok(Err(e)) => Err(explain_transition(
+            bus,
+            &addrs,
+            AlState::SafeOp,
+            bus_error(None, "PRE-OP → SAFE-OP", e),
+        )),
+        Err(e) => Err(explain_transition(
+            bus,
+            &addrs,
+            AlState::SafeOp,
+            exec_error(None, e),
+        )),
+    }
+}
+
+/// A read-only cycle time shows the SYNC0 cycle once SYNC0 runs (ETG.1020): check it, from the
+/// first SYNC0 on (after the start delay) for some cycles.
+fn recheck_cycle_times<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    recheck: Vec<(u16, DriveRef, ObjectAddress)>,
+    cfg: &StartupConfig,
+    warnings: &mut Vec<(DriveRef, String)>,
+) -> Result<(), MasterError> {
+    let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
     let wait = cfg.dc.start_delay + cfg.cycle * 20 + Duration::from_millis(200);
     for (addr, drive, object) in recheck {
         let until = crate::rt::monotonic_ns() + wait.as_nanos() as u64;
@@ -1598,13 +1706,7 @@ pub fn configure<L: FrameLink>(
             }
         }
     }
-    Ok(Started {
-        group,
-        drives,
-        io,
-        devices,
-        warnings,
-    })
+    Ok(())
 }
 
 /// After a failed transition: find the drive that refused and say why (its AL status code).
@@ -1645,36 +1747,28 @@ pub fn explain_transition<L: FrameLink>(
     fallback
 }
 
-/// Standard data types of the CiA 402 objects, for drives whose dictionary lacks one.
-fn standard_type(addr: ObjectAddress) -> Option<DataType> {
-    Some(match addr.index {
-        // Error code, controlword, statusword.
-        0x603F..=0x6041 => DataType::Unsigned16,
-        0x6060 | 0x6061 => DataType::Integer8,
-        0x6064 | 0x606C | 0x607A | 0x60FF | 0x60F4 => DataType::Integer32,
-        0x6071 | 0x6077 => DataType::Integer16,
-        0x60FD => DataType::Unsigned32,
-        _ => return None,
-    })
-}
-
 fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields, String> {
     let dict = od::Dictionary::new(profile.dictionary);
+    let mut axis = AxisBinding::resolve(layout, &dict).map_err(|e| e.to_string())?;
+    if axis.controlword.is_none() {
+        return Err("the controlword 0x6040:00 is not mapped".into());
+    }
+    if axis.statusword.is_none() {
+        return Err("the statusword 0x6041:00 is not mapped".into());
+    }
     let get = |dir: Direction, addr: ObjectAddress| -> Result<Option<Field>, String> {
         if layout.find(dir, addr).is_none() {
             return Ok(None);
         }
         let dt = dict
             .data_type(addr)
-            .or_else(|| standard_type(addr))
+            .or_else(|| pdo::axis::standard_type(addr))
             .ok_or_else(|| format!("{addr} is mapped but its type is unknown"))?;
         layout
             .field(dir, addr, dt)
             .map(Some)
             .map_err(|e| e.to_string())
     };
-    let a = ObjectAddress::new;
-    let need = |f: Option<Field>, what: &str| f.ok_or_else(|| format!("{what} is not mapped"));
     let counter = match profile.cycle_counter {
         Some(c) => get(Direction::Rx, c.output)?
             .map(|out| {
@@ -1689,7 +1783,7 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
             .transpose()?,
         None => None,
     };
-    let zero_speed = match profile.zero_speed_flag {
+    axis.zero_speed = match profile.zero_speed_flag {
         Some(z) => layout
             .raw_field(Direction::Tx, z.address, false)
             .ok()
@@ -1703,27 +1797,8 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
         }
     }
     Ok(DriveFields {
-        controlword: need(
-            get(Direction::Rx, a(0x6040, 0))?,
-            "the controlword 0x6040:00",
-        )?,
-        mode: get(Direction::Rx, a(0x6060, 0))?,
-        target_position: get(Direction::Rx, a(0x607A, 0))?,
-        target_velocity: get(Direction::Rx, a(0x60FF, 0))?,
-        target_torque: get(Direction::Rx, a(0x6071, 0))?,
-        statusword: need(
-            get(Direction::Tx, a(0x6041, 0))?,
-            "the statusword 0x6041:00",
-        )?,
-        mode_display: get(Direction::Tx, a(0x6061, 0))?,
-        position: get(Direction::Tx, a(0x6064, 0))?,
-        velocity: get(Direction::Tx, a(0x606C, 0))?,
-        torque: get(Direction::Tx, a(0x6077, 0))?,
-        error_code: get(Direction::Tx, a(0x603F, 0))?,
-        following_error: get(Direction::Tx, a(0x60F4, 0))?,
-        digital_inputs: get(Direction::Tx, a(0x60FD, 0))?,
+        axis,
         counter,
-        zero_speed,
         output_defaults,
         held_outputs: Vec::new(),
     })

@@ -474,110 +474,16 @@ pub fn build(desc: &DeviceDescription) -> Result<SiiImage, SiiError> {
     if size < 128 || size % 128 != 0 || size > 512 * 1024 {
         return Err(SiiError::InvalidEepromSize { bytes: size });
     }
-    if desc.sync_managers.len() > 8 {
-        return Err(SiiError::TooManySyncManagers {
-            count: desc.sync_managers.len(),
-        });
-    }
-    for (sm, s) in desc.sync_managers.iter().enumerate() {
-        let mode = s.control & 0x03;
-        let direction = (s.control >> 2) & 0x03;
-        if !(mode == 0 || mode == 2) || direction > 1 {
-            return Err(SiiError::InvalidSmControl {
-                sm,
-                control: s.control,
-                mode,
-                direction,
-            });
-        }
-    }
-
+    check_sync_managers(desc)?;
     let mut strings = Strings { list: Vec::new() };
     // Order matters for SOEM, which names a device by string 1: the device name comes first.
     let name_idx = strings.index(&desc.name)?;
     let order_idx = strings.index(&desc.order)?;
     let group_idx = strings.index(&desc.group)?;
     let image_idx = strings.index(desc.image.as_deref().unwrap_or(""))?;
-
-    let mut pdo_cats = Vec::new();
-    for (kind, pdos) in [
-        (category::TXPDO, &desc.tx_pdos),
-        (category::RXPDO, &desc.rx_pdos),
-    ] {
-        if pdos.is_empty() {
-            continue;
-        }
-        let mut data = Vec::new();
-        for p in pdos {
-            let n = u8::try_from(p.entries.len()).map_err(|_| SiiError::TooManyPdoEntries {
-                index: p.index,
-                count: p.entries.len(),
-            })?;
-            push_u16(&mut data, p.index);
-            data.push(n);
-            data.push(p.sm);
-            data.push(p.dc_sync);
-            data.push(strings.index(&p.name)?);
-            push_u16(&mut data, p.flags);
-            for e in &p.entries {
-                push_u16(&mut data, e.index);
-                data.push(e.sub);
-                data.push(strings.index(&e.name)?);
-                data.push(e.data_type);
-                data.push(e.bits);
-                push_u16(&mut data, e.flags);
-            }
-        }
-        pdo_cats.push((kind, data));
-    }
-
-    let mut dc = Vec::new();
-    for m in &desc.dc_modes {
-        push_u32(&mut dc, m.cycle_time0);
-        dc.extend_from_slice(&m.shift_time0.to_le_bytes());
-        dc.extend_from_slice(&m.shift_time1.to_le_bytes());
-        dc.extend_from_slice(&m.sync1_cycle_factor.to_le_bytes());
-        push_u16(&mut dc, m.assign_activate);
-        dc.extend_from_slice(&m.sync0_cycle_factor.to_le_bytes());
-        dc.push(strings.index(&m.name)?);
-        dc.push(strings.index(&m.description)?);
-        dc.extend_from_slice(&[0; 4]);
-    }
-
-    let mut img = vec![0u8; usize::from(FIRST_CATEGORY_WORD) * 2];
-    let mut w = |word: usize, v: u16| {
-        img[word * 2..word * 2 + 2].copy_from_slice(&v.to_le_bytes());
-    };
-    w(0, desc.pdi_control);
-    w(1, desc.pdi_config);
-    w(2, desc.sync_impulse_len);
-    w(3, desc.pdi_config2);
-    w(4, desc.alias);
-    let id = desc.identity;
-    for (i, v) in [id.vendor_id, id.product_code, id.revision, id.serial]
-        .into_iter()
-        .enumerate()
-    {
-        w(8 + 2 * i, v as u16);
-        w(9 + 2 * i, (v >> 16) as u16);
-    }
-    if let Some(m) = &desc.mailbox {
-        if let Some(b) = m.bootstrap {
-            for (i, v) in b.into_iter().enumerate() {
-                w(0x14 + i, v);
-            }
-        }
-        w(0x18, m.rx_offset);
-        w(0x19, m.rx_size);
-        w(0x1A, m.tx_offset);
-        w(0x1B, m.tx_size);
-        w(0x1C, m.protocols.bits());
-    }
-    w(0x3E, ((size * 8 / 1024) as u16).saturating_sub(1));
-    w(0x3F, 1);
-    let crc = SII_CRC.checksum(&img[0..14]);
-    img[14] = crc;
-    img[15] = 0;
+    let pdo_cats = pdo_categories(desc, &mut strings)?;
+    let dc = dc_category(desc, &mut strings)?;
+    let mut img = header_words(desc);
 
     // Strings.
     let mut s = Vec::new();
@@ -638,6 +544,129 @@ pub fn build(desc: &DeviceDescription) -> Result<SiiImage, SiiError> {
     }
     img.resize(size, 0xFF);
     Ok(SiiImage { bytes: img })
+}
+
+/// At most eight SyncManagers, each with a mode and direction the SII can describe.
+fn check_sync_managers(desc: &DeviceDescription) -> Result<(), SiiError> {
+    if desc.sync_managers.len() > 8 {
+        return Err(SiiError::TooManySyncManagers {
+            count: desc.sync_managers.len(),
+        });
+    }
+    for (sm, s) in desc.sync_managers.iter().enumerate() {
+        let mode = s.control & 0x03;
+        let direction = (s.control >> 2) & 0x03;
+        if !(mode == 0 || mode == 2) || direction > 1 {
+            return Err(SiiError::InvalidSmControl {
+                sm,
+                control: s.control,
+                mode,
+                direction,
+            });
+        }
+    }
+
+    Ok(())
+}
+
+/// The TxPDO and RxPDO categories (their names go into `strings`).
+fn pdo_categories(
+    desc: &DeviceDescription,
+    strings: &mut Strings,
+) -> Result<Vec<(u16, Vec<u8>)>, SiiError> {
+    let mut pdo_cats = Vec::new();
+    for (kind, pdos) in [
+        (category::TXPDO, &desc.tx_pdos),
+        (category::RXPDO, &desc.rx_pdos),
+    ] {
+        if pdos.is_empty() {
+            continue;
+        }
+        let mut data = Vec::new();
+        for p in pdos {
+            let n = u8::try_from(p.entries.len()).map_err(|_| SiiError::TooManyPdoEntries {
+                index: p.index,
+                count: p.entries.len(),
+            })?;
+            push_u16(&mut data, p.index);
+            data.push(n);
+            data.push(p.sm);
+            data.push(p.dc_sync);
+            data.push(strings.index(&p.name)?);
+            push_u16(&mut data, p.flags);
+            for e in &p.entries {
+                push_u16(&mut data, e.index);
+                data.push(e.sub);
+                data.push(strings.index(&e.name)?);
+                data.push(e.data_type);
+                data.push(e.bits);
+                push_u16(&mut data, e.flags);
+            }
+        }
+        pdo_cats.push((kind, data));
+    }
+
+    Ok(pdo_cats)
+}
+
+/// The DC category's data: one record per DC mode (its names go into `strings`).
+fn dc_category(desc: &DeviceDescription, strings: &mut Strings) -> Result<Vec<u8>, SiiError> {
+    let mut dc = Vec::new();
+    for m in &desc.dc_modes {
+        push_u32(&mut dc, m.cycle_time0);
+        dc.extend_from_slice(&m.shift_time0.to_le_bytes());
+        dc.extend_from_slice(&m.shift_time1.to_le_bytes());
+        dc.extend_from_slice(&m.sync1_cycle_factor.to_le_bytes());
+        push_u16(&mut dc, m.assign_activate);
+        dc.extend_from_slice(&m.sync0_cycle_factor.to_le_bytes());
+        dc.push(strings.index(&m.name)?);
+        dc.push(strings.index(&m.description)?);
+        dc.extend_from_slice(&[0; 4]);
+    }
+
+    Ok(dc)
+}
+
+/// The header words 0x00–0x3F: PDI control and configuration, alias, identity, mailbox, size,
+/// version, and the checksum over words 0–6.
+fn header_words(desc: &DeviceDescription) -> Vec<u8> {
+    let size = desc.eeprom_bytes;
+    let mut img = vec![0u8; usize::from(FIRST_CATEGORY_WORD) * 2];
+    let mut w = |word: usize, v: u16| {
+        img[word * 2..word * 2 + 2].copy_from_slice(&v.to_le_bytes());
+    };
+    w(0, desc.pdi_control);
+    w(1, desc.pdi_config);
+    w(2, desc.sync_impulse_len);
+    w(3, desc.pdi_config2);
+    w(4, desc.alias);
+    let id = desc.identity;
+    for (i, v) in [id.vendor_id, id.product_code, id.revision, id.serial]
+        .into_iter()
+        .enumerate()
+    {
+        w(8 + 2 * i, v as u16);
+        w(9 + 2 * i, (v >> 16) as u16);
+    }
+    if let Some(m) = &desc.mailbox {
+        if let Some(b) = m.bootstrap {
+            for (i, v) in b.into_iter().enumerate() {
+                w(0x14 + i, v);
+            }
+        }
+        w(0x18, m.rx_offset);
+        w(0x19, m.rx_size);
+        w(0x1A, m.tx_offset);
+        w(0x1B, m.tx_size);
+        w(0x1C, m.protocols.bits());
+    }
+    w(0x3E, ((size * 8 / 1024) as u16).saturating_sub(1));
+    w(0x3F, 1);
+    let crc = SII_CRC.checksum(&img[0..14]);
+    img[14] = crc;
+    img[15] = 0;
+
+    img
 }
 
 /// An SII EEPROM image.
@@ -916,6 +945,74 @@ pub enum FromEsiError {
     },
 }
 
+/// The PDOs of an ESI list in SII terms.
+fn esi_pdos(list: &[crate::esi::EsiPdo]) -> Result<Vec<PdoDesc>, FromEsiError> {
+    list.iter()
+        .map(|p| {
+            let entries = p
+                .entries
+                .iter()
+                .map(|e| {
+                    Ok(PdoEntryDesc {
+                        index: e.index,
+                        sub: e.sub,
+                        name: e.name.clone(),
+                        data_type: e.data_type().map(|t| t.code() as u8).unwrap_or(0),
+                        bits: u8::try_from(e.bit_len).map_err(|_| FromEsiError::EntryTooLong {
+                            pdo: p.index,
+                            index: e.index,
+                            sub: e.sub,
+                            bits: e.bit_len,
+                        })?,
+                        flags: 0,
+                    })
+                })
+                .collect::<Result<Vec<_>, _>>()?;
+            // ETG.2010 PDO flags: bit 0 mandatory, bit 1 default, bit 4 fixed content,
+            // bit 5 virtual content.
+            let flags = u16::from(p.mandatory)
+                | u16::from(p.is_default()) << 1
+                | u16::from(p.fixed) << 4
+                | u16::from(p.virtual_) << 5;
+            Ok(PdoDesc {
+                index: p.index,
+                sm: p.sm.unwrap_or(0xFF),
+                dc_sync: 0,
+                name: p.name.clone(),
+                flags,
+                entries,
+            })
+        })
+        .collect()
+}
+
+/// The DC operation modes of an ESI device in SII terms.
+fn esi_dc_modes(device: &crate::esi::Device) -> Result<Vec<DcOpMode>, FromEsiError> {
+    let factor = |mode: &str, f: Option<i32>| -> Result<i16, FromEsiError> {
+        let f = f.unwrap_or(0);
+        i16::try_from(f).map_err(|_| FromEsiError::FactorOutOfRange {
+            mode: mode.to_owned(),
+            factor: f,
+        })
+    };
+    device
+        .dc
+        .iter()
+        .map(|m| {
+            Ok(DcOpMode {
+                name: m.name.clone(),
+                description: m.desc.clone(),
+                assign_activate: m.assign_activate,
+                cycle_time0: m.cycle_time_sync0,
+                shift_time0: m.shift_time_sync0,
+                shift_time1: m.shift_time_sync1,
+                sync0_cycle_factor: factor(&m.name, m.cycle_time_sync0_factor)?,
+                sync1_cycle_factor: factor(&m.name, m.cycle_time_sync1_factor)?,
+            })
+        })
+        .collect::<Result<Vec<_>, FromEsiError>>()
+}
+
 /// Describe an ESI device in SII terms, as a configuration tool would write its EEPROM:
 /// identity (vendor from the file, serial given), names, the configuration area from
 /// `<Eeprom><ConfigData>`, the mailbox from the `MBoxOut`/`MBoxIn` SyncManagers and `<Mailbox>`,
@@ -990,70 +1087,7 @@ pub fn from_esi(
             EF::Unused => FmmuUsage::Unused,
         })
         .collect();
-    let pdos = |list: &[crate::esi::EsiPdo]| -> Result<Vec<PdoDesc>, FromEsiError> {
-        list.iter()
-            .map(|p| {
-                let entries = p
-                    .entries
-                    .iter()
-                    .map(|e| {
-                        Ok(PdoEntryDesc {
-                            index: e.index,
-                            sub: e.sub,
-                            name: e.name.clone(),
-                            data_type: e.data_type().map(|t| t.code() as u8).unwrap_or(0),
-                            bits: u8::try_from(e.bit_len).map_err(|_| {
-                                FromEsiError::EntryTooLong {
-                                    pdo: p.index,
-                                    index: e.index,
-                                    sub: e.sub,
-                                    bits: e.bit_len,
-                                }
-                            })?,
-                            flags: 0,
-                        })
-                    })
-                    .collect::<Result<Vec<_>, _>>()?;
-                // ETG.2010 PDO flags: bit 0 mandatory, bit 1 default, bit 4 fixed content,
-                // bit 5 virtual content.
-                let flags = u16::from(p.mandatory)
-                    | u16::from(p.is_default()) << 1
-                    | u16::from(p.fixed) << 4
-                    | u16::from(p.virtual_) << 5;
-                Ok(PdoDesc {
-                    index: p.index,
-                    sm: p.sm.unwrap_or(0xFF),
-                    dc_sync: 0,
-                    name: p.name.clone(),
-                    flags,
-                    entries,
-                })
-            })
-            .collect()
-    };
-    let factor = |mode: &str, f: Option<i32>| -> Result<i16, FromEsiError> {
-        let f = f.unwrap_or(0);
-        i16::try_from(f).map_err(|_| FromEsiError::FactorOutOfRange {
-            mode: mode.to_owned(),
-            factor: f,
-        })
-    };
-    let dc_modes = device
-        .dc
-        .iter()
-        .map(|m| {
-            Ok(DcOpMode {
-                name: m.name.clone(),
-                description: m.desc.clone(),
-                assign_activate: m.assign_activate,
-                cycle_time0: m.cycle_time_sync0,
-                shift_time0: m.shift_time_sync0,
-                shift_time1: m.shift_time_sync1,
-                sync0_cycle_factor: factor(&m.name, m.cycle_time_sync0_factor)?,
-                sync1_cycle_factor: factor(&m.name, m.cycle_time_sync1_factor)?,
-            })
-        })
-        .collect::<Result<Vec<_>, FromEsiError>>()?;
+    let dc_modes = esi_dc_modes(device)?;
     let eeprom_bytes = eeprom
         .and_then(|e| e.byte_size)
         .map(|b| (b as usize).div_ceil(128).max(1) * 128)
@@ -1079,8 +1113,8 @@ pub fn from_esi(
         ds402_channels: u8::from(device.profiles.iter().any(|p| p.profile_no == Some(402))),
         sync_managers,
         fmmus,
-        tx_pdos: pdos(&device.tx_pdos)?,
-        rx_pdos: pdos(&device.rx_pdos)?,
+        tx_pdos: esi_pdos(&device.tx_pdos)?,
+        rx_pdos: esi_pdos(&device.rx_pdos)?,
         dc_modes,
         eeprom_bytes,
         ..Default::default()

@@ -15,11 +15,13 @@
 //! - [`remap`]: the SDO download sequence that installs a mapping in PRE-OP, and the read-back
 //!   that rebuilds a [`Mapping`] from a drive's 0x1C12/0x1C13 and 0x16xx/0x1Axx.
 
+pub mod axis;
 pub mod image;
 pub mod layout;
 pub mod limits;
 pub mod remap;
 
+pub use axis::AxisBinding;
 pub use image::{Field, FieldValue, ImageError, ImageView};
 pub use layout::{FieldError, ImageLayout, Layout, MappedEntry};
 pub use limits::{

@@ -911,194 +911,215 @@ impl EmulatedDrive {
         self.homing = Homing::default();
     }
 
-    /// The plan of the next cycle in Operation enabled.
+    /// The plan of the next cycle in Operation enabled, by the mode of operation.
     fn operate(&mut self, cw: ControlWord, dt_ns: u32) {
         let dt = f64::from(dt_ns) / 1e9;
-        let upr = self.units_per_rev();
-        let vpr = self.velocity_per_rev_s();
-        let halt = cw.contains(ControlWord::HALT);
-        let edge4 = cw.contains(ControlWord::NEW_SET_POINT)
-            && self.prev_cw & ControlWord::NEW_SET_POINT.bits() == 0;
-        let decel = self.ramp_rev_s2(obj::PROFILE_DECELERATION, None);
-        let accel = self.ramp_rev_s2(obj::PROFILE_ACCELERATION, None);
+        let m = Motion {
+            cw,
+            dt,
+            halt: cw.contains(ControlWord::HALT),
+            edge4: cw.contains(ControlWord::NEW_SET_POINT)
+                && self.prev_cw & ControlWord::NEW_SET_POINT.bits() == 0,
+            accel: self.ramp_rev_s2(obj::PROFILE_ACCELERATION, None),
+            decel: self.ramp_rev_s2(obj::PROFILE_DECELERATION, None),
+        };
         self.demand_prev = self.demand;
         match self.mode {
-            // csp
-            8 => {
-                if halt && self.spec.halt_in_cyclic_modes {
-                    self.ramp_to_stop(decel, dt);
-                    return;
-                }
-                if self.spec.csp_start_edge && !self.csp_started {
-                    if !edge4 {
-                        // Not started: hold where the axis is.
-                        self.plan_position(dt);
-                        return;
-                    }
-                    self.csp_started = true;
-                }
-                let target = self.int(obj::TARGET_POSITION) as i32;
-                let base = self.last_target.unwrap_or_else(|| {
-                    (self.demand.round() as i64).clamp(i64::from(i32::MIN), i64::from(i32::MAX))
-                        as i32
-                });
-                let delta = i64::from(target.wrapping_sub(base));
-                if self.last_target.is_none() {
-                    self.command_unwrapped = i64::from(base);
-                }
-                self.command_unwrapped = self.command_unwrapped.saturating_add(delta);
-                self.last_target = Some(target);
-                let c = self.spec.command;
-                if self.command_unwrapped < i64::from(i32::MIN)
-                    || self.command_unwrapped > i64::from(i32::MAX)
-                {
-                    if let Some(a) = self.alarm_by_id(c.overflow_alarm) {
-                        self.pending = Some(a);
-                    }
-                }
-                let speed = delta.unsigned_abs() as f64 / upr / dt.max(1e-9);
-                if speed > c.speed_factor * self.spec.motor.max_speed_rev_s
-                    && let Some(a) = self.alarm_by_id(c.speed_alarm)
-                {
-                    self.pending = Some(a);
-                }
-                // The demand follows the unwrapped command (across the 32-bit wrap of 0x607A),
-                // plus the position offset where the drive has one (0x60B0).
-                let offset = self.int(obj::POSITION_OFFSET) as f64;
-                self.demand = self.command_unwrapped as f64 + offset;
+            8 => self.operate_csp(&m),
+            9 => self.operate_csv(&m),
+            10 => self.operate_cst(),
+            3 => self.operate_pv(&m),
+            4 => self.operate_tq(&m),
+            1 => self.operate_pp(&m),
+            6 => self.operate_hm(&m),
+            // A mode the emulator does not run: hold the position.
+            _ => self.plan_position(dt),
+        }
+    }
+
+    /// Cyclic synchronous position.
+    fn operate_csp(&mut self, m: &Motion) {
+        let (halt, edge4, decel, dt) = (m.halt, m.edge4, m.decel, m.dt);
+        let upr = self.units_per_rev();
+        if halt && self.spec.halt_in_cyclic_modes {
+            self.ramp_to_stop(decel, dt);
+            return;
+        }
+        if self.spec.csp_start_edge && !self.csp_started {
+            if !edge4 {
+                // Not started: hold where the axis is.
                 self.plan_position(dt);
+                return;
             }
-            // csv
-            9 => {
-                let v =
-                    (self.int(obj::TARGET_VELOCITY) + self.int(obj::VELOCITY_OFFSET)) as f64 / vpr;
-                if halt && self.spec.halt_in_cyclic_modes {
-                    self.ramp_to_stop(decel, dt);
-                    return;
-                }
-                self.velocity_demand = v.clamp(-self.limits.speed_rev_s, self.limits.speed_rev_s);
-                self.demand = self.actual_units();
-                self.plan = Drive::Velocity {
-                    target_rev_s: self.velocity_demand,
-                };
-            }
-            // cst
-            10 => {
-                let t = (self.int(obj::TARGET_TORQUE) + self.int(obj::TORQUE_OFFSET)) as f64;
-                self.torque_demand_permille = t;
-                self.demand = self.actual_units();
-                self.plan = Drive::Torque {
-                    torque_nm: self.permille_to_nm(t),
-                };
-            }
-            // pv
-            3 => {
-                let target = if halt {
-                    0.0
-                } else {
-                    self.int(obj::TARGET_VELOCITY) as f64 / vpr
-                };
-                let target = target.clamp(-self.limits.speed_rev_s, self.limits.speed_rev_s);
-                let v = self.velocity_demand;
-                let rate = if target.abs() > v.abs() && target.signum() == v.signum() || v == 0.0 {
-                    accel
-                } else {
-                    decel
-                };
-                self.velocity_demand = approach(v, target, rate * dt);
-                self.demand = self.actual_units();
-                self.plan = Drive::Velocity {
-                    target_rev_s: self.velocity_demand,
-                };
-            }
-            // tq
-            4 => {
-                let target = if halt {
-                    0.0
-                } else {
-                    self.int(obj::TARGET_TORQUE) as f64
-                };
-                let slope = self.od.dict().uint(obj::TORQUE_SLOPE).unwrap_or(0) as f64;
-                // As ‰ of the rated torque per second.
-                let slope = match self.spec.torque_slope {
-                    TorqueSlopeUnit::PermillePerSecond => slope,
-                    TorqueSlopeUnit::MilliNewtonMetrePerSecond => {
-                        slope / (self.spec.motor.rated_torque_nm * 1000.0) * 1000.0
-                    }
-                };
-                self.torque_demand_permille = if slope == 0.0 {
-                    target
-                } else {
-                    approach(self.torque_demand_permille, target, slope * dt)
-                };
-                self.demand = self.actual_units();
-                self.plan = Drive::Torque {
-                    torque_nm: self.permille_to_nm(self.torque_demand_permille),
-                };
-            }
-            // pp
-            1 => {
-                if edge4 {
-                    let t = self.int(obj::TARGET_POSITION) as f64;
-                    let target = if cw.contains(ControlWord::RELATIVE) {
-                        self.pp.last_target + t
-                    } else {
-                        t
-                    };
-                    if self.pp.target.is_some() && !cw.contains(ControlWord::CHANGE_SET_IMMEDIATELY)
-                    {
-                        if self.pp.pending.is_none() {
-                            self.pp.pending = Some(target);
-                            self.pp.ack = true;
-                        }
-                    } else {
-                        self.pp.target = Some(target);
-                        self.pp.last_target = target;
-                        self.pp.ack = true;
-                    }
-                }
-                if !cw.contains(ControlWord::NEW_SET_POINT) {
-                    self.pp.ack = false;
-                }
-                let vmax = (self.od.dict().uint(obj::PROFILE_VELOCITY).unwrap_or(0) as f64).min(
-                    self.od
-                        .dict()
-                        .uint(obj::MAX_PROFILE_VELOCITY)
-                        .map_or(f64::INFINITY, |v| v as f64),
-                ) / vpr
-                    * upr;
-                let vmax = vmax.min(self.limits.speed_rev_s * upr);
-                let (acc, dec) = (accel * upr, decel * upr);
-                self.profile_step(halt, vmax, acc, dec, dt);
-                self.plan_position(dt);
-            }
-            // hm
-            6 => {
-                if edge4 && !self.homing.attained {
-                    let method = self.int(obj::HOMING_METHOD) as i8;
-                    if self.spec.homing_on_current_position.contains(&method) {
-                        let home = self.int(obj::HOME_OFFSET) as f64;
-                        self.offset_units += home - self.actual_units();
-                        self.demand = home;
-                        self.demand_prev = home;
-                        self.homing = Homing {
-                            attained: true,
-                            error: false,
-                        };
-                    } else {
-                        self.homing = Homing {
-                            attained: false,
-                            error: true,
-                        };
-                    }
-                }
-                self.plan_position(dt);
-            }
-            _ => {
-                // A mode the emulator does not run: hold the position.
-                self.plan_position(dt);
+            self.csp_started = true;
+        }
+        let target = self.int(obj::TARGET_POSITION) as i32;
+        let base = self.last_target.unwrap_or_else(|| {
+            (self.demand.round() as i64).clamp(i64::from(i32::MIN), i64::from(i32::MAX)) as i32
+        });
+        let delta = i64::from(target.wrapping_sub(base));
+        if self.last_target.is_none() {
+            self.command_unwrapped = i64::from(base);
+        }
+        self.command_unwrapped = self.command_unwrapped.saturating_add(delta);
+        self.last_target = Some(target);
+        let c = self.spec.command;
+        if self.command_unwrapped < i64::from(i32::MIN)
+            || self.command_unwrapped > i64::from(i32::MAX)
+        {
+            if let Some(a) = self.alarm_by_id(c.overflow_alarm) {
+                self.pending = Some(a);
             }
         }
+        let speed = delta.unsigned_abs() as f64 / upr / dt.max(1e-9);
+        if speed > c.speed_factor * self.spec.motor.max_speed_rev_s
+            && let Some(a) = self.alarm_by_id(c.speed_alarm)
+        {
+            self.pending = Some(a);
+        }
+        // The demand follows the unwrapped command (across the 32-bit wrap of 0x607A),
+        // plus the position offset where the drive has one (0x60B0).
+        let offset = self.int(obj::POSITION_OFFSET) as f64;
+        self.demand = self.command_unwrapped as f64 + offset;
+        self.plan_position(dt);
+    }
+
+    /// Cyclic synchronous velocity.
+    fn operate_csv(&mut self, m: &Motion) {
+        let (halt, decel, dt) = (m.halt, m.decel, m.dt);
+        let vpr = self.velocity_per_rev_s();
+        let v = (self.int(obj::TARGET_VELOCITY) + self.int(obj::VELOCITY_OFFSET)) as f64 / vpr;
+        if halt && self.spec.halt_in_cyclic_modes {
+            self.ramp_to_stop(decel, dt);
+            return;
+        }
+        self.velocity_demand = v.clamp(-self.limits.speed_rev_s, self.limits.speed_rev_s);
+        self.demand = self.actual_units();
+        self.plan = Drive::Velocity {
+            target_rev_s: self.velocity_demand,
+        };
+    }
+
+    /// Cyclic synchronous torque.
+    fn operate_cst(&mut self) {
+        let t = (self.int(obj::TARGET_TORQUE) + self.int(obj::TORQUE_OFFSET)) as f64;
+        self.torque_demand_permille = t;
+        self.demand = self.actual_units();
+        self.plan = Drive::Torque {
+            torque_nm: self.permille_to_nm(t),
+        };
+    }
+
+    /// Profile velocity.
+    fn operate_pv(&mut self, m: &Motion) {
+        let (halt, accel, decel, dt) = (m.halt, m.accel, m.decel, m.dt);
+        let vpr = self.velocity_per_rev_s();
+        let target = if halt {
+            0.0
+        } else {
+            self.int(obj::TARGET_VELOCITY) as f64 / vpr
+        };
+        let target = target.clamp(-self.limits.speed_rev_s, self.limits.speed_rev_s);
+        let v = self.velocity_demand;
+        let rate = if target.abs() > v.abs() && target.signum() == v.signum() || v == 0.0 {
+            accel
+        } else {
+            decel
+        };
+        self.velocity_demand = approach(v, target, rate * dt);
+        self.demand = self.actual_units();
+        self.plan = Drive::Velocity {
+            target_rev_s: self.velocity_demand,
+        };
+    }
+
+    /// Profile torque.
+    fn operate_tq(&mut self, m: &Motion) {
+        let (halt, dt) = (m.halt, m.dt);
+        let target = if halt {
+            0.0
+        } else {
+            self.int(obj::TARGET_TORQUE) as f64
+        };
+        let slope = self.od.dict().uint(obj::TORQUE_SLOPE).unwrap_or(0) as f64;
+        // As ‰ of the rated torque per second.
+        let slope = match self.spec.torque_slope {
+            TorqueSlopeUnit::PermillePerSecond => slope,
+            TorqueSlopeUnit::MilliNewtonMetrePerSecond => {
+                slope / (self.spec.motor.rated_torque_nm * 1000.0) * 1000.0
+            }
+        };
+        self.torque_demand_permille = if slope == 0.0 {
+            target
+        } else {
+            approach(self.torque_demand_permille, target, slope * dt)
+        };
+        self.demand = self.actual_units();
+        self.plan = Drive::Torque {
+            torque_nm: self.permille_to_nm(self.torque_demand_permille),
+        };
+    }
+
+    /// Profile position.
+    fn operate_pp(&mut self, m: &Motion) {
+        let (cw, halt, edge4, accel, decel, dt) = (m.cw, m.halt, m.edge4, m.accel, m.decel, m.dt);
+        let (upr, vpr) = (self.units_per_rev(), self.velocity_per_rev_s());
+        if edge4 {
+            let t = self.int(obj::TARGET_POSITION) as f64;
+            let target = if cw.contains(ControlWord::RELATIVE) {
+                self.pp.last_target + t
+            } else {
+                t
+            };
+            if self.pp.target.is_some() && !cw.contains(ControlWord::CHANGE_SET_IMMEDIATELY) {
+                if self.pp.pending.is_none() {
+                    self.pp.pending = Some(target);
+                    self.pp.ack = true;
+                }
+            } else {
+                self.pp.target = Some(target);
+                self.pp.last_target = target;
+                self.pp.ack = true;
+            }
+        }
+        if !cw.contains(ControlWord::NEW_SET_POINT) {
+            self.pp.ack = false;
+        }
+        let vmax = (self.od.dict().uint(obj::PROFILE_VELOCITY).unwrap_or(0) as f64).min(
+            self.od
+                .dict()
+                .uint(obj::MAX_PROFILE_VELOCITY)
+                .map_or(f64::INFINITY, |v| v as f64),
+        ) / vpr
+            * upr;
+        let vmax = vmax.min(self.limits.speed_rev_s * upr);
+        let (acc, dec) = (accel * upr, decel * upr);
+        self.profile_step(halt, vmax, acc, dec, dt);
+        self.plan_position(dt);
+    }
+
+    /// Homing.
+    fn operate_hm(&mut self, m: &Motion) {
+        let (edge4, dt) = (m.edge4, m.dt);
+        if edge4 && !self.homing.attained {
+            let method = self.int(obj::HOMING_METHOD) as i8;
+            if self.spec.homing_on_current_position.contains(&method) {
+                let home = self.int(obj::HOME_OFFSET) as f64;
+                self.offset_units += home - self.actual_units();
+                self.demand = home;
+                self.demand_prev = home;
+                self.homing = Homing {
+                    attained: true,
+                    error: false,
+                };
+            } else {
+                self.homing = Homing {
+                    attained: false,
+                    error: true,
+                };
+            }
+        }
+        self.plan_position(dt);
     }
 
     fn plan_position(&mut self, _dt: f64) {
@@ -1663,6 +1684,19 @@ impl Device for EmulatedDrive {
         }
         Ok(())
     }
+}
+
+/// What one cycle in Operation enabled starts from: the controlword and its edges, the cycle
+/// time and the profile ramps.
+struct Motion {
+    cw: ControlWord,
+    dt: f64,
+    halt: bool,
+    /// Bit 4 (new set-point) rose.
+    edge4: bool,
+    /// Profile acceleration and deceleration, rev/s².
+    accel: f64,
+    decel: f64,
 }
 
 #[cfg(test)]
