@@ -201,3 +201,369 @@ fn the_slave_crate_depends_on_the_core_only() {
     );
     assert!(bad.is_empty(), "ecdrive-sim may not depend on {bad:?}");
 }
+
+/// The module path of the file at `rel` under a crate's `src/`: `a.rs` and `a/mod.rs` are
+/// `a`, `a/b.rs` is `a::b`, `lib.rs` and `main.rs` the root.
+fn module_of(rel: &str) -> Vec<String> {
+    let mut parts: Vec<String> = rel
+        .trim_end_matches(".rs")
+        .split('/')
+        .map(str::to_string)
+        .collect();
+    if parts
+        .last()
+        .is_some_and(|l| l == "mod" || l == "lib" || l == "main")
+    {
+        parts.pop();
+    }
+    parts
+}
+
+/// The module paths `text` (the file of module `module`) names in code, comments left out:
+/// `super::x::…`, `self::x::…` and `crate::x::…`, each item of a `{…}` group on its own.
+fn named_paths(text: &str, module: &[String]) -> Vec<(usize, Vec<String>)> {
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut out = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let code = line.split("//").next().unwrap_or("");
+        for root in ["super::", "self::", "crate::"] {
+            let mut from = 0;
+            while let Some(i) = code[from..].find(root) {
+                let at = from + i;
+                from = at + root.len();
+                if code[..at]
+                    .chars()
+                    .next_back()
+                    .is_some_and(|c| c.is_alphanumeric() || c == '_' || c == ':')
+                {
+                    continue;
+                }
+                let mut base: Vec<String> = match root {
+                    "crate::" => Vec::new(),
+                    "self::" => module.to_vec(),
+                    _ => module[..module.len().saturating_sub(1)].to_vec(),
+                };
+                let mut rest = &code[from..];
+                while let Some(r) = rest.strip_prefix("super::") {
+                    base.pop();
+                    rest = r;
+                }
+                let mut heads = Vec::new();
+                if let Some(group) = rest.strip_prefix('{') {
+                    let end = group.find('}').unwrap_or(group.len());
+                    for item in group[..end].split(',') {
+                        heads.push(item.trim().split("::").map(ident).collect::<Vec<_>>());
+                    }
+                } else {
+                    let mut segs = Vec::new();
+                    let mut r = rest;
+                    loop {
+                        let id = ident(r);
+                        if id.is_empty() {
+                            break;
+                        }
+                        r = &r[id.len()..];
+                        segs.push(id);
+                        match r.strip_prefix("::") {
+                            Some(x) => r = x,
+                            None => break,
+                        }
+                    }
+                    heads.push(segs);
+                }
+                for h in heads {
+                    let mut p = base.clone();
+                    p.extend(h.into_iter().filter(|s| !s.is_empty()));
+                    out.push((n + 1, p));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The module-level import circles of the crate whose sources are in `src`: for each pair of
+/// sibling modules (a reference from deep inside one counts for the sibling it lies in), an
+/// edge when one names the other in code; every strongly connected set of two or more
+/// siblings is reported with the references that close it.
+fn import_circles(src: &Path) -> Vec<String> {
+    use std::collections::{BTreeMap, BTreeSet};
+    let files = source_scan::rust_files(src);
+    let rel = |f: &Path| {
+        f.strip_prefix(src)
+            .unwrap_or(f)
+            .to_string_lossy()
+            .replace('\\', "/")
+    };
+    let modules: BTreeSet<Vec<String>> = files.iter().map(|f| module_of(&rel(f))).collect();
+    let mut edges: BTreeMap<(Vec<String>, Vec<String>), String> = BTreeMap::new();
+    for f in &files {
+        let r = rel(f);
+        let from = module_of(&r);
+        let text = std::fs::read_to_string(f).unwrap_or_default();
+        for (line, path) in named_paths(&text, &from) {
+            // The longest prefix that is a module of this crate.
+            let Some(to) = (0..=path.len())
+                .rev()
+                .map(|k| path[..k].to_vec())
+                .find(|p| modules.contains(p))
+            else {
+                continue;
+            };
+            let common = from.iter().zip(&to).take_while(|(a, b)| a == b).count();
+            if common == from.len() || common == to.len() {
+                continue; // the module itself, an ancestor or a descendant
+            }
+            let key = (from[..=common].to_vec(), to[..=common].to_vec());
+            edges
+                .entry(key)
+                .or_insert_with(|| format!("{r}:{line} names {}", path.join("::")));
+        }
+    }
+    // Strongly connected sets, by mutual reachability (the graphs are small).
+    let nodes: BTreeSet<Vec<String>> = edges
+        .keys()
+        .flat_map(|(a, b)| [a.clone(), b.clone()])
+        .collect();
+    let reach = |start: &Vec<String>| {
+        let mut seen = BTreeSet::new();
+        let mut todo = vec![start.clone()];
+        while let Some(n) = todo.pop() {
+            for (a, b) in edges.keys() {
+                if *a == n && seen.insert(b.clone()) {
+                    todo.push(b.clone());
+                }
+            }
+        }
+        seen
+    };
+    let reachable: BTreeMap<Vec<String>, BTreeSet<Vec<String>>> =
+        nodes.iter().map(|n| (n.clone(), reach(n))).collect();
+    let mut found = Vec::new();
+    let mut done = BTreeSet::new();
+    for n in &nodes {
+        if done.contains(n) || !reachable[n].contains(n) {
+            continue;
+        }
+        let set: BTreeSet<Vec<String>> = nodes
+            .iter()
+            .filter(|m| reachable[n].contains(*m) && reachable[*m].contains(n))
+            .cloned()
+            .collect();
+        let how: Vec<&String> = edges
+            .iter()
+            .filter(|((a, b), _)| set.contains(a) && set.contains(b))
+            .map(|(_, w)| w)
+            .collect();
+        let names: Vec<String> = set.iter().map(|m| m.join("::")).collect();
+        found.push(format!("{{{}}}: {how:?}", names.join(", ")));
+        done.extend(set);
+    }
+    found
+}
+
+/// No module-level import circles in any crate: each module of a layer can be read, and
+/// split off, without the modules that use it.
+#[test]
+fn no_crate_has_an_import_circle() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut found = Vec::new();
+    for dir in [
+        "crates/ecdrive-core/src",
+        "crates/ecdrive-sim/src",
+        "crates/ecdrive-ethercat/src",
+        "crates/ecdrive-canopen/src",
+    ] {
+        for c in import_circles(&root.join(dir)) {
+            found.push(format!("{dir}: {c}"));
+        }
+    }
+    assert!(found.is_empty(), "import circles:\n{}", found.join("\n"));
+}
+
+/// The circle check sees a circle between siblings, through a group and from deep inside one,
+/// and not a child naming its parent.
+#[test]
+fn the_circle_check_sees_circles() {
+    let m = |s: &str| s.split("::").map(str::to_string).collect::<Vec<_>>();
+    let paths = |t: &str, module: &str| -> Vec<String> {
+        named_paths(t, &m(module))
+            .into_iter()
+            .map(|(_, p)| p.join("::"))
+            .collect()
+    };
+    assert_eq!(paths("use super::coe::CoeError;", "bus"), ["coe::CoeError"]);
+    assert_eq!(paths("use super::{a, b::C};", "x::y"), ["x::a", "x::b::C"]);
+    assert_eq!(paths("// use super::coe;", "bus"), Vec::<String>::new());
+    assert_eq!(paths("crate::od::Value", "a::b"), ["od::Value"]);
+    let dir = std::env::temp_dir().join(format!("ecdrive-circles-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(dir.join("a")).expect("temp dir");
+    let write = |p: &str, t: &str| std::fs::write(dir.join(p), t).expect("write");
+    write("lib.rs", "mod a; mod b; mod c;");
+    write("a/mod.rs", "mod inner; pub use inner::X;");
+    write("a/inner.rs", "use crate::b::Y; use super::X;");
+    write("b.rs", "use super::c::Z;");
+    write("c.rs", "pub struct Z; fn f() { crate::a::X; }");
+    let found = import_circles(&dir);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].starts_with("{a, b, c}"), "{found:?}");
+    write("c.rs", "pub struct Z;");
+    assert!(import_circles(&dir).is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The code of a line: comments, string and character literals blanked out (so that braces in
+/// them do not count).
+fn code_of(line: &str) -> String {
+    let mut out = String::new();
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '/' if chars.peek() == Some(&'/') => break,
+            '"' => {
+                while let Some(d) = chars.next() {
+                    match d {
+                        '\\' => {
+                            chars.next();
+                        }
+                        '"' => break,
+                        _ => {}
+                    }
+                }
+                out.push_str("\"\"");
+            }
+            '\'' => {
+                // A character literal ('{', '\n') — not a lifetime ('a).
+                let rest: String = chars.clone().take(3).collect();
+                let lit = rest.starts_with('\\') || rest.chars().nth(1) == Some('\'');
+                if lit {
+                    while let Some(d) = chars.next() {
+                        if d == '\\' {
+                            chars.next();
+                        } else if d == '\'' {
+                            break;
+                        }
+                    }
+                    out.push_str("' '");
+                } else {
+                    out.push(c);
+                }
+            }
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// The functions of `text` longer than `max` lines (signature to closing brace), test code
+/// (items under `#[cfg(test)]`) left out: (line, name, lines).
+fn long_functions(text: &str, max: usize) -> Vec<(usize, String, usize)> {
+    let lines: Vec<String> = text.lines().map(code_of).collect();
+    let block_end = |from: usize| -> usize {
+        let mut depth = 0i64;
+        let mut opened = false;
+        for (k, l) in lines.iter().enumerate().skip(from) {
+            depth += l.matches('{').count() as i64 - l.matches('}').count() as i64;
+            opened |= l.contains('{');
+            if !opened && l.trim_end().ends_with(';') {
+                return k;
+            }
+            if opened && depth <= 0 {
+                return k;
+            }
+        }
+        lines.len().saturating_sub(1)
+    };
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < lines.len() {
+        let t = lines[i].trim_start();
+        if t.starts_with("#[cfg(test)]") {
+            let mut j = i + 1;
+            while j < lines.len() && lines[j].trim_start().starts_with("#[") {
+                j += 1;
+            }
+            i = block_end(j) + 1;
+            continue;
+        }
+        let words: Vec<&str> = t.split_whitespace().collect();
+        if let Some(k) = words.iter().position(|w| *w == "fn")
+            && words[..k]
+                .iter()
+                .all(|w| ["pub", "const", "async", "unsafe"].contains(w) || w.starts_with("pub("))
+            && let Some(name) = words.get(k + 1)
+        {
+            let end = block_end(i);
+            let n = end - i + 1;
+            if n > max {
+                let name: String = name
+                    .chars()
+                    .take_while(|c| c.is_alphanumeric() || *c == '_')
+                    .collect();
+                out.push((i + 1, name, n));
+            }
+            i += 1;
+            continue;
+        }
+        i += 1;
+    }
+    out
+}
+
+/// No function of the master and slave crates is longer than 150 lines (tests excepted): each
+/// step of start-up, the cycle and the emulation reads in one place.
+#[test]
+fn no_function_of_the_master_and_slave_crates_exceeds_150_lines() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut found = Vec::new();
+    for dir in [
+        "crates/ecdrive-ethercat/src",
+        "crates/ecdrive-canopen/src",
+        "crates/ecdrive-sim/src",
+    ] {
+        for f in source_scan::rust_files(&root.join(dir)) {
+            let rel = f
+                .strip_prefix(root)
+                .unwrap_or(&f)
+                .to_string_lossy()
+                .replace('\\', "/");
+            if rel.ends_with("/tests.rs") || rel.contains("/tests/") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&f).unwrap_or_default();
+            for (line, name, n) in long_functions(&text, 150) {
+                found.push(format!("{rel}:{line}: fn {name} has {n} lines"));
+            }
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "functions over 150 lines:\n{}",
+        found.join("\n")
+    );
+}
+
+/// The length check counts from the signature to the closing brace, sees through braces in
+/// strings and characters, and leaves test code out.
+#[test]
+fn the_length_check_counts_lines() {
+    let body = |n: usize| "    let x = 1;\n".repeat(n);
+    let f = format!("pub fn long() {{\n{}}}\nfn short() {{\n}}\n", body(10));
+    assert_eq!(long_functions(&f, 11), [(1, "long".to_string(), 12)]);
+    assert!(long_functions(&f, 12).is_empty());
+    let tricky = format!(
+        "fn a() {{\n    let s = \"}}\"; let c = '}}';\n{}}}\n",
+        body(3)
+    );
+    assert_eq!(long_functions(&tricky, 4), [(1, "a".to_string(), 6)]);
+    let test = format!(
+        "#[cfg(test)]\nmod tests {{\n    fn t() {{\n{}    }}\n}}\n",
+        body(20)
+    );
+    assert!(long_functions(&test, 5).is_empty());
+}

@@ -6,7 +6,7 @@
 //! storage; nothing is leaked and nothing needs `unsafe` re-use of ethercrab's storage.
 
 use super::coe::{CoeClient, CoeError, EmergencyLog, MailboxSequence};
-use super::error::DriveRef;
+use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec::{self, ExecError};
 use super::io::{FrameLink, LossPolicy, MAX_FRAME, Pump};
 use ethercrab::{MainDevice, MainDeviceConfig, PduStorage, RetryBehaviour, Timeouts};
@@ -297,4 +297,30 @@ pub enum SessionError {
     /// The bus did not answer in time, or the link failed.
     #[error(transparent)]
     Exec(#[from] ExecError),
+}
+
+impl From<SessionError> for MasterError {
+    fn from(e: SessionError) -> Self {
+        match e {
+            SessionError::Coe(c) => {
+                let kind = match c.abort_code() {
+                    Some(code) => ErrorKind::Sdo(code),
+                    None => match c.kind {
+                        super::coe::CoeErrorKind::Timeout(_) => ErrorKind::Timeout,
+                        _ => ErrorKind::Bus,
+                    },
+                };
+                MasterError {
+                    drive: Some(c.drive.clone()),
+                    step: match c.address {
+                        Some(a) => format!("{a}"),
+                        None => "mailbox".into(),
+                    },
+                    reason: c.kind.to_string(),
+                    kind,
+                }
+            }
+            SessionError::Exec(x) => exec::exec_error(None, x),
+        }
+    }
 }

@@ -79,52 +79,6 @@ impl MasterError {
     }
 }
 
-impl From<super::bus::SessionError> for MasterError {
-    fn from(e: super::bus::SessionError) -> Self {
-        use super::bus::SessionError;
-        match e {
-            SessionError::Coe(c) => {
-                let kind = match c.abort_code() {
-                    Some(code) => ErrorKind::Sdo(code),
-                    None => match c.kind {
-                        super::coe::CoeErrorKind::Timeout(_) => ErrorKind::Timeout,
-                        _ => ErrorKind::Bus,
-                    },
-                };
-                Self {
-                    drive: Some(c.drive.clone()),
-                    step: match c.address {
-                        Some(a) => format!("{a}"),
-                        None => "mailbox".into(),
-                    },
-                    reason: c.kind.to_string(),
-                    kind,
-                }
-            }
-            SessionError::Exec(x) => exec_error(None, x),
-        }
-    }
-}
-
-/// Convert an executor error, with the drive it concerned.
-pub fn exec_error(drive: Option<&DriveRef>, e: super::exec::ExecError) -> MasterError {
-    use super::exec::ExecError;
-    let (step, kind, reason) = match e {
-        ExecError::Timeout { what, timeout_ms } => (
-            what,
-            ErrorKind::Timeout,
-            format!("no result within {timeout_ms} ms"),
-        ),
-        ExecError::FrameLost { what, lost } => (
-            what,
-            ErrorKind::Timeout,
-            format!("the segment did not answer ({lost} frame(s) lost after retries)"),
-        ),
-        ExecError::Link { what, source } => (what, ErrorKind::Link, source.to_string()),
-    };
-    MasterError::new(drive, step, kind, reason)
-}
-
 /// Convert an ethercrab error from a step.
 pub fn bus_error(
     drive: Option<&DriveRef>,

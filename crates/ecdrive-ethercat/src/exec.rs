@@ -6,6 +6,7 @@
 //! [`exchange`] is the cycle's allocation-free variant: it polls a future with a no-op waker and
 //! pumps inline until the future completes or the cycle's deadline passes.
 
+use super::error::{DriveRef, ErrorKind, MasterError};
 use super::io::{FrameLink, LinkError, Pump};
 use crate::rt::monotonic_ns;
 use std::future::Future;
@@ -219,6 +220,24 @@ pub fn exchange<L: FrameLink, F: Future>(
             return Err(ExchangeError::Late);
         }
     }
+}
+
+/// Convert an executor error, with the drive it concerned.
+pub fn exec_error(drive: Option<&DriveRef>, e: ExecError) -> MasterError {
+    let (step, kind, reason) = match e {
+        ExecError::Timeout { what, timeout_ms } => (
+            what,
+            ErrorKind::Timeout,
+            format!("no result within {timeout_ms} ms"),
+        ),
+        ExecError::FrameLost { what, lost } => (
+            what,
+            ErrorKind::Timeout,
+            format!("the segment did not answer ({lost} frame(s) lost after retries)"),
+        ),
+        ExecError::Link { what, source } => (what, ErrorKind::Link, source.to_string()),
+    };
+    MasterError::new(drive, step, kind, reason)
 }
 
 #[cfg(test)]

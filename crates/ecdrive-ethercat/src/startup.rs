@@ -16,7 +16,8 @@
 //! Every failure names the drive, the object or register, and the reason.
 
 use super::bus::{Bus, MAX_PDI, MAX_SUBDEVICES};
-use super::error::{DriveRef, ErrorKind, MasterError, bus_error, exec_error};
+use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
+use super::exec::exec_error;
 use super::program::{CyclicMode, Step};
 use crate::drives::{CycleTimeObject, DriveProfile, StartupWhen};
 use crate::ec::{AlState, AlStatusCode, register};

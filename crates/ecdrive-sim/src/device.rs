@@ -197,3 +197,32 @@ pub trait Device: AsAny + Send {
         Ok(())
     }
 }
+
+/// Why a device cannot be created by name ([`crate::devices::by_name`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum DeviceError {
+    /// No device has that name.
+    #[error("unknown device {name:?}; known devices: {known}")]
+    Unknown {
+        /// The name asked for.
+        name: String,
+        /// The names accepted.
+        known: String,
+    },
+    /// A quirk is unknown or does not apply to the device.
+    #[error("device {name:?}: {reason}")]
+    Quirk {
+        /// The device name as given.
+        name: String,
+        /// Why.
+        reason: String,
+    },
+    /// The device's built-in data is inconsistent.
+    #[error("device {name:?} cannot be built: {reason}")]
+    Build {
+        /// The device.
+        name: String,
+        /// Why.
+        reason: String,
+    },
+}

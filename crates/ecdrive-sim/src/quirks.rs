@@ -250,19 +250,6 @@ impl fmt::Display for Quirks {
     }
 }
 
-/// [`Quirk::CycleTimeReadOnly`]: at a SYNC0 event, 0x1C32:02 and 0x1C33:02 (where they exist)
-/// show the SYNC0 cycle.
-pub fn show_sync0_cycle(dict: &mut crate::coe::ValueStore, event: &crate::SyncEvent) {
-    if event.kind == crate::SyncKind::Sync0 && event.cycle_time_ns > 0 {
-        for index in [0x1C32, 0x1C33] {
-            let a = crate::od::ObjectAddress::new(index, 2);
-            if dict.raw(a).is_some() {
-                let _ = dict.set_uint(a, u64::from(event.cycle_time_ns));
-            }
-        }
-    }
-}
-
 /// Split a device name into its base name and quirks: `bdhde+no-state-skipping` →
 /// (`bdhde`, {no-state-skipping}). The error names an unknown quirk and lists the known ones.
 pub fn split_name(name: &str) -> Result<(&str, Quirks), String> {

@@ -60,7 +60,8 @@ pub use slaves::{
 pub use states::{StateChange, StatesOptions, states};
 
 use super::bus::{Bus, BusOptions, run_session};
-use super::error::{DriveRef, ErrorKind, MasterError, bus_error, exec_error};
+use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
+use super::exec::exec_error;
 use super::startup::{self, DeviceInfo, Group};
 use crate::ec::{AlStatus, AlStatusCode, register};
 use crate::link::{FrameLink, LinkError, RawSocket};

@@ -3,7 +3,8 @@
 use super::{T_STEP, discover, drive_ref};
 use crate::link::FrameLink;
 use crate::master::bus::Bus;
-use crate::master::error::{ErrorKind, MasterError, bus_error, exec_error};
+use crate::master::error::{ErrorKind, MasterError, bus_error};
+use crate::master::exec::exec_error;
 use crate::od::{DataType, Value};
 use serde::Serialize;
 

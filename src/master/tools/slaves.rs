@@ -4,7 +4,8 @@ use super::{Discovered, T_STEP, al_state_text, discover, drive_ref, read_al_stat
 use crate::ec::{AlStatus, AlStatusCode, register};
 use crate::link::FrameLink;
 use crate::master::bus::Bus;
-use crate::master::error::{DriveRef, MasterError, bus_error, exec_error};
+use crate::master::error::{DriveRef, MasterError, bus_error};
+use crate::master::exec::exec_error;
 use serde::Serialize;
 
 /// AL status of a device, with the status code when the error flag is set.

@@ -151,6 +151,19 @@ fn initial_value(obj: &ObjectDesc, e: &EntryDesc) -> Result<Vec<u8>, OdError> {
 }
 
 impl ValueStore {
+    /// [`Quirk::CycleTimeReadOnly`](crate::quirks::Quirk::CycleTimeReadOnly): at a SYNC0
+    /// event, 0x1C32:02 and 0x1C33:02 (where they exist) show the SYNC0 cycle.
+    pub fn show_sync0_cycle(&mut self, event: &crate::SyncEvent) {
+        if event.kind == crate::SyncKind::Sync0 && event.cycle_time_ns > 0 {
+            for index in [0x1C32, 0x1C33] {
+                let a = crate::od::ObjectAddress::new(index, 2);
+                if self.raw(a).is_some() {
+                    let _ = self.set_uint(a, u64::from(event.cycle_time_ns));
+                }
+            }
+        }
+    }
+
     /// Build from descriptor tables, values initialised from the defaults (zero or empty where
     /// none is given). Checks the tables: unique indices and sub-indices, a VAR has exactly
     /// sub 0, an ARRAY/RECORD has an UNSIGNED8 sub 0, defaults fit their types.

@@ -799,7 +799,7 @@ impl Device for GenericCoeDevice {
     ) -> Result<(), AlStatusCode> {
         self.seen.cycles += 1;
         if self.quirks.has(Quirk::CycleTimeReadOnly) {
-            crate::quirks::show_sync0_cycle(self.od.dict_mut(), event);
+            self.od.dict_mut().show_sync0_cycle(event);
         }
         if event.kind == SyncKind::Sync0 {
             self.seen.sync0_events += 1;

@@ -24,34 +24,7 @@ pub use io::{IoDevice, IoObservations, TEST_VENDOR_ID};
 use super::device::Device;
 use super::quirks::split_name;
 
-/// Why [`by_name`] cannot create a device.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-pub enum DeviceError {
-    /// No device has that name.
-    #[error("unknown device {name:?}; known devices: {known}")]
-    Unknown {
-        /// The name asked for.
-        name: String,
-        /// The names accepted.
-        known: String,
-    },
-    /// A quirk is unknown or does not apply to the device.
-    #[error("device {name:?}: {reason}")]
-    Quirk {
-        /// The device name as given.
-        name: String,
-        /// Why.
-        reason: String,
-    },
-    /// The device's built-in data is inconsistent.
-    #[error("device {name:?} cannot be built: {reason}")]
-    Build {
-        /// The device.
-        name: String,
-        /// Why.
-        reason: String,
-    },
-}
+pub use crate::device::DeviceError;
 
 /// The test devices [`by_name`] accepts, with a one-line description each. The emulated drives
 /// come on top, from the drive registry: see [`device_names`].

@@ -1674,7 +1674,7 @@ impl Device for EmulatedDrive {
         inputs: &mut [u8],
     ) -> Result<(), AlStatusCode> {
         if self.quirks.has(Quirk::CycleTimeReadOnly) {
-            crate::quirks::show_sync0_cycle(self.od.dict_mut(), event);
+            self.od.dict_mut().show_sync0_cycle(event);
         }
         self.cycle(event, outputs);
         for s in &self.tx {

@@ -65,9 +65,9 @@ pub use esi_model::{EsiModel, EsiModelError};
 pub use spec::DriveSpec;
 
 use super::device::Device;
-use super::devices::DeviceError;
 use super::quirks::Quirks;
 use super::sii::DeviceDescription;
+use crate::device::DeviceError;
 
 static SPECS: [&DriveSpec; 2] = [&mr_j4_tm::SPEC, &bdhde::SPEC];
 
