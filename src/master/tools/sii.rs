@@ -21,17 +21,7 @@ use std::fmt::Write as _;
 
 pub use crate::ec::sii::{FIRST_CATEGORY_WORD, category};
 
-/// Why SII bytes could not be decoded.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("SII {what} at word 0x{word:04X}: {reason}")]
-pub struct SiiDecodeError {
-    /// What was being read.
-    pub what: String,
-    /// Its word address.
-    pub word: u32,
-    /// What is wrong.
-    pub reason: String,
-}
+pub use crate::ec::sii::SiiDecodeError;
 
 /// The standard mailbox (words 0x18–0x1B) or the bootstrap mailbox (0x14–0x17).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -210,57 +200,6 @@ pub struct SiiInfo {
     pub dc_modes: Vec<SiiDcMode>,
 }
 
-/// Checked little-endian reads from a byte slice (a view over SII data).
-struct Reader<'a> {
-    data: &'a [u8],
-    what: &'a str,
-    word: u32,
-}
-
-impl Reader<'_> {
-    fn err(&self, at: usize, reason: &str) -> SiiDecodeError {
-        SiiDecodeError {
-            what: self.what.to_string(),
-            word: self.word + (at / 2) as u32,
-            reason: reason.to_string(),
-        }
-    }
-
-    fn u8(&self, at: usize) -> Result<u8, SiiDecodeError> {
-        self.data
-            .get(at)
-            .copied()
-            .ok_or_else(|| self.err(at, "the data ends early"))
-    }
-
-    fn u16(&self, at: usize) -> Result<u16, SiiDecodeError> {
-        Ok(u16::from_le_bytes([self.u8(at)?, self.u8(at + 1)?]))
-    }
-
-    fn u32(&self, at: usize) -> Result<u32, SiiDecodeError> {
-        Ok(u32::from(self.u16(at)?) | u32::from(self.u16(at + 2)?) << 16)
-    }
-}
-
-fn fmmu_name(b: u8) -> &'static str {
-    match b {
-        1 => "Outputs",
-        2 => "Inputs",
-        3 => "MBoxState",
-        _ => "Unused",
-    }
-}
-
-fn sm_kind_name(b: u8) -> &'static str {
-    match b {
-        1 => "MBoxOut",
-        2 => "MBoxIn",
-        3 => "Outputs",
-        4 => "Inputs",
-        _ => "Unused",
-    }
-}
-
 impl SiiInfo {
     /// The string with SII index `i` (1-based; 0 and unknown indices give `""`).
     pub fn string(&self, i: u8) -> &str {
@@ -270,199 +209,113 @@ impl SiiInfo {
         }
     }
 
-    /// Decode raw EEPROM bytes (a dump, or the part up to the end category).
+    /// Decode raw EEPROM bytes (a dump, or the part up to the end category) with the core's
+    /// [`parse`](crate::ec::sii::parse), into what the tools print.
     pub fn decode(bytes: &[u8]) -> Result<Self, SiiDecodeError> {
-        let head = Reader {
-            data: bytes,
-            what: "header",
-            word: 0,
+        let p = crate::ec::sii::parse(bytes)?;
+        let d = &p.description;
+        let mbx = |m: [u16; 4]| SiiMailbox {
+            rx_offset: m[0],
+            rx_size: m[1],
+            tx_offset: m[2],
+            tx_size: m[3],
         };
-        let w = |i: usize| head.u16(i * 2);
-        let mbx = |base: usize| -> Result<Option<SiiMailbox>, SiiDecodeError> {
-            let m = SiiMailbox {
-                rx_offset: w(base)?,
-                rx_size: w(base + 1)?,
-                tx_offset: w(base + 2)?,
-                tx_size: w(base + 3)?,
-            };
-            Ok((m.rx_size != 0 && m.rx_size != 0xFFFF).then_some(m))
+        let pdos = |list: &[crate::ec::sii::PdoDesc]| -> Vec<SiiPdo> {
+            list.iter()
+                .map(|p| SiiPdo {
+                    index: p.index,
+                    sm: p.sm,
+                    dc_sync: p.dc_sync,
+                    name: p.name.clone(),
+                    flags: p.flags,
+                    entries: p
+                        .entries
+                        .iter()
+                        .map(|e| SiiPdoEntry {
+                            index: e.index,
+                            sub: e.sub,
+                            name: e.name.clone(),
+                            data_type: e.data_type,
+                            bits: e.bits,
+                        })
+                        .collect(),
+                })
+                .collect()
         };
-        let protocol_bits = w(0x1C)?;
-        let mut info = SiiInfo {
-            pdi_control: w(0)?,
-            pdi_config: w(1)?,
-            sync_impulse_len: w(2)?,
-            pdi_config2: w(3)?,
-            alias: w(4)?,
-            checksum_ok: crate::ec::sii::header_checksum(bytes) == bytes.get(14).copied(),
-            vendor_id: head.u32(16)?,
-            product_code: head.u32(20)?,
-            revision: head.u32(24)?,
-            serial: head.u32(28)?,
-            bootstrap_mailbox: mbx(0x14)?,
-            mailbox: mbx(0x18)?,
-            protocol_bits,
-            protocols: protocol_names(protocol_bits),
-            size_bytes: (usize::from(w(0x3E)?) + 1) * 128,
-            version: w(0x3F)?,
-            categories: Vec::new(),
-            strings: Vec::new(),
-            general: None,
-            fmmus: Vec::new(),
-            sync_managers: Vec::new(),
-            tx_pdos: Vec::new(),
-            rx_pdos: Vec::new(),
-            dc_modes: Vec::new(),
-        };
-        // The category list; strings first (other categories refer to them).
-        let mut cats: Vec<(u16, u32, &[u8])> = Vec::new();
-        let mut word = u32::from(FIRST_CATEGORY_WORD);
-        let list = Reader {
-            data: bytes,
-            what: "category list",
-            word: 0,
-        };
-        loop {
-            let at = word as usize * 2;
-            if at >= bytes.len() {
-                // A dump cut short (or an erased EEPROM without end marker): stop.
-                break;
-            }
-            let kind = list.u16(at)?;
-            if kind == category::END {
-                break;
-            }
-            let len = list.u16(at + 2)?;
-            let start = at + 4;
-            let end = start + usize::from(len) * 2;
-            let data = bytes.get(start..end).ok_or_else(|| SiiDecodeError {
-                what: format!("category {} ({kind})", category::name(kind)),
-                word,
-                reason: format!(
-                    "{len} words announced, the data ends at word 0x{:04X}",
-                    bytes.len() / 2
-                ),
-            })?;
-            cats.push((kind, word + 2, data));
-            info.categories.push(SiiCategory {
-                kind,
-                name: category::name(kind).to_string(),
-                word: word + 2,
-                words: len,
-            });
-            word += 2 + u32::from(len);
-        }
-        if let Some((_, w0, data)) = cats.iter().find(|(k, _, _)| *k == category::STRINGS) {
-            let r = Reader {
-                data,
-                what: "Strings category",
-                word: *w0,
-            };
-            let n = r.u8(0)?;
-            let mut at = 1;
-            for _ in 0..n {
-                let len = usize::from(r.u8(at)?);
-                let s = data
-                    .get(at + 1..at + 1 + len)
-                    .ok_or_else(|| r.err(at, "a string runs past the category"))?;
-                info.strings.push(String::from_utf8_lossy(s).into_owned());
-                at += 1 + len;
-            }
-        }
-        for (kind, w0, data) in &cats {
-            let name = format!("{} category", category::name(*kind));
-            let r = Reader {
-                data,
-                what: &name,
-                word: *w0,
-            };
-            match *kind {
-                category::GENERAL => {
-                    info.general = Some(SiiGeneral {
-                        group: info.string(r.u8(0)?).to_string(),
-                        image: info.string(r.u8(1)?).to_string(),
-                        order: info.string(r.u8(2)?).to_string(),
-                        name: info.string(r.u8(3)?).to_string(),
-                        coe_details: r.u8(5)?,
-                        foe_details: r.u8(6)?,
-                        eoe_details: r.u8(7)?,
-                        soe_channels: r.u8(8)?,
-                        ds402_channels: r.u8(9)?,
-                        flags: r.u8(11)?,
-                        ebus_current_ma: r.u16(12)? as i16,
-                        port_types: r.u16(14)?,
-                    });
-                }
-                category::FMMU => {
-                    info.fmmus = data.iter().map(|b| fmmu_name(*b).to_string()).collect();
-                    // A padding byte makes the count even; drop a trailing unused one.
-                    if data.len() % 2 == 0 && data.last().is_some_and(|b| *b == 0 || *b == 0xFF) {
-                        info.fmmus.pop();
-                    }
-                }
-                category::SYNC_MANAGER => {
-                    for k in 0..data.len() / 8 {
-                        let at = k * 8;
-                        info.sync_managers.push(SiiSm {
-                            start: r.u16(at)?,
-                            length: r.u16(at + 2)?,
-                            control: r.u8(at + 4)?,
-                            enable: r.u8(at + 6)?,
-                            kind: sm_kind_name(r.u8(at + 7)?).to_string(),
-                        });
-                    }
-                }
-                category::TXPDO | category::RXPDO => {
-                    let mut at = 0;
-                    let mut pdos = Vec::new();
-                    while at + 8 <= data.len() {
-                        let n = r.u8(at + 2)?;
-                        let mut pdo = SiiPdo {
-                            index: r.u16(at)?,
-                            sm: r.u8(at + 3)?,
-                            dc_sync: r.u8(at + 4)?,
-                            name: info.string(r.u8(at + 5)?).to_string(),
-                            flags: r.u16(at + 6)?,
-                            entries: Vec::with_capacity(usize::from(n)),
-                        };
-                        at += 8;
-                        for _ in 0..n {
-                            pdo.entries.push(SiiPdoEntry {
-                                index: r.u16(at)?,
-                                sub: r.u8(at + 2)?,
-                                name: info.string(r.u8(at + 3)?).to_string(),
-                                data_type: r.u8(at + 4)?,
-                                bits: r.u8(at + 5)?,
-                            });
-                            at += 8;
-                        }
-                        pdos.push(pdo);
-                    }
-                    if *kind == category::TXPDO {
-                        info.tx_pdos.extend(pdos);
-                    } else {
-                        info.rx_pdos.extend(pdos);
-                    }
-                }
-                category::DC => {
-                    for k in 0..data.len() / 24 {
-                        let at = k * 24;
-                        info.dc_modes.push(SiiDcMode {
-                            cycle_time0: r.u32(at)?,
-                            shift_time0: r.u32(at + 4)? as i32,
-                            shift_time1: r.u32(at + 8)? as i32,
-                            sync1_cycle_factor: r.u16(at + 12)? as i16,
-                            assign_activate: r.u16(at + 14)?,
-                            sync0_cycle_factor: r.u16(at + 16)? as i16,
-                            name: info.string(r.u8(at + 18)?).to_string(),
-                            description: info.string(r.u8(at + 19)?).to_string(),
-                        });
-                    }
-                }
-                _ => {}
-            }
-        }
-        Ok(info)
+        Ok(SiiInfo {
+            pdi_control: d.pdi_control,
+            pdi_config: d.pdi_config,
+            sync_impulse_len: d.sync_impulse_len,
+            pdi_config2: d.pdi_config2,
+            alias: d.alias,
+            checksum_ok: p.checksum_ok,
+            vendor_id: d.identity.vendor_id,
+            product_code: d.identity.product_code,
+            revision: d.identity.revision,
+            serial: d.identity.serial,
+            bootstrap_mailbox: d.mailbox.as_ref().and_then(|m| m.bootstrap).map(mbx),
+            mailbox: d
+                .mailbox
+                .as_ref()
+                .map(|m| mbx([m.rx_offset, m.rx_size, m.tx_offset, m.tx_size])),
+            protocol_bits: p.protocol_bits,
+            protocols: protocol_names(p.protocol_bits),
+            size_bytes: d.eeprom_bytes,
+            version: p.version,
+            categories: p
+                .categories
+                .iter()
+                .map(|c| SiiCategory {
+                    kind: c.kind,
+                    name: category::name(c.kind).to_string(),
+                    word: c.word,
+                    words: c.words,
+                })
+                .collect(),
+            strings: p.strings.clone(),
+            general: p.has_general.then(|| SiiGeneral {
+                group: d.group.clone(),
+                image: d.image.clone().unwrap_or_default(),
+                order: d.order.clone(),
+                name: d.name.clone(),
+                coe_details: d.coe_details.bits(),
+                foe_details: d.foe_details,
+                eoe_details: d.eoe_details,
+                soe_channels: d.soe_channels,
+                ds402_channels: d.ds402_channels,
+                flags: d.flags.bits(),
+                ebus_current_ma: d.ebus_current_ma,
+                port_types: d.port_types,
+            }),
+            fmmus: d.fmmus.iter().map(|f| f.esi_name().to_string()).collect(),
+            sync_managers: d
+                .sync_managers
+                .iter()
+                .map(|s| SiiSm {
+                    start: s.start,
+                    length: s.length,
+                    control: s.control,
+                    enable: s.enable.bits(),
+                    kind: s.kind.esi_name().to_string(),
+                })
+                .collect(),
+            tx_pdos: pdos(&d.tx_pdos),
+            rx_pdos: pdos(&d.rx_pdos),
+            dc_modes: d
+                .dc_modes
+                .iter()
+                .map(|m| SiiDcMode {
+                    name: m.name.clone(),
+                    description: m.description.clone(),
+                    assign_activate: m.assign_activate,
+                    cycle_time0: m.cycle_time0,
+                    shift_time0: m.shift_time0,
+                    shift_time1: m.shift_time1,
+                    sync0_cycle_factor: m.sync0_cycle_factor,
+                    sync1_cycle_factor: m.sync1_cycle_factor,
+                })
+                .collect(),
+        })
     }
 }
 
