@@ -156,7 +156,7 @@ fn torque_and_velocity_beyond_the_drives_documented_maximum_warn_with_the_number
     let text = out.ok();
     assert!(
         text.contains(
-            "warning: drive[0].program[0]: torque 6000 (0.1 % of rated torque (0x6076)) is beyond the BDHDE's 5000"
+            "warning: drive[0].program[0]: torque 6000 (0.1 % of rated torque) is beyond the BDHDE's 5000"
         ),
         "{text}"
     );

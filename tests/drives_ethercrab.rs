@@ -192,7 +192,7 @@ async fn ethercrab_runs_both_emulated_drives() {
                 0x0027 => 0x001F,
                 _ => 0x0000,
             };
-            let cpr = PROFILES[i].units.counts_per_rev as i32;
+            let cpr = PROFILES[i].units.position_per_rev as i32;
             let t = match (sw & 0x006F == 0x0027, target[i]) {
                 (true, Some(t)) if t.wrapping_sub(start[i]) < cpr / 4 => {
                     Some(t + cpr / 200) // 5 rev/s at 1 ms

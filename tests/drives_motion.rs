@@ -41,7 +41,7 @@ fn enable(w: &mut Wire, mode: i8) {
 }
 
 fn counts_per_rev(p: &DriveProfile) -> f64 {
-    p.units.counts_per_rev
+    p.units.position_per_rev
 }
 
 /// A csp sine of `amplitude_rev` and `hz` for `cycles` cycles; returns the largest |0x60F4|
@@ -247,7 +247,7 @@ fn following_error_window_and_time_out() {
 #[test]
 fn csv_ramp_and_cst_step() {
     for p in [MR, BD] {
-        let vpr = p.units.counts_per_rev / p.units.velocity_unit_counts_per_s; // units per rev/s
+        let vpr = p.units.position_per_rev / p.units.velocity_position_per_s(); // units per rev/s
         let mut w = enabled(p, 1_000_000, 9);
         let mut worst = 0.0f64;
         let mut prev = 0.0;
@@ -302,7 +302,7 @@ fn csv_ramp_and_cst_step() {
 #[test]
 fn mode_switching() {
     for p in [MR, BD] {
-        let vpr = p.units.counts_per_rev / p.units.velocity_unit_counts_per_s;
+        let vpr = p.units.position_per_rev / p.units.velocity_position_per_s();
         let mut w = enabled(p, 1_000_000, 9);
         cyclic::set_velocity(w.outputs_mut(0), (10.0 * vpr) as i32);
         for _ in 0..20 {
@@ -385,7 +385,7 @@ fn profile_modes() {
     ] {
         let mut w = op_with(drive, p);
         let cpr = counts_per_rev(p);
-        let vpr = p.units.counts_per_rev / p.units.velocity_unit_counts_per_s;
+        let vpr = p.units.position_per_rev / p.units.velocity_position_per_s();
         // Profile parameters by SDO: 20 rev/s; ramps of 200 rev/s² (MR-J4-TM: time constants,
         // 250 ms to the rated 50 rev/s).
         w.write_u32(0, 0x6081, 0, (20.0 * vpr) as u32).unwrap();

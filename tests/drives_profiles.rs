@@ -354,7 +354,7 @@ fn units_and_alarm_names() {
     assert_eq!(u.velocity_to_drive(50.0 * 4_194_304.0), 300_000);
     assert!((u.velocity_from_drive(300_000) - 50.0 * 4_194_304.0).abs() < 1e-6);
     let b = bdhde::UNITS;
-    assert_eq!(b.counts_per_rev, 1_048_576.0);
+    assert_eq!(b.position_per_rev, 1_048_576.0);
     assert_eq!(b.velocity_to_drive(1_048_576.0), 1_048_576);
 
     let d = mr_j4_tm::PROFILE.describe_error(0xFF86);

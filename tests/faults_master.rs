@@ -75,7 +75,7 @@ fn config(revs: f64, restart: RestartPolicy) -> MasterConfig {
     cfg.emergency_poll = None;
     cfg.bus.loss.frame_timeout_ns = 5_000_000;
     for (i, p) in PROFILES.iter().enumerate() {
-        let rev = p.units.counts_per_rev;
+        let rev = p.units.position_per_rev;
         cfg.startup.drives.push(DriveSetup {
             program: vec![Step::Move {
                 target: Target::By(revs * rev),
@@ -254,7 +254,7 @@ fn lost_frames_hold_the_setpoint<L: FrameLink + Send + 'static>(
     // cycle); had the program clock run on through the lost cycles, the first step after
     // them would be three times that.
     for (i, p) in PROFILES.iter().enumerate() {
-        let per_cycle = p.units.counts_per_rev / 1000.0;
+        let per_cycle = p.units.position_per_rev / 1000.0;
         let step = c.max_setpoint_step[i].position as f64;
         assert!(
             step <= per_cycle * 1.05 + 1.0,

@@ -187,7 +187,7 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
     let _one = serial();
     let cycle = Duration::from_millis(1);
     let program = |p: &DriveProfile| {
-        let rev = p.units.counts_per_rev;
+        let rev = p.units.position_per_rev;
         vec![
             // 0: csp move by one revolution at up to 2 rev/s.
             Step::Move {
@@ -261,8 +261,8 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
     assert!(errors(&r).is_empty(), "{:#?}", errors(&r));
     let cyc = r.cycle.as_ref().unwrap();
     for (i, p) in PROFILES.iter().enumerate() {
-        let rev = p.units.counts_per_rev;
-        let vel_unit = p.units.velocity_unit_counts_per_s;
+        let rev = p.units.position_per_rev;
+        let vel_unit = p.units.velocity_position_per_s();
         // csp: one revolution, followed within 0.1 % after the dwell.
         let settled = *samples[i][1].position.last().unwrap() - p0[i];
         assert!(
@@ -350,7 +350,7 @@ fn a_user_mapping_runs_and_an_invalid_one_is_refused_before_anything_is_written(
             PdoEntry::new(0x2D12, 0, 16),
         ],
     )];
-    let rev = mr_j4_tm::PROFILE.units.counts_per_rev;
+    let rev = mr_j4_tm::PROFILE.units.position_per_rev;
     let mut cfg = config(
         Duration::from_millis(1),
         [
@@ -440,7 +440,7 @@ fn a_user_mapping_runs_and_an_invalid_one_is_refused_before_anything_is_written(
 fn a_following_error_fault_stops_both_axes_is_decoded_reset_and_motion_resumes() {
     let _one = serial();
     let jog = |p: &DriveProfile| {
-        let rev = p.units.counts_per_rev;
+        let rev = p.units.position_per_rev;
         vec![Step::Jog {
             velocity: 0.5 * rev,
             acceleration: 5.0 * rev,
@@ -535,7 +535,7 @@ fn a_following_error_fault_stops_both_axes_is_decoded_reset_and_motion_resumes()
 fn a_program_cut_short_in_csv_runs_again_from_its_start_mode() {
     let _one = serial();
     let program = |p: &DriveProfile| {
-        let rev = p.units.counts_per_rev;
+        let rev = p.units.position_per_rev;
         vec![
             Step::Move {
                 target: Target::By(0.2 * rev),

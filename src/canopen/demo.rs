@@ -77,7 +77,8 @@ fn uint(v: f64) -> Value {
 }
 
 /// SDO settings for profile velocity, accelerations and homing speeds in the drive's units
-/// (r/min, PUU/s and ms-to-3000 r/min, steps/s … — converted with its [`Units`]).
+/// (r/min, PUU/s and ms-to-3000 r/min, steps/s … — converted with its [`Units`]); none for a
+/// profile that does not describe its profile-mode units.
 ///
 /// [`Units`]: super::profile::Units
 pub fn motion_settings(
@@ -86,22 +87,25 @@ pub fn motion_settings(
     accel_rev_s2: f64,
 ) -> Vec<(ObjectAddress, Value)> {
     let u = &profile.units;
-    let acc = uint(u.accel_from_rev_per_s2(accel_rev_s2));
+    let (Some(pu), Some(acc)) = (u.profile, u.accel_from_rev_per_s2(accel_rev_s2)) else {
+        return Vec::new();
+    };
+    let acc = uint(acc);
     let mut v = vec![
         (
             ObjectAddress::new(0x6081, 0),
-            uint(u.from_rev_per_s(u.profile_velocity, velocity_rev_s)),
+            uint(u.from_rev_per_s(pu.profile_velocity, velocity_rev_s)),
         ),
         (ObjectAddress::new(0x6083, 0), acc.clone()),
         (ObjectAddress::new(0x6084, 0), acc.clone()),
         (ObjectAddress::new(0x6085, 0), acc),
         (
             ObjectAddress::new(0x6099, 1),
-            uint(u.from_rev_per_s(u.homing_velocity, defaults::HOMING_FAST_REV_S)),
+            uint(u.from_rev_per_s(pu.homing_velocity, defaults::HOMING_FAST_REV_S)),
         ),
         (
             ObjectAddress::new(0x6099, 2),
-            uint(u.from_rev_per_s(u.homing_velocity, defaults::HOMING_SLOW_REV_S)),
+            uint(u.from_rev_per_s(pu.homing_velocity, defaults::HOMING_SLOW_REV_S)),
         ),
     ];
     let dict = crate::od::Dictionary::new(profile.dictionary);

@@ -1227,7 +1227,7 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
 /// Warnings for program steps beyond what the drive documents independently of the motor
 /// ([`DriveProfile::ratings`]); `k` counts per user unit.
 fn rated(i: usize, p: &DriveProfile, r: &raw::Drive, k: f64, warnings: &mut Vec<String>) {
-    let speed = |counts_per_s: f64| counts_per_s / p.units.counts_per_rev;
+    let speed = |counts_per_s: f64| counts_per_s / p.units.position_per_rev;
     for (n, s) in r.program.iter().enumerate() {
         let at = format!("drive[{i}].program[{n}]");
         let velocity = match *s.get_ref() {
@@ -1260,7 +1260,7 @@ fn rated(i: usize, p: &DriveProfile, r: &raw::Drive, k: f64, warnings: &mut Vec<
             warnings.push(format!(
                 "{at}: torque {} ({}) is beyond the {}'s {} ({})",
                 torque.abs(),
-                p.units.torque_unit,
+                p.units.torque_name(),
                 p.name,
                 rating.value,
                 rating.source

@@ -1,6 +1,7 @@
 //! The emulated drives a measurement runs against: sim devices by name, the drive profile the
 //! master uses for each, and fresh segments with the ESC timing statistics switched on.
 
+use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, SupportedModes};
 use crate::drives::{
     self, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units,
@@ -75,11 +76,11 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
         cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
     },
     units: Units {
-        counts_per_rev: 1.0,
-        position_unit: "count",
-        velocity_unit_counts_per_s: 1.0,
-        velocity_unit: "count/s",
-        torque_unit: "‰",
+        position_name: "increment",
+        position_per_rev: 1.0,
+        velocity: VelocityUnit::PositionPerSecond,
+        torque_per_mille: 1.0,
+        profile: None,
     },
     complete_access: false,
     esi: "",

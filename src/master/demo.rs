@@ -123,7 +123,7 @@ pub struct DemoReport {
 /// The program each drive runs: a csp move and sine, a csv ramp, a cst torque step, and back to
 /// csp, in the drive's own units (one motor revolution = `counts_per_rev`).
 pub fn program(profile: &DriveProfile) -> Vec<Step> {
-    let rev = profile.units.counts_per_rev;
+    let rev = profile.units.position_per_rev;
     vec![
         Step::Move {
             target: Target::By(0.5 * rev),
@@ -288,7 +288,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         .iter()
         .enumerate()
         .map(|(i, d)| {
-            let rev = profiles.get(i).map_or(1.0, |p| p.units.counts_per_rev);
+            let rev = profiles.get(i).map_or(1.0, |p| p.units.position_per_rev);
             let fe = cycle.max_following_error.get(i).copied().unwrap_or(0);
             DemoDrive {
                 position: d.info.position,

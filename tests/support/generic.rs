@@ -2,6 +2,7 @@
 //! builders.
 #![allow(dead_code)]
 
+use ecdrive::cia402::VelocityUnit;
 use ecdrive::cia402::{DriveCaps, SupportedModes};
 use ecdrive::drives::{CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units};
 use ecdrive::od::ObjectAddress;
@@ -72,11 +73,11 @@ pub static GENERIC_TEST: DriveProfile = DriveProfile {
         cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
     },
     units: Units {
-        counts_per_rev: 1.0,
-        position_unit: "count",
-        velocity_unit_counts_per_s: 1.0,
-        velocity_unit: "count/s",
-        torque_unit: "‰",
+        position_name: "increment",
+        position_per_rev: 1.0,
+        velocity: VelocityUnit::PositionPerSecond,
+        torque_per_mille: 1.0,
+        profile: None,
     },
     complete_access: false,
     esi: "",

@@ -432,7 +432,7 @@ impl AxisRt {
             sub: usize::from(d.info.position),
             axis,
             fields: d.fields.clone(),
-            velocity_unit: d.profile.units.velocity_unit_counts_per_s,
+            velocity_unit: d.profile.units.velocity_position_per_s(),
             runner: Runner::new(d.setup.program.clone(), d.setup.mode),
             program: ProgramState::Idle,
             hold: Sample::default(),

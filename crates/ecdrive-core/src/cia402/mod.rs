@@ -37,6 +37,7 @@ pub mod planner;
 pub mod profile_position;
 pub mod profile_velocity;
 mod state;
+pub mod units;
 
 pub use axis::{
     Axis, AxisConfig, AxisError, AxisStatus, Event, Feedback, ModeSwitchError, ModeSwitchFailure,
@@ -58,6 +59,7 @@ pub use planner::{
 pub use profile_position::{PpConfig, PpError, PpPhase, PpStatus, ProfilePosition, SetPoint};
 pub use profile_velocity::{ProfileTorque, ProfileVelocity, PvStatus, TqStatus};
 pub use state::State;
+pub use units::{AccelUnit, ProfileUnits, TorqueSlopeUnit, Units, VelocityUnit};
 
 /// Object addresses of the CiA 402 objects this layer deals with.
 pub mod object {

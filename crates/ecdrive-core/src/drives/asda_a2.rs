@@ -31,7 +31,7 @@ use crate::can::profile::{
     EmulationQuirks, EnableConditions, EnabledNmtReaction, HomingSupport, Identity, ParamSetting,
     PdoDefault, TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,
 };
-use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes};
+use crate::cia402::{DriveCaps, ErrorEntry, ProfileUnits, QuickStopOption, SupportedModes};
 use crate::od::{EntryDesc, ObjectAddress, ObjectCode, ObjectDesc};
 use crate::pdo::{DirectionLimits, PdoLimits, PdoRange};
 
@@ -676,11 +676,13 @@ pub const UNITS: Units = Units {
     position_name: "PUU",
     position_per_rev: 1_280_000.0,
     velocity: VelocityUnit::RevPerMinute { scale: 0.1 },
-    profile_velocity: VelocityUnit::PositionPerSecond,
-    homing_velocity: VelocityUnit::RevPerMinute { scale: 0.1 },
-    acceleration: AccelUnit::MillisecondsTo { rpm: 3000.0 },
-    torque_slope: TorqueSlopeUnit::MillisecondsToRated,
     torque_per_mille: 1.0,
+    profile: Some(ProfileUnits {
+        profile_velocity: VelocityUnit::PositionPerSecond,
+        homing_velocity: VelocityUnit::RevPerMinute { scale: 0.1 },
+        acceleration: AccelUnit::MillisecondsTo { rpm: 3000.0 },
+        torque_slope: TorqueSlopeUnit::MillisecondsToRated,
+    }),
 };
 
 /// P1-01 (2101h): control mode 0x0C = CANopen full (standard DS402). Checked, not written (a

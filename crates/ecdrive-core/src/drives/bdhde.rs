@@ -21,6 +21,7 @@ use super::profile::{
     CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, StartupSdo, StartupWhen, SyncSpec,
     Units,
 };
+use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes};
 use crate::od::{ConstValue, ObjectAddress};
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
@@ -430,11 +431,14 @@ pub const COUNTS_PER_REV: u32 = 1 << 20;
 /// second, acceleration in user units per s² (§6.2–§6.4), torque in per mille of the motor's
 /// rated torque 0x6076 (§6.6).
 pub const UNITS: Units = Units {
-    counts_per_rev: COUNTS_PER_REV as f64,
-    position_unit: "count (2^20 per revolution, set at start-up)",
-    velocity_unit_counts_per_s: 1.0,
-    velocity_unit: "count/s",
-    torque_unit: "0.1 % of rated torque (0x6076)",
+    // Counts: 2^20 per revolution, set at start-up.
+    position_name: "count",
+    position_per_rev: COUNTS_PER_REV as f64,
+    velocity: VelocityUnit::PositionPerSecond,
+    // 0.1 % of rated torque (0x6076).
+    torque_per_mille: 1.0,
+    // The profile modes are not run on this drive yet: their units are not described here.
+    profile: None,
 };
 
 // ============================================================================================

@@ -28,7 +28,7 @@ use crate::can::profile::{
     TransmissionTypes, Units, VelocityUnit,
 };
 use crate::cia402::{
-    DriveCaps, ErrorEntry, QuickStopEnd, QuickStopOption, StopRamp, SupportedModes,
+    DriveCaps, ErrorEntry, ProfileUnits, QuickStopEnd, QuickStopOption, StopRamp, SupportedModes,
 };
 use crate::od::{EntryDesc, ObjectCode, ObjectDesc};
 use crate::pdo::{DirectionLimits, PdoEntry, PdoLimits, PdoRange};
@@ -572,11 +572,13 @@ pub const UNITS: Units = Units {
     position_name: "step",
     position_per_rev: 36_000.0,
     velocity: VelocityUnit::RevPerMinute { scale: 1.0 },
-    profile_velocity: VelocityUnit::RevPerMinute { scale: 1.0 },
-    homing_velocity: VelocityUnit::RevPerMinute { scale: 1.0 },
-    acceleration: AccelUnit::RpmPerSecond,
-    torque_slope: TorqueSlopeUnit::PerMillePerSecond,
     torque_per_mille: 1.0,
+    profile: Some(ProfileUnits {
+        profile_velocity: VelocityUnit::RevPerMinute { scale: 1.0 },
+        homing_velocity: VelocityUnit::RevPerMinute { scale: 1.0 },
+        acceleration: AccelUnit::RpmPerSecond,
+        torque_slope: TorqueSlopeUnit::PerMillePerSecond,
+    }),
 };
 
 /// Enable preconditions: remote bit 9 must be 1 (S-ON input off, support software not

@@ -18,6 +18,7 @@
 use super::od_table::*;
 use super::profile::{CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units};
 use crate::cia402::DriveCaps;
+use crate::cia402::VelocityUnit;
 use crate::od::{EntryDesc, ObjectAddress, ObjectCode, ObjectDesc};
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
 
@@ -185,11 +186,12 @@ pub const SYNC: SyncSpec = SyncSpec {
 
 /// Units are the drive's own: increments, increments per second, per mille of rated torque.
 pub const UNITS: Units = Units {
-    counts_per_rev: 1.0,
-    position_unit: "increment (drive-defined)",
-    velocity_unit_counts_per_s: 1.0,
-    velocity_unit: "increment/s (drive-defined)",
-    torque_unit: "0.1 % of rated torque (0x6076)",
+    position_name: "increment (drive-defined)",
+    position_per_rev: 1.0,
+    velocity: VelocityUnit::PositionPerSecond,
+    // 0.1 % of rated torque (0x6076).
+    torque_per_mille: 1.0,
+    profile: None,
 };
 
 /// The generic CiA 402 profile (see the [module documentation](self)). Its identity matches no

@@ -35,7 +35,7 @@ use crate::can::profile::{
     EnableConditions, EnabledNmtReaction, HomingSupport, Identity, PdoDefault, TorqueSlopeUnit,
     TransmissionTypes, Units, VelocityUnit,
 };
-use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes};
+use crate::cia402::{DriveCaps, ErrorEntry, ProfileUnits, QuickStopOption, SupportedModes};
 use crate::od::{ConstValue, EntryDesc, ObjectCode, ObjectDesc};
 use crate::pdo::{DirectionLimits, PdoEntry, PdoLimits, PdoRange};
 
@@ -538,11 +538,13 @@ pub const UNITS: Units = Units {
     position_name: "microstep",
     position_per_rev: 51_200.0,
     velocity: VelocityUnit::PositionPerSecond,
-    profile_velocity: VelocityUnit::PositionPerSecond,
-    homing_velocity: VelocityUnit::PositionPerSecond,
-    acceleration: AccelUnit::PositionPerSecond2,
-    torque_slope: TorqueSlopeUnit::PerMillePerSecond,
     torque_per_mille: 1.0,
+    profile: Some(ProfileUnits {
+        profile_velocity: VelocityUnit::PositionPerSecond,
+        homing_velocity: VelocityUnit::PositionPerSecond,
+        acceleration: AccelUnit::PositionPerSecond2,
+        torque_slope: TorqueSlopeUnit::PerMillePerSecond,
+    }),
 };
 
 /// Enable preconditions: statusword bit 4 (DC bus OK) must be 1 before Ready to switch on.

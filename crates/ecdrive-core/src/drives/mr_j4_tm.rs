@@ -21,6 +21,7 @@ use super::profile::{
     CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,
     StartupSdo, StatusFlag, SyncSpec, Units,
 };
+use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes, VendorModeBit};
 use crate::od::ObjectAddress;
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
@@ -429,11 +430,14 @@ pub const COUNTS_PER_REV: f64 = 4_194_304.0;
 /// torque in 0.1 % of the rated torque (§5.4.3–§5.4.5). Ramps (0x6083/0x6084/0x6085) are time
 /// constants in ms from 0 to the rated speed, not accelerations.
 pub const UNITS: Units = Units {
-    counts_per_rev: COUNTS_PER_REV,
-    position_unit: "pulse",
-    velocity_unit_counts_per_s: COUNTS_PER_REV / 6000.0,
-    velocity_unit: "0.01 r/min",
-    torque_unit: "0.1 % of rated torque",
+    position_name: "pulse",
+    position_per_rev: COUNTS_PER_REV,
+    // 0.01 r/min (a velocity unit is COUNTS_PER_REV / 6000 pulses/s).
+    velocity: VelocityUnit::RevPerMinute { scale: 0.01 },
+    // 0.1 % of rated torque.
+    torque_per_mille: 1.0,
+    // The profile modes are not run on this drive yet: their units are not described here.
+    profile: None,
 };
 
 // ============================================================================================

@@ -159,34 +159,7 @@ pub struct CycleCounter {
     pub echo: Option<ObjectAddress>,
 }
 
-/// Units of the drive's position, velocity and torque objects.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Units {
-    /// Position counts per motor revolution with the default scaling (MR-J4-TM: 4 194 304 in
-    /// the cyclic modes).
-    pub counts_per_rev: f64,
-    /// Name of the position unit ("pulse", "count").
-    pub position_unit: &'static str,
-    /// One velocity unit in counts per second (MR-J4-TM: 0.01 r/min = 4 194 304 / 6000 counts/s).
-    pub velocity_unit_counts_per_s: f64,
-    /// Name of the velocity unit ("0.01 r/min").
-    pub velocity_unit: &'static str,
-    /// Name of the torque unit ("0.1 % of rated torque").
-    pub torque_unit: &'static str,
-}
-
-impl Units {
-    /// A velocity in counts/s as drive velocity units (rounded, saturating).
-    pub fn velocity_to_drive(&self, counts_per_s: f64) -> i32 {
-        let v = (counts_per_s / self.velocity_unit_counts_per_s).round();
-        v.clamp(i32::MIN as f64, i32::MAX as f64) as i32
-    }
-
-    /// A drive velocity as counts/s.
-    pub fn velocity_from_drive(&self, v: i32) -> f64 {
-        v as f64 * self.velocity_unit_counts_per_s
-    }
-}
+pub use crate::cia402::units::Units;
 
 /// Everything ecdrive knows about one drive type. Profiles are `static`s; use them by
 /// reference.

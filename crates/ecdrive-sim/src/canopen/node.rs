@@ -19,6 +19,7 @@ use crate::can::nmt::{ErrorControl, NmtCommand, NmtState};
 use crate::can::profile::{Alarm, CanDriveProfile, EnabledNmtReaction, Transmission, od};
 use crate::can::sdo::{SdoObjects, SdoServer};
 use crate::cia402::device::{Device, DeviceConfig, DeviceInputs, Reaction};
+use crate::cia402::{AccelUnit, ProfileUnits, TorqueSlopeUnit, Units};
 use crate::cia402::{ControlWord, OperationMode, State, StopRamp};
 use crate::coe::ValueStore;
 use crate::od::{DataType, EntryAccess, ObjectAddress, SdoAbortCode, Value};
@@ -899,9 +900,21 @@ impl EmulatedNode {
         let int = |i: u16, s: u8| self.od.int(ObjectAddress::new(i, s));
         let f = |i: u16, s: u8| int(i, s).map(|v| v as f64);
         let vel = |unit, v: f64| u.to_rev_per_s(unit, v) * ppr;
+        // \[REC\] A profile that describes no profile-mode units: the cyclic velocity unit,
+        // accelerations in position units/s², torque slopes in ‰/s.
+        let pu = u.profile.unwrap_or(ProfileUnits {
+            profile_velocity: u.velocity,
+            homing_velocity: u.velocity,
+            acceleration: AccelUnit::PositionPerSecond2,
+            torque_slope: TorqueSlopeUnit::PerMillePerSecond,
+        });
+        let units = Units {
+            profile: Some(pu),
+            ..*u
+        };
         let acc = |a: Option<f64>| {
-            let r = match a {
-                Some(a) => u.accel_to_rev_per_s2(a),
+            let r = match a.and_then(|a| units.accel_to_rev_per_s2(a)) {
+                Some(r) => r,
                 None => FALLBACK_ACCEL_REV_S2,
             };
             let r = if !r.is_finite() {
@@ -916,7 +929,7 @@ impl EmulatedNode {
         let decel = acc(f(0x6084, 0));
         Params {
             target_position: int(0x607A, 0).unwrap_or(0) as i32,
-            profile_velocity: vel(u.profile_velocity, f(0x6081, 0).unwrap_or(0.0)),
+            profile_velocity: vel(pu.profile_velocity, f(0x6081, 0).unwrap_or(0.0)),
             acceleration: acc(f(0x6083, 0)),
             deceleration: decel,
             quick_stop_deceleration: match f(0x6085, 0) {
@@ -926,12 +939,12 @@ impl EmulatedNode {
             target_velocity: vel(u.velocity, f(0x60FF, 0).unwrap_or(0.0)),
             target_torque: f(0x6071, 0).unwrap_or(0.0) * u.torque_per_mille,
             torque_slope: {
-                let s = u.torque_slope_per_mille_per_s(f(0x6087, 0).unwrap_or(0.0));
-                if s.is_finite() { s } else { 1.0e9 }
+                let s = units.torque_slope_per_mille_per_s(f(0x6087, 0).unwrap_or(0.0));
+                s.filter(|s| s.is_finite()).unwrap_or(1.0e9)
             },
             homing_method: int(0x6098, 0).unwrap_or(0) as i8,
-            homing_fast: vel(u.homing_velocity, f(0x6099, 1).unwrap_or(0.0)),
-            homing_slow: vel(u.homing_velocity, f(0x6099, 2).unwrap_or(0.0)),
+            homing_fast: vel(pu.homing_velocity, f(0x6099, 1).unwrap_or(0.0)),
+            homing_slow: vel(pu.homing_velocity, f(0x6099, 2).unwrap_or(0.0)),
             homing_acceleration: acc(f(0x609A, 0).or(f(0x6083, 0))),
             home_offset: int(0x607C, 0).unwrap_or(0) as i32,
             position_window: f(0x6067, 0).unwrap_or(0.5),
