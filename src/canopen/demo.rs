@@ -237,7 +237,7 @@ pub fn run_pv<T: CanTransport>(
     timeout_us: u64,
 ) -> Result<i32, CanError> {
     m.switch_mode(node, OperationMode::ProfileVelocity, timeout_us)?;
-    let zero_bit = m.profile(node).is_some_and(|p| p.quirks.pv_zero_speed_bit);
+    let zero_bit = m.profile(node).is_some_and(|p| p.pv_zero_speed_bit);
     let mut pv = ProfileVelocity::new(zero_bit);
     pv.set_target(velocity);
     let deadline = m.now_us().saturating_add(timeout_us);
@@ -348,9 +348,7 @@ pub fn run_ip<T: CanTransport>(
     timeout_us: u64,
 ) -> Result<i32, CanError> {
     m.switch_mode(node, OperationMode::InterpolatedPosition, timeout_us)?;
-    let needs_bit = m
-        .profile(node)
-        .is_some_and(|p| p.quirks.ip_needs_enable_bit);
+    let needs_bit = m.profile(node).is_some_and(|p| p.ip_needs_enable_bit);
     let mut ip = Interpolation::new(needs_bit);
     let from = m
         .drive(node)

@@ -34,24 +34,7 @@ use core::ops::RangeInclusive;
 use core::str::FromStr;
 use std::path::PathBuf;
 
-/// The CANopen drive profiles the library knows, for identification.
-pub const KNOWN_PROFILES: &[&CanDriveProfile] =
-    &[&blv_r::PROFILE, &asda_a2::PROFILE, &lexium_mdrive::PROFILE];
-
-/// Which profile a node with these identity values matches (device type 1000h, vendor
-/// 1018h:01, product 1018h:02). The Lexium open- and closed-loop models share their identity:
-/// the open-loop profile is returned (configure a closed-loop drive with
-/// [`lexium_mdrive::PROFILE_CLOSED_LOOP`] explicitly).
-pub fn identify(
-    device_type: u32,
-    vendor_id: u32,
-    product: Option<u32>,
-) -> Option<&'static CanDriveProfile> {
-    KNOWN_PROFILES
-        .iter()
-        .copied()
-        .find(|p| p.identity.matches(device_type, vendor_id, product))
-}
+use crate::drives::canopen_by_identity as identify;
 
 /// A bus as the command line names it.
 #[derive(Debug, Clone, PartialEq, Eq)]

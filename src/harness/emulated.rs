@@ -4,7 +4,7 @@
 use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, SupportedModes};
 use crate::drives::{
-    self, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units,
+    self, CycleTimeObject, CycleTimes, DriveProfile, EtherCat, IdentityMatch, SyncSpec, Units,
 };
 use crate::od::ObjectAddress;
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange};
@@ -29,52 +29,12 @@ static TX: &[Pdo] = &[Pdo::fixed(
 /// the cyclic mapping, DC SYNC0 with 0x1C32:01/02, any cycle from 125 µs in 125 µs steps.
 pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
     name: "generic CoE device (emulated)",
-    key: "generic-coe",
     vendor: "ecdrive",
-    identity: IdentityMatch {
-        vendor_id: TEST_VENDOR_ID,
-        product_code: GENERIC_COE_PRODUCT,
-    },
-    revision: 1,
     caps: DriveCaps {
         supported_modes: SupportedModes::ALL_STANDARD,
         ..DriveCaps::CIA402
     },
-    pdo_limits: PdoLimits {
-        drive: "generic CoE device",
-        rx: DirectionLimits {
-            pdos: RANGES_RX,
-            max_assigned: 2,
-            max_entries: 16,
-            max_bytes: 64,
-        },
-        tx: DirectionLimits {
-            pdos: RANGES_TX,
-            max_assigned: 2,
-            max_entries: 16,
-            max_bytes: 64,
-        },
-        assignment_writable: true,
-    },
-    default_mapping: Mapping::fixed(RX, TX),
-    cyclic_mapping: Mapping::fixed(RX, TX),
-    required_objects: &[],
     dictionary: OBJECTS,
-    startup: &[],
-    output_defaults: &[],
-    cycle_counter: None,
-    sync: SyncSpec {
-        free_run: true,
-        dc_sync0: true,
-        cycle_times: CycleTimes::Range {
-            min_ns: 125_000,
-            max_ns: 10_000_000,
-            step_ns: 125_000,
-        },
-        assign_activate: 0x0300,
-        sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
-        cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
-    },
     units: Units {
         position_name: "increment",
         position_per_rev: 1.0,
@@ -82,10 +42,52 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
         torque_per_mille: 1.0,
         profile: None,
     },
-    complete_access: false,
-    esi: "",
-    zero_speed_flag: None,
-    ratings: crate::drives::Ratings::NONE,
+    bus: EtherCat {
+        key: "generic-coe",
+        identity: IdentityMatch {
+            vendor_id: TEST_VENDOR_ID,
+            product_code: GENERIC_COE_PRODUCT,
+        },
+        revision: 1,
+        pdo_limits: PdoLimits {
+            drive: "generic CoE device",
+            rx: DirectionLimits {
+                pdos: RANGES_RX,
+                max_assigned: 2,
+                max_entries: 16,
+                max_bytes: 64,
+            },
+            tx: DirectionLimits {
+                pdos: RANGES_TX,
+                max_assigned: 2,
+                max_entries: 16,
+                max_bytes: 64,
+            },
+            assignment_writable: true,
+        },
+        default_mapping: Mapping::fixed(RX, TX),
+        cyclic_mapping: Mapping::fixed(RX, TX),
+        required_objects: &[],
+        startup: &[],
+        output_defaults: &[],
+        cycle_counter: None,
+        sync: SyncSpec {
+            free_run: true,
+            dc_sync0: true,
+            cycle_times: CycleTimes::Range {
+                min_ns: 125_000,
+                max_ns: 10_000_000,
+                step_ns: 125_000,
+            },
+            assign_activate: 0x0300,
+            sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
+            cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
+        },
+        complete_access: false,
+        esi: "",
+        zero_speed_flag: None,
+        ratings: crate::drives::Ratings::NONE,
+    },
 };
 
 /// Why the emulated line cannot be built.

@@ -4,7 +4,9 @@
 
 use ecdrive::cia402::VelocityUnit;
 use ecdrive::cia402::{DriveCaps, SupportedModes};
-use ecdrive::drives::{CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units};
+use ecdrive::drives::{
+    CycleTimeObject, CycleTimes, DriveProfile, EtherCat, IdentityMatch, SyncSpec, Units,
+};
 use ecdrive::od::ObjectAddress;
 use ecdrive::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange};
 use ecdrive::sim::devices::generic_coe::{GENERIC_COE_PRODUCT, OBJECTS};
@@ -26,52 +28,12 @@ pub static TX: &[Pdo] = &[Pdo::fixed(
 /// A profile for the sim's generic CoE test device, as a test would write one for a new drive.
 pub static GENERIC_TEST: DriveProfile = DriveProfile {
     name: "generic test device",
-    key: "generic-test",
     vendor: "ecdrive",
-    identity: IdentityMatch {
-        vendor_id: TEST_VENDOR_ID,
-        product_code: GENERIC_COE_PRODUCT,
-    },
-    revision: 1,
     caps: DriveCaps {
         supported_modes: SupportedModes::ALL_STANDARD,
         ..DriveCaps::CIA402
     },
-    pdo_limits: PdoLimits {
-        drive: "generic test device",
-        rx: DirectionLimits {
-            pdos: RANGES_RX,
-            max_assigned: 2,
-            max_entries: 16,
-            max_bytes: 64,
-        },
-        tx: DirectionLimits {
-            pdos: RANGES_TX,
-            max_assigned: 2,
-            max_entries: 16,
-            max_bytes: 64,
-        },
-        assignment_writable: true,
-    },
-    default_mapping: Mapping::fixed(RX, TX),
-    cyclic_mapping: Mapping::fixed(RX, TX),
-    required_objects: &[],
     dictionary: OBJECTS,
-    startup: &[],
-    output_defaults: &[],
-    cycle_counter: None,
-    sync: SyncSpec {
-        free_run: true,
-        dc_sync0: true,
-        cycle_times: CycleTimes::Range {
-            min_ns: 250_000,
-            max_ns: 10_000_000,
-            step_ns: 250_000,
-        },
-        assign_activate: 0x0300,
-        sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
-        cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
-    },
     units: Units {
         position_name: "increment",
         position_per_rev: 1.0,
@@ -79,10 +41,52 @@ pub static GENERIC_TEST: DriveProfile = DriveProfile {
         torque_per_mille: 1.0,
         profile: None,
     },
-    complete_access: false,
-    esi: "",
-    zero_speed_flag: None,
-    ratings: ecdrive::drives::Ratings::NONE,
+    bus: EtherCat {
+        key: "generic-test",
+        identity: IdentityMatch {
+            vendor_id: TEST_VENDOR_ID,
+            product_code: GENERIC_COE_PRODUCT,
+        },
+        revision: 1,
+        pdo_limits: PdoLimits {
+            drive: "generic test device",
+            rx: DirectionLimits {
+                pdos: RANGES_RX,
+                max_assigned: 2,
+                max_entries: 16,
+                max_bytes: 64,
+            },
+            tx: DirectionLimits {
+                pdos: RANGES_TX,
+                max_assigned: 2,
+                max_entries: 16,
+                max_bytes: 64,
+            },
+            assignment_writable: true,
+        },
+        default_mapping: Mapping::fixed(RX, TX),
+        cyclic_mapping: Mapping::fixed(RX, TX),
+        required_objects: &[],
+        startup: &[],
+        output_defaults: &[],
+        cycle_counter: None,
+        sync: SyncSpec {
+            free_run: true,
+            dc_sync0: true,
+            cycle_times: CycleTimes::Range {
+                min_ns: 250_000,
+                max_ns: 10_000_000,
+                step_ns: 250_000,
+            },
+            assign_activate: 0x0300,
+            sync_type_object: Some(ObjectAddress::new(0x1C32, 1)),
+            cycle_time_object: Some(CycleTimeObject::Nanoseconds(ObjectAddress::new(0x1C32, 2))),
+        },
+        complete_access: false,
+        esi: "",
+        zero_speed_flag: None,
+        ratings: ecdrive::drives::Ratings::NONE,
+    },
 };
 
 /// A segment of `n` generic CoE devices (SM watchdog off: CI machines stall).

@@ -9,15 +9,15 @@
 //! drives); the object dictionary; the PDO rules including the CAN-only ones ([`CanPdoProfile`]);
 //! units and their conversions ([`Units`]); enable preconditions ([`EnableConditions`]); homing
 //! methods ([`HomingSupport`]); how EMCY bytes 3–7 are laid out ([`EmcyFormat`]) and the alarm
-//! table ([`Alarm`]); traffic limits; the reaction to NMT commands while enabled
-//! ([`EnabledNmtReaction`]); and what the emulated node needs to behave like the drive
-//! ([`EmulationQuirks`]).
+//! table ([`Alarm`]); traffic limits; and the reaction to NMT commands while enabled
+//! ([`EnabledNmtReaction`]). What only the emulated node needs lives in the software slave, not
+//! here. A [`CanDriveProfile`] is the common [`Profile`] with the CANopen part [`CanOpen`].
 //!
 //! The module also has `const` builders for dictionary tables ([`od`]) so the profiles stay
 //! short.
 
-use crate::cia402::{DriveCaps, ErrorCode, ErrorDescription, OperationMode};
-use crate::od::{ObjectAddress, ObjectDesc};
+use crate::cia402::{ErrorCode, ErrorDescription, OperationMode};
+use crate::od::ObjectAddress;
 use crate::pdo::{PdoEntry, PdoLimits};
 use core::fmt;
 
@@ -174,6 +174,7 @@ pub struct CanPdoProfile {
     pub default_tpdos: &'static [PdoDefault],
 }
 
+pub use crate::cia402::Profile;
 pub use crate::cia402::units::{AccelUnit, TorqueSlopeUnit, Units, VelocityUnit};
 
 /// A drive parameter the master must check or set before enabling: `(value & mask) == value`
@@ -338,50 +339,12 @@ pub struct CommSupport {
     pub rpdo_min_interval_us: u32,
 }
 
-/// A parameter whose value makes "enable operation" (controlword bit 3) alone switch the drive
-/// on (ASDA-A2 P3-12 X = 0, §2.2.2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Bit3Enable {
-    /// The parameter object.
-    pub addr: ObjectAddress,
-    /// The digit's bits.
-    pub mask: u32,
-    /// The value of those bits that selects "bit 3 alone".
-    pub value: u32,
-}
+/// A CANopen drive's profile: the common part and [`CanOpen`] (see [`Profile`]).
+pub type CanDriveProfile = Profile<CanOpen>;
 
-/// What the emulated node needs to behave like the drive, beyond the dictionary.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct EmulationQuirks {
-    /// "Enable operation" alone switches on, selected by a parameter (ASDA-A2 P3-12 X = 0).
-    pub bit3_enable: Option<Bit3Enable>,
-    /// Leaving NMT Operational while enabled disables the power stage (BLV-R §5.1 ties
-    /// excitation to Operational).
-    pub operational_required: bool,
-    /// Alarm (vendor number) raised for an SDO request within
-    /// [`CommSupport::sdo_min_interval_us`] of the previous one (ASDA-A2 AL111).
-    pub sdo_overrun_alarm: Option<u16>,
-    /// Alarm raised for two frames on one RPDO COB-ID within
-    /// [`CommSupport::rpdo_min_interval_us`] (ASDA-A2 AL112).
-    pub rpdo_overrun_alarm: Option<u16>,
-    /// Alarm raised for an RPDO shorter than its mapping (BLV-R, Lexium: EMCY 8210h; ASDA-A2
-    /// AL123).
-    pub pdo_length_alarm: Option<u16>,
-    /// Alarm raised when life guarding or the heartbeat consumer times out (ASDA-A2 AL170; the
-    /// others report EMCY 8130h).
-    pub guarding_alarm: Option<u16>,
-    /// In ip, controlword bit 4 enables interpolation (CiA); `false`: interpolation runs
-    /// whenever mode 7 is active (ASDA-A2 §5.2).
-    pub ip_needs_enable_bit: bool,
-    /// Statusword bit 12 in pv is the zero-speed flag (all three drives).
-    pub pv_zero_speed_bit: bool,
-}
-
-/// Everything about one CANopen drive model.
+/// What only a CANopen drive's profile has.
 #[derive(Debug, Clone, Copy)]
-pub struct CanDriveProfile {
-    /// Short name for messages, e.g. `"BLV-R"`.
-    pub name: &'static str,
+pub struct CanOpen {
     /// The manual the data comes from.
     pub source: &'static str,
     /// Identity.
@@ -392,16 +355,10 @@ pub struct CanDriveProfile {
     pub default_bitrate_kbit: u16,
     /// Bit rates the drive offers, kbit/s.
     pub bitrates_kbit: &'static [u16],
-    /// The CiA 402 capability set (the same type as the EtherCAT drives use).
-    pub caps: DriveCaps,
     /// Where the manuals disagree about the supported modes.
     pub modes_note: &'static str,
-    /// The object dictionary. COB-ID defaults are given for node-ID 0; the node adds its ID.
-    pub dictionary: &'static [ObjectDesc],
     /// PDO rules and defaults.
     pub pdo: CanPdoProfile,
-    /// Units.
-    pub units: Units,
     /// Enable preconditions.
     pub enable: EnableConditions,
     /// Homing methods.
@@ -418,8 +375,11 @@ pub struct CanDriveProfile {
     pub nmt_stop_while_enabled: EnabledNmtReaction,
     /// Reaction to NMT Reset node / Reset communication while enabled.
     pub nmt_reset_while_enabled: EnabledNmtReaction,
-    /// Emulation behaviour.
-    pub quirks: EmulationQuirks,
+    /// In ip, controlword bit 4 enables interpolation (CiA); `false`: interpolation runs
+    /// whenever mode 7 is active (ASDA-A2 §5.2).
+    pub ip_needs_enable_bit: bool,
+    /// Statusword bit 12 in pv is the zero-speed flag.
+    pub pv_zero_speed_bit: bool,
 }
 
 impl CanDriveProfile {

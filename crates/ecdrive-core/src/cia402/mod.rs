@@ -27,6 +27,7 @@ mod bits;
 mod caps;
 mod command;
 pub mod device;
+pub mod drive_profile;
 mod error_code;
 pub mod homing;
 pub mod interpolated;
@@ -46,6 +47,7 @@ pub use axis::{
 pub use bits::{ControlWord, StatusWord};
 pub use caps::{DriveCaps, QuickStopEnd, QuickStopOption, StopRamp};
 pub use command::Command;
+pub use drive_profile::Profile;
 pub use error_code::{
     ErrorClass, ErrorCode, ErrorDescription, ErrorEntry, ErrorSource, STANDARD_CODES,
 };

@@ -27,9 +27,9 @@ use crate::can::profile::od::{
     pdo_map, store_record, u,
 };
 use crate::can::profile::{
-    AccelUnit, Alarm, Bit3Enable, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat,
-    EmulationQuirks, EnableConditions, EnabledNmtReaction, HomingSupport, Identity, ParamSetting,
-    PdoDefault, TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,
+    AccelUnit, Alarm, CanDriveProfile, CanOpen, CanPdoProfile, CommSupport, EmcyFormat,
+    EnableConditions, EnabledNmtReaction, HomingSupport, Identity, ParamSetting, PdoDefault,
+    TorqueSlopeUnit, TransmissionTypes, Units, VelocityUnit,
 };
 use crate::cia402::{DriveCaps, ErrorEntry, ProfileUnits, QuickStopOption, SupportedModes};
 use crate::od::{EntryDesc, ObjectAddress, ObjectCode, ObjectDesc};
@@ -758,36 +758,29 @@ pub const COMM: CommSupport = CommSupport {
 /// The ASDA-A2 profile.
 pub const PROFILE: CanDriveProfile = CanDriveProfile {
     name: "ASDA-A2",
-    source: "Delta CANopen for ASDA-A2, V2.01 (2012-09-20)",
-    identity: IDENTITY,
-    default_node_id: Some(0x7F),
-    default_bitrate_kbit: 500,
-    bitrates_kbit: &[1000, 750, 500, 250, 125],
+    vendor: "Delta Electronics",
     caps: CAPS,
-    modes_note: "6502h = 0000 006Dh (pp, pv, tq, hm, ip); 6060h 0 is reserved (default)",
     dictionary: DICTIONARY,
-    pdo: PDO,
     units: UNITS,
-    enable: ENABLE,
-    homing: HOMING,
-    emcy: EmcyFormat::AlarmInBytes3To4,
-    alarms: ALARMS,
-    vendor_abort_codes: VENDOR_ABORT_CODES,
-    comm: COMM,
-    nmt_stop_while_enabled: EnabledNmtReaction::Alarm(alarm::NMT_WHILE_ENABLED),
-    nmt_reset_while_enabled: EnabledNmtReaction::Alarm(alarm::NMT_WHILE_ENABLED),
-    quirks: EmulationQuirks {
-        bit3_enable: Some(Bit3Enable {
-            addr: P3_12,
-            mask: 0x000F,
-            value: 0,
-        }),
-        operational_required: false,
-        sdo_overrun_alarm: Some(alarm::SDO_OVERRUN),
-        pdo_length_alarm: Some(alarm::PDO_LENGTH),
-        rpdo_overrun_alarm: Some(alarm::PDO_OVERRUN),
-        guarding_alarm: Some(alarm::GUARDING_SERVO_ON),
+    bus: CanOpen {
+        source: "Delta CANopen for ASDA-A2, V2.01 (2012-09-20)",
+        identity: IDENTITY,
+        default_node_id: Some(0x7F),
+        default_bitrate_kbit: 500,
+        bitrates_kbit: &[1000, 750, 500, 250, 125],
+        modes_note: "6502h = 0000 006Dh (pp, pv, tq, hm, ip); 6060h 0 is reserved (default)",
+        pdo: PDO,
+        enable: ENABLE,
+        homing: HOMING,
+        emcy: EmcyFormat::AlarmInBytes3To4,
+        alarms: ALARMS,
+        vendor_abort_codes: VENDOR_ABORT_CODES,
+        comm: COMM,
+        nmt_stop_while_enabled: EnabledNmtReaction::Alarm(alarm::NMT_WHILE_ENABLED),
+        nmt_reset_while_enabled: EnabledNmtReaction::Alarm(alarm::NMT_WHILE_ENABLED),
+        // §5.2: interpolation runs whenever mode 7 is active.
         ip_needs_enable_bit: false,
+        // Statusword bit 12 in pv: zero speed.
         pv_zero_speed_bit: true,
     },
 };

@@ -23,6 +23,7 @@ use super::profile::{
 };
 use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes};
+use crate::drives::profile::EtherCat;
 use crate::od::{ConstValue, ObjectAddress};
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
 
@@ -458,30 +459,32 @@ pub const STARTUP: &[StartupSdo] = REC_STARTUP;
 /// Everything ecdrive knows about the BDHDE.
 pub static PROFILE: DriveProfile = DriveProfile {
     name: "BDHDE",
-    key: "bdhde",
     vendor: "Servotronix",
-    identity: IdentityMatch {
-        vendor_id: VENDOR_ID,
-        product_code: PRODUCT_CODE,
-    },
-    revision: REVISION,
     caps: CAPS,
-    pdo_limits: PDO_LIMITS,
-    default_mapping: DEFAULT_MAPPING,
-    cyclic_mapping: CYCLIC_MAPPING,
-    required_objects: REQUIRED_OBJECTS,
     dictionary: DICTIONARY,
-    startup: STARTUP,
-    output_defaults: &[],
-    cycle_counter: None,
-    sync: SYNC,
     units: UNITS,
-    // MANUAL GAP: complete access is not described; the abort list names 0x06010004
-    // "cannot be accessed via complete access". Off, as in the ESI file.
-    complete_access: false,
-    esi: include_str!("../../../../esi/Servotronix_BDHDE.xml"),
-    zero_speed_flag: None,
-    ratings: RATINGS,
+    bus: EtherCat {
+        key: "bdhde",
+        identity: IdentityMatch {
+            vendor_id: VENDOR_ID,
+            product_code: PRODUCT_CODE,
+        },
+        revision: REVISION,
+        pdo_limits: PDO_LIMITS,
+        default_mapping: DEFAULT_MAPPING,
+        cyclic_mapping: CYCLIC_MAPPING,
+        required_objects: REQUIRED_OBJECTS,
+        startup: STARTUP,
+        output_defaults: &[],
+        cycle_counter: None,
+        sync: SYNC,
+        // MANUAL GAP: complete access is not described; the abort list names 0x06010004
+        // "cannot be accessed via complete access". Off, as in the ESI file.
+        complete_access: false,
+        esi: include_str!("../../../../esi/Servotronix_BDHDE.xml"),
+        zero_speed_flag: None,
+        ratings: RATINGS,
+    },
 };
 
 /// What the manual documents independently of the motor: 0x6072 (max torque) takes 0 to 5000

@@ -23,7 +23,7 @@ use crate::can::profile::od::{
     pdo_map, store_record, u,
 };
 use crate::can::profile::{
-    AccelUnit, Alarm, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat, EmulationQuirks,
+    AccelUnit, Alarm, CanDriveProfile, CanOpen, CanPdoProfile, CommSupport, EmcyFormat,
     EnableConditions, EnabledNmtReaction, HomingSupport, Identity, PdoDefault, TorqueSlopeUnit,
     TransmissionTypes, Units, VelocityUnit,
 };
@@ -623,33 +623,30 @@ pub const COMM: CommSupport = CommSupport {
 /// The BLV-R profile.
 pub const PROFILE: CanDriveProfile = CanDriveProfile {
     name: "BLV-R",
-    source: "Oriental Motor BLV series R type, CANopen communication profile",
-    identity: IDENTITY,
-    default_node_id: None,
-    default_bitrate_kbit: 500,
-    bitrates_kbit: &[1000, 800, 500, 250, 125, 50, 20, 10],
+    vendor: "Oriental Motor",
     caps: CAPS,
-    modes_note: "6502h = 0000 002Dh (pp, pv, tq, hm) from driver version 4.00, 0000 0025h \
-                 before (no tq); 6060h range 0–6, default 3 (pv)",
     dictionary: DICTIONARY,
-    pdo: PDO,
     units: UNITS,
-    enable: ENABLE,
-    homing: HOMING,
-    emcy: EmcyFormat::AlarmInCodeLowByte,
-    alarms: ALARMS,
-    vendor_abort_codes: VENDOR_ABORT_CODES,
-    comm: COMM,
-    nmt_stop_while_enabled: EnabledNmtReaction::Unspecified,
-    nmt_reset_while_enabled: EnabledNmtReaction::Unspecified,
-    quirks: EmulationQuirks {
-        bit3_enable: None,
-        operational_required: true,
-        sdo_overrun_alarm: None,
-        pdo_length_alarm: Some(0x8210),
-        rpdo_overrun_alarm: None,
-        guarding_alarm: None,
+    bus: CanOpen {
+        source: "Oriental Motor BLV series R type, CANopen communication profile",
+        identity: IDENTITY,
+        default_node_id: None,
+        default_bitrate_kbit: 500,
+        bitrates_kbit: &[1000, 800, 500, 250, 125, 50, 20, 10],
+        modes_note: "6502h = 0000 002Dh (pp, pv, tq, hm) from driver version 4.00, 0000 0025h \
+                     before (no tq); 6060h range 0–6, default 3 (pv)",
+        pdo: PDO,
+        enable: ENABLE,
+        homing: HOMING,
+        emcy: EmcyFormat::AlarmInCodeLowByte,
+        alarms: ALARMS,
+        vendor_abort_codes: VENDOR_ABORT_CODES,
+        comm: COMM,
+        nmt_stop_while_enabled: EnabledNmtReaction::Unspecified,
+        nmt_reset_while_enabled: EnabledNmtReaction::Unspecified,
+        // CiA 402: controlword bit 4 enables interpolation in ip.
         ip_needs_enable_bit: true,
+        // Statusword bit 12 in pv: zero speed.
         pv_zero_speed_bit: true,
     },
 };
@@ -662,8 +659,9 @@ pub const PROFILE: CanDriveProfile = CanDriveProfile {
 //   `EMU_NODE_ID`.
 // - MANUAL GAP: the reaction to NMT Stop / Reset while enabled (`Unspecified`); the emulation
 //   disables the power stage because §5.1 ties excitation to Operational.
-// - MANUAL GAP: whether guarding/heartbeat loss (EMCY 8130h) stops the motor (`guarding_alarm:
-//   None`: the emulation only sends the EMCY). The Function Edition is not in our set.
+// - MANUAL GAP: whether guarding/heartbeat loss (EMCY 8130h) stops the motor (the software
+//   slave's own quirk table: the emulation only sends the EMCY). The Function Edition is not
+//   in our set.
 // - MANUAL GAP: whether each alarm can be reset (the manual's "Possible/Not possible" column
 //   lost its assignment); every FFxxh alarm is a fault here.
 // - MANUAL GAP: 1009h/100Ah contents (the manual gives examples only): `EMU_HW_VERSION`,

@@ -19,6 +19,7 @@ use super::od_table::*;
 use super::profile::{CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, SyncSpec, Units};
 use crate::cia402::DriveCaps;
 use crate::cia402::VelocityUnit;
+use crate::drives::profile::EtherCat;
 use crate::od::{EntryDesc, ObjectAddress, ObjectCode, ObjectDesc};
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
 
@@ -198,26 +199,28 @@ pub const UNITS: Units = Units {
 /// device: it is chosen by [`super::identify`] with `allow_generic`, or by its key.
 pub static GENERIC_CIA402: DriveProfile = DriveProfile {
     name: "generic CiA 402 drive",
-    key: "generic-cia402",
     vendor: "any",
-    identity: IdentityMatch {
-        vendor_id: 0,
-        product_code: 0,
-    },
-    revision: 0,
     caps: DriveCaps::CIA402,
-    pdo_limits: PDO_LIMITS,
-    default_mapping: DEFAULT_MAPPING,
-    cyclic_mapping: CYCLIC_MAPPING,
-    required_objects: REQUIRED_OBJECTS,
     dictionary: DICTIONARY,
-    startup: &[],
-    output_defaults: &[],
-    cycle_counter: None,
-    sync: SYNC,
     units: UNITS,
-    complete_access: false,
-    esi: "",
-    zero_speed_flag: None,
-    ratings: crate::drives::Ratings::NONE,
+    bus: EtherCat {
+        key: "generic-cia402",
+        identity: IdentityMatch {
+            vendor_id: 0,
+            product_code: 0,
+        },
+        revision: 0,
+        pdo_limits: PDO_LIMITS,
+        default_mapping: DEFAULT_MAPPING,
+        cyclic_mapping: CYCLIC_MAPPING,
+        required_objects: REQUIRED_OBJECTS,
+        startup: &[],
+        output_defaults: &[],
+        cycle_counter: None,
+        sync: SYNC,
+        complete_access: false,
+        esi: "",
+        zero_speed_flag: None,
+        ratings: crate::drives::Ratings::NONE,
+    },
 };

@@ -31,7 +31,7 @@ use crate::can::profile::od::{
     pdo_map, store_record, u,
 };
 use crate::can::profile::{
-    AccelUnit, Alarm, CanDriveProfile, CanPdoProfile, CommSupport, EmcyFormat, EmulationQuirks,
+    AccelUnit, Alarm, CanDriveProfile, CanOpen, CanPdoProfile, CommSupport, EmcyFormat,
     EnableConditions, EnabledNmtReaction, HomingSupport, Identity, PdoDefault, TorqueSlopeUnit,
     TransmissionTypes, Units, VelocityUnit,
 };
@@ -584,49 +584,47 @@ pub const COMM: CommSupport = CommSupport {
     rpdo_min_interval_us: 0,
 };
 
-const QUIRKS: EmulationQuirks = EmulationQuirks {
-    bit3_enable: None,
-    operational_required: false,
-    sdo_overrun_alarm: None,
-    pdo_length_alarm: Some(0x8210),
-    rpdo_overrun_alarm: None,
-    guarding_alarm: Some(alarm::GUARDING),
-    ip_needs_enable_bit: true,
-    pv_zero_speed_bit: true,
-};
-
 /// The Lexium MDrive profile (open-loop models: pp, pv, hm; no index pulse).
 pub const PROFILE: CanDriveProfile = CanDriveProfile {
     name: "Lexium MDrive",
-    source: "Schneider Electric CANopen Fieldbus manual for Lexium MDrive, V1.00 (09.2014)",
-    identity: IDENTITY,
-    default_node_id: Some(0x41),
-    default_bitrate_kbit: 1000,
-    bitrates_kbit: &[1000, 800, 500, 250, 125, 100, 50, 20, 10],
+    vendor: "Schneider Electric",
     caps: CAPS,
-    modes_note: "6502h = 0000 0025h (pp, pv, hm); 6060h range 1, 3, 6, default 1. tq (4) is \
-                 described for closed-loop models only and csp (§6.9) has no 6060h value",
     dictionary: DICTIONARY,
-    pdo: PDO,
     units: UNITS,
-    enable: ENABLE,
-    homing: HOMING,
-    emcy: EmcyFormat::PdoAndVendorCode,
-    alarms: ALARMS,
-    vendor_abort_codes: &[],
-    comm: COMM,
-    nmt_stop_while_enabled: EnabledNmtReaction::QuickStopThenFault(alarm::NMT_WHILE_ENABLED),
-    nmt_reset_while_enabled: EnabledNmtReaction::QuickStopThenFault(alarm::NMT_WHILE_ENABLED),
-    quirks: QUIRKS,
+    bus: CanOpen {
+        source: "Schneider Electric CANopen Fieldbus manual for Lexium MDrive, V1.00 (09.2014)",
+        identity: IDENTITY,
+        default_node_id: Some(0x41),
+        default_bitrate_kbit: 1000,
+        bitrates_kbit: &[1000, 800, 500, 250, 125, 100, 50, 20, 10],
+        modes_note: "6502h = 0000 0025h (pp, pv, hm); 6060h range 1, 3, 6, default 1. tq (4) is \
+                     described for closed-loop models only and csp (§6.9) has no 6060h value",
+        pdo: PDO,
+        enable: ENABLE,
+        homing: HOMING,
+        emcy: EmcyFormat::PdoAndVendorCode,
+        alarms: ALARMS,
+        vendor_abort_codes: &[],
+        comm: COMM,
+        nmt_stop_while_enabled: EnabledNmtReaction::QuickStopThenFault(alarm::NMT_WHILE_ENABLED),
+        nmt_reset_while_enabled: EnabledNmtReaction::QuickStopThenFault(alarm::NMT_WHILE_ENABLED),
+        // CiA 402: controlword bit 4 enables interpolation in ip.
+        ip_needs_enable_bit: true,
+        // Statusword bit 12 in pv: zero speed.
+        pv_zero_speed_bit: true,
+    },
 };
 
 /// The closed-loop models (encoder, hMTechnology): tq and the index-pulse homing methods too.
 pub const PROFILE_CLOSED_LOOP: CanDriveProfile = CanDriveProfile {
     name: "Lexium MDrive (closed loop)",
     caps: CAPS_CLOSED_LOOP,
-    homing: HomingSupport {
-        index_pulse: true,
-        ..HOMING
+    bus: CanOpen {
+        homing: HomingSupport {
+            index_pulse: true,
+            ..HOMING
+        },
+        ..PROFILE.bus
     },
     ..PROFILE
 };

@@ -13,7 +13,7 @@
 //! - [`generic`]: plain CiA 402 ([`generic::GENERIC_CIA402`]), for devices ecdrive does not
 //!   know, used only when the user asks for it.
 //!
-//! CANopen drives (their profiles are [`crate::can::profile`] values):
+//! CANopen drives, in the same registry ([`CANOPEN_PROFILES`], [`canopen_by_identity`]):
 //! - [`blv_r`]: Oriental Motor BLV series R type (CANopen).
 //! - [`asda_a2`]: Delta ASDA-A2 (CANopen).
 //! - [`lexium_mdrive`]: Schneider Electric Lexium MDrive (CANopen).
@@ -40,10 +40,12 @@ pub(crate) mod od_table;
 pub mod profile;
 mod registry;
 
-pub use registry::{UnknownDevice, all, by_identity, by_key, identify};
+pub use registry::{
+    CANOPEN_PROFILES, UnknownDevice, all, by_identity, by_key, canopen_by_identity, identify,
+};
 
 pub use profile::{
-    CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch,
-    OutputDefault, Rating, Ratings, StartupSdo, StartupWhen, StatusFlag, SyncSpec, SyncWrite,
-    Units, interpolation_cycle_ns, interpolation_standard_form,
+    CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, EtherCat,
+    IdentityMatch, OutputDefault, Rating, Ratings, StartupSdo, StartupWhen, StatusFlag, SyncSpec,
+    SyncWrite, Units, interpolation_cycle_ns, interpolation_standard_form,
 };

@@ -23,6 +23,7 @@ use super::profile::{
 };
 use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes, VendorModeBit};
+use crate::drives::profile::EtherCat;
 use crate::od::ObjectAddress;
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange, RequiredObjects};
 
@@ -486,32 +487,34 @@ pub const CYCLE_COUNTER: CycleCounter = CycleCounter {
 /// Everything ecdrive knows about the MR-J4-TM.
 pub static PROFILE: DriveProfile = DriveProfile {
     name: "MR-J4-TM",
-    key: "mr-j4-tm",
     vendor: "Mitsubishi Electric",
-    identity: IdentityMatch {
-        vendor_id: VENDOR_ID,
-        product_code: PRODUCT_CODE,
-    },
-    revision: REVISION,
     caps: CAPS,
-    pdo_limits: PDO_LIMITS,
-    default_mapping: DEFAULT_MAPPING,
-    cyclic_mapping: CYCLIC_MAPPING,
-    required_objects: REQUIRED_OBJECTS,
     dictionary: DICTIONARY,
-    startup: STARTUP,
-    output_defaults: OUTPUT_DEFAULTS,
-    cycle_counter: Some(CYCLE_COUNTER),
-    sync: SYNC,
     units: UNITS,
-    // §4.1: "Complete Access: not supported".
-    complete_access: false,
-    esi: include_str!("../../../../esi/Mitsubishi_MR-J4-TM.xml"),
-    zero_speed_flag: Some(StatusFlag {
-        address: ObjectAddress::new(0x2D12, 0),
-        bit: 3,
-    }),
-    ratings: RATINGS,
+    bus: EtherCat {
+        key: "mr-j4-tm",
+        identity: IdentityMatch {
+            vendor_id: VENDOR_ID,
+            product_code: PRODUCT_CODE,
+        },
+        revision: REVISION,
+        pdo_limits: PDO_LIMITS,
+        default_mapping: DEFAULT_MAPPING,
+        cyclic_mapping: CYCLIC_MAPPING,
+        required_objects: REQUIRED_OBJECTS,
+        startup: STARTUP,
+        output_defaults: OUTPUT_DEFAULTS,
+        cycle_counter: Some(CYCLE_COUNTER),
+        sync: SYNC,
+        // §4.1: "Complete Access: not supported".
+        complete_access: false,
+        esi: include_str!("../../../../esi/Mitsubishi_MR-J4-TM.xml"),
+        zero_speed_flag: Some(StatusFlag {
+            address: ObjectAddress::new(0x2D12, 0),
+            bit: 3,
+        }),
+        ratings: RATINGS,
+    },
 };
 
 /// What the manual documents independently of the motor: the torque limits 0x60E0/0x60E1

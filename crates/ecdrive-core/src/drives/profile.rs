@@ -5,9 +5,8 @@
 //! faults), by the software slave (how the emulated drive answers), by the CLI (type inference,
 //! names) and by the tests. Quirks are fields here, not `if vendor == …` in the logic.
 
-use crate::cia402::DriveCaps;
 pub use crate::cia402::interpolated::{interpolation_cycle_ns, interpolation_standard_form};
-use crate::od::{ConstValue, ObjectAddress, ObjectDesc};
+use crate::od::{ConstValue, ObjectAddress};
 use crate::pdo::{Mapping, PdoLimits, RequiredObjects};
 
 /// Vendor ID and product code as 0x1018:01/02 and the SII report them. Any revision matches.
@@ -159,24 +158,21 @@ pub struct CycleCounter {
     pub echo: Option<ObjectAddress>,
 }
 
+pub use crate::cia402::Profile;
 pub use crate::cia402::units::Units;
 
-/// Everything ecdrive knows about one drive type. Profiles are `static`s; use them by
-/// reference.
+/// An EtherCAT drive's profile: the common part and [`EtherCat`] (see [`Profile`]).
+pub type DriveProfile = Profile<EtherCat>;
+
+/// What only an EtherCAT drive's profile has.
 #[derive(Debug, Clone)]
-pub struct DriveProfile {
-    /// Short name used on the command line and in messages (`"MR-J4-TM"`).
-    pub name: &'static str,
+pub struct EtherCat {
     /// The `--device` key (`"mr-j4-tm"`).
     pub key: &'static str,
-    /// Vendor name.
-    pub vendor: &'static str,
     /// Identity.
     pub identity: IdentityMatch,
     /// Revision reported by the emulated drive (and expected from real ones, informational).
     pub revision: u32,
-    /// CiA 402 behaviour: state skipping, quick-stop options, mode rules, alarm table.
-    pub caps: DriveCaps,
     /// PDO limits.
     pub pdo_limits: PdoLimits,
     /// Power-on mapping.
@@ -185,8 +181,6 @@ pub struct DriveProfile {
     pub cyclic_mapping: Mapping,
     /// Objects each mode needs mapped.
     pub required_objects: &'static [RequiredObjects],
-    /// The object dictionary as the manual lists it.
-    pub dictionary: &'static [ObjectDesc],
     /// SDOs written in PRE-OP for a safe start.
     pub startup: &'static [StartupSdo],
     /// Values mapped outputs must carry from the first cycle.
@@ -195,8 +189,6 @@ pub struct DriveProfile {
     pub cycle_counter: Option<CycleCounter>,
     /// Synchronisation.
     pub sync: SyncSpec,
-    /// Units.
-    pub units: Units,
     /// Whether SDO complete access works.
     pub complete_access: bool,
     /// The drive's ESI file (XML text), `include_str!`'d from `esi/`; empty for a profile
@@ -372,7 +364,7 @@ impl SyncSpec {
 impl DriveProfile {
     /// Whether a device with this vendor ID and product code is this drive type.
     pub const fn matches(&self, vendor_id: u32, product_code: u32) -> bool {
-        self.identity.matches(vendor_id, product_code)
+        self.bus.identity.matches(vendor_id, product_code)
     }
 
     /// A view over the dictionary (type inference, mapping checks).

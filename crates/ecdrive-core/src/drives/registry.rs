@@ -1,7 +1,9 @@
-//! The EtherCAT drive profiles ecdrive knows, looked up by identity or by name, and the report
-//! of a device none of them matches.
+//! The one registry of the drive profiles ecdrive knows, on both buses: the EtherCAT ones
+//! looked up by identity or by name (and the report of a device none of them matches), the
+//! CANopen ones by their identity objects.
 
-use super::{DriveProfile, bdhde, generic, mr_j4_tm};
+use super::{DriveProfile, asda_a2, bdhde, blv_r, generic, lexium_mdrive, mr_j4_tm};
+use crate::can::profile::CanDriveProfile;
 
 /// Every known EtherCAT profile, in the order `ecdrive` lists them (the generic one is not
 /// among them).
@@ -78,4 +80,23 @@ pub fn identify(
             .collect::<Vec<_>>()
             .join(", "),
     })
+}
+
+/// Every known CANopen profile, in the order the tools list them. The Lexium open- and
+/// closed-loop models share their identity: only the open-loop profile is here (configure a
+/// closed-loop drive with [`lexium_mdrive::PROFILE_CLOSED_LOOP`] explicitly).
+pub static CANOPEN_PROFILES: &[&CanDriveProfile] =
+    &[&blv_r::PROFILE, &asda_a2::PROFILE, &lexium_mdrive::PROFILE];
+
+/// Which CANopen profile a node with these identity values matches (device type 1000h, vendor
+/// 1018h:01, product 1018h:02).
+pub fn canopen_by_identity(
+    device_type: u32,
+    vendor_id: u32,
+    product: Option<u32>,
+) -> Option<&'static CanDriveProfile> {
+    CANOPEN_PROFILES
+        .iter()
+        .copied()
+        .find(|p| p.identity.matches(device_type, vendor_id, product))
 }

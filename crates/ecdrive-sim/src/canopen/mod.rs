@@ -13,6 +13,7 @@
 
 pub mod motion;
 pub mod node;
+pub mod quirks;
 
 pub use motion::World;
 pub use node::{EmuError, EmulatedNode, NodeStats};

@@ -8,6 +8,7 @@
 //! Every number here that is not from a manual is in [`World`] or the constants below, labelled
 //! \[REC\].
 
+use super::quirks::EmulationQuirks;
 use crate::can::profile::{CanDriveProfile, HomingSupport, Units};
 use crate::cia402::{ControlWord, OperationMode, State, StatusWord};
 
@@ -229,6 +230,7 @@ impl Motion {
         cw: ControlWord,
         p: &Params,
         profile: &CanDriveProfile,
+        quirks: &EmulationQuirks,
         quick_stop_immediate: bool,
     ) -> (StatusWord, bool) {
         let enabled = state == State::OperationEnabled;
@@ -259,7 +261,7 @@ impl Motion {
         let mut bits = StatusWord::empty();
         match state {
             State::OperationEnabled => {
-                bits = self.run_mode(now_us, dt, mode, cw, p, profile);
+                bits = self.run_mode(now_us, dt, mode, cw, p, profile, quirks);
             }
             State::QuickStopActive | State::FaultReactionActive => {
                 self.torque = 0.0;
@@ -291,6 +293,7 @@ impl Motion {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn run_mode(
         &mut self,
         now_us: u64,
@@ -299,6 +302,7 @@ impl Motion {
         cw: ControlWord,
         p: &Params,
         profile: &CanDriveProfile,
+        quirks: &EmulationQuirks,
     ) -> StatusWord {
         let halt = cw.contains(ControlWord::HALT);
         let mut bits = StatusWord::empty();
@@ -330,7 +334,7 @@ impl Motion {
                     StatusWord::TARGET_REACHED,
                     (self.vel - target).abs() <= p.velocity_window,
                 );
-                if profile.quirks.pv_zero_speed_bit {
+                if quirks.pv_zero_speed_bit {
                     bits.set(
                         StatusWord::SPEED_ZERO,
                         self.vel.abs() <= p.zero_speed_threshold,
@@ -359,7 +363,7 @@ impl Motion {
             }
             OperationMode::InterpolatedPosition => {
                 let enabled =
-                    !profile.quirks.ip_needs_enable_bit || cw.contains(ControlWord::NEW_SET_POINT);
+                    !quirks.ip_needs_enable_bit || cw.contains(ControlWord::NEW_SET_POINT);
                 let sync_ok = self
                     .ip_sync_us
                     .is_some_and(|t| now_us.saturating_sub(t) <= 2 * self.ip_period_us.max(1));

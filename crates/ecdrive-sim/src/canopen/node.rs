@@ -95,6 +95,8 @@ pub const OUTBOX_FRAMES: usize = 1024;
 pub struct EmulatedNode {
     id: u8,
     profile: &'static CanDriveProfile,
+    /// What the node does beyond its dictionary (the emulator's own data).
+    quirks: super::quirks::EmulationQuirks,
     od: ValueStore,
     stored: ValueStore,
     restore_pending: [bool; 5],
@@ -184,6 +186,7 @@ impl EmulatedNode {
         Ok(Self {
             id,
             profile,
+            quirks: super::quirks::for_vendor(profile.identity.vendor_id),
             od,
             stored,
             restore_pending: [false; 5],
@@ -374,9 +377,7 @@ impl EmulatedNode {
             NmtCommand::ResetNode | NmtCommand::ResetCommunication if energised => {
                 Some(self.profile.nmt_reset_while_enabled)
             }
-            NmtCommand::EnterPreOperational
-                if energised && self.profile.quirks.operational_required =>
-            {
+            NmtCommand::EnterPreOperational if energised && self.quirks.operational_required => {
                 Some(EnabledNmtReaction::Unspecified)
             }
             _ => None,
@@ -511,7 +512,7 @@ impl EmulatedNode {
         if too_soon {
             // The drive's SDO receive buffer overruns: the request is lost (ASDA-A2 AL111).
             self.stats.sdo_overruns += 1;
-            if let Some(n) = self.profile.quirks.sdo_overrun_alarm {
+            if let Some(n) = self.quirks.sdo_overrun_alarm {
                 self.inject_alarm(n);
             }
             return;
@@ -538,14 +539,14 @@ impl EmulatedNode {
         }
         if too_soon {
             self.stats.rpdos_rejected += 1;
-            if let Some(n) = self.profile.quirks.rpdo_overrun_alarm {
+            if let Some(n) = self.quirks.rpdo_overrun_alarm {
                 self.inject_alarm(n);
             }
             return;
         }
         if data.len() < p.len {
             self.stats.rpdos_rejected += 1;
-            if let Some(n) = self.profile.quirks.pdo_length_alarm {
+            if let Some(n) = self.quirks.pdo_length_alarm {
                 self.inject_alarm(n);
             }
             return;
@@ -811,7 +812,7 @@ impl EmulatedNode {
     }
 
     fn bit3_mode(&self) -> bool {
-        self.profile.quirks.bit3_enable.is_some_and(|b| {
+        self.quirks.bit3_enable.is_some_and(|b| {
             self.od
                 .int(b.addr)
                 .is_some_and(|v| (v as u32) & b.mask == b.value)
@@ -1032,9 +1033,17 @@ impl EmulatedNode {
         let immediate = (matches!(qs.ramp, StopRamp::Immediate) && after == State::QuickStopActive)
             || (after == State::FaultReactionActive
                 && self.od.int(ObjectAddress::new(0x605E, 0)) == Some(0));
-        let (bits, _stopped) =
-            self.motion
-                .tick(now, dt, after, mode, cw, &p, self.profile, immediate);
+        let (bits, _stopped) = self.motion.tick(
+            now,
+            dt,
+            after,
+            mode,
+            cw,
+            &p,
+            self.profile,
+            &self.quirks,
+            immediate,
+        );
 
         let sw = self.device.statusword() | bits;
         let u = &self.profile.units;
@@ -1121,7 +1130,7 @@ impl EmulatedNode {
     }
 
     fn comm_lost(&mut self) {
-        match self.profile.quirks.guarding_alarm {
+        match self.quirks.guarding_alarm {
             Some(n) => {
                 self.inject_alarm(n);
             }
@@ -1181,12 +1190,7 @@ impl EmulatedNode {
             0x605A => self.refresh_device(),
             _ => {}
         }
-        if self
-            .profile
-            .quirks
-            .bit3_enable
-            .is_some_and(|b| b.addr == addr)
-        {
+        if self.quirks.bit3_enable.is_some_and(|b| b.addr == addr) {
             self.refresh_device();
         }
     }
