@@ -29,6 +29,18 @@
 pub use ecdrive_core::{can, cia402, drives, ec, esi, link, od, pdo, rt};
 pub use ecdrive_sim as sim;
 
+// The façade: what an application driving EtherCAT drives uses, from one path (the README's
+// library example imports nothing else). The CANopen master's entry points are at
+// `ecdrive::canopen::{Master, MasterConfig, DriveSetup, CanDrive}`.
+pub use cia402::{OperationMode, State};
+pub use drives::DriveProfile;
+pub use ecdrive_ethercat::{
+    Axes, AxisTelemetry, Command, CycleTelemetry, CyclicMode, DriveRef, DriveSetup, ErrorKind,
+    Event, EventKind, HistoryEntry, HistoryKind, Master, MasterConfig, MasterError, Selector,
+    SessionReport, StartFailure, Step, StopKind, StopReason, Target, Telemetry,
+};
+pub use link::RawSocket;
+
 pub mod canopen;
 pub mod config;
 pub mod harness;

@@ -22,5 +22,9 @@ pub mod unix_bus;
 
 pub use ecdrive_core::can::{emcy, frame, nmt, profile, sdo, transport};
 
+pub use drive::CanDrive;
+pub use error::{CanError, CanErrorKind, NodeRef};
 pub use frame::{CanFrame, FrameError, NodeId, Service};
+pub use master::{DriveSetup, Master, MasterConfig, MasterEvent, Supervision};
+pub use pdo_plan::PdoPlan;
 pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};

@@ -3,6 +3,11 @@
 //! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic
 //! loop, supervision. Built on `ecdrive-core`; the software slave is only a dev-dependency of
 //! its tests, never a normal one.
+//!
+//! An application needs only the types at the crate root: [`Master`] with its
+//! [`MasterConfig`] (a [`DriveSetup`] per drive, found by a [`Selector`], with a program of
+//! [`Step`]s), [`Command`]s in, [`Telemetry`] and the history out, a [`SessionReport`] at the
+//! end. The modules below are the master's parts, public for the tools built on them.
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
@@ -21,3 +26,14 @@ pub mod session;
 pub mod setpoint;
 pub mod startup;
 pub mod telemetry;
+
+pub use cycle::{CycleEnd, CycleReport, CycleSettings};
+pub use error::{DriveRef, ErrorKind, MasterError};
+pub use history::{HistoryEntry, HistoryKind};
+pub use program::{CyclicMode, Step, Target};
+pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
+pub use startup::{DriveSetup, Selector, StartupConfig};
+pub use telemetry::{
+    AxisTelemetry, Axes, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason,
+    Telemetry,
+};
