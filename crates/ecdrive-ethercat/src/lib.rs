@@ -34,6 +34,5 @@ pub use program::{CyclicMode, Step, Target};
 pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
 pub use startup::{DriveSetup, Selector, StartupConfig};
 pub use telemetry::{
-    AxisTelemetry, Axes, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason,
-    Telemetry,
+    Axes, AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
 };
