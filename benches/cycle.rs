@@ -14,8 +14,8 @@
 //! Run with `cargo bench --bench cycle`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ecdrive::harness::cpu::ThreadCpuClock;
-use ecdrive::harness::emulated;
+use ecdrive::app::harness::cpu::ThreadCpuClock;
+use ecdrive::app::harness::emulated;
 use ecdrive::master::cycle::CycleHooks;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};

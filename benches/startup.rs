@@ -6,7 +6,7 @@
 //! Run with `cargo bench --bench startup`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ecdrive::harness::emulated;
+use ecdrive::app::harness::emulated;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::StopKind;

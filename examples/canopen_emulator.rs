@@ -8,7 +8,7 @@
 //! Starts a hub at the path (replacing a stale socket), serves the BLV-R (node 1), the ASDA-A2
 //! (7Fh) and the Lexium MDrive (41h) in real time, and ends after `seconds` (default 600).
 
-use ecdrive::canopen::tools::DEMO_NODES;
+use ecdrive::app::canopen::tools::DEMO_NODES;
 use ecdrive::canopen::unix_bus::{UnixBusHub, UnixBusPort};
 use ecdrive::sim::canopen::{self as emu, EmulatedNode};
 use std::path::PathBuf;

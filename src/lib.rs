@@ -17,12 +17,11 @@
 //! | [`drives`] | one file per drive: identity, defaults, quirks and alarm tables, as data |
 //! | [`link`] | Ethernet frame I/O: raw `AF_PACKET` sockets and the in-process link |
 //! | [`sim`] | the software EtherCAT slave: ESC registers, SII, mailbox/CoE, DC and emulated drives |
-//! | [`master`] | the ethercrab integration: start-up, PDO and DC configuration, the cyclic loop |
+//! | [`master`] | the EtherCAT master (`ecdrive-ethercat`): start-up, PDO and DC configuration, the cyclic loop |
 //! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
-//! | [`harness`] | the cycle-jitter harness behind `ecdrive jitter`: ecdrive's cycle against a bare sleep loop and plain ethercrab |
-//! | [`can`] | CANopen (CiA 301) wire vocabulary and protocols shared by master and emulated nodes: frames, NMT, SDO, EMCY, transports, the CANopen drive-profile type |
-//! | [`canopen`] | the CANopen master: the same CiA 402 layer over CANopen |
-//! | [`config`] | the `ecdrive run` configuration file (TOML) → master configuration |
+//! | [`can`] | CANopen (CiA 301) wire vocabulary and protocols shared by master and emulated nodes: frames, NMT, SDO, EMCY, transports, the CANopen part of the drive profile |
+//! | [`canopen`] | the CANopen master (`ecdrive-canopen`): the same CiA 402 layer over CANopen |
+//! | [`app`] | the applications: demo, soak, commissioning tools, the `ecdrive run` configuration file, the jitter harness |
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
@@ -41,9 +40,8 @@ pub use ecdrive_ethercat::{
 };
 pub use link::RawSocket;
 
+pub mod app;
 pub mod canopen;
-pub mod config;
-pub mod harness;
 pub mod master;
 
 /// The README's Rust examples, compiled by `cargo test --doc`.

@@ -5,10 +5,10 @@
 //! `harness = false` (see Cargo.toml): `main` decides whether it is the parent or the child.
 //! Timeouts are generous failure guards, not timing assertions.
 
-use ecdrive::canopen::demo;
+use ecdrive::app::canopen::demo;
+use ecdrive::app::canopen::tools;
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
 use ecdrive::canopen::nmt::NmtState;
-use ecdrive::canopen::tools;
 use ecdrive::canopen::unix_bus::{UnixBusHub, UnixBusPort};
 use ecdrive::cia402::SetPoint;
 use ecdrive::drives::blv_r;

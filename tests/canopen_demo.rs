@@ -1,4 +1,4 @@
-use ecdrive::canopen::demo;
+use ecdrive::app::canopen::demo;
 
 #[test]
 fn demo_runs_every_drive_through_every_mode() {

@@ -6,11 +6,11 @@
 mod canopen_util;
 
 use canopen_util::{T, bus, events, node_int, setup};
-use ecdrive::canopen::demo;
+use ecdrive::app::canopen::demo;
+use ecdrive::app::canopen::tools;
 use ecdrive::canopen::master::{Master, MasterEvent};
 use ecdrive::canopen::nmt::NmtState;
 use ecdrive::canopen::profile::CanDriveProfile;
-use ecdrive::canopen::tools;
 use ecdrive::cia402::{OperationMode, SetPoint, State};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::od::ObjectAddress;

@@ -6,8 +6,8 @@
 mod canopen_util;
 
 use canopen_util::{T, bus, events, node_int, ready, setup, write};
+use ecdrive::app::canopen::demo;
 use ecdrive::canopen::CanTransport;
-use ecdrive::canopen::demo;
 use ecdrive::canopen::error::CanErrorKind;
 use ecdrive::canopen::master::{Master, MasterEvent, Supervision};
 use ecdrive::canopen::nmt::{NmtCommand, NmtState};

@@ -273,8 +273,13 @@ fn tpdo_transmission_types() {
     m.enable(3, T).unwrap();
     let before = m.transport().node(3).unwrap().stats().tpdos_sent;
     let t0 = m.now_us();
-    ecdrive::canopen::demo::move_pp(&mut m, 3, &[ecdrive::cia402::SetPoint::absolute(36_000)], T)
-        .unwrap();
+    ecdrive::app::canopen::demo::move_pp(
+        &mut m,
+        3,
+        &[ecdrive::cia402::SetPoint::absolute(36_000)],
+        T,
+    )
+    .unwrap();
     let dt_ms = (m.now_us() - t0) / 1000;
     let sent = m.transport().node(3).unwrap().stats().tpdos_sent - before;
     assert!(sent > 0);

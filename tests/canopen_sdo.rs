@@ -6,10 +6,10 @@
 mod canopen_util;
 
 use canopen_util::{bus, events, node_int};
+use ecdrive::app::canopen::tools::{self, BusSpec};
 use ecdrive::canopen::error::CanErrorKind;
 use ecdrive::canopen::master::MasterEvent;
 use ecdrive::canopen::sdo::SdoError;
-use ecdrive::canopen::tools::{self, BusSpec};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::od::{DataType, ObjectAddress, SdoAbortCode, Value};
 

@@ -1,10 +1,10 @@
 //! The `ecdrive run` configuration file: what a good file becomes, and the line, column, key and
 //! reason of every kind of bad file.
 
-use ecdrive::config::{ConfigError, parse, parse_duration};
+use ecdrive::app::config::{ConfigError, parse, parse_duration};
+use ecdrive::app::ethercat::tools::Target;
 use ecdrive::master::program::{CyclicMode, Step, Target as MoveTarget};
 use ecdrive::master::startup::Selector;
-use ecdrive::master::tools::Target;
 use std::time::Duration;
 
 fn err(text: &str) -> ConfigError {
@@ -402,7 +402,8 @@ fn mappings_and_start_up_values_are_checked() {
 
 #[test]
 fn a_file_that_cannot_be_read_is_named() {
-    let e = ecdrive::config::load(std::path::Path::new("/nonexistent/ecdrive.toml")).unwrap_err();
+    let e =
+        ecdrive::app::config::load(std::path::Path::new("/nonexistent/ecdrive.toml")).unwrap_err();
     assert_eq!(e.line, 0);
     assert!(
         e.to_string()

@@ -6,8 +6,8 @@
 mod support {
     pub mod cli;
 }
-use ecdrive::master::tools::Target;
-use ecdrive::master::tools::run::{Outcome, RunOptions, run};
+use ecdrive::app::ethercat::tools::Target;
+use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
 use std::sync::atomic::AtomicBool;
 use support::cli::{SimOnVeth, ecdrive};
 
@@ -31,7 +31,7 @@ fn every_sim_example_runs_to_completion() {
     let _one = ONE_RUN_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let mut ran = 0;
     for path in examples() {
-        let mut cfg = ecdrive::config::load(&path).unwrap_or_else(|e| panic!("{e}"));
+        let mut cfg = ecdrive::app::config::load(&path).unwrap_or_else(|e| panic!("{e}"));
         if !matches!(cfg.target, Target::Sim(_)) {
             continue;
         }
@@ -163,7 +163,7 @@ fn mr_j4(extra: &str) -> String {
 #[test]
 fn profile_checks_name_the_line_and_the_limit() {
     let check = |text: &str, line: usize, key: &str, has: &str| {
-        let e = ecdrive::config::parse(text, "bad.toml").unwrap_err();
+        let e = ecdrive::app::config::parse(text, "bad.toml").unwrap_err();
         let s = e.to_string();
         assert_eq!(e.line, line, "{s}");
         assert_eq!(e.key.as_deref(), Some(key), "{s}");
@@ -252,7 +252,7 @@ fn readme_example() -> String {
 #[test]
 fn the_readme_configuration_example_is_valid() {
     let block = readme_example();
-    let cfg = ecdrive::config::parse(&block, "README.md").unwrap_or_else(|e| panic!("{e}"));
+    let cfg = ecdrive::app::config::parse(&block, "README.md").unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(cfg.drives.len(), 1);
     let d = &cfg.master.startup.drives[0];
     assert!(d.mapping.is_some());
@@ -292,7 +292,7 @@ fn check_readme_run(j: &serde_json::Value) {
 #[test]
 fn the_readme_configuration_example_runs_in_process() {
     let _one = ONE_RUN_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let mut cfg = ecdrive::config::parse(&readme_example(), "README.md").unwrap();
+    let mut cfg = ecdrive::app::config::parse(&readme_example(), "README.md").unwrap();
     cfg.sim.loss_detection = false;
     let stop = AtomicBool::new(false);
     let opts = RunOptions {

@@ -4,7 +4,7 @@
 mod support {
     pub mod cli;
 }
-use ecdrive::master::tools::run::{Outcome, RunOptions, run};
+use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
 use std::sync::atomic::AtomicBool;
 use support::cli::ecdrive;
 
@@ -29,7 +29,7 @@ tx = [{ pdo = 0x1A00, entries = ["0x6041:00", "0x6064:00"] }]
 
 #[test]
 fn the_generic_device_runs_a_program_and_reports_it() {
-    let cfg = ecdrive::config::parse(GENERIC, "generic.toml").unwrap();
+    let cfg = ecdrive::app::config::parse(GENERIC, "generic.toml").unwrap();
     let stop = AtomicBool::new(false);
     let mut phases = Vec::new();
     let r = run(&cfg, &RunOptions::default(), &stop, &mut |p| {

@@ -2,9 +2,9 @@
 //! and the ESI skeleton against EEPROM images the software slave builds from the drives' ESI
 //! files, and the commands in-process (`sim:` targets, no root).
 
+use ecdrive::app::ethercat::tools::sii::{SiiInfo, esi_skeleton};
+use ecdrive::app::ethercat::tools::{self, Target};
 use ecdrive::esi::EsiFile;
-use ecdrive::master::tools::sii::{SiiInfo, esi_skeleton};
-use ecdrive::master::tools::{self, Target};
 use ecdrive::pdo::Direction;
 use ecdrive::sim::sii;
 

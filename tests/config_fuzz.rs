@@ -131,7 +131,7 @@ proptest! {
 #[test]
 fn the_examples_parse() {
     for (i, text) in EXAMPLES.iter().enumerate() {
-        if let Err(e) = ecdrive::config::parse(text, "example.toml") {
+        if let Err(e) = ecdrive::app::config::parse(text, "example.toml") {
             panic!("example {i}: {e}");
         }
     }
@@ -142,12 +142,12 @@ fn the_examples_parse() {
 /// what is wrong, where.
 #[test]
 fn syntax_errors_are_one_line_with_a_reason() {
-    let e = ecdrive::config::parse("interface = [\n", "x.toml").unwrap_err();
+    let e = ecdrive::app::config::parse("interface = [\n", "x.toml").unwrap_err();
     assert_eq!(
         e.to_string(),
         "x.toml line 2, column 1: invalid array; expected `]`"
     );
-    let e = ecdrive::config::parse("interface =", "x.toml").unwrap_err();
+    let e = ecdrive::app::config::parse("interface =", "x.toml").unwrap_err();
     assert_eq!(
         e.to_string(),
         "x.toml line 1, column 12: invalid TOML syntax here"

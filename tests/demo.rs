@@ -1,7 +1,7 @@
 //! The demo's library path: both emulated drives reach OP with DC, run csp, csv and cst, and
 //! the report carries what the README promises (recoveries, if the machine stalled, included).
 
-use ecdrive::master::demo::{DemoOptions, run};
+use ecdrive::app::ethercat::demo::{DemoOptions, run};
 
 #[test]
 fn demo_runs_both_drives_through_csp_csv_cst() {

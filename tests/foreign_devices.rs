@@ -15,10 +15,10 @@
 mod support {
     pub mod cli;
 }
+use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunReport, run};
 use ecdrive::link::{FrameLink, LinkError};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
-use ecdrive::master::tools::run::{Outcome, RunOptions, RunReport, run};
 use ecdrive::sim::EscConfig;
 use ecdrive::sim::run::build_segment;
 use ecdrive::sim::transport::SegmentLink;
@@ -60,7 +60,7 @@ fn move_at(position: u16) -> String {
 }
 
 fn run_text(text: &str) -> RunReport {
-    let cfg = ecdrive::config::parse(text, "quirks.toml").unwrap_or_else(|e| panic!("{e}"));
+    let cfg = ecdrive::app::config::parse(text, "quirks.toml").unwrap_or_else(|e| panic!("{e}"));
     let stop = AtomicBool::new(false);
     run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -560,8 +560,8 @@ fn tempdir(what: &str) -> std::path::PathBuf {
 /// table prints it) gets 0x60C2:01 in its 250 µs unit instead, and reaches OP either way.
 #[test]
 fn the_bdhde_interpolation_period_in_either_form() {
+    use ecdrive::app::ethercat::tools::{self, StatesOptions, Target};
     use ecdrive::ec::AlState;
-    use ecdrive::master::tools::{self, StatesOptions, Target};
     use ecdrive::od::{DataType, ObjectAddress};
     for (device, value, index) in [
         ("bdhde", "1", "-3"),

@@ -82,7 +82,7 @@ fn the_corpus_reaches_the_success_paths() {
     let configs_ok = read("config")
         .iter()
         .filter_map(|d| std::str::from_utf8(d).ok())
-        .filter(|t| ecdrive::config::parse(t, "corpus.toml").is_ok())
+        .filter(|t| ecdrive::app::config::parse(t, "corpus.toml").is_ok())
         .count();
     assert!(
         configs_ok >= 3,

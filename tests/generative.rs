@@ -413,7 +413,7 @@ fn check(
 fn run_case(c: &Case) -> Result<(), TestCaseError> {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let text = toml(c);
-    let mut cfg = ecdrive::config::parse(&text, "generated.toml")
+    let mut cfg = ecdrive::app::config::parse(&text, "generated.toml")
         .map_err(|e| TestCaseError::fail(format!("the file was refused: {e}\n{text}")))?;
     // Lost frames hold the set-points; the subject is configuration and commands.
     cfg.master.cycle.lost_before_stop = 200;

@@ -2,7 +2,7 @@
 //! JSON promises, for each run, and an SVG that parses. No timing is asserted: only that the
 //! figures exist and are consistent with each other.
 
-use ecdrive::harness::{self, JitterConfig, JitterReport, Transport};
+use ecdrive::app::harness::{self, JitterConfig, JitterReport, Transport};
 use serde_json::Value;
 use std::time::Duration;
 

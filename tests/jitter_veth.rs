@@ -2,7 +2,7 @@
 //! inside a network namespace, every run on the host end. Skipped loudly without root, fails
 //! without root under `ECDRIVE_CI`. No timing is asserted.
 
-use ecdrive::harness::{self, JitterConfig, Transport};
+use ecdrive::app::harness::{self, JitterConfig, Transport};
 use ecdrive::link::netns::require_root;
 use std::time::Duration;
 

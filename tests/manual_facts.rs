@@ -20,12 +20,12 @@
 //! Entries the manual lists and a side does not have are printed as coverage gaps, not failures:
 //! a failure is a contradiction of the manual.
 
+use ecdrive::app::canopen::tools as cantools;
+use ecdrive::app::ethercat::tools::{self, Target};
 use ecdrive::canopen::master::{Master, MasterConfig};
 use ecdrive::canopen::profile::CanDriveProfile;
-use ecdrive::canopen::tools as cantools;
 use ecdrive::cia402::{DriveCaps, ErrorEntry};
 use ecdrive::drives::{self, CycleTimes, DriveProfile};
-use ecdrive::master::tools::{self, Target};
 use ecdrive::od::{ConstValue, DataType, EntryAccess, ObjectAddress, ObjectDesc};
 use ecdrive::pdo::PdoLimits;
 use serde::Deserialize;

@@ -4,10 +4,10 @@
 //! runs the programs again to their end — counting one recovery and one completed program, and
 //! nothing unhandled.
 
+use ecdrive::app::ethercat::demo;
+use ecdrive::app::ethercat::recovery::{self, Operator};
 use ecdrive::cia402::State;
 use ecdrive::drives::{DriveProfile, bdhde, mr_j4_tm};
-use ecdrive::master::demo;
-use ecdrive::master::recovery::{self, Operator};
 use ecdrive::master::session::{HistoryKind, Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::StopKind;

@@ -3,7 +3,7 @@
 //! with no unhandled error, and its counts agree with what the software slave dropped. Counted
 //! in cycles, never in seconds: a slow machine takes longer, it does not fail.
 
-use ecdrive::master::soak::{self, SoakOptions};
+use ecdrive::app::ethercat::soak::{self, SoakOptions};
 use std::time::Duration;
 
 #[test]

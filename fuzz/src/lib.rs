@@ -334,7 +334,7 @@ pub fn config(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    match ecdrive::config::parse(text, "fuzz.toml") {
+    match ecdrive::app::config::parse(text, "fuzz.toml") {
         Ok(c) => {
             let _ = format!("{c:?}");
         }

@@ -14,7 +14,7 @@
 use ecdrive::ec::mailbox::{SdoInfoRequest, SdoRequest, list_type, value_info};
 use ecdrive::link::{FrameLink, LinkError};
 use ecdrive::master::error::DriveRef;
-use ecdrive::master::tools;
+use ecdrive::app::ethercat::tools;
 use ecdrive::od::ObjectAddress;
 use ecdrive::sim::devices::{EchoMailbox, GenericCoeDevice, IoDevice};
 use ecdrive::sim::transport::SegmentLink;

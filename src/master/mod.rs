@@ -1,10 +1,4 @@
-//! The EtherCAT master ([`ecdrive_ethercat`], re-exported here under the same paths) and the
-//! applications built on it: the demo, the soak run, recovery and the tools behind the CLI
-//! commands.
+//! The EtherCAT master (the crate `ecdrive-ethercat`, re-exported): start-up, the cycle,
+//! supervision. The applications built on it (demo, soak, tools) are in the application layer, `app`.
 
 pub use ecdrive_ethercat::*;
-
-pub mod demo;
-pub mod recovery;
-pub mod soak;
-pub mod tools;

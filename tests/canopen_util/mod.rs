@@ -2,7 +2,7 @@
 //! drives, configured and enabled through the public API.
 #![allow(dead_code)]
 
-use ecdrive::canopen::demo;
+use ecdrive::app::canopen::demo;
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
 use ecdrive::canopen::profile::CanDriveProfile;
 use ecdrive::od::{ObjectAddress, Value};

@@ -1,10 +1,10 @@
 //! `slaves`, `upload` and `download` on a CANopen bus (`--can IF`): the library side is
-//! `ecdrive::canopen::tools`.
+//! `ecdrive::app::canopen::tools`.
 
 use crate::{exit, fail_with, print_json};
+use ecdrive::app::canopen::tools::{self, BusSpec};
 use ecdrive::canopen::error::{CanError, CanErrorKind};
 use ecdrive::canopen::master::{Master, MasterConfig};
-use ecdrive::canopen::tools::{self, BusSpec};
 use ecdrive::canopen::transport::CanTransport;
 use ecdrive::od::{DataType, ObjectAddress, Value};
 use serde_json::json;
@@ -203,7 +203,7 @@ pub fn download(
 /// `ecdrive sim --can BUS [--node NAME[@ID]…]`: serve emulated CANopen drives until a stop
 /// signal.
 pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
-    use ecdrive::canopen::tools::{DEMO_NODES, EMULATED_NODES, NodeSpec};
+    use ecdrive::app::canopen::tools::{DEMO_NODES, EMULATED_NODES, NodeSpec};
     let spec: BusSpec = match bus.parse() {
         Ok(s) => s,
         Err(e) => return fail_with("sim", &format!("--can {bus}: {e}"), exit::USAGE),

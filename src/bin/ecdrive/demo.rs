@@ -1,7 +1,7 @@
 //! `ecdrive demo`: argument parsing and output of the demo (the work is `master::demo`).
 
 use clap::Args;
-use ecdrive::master::demo::{self, DemoOptions, DemoReport};
+use ecdrive::app::ethercat::demo::{self, DemoOptions, DemoReport};
 use ecdrive::rt::{RtSettings, Summary};
 use std::process::ExitCode;
 use std::time::Duration;
@@ -129,7 +129,9 @@ fn print_text(r: &DemoReport) {
 /// Run `ecdrive demo`.
 pub fn run(args: DemoArgs) -> ExitCode {
     if args.canopen {
-        return match ecdrive::canopen::demo::run(&ecdrive::canopen::demo::DemoOptions::default()) {
+        return match ecdrive::app::canopen::demo::run(
+            &ecdrive::app::canopen::demo::DemoOptions::default(),
+        ) {
             Ok(s) if args.json => {
                 let j = serde_json::json!({
                     "scan": s.scan,

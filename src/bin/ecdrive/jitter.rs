@@ -1,8 +1,8 @@
-//! `ecdrive jitter`: arguments and output. The measurement is `ecdrive::harness`.
+//! `ecdrive jitter`: arguments and output. The measurement is `ecdrive::app::harness`.
 
 use super::exit;
 use clap::Args;
-use ecdrive::harness::{self, HarnessError, JitterConfig, Transport};
+use ecdrive::app::harness::{self, HarnessError, JitterConfig, Transport};
 use ecdrive::rt::RtSettings;
 use std::path::PathBuf;
 use std::process::ExitCode;

@@ -1,5 +1,5 @@
 //! The `ecdrive` command line. Argument parsing and output only: the work is in the library
-//! (`ecdrive::master::tools`, `ecdrive::config`, `ecdrive::sim::run`).
+//! (`ecdrive::app::ethercat::tools`, `ecdrive::app::config`, `ecdrive::sim::run`).
 
 mod can;
 mod demo;
@@ -10,9 +10,9 @@ mod sim;
 mod soak;
 
 use clap::{Args, Parser, Subcommand};
+use ecdrive::app::ethercat::tools::{self, Target};
 use ecdrive::ec::AlState;
 use ecdrive::master::error::{ErrorKind, MasterError};
-use ecdrive::master::tools::{self, Target};
 use ecdrive::od::{DataType, ObjectAddress};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -463,7 +463,7 @@ fn parse_u16(s: &str) -> Result<u16, String> {
 }
 
 fn parse_duration(s: &str) -> Result<Duration, String> {
-    ecdrive::config::parse_duration(s)
+    ecdrive::app::config::parse_duration(s)
 }
 
 /// The exit code for a library error.

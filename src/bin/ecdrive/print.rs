@@ -1,9 +1,9 @@
 //! Text output of the commands: tables and listings in the style of the IgH `ethercat` tool.
 
-use ecdrive::master::tools::esi::{EsiCheck, EsiSummary};
-use ecdrive::master::tools::run::{RunProgress, RunReport};
-use ecdrive::master::tools::sii::{SiiDump, SiiInfo};
-use ecdrive::master::tools::{
+use ecdrive::app::ethercat::tools::esi::{EsiCheck, EsiSummary};
+use ecdrive::app::ethercat::tools::run::{RunProgress, RunReport};
+use ecdrive::app::ethercat::tools::sii::{SiiDump, SiiInfo};
+use ecdrive::app::ethercat::tools::{
     OdListing, PdoReport, RegisterData, SdoValue, SlaveReport, StateChange,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -95,7 +95,8 @@ fn slave_verbose(s: &SlaveReport) {
         println!("Description: {d}");
     }
     println!("Alias: {}", s.alias);
-    let state = |al: &ecdrive::master::tools::AlStatusReport| match (&al.code, &al.code_text) {
+    let state = |al: &ecdrive::app::ethercat::tools::AlStatusReport| match (&al.code, &al.code_text)
+    {
         (Some(c), Some(t)) => format!("{} (AL status code 0x{c:04X}: {t})", al.state),
         _ => al.state.clone(),
     };
@@ -188,9 +189,9 @@ pub fn downloaded(v: &SdoValue) {
             .unwrap_or_default(),
         v.data_type,
         match v.type_source {
-            ecdrive::master::tools::TypeSource::Explicit => "--type",
-            ecdrive::master::tools::TypeSource::Profile => "profile",
-            ecdrive::master::tools::TypeSource::SdoInfo => "SDO information",
+            ecdrive::app::ethercat::tools::TypeSource::Explicit => "--type",
+            ecdrive::app::ethercat::tools::TypeSource::Profile => "profile",
+            ecdrive::app::ethercat::tools::TypeSource::SdoInfo => "SDO information",
         }
     );
 }
@@ -233,7 +234,7 @@ pub fn sdos(listing: &OdListing) {
     }
 }
 
-pub fn reset(r: &ecdrive::master::tools::reset::ResetReport) {
+pub fn reset(r: &ecdrive::app::ethercat::tools::reset::ResetReport) {
     for d in &r.drives {
         match (&d.fault, d.cleared) {
             (Some(f), Some(true)) => println!(
@@ -282,7 +283,7 @@ pub fn pdos(r: &PdoReport) {
             }
         }
     }
-    if r.source == ecdrive::master::tools::PdoSource::Sii {
+    if r.source == ecdrive::app::ethercat::tools::PdoSource::Sii {
         println!("(from the SII: the device has no CoE)");
     }
 }

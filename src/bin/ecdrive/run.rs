@@ -1,7 +1,7 @@
 //! `ecdrive run -c FILE`: a cyclic run from a configuration file.
 
 use crate::{exit, fail, fail_with, print, print_json};
-use ecdrive::master::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
+use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -13,7 +13,7 @@ pub fn run(
     check: bool,
     json: bool,
 ) -> ExitCode {
-    let mut cfg = match ecdrive::config::load(path) {
+    let mut cfg = match ecdrive::app::config::load(path) {
         Ok(c) => c,
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
@@ -28,7 +28,7 @@ pub fn run(
             #[derive(serde::Serialize)]
             struct Checked<'a> {
                 config: &'a str,
-                target: &'a ecdrive::master::tools::Target,
+                target: &'a ecdrive::app::ethercat::tools::Target,
                 cycle_ns: u64,
                 drives: usize,
                 valid: bool,

@@ -182,7 +182,7 @@ fn position(s: &str) -> Result<u16, String> {
 }
 
 fn time(s: &str) -> Result<Duration, String> {
-    ecdrive::config::parse_duration(s)
+    ecdrive::app::config::parse_duration(s)
 }
 
 /// A probability: `1%`, `0.5 %` or `0.01`; 0 to 1.
@@ -446,7 +446,7 @@ pub fn sim(
     json: bool,
 ) -> ExitCode {
     if list_devices {
-        use ecdrive::canopen::tools::EMULATED_NODES;
+        use ecdrive::app::canopen::tools::EMULATED_NODES;
         let names = ecdrive::sim::devices::device_names();
         use ecdrive::sim::quirks::Quirk;
         if json {

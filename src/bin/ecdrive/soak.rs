@@ -1,7 +1,7 @@
 //! `ecdrive soak`: argument parsing and output of the soak (the work is `master::soak`).
 
 use clap::Args;
-use ecdrive::master::soak::{self, SoakCounts, SoakOptions, SoakReport};
+use ecdrive::app::ethercat::soak::{self, SoakCounts, SoakOptions, SoakReport};
 use ecdrive::rt::RtSettings;
 use std::process::ExitCode;
 use std::time::Duration;

@@ -11,7 +11,7 @@
 //! | `reg` | [`reg_read`], [`reg_write`] | [`RegisterData`] |
 //! | `sii` | [`sii::sii_read`], then [`sii::SiiInfo::decode`] / [`sii::esi_skeleton`] | [`sii::SiiDump`] |
 //! | `esi` | [`esi::show`], [`esi::check`] | [`esi::EsiSummary`], [`esi::EsiCheck`] |
-//! | `run` | [`run::run`] (with a [`crate::config::RunConfig`]) | [`run::RunReport`] |
+//! | `run` | [`run::run`] (with a [`crate::app::config::RunConfig`]) | [`run::RunReport`] |
 //! | `reset` | [`reset::reset`] | [`reset::ResetReport`] |
 //!
 //! ecdrive is not a resident master: every operation starts with a fresh discovery
@@ -21,7 +21,7 @@
 //! emulated devices in-process (`sim:mr-j4-tm,bdhde`), which needs no root.
 //!
 //! ```
-//! use ecdrive::master::tools::{self, Target};
+//! use ecdrive::app::ethercat::tools::{self, Target};
 //!
 //! let target: Target = "sim:mr-j4-tm,bdhde".parse()?;
 //! let slaves = tools::session(&target, |bus| tools::slaves(bus, false))?;
@@ -59,12 +59,12 @@ pub use slaves::{
 };
 pub use states::{StateChange, StatesOptions, states};
 
-use super::bus::{Bus, BusOptions, run_session};
-use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
-use super::exec::exec_error;
-use super::startup::{self, DeviceInfo, Group};
 use crate::ec::{AlStatus, AlStatusCode, register};
 use crate::link::{FrameLink, LinkError, RawSocket};
+use crate::master::bus::{Bus, BusOptions, run_session};
+use crate::master::error::{DriveRef, ErrorKind, MasterError, bus_error};
+use crate::master::exec::exec_error;
+use crate::master::startup::{self, DeviceInfo, Group};
 use crate::sim::EscConfig;
 use crate::sim::transport::SegmentLink;
 use ethercrab::subdevice_group::PreOp;

@@ -13,14 +13,14 @@
 //! frames must not cause ([`recovery::unhandled_kind`]: a refused command, a session error)
 //! appeared.
 
-use super::cycle::CycleSettings;
 use super::demo;
-use super::error::{ErrorKind, MasterError};
 use super::recovery::{self, Operator, POLL};
-use super::session::{HistoryKind, Master, MasterConfig, RestartPolicy};
-use super::startup::{DriveSetup, Selector};
-use super::telemetry::{StopKind, Telemetry};
 use crate::drives;
+use crate::master::cycle::CycleSettings;
+use crate::master::error::{ErrorKind, MasterError};
+use crate::master::session::{HistoryKind, Master, MasterConfig, RestartPolicy};
+use crate::master::startup::{DriveSetup, Selector};
+use crate::master::telemetry::{StopKind, Telemetry};
 use crate::rt::{RtSettings, Summary};
 use crate::sim::faults::{Fault, LinkFault};
 use crate::sim::transport::SegmentLink;

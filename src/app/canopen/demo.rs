@@ -22,7 +22,7 @@
 //! bus.add_node(EmulatedNode::new(&blv_r::PROFILE, 3).unwrap());
 //! let mut m = Master::new(bus, MasterConfig::default());
 //! let mut setup = DriveSetup::new(&blv_r::PROFILE);
-//! setup.settings = ecdrive::canopen::demo::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
+//! setup.settings = ecdrive::app::canopen::demo::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
 //! m.configure_drive(3, setup).unwrap(); // identity, supervision, PDOs, mode
 //! m.start(3).unwrap(); // NMT start
 //! m.enable(3, 1_000_000).unwrap(); // Axis → Operation enabled
@@ -44,11 +44,11 @@
 //! m.shutdown_node(3, 1_000_000).unwrap(); // disable, then NMT stop
 //! ```
 
-use super::error::{CanError, CanErrorKind, NodeRef};
-use super::master::{DriveSetup, Master, MasterConfig, MasterEvent};
-use super::profile::CanDriveProfile;
 use super::tools::{self, DEMO_NODES};
-use super::transport::CanTransport;
+use crate::canopen::error::{CanError, CanErrorKind, NodeRef};
+use crate::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
+use crate::canopen::profile::CanDriveProfile;
+use crate::canopen::transport::CanTransport;
 use crate::cia402::interpolated::linear_point;
 use crate::cia402::{
     Event, Homing, HomingOutcome, Interpolation, OperationMode, ProfilePosition, ProfileTorque,
@@ -80,7 +80,7 @@ fn uint(v: f64) -> Value {
 /// (r/min, PUU/s and ms-to-3000 r/min, steps/s … — converted with its [`Units`]); none for a
 /// profile that does not describe its profile-mode units.
 ///
-/// [`Units`]: super::profile::Units
+/// [`Units`]: crate::canopen::profile::Units
 pub fn motion_settings(
     profile: &CanDriveProfile,
     velocity_rev_s: f64,

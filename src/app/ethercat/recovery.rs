@@ -8,11 +8,11 @@
 //! out); [`Operator`] applies it to a running [`Master`] and counts completed programs and
 //! recoveries.
 
-use super::error::MasterError;
-use super::io::FrameLink;
-use super::session::{HistoryKind, Master};
-use super::telemetry::{Axes, Command, Phase, Telemetry};
 use crate::cia402::State;
+use crate::master::error::MasterError;
+use crate::master::io::FrameLink;
+use crate::master::session::{HistoryKind, Master};
+use crate::master::telemetry::{Axes, Command, Phase, Telemetry};
 use std::time::{Duration, Instant};
 
 fn any_energised(t: &Telemetry) -> bool {

@@ -9,8 +9,8 @@
 //! faults, and the cycle timing.
 
 use super::Target;
+use crate::app::config::{RunConfig, UserUnits};
 use crate::cia402::State;
-use crate::config::{RunConfig, UserUnits};
 use crate::master::cycle::CycleEnd;
 use crate::master::error::{ErrorKind, MasterError};
 use crate::master::history::HistoryKind;

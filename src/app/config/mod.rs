@@ -52,11 +52,11 @@
 
 mod raw;
 
+use crate::app::ethercat::tools::{SimSettings, Target};
 use crate::drives::DriveProfile;
 use crate::master::program::{self, CyclicMode, Step, Target as MoveTarget};
 use crate::master::session::MasterConfig;
 use crate::master::startup::{DriveSetup, Selector};
-use crate::master::tools::{SimSettings, Target};
 use crate::od::{Dictionary, ObjectAddress, Value};
 use crate::pdo::{Direction, Mapping, Pdo, PdoEntry};
 use std::ops::Range;

@@ -4,7 +4,7 @@
 //!
 //! ```no_run
 //! use ecdrive::canopen::master::{Master, MasterConfig};
-//! use ecdrive::canopen::tools::{self, BusSpec};
+//! use ecdrive::app::canopen::tools::{self, BusSpec};
 //! use ecdrive::od::ObjectAddress;
 //!
 //! let spec: BusSpec = "virtual".parse().unwrap(); // or "can0", or "vbus:/tmp/bus.sock"
@@ -18,14 +18,14 @@
 //! # let _ = v;
 //! ```
 
-use super::can_socket::SocketCanTransport;
-use super::error::{CanError, CanErrorKind};
-use super::master::Master;
-use super::nmt::NmtState;
-use super::profile::CanDriveProfile;
-use super::sdo::AbortText;
-use super::transport::{CanTransport, TransportError};
-use super::unix_bus::UnixBusPort;
+use crate::canopen::can_socket::SocketCanTransport;
+use crate::canopen::error::{CanError, CanErrorKind};
+use crate::canopen::master::Master;
+use crate::canopen::nmt::NmtState;
+use crate::canopen::profile::CanDriveProfile;
+use crate::canopen::sdo::AbortText;
+use crate::canopen::transport::{CanTransport, TransportError};
+use crate::canopen::unix_bus::UnixBusPort;
 use crate::drives::{asda_a2, blv_r, lexium_mdrive};
 use crate::od::{DataType, ObjectAddress, SdoAbortCode, Value};
 use crate::sim::canopen::{EmulatedNode, SimBus};
@@ -291,7 +291,7 @@ pub fn download<T: CanTransport>(
 pub fn abort_text(code: SdoAbortCode, profile: Option<&CanDriveProfile>) -> AbortText {
     match profile {
         Some(p) => p.abort_text(code),
-        None => super::sdo::abort_text(code, &[]),
+        None => crate::canopen::sdo::abort_text(code, &[]),
     }
 }
 
@@ -452,7 +452,7 @@ pub fn serve(
         BusSpec::SocketCan(i) => (Box::new(SocketCanTransport::open(i).map_err(io)?), None),
         BusSpec::UnixHub(p) => {
             // A hub already running there is joined; otherwise this process runs it.
-            let hub = match super::unix_bus::UnixBusHub::spawn(p) {
+            let hub = match crate::canopen::unix_bus::UnixBusHub::spawn(p) {
                 Ok(h) => Some(h),
                 Err(TransportError::Io { source, .. })
                     if source.kind() == std::io::ErrorKind::AddrInUse =>
@@ -468,7 +468,7 @@ pub fn serve(
     // each other's frames (a fresh hub of our own has nobody else on it).
     if hub.is_none() {
         let probe = open_bus(bus).map_err(io)?;
-        let mut m = Master::new(probe, super::master::MasterConfig::default());
+        let mut m = Master::new(probe, crate::canopen::master::MasterConfig::default());
         let taken = m
             .probe(nodes.iter().map(|n| n.node), SCAN_WINDOW_US)
             .map_err(|e| ServeError::Invalid(format!("probing {bus} for the node-IDs: {e}")))?;

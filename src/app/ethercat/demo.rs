@@ -6,14 +6,14 @@
 //! master is the same code that runs against hardware. Needs no hardware and no root (without
 //! the privilege for SCHED_FIFO it says so and runs at normal priority).
 
-use super::cycle::CycleSettings;
-use super::error::{ErrorKind, MasterError};
-use super::program::{CyclicMode, Step, Target};
 use super::recovery::{self, Operator};
-use super::session::{HistoryEntry, Master, MasterConfig};
-use super::startup::{DriveSetup, Selector};
-use super::telemetry::StopKind;
 use crate::drives::{self, DriveProfile};
+use crate::master::cycle::CycleSettings;
+use crate::master::error::{ErrorKind, MasterError};
+use crate::master::program::{CyclicMode, Step, Target};
+use crate::master::session::{HistoryEntry, Master, MasterConfig};
+use crate::master::startup::{DriveSetup, Selector};
+use crate::master::telemetry::StopKind;
 use crate::rt::host::HostInfo;
 use crate::rt::{RtReport, RtSettings, Summary};
 use crate::sim::transport::SegmentLink;

@@ -212,7 +212,7 @@ pub enum HarnessError {
 fn discover_far_end(
     interface: &str,
 ) -> Result<(Vec<String>, Vec<&'static crate::drives::DriveProfile>), HarnessError> {
-    use crate::master::tools::{Target, session};
+    use crate::app::ethercat::tools::{Target, session};
     let target = Target::Interface(interface.to_string());
     let devices = session(&target, |bus| {
         crate::master::startup::discover(bus).map(|(_, devices)| devices)

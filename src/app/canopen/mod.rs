@@ -1,0 +1,4 @@
+//! The CANopen applications: the demo and the tools behind `ecdrive … --can`.
+
+pub mod demo;
+pub mod tools;
