@@ -747,7 +747,8 @@ impl<'a> CoeClient<'a> {
             object_code: d.object_code,
             name: String::from_utf8_lossy(d.name)
                 .trim_end_matches('\0')
-                .to_string(),
+                .to_string()
+                .into(),
         })
     }
 
@@ -784,20 +785,7 @@ impl<'a> CoeClient<'a> {
     }
 }
 
-/// An object description read through SDO information.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
-pub struct ObjectInfo {
-    /// Index.
-    pub index: u16,
-    /// Data type code.
-    pub data_type: u16,
-    /// Highest sub-index.
-    pub max_sub: u8,
-    /// Object code (7 VAR, 8 ARRAY, 9 RECORD).
-    pub object_code: u8,
-    /// Name.
-    pub name: String,
-}
+pub use crate::od::ObjectInfo;
 
 /// An entry description read through SDO information.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -194,3 +194,28 @@ impl ObjectDesc {
         ObjectAddress::new(self.index, sub)
     }
 }
+
+/// What SDO information tells about one object ("get object description", CiA 301 / ETG.1000.6
+/// §5.6.3.5): one type for the slave that answers and the master that asks.
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+pub struct ObjectInfo {
+    /// Index.
+    pub index: u16,
+    /// Data type index: the value type of a VAR, the element type of an ARRAY, the structure
+    /// type of a RECORD (0 when none is defined).
+    pub data_type: u16,
+    /// Highest sub-index that exists (0 for a VAR).
+    pub max_sub: u8,
+    /// Object code as carried on the wire (7 VAR, 8 ARRAY, 9 RECORD; a device may report
+    /// others).
+    pub object_code: u8,
+    /// Name.
+    pub name: std::borrow::Cow<'static, str>,
+}
+
+impl ObjectInfo {
+    /// The object code, if it is one this crate models.
+    pub const fn code(&self) -> Option<ObjectCode> {
+        ObjectCode::from_code(self.object_code)
+    }
+}

@@ -16,7 +16,7 @@ mod value;
 
 pub use abort::SdoAbortCode;
 pub use address::{AddressParseError, ObjectAddress};
-pub use desc::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc};
+pub use desc::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc, ObjectInfo};
 pub use dictionary::{Dictionary, DictionaryError};
 pub use emergency::{Emergency, EmergencyLengthError};
 pub use types::DataType;

@@ -934,7 +934,7 @@ fn object_description(
         index,
         data_type: o.data_type,
         max_sub: o.max_sub,
-        object_code: o.code as u8,
+        object_code: o.object_code,
         name: o.name.as_bytes(),
     };
     out.resize(d.len(), 0);

@@ -873,8 +873,8 @@ impl ObjectStore for OdStore {
         };
         Some(ObjectInfo {
             index,
-            name: o.name,
-            code: o.code,
+            name: o.name.into(),
+            object_code: o.code as u8,
             data_type,
             max_sub: if o.code == ObjectCode::Var {
                 0

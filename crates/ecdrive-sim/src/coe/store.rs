@@ -64,21 +64,7 @@ impl ListType {
     }
 }
 
-/// What SDO information tells about one object ("get object description").
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ObjectInfo {
-    /// Index.
-    pub index: u16,
-    /// Name.
-    pub name: &'static str,
-    /// VAR, ARRAY or RECORD.
-    pub code: ObjectCode,
-    /// Data type index: the value type of a VAR, the element type of an ARRAY, the structure
-    /// type of a RECORD (0 when none is defined).
-    pub data_type: u16,
-    /// Highest sub-index that exists (0 for a VAR).
-    pub max_sub: u8,
-}
+pub use crate::od::ObjectInfo;
 
 /// An object dictionary as the CoE server sees it.
 ///
@@ -145,7 +131,7 @@ pub trait ObjectStore {
         buf: &mut [u8],
     ) -> Result<usize, SdoAbortCode> {
         let obj = ca_object(self, index, sub)?;
-        if obj.code == ObjectCode::Var {
+        if obj.code() == Some(ObjectCode::Var) {
             return self.read(index, 0, state, buf);
         }
         let mut tmp = [0u8; 8];
@@ -187,7 +173,7 @@ pub trait ObjectStore {
         data: &[u8],
     ) -> Result<(), SdoAbortCode> {
         let obj = ca_object(self, index, sub)?;
-        if obj.code == ObjectCode::Var {
+        if obj.code() == Some(ObjectCode::Var) {
             return self.write(index, 0, state, data);
         }
         let current_n = read_sub0(self, index, state)?;
@@ -260,7 +246,7 @@ fn ca_object<S: ObjectStore + ?Sized>(
         // Complete access addresses a whole object from sub 0 or sub 1, nothing else.
         return Err(SdoAbortCode::UNSUPPORTED_ACCESS);
     }
-    if obj.code == ObjectCode::Var {
+    if obj.code() == Some(ObjectCode::Var) {
         return if sub == 0 {
             Ok(obj)
         } else {

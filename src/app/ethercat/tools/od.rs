@@ -594,7 +594,7 @@ pub fn sdos<L: FrameLink>(
             Ok((
                 Some(OdObject {
                     index,
-                    name: o.name,
+                    name: o.name.into_owned(),
                     object_code: ObjectCode::from_code(o.object_code)
                         .map_or_else(|| o.object_code.to_string(), |c| c.name().to_string()),
                     max_sub: o.max_sub,

@@ -164,7 +164,9 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
             let mut out = Vec::new();
             for (a, object) in &wanted {
                 let name = if *object {
-                    c.object_description(a.index).await.map(|o| o.name)
+                    c.object_description(a.index)
+                        .await
+                        .map(|o| o.name.into_owned())
                 } else {
                     c.entry_description(*a).await.map(|e| e.name)
                 };
