@@ -113,7 +113,7 @@ pub fn from_esi(
     device: &crate::esi::Device,
     serial: u32,
 ) -> Result<DeviceDescription, FromEsiError> {
-    use crate::esi::{FmmuUsage as EF, SmKind};
+    use crate::esi::SmKind;
     let eeprom = device.eeprom.as_ref();
     let cfg = |word: usize| -> Option<u16> {
         let b = eeprom?.config_data.get(word * 2..word * 2 + 2)?;
@@ -129,7 +129,7 @@ pub fn from_esi(
             rx_size: out.default_size.unwrap_or(0),
             tx_offset: inp.start_address,
             tx_size: inp.default_size.unwrap_or(0),
-            protocols: MailboxProtocols::from_bits_truncate(m.protocols.bits()),
+            protocols: m.protocols,
             bootstrap: eeprom.and_then(|e| {
                 let w = |i: usize| {
                     e.boot_strap
@@ -164,16 +164,7 @@ pub fn from_esi(
             },
         })
         .collect();
-    let fmmus = device
-        .fmmus
-        .iter()
-        .map(|f| match f.usage {
-            EF::Outputs => FmmuUsage::Outputs,
-            EF::Inputs => FmmuUsage::Inputs,
-            EF::MBoxState => FmmuUsage::SmStatus,
-            EF::Unused => FmmuUsage::Unused,
-        })
-        .collect();
+    let fmmus = device.fmmus.iter().map(|f| f.usage).collect();
     let dc_modes = esi_dc_modes(device)?;
     let eeprom_bytes = eeprom
         .and_then(|e| e.byte_size)

@@ -180,7 +180,7 @@ pub enum FmmuUsage {
     Outputs = 1,
     /// Inputs.
     Inputs = 2,
-    /// SyncManager status (mailbox polling).
+    /// SyncManager status (mailbox polling; ESI `MBoxState`).
     SmStatus = 3,
 }
 
@@ -1199,6 +1199,22 @@ impl FmmuUsage {
             Self::SmStatus => "MBoxState",
             Self::Unused => "Unused",
         }
+    }
+
+    /// The `<Fmmu>` element text of an ESI file (empty for unused).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Outputs => "Outputs",
+            Self::Inputs => "Inputs",
+            Self::SmStatus => "MBoxState",
+            Self::Unused => "",
+        }
+    }
+
+    /// The SII FMMU category byte: 1 outputs, 2 inputs, 3 SyncManager status (ESI
+    /// `MBoxState`), 0 unused.
+    pub const fn sii_code(self) -> u8 {
+        self as u8
     }
 }
 

@@ -250,40 +250,7 @@ impl SyncManager {
     }
 }
 
-/// What an FMMU is used for (the `<Fmmu>` element text).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum FmmuUsage {
-    /// `Outputs`.
-    Outputs,
-    /// `Inputs`.
-    Inputs,
-    /// `MBoxState`: maps the mailbox-in SyncManager's status bit.
-    MBoxState,
-    /// No text: unused.
-    Unused,
-}
-
-impl FmmuUsage {
-    /// The ESI text.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Outputs => "Outputs",
-            Self::Inputs => "Inputs",
-            Self::MBoxState => "MBoxState",
-            Self::Unused => "",
-        }
-    }
-
-    /// The SII FMMU category byte: 1 outputs, 2 inputs, 3 SyncManager status, 0 unused.
-    pub const fn sii_code(self) -> u8 {
-        match self {
-            Self::Unused => 0,
-            Self::Outputs => 1,
-            Self::Inputs => 2,
-            Self::MBoxState => 3,
-        }
-    }
-}
+pub use crate::ec::sii::FmmuUsage;
 
 /// `<Fmmu>`.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -362,24 +329,7 @@ impl EsiPdoEntry {
     }
 }
 
-bitflags::bitflags! {
-    /// Mailbox protocols, in the bit layout of the SII "mailbox protocol" word (0x001C).
-    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-    pub struct MailboxProtocols: u16 {
-        /// ADS over EtherCAT.
-        const AOE = 0x0001;
-        /// Ethernet over EtherCAT.
-        const EOE = 0x0002;
-        /// CANopen over EtherCAT.
-        const COE = 0x0004;
-        /// File access over EtherCAT.
-        const FOE = 0x0008;
-        /// Servo profile over EtherCAT.
-        const SOE = 0x0010;
-        /// Vendor specific over EtherCAT.
-        const VOE = 0x0020;
-    }
-}
+pub use crate::ec::sii::MailboxProtocols;
 
 /// `<Mailbox>`.
 #[derive(Debug, Clone, PartialEq, Eq)]

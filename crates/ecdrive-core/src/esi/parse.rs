@@ -359,7 +359,7 @@ impl<'a, 'input> P<'a, 'input> {
             let usage = match text.to_ascii_lowercase().as_str() {
                 "outputs" => FmmuUsage::Outputs,
                 "inputs" => FmmuUsage::Inputs,
-                "mboxstate" => FmmuUsage::MBoxState,
+                "mboxstate" => FmmuUsage::SmStatus,
                 "" => FmmuUsage::Unused,
                 _ => {
                     return Err(self.invalid(
