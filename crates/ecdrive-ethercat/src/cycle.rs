@@ -28,7 +28,7 @@ use crate::cia402::{
     StatusWord,
 };
 use crate::ec::register;
-use crate::pdo::Field;
+use crate::pdo;
 use crate::rt::{LatencyHistogram, RtReport, RtSettings, monotonic_ns, sleep_until_ns};
 use ethercrab::subdevice_group::{HasDc, SafeOp};
 use ethercrab::{Command as EcCommand, MainDevice, SubDeviceState};
@@ -465,7 +465,7 @@ impl AxisRt {
             let _ = f.write_raw(out, *v);
         }
         for (f, v) in &self.fields.output_defaults {
-            write_i(f, out, *v);
+            pdo::axis::write(Some(*f), out, *v);
         }
         self.fields.axis.write_disable_voltage(out);
     }
@@ -475,7 +475,7 @@ impl AxisRt {
     fn count(&mut self, out: &mut [u8]) {
         if let Some((c, _)) = &self.fields.counter {
             self.counter = self.counter.wrapping_add(1);
-            write_i(c, out, i64::from(self.counter));
+            pdo::axis::write(Some(*c), out, i64::from(self.counter));
         }
     }
 
@@ -753,25 +753,27 @@ impl AxisRt {
         }
         if let Some((p, v, t)) = self.last_out {
             let s = &mut self.steps;
-            let (d, max, at) = match CyclicMode::from_code(running.active_mode.as_i8()) {
-                Some(CyclicMode::Csp) => (
+            let step = match CyclicMode::from_code(running.active_mode.as_i8()) {
+                Some(CyclicMode::Csp) => Some((
                     i64::from(out.target_position.wrapping_sub(p)).abs(),
                     &mut s.position,
                     0,
-                ),
-                Some(CyclicMode::Csv) => (
+                )),
+                Some(CyclicMode::Csv) => Some((
                     (i64::from(out.target_velocity) - i64::from(v)).abs(),
                     &mut s.velocity,
                     1,
-                ),
-                Some(CyclicMode::Cst) => (
+                )),
+                Some(CyclicMode::Cst) => Some((
                     (i64::from(out.target_torque) - i64::from(t)).abs(),
                     &mut s.torque,
                     2,
-                ),
-                None => (0, &mut s.position, 0),
+                )),
+                None => None,
             };
-            if d > *max {
+            if let Some((d, max, at)) = step
+                && d > *max
+            {
                 *max = d;
                 s.at_cycle[at] = cycle;
             }
@@ -973,10 +975,6 @@ impl AxisRt {
             _ => None,
         }
     }
-}
-
-fn write_i(f: &Field, buf: &mut [u8], v: i64) {
-    let _ = f.write_int(buf, v as i128);
 }
 
 /// The raw AL state (0x0130 low byte) ethercrab read for a device.

@@ -1758,17 +1758,7 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
         return Err("the statusword 0x6041:00 is not mapped".into());
     }
     let get = |dir: Direction, addr: ObjectAddress| -> Result<Option<Field>, String> {
-        if layout.find(dir, addr).is_none() {
-            return Ok(None);
-        }
-        let dt = dict
-            .data_type(addr)
-            .or_else(|| pdo::axis::standard_type(addr))
-            .ok_or_else(|| format!("{addr} is mapped but its type is unknown"))?;
-        layout
-            .field(dir, addr, dt)
-            .map(Some)
-            .map_err(|e| e.to_string())
+        pdo::axis::resolve_mapped(layout, &dict, dir, addr).map_err(|e| e.to_string())
     };
     let counter = match profile.cycle_counter {
         Some(c) => get(Direction::Rx, c.output)?

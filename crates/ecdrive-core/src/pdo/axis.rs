@@ -72,16 +72,8 @@ impl AxisBinding {
     /// read as its type (no type known, a length other than the type's) is an error naming it;
     /// one that is not mapped stays `None`.
     pub fn resolve(layout: &Layout, dictionary: &Dictionary<'_>) -> Result<Self, FieldError> {
-        let get = |dir: Direction, index: u16, sub: u8| -> Result<Option<Field>, FieldError> {
-            let addr = ObjectAddress::new(index, sub);
-            if layout.find(dir, addr).is_none() {
-                return Ok(None);
-            }
-            let data_type = dictionary
-                .data_type(addr)
-                .or_else(|| standard_type(addr))
-                .ok_or(FieldError::NotInDictionary { addr })?;
-            layout.field(dir, addr, data_type).map(Some)
+        let get = |dir: Direction, index: u16, sub: u8| {
+            resolve_mapped(layout, dictionary, dir, ObjectAddress::new(index, sub))
         };
         let (rx, tx) = (Direction::Rx, Direction::Tx);
         Ok(Self {
@@ -178,6 +170,25 @@ impl AxisBinding {
             ) | (0x60C1, 1)
         )
     }
+}
+
+/// The field of `addr` in direction `dir`, typed by the dictionary (or, for an object it lacks,
+/// by [`standard_type`]); `None` when `addr` is not mapped. A mapped object whose type is unknown
+/// or whose mapped length is not its type's is an error naming it.
+pub fn resolve_mapped(
+    layout: &Layout,
+    dictionary: &Dictionary<'_>,
+    dir: Direction,
+    addr: ObjectAddress,
+) -> Result<Option<Field>, FieldError> {
+    if layout.find(dir, addr).is_none() {
+        return Ok(None);
+    }
+    let data_type = dictionary
+        .data_type(addr)
+        .or_else(|| standard_type(addr))
+        .ok_or(FieldError::NotInDictionary { addr })?;
+    layout.field(dir, addr, data_type).map(Some)
 }
 
 /// A mapped field's value as an integer (`None`: not mapped, or outside the buffer).
