@@ -56,8 +56,8 @@ fn sii_of_the_drive_esi_files_decodes_to_what_the_files_say() {
         }
         assert_eq!(info.dc_modes.len(), dev.dc.len(), "{path}");
         for (m, w) in info.dc_modes.iter().zip(&dev.dc) {
-            assert_eq!(m.name, w.name, "{path}");
-            assert_eq!(m.assign_activate, w.assign_activate, "{path}");
+            assert_eq!(m.name, w.mode.name, "{path}");
+            assert_eq!(m.assign_activate, w.mode.assign_activate, "{path}");
         }
     }
 }

@@ -169,12 +169,16 @@ fn identity_pdos_and_dc_modes_match_the_esi_files() {
         let dc = dev
             .dc
             .iter()
-            .find(|m| m.assign_activate != 0)
+            .find(|m| m.mode.assign_activate != 0)
             .expect("a DC mode");
-        assert_eq!(dc.assign_activate, p.sync.assign_activate, "{}", p.name);
-        assert!(dc.sync0() && !dc.sync1());
         assert_eq!(
-            dev.dc.iter().any(|m| m.assign_activate == 0),
+            dc.mode.assign_activate, p.sync.assign_activate,
+            "{}",
+            p.name
+        );
+        assert!(dc.mode.sync0() && !dc.mode.sync1());
+        assert_eq!(
+            dev.dc.iter().any(|m| m.mode.assign_activate == 0),
             p.sync.free_run,
             "{}: free run",
             p.name

@@ -192,11 +192,11 @@ fn eeprom_is_the_esi_file() {
         assert_eq!(dc.len(), 24 * dev.dc.len());
         let mut assign = Vec::new();
         for (m, e) in dc.chunks(24).zip(&dev.dc) {
-            assert_eq!(u32le(m, 0), e.cycle_time_sync0);
-            assert_eq!(u32le(m, 4), e.shift_time_sync0 as u32);
+            assert_eq!(u32le(m, 0), e.mode.cycle_time0);
+            assert_eq!(u32le(m, 4), e.mode.shift_time0 as u32);
             let aa = u16le(m, 14);
-            assert_eq!(aa, e.assign_activate);
-            assert_eq!(sii.string(m[18]), Some(e.name.as_str()));
+            assert_eq!(aa, e.mode.assign_activate);
+            assert_eq!(sii.string(m[18]), Some(e.mode.name.as_str()));
             assign.push(aa);
         }
         assert!(

@@ -233,17 +233,17 @@ fn mrj4_dc_modes() {
     let f = load(MRJ4);
     let d = &f.devices[0];
     // §1.1(3),(4): free run or DC SYNC0; SYNC1 unused; SYNC0 = PDO cycle, shift 0.
-    let names: Vec<&str> = d.dc.iter().map(|m| m.name.as_str()).collect();
+    let names: Vec<&str> = d.dc.iter().map(|m| m.mode.name.as_str()).collect();
     assert_eq!(names, ["FreeRun", "DC"]);
     let free = d.dc_op_mode("FreeRun").unwrap();
-    assert_eq!(free.assign_activate, 0);
+    assert_eq!(free.mode.assign_activate, 0);
     assert_eq!(free.sms[0].sync_type, Some(0)); // 1C32h:01 = 0
     let dc = d.dc_op_mode("DC").unwrap();
     // MANUAL GAP: AssignActivate, ETG convention #x0300.
-    assert_eq!(dc.assign_activate, 0x0300);
-    assert!(dc.sync0() && !dc.sync1());
-    assert_eq!(dc.sync0_cycle_ns(1_000_000), 1_000_000);
-    assert_eq!(dc.shift_time_sync0, 0);
+    assert_eq!(dc.mode.assign_activate, 0x0300);
+    assert!(dc.mode.sync0() && !dc.mode.sync1());
+    assert_eq!(dc.mode.sync0_cycle_ns(1_000_000), 1_000_000);
+    assert_eq!(dc.mode.shift_time0, 0);
     assert_eq!(dc.cycle_time_sync1, 0);
     let st: Vec<(u8, Option<u16>)> = dc.sms.iter().map(|s| (s.no, s.sync_type)).collect();
     assert_eq!(st, [(2, Some(2)), (3, Some(2))]); // 1C32h:01 = 2 DC Sync0
@@ -448,8 +448,8 @@ fn bdhde_dc_and_interpolation_period() {
     // §4.4.1 step 8: DC-Synchronous; AssignActivate is ours (#x0300).
     assert_eq!(d.dc.len(), 1);
     let dc = &d.dc[0];
-    assert_eq!(dc.assign_activate, 0x0300);
-    assert_eq!(dc.sync0_cycle_ns(1_000_000), 1_000_000);
+    assert_eq!(dc.mode.assign_activate, 0x0300);
+    assert_eq!(dc.mode.sync0_cycle_ns(1_000_000), 1_000_000);
     // §2.4: FBITPRD = 60C2h:01 = 1..64 × 250 µs (DISCREPANCY: the 60C2h table says 4..64; the
     // file follows §2.4, so 250 µs and 500 µs cycles are allowed).
     let c = dc.allowed_cycle_times.as_ref().unwrap();

@@ -71,7 +71,7 @@ fn exercise(bytes: &[u8]) {
         let _ = d.mapping(&rx, &tx);
         for m in &d.dc {
             for cycle in [0, 1, 1_000_000, u64::MAX] {
-                let _ = m.sync0_cycle_ns(cycle);
+                let _ = m.mode.sync0_cycle_ns(cycle);
             }
             if let Some(c) = &m.allowed_cycle_times {
                 let _ = (c.contains(0), c.contains(u32::MAX), c.min());

@@ -277,30 +277,30 @@ fn mailbox_coe_and_init_commands() {
 fn several_dc_op_modes() {
     let f = file();
     let d = ac3102(&f);
-    let names: Vec<&str> = d.dc.iter().map(|m| m.name.as_str()).collect();
+    let names: Vec<&str> = d.dc.iter().map(|m| m.mode.name.as_str()).collect();
     assert_eq!(names, ["Synchron", "DcSync", "DcSyncInput"]);
 
     let sm = d.dc_op_mode("synchron").unwrap();
-    assert_eq!(sm.desc, "SM-Synchron");
-    assert_eq!(sm.assign_activate, 0);
-    assert!(!sm.cyclic() && !sm.sync0() && !sm.sync1());
+    assert_eq!(sm.mode.description, "SM-Synchron");
+    assert_eq!(sm.mode.assign_activate, 0);
+    assert!(!sm.mode.cyclic() && !sm.mode.sync0() && !sm.mode.sync1());
 
     let dc = d.dc_op_mode("DcSync").unwrap();
-    assert_eq!(dc.assign_activate, 0x0700);
-    assert!(dc.cyclic() && dc.sync0() && dc.sync1());
-    assert_eq!(dc.cycle_time_sync0_factor, Some(1));
-    assert_eq!(dc.sync0_cycle_ns(1_000_000), 1_000_000);
-    assert_eq!(dc.cycle_time_sync1_factor, Some(1));
+    assert_eq!(dc.mode.assign_activate, 0x0700);
+    assert!(dc.mode.cyclic() && dc.mode.sync0() && dc.mode.sync1());
+    assert_eq!(dc.mode.sync0_cycle_factor, 1);
+    assert_eq!(dc.mode.sync0_cycle_ns(1_000_000), 1_000_000);
+    assert_eq!(dc.mode.sync1_cycle_factor, 1);
     assert!(dc.allowed_cycle_times.is_none());
 
     let inp = d.dc_op_mode("DcSyncInput").unwrap();
-    assert_eq!(inp.cycle_time_sync0_factor, Some(-2));
-    assert_eq!(inp.sync0_cycle_ns(1_000_000), 500_000);
-    assert_eq!(inp.shift_time_sync0, -5000);
+    assert_eq!(inp.mode.sync0_cycle_factor, -2);
+    assert_eq!(inp.mode.sync0_cycle_ns(1_000_000), 500_000);
+    assert_eq!(inp.mode.shift_time0, -5000);
     assert_eq!(inp.shift_time_sync0_factor, Some(1));
     assert!(inp.shift_time_sync0_input);
-    assert_eq!(inp.cycle_time_sync1_factor, Some(2));
-    assert_eq!(inp.shift_time_sync1, 2000);
+    assert_eq!(inp.mode.sync1_cycle_factor, 2);
+    assert_eq!(inp.mode.shift_time1, 2000);
     assert_eq!(
         inp.sms,
         [DcSm {
@@ -487,4 +487,21 @@ fn latin1_and_utf8_copies_parse_the_same() {
     let mut bom = vec![0xEF, 0xBB, 0xBF];
     bom.extend_from_slice(utf8.as_bytes());
     assert_eq!(EsiFile::parse_bytes(&bom).unwrap(), file());
+}
+
+#[test]
+fn a_cycle_factor_the_sii_cannot_carry_is_refused_by_name() {
+    // The SII's DC category holds the SYNC0/SYNC1 cycle factors as INT16 (ETG.2010), so the one
+    // DC mode type keeps them as i16 and the parser refuses a larger one where it stands.
+    let bytes = std::fs::read(PATH).unwrap();
+    let text: String = bytes.iter().map(|&b| char::from(b)).collect();
+    let text = text.replacen(
+        r#"<CycleTimeSync0 Factor="-2">"#,
+        r#"<CycleTimeSync0 Factor="40000">"#,
+        1,
+    );
+    let e = EsiFile::parse(&text).unwrap_err().to_string();
+    assert!(e.contains("Factor") && e.contains("DcSyncInput"), "{e}");
+    assert!(e.contains("16-bit"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
 }

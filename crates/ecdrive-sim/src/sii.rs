@@ -22,14 +22,6 @@ pub enum FromEsiError {
         /// Its bit length.
         bits: u16,
     },
-    /// A DC cycle factor does not fit the SII's 16-bit field.
-    #[error("DC operation mode {mode:?}: cycle factor {factor} out of range")]
-    FactorOutOfRange {
-        /// The mode.
-        mode: String,
-        /// The factor.
-        factor: i32,
-    },
 }
 
 /// The PDOs of an ESI list in SII terms.
@@ -71,33 +63,6 @@ fn esi_pdos(list: &[crate::esi::EsiPdo]) -> Result<Vec<PdoDesc>, FromEsiError> {
             })
         })
         .collect()
-}
-
-/// The DC operation modes of an ESI device in SII terms.
-fn esi_dc_modes(device: &crate::esi::Device) -> Result<Vec<DcOpMode>, FromEsiError> {
-    let factor = |mode: &str, f: Option<i32>| -> Result<i16, FromEsiError> {
-        let f = f.unwrap_or(0);
-        i16::try_from(f).map_err(|_| FromEsiError::FactorOutOfRange {
-            mode: mode.to_owned(),
-            factor: f,
-        })
-    };
-    device
-        .dc
-        .iter()
-        .map(|m| {
-            Ok(DcOpMode {
-                name: m.name.clone(),
-                description: m.desc.clone(),
-                assign_activate: m.assign_activate,
-                cycle_time0: m.cycle_time_sync0,
-                shift_time0: m.shift_time_sync0,
-                shift_time1: m.shift_time_sync1,
-                sync0_cycle_factor: factor(&m.name, m.cycle_time_sync0_factor)?,
-                sync1_cycle_factor: factor(&m.name, m.cycle_time_sync1_factor)?,
-            })
-        })
-        .collect::<Result<Vec<_>, FromEsiError>>()
 }
 
 /// Describe an ESI device in SII terms, as a configuration tool would write its EEPROM:
@@ -165,7 +130,7 @@ pub fn from_esi(
         })
         .collect();
     let fmmus = device.fmmus.iter().map(|f| f.usage).collect();
-    let dc_modes = esi_dc_modes(device)?;
+    let dc_modes = device.dc.iter().map(|m| m.mode.clone()).collect();
     let eeprom_bytes = eeprom
         .and_then(|e| e.byte_size)
         .map(|b| (b as usize).div_ceil(128).max(1) * 128)

@@ -258,7 +258,8 @@ impl PdoDesc {
     }
 }
 
-/// One distributed-clock operation mode (DC category).
+/// One distributed-clock operation mode (DC category): the one type for a DC mode, whether it
+/// comes from the SII or from an ESI file's `<Dc><OpMode>` (see `esi::OpMode`).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct DcOpMode {
     /// Name, e.g. `"DC"` or `"SM-Synchron"`.
@@ -274,10 +275,40 @@ pub struct DcOpMode {
     pub shift_time0: i32,
     /// SYNC1 shift in ns.
     pub shift_time1: i32,
-    /// SYNC0 cycle factor.
+    /// SYNC0 cycle factor: SYNC0 cycle = factor × bus cycle (negative: bus cycle ÷ |factor|;
+    /// 0: none given, see [`DcOpMode::sync0_cycle_ns`]).
     pub sync0_cycle_factor: i16,
-    /// SYNC1 cycle factor.
+    /// SYNC1 cycle factor: SYNC1 cycle = factor × SYNC0 cycle (0: none given).
     pub sync1_cycle_factor: i16,
+}
+
+impl DcOpMode {
+    /// AssignActivate bit 8: the cyclic unit is activated.
+    pub const fn cyclic(&self) -> bool {
+        self.assign_activate & 0x0100 != 0
+    }
+
+    /// AssignActivate bit 9: SYNC0 is generated.
+    pub const fn sync0(&self) -> bool {
+        self.assign_activate & 0x0200 != 0
+    }
+
+    /// AssignActivate bit 10: SYNC1 is generated.
+    pub const fn sync1(&self) -> bool {
+        self.assign_activate & 0x0400 != 0
+    }
+
+    /// The SYNC0 cycle in ns for a bus (task) cycle of `bus_cycle_ns`: the factor applied to
+    /// the bus cycle if one is given (negative: the bus cycle ÷ |factor|), else the fixed
+    /// value, else (value 0) the bus cycle.
+    pub fn sync0_cycle_ns(&self, bus_cycle_ns: u64) -> u64 {
+        match self.sync0_cycle_factor {
+            f if f > 0 => bus_cycle_ns.saturating_mul(f.unsigned_abs().into()),
+            f if f < 0 => bus_cycle_ns / u64::from(f.unsigned_abs()),
+            _ if self.cycle_time0 != 0 => u64::from(self.cycle_time0),
+            _ => bus_cycle_ns,
+        }
+    }
 }
 
 /// What the SII of a device says, in SII terms. Build the image with [`build`].

@@ -256,11 +256,11 @@ impl Device {
                 .get(..i)
                 .unwrap_or_default()
                 .iter()
-                .any(|x| x.name == m.name)
+                .any(|x| x.mode.name == m.mode.name)
             {
                 issue(
                     m.position,
-                    format!("DC <OpMode> {:?} is described twice", m.name),
+                    format!("DC <OpMode> {:?} is described twice", m.mode.name),
                 );
             }
         }

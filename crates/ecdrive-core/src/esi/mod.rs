@@ -55,7 +55,7 @@ pub use error::{EsiError, EsiErrorKind, Position};
 pub use model::{
     CoeDetails, CycleTimes, DcOpMode, DcSm, Device, DeviceType, Eeprom, EepromCategory, EsiFile,
     EsiPdo, EsiPdoEntry, Fmmu, FmmuUsage, Group, InitCmd, LCID_ENGLISH, LocalizedText, Mailbox,
-    MailboxProtocols, Profile, SmKind, SyncManager, Transition, Vendor, preferred_text,
+    MailboxProtocols, OpMode, Profile, SmKind, SyncManager, Transition, Vendor, preferred_text,
 };
 pub use parse::ECDRIVE_NAMESPACE;
 

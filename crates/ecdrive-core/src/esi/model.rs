@@ -132,7 +132,7 @@ pub struct Device {
     /// `<Mailbox>`.
     pub mailbox: Option<Mailbox>,
     /// `<Dc><OpMode>`s in file order (empty if the device has no `<Dc>`).
-    pub dc: Vec<DcOpMode>,
+    pub dc: Vec<OpMode>,
     /// `<Eeprom>`.
     pub eeprom: Option<Eeprom>,
     /// `<Profile>`s (one per channel; drives usually have one).
@@ -159,8 +159,10 @@ impl Device {
     }
 
     /// The DC operation mode named `name` (case-insensitive).
-    pub fn dc_op_mode(&self, name: &str) -> Option<&DcOpMode> {
-        self.dc.iter().find(|m| m.name.eq_ignore_ascii_case(name))
+    pub fn dc_op_mode(&self, name: &str) -> Option<&OpMode> {
+        self.dc
+            .iter()
+            .find(|m| m.mode.name.eq_ignore_ascii_case(name))
     }
 
     /// The object dictionary of the first profile that has one.
@@ -250,6 +252,7 @@ impl SyncManager {
     }
 }
 
+pub use crate::ec::sii::DcOpMode;
 pub use crate::ec::sii::FmmuUsage;
 
 /// `<Fmmu>`.
@@ -509,67 +512,27 @@ impl CycleTimes {
     }
 }
 
-/// `<Dc><OpMode>`: one synchronisation mode a configuration tool can choose.
+/// `<Dc><OpMode>`: one synchronisation mode a configuration tool can choose. The part the
+/// SII's DC category carries too is the one [`DcOpMode`] (name, description, AssignActivate,
+/// SYNC0 cycle and its factor, shifts, SYNC1 factor); the rest only the ESI says.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct DcOpMode {
+pub struct OpMode {
     /// Where the element starts.
     pub position: Position,
-    /// `<Name>` (an identifier such as `DC` or `FreeRun`).
-    pub name: String,
-    /// `<Desc>`: the text shown to users.
-    pub desc: String,
-    /// `<AssignActivate>`: the value for ESC register 0x0980 (bit 8 cyclic unit, bit 9
-    /// SYNC0, bit 10 SYNC1; 0 for free run).
-    pub assign_activate: u16,
-    /// `<CycleTimeSync0>` value in ns (0 if absent).
-    pub cycle_time_sync0: u32,
-    /// `Factor` of `<CycleTimeSync0>`: SYNC0 cycle = factor × bus cycle (negative: bus cycle
-    /// ÷ |factor|).
-    pub cycle_time_sync0_factor: Option<i32>,
-    /// `<ShiftTimeSync0>` value in ns (0 if absent).
-    pub shift_time_sync0: i32,
+    /// The mode in SII terms: `<Name>`, `<Desc>`, `<AssignActivate>`, `<CycleTimeSync0>` and
+    /// its `Factor`, `<ShiftTimeSync0>`, `<ShiftTimeSync1>` and the `Factor` of
+    /// `<CycleTimeSync1>` (0 where the file gives none).
+    pub mode: DcOpMode,
     /// `Factor` of `<ShiftTimeSync0>`.
     pub shift_time_sync0_factor: Option<i32>,
     /// `Input` of `<ShiftTimeSync0>`: the shift applies to inputs.
     pub shift_time_sync0_input: bool,
     /// `<CycleTimeSync1>` value in ns (0 if absent).
     pub cycle_time_sync1: u32,
-    /// `Factor` of `<CycleTimeSync1>`: SYNC1 cycle = factor × SYNC0 cycle.
-    pub cycle_time_sync1_factor: Option<i32>,
-    /// `<ShiftTimeSync1>` value in ns (0 if absent).
-    pub shift_time_sync1: i32,
     /// `<Sm>` children: per-SyncManager synchronisation settings for this mode.
     pub sms: Vec<DcSm>,
     /// Allowed cycle times (this project's vendor-specific extension), if stated.
     pub allowed_cycle_times: Option<CycleTimes>,
-}
-
-impl DcOpMode {
-    /// AssignActivate bit 8: the cyclic unit is activated.
-    pub const fn cyclic(&self) -> bool {
-        self.assign_activate & 0x0100 != 0
-    }
-
-    /// AssignActivate bit 9: SYNC0 is generated.
-    pub const fn sync0(&self) -> bool {
-        self.assign_activate & 0x0200 != 0
-    }
-
-    /// AssignActivate bit 10: SYNC1 is generated.
-    pub const fn sync1(&self) -> bool {
-        self.assign_activate & 0x0400 != 0
-    }
-
-    /// The SYNC0 cycle in ns for a bus (task) cycle of `bus_cycle_ns`: the factor applied to
-    /// the bus cycle if a factor is given, else the fixed value, else (value 0) the bus cycle.
-    pub fn sync0_cycle_ns(&self, bus_cycle_ns: u64) -> u64 {
-        match self.cycle_time_sync0_factor {
-            Some(f) if f > 0 => bus_cycle_ns.saturating_mul(f as u64),
-            Some(f) if f < 0 => bus_cycle_ns / u64::from(f.unsigned_abs()),
-            _ if self.cycle_time_sync0 != 0 => u64::from(self.cycle_time_sync0),
-            _ => bus_cycle_ns,
-        }
-    }
 }
 
 /// `<Sm>` inside a DC `<OpMode>`.

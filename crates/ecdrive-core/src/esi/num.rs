@@ -69,6 +69,7 @@ macro_rules! esi_int {
 
 esi_int!(u8, "an 8-bit unsigned number");
 esi_int!(u16, "a 16-bit unsigned number");
+esi_int!(i16, "a 16-bit signed number");
 esi_int!(u32, "a 32-bit unsigned number");
 esi_int!(i32, "a 32-bit signed number");
 esi_int!(u64, "a 64-bit unsigned number");

@@ -572,20 +572,22 @@ impl<'a, 'input> P<'a, 'input> {
         })
     }
 
-    fn op_mode(&self, n: Node, dev: &str) -> R<DcOpMode> {
+    fn op_mode(&self, n: Node, dev: &str) -> R<OpMode> {
         let name_el = self.req_child(n, "Name", &format!("<OpMode> in {dev}"))?;
         let name = text_of(name_el);
         let scope = format!("<OpMode> {name:?} in {dev}");
         let assign_activate = self.req_num_child::<u16>(n, "AssignActivate", &scope)?;
-        let timed = |tag: &'static str| -> R<(Option<Node>, Option<i32>)> {
-            match child(n, tag) {
-                None => Ok((None, None)),
-                Some(c) => Ok((Some(c), self.attr_num::<i32>(c, "Factor", &scope)?)),
-            }
+        let (c0, s0, c1) = (
+            child(n, "CycleTimeSync0"),
+            child(n, "ShiftTimeSync0"),
+            child(n, "CycleTimeSync1"),
+        );
+        // The SII carries the cycle factors as INT16: a larger one is refused here, by name.
+        let factor = |el: Option<Node>| -> R<i16> {
+            el.map(|e| self.attr_num::<i16>(e, "Factor", &scope))
+                .transpose()
+                .map(|f| f.flatten().unwrap_or_default())
         };
-        let (c0, c0f) = timed("CycleTimeSync0")?;
-        let (s0, s0f) = timed("ShiftTimeSync0")?;
-        let (c1, c1f) = timed("CycleTimeSync1")?;
         let cycle = |el: Option<Node>, tag: &str| -> R<u32> {
             el.map(|e| self.num_text::<u32>(e, tag, &scope))
                 .transpose()
@@ -612,24 +614,29 @@ impl<'a, 'input> P<'a, 'input> {
                     .collect::<R<Vec<_>>>()?,
             });
         }
-        Ok(DcOpMode {
+        Ok(OpMode {
             position: self.node_pos(n),
-            desc: child(n, "Desc").map(text_of).unwrap_or_default(),
-            assign_activate,
-            cycle_time_sync0: cycle(c0, "CycleTimeSync0")?,
-            cycle_time_sync0_factor: c0f,
-            shift_time_sync0: shift(s0, "ShiftTimeSync0")?,
-            shift_time_sync0_factor: s0f,
+            mode: DcOpMode {
+                description: child(n, "Desc").map(text_of).unwrap_or_default(),
+                assign_activate,
+                cycle_time0: cycle(c0, "CycleTimeSync0")?,
+                sync0_cycle_factor: factor(c0)?,
+                shift_time0: shift(s0, "ShiftTimeSync0")?,
+                shift_time1: shift(child(n, "ShiftTimeSync1"), "ShiftTimeSync1")?,
+                sync1_cycle_factor: factor(c1)?,
+                name,
+            },
+            shift_time_sync0_factor: s0
+                .map(|e| self.attr_num::<i32>(e, "Factor", &scope))
+                .transpose()?
+                .flatten(),
             shift_time_sync0_input: match s0 {
                 Some(e) => self.flag(e, "Input", &scope)?,
                 None => false,
             },
             cycle_time_sync1: cycle(c1, "CycleTimeSync1")?,
-            cycle_time_sync1_factor: c1f,
-            shift_time_sync1: shift(child(n, "ShiftTimeSync1"), "ShiftTimeSync1")?,
             sms,
             allowed_cycle_times: self.cycle_times(n, &scope)?,
-            name,
         })
     }
 

@@ -107,9 +107,9 @@ impl EsiModel {
                 .iter()
                 .find(|m| {
                     if sync0 {
-                        m.sync0()
+                        m.mode.sync0()
                     } else {
-                        m.assign_activate == 0
+                        m.mode.assign_activate == 0
                     }
                 })
                 .map(|m| m.allowed_cycle_times.clone())

@@ -164,7 +164,12 @@ pub fn show(path: &Path) -> Result<EsiSummary, EsiError> {
                 dc_modes: d
                     .dc
                     .iter()
-                    .map(|m| format!("{}: AssignActivate 0x{:04X}", m.name, m.assign_activate))
+                    .map(|m| {
+                        format!(
+                            "{}: AssignActivate 0x{:04X}",
+                            m.mode.name, m.mode.assign_activate
+                        )
+                    })
                     .collect(),
                 dictionary_objects: d.dictionary().map_or(0, |x| x.objects.len()),
                 eeprom_bytes: d.eeprom.as_ref().and_then(|e| e.byte_size),
