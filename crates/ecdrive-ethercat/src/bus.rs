@@ -17,7 +17,7 @@ use std::time::Duration;
 /// Frames ethercrab may have in flight at once.
 pub const MAX_FRAMES: usize = 16;
 /// Largest number of devices on one segment.
-pub const MAX_SUBDEVICES: usize = 128;
+pub const MAX_SUBDEVICES: usize = 256;
 /// Largest process image (inputs + outputs of every device), bytes.
 pub const MAX_PDI: usize = 16384;
 

@@ -23,6 +23,7 @@ use super::telemetry::{
     AxisTelemetry, Command, CycleTelemetry, Event, EventKind, IO_TELEMETRY_BYTES, IoTelemetry,
     Phase, StopKind, StopReason, Telemetry,
 };
+use super::wkc::{DatagramWkc, WkcPlan};
 use crate::cia402::{
     self, Axis, AxisConfig, AxisStatus, Feedback, ModeSwitchPhase, OperationMode, Output, State,
     StatusWord,
@@ -1002,8 +1003,8 @@ enum Exchanged {
 struct Constants {
     cycle_ns: u64,
     dt: f64,
-    /// The working counter every reply should show.
-    wkc_expected: u16,
+    /// The working counter a reply whose image went out in one LRW shows.
+    wkc_whole: u16,
     segment_gone_cycles: u64,
     stop_ramp_cycles: u64,
     stop_timeout_cycles: u64,
@@ -1036,6 +1037,8 @@ struct Counts {
     segment_lost: bool,
     wkc_errors: u32,
     last_wkc: u16,
+    /// What the last reply's working counter should have been (the sum over its datagrams).
+    last_wkc_expected: u16,
     overruns: u64,
     recorded_lost: u64,
     recorded_overruns: u64,
@@ -1056,6 +1059,9 @@ struct Cycle<'a, 'p, L: FrameLink> {
     restarting: &'a mut bool,
     ev: Emitter<'a>,
     k: Constants,
+    /// The expected working counter of each logical datagram, from the FMMU configuration the
+    /// master sent (`None`: not recorded; the whole-image value is checked instead).
+    wkc_plan: Option<WkcPlan>,
     axes: Vec<AxisRt>,
     /// Every device by position: its station address and last AL state.
     addresses: Vec<u16>,
@@ -1140,7 +1146,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         // inputs.
         let wkc =
             |outputs: usize, inputs: usize| u16::from(outputs > 0) * 2 + u16::from(inputs > 0);
-        let wkc_expected: u16 = drives
+        let wkc_whole: u16 = drives
             .iter()
             .map(|d| {
                 wkc(
@@ -1161,6 +1167,14 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 *a = address;
             }
         }
+        let plan = WkcPlan::from_fmmus(
+            addresses.iter().enumerate().map(|(p, &a)| (p as u16, a)),
+            pump.fmmu_configs(),
+        );
+        // The plan must account for every device the layout has: otherwise the tap missed a
+        // configuration, and the whole-image value is the better check.
+        let wkc_plan = (!plan.is_empty() && plan.whole() == wkc_whole).then_some(plan);
+        pump.record_logical(wkc_plan.is_some());
         let cycles = |d: Duration| d.as_nanos() as u64 / cycle_ns;
         Self {
             md,
@@ -1178,10 +1192,11 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 cycle: 0,
                 first_stop: None,
             },
+            wkc_plan,
             k: Constants {
                 cycle_ns,
                 dt: settings.cycle.as_secs_f64(),
-                wkc_expected,
+                wkc_whole,
                 segment_gone_cycles: cycles(settings.segment_gone_after)
                     .max(u64::from(settings.segment_lost_after)),
                 stop_ramp_cycles: cycles(settings.stop_ramp).max(1),
@@ -1285,6 +1300,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             self.clock.woke + (self.k.cycle_ns as f64 * self.settings.reply_budget) as u64;
         self.clock.t_ex = monotonic_ns();
         let group = self.group;
+        self.pump.clear_logical();
         let result = {
             let fut = pin!(group.tx_rx_dc(self.md));
             exec::exchange(self.pump, fut, deadline)
@@ -1400,11 +1416,12 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 self.steady = true;
             }
         }
+        let (expected, datagram) = self.expected_wkc();
+        self.counts.last_wkc_expected = expected;
         if !self.all_op() || self.ending() {
             return;
         }
-        let expected = self.k.wkc_expected;
-        if wkc == expected {
+        if wkc == expected && datagram.is_none() {
             self.counts.wkc_errors = 0;
             return;
         }
@@ -1413,6 +1430,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             got: wkc,
             expected,
             missing: scan.missing,
+            datagram,
         });
         if self.counts.wkc_errors == self.settings.wkc_errors_before_stop {
             self.ev.emit(EventKind::Stopping {
@@ -1421,6 +1439,19 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             for a in self.axes.iter_mut() {
                 a.begin_stop(StopKind::Ramp, tick, cycle);
             }
+        }
+    }
+
+    /// The working counter the last reply should show, and its first logical datagram that
+    /// came back wrong: per datagram from the plan when the reply's datagrams were recorded,
+    /// else the whole-image value. No allocation.
+    fn expected_wkc(&self) -> (u16, Option<DatagramWkc>) {
+        let (seen, overflow) = self.pump.logical_seen();
+        match &self.wkc_plan {
+            Some(plan) if !seen.is_empty() && !overflow => {
+                plan.check(seen.iter().map(|d| (d.address, d.len, d.wkc)))
+            }
+            _ => (self.k.wkc_whole, None),
         }
     }
 
@@ -1633,7 +1664,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             cycle: c.cycle,
             dc_time: c.dc_time,
             wkc: self.counts.last_wkc,
-            wkc_expected: self.k.wkc_expected,
+            wkc_expected: self.counts.last_wkc_expected,
             lost: self.counts.lost_total,
             overruns: self.counts.overruns,
             wake_latency_ns: c.latency,
@@ -1729,6 +1760,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     /// The run has ended: say so until the session publishes what comes next (a whole
     /// snapshot: the input buffer of the triple buffer holds an older one), and report.
     fn finish(self, end: CycleEnd, rt: RtReport) -> CycleReport {
+        self.pump.record_logical(false);
         let t = self.telemetry.input_buffer_mut();
         t.cycle = CycleTelemetry {
             phase: Phase::Stopping,

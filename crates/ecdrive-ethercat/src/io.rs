@@ -11,6 +11,7 @@
 //! waiting future (ethercrab releases the frame slot on drop).
 
 use crate::ec::frame::{EthercatFrame, EthernetFrame};
+use crate::ec::register::FmmuConfig;
 use crate::ec::{command::Command, register};
 use crate::rt::monotonic_ns;
 use ethercrab::{PduRx, PduTx};
@@ -85,6 +86,10 @@ const FIRST_IDX_OFFSET: usize = 14 + 2 + 1;
 /// The tap learns where each device's SM0 (the write mailbox) starts from the SyncManager
 /// writes it sees (FPWR to 0x0800) or from [`Pump::learn_mailbox`], and records the counter of
 /// every FPWR to that address.
+///
+/// The same tap keeps the FMMU configuration every device was sent (FPWR to 0x0600–0x06FF):
+/// where each device's inputs and outputs sit in the logical process image, as its ESC will
+/// count them in the working counter (see [`Pump::fmmu_configs`]).
 #[derive(Debug, Default)]
 struct MailboxTap {
     on: bool,
@@ -92,6 +97,8 @@ struct MailboxTap {
     sm0: HashMap<u16, u16>,
     /// (station address, counter) of each mailbox request sent while the tap was on.
     seen: Vec<(u16, u8)>,
+    /// (station address, FMMU number) → the block last written.
+    fmmus: HashMap<(u16, u8), FmmuConfig>,
 }
 
 impl MailboxTap {
@@ -108,12 +115,77 @@ impl MailboxTap {
                 continue;
             }
             let (station, ado, data) = (d.adp(), d.ado(), d.data());
-            if ado == register::sm(0) && data.len() >= 2 {
+            if (register::FMMU_BASE..register::SM_BASE).contains(&ado) {
+                let first = (ado - register::FMMU_BASE) / register::FMMU_SIZE;
+                let blocks = data.chunks_exact(usize::from(register::FMMU_SIZE));
+                for (k, b) in blocks.enumerate() {
+                    if let (Some(c), Ok(n)) =
+                        (FmmuConfig::parse(b), u8::try_from(usize::from(first) + k))
+                    {
+                        self.fmmus.insert((station, n), c);
+                    }
+                }
+            } else if ado == register::sm(0) && data.len() >= 2 {
                 let start = u16::from_le_bytes([data[0], data[1]]);
                 self.sm0.insert(station, start);
             } else if self.sm0.get(&station) == Some(&ado) && data.len() >= 6 {
                 // Mailbox header byte 5, bits 4–6: the counter.
                 self.seen.push((station, (data[5] >> 4) & 0x07));
+            }
+        }
+    }
+}
+
+/// One logical datagram (LRD/LWR/LRW) as it came back: where it addressed the process image and
+/// the working counter the devices gave it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LogicalSeen {
+    /// Logical start address.
+    pub address: u32,
+    /// Length in bytes.
+    pub len: u16,
+    /// Working counter.
+    pub wkc: u16,
+}
+
+/// How many logical datagrams one cycle's record holds (ethercrab splits the process image
+/// over as many frames as it needs; this covers images up to about 11 kB).
+pub const LOGICAL_RECORD: usize = 8;
+
+/// The logical datagrams of the replies received since the record was cleared: a fixed array,
+/// written in the receive path without allocation.
+#[derive(Debug, Clone, Copy, Default)]
+struct LogicalRecord {
+    on: bool,
+    seen: [LogicalSeen; LOGICAL_RECORD],
+    n: usize,
+    overflow: bool,
+}
+
+impl LogicalRecord {
+    fn observe(&mut self, frame: &[u8]) {
+        let Ok(eth) = EthernetFrame::new_checked(frame) else {
+            return;
+        };
+        let Ok(ecat) = EthercatFrame::new_checked(eth.payload()) else {
+            return;
+        };
+        for d in ecat.datagrams() {
+            let Ok(d) = d else { break };
+            if !d.command().is_some_and(Command::is_logical) {
+                continue;
+            }
+            let seen = LogicalSeen {
+                address: d.logical_address(),
+                len: u16::try_from(d.data_len()).unwrap_or(u16::MAX),
+                wkc: d.wkc(),
+            };
+            match self.seen.get_mut(self.n) {
+                Some(slot) => {
+                    *slot = seen;
+                    self.n += 1;
+                }
+                None => self.overflow = true,
             }
         }
     }
@@ -132,6 +204,7 @@ pub struct Pump<'sto, L: FrameLink> {
     policy: LossPolicy,
     link_error: Option<String>,
     tap: MailboxTap,
+    logical: LogicalRecord,
 }
 
 impl<'sto, L: FrameLink> Pump<'sto, L> {
@@ -149,7 +222,38 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             policy,
             link_error: None,
             tap: MailboxTap::default(),
+            logical: LogicalRecord::default(),
         }
+    }
+
+    /// The FMMU blocks every device was sent while the tap was on, by (station address, FMMU
+    /// number): the master's own record of the logical process image as the ESCs map it.
+    pub fn fmmu_configs(&self) -> impl Iterator<Item = (u16, u8, FmmuConfig)> + '_ {
+        self.tap.fmmus.iter().map(|(&(st, n), &c)| (st, n, c))
+    }
+
+    /// Record the logical datagrams (LRD/LWR/LRW) of the replies from now on, in a fixed
+    /// array (allocation-free: the cycle keeps it on), and clear the record.
+    pub fn record_logical(&mut self, on: bool) {
+        self.logical = LogicalRecord {
+            on,
+            ..LogicalRecord::default()
+        };
+    }
+
+    /// Clear the record of logical datagrams (keeps it on or off).
+    pub fn clear_logical(&mut self) {
+        self.logical.n = 0;
+        self.logical.overflow = false;
+    }
+
+    /// The logical datagrams received since the record was cleared, in arrival order, and
+    /// whether more arrived than the record holds ([`LOGICAL_RECORD`]).
+    pub fn logical_seen(&self) -> (&[LogicalSeen], bool) {
+        (
+            self.logical.seen.get(..self.logical.n).unwrap_or(&[]),
+            self.logical.overflow,
+        )
     }
 
     /// Record the counters of mailbox requests sent from now on (off by default; never on in
@@ -334,6 +438,9 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         }
         match self.rx.receive_frame(frame) {
             Ok(ethercrab::ReceiveAction::Processed) => {
+                if self.logical.on {
+                    self.logical.observe(frame);
+                }
                 self.stats.received += 1;
                 true
             }

@@ -26,6 +26,7 @@ pub mod session;
 pub mod setpoint;
 pub mod startup;
 pub mod telemetry;
+pub mod wkc;
 
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};

@@ -306,11 +306,13 @@ impl Decoder {
                 got,
                 expected,
                 missing,
+                datagram,
             } => (
                 missing.and_then(|m| self.device(m)),
                 true,
                 format!(
-                    "working counter {got}, expected {expected}{}",
+                    "working counter {got}, expected {expected}{}{}",
+                    datagram.map(describe_datagram).unwrap_or_default(),
                     if missing.is_some() {
                         " (this device did not answer)"
                     } else {
@@ -1371,4 +1373,46 @@ fn run<L: FrameLink + Send>(
     *shutdown_ok_out = shutdown_ok;
     *last_cycle = report;
     run_end(end, restarting, decoder)
+}
+
+/// ": LRW 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) 18, expected 20" for a
+/// working-counter event: which datagram of the reply was wrong and whom it covers.
+fn describe_datagram(d: crate::wkc::DatagramWkc) -> String {
+    let devices = match d.devices {
+        Some((lo, hi)) if lo == hi => format!(", device {lo}"),
+        Some((lo, hi)) => format!(", devices {lo}–{hi}"),
+        None => ", no device".to_owned(),
+    };
+    format!(
+        ": logical datagram {} of {} (logical 0x{:08X}, {} bytes{devices}) came back with {}, expected {}",
+        d.index, d.of, d.address, d.len, d.got, d.expected
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_wrong_datagram_is_named_with_its_devices() {
+        let d = crate::wkc::DatagramWkc {
+            index: 2,
+            of: 2,
+            address: 1466,
+            len: 118,
+            got: 18,
+            expected: 20,
+            devices: Some((38, 47)),
+        };
+        assert_eq!(
+            describe_datagram(d),
+            ": logical datagram 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) came back \
+             with 18, expected 20"
+        );
+        let one = crate::wkc::DatagramWkc {
+            devices: Some((5, 5)),
+            ..d
+        };
+        assert!(describe_datagram(one).contains(", device 5)"));
+    }
 }

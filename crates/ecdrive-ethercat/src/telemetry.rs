@@ -154,6 +154,9 @@ pub enum EventKind {
         expected: u16,
         /// Position of the first device whose state check came back without an answer.
         missing: Option<u16>,
+        /// The first logical datagram of the reply whose working counter was wrong, with the
+        /// devices it covers (`None` when the reply's datagrams were not recorded).
+        datagram: Option<crate::wkc::DatagramWkc>,
     },
     /// A device's AL state changed.
     AlState {

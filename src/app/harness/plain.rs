@@ -35,7 +35,7 @@ use std::sync::mpsc;
 use std::time::Duration;
 
 /// Same group dimensions as ecdrive's (`master::bus`), so both copy the same structures.
-const MAX_SUBDEVICES: usize = 128;
+const MAX_SUBDEVICES: usize = 256;
 const MAX_PDI: usize = 16384;
 const MAX_FRAMES: usize = 16;
 const MAX_FRAME: usize = 1514;

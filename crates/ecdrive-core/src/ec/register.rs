@@ -170,6 +170,69 @@ pub const fn fmmu(n: u8) -> u16 {
     FMMU_BASE + FMMU_SIZE * n as u16
 }
 
+/// One FMMU register block (ETG.1000.4 Table 57, 16 bytes at [`fmmu`]`(n)`): how the ESC maps a
+/// range of the logical address space onto its physical memory. The one view of these bytes
+/// for the software slave's ESC and for the master, which reads the mapping back from the
+/// configuration it sent (see the working-counter plan of the cycle).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct FmmuConfig {
+    /// Logical start address (bytes 0–3).
+    pub logical_start: u32,
+    /// Length in bytes (bytes 4–5).
+    pub length: u16,
+    /// Logical start bit (byte 6, bits 0–2).
+    pub logical_start_bit: u8,
+    /// Logical stop bit (byte 7, bits 0–2).
+    pub logical_stop_bit: u8,
+    /// Physical start address (bytes 8–9).
+    pub physical_start: u16,
+    /// Physical start bit (byte 10, bits 0–2).
+    pub physical_start_bit: u8,
+    /// Type bit 0 (byte 11): read access (the master reads: inputs).
+    pub read: bool,
+    /// Type bit 1 (byte 11): write access (the master writes: outputs).
+    pub write: bool,
+    /// Activate (byte 12, bit 0).
+    pub active: bool,
+}
+
+impl FmmuConfig {
+    /// Read one block; `None` if `b` is shorter than [`FMMU_SIZE`].
+    pub fn parse(b: &[u8]) -> Option<Self> {
+        let b = b.get(..usize::from(FMMU_SIZE))?;
+        Some(Self {
+            logical_start: u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+            length: u16::from_le_bytes([b[4], b[5]]),
+            logical_start_bit: b[6] & 0x07,
+            logical_stop_bit: b[7] & 0x07,
+            physical_start: u16::from_le_bytes([b[8], b[9]]),
+            physical_start_bit: b[10] & 0x07,
+            read: b[11] & 0x01 != 0,
+            write: b[11] & 0x02 != 0,
+            active: b[12] & 0x01 != 0,
+        })
+    }
+
+    /// The 16 bytes of the block.
+    pub fn emit(&self) -> [u8; FMMU_SIZE as usize] {
+        let mut b = [0u8; FMMU_SIZE as usize];
+        b[0..4].copy_from_slice(&self.logical_start.to_le_bytes());
+        b[4..6].copy_from_slice(&self.length.to_le_bytes());
+        b[6] = self.logical_start_bit & 0x07;
+        b[7] = self.logical_stop_bit & 0x07;
+        b[8..10].copy_from_slice(&self.physical_start.to_le_bytes());
+        b[10] = self.physical_start_bit & 0x07;
+        b[11] = u8::from(self.read) | u8::from(self.write) << 1;
+        b[12] = u8::from(self.active);
+        b
+    }
+
+    /// The logical bytes the block covers, `logical_start..logical_start + length`.
+    pub fn logical_range(&self) -> core::ops::Range<u32> {
+        self.logical_start..self.logical_start.saturating_add(u32::from(self.length))
+    }
+}
+
 /// A short name for a register address, for error messages (`"AL status (0x0130)"`). Addresses
 /// without a name print as hex.
 pub fn describe(addr: u16) -> String {
@@ -206,4 +269,42 @@ pub fn describe(addr: u16) -> String {
         _ => return format!("register 0x{addr:04X}"),
     };
     format!("{name} (0x{addr:04X})")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn fmmu_block_as_etg1000_4_lays_it_out() {
+        // Logical 0x00010000, 6 bytes, bits 0..7, physical 0x1100, read+write, active.
+        let b = [
+            0x00, 0x00, 0x01, 0x00, 0x06, 0x00, 0x00, 0x07, 0x00, 0x11, 0x00, 0x03, 0x01, 0, 0, 0,
+        ];
+        let f = FmmuConfig::parse(&b).unwrap();
+        assert_eq!(f.logical_start, 0x0001_0000);
+        assert_eq!(f.length, 6);
+        assert_eq!(f.logical_stop_bit, 7);
+        assert_eq!(f.physical_start, 0x1100);
+        assert!(f.read && f.write && f.active);
+        assert_eq!(f.logical_range(), 0x0001_0000..0x0001_0006);
+        assert_eq!(f.emit(), b);
+        assert_eq!(FmmuConfig::parse(&b[..15]), None);
+    }
+
+    proptest! {
+        #[test]
+        fn fmmu_parse_emit_round_trip(
+            ls in any::<u32>(), len in any::<u16>(), sb in 0u8..8, eb in 0u8..8,
+            ps in any::<u16>(), pb in 0u8..8, r in any::<bool>(), w in any::<bool>(),
+            a in any::<bool>(),
+        ) {
+            let f = FmmuConfig {
+                logical_start: ls, length: len, logical_start_bit: sb, logical_stop_bit: eb,
+                physical_start: ps, physical_start_bit: pb, read: r, write: w, active: a,
+            };
+            prop_assert_eq!(FmmuConfig::parse(&f.emit()), Some(f));
+        }
+    }
 }

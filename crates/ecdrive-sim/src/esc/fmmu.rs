@@ -1,28 +1,21 @@
 //! FMMUs: logical addressing (LRD/LWR/LRW) mapped onto the ESC's memory.
 
 use super::*;
+use crate::ec::register::FmmuConfig;
 
 impl Esc {
     pub(super) fn rebuild_fmmus(&mut self) {
         self.fmmus.clear();
         for n in 0..usize::from(self.cfg.fmmu_count) {
             let b = 0x0600 + 16 * n;
-            if self.byte(b + 12) & 0x01 == 0 {
+            let Some(c) = self.mem.get(b..b + 16).and_then(FmmuConfig::parse) else {
+                continue;
+            };
+            if !c.active {
                 continue;
             }
-            let ty = self.byte(b + 11);
-            let f = Fmmu {
-                log_start: self.get_u32(b),
-                len: self.get_u16(b + 4),
-                start_bit: self.byte(b + 6) & 0x07,
-                stop_bit: self.byte(b + 7) & 0x07,
-                phys: self.get_u16(b + 8),
-                phys_bit: self.byte(b + 10) & 0x07,
-                read: ty & 0x01 != 0,
-                write: ty & 0x02 != 0,
-            };
-            if f.len > 0 && (f.read || f.write) {
-                self.fmmus.push(f);
+            if c.length > 0 && (c.read || c.write) {
+                self.fmmus.push(c);
             }
         }
     }
@@ -82,7 +75,7 @@ impl Esc {
     #[allow(clippy::too_many_arguments)]
     pub(super) fn fmmu_access(
         &mut self,
-        f: Fmmu,
+        f: FmmuConfig,
         d0: u64,
         d1: u64,
         data: &mut [u8],
@@ -90,8 +83,10 @@ impl Esc {
         hop: Hop,
         dev: &mut dyn Device,
     ) -> bool {
-        let l0 = u64::from(f.log_start) * 8 + u64::from(f.start_bit);
-        let l1 = (u64::from(f.log_start) + u64::from(f.len) - 1) * 8 + u64::from(f.stop_bit) + 1;
+        let l0 = u64::from(f.logical_start) * 8 + u64::from(f.logical_start_bit);
+        let l1 = (u64::from(f.logical_start) + u64::from(f.length) - 1) * 8
+            + u64::from(f.logical_stop_bit)
+            + 1;
         if l1 <= l0 {
             return false;
         }
@@ -100,8 +95,8 @@ impl Esc {
         if lo >= hi {
             return false;
         }
-        let p0 = u64::from(f.phys) * 8 + u64::from(f.phys_bit) + (lo - l0);
-        if f.byte_aligned() {
+        let p0 = u64::from(f.physical_start) * 8 + u64::from(f.physical_start_bit) + (lo - l0);
+        if f.logical_start_bit == 0 && f.logical_stop_bit == 7 && f.physical_start_bit == 0 {
             let (dl, dh) = (((lo - d0) / 8) as usize, ((hi - d0) / 8) as usize);
             let phys = p0 / 8;
             let Ok(phys) = u16::try_from(phys) else {

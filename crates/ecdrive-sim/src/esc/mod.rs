@@ -166,24 +166,6 @@ struct SmView {
     usable: bool,
 }
 
-#[derive(Debug, Clone, Copy, Default)]
-struct Fmmu {
-    log_start: u32,
-    len: u16,
-    start_bit: u8,
-    stop_bit: u8,
-    phys: u16,
-    phys_bit: u8,
-    read: bool,
-    write: bool,
-}
-
-impl Fmmu {
-    fn byte_aligned(&self) -> bool {
-        self.start_bit == 0 && self.stop_bit == 7 && self.phys_bit == 0
-    }
-}
-
 /// Mailbox layout from the SII.
 #[derive(Debug, Clone, Copy)]
 struct MbxLayout {
@@ -229,7 +211,7 @@ pub struct Esc {
     sm_out_pd: Option<u8>,
     sm_in_pd: Option<u8>,
     sms: Vec<SmView>,
-    fmmus: Vec<Fmmu>,
+    fmmus: Vec<crate::ec::register::FmmuConfig>,
     mailbox: MailboxRt,
     pd: ProcessRt,
     dc: DcUnit,
