@@ -38,7 +38,13 @@ use std::time::Duration;
 const MAX_SUBDEVICES: usize = 256;
 const MAX_PDI: usize = 16384;
 const MAX_FRAMES: usize = 16;
-const MAX_FRAME: usize = 1514;
+/// ethercrab 0.7.1's `tx_rx_task` receives into a buffer of the interface's MTU (1 500 bytes on
+/// Ethernet and veth), which must also hold the 14-byte Ethernet header: a reply longer than
+/// 1 500 bytes comes back cut and the task fails ("failed to receive an EtherCAT frame"). So
+/// the baseline's frames stay within 1 500 bytes (ecdrive's own pump reads whole 1 514-byte
+/// frames). From about 31 emulated drives the process image and the AL status reads fill a
+/// frame: the baseline then sends slightly shorter frames, a few more of them, than ecdrive.
+const MAX_FRAME: usize = 1500;
 /// Whole frames of at most `MAX_FRAME` bytes (`element_size` adds ethercrab's headers).
 type Storage =
     PduStorage<MAX_FRAMES, { PduStorage::element_size(MAX_FRAME - PduStorage::element_size(0)) }>;
