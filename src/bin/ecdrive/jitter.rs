@@ -75,24 +75,7 @@ fn expand(devices: &[String], interface: bool) -> Result<Vec<String>, String> {
             vec!["generic-coe".into(), "generic-coe".into()]
         });
     }
-    let mut out = Vec::new();
-    for d in devices {
-        match d.rsplit_once(':') {
-            Some((name, n)) => {
-                let n: usize = n
-                    .parse()
-                    .ok()
-                    .filter(|n| (1..=128).contains(n))
-                    .ok_or_else(|| format!("--device {d}: the count must be 1 to 128"))?;
-                out.extend(std::iter::repeat_n(name.to_string(), n));
-            }
-            None => out.push(d.clone()),
-        }
-    }
-    if out.len() > 128 {
-        return Err(format!("{} drives: at most 128", out.len()));
-    }
-    Ok(out)
+    crate::sim::repeat_devices(devices)
 }
 
 /// Run `ecdrive jitter`.

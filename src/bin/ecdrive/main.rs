@@ -340,9 +340,10 @@ enum Command {
         /// blv-r@1, asda-a2@0x7F, lexium-mdrive@0x41 (see --list-devices).
         #[arg(long = "node", value_name = "NAME[@ID]", requires = "can")]
         nodes: Vec<String>,
-        /// A device, in line order; repeat for more devices. NAME+QUIRK[+QUIRK…] makes it
-        /// behave like a device ecdrive did not write (see --list-devices).
-        #[arg(long = "device", short = 'd', value_name = "NAME")]
+        /// A device, in line order, optionally repeated (`mr-j4-tm:32`); repeat the option for
+        /// more devices. NAME+QUIRK[+QUIRK…] makes it behave like a device ecdrive did not
+        /// write (see --list-devices).
+        #[arg(long = "device", short = 'd', value_name = "NAME[:COUNT]")]
         devices: Vec<String>,
         /// SM watchdog reset value in units of 100 µs (0 disables it; default: the ESC reset
         /// value of 1000 = 100 ms).

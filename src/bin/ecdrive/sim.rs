@@ -511,6 +511,10 @@ pub fn sim(
     let Some(interface) = interface else {
         return fail_with("sim", "--interface is required", exit::USAGE);
     };
+    let devices = match repeat_devices(&devices) {
+        Ok(d) => d,
+        Err(e) => return fail_with("sim", &e, exit::USAGE),
+    };
     let opts = ecdrive::sim::run::SimOptions {
         interface,
         devices,
@@ -584,4 +588,32 @@ pub fn sim(
         }
         Err(e) => fail_with("sim", &e.to_string(), exit::BUS),
     }
+}
+
+/// `--device NAME[:COUNT]` as the devices in line order: `mr-j4-tm:32` is 32 MR-J4-TM; quirks
+/// (`NAME+QUIRK`) stay with the name. At most as many devices as the master takes on one
+/// segment.
+pub(crate) fn repeat_devices(devices: &[String]) -> Result<Vec<String>, String> {
+    let max = ecdrive::master::bus::MAX_SUBDEVICES;
+    let mut out = Vec::new();
+    for d in devices {
+        match d.rsplit_once(':') {
+            Some((name, n)) => {
+                let n: usize = n
+                    .parse()
+                    .ok()
+                    .filter(|n| (1..=max).contains(n))
+                    .ok_or_else(|| format!("--device {d}: the count must be 1 to {max}"))?;
+                out.extend(std::iter::repeat_n(name.to_string(), n));
+            }
+            None => out.push(d.clone()),
+        }
+    }
+    if out.len() > max {
+        return Err(format!(
+            "{} devices: at most {max} on one segment",
+            out.len()
+        ));
+    }
+    Ok(out)
 }
