@@ -14,7 +14,7 @@ use crate::ec::mailbox::{
     SdoInfoOpcode, SdoInfoRequest, SdoRequest, SdoResponse,
 };
 use crate::ec::register;
-use crate::od::{ObjectAddress, SdoAbortCode};
+use crate::od::{ObjectAddress, SdoAbortCode, SegmentError, Segmented};
 use crate::rt::monotonic_ns;
 use ethercrab::{Command, MainDevice};
 use std::sync::{Arc, Mutex};
@@ -529,7 +529,7 @@ impl<'a> CoeClient<'a> {
                 addr,
             )
             .await?;
-        let mut data = match self.parse_sdo(&reply, addr)? {
+        let (mut data, size) = match self.parse_sdo(&reply, addr)? {
             SdoResponse::UploadExpedited {
                 index, sub, data, ..
             } => {
@@ -544,9 +544,13 @@ impl<'a> CoeClient<'a> {
                 ..
             } => {
                 self.check_echo(addr, index, sub, complete_access)?;
-                let mut v = Vec::with_capacity(complete_size as usize);
-                v.extend_from_slice(&data[..data.len().min(complete_size as usize)]);
-                (v, complete_size as usize)
+                let size = complete_size as usize;
+                let mut v = Vec::with_capacity(size);
+                v.extend_from_slice(&data[..data.len().min(size)]);
+                if v.len() == size {
+                    return Ok(v);
+                }
+                (v, size)
             }
             other => {
                 return Err(self.error(
@@ -558,27 +562,27 @@ impl<'a> CoeClient<'a> {
                 ));
             }
         };
-        // Segmented upload for the rest.
-        let mut toggle = false;
-        while data.0.len() < data.1 {
-            let (reply, _) = self.sdo(SdoRequest::UploadSegment { toggle }, addr).await?;
+        // Segmented upload for the rest (the initiate announced the size).
+        let mut seg = Segmented::start(data.len(), Some(size));
+        loop {
+            let req = SdoRequest::UploadSegment {
+                toggle: seg.toggle(),
+            };
+            let (reply, _) = self.sdo(req, addr).await?;
             match self.parse_sdo(&reply, addr)? {
                 SdoResponse::UploadSegment {
-                    toggle: t,
+                    toggle,
                     last,
-                    data: seg,
-                } => {
-                    if t != toggle {
-                        return Err(
-                            self.error(Some(addr), CoeErrorKind::Abort(SdoAbortCode::TOGGLE_BIT))
-                        );
+                    data: part,
+                } => match seg.next_in(toggle, part.len(), last, size) {
+                    Ok(done) => {
+                        data.extend_from_slice(part);
+                        if done {
+                            return Ok(data);
+                        }
                     }
-                    let room = data.1 - data.0.len();
-                    data.0.extend_from_slice(&seg[..seg.len().min(room)]);
-                    if last {
-                        break;
-                    }
-                }
+                    Err(e) => return Err(self.segment_error(addr, "upload", e)),
+                },
                 other => {
                     return Err(self.error(
                         Some(addr),
@@ -589,19 +593,17 @@ impl<'a> CoeClient<'a> {
                     ));
                 }
             }
-            toggle = !toggle;
         }
-        if data.0.len() != data.1 {
-            return Err(self.error(
-                Some(addr),
-                CoeErrorKind::Protocol(format!(
-                    "upload announced {} bytes, got {}",
-                    data.1,
-                    data.0.len()
-                )),
-            ));
-        }
-        Ok(data.0)
+    }
+
+    /// The error for a segment the transfer refused: a toggle bit out of turn is what an
+    /// abort would say; a length off the announced size is a protocol error.
+    fn segment_error(&self, addr: ObjectAddress, what: &str, e: SegmentError) -> CoeError {
+        let kind = match e {
+            SegmentError::Toggle => CoeErrorKind::Abort(SdoAbortCode::TOGGLE_BIT),
+            e => CoeErrorKind::Protocol(format!("{what}: {e}")),
+        };
+        self.error(Some(addr), kind)
     }
 
     fn check_echo(
@@ -643,7 +645,7 @@ impl<'a> CoeClient<'a> {
             ));
         }
         let mbx = self.sms.out_len as usize;
-        let (req, mut sent) =
+        let (req, sent) =
             SdoRequest::initiate_download(addr.index, addr.sub, complete_access, data, mbx);
         let (reply, _) = self.sdo(req, addr).await?;
         match self.parse_sdo(&reply, addr)? {
@@ -660,16 +662,21 @@ impl<'a> CoeClient<'a> {
                 ));
             }
         }
-        let mut toggle = false;
-        while sent < data.len() {
-            let (req, n) = SdoRequest::download_segment(&data[sent..], toggle, mbx);
+        let mut seg = Segmented::start(sent, Some(data.len()));
+        let capacity = mailbox::segment_data_capacity(mbx).max(1);
+        while !seg.sent_all(data.len()) {
+            let out = seg.next_out(data.len(), capacity);
+            let req = SdoRequest::DownloadSegment {
+                toggle: out.toggle,
+                last: out.last,
+                data: data.get(out.range).unwrap_or(&[]),
+            };
             let (reply, _) = self.sdo(req, addr).await?;
             match self.parse_sdo(&reply, addr)? {
-                SdoResponse::DownloadSegment { toggle: t } if t == toggle => {}
-                SdoResponse::DownloadSegment { .. } => {
-                    return Err(
-                        self.error(Some(addr), CoeErrorKind::Abort(SdoAbortCode::TOGGLE_BIT))
-                    );
+                SdoResponse::DownloadSegment { toggle } => {
+                    if let Err(e) = seg.acknowledged(toggle) {
+                        return Err(self.segment_error(addr, "download", e));
+                    }
                 }
                 other => {
                     return Err(self.error(
@@ -681,8 +688,6 @@ impl<'a> CoeClient<'a> {
                     ));
                 }
             }
-            sent += n;
-            toggle = !toggle;
         }
         Ok(())
     }

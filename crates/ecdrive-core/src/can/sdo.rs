@@ -25,7 +25,7 @@
 //! ⚠ The Lexium manual's Table 3.4 swaps the upload request (40h) and response (4xh) bytes; its
 //! example frames are CiA-conformant and so is this module.
 
-use crate::od::{ObjectAddress, SdoAbortCode};
+use crate::od::{ObjectAddress, SdoAbortCode, SegmentError, Segmented};
 use core::fmt;
 
 /// Largest value this module transfers, in bytes (client uploads and server downloads).
@@ -456,9 +456,9 @@ pub enum ClientStep {
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum ClientState {
     UploadInit,
-    UploadSegments { toggle: bool, size: Option<u32> },
+    UploadSegments(Segmented),
     DownloadInit { segmented: bool },
-    DownloadSegments { toggle: bool },
+    DownloadSegments(Segmented),
     Done,
 }
 
@@ -471,7 +471,6 @@ pub struct ClientTransfer {
     addr: ObjectAddress,
     state: ClientState,
     buf: Vec<u8>,
-    pos: usize,
     abort_code: Option<SdoAbortCode>,
 }
 
@@ -483,7 +482,6 @@ impl ClientTransfer {
                 addr,
                 state: ClientState::UploadInit,
                 buf: Vec::new(),
-                pos: 0,
                 abort_code: None,
             },
             SdoRequest::initiate_upload(addr),
@@ -510,7 +508,6 @@ impl ClientTransfer {
                 addr,
                 state: ClientState::DownloadInit { segmented: first.1 },
                 buf: data,
-                pos: 0,
                 abort_code: None,
             },
             first.0,
@@ -535,7 +532,6 @@ impl ClientTransfer {
                 addr,
                 state: ClientState::DownloadInit { segmented: true },
                 buf: data,
-                pos: 0,
                 abort_code: None,
             },
             first,
@@ -602,52 +598,46 @@ impl ClientTransfer {
                         self.fail("announced size too large", SdoAbortCode::OUT_OF_MEMORY);
                         return Err(SdoError::TooLarge(s as usize));
                     }
-                    self.state = ClientState::UploadSegments {
-                        toggle: false,
-                        size,
-                    };
-                    Ok(ClientStep::Send(SdoRequest::upload_segment(false)))
+                    let seg = Segmented::start(0, size.map(|s| s as usize));
+                    self.state = ClientState::UploadSegments(seg);
+                    Ok(ClientStep::Send(SdoRequest::upload_segment(seg.toggle())))
                 }
                 _ => Err(self.fail(
                     "expected an initiate-upload response",
                     SdoAbortCode::INVALID_COMMAND,
                 )),
             },
-            ClientState::UploadSegments { toggle, size } => match resp {
+            ClientState::UploadSegments(mut seg) => match resp {
                 SdoResponse::UploadSegment {
-                    toggle: t,
+                    toggle,
                     data,
                     len,
                     last,
                 } => {
-                    if t != toggle {
-                        return Err(
-                            self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT)
-                        );
-                    }
-                    self.buf.extend_from_slice(data.get(..len).unwrap_or(&[]));
-                    if self.buf.len() > MAX_TRANSFER {
-                        let n = self.buf.len();
-                        self.fail("upload too large", SdoAbortCode::OUT_OF_MEMORY);
-                        return Err(SdoError::TooLarge(n));
-                    }
-                    if last {
-                        if let Some(s) = size
-                            && s as usize != self.buf.len()
-                        {
-                            return Err(self.fail(
-                                "uploaded length differs from the indicated size",
-                                SdoAbortCode::LENGTH_MISMATCH,
-                            ));
+                    let data = data.get(..len).unwrap_or(&[]);
+                    match seg.next_in(toggle, data.len(), last, MAX_TRANSFER) {
+                        Ok(done) => {
+                            self.buf.extend_from_slice(data);
+                            if done {
+                                self.state = ClientState::Done;
+                                return Ok(ClientStep::Uploaded(core::mem::take(&mut self.buf)));
+                            }
+                            self.state = ClientState::UploadSegments(seg);
+                            Ok(ClientStep::Send(SdoRequest::upload_segment(seg.toggle())))
                         }
-                        self.state = ClientState::Done;
-                        return Ok(ClientStep::Uploaded(core::mem::take(&mut self.buf)));
+                        Err(SegmentError::Toggle) => {
+                            Err(self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT))
+                        }
+                        Err(SegmentError::OverLimit { .. }) => {
+                            let n = seg.position() + data.len();
+                            self.fail("upload too large", SdoAbortCode::OUT_OF_MEMORY);
+                            Err(SdoError::TooLarge(n))
+                        }
+                        Err(_) => Err(self.fail(
+                            "uploaded length differs from the indicated size",
+                            SdoAbortCode::LENGTH_MISMATCH,
+                        )),
                     }
-                    self.state = ClientState::UploadSegments {
-                        toggle: !toggle,
-                        size,
-                    };
-                    Ok(ClientStep::Send(SdoRequest::upload_segment(!toggle)))
                 }
                 _ => Err(self.fail("expected an upload segment", SdoAbortCode::INVALID_COMMAND)),
             },
@@ -657,7 +647,7 @@ impl ClientTransfer {
                         self.state = ClientState::Done;
                         return Ok(ClientStep::Downloaded);
                     }
-                    Ok(self.next_segment(false))
+                    Ok(self.next_segment(Segmented::start(0, Some(self.buf.len()))))
                 }
                 SdoResponse::DownloadInitiated { .. } => Err(self.fail(
                     "the response names another object",
@@ -668,18 +658,18 @@ impl ClientTransfer {
                     SdoAbortCode::INVALID_COMMAND,
                 )),
             },
-            ClientState::DownloadSegments { toggle } => match resp {
-                SdoResponse::DownloadSegment { toggle: t } => {
-                    if t != toggle {
+            ClientState::DownloadSegments(seg) => match resp {
+                SdoResponse::DownloadSegment { toggle } => {
+                    if seg.acknowledged(toggle).is_err() {
                         return Err(
                             self.fail("toggle bit not alternated", SdoAbortCode::TOGGLE_BIT)
                         );
                     }
-                    if self.pos >= self.buf.len() {
+                    if seg.sent_all(self.buf.len()) {
                         self.state = ClientState::Done;
                         return Ok(ClientStep::Downloaded);
                     }
-                    Ok(self.next_segment(!toggle))
+                    Ok(self.next_segment(seg))
                 }
                 _ => Err(self.fail(
                     "expected a download-segment response",
@@ -689,13 +679,11 @@ impl ClientTransfer {
         }
     }
 
-    fn next_segment(&mut self, toggle: bool) -> ClientStep {
-        let end = (self.pos + 7).min(self.buf.len());
-        let chunk = self.buf.get(self.pos..end).unwrap_or(&[]);
-        let last = end >= self.buf.len();
-        let frame = SdoRequest::download_segment(toggle, chunk, last);
-        self.pos = end;
-        self.state = ClientState::DownloadSegments { toggle };
+    fn next_segment(&mut self, mut seg: Segmented) -> ClientStep {
+        let out = seg.next_out(self.buf.len(), 7);
+        let chunk = self.buf.get(out.range).unwrap_or(&[]);
+        let frame = SdoRequest::download_segment(out.toggle, chunk, out.last);
+        self.state = ClientState::DownloadSegments(seg);
         ClientStep::Send(frame)
     }
 }
@@ -732,16 +720,8 @@ pub trait SdoObjects {
 #[derive(Debug, Clone, PartialEq, Eq)]
 enum ServerState {
     Idle,
-    Downloading {
-        addr: ObjectAddress,
-        size: Option<u32>,
-        toggle: bool,
-    },
-    Uploading {
-        addr: ObjectAddress,
-        pos: usize,
-        toggle: bool,
-    },
+    Downloading { addr: ObjectAddress, seg: Segmented },
+    Uploading { addr: ObjectAddress, seg: Segmented },
 }
 
 /// The server side of SDO for one node: expedited and segmented, toggle checking, aborts.
@@ -816,8 +796,7 @@ impl SdoServer {
                 }
                 self.state = ServerState::Downloading {
                     addr,
-                    size,
-                    toggle: false,
+                    seg: Segmented::start(0, size.map(|s| s as usize)),
                 };
                 Some(SdoResponse::download_initiated(addr))
             }
@@ -827,27 +806,16 @@ impl SdoServer {
                 len,
                 last,
             } => {
-                let ServerState::Downloading {
-                    addr,
-                    size,
-                    toggle: expected,
-                } = self.state
-                else {
+                let ServerState::Downloading { addr, mut seg } = self.state else {
                     return self.abort(ObjectAddress::new(0, 0), SdoAbortCode::INVALID_COMMAND);
                 };
-                if toggle != expected {
-                    return self.abort(addr, SdoAbortCode::TOGGLE_BIT);
-                }
-                self.buf.extend_from_slice(data.get(..len).unwrap_or(&[]));
-                let too_long = size.is_some_and(|s| self.buf.len() > s as usize)
-                    || self.buf.len() > MAX_TRANSFER;
-                if too_long {
-                    return self.abort(addr, SdoAbortCode::LENGTH_TOO_HIGH);
-                }
-                if last {
-                    if size.is_some_and(|s| self.buf.len() != s as usize) {
-                        return self.abort(addr, SdoAbortCode::LENGTH_TOO_LOW);
-                    }
+                let data = data.get(..len).unwrap_or(&[]);
+                let done = match seg.next_in(toggle, data.len(), last, MAX_TRANSFER) {
+                    Ok(done) => done,
+                    Err(e) => return self.abort(addr, server_abort(e)),
+                };
+                self.buf.extend_from_slice(data);
+                if done {
                     let data = core::mem::take(&mut self.buf);
                     let r = objects.sdo_write(addr, &data, true);
                     self.reset();
@@ -856,11 +824,7 @@ impl SdoServer {
                         Err(code) => self.abort(addr, code),
                     };
                 }
-                self.state = ServerState::Downloading {
-                    addr,
-                    size,
-                    toggle: !toggle,
-                };
+                self.state = ServerState::Downloading { addr, seg };
                 Some(SdoResponse::download_segment(toggle))
             }
             SdoRequest::InitiateUpload { addr } => {
@@ -874,8 +838,7 @@ impl SdoServer {
                     self.buf = value;
                     self.state = ServerState::Uploading {
                         addr,
-                        pos: 0,
-                        toggle: false,
+                        seg: Segmented::start(0, Some(0)),
                     };
                     return Some(SdoResponse::segmented_upload(addr, 0));
                 }
@@ -889,42 +852,42 @@ impl SdoServer {
                 self.buf = value;
                 self.state = ServerState::Uploading {
                     addr,
-                    pos: 0,
-                    toggle: false,
+                    seg: Segmented::start(0, Some(size as usize)),
                 };
                 Some(SdoResponse::segmented_upload(addr, size))
             }
             SdoRequest::UploadSegment { toggle } => {
-                let ServerState::Uploading {
-                    addr,
-                    pos,
-                    toggle: expected,
-                } = self.state
-                else {
+                let ServerState::Uploading { addr, mut seg } = self.state else {
                     return self.abort(ObjectAddress::new(0, 0), SdoAbortCode::INVALID_COMMAND);
                 };
-                if toggle != expected {
+                if seg.expect(toggle).is_err() {
                     return self.abort(addr, SdoAbortCode::TOGGLE_BIT);
                 }
-                let end = (pos + 7).min(self.buf.len());
-                let last = end >= self.buf.len();
+                let out = seg.next_out(self.buf.len(), 7);
                 let frame = SdoResponse::upload_segment(
-                    toggle,
-                    self.buf.get(pos..end).unwrap_or(&[]),
-                    last,
+                    out.toggle,
+                    self.buf.get(out.range).unwrap_or(&[]),
+                    out.last,
                 );
-                if last {
+                if out.last {
                     self.reset();
                 } else {
-                    self.state = ServerState::Uploading {
-                        addr,
-                        pos: end,
-                        toggle: !toggle,
-                    };
+                    self.state = ServerState::Uploading { addr, seg };
                 }
                 Some(frame)
             }
         }
+    }
+}
+
+/// The abort a server sends for a refused download segment (CiA 301 §7.2.4.3.17).
+fn server_abort(e: SegmentError) -> SdoAbortCode {
+    match e {
+        SegmentError::Toggle => SdoAbortCode::TOGGLE_BIT,
+        SegmentError::LongerThanAnnounced { .. } | SegmentError::OverLimit { .. } => {
+            SdoAbortCode::LENGTH_TOO_HIGH
+        }
+        SegmentError::ShorterThanAnnounced { .. } => SdoAbortCode::LENGTH_TOO_LOW,
     }
 }
 

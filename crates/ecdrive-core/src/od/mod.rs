@@ -1,6 +1,6 @@
 //! CANopen / CoE object dictionary types (CiA 301, ETG.1000.6): object addresses, data types,
 //! access rights, static object descriptions and a [`Dictionary`] view over them, runtime values,
-//! and SDO abort codes.
+//! SDO abort codes and the segmented SDO transfer ([`Segmented`]) both buses use.
 //!
 //! These types are shared by the drive profiles (which describe what a drive's dictionary holds),
 //! the software slave (which serves a dictionary over CoE) and the master (which reads and writes
@@ -11,6 +11,7 @@ mod address;
 mod desc;
 mod dictionary;
 mod emergency;
+mod segmented;
 mod types;
 mod value;
 
@@ -19,5 +20,6 @@ pub use address::{AddressParseError, ObjectAddress};
 pub use desc::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc, ObjectInfo};
 pub use dictionary::{Dictionary, DictionaryError};
 pub use emergency::{Emergency, EmergencyLengthError};
+pub use segmented::{Segment, SegmentError, Segmented};
 pub use types::DataType;
 pub use value::{ConstValue, Value, ValueError};

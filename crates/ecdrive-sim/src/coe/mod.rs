@@ -36,7 +36,7 @@ use crate::ec::mailbox::{
     MailboxType, ObjectDescription, SDO_MIN_LEN, Sdo, SdoInfoFragment, SdoInfoOpcode,
     SdoInfoRequest, SdoRequest, SdoResponse, list_type, value_info,
 };
-use crate::od::{ConstValue, EntryDesc, SdoAbortCode};
+use crate::od::{ConstValue, EntryDesc, SdoAbortCode, SegmentError, Segmented};
 use crate::quirks::{self, Quirk, Quirks};
 use std::collections::VecDeque;
 
@@ -99,21 +99,19 @@ impl Default for CoeConfig {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Transfer {
     Idle,
-    /// Upload: the value is in `data[..len]`; the next segment starts at `offset`.
+    /// Upload: the value is in `data[..len]`; `seg` says where the next segment starts.
     Upload {
         index: u16,
         sub: u8,
         len: usize,
-        offset: usize,
-        toggle: bool,
+        seg: Segmented,
     },
-    /// Download: `size` bytes announced, received so far in `data`.
+    /// Download: the size announced in `seg`, received so far in `data`.
     Download {
         index: u16,
         sub: u8,
         complete_access: bool,
-        size: usize,
-        toggle: bool,
+        seg: Segmented,
     },
 }
 
@@ -596,8 +594,7 @@ impl CoeServer {
                     index,
                     sub,
                     len,
-                    offset: 0,
-                    toggle: false,
+                    seg: Segmented::start(0, Some(len)),
                 };
             }
             r
@@ -611,39 +608,34 @@ impl CoeServer {
             index,
             sub,
             len,
-            offset,
-            toggle: expected,
+            mut seg,
         } = self.transfer
         else {
             return self.abort(0, 0, SdoAbortCode::INVALID_COMMAND, reply);
         };
-        if toggle != expected {
+        if seg.expect(toggle).is_err() {
             return self.abort(index, sub, SdoAbortCode::TOGGLE_BIT, reply);
         }
-        let cap = mailbox::segment_data_capacity(reply.len());
-        let end = len.min(offset.saturating_add(cap));
-        let last = end >= len;
+        let out = seg.next_out(len, mailbox::segment_data_capacity(reply.len()));
         let data = std::mem::take(&mut self.data);
-        let chunk = data.get(offset..end).unwrap_or(&[]);
         let r = self.respond(
             SdoResponse::UploadSegment {
-                toggle,
-                last,
-                data: chunk,
+                toggle: out.toggle,
+                last: out.last,
+                data: data.get(out.range).unwrap_or(&[]),
             },
             reply,
         );
         self.data = data;
         if r.is_some() {
-            self.transfer = if last {
+            self.transfer = if out.last {
                 Transfer::Idle
             } else {
                 Transfer::Upload {
                     index,
                     sub,
                     len,
-                    offset: end,
-                    toggle: !toggle,
+                    seg,
                 }
             };
         }
@@ -727,8 +719,7 @@ impl CoeServer {
                 index,
                 sub,
                 complete_access,
-                size,
-                toggle: false,
+                seg: Segmented::start(data.len(), Some(size)),
             };
         }
         r
@@ -747,36 +738,33 @@ impl CoeServer {
             index,
             sub,
             complete_access,
-            size,
-            toggle: expected,
+            mut seg,
         } = self.transfer
         else {
             return self.abort(0, 0, SdoAbortCode::INVALID_COMMAND, reply);
         };
-        if toggle != expected {
-            return self.abort(index, sub, SdoAbortCode::TOGGLE_BIT, reply);
-        }
-        if self.data.len() + data.len() > size {
-            return self.abort(index, sub, SdoAbortCode::LENGTH_MISMATCH, reply);
-        }
+        let done = match seg.next_in(toggle, data.len(), last, self.config.max_object_size) {
+            Ok(done) => done,
+            Err(SegmentError::Toggle) => {
+                return self.abort(index, sub, SdoAbortCode::TOGGLE_BIT, reply);
+            }
+            // More or less than the initiate announced.
+            Err(_) => return self.abort(index, sub, SdoAbortCode::LENGTH_MISMATCH, reply),
+        };
         self.data.extend_from_slice(data);
-        if !last {
+        if !done {
             let r = self.respond(SdoResponse::DownloadSegment { toggle }, reply);
             if r.is_some() {
                 self.transfer = Transfer::Download {
                     index,
                     sub,
                     complete_access,
-                    size,
-                    toggle: !toggle,
+                    seg,
                 };
             }
             return r;
         }
         self.transfer = Transfer::Idle;
-        if self.data.len() != size {
-            return self.abort(index, sub, SdoAbortCode::LENGTH_MISMATCH, reply);
-        }
         let value = std::mem::take(&mut self.data);
         let written = if complete_access {
             od.write_complete(index, sub, state, &value)
