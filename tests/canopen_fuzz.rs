@@ -6,10 +6,12 @@ use ecdrive::canopen::emcy::Emergency;
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
 use ecdrive::canopen::nmt::{ErrorControl, NmtCommand};
 use ecdrive::canopen::profile::CanDriveProfile;
-use ecdrive::canopen::sdo::{SdoRequest, SdoResponse, SdoServer};
+use ecdrive::canopen::sdo::{SdoRequest, SdoResponse};
 use ecdrive::canopen::{CanFrame, CanTransport, TransportError};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
+use ecdrive::ec::AlState;
 use ecdrive::od::ObjectAddress;
+use ecdrive::sim::canopen::SdoServer;
 use ecdrive::sim::canopen::{EmulatedNode, SimBus};
 use proptest::prelude::*;
 use std::collections::VecDeque;
@@ -108,7 +110,7 @@ proptest! {
         let mut server = SdoServer::new();
         let mut node = EmulatedNode::new(&blv_r::PROFILE, NODE).unwrap();
         node.power_on(0);
-        let _ = server.handle(&bytes, &mut node);
+        let _ = server.handle(&bytes, AlState::PreOp, &mut node);
         if let Ok(f) = CanFrame::new(0x700 + NODE as u16, bytes.get(..bytes.len().min(8)).unwrap_or(&[])) {
             let _ = ErrorControl::parse(&f);
             let _ = NmtCommand::parse(&f);

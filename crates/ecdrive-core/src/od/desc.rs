@@ -214,6 +214,33 @@ pub struct ObjectInfo {
 }
 
 impl ObjectInfo {
+    /// The description of a static object: a VAR's value type, an ARRAY's element type (its
+    /// first entry after sub-index 0), 0 for a RECORD (no structure type defined); the highest
+    /// sub-index (0 for a VAR).
+    pub fn describe(o: &ObjectDesc) -> Self {
+        let max_sub = o.entries.iter().map(|e| e.sub).max().unwrap_or(0);
+        let data_type = match o.code {
+            ObjectCode::Var => o.entry(0).map_or(0, |e| e.data_type.code()),
+            ObjectCode::Array => o
+                .entries
+                .iter()
+                .find(|e| e.sub > 0)
+                .map_or(0, |e| e.data_type.code()),
+            ObjectCode::Record => 0,
+        };
+        Self {
+            index: o.index,
+            name: o.name.into(),
+            object_code: o.code as u8,
+            data_type,
+            max_sub: if o.code == ObjectCode::Var {
+                0
+            } else {
+                max_sub
+            },
+        }
+    }
+
     /// The object code, if it is one this crate models.
     pub const fn code(&self) -> Option<ObjectCode> {
         ObjectCode::from_code(self.object_code)

@@ -2,6 +2,7 @@
 //!
 //! - [`EmulatedNode`]: one drive, generic, with all drive differences taken from its
 //!   [`CanDriveProfile`](crate::can::profile::CanDriveProfile) ([`node`]).
+//! - [`SdoServer`]: the SDO server of a node, over the same object store as the CoE server.
 //! - [`motion`]: the drive side of pp, pv, tq, hm, ip and a simple motor.
 //! - [`SimBus`]: the deterministic in-process world: a [`Hub`] with the master's port and one
 //!   port per node, and a **simulated clock** that advances only while the master waits in
@@ -14,9 +15,11 @@
 pub mod motion;
 pub mod node;
 pub mod quirks;
+pub mod sdo_server;
 
 pub use motion::World;
 pub use node::{EmuError, EmulatedNode, NodeStats};
+pub use sdo_server::SdoServer;
 
 use crate::can::frame::CanFrame;
 use crate::can::transport::{CanTransport, Hub, PortId, TransportError};

@@ -13,16 +13,18 @@ use super::motion::{
     DEFAULT_SPEED_WINDOW_REV_S, DEFAULT_ZERO_SPEED_REV_S, FALLBACK_ACCEL_REV_S2, Motion, Params,
     STEP_ACCEL_REV_S2, World,
 };
+use super::sdo_server::SdoServer;
 use crate::can::emcy::Emergency;
 use crate::can::frame::{CanFrame, cob};
 use crate::can::nmt::{ErrorControl, NmtCommand, NmtState};
 use crate::can::profile::{Alarm, CanDriveProfile, EnabledNmtReaction, Transmission, od};
-use crate::can::sdo::{SdoObjects, SdoServer};
 use crate::cia402::device::{Device, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{AccelUnit, ProfileUnits, TorqueSlopeUnit, Units};
 use crate::cia402::{ControlWord, OperationMode, State, StopRamp};
+use crate::coe::ObjectStore;
 use crate::coe::ValueStore;
-use crate::od::{DataType, EntryAccess, ObjectAddress, SdoAbortCode, Value};
+use crate::ec::AlState;
+use crate::od::{DataType, EntryAccess, EntryDesc, ObjectAddress, ObjectInfo, SdoAbortCode, Value};
 use std::collections::VecDeque;
 
 /// Why a node cannot be built.
@@ -519,7 +521,13 @@ impl EmulatedNode {
         }
         self.stats.sdo_requests += 1;
         let mut server = core::mem::take(&mut self.sdo);
-        let resp = server.handle(frame.data(), self);
+        // The entries' access flags are in EtherCAT terms: pre-operational is PRE-OP.
+        let access = if self.nmt == NmtState::Operational {
+            AlState::Op
+        } else {
+            AlState::PreOp
+        };
+        let resp = server.handle(frame.data(), access, self);
         self.sdo = server;
         if let Some(r) = resp {
             self.emit(CanFrame::from_parts(cob::sdo_tx(self.id), r, 8));
@@ -1301,15 +1309,34 @@ fn copy_range(from: &ValueStore, to: &mut ValueStore, lo: u16, hi: u16) {
     }
 }
 
-impl SdoObjects for EmulatedNode {
-    fn sdo_read(&mut self, addr: ObjectAddress, out: &mut Vec<u8>) -> Result<(), SdoAbortCode> {
-        let e = self.od.entry_desc(addr).ok_or_else(|| {
-            if self.od.object_desc(addr.index).is_some() {
-                SdoAbortCode::NO_SUBINDEX
-            } else {
-                SdoAbortCode::NO_OBJECT
-            }
-        })?;
+/// The node's dictionary as the SDO server serves it; CANopen access does not depend on the NMT
+/// state here (every entry the manuals list is accessible in pre-operational and operational).
+impl ObjectStore for EmulatedNode {
+    fn object(&self, index: u16) -> Option<ObjectInfo> {
+        self.od.object_desc(index).map(ObjectInfo::describe)
+    }
+
+    fn entry(&self, index: u16, sub: u8) -> Result<EntryDesc, SdoAbortCode> {
+        self.entry_of(ObjectAddress::new(index, sub)).copied()
+    }
+
+    fn next_index(&self, after: Option<u16>) -> Option<u16> {
+        self.od
+            .objects()
+            .map(|o| o.index)
+            .filter(|i| after.is_none_or(|a| *i > a))
+            .min()
+    }
+
+    fn read(
+        &mut self,
+        index: u16,
+        sub: u8,
+        _: AlState,
+        buf: &mut [u8],
+    ) -> Result<usize, SdoAbortCode> {
+        let addr = ObjectAddress::new(index, sub);
+        let e = self.entry_of(addr)?;
         if !e.access.readable() {
             return Err(SdoAbortCode::WRITE_ONLY);
         }
@@ -1319,49 +1346,33 @@ impl SdoObjects for EmulatedNode {
                 return Err(SdoAbortCode::NO_DATA);
             }
         }
-        out.clear();
-        out.extend_from_slice(self.od.raw(addr).unwrap_or(&[]));
-        Ok(())
+        let v = self.od.raw(addr).unwrap_or(&[]);
+        buf.get_mut(..v.len())
+            .ok_or(SdoAbortCode::OUT_OF_MEMORY)?
+            .copy_from_slice(v);
+        Ok(v.len())
     }
 
-    fn sdo_prepare_write(
-        &mut self,
-        addr: ObjectAddress,
-        size: Option<u32>,
-    ) -> Result<(), SdoAbortCode> {
-        let e = self.od.entry_desc(addr).ok_or_else(|| {
+    fn write(&mut self, index: u16, sub: u8, _: AlState, data: &[u8]) -> Result<(), SdoAbortCode> {
+        self.sdo_write(ObjectAddress::new(index, sub), data)
+    }
+}
+
+impl EmulatedNode {
+    fn entry_of(&self, addr: ObjectAddress) -> Result<&'static EntryDesc, SdoAbortCode> {
+        self.od.entry_desc(addr).ok_or_else(|| {
             if self.od.object_desc(addr.index).is_some() {
                 SdoAbortCode::NO_SUBINDEX
             } else {
                 SdoAbortCode::NO_OBJECT
             }
-        })?;
-        if !e.access.writable() {
-            return Err(SdoAbortCode::READ_ONLY);
-        }
-        let cap = usize::from(e.bit_len).div_ceil(8);
-        if let Some(s) = size
-            && cap > 0
-            && s as usize > cap
-        {
-            return Err(SdoAbortCode::LENGTH_TOO_HIGH);
-        }
-        Ok(())
+        })
     }
 
-    fn sdo_write(
-        &mut self,
-        addr: ObjectAddress,
-        data: &[u8],
-        size_known: bool,
-    ) -> Result<(), SdoAbortCode> {
-        let e = self.od.entry_desc(addr).ok_or_else(|| {
-            if self.od.object_desc(addr.index).is_some() {
-                SdoAbortCode::NO_SUBINDEX
-            } else {
-                SdoAbortCode::NO_OBJECT
-            }
-        })?;
+    /// Write one entry from an SDO download: length and range checks, store/restore
+    /// signatures, the node's side effects.
+    fn sdo_write(&mut self, addr: ObjectAddress, data: &[u8]) -> Result<(), SdoAbortCode> {
+        let e = self.entry_of(addr)?;
         if !e.access.writable() {
             return Err(SdoAbortCode::READ_ONLY);
         }
@@ -1394,8 +1405,8 @@ impl SdoObjects for EmulatedNode {
                 return Err(SdoAbortCode::LENGTH_TOO_HIGH);
             }
             data
-        } else if data.len() == need || (!size_known && data.len() >= need) {
-            data.get(..need).ok_or(SdoAbortCode::LENGTH_MISMATCH)?
+        } else if data.len() == need {
+            data
         } else if data.len() > need {
             return Err(SdoAbortCode::LENGTH_TOO_HIGH);
         } else {

@@ -10,7 +10,7 @@ use crate::od::{
 use crate::pdo::{Direction, Mapping, PdoEntry, PdoLimits, ReadbackError, read_mapping_sync};
 use core::ops::{Deref, DerefMut};
 
-use super::{MAX_UNSIZED_STRING, RECORD_DATA_TYPE};
+use super::MAX_UNSIZED_STRING;
 use crate::quirks::{Quirk, Quirks};
 
 /// Why a descriptor table cannot be served.
@@ -861,27 +861,7 @@ impl ObjectStore for OdStore {
             return None;
         }
         let o = self.dict.object_desc(index)?;
-        let max_sub = o.entries.iter().map(|e| e.sub).max().unwrap_or(0);
-        let data_type = match o.code {
-            ObjectCode::Var => o.entry(0).map_or(0, |e| e.data_type.code()),
-            ObjectCode::Array => o
-                .entries
-                .iter()
-                .find(|e| e.sub > 0)
-                .map_or(0, |e| e.data_type.code()),
-            ObjectCode::Record => RECORD_DATA_TYPE,
-        };
-        Some(ObjectInfo {
-            index,
-            name: o.name.into(),
-            object_code: o.code as u8,
-            data_type,
-            max_sub: if o.code == ObjectCode::Var {
-                0
-            } else {
-                max_sub
-            },
-        })
+        Some(ObjectInfo::describe(o))
     }
 
     fn entry(&self, index: u16, sub: u8) -> Result<EntryDesc, SdoAbortCode> {
