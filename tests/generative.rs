@@ -539,7 +539,7 @@ fn run_case(c: &Case) -> Result<(), TestCaseError> {
     let errors: Vec<_> = report
         .history
         .iter()
-        .filter(|h| h.error && !matches!(h.kind, ecdrive::master::history::HistoryKind::FrameLost))
+        .filter(|h| h.error && !matches!(h.kind, ecdrive::master::HistoryKind::FrameLost))
         .collect();
     prop_assert!(errors.is_empty(), "{:#?}\n{}", errors, text);
     Ok(())

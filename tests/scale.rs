@@ -186,10 +186,10 @@ fn run<L: FrameLink + Send + 'static>(link: L, drives: usize, cycle: Duration) -
                 .all(|a| a.state == Some(State::OperationEnabled))
     })
     .unwrap();
-    // Frames and working counter over 100 cycles of steady state.
+    // Frames and working counter over 200 cycles of steady state.
     let (c0, s0) = (m.telemetry().cycle.cycle, sent.load(Ordering::Relaxed));
-    m.wait_until("100 cycles", Duration::from_secs(60), |t| {
-        t.cycle.cycle >= c0 + 100
+    m.wait_until("200 cycles", Duration::from_secs(60), |t| {
+        t.cycle.cycle >= c0 + 200
     })
     .unwrap();
     let (c1, s1) = (m.telemetry().cycle.cycle, sent.load(Ordering::Relaxed));
@@ -198,12 +198,13 @@ fn run<L: FrameLink + Send + 'static>(link: L, drives: usize, cycle: Duration) -
     assert_eq!(t.cycle.wkc_expected, wkc, "{drives} drives: {:?}", t.cycle);
     assert_eq!(t.cycle.wkc, wkc, "{drives} drives: {:?}", t.cycle);
     // Every cycle sends the same frames. The two counts are read one after the other while
-    // the cycle runs, so each may be one cycle apart: a wrong count per cycle shows as 100
-    // frames off, a race as at most two cycles' worth.
-    let (got, want) = (s1 - s0, (c1 - c0) * frames as u64);
+    // the cycle runs, and the telemetry may be a few cycles behind on a loaded machine: a
+    // wrong count per cycle is at least one frame per cycle off, a race a few frames in all.
+    let per_cycle = (s1 - s0) as f64 / (c1 - c0) as f64;
     assert!(
-        got.abs_diff(want) <= 2 * frames as u64,
-        "{drives} drives: {got} cyclic frames in {} cycles, {frames} per cycle expected",
+        (per_cycle - frames as f64).abs() < 0.5,
+        "{drives} drives: {} cyclic frames in {} cycles, {frames} per cycle expected",
+        s1 - s0,
         c1 - c0
     );
     m.command(Command::RunProgram(Axes::All)).unwrap();

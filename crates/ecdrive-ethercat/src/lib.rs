@@ -19,21 +19,22 @@ pub mod coe;
 pub mod cycle;
 pub mod error;
 pub mod exec;
-pub mod history;
+mod history;
 pub mod io;
 pub mod program;
 pub mod session;
 pub mod setpoint;
 pub mod startup;
 pub mod telemetry;
-pub mod wkc;
+mod wkc;
 
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
-pub use history::{HistoryEntry, HistoryKind};
+pub use history::{HistoryEntry, HistoryKind, HistoryLog};
 pub use program::{CyclicMode, Step, Target};
 pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
 pub use startup::{DriveSetup, Selector, StartupConfig};
 pub use telemetry::{
     Axes, AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
 };
+pub use wkc::{DatagramWkc, WkcPlan};

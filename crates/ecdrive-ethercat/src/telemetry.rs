@@ -283,8 +283,8 @@ pub struct AxisTelemetry {
     pub torque_demand: i16,
     /// Torque actual, drive units.
     pub torque_actual: i16,
-    /// Following error as the master computes it: the position demand of
-    /// [`FEEDBACK_DELAY_CYCLES`](super::cycle::FEEDBACK_DELAY_CYCLES) cycles ago − the actual
+    /// Following error as the master computes it: the position demand the drive took (the one
+    /// whose frame passed two SYNC0 pulses before this feedback was latched) − the actual
     /// position. The master-side limit uses this value.
     pub following_error: i64,
     /// Largest |following error| (the master's) seen while energised in csp.

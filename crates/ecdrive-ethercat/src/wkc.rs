@@ -59,8 +59,10 @@ pub struct DatagramWkc {
     pub devices: Option<(u16, u16)>,
 }
 
-/// The expected working counters of the logical process image. See the [module
-/// documentation](self).
+/// The expected working counters of the logical process image: each device's logical ranges as
+/// the master configured them (the FMMU blocks it sent), and the count any logical datagram
+/// should come back with. An ESC adds +1 when a datagram touches its inputs, +2 (LRW) when it
+/// touches its outputs, once per ESC; a device cut between two datagrams counts in both.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct WkcPlan {
     devices: Vec<DeviceImage>,

@@ -8,7 +8,7 @@
 //! - [`sii`]: the SII EEPROM image, built from a [`sii::DeviceDescription`];
 //! - [`segment::Segment`]: a line of slaves processing frames in place;
 //! - [`transport`]: serving a segment on a raw socket, to ethercrab's `PduTx`/`PduRx`
-//!   in-process, or as a synchronous [`link::FrameLink`](crate::link::FrameLink);
+//!   in-process, or as a synchronous [`crate::link::FrameLink`];
 //! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
 //! - [`devices`]: ready-made test devices (generic CoE servo, EEPROM-only I/O, mailbox echo);
 //! - [`drives`]: the emulated drives (MR-J4-TM, BDHDE), built from their ESI files and their

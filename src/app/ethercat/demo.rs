@@ -218,7 +218,7 @@ const DEMO_LIMIT: Duration = Duration::from_secs(30);
 const MAX_RECOVERIES: u64 = 3;
 
 /// Run the demo: OP, enable, run the programs once, stop. If the drives stop on their own
-/// (a fault) the demo recovers as an application would (at most [`MAX_RECOVERIES`] times) and
+/// (a fault) the demo recovers as an application would (at most `MAX_RECOVERIES` times) and
 /// the report says so; it succeeds when the programs completed, nothing was left unhandled and
 /// the drives were shut down.
 pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {

@@ -9,8 +9,8 @@
 //! recoveries.
 
 use crate::cia402::State;
+use crate::link::FrameLink;
 use crate::master::error::MasterError;
-use crate::master::io::FrameLink;
 use crate::master::session::{HistoryKind, Master};
 use crate::master::telemetry::{Axes, Command, Phase, Telemetry};
 use std::time::{Duration, Instant};
@@ -58,14 +58,14 @@ pub enum Action {
 
 /// The recovery after a controlled stop, as an application would do it: while a fault
 /// is shown, request a reset of the faulted axis (the master then pulses bit 7 until the drive
-/// leaves Fault), and again every [`RESET_RETRY`] while it is still or again shown; once no
+/// leaves Fault), and again every `RESET_RETRY` while it is still or again shown; once no
 /// axis shows a fault and none is energised, wait a moment and enable them all; once all are
 /// enabled, run the programs.
 ///
 /// A fault that appears while the enable is under way cancels it (the master refuses to
 /// energise a faulted drive); the reset and the enable then start again. It is an unhandled
-/// error when a fault stays shown [`FAULT_CLEAR_LIMIT`] after its first reset request, or the
-/// axes are not enabled [`ENABLE_LIMIT`] after the request without a fault meanwhile.
+/// error when a fault stays shown `FAULT_CLEAR_LIMIT` after its first reset request, or the
+/// axes are not enabled `ENABLE_LIMIT` after the request without a fault meanwhile.
 #[derive(Debug)]
 pub struct Recovery {
     /// How long the axes stay idle before the enable ([`SETTLE`]).

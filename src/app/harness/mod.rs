@@ -13,7 +13,7 @@
 //!    cycle, axes enabled and holding position.
 //!
 //! Transports ([`Transport`]): in-process (the emulated slaves are a
-//! [`SegmentLink`](crate::sim::transport::SegmentLink) called by ecdrive's cycle thread, and an
+//! [`crate::sim::transport::SegmentLink`] called by ecdrive's cycle thread, and an
 //! [`EthercrabLink`](crate::sim::transport::EthercrabLink) thread for plain ethercrab); a veth
 //! pair the harness creates, with the emulated slaves served on its far end inside a network
 //! namespace by a thread of this process (root); or any interface, whose far end is not the

@@ -20,7 +20,7 @@ impl<T: CanTransport> Master<T> {
     }
 
     /// Send an NMT command to `node` (0 = every node). Stop and the resets are refused to a node
-    /// whose drive is energised (see the [module documentation](self)); for node 0 every known
+    /// whose drive is energised (see the module documentation); for node 0 every known
     /// node is checked.
     pub fn nmt(&mut self, node: u8, cmd: NmtCommand) -> Result<(), CanError> {
         if node > 127 {

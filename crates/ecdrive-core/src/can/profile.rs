@@ -5,7 +5,7 @@
 //! vendor it talks to.
 //!
 //! What a profile holds (see `/work/shared/reference/canopen-common.md` §3):
-//! identity ([`Identity`]); the CiA 402 capability set ([`DriveCaps`], shared with the EtherCAT
+//! identity ([`Identity`]); the CiA 402 capability set ([`DriveCaps`](crate::cia402::DriveCaps), shared with the EtherCAT
 //! drives); the object dictionary; the PDO rules including the CAN-only ones ([`CanPdoProfile`]);
 //! units and their conversions ([`Units`]); enable preconditions ([`EnableConditions`]); homing
 //! methods ([`HomingSupport`]); how EMCY bytes 3–7 are laid out ([`EmcyFormat`]) and the alarm

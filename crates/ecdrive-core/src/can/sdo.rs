@@ -9,7 +9,7 @@
 //!
 //! The server side serves the emulated nodes and lives with them in the software slave
 //! (`sim::canopen::sdo_server`, over the same object store as its CoE server); the segmented
-//! transfer itself is [`Segmented`](crate::od::Segmented), shared with CoE.
+//! transfer itself is [`crate::od::Segmented`], shared with CoE.
 //!
 //! Command byte layout (byte 0), `ccs`/`scs` in bits 7–5:
 //!

@@ -214,7 +214,7 @@ pub struct Rating {
 /// The largest torque and speed a drive documents independently of the motor it drives.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ratings {
-    /// Largest torque, in the drive's torque unit ([`Units::torque_unit`]).
+    /// Largest torque, in the drive's torque unit ([`Units::torque_per_mille`]).
     pub max_torque: Option<Rating>,
     /// Largest speed, motor revolutions per second.
     pub max_speed_rev_s: Option<Rating>,

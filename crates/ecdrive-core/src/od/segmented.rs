@@ -55,7 +55,7 @@ pub struct Segment {
     pub last: bool,
 }
 
-/// Where a segmented transfer stands. See the [module documentation](self).
+/// Where a segmented transfer stands. It is stepped by the side that sends a value ([`next_out`](Self::next_out)) and by the side that receives it ([`next_in`](Self::next_in)).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Segmented {
     toggle: bool,

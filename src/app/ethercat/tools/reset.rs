@@ -14,8 +14,8 @@
 
 use crate::cia402::State;
 use crate::link::FrameLink;
+use crate::master::HistoryKind;
 use crate::master::error::{ErrorKind, MasterError};
-use crate::master::history::HistoryKind;
 use crate::master::session::{Master, MasterConfig};
 use crate::master::telemetry::{Axes, Command, StopKind};
 use serde::Serialize;

@@ -11,9 +11,9 @@
 use super::Target;
 use crate::app::config::{RunConfig, UserUnits};
 use crate::cia402::State;
+use crate::master::HistoryKind;
 use crate::master::cycle::CycleEnd;
 use crate::master::error::{ErrorKind, MasterError};
-use crate::master::history::HistoryKind;
 use crate::master::session::{HistoryEntry, Master};
 use crate::master::startup::{DeviceInfo, Selector};
 use crate::master::telemetry::{Axes, Command, StopKind, StopReason, Telemetry};
@@ -656,7 +656,7 @@ pub fn run(
                     .history
                     .iter()
                     .filter(|h| {
-                        h.kind == crate::master::history::HistoryKind::Warning
+                        h.kind == crate::master::HistoryKind::Warning
                             && !h.error
                             && h.drive
                                 .as_ref()
