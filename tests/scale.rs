@@ -225,6 +225,13 @@ fn run<L: FrameLink + Send + 'static>(link: L, drives: usize, cycle: Duration) -
         .collect();
     assert!(errors.is_empty(), "{drives} drives: {errors:#?}");
     assert!(r.shutdown_ok, "{drives} drives");
+    // Where start-up's time went: every phase counted once, to OP.
+    let t = r.startup.expect("start-up times");
+    let op = t.op_ms.expect("the time to OP");
+    let sum = t.discovery_ms + t.coe_ms + t.image_ms + t.dc_settle_ms + t.safe_op_ms + op;
+    assert!((t.total_ms - sum).abs() < 1e-6, "{t:?}");
+    assert!(t.sii_ms > 0.0 && t.sii_ms <= t.discovery_ms, "{t:?}");
+    assert!(t.coe_ms > 0.0 && t.image_ms > 0.0 && op > 0.0, "{t:?}");
     assert_eq!(r.cycle.as_ref().unwrap().end, CycleEnd::Stopped);
     for (i, states) in r.cycle.as_ref().unwrap().states.iter().enumerate() {
         assert!(

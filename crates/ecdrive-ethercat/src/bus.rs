@@ -100,6 +100,8 @@ pub struct Bus<'sto, L: FrameLink> {
     /// The device ethercrab's client wrote a mailbox request to last (to name it when
     /// ethercrab's step fails).
     last_ethercrab_mailbox: Option<u16>,
+    /// The last discovery's duration and its SII span, in ms (start-up's time report).
+    discovery_ms: Option<(f64, f64)>,
 }
 
 /// Open a session on `link` and run `f` with it. The storage and the link live as long as the
@@ -128,6 +130,7 @@ pub fn with_bus<L: FrameLink, R>(
         opts,
         counters: HashMap::new(),
         last_ethercrab_mailbox: None,
+        discovery_ms: None,
     };
     let r = f(&mut bus);
     let (_, _, link) = bus.pump.into_parts();
@@ -230,6 +233,16 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
                 .sent_by_ethercrab(c);
         }
         r
+    }
+
+    /// Note how long discovery took and its SII span (ms).
+    pub fn set_discovery_ms(&mut self, total: f64, sii: f64) {
+        self.discovery_ms = Some((total, sii));
+    }
+
+    /// How long the last discovery took and its SII span (ms).
+    pub fn discovery_ms(&self) -> Option<(f64, f64)> {
+        self.discovery_ms
     }
 
     /// The configured address of the device to which ethercrab sent its last mailbox request

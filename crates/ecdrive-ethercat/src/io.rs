@@ -99,6 +99,8 @@ struct MailboxTap {
     seen: Vec<(u16, u8)>,
     /// (station address, FMMU number) → the block last written.
     fmmus: HashMap<(u16, u8), FmmuConfig>,
+    /// Monotonic times of the first and the last frame with an SII (EEPROM) access.
+    sii: Option<(u64, u64)>,
 }
 
 impl MailboxTap {
@@ -109,8 +111,13 @@ impl MailboxTap {
         let Ok(ecat) = EthercatFrame::new_checked(eth.payload()) else {
             return;
         };
+        let mut sii = false;
         for d in ecat.datagrams() {
             let Ok(d) = d else { break };
+            let logical = d.command().is_some_and(Command::is_logical);
+            if !logical && (register::SII_CONTROL..=register::SII_DATA + 7).contains(&d.ado()) {
+                sii = true;
+            }
             if d.command() != Some(Command::Fpwr) {
                 continue;
             }
@@ -132,6 +139,10 @@ impl MailboxTap {
                 // Mailbox header byte 5, bits 4–6: the counter.
                 self.seen.push((station, (data[5] >> 4) & 0x07));
             }
+        }
+        if sii {
+            let now = monotonic_ns();
+            self.sii = Some(self.sii.map_or((now, now), |(first, _)| (first, now)));
         }
     }
 }
@@ -230,6 +241,12 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     /// number): the master's own record of the logical process image as the ESCs map it.
     pub fn fmmu_configs(&self) -> impl Iterator<Item = (u16, u8, FmmuConfig)> + '_ {
         self.tap.fmmus.iter().map(|(&(st, n), &c)| (st, n, c))
+    }
+
+    /// The monotonic times of the first and the last frame with an SII (EEPROM) access sent
+    /// while the tap was on, since the last call.
+    pub fn take_sii_span(&mut self) -> Option<(u64, u64)> {
+        self.tap.sii.take()
     }
 
     /// Record the logical datagrams (LRD/LWR/LRW) of the replies from now on, in a fixed

@@ -131,6 +131,8 @@ pub struct SessionReport {
     pub history_totals: std::collections::BTreeMap<HistoryKind, u64>,
     /// Every emergency received.
     pub emergencies: Vec<EmergencyRecord>,
+    /// Where the first start-up's time went, to OP when every device got there.
+    pub startup: Option<startup::StartupTimes>,
     /// Whether the drives reached INIT at the end.
     pub shutdown_ok: bool,
     /// Re-starts that brought the drives back to OP.
@@ -707,6 +709,7 @@ struct Persist {
     emergencies: Vec<EmergencyRecord>,
     restarts: u32,
     shutdown_ok: bool,
+    startup: startup::StartupTimes,
 }
 
 impl Persist {
@@ -781,6 +784,7 @@ impl Persist {
             emergencies: Vec::new(),
             restarts: 0,
             shutdown_ok: false,
+            startup: started.times,
         }
     }
 
@@ -954,6 +958,7 @@ fn session<L: FrameLink + Send>(
             emergencies: p.emergencies,
             shutdown_ok: p.shutdown_ok,
             restarts: p.restarts,
+            startup: Some(p.startup),
         }),
         link,
     )
@@ -1276,6 +1281,7 @@ fn run<L: FrameLink + Send>(
         emergencies,
         restarts,
         shutdown_ok: shutdown_ok_out,
+        startup: times,
         ..
     } = p;
     cycle_io.restarts = *restarts;
@@ -1335,6 +1341,9 @@ fn run<L: FrameLink + Send>(
             while let Ok(e) = events.pop() {
                 if let Some(entry) = decoder.entry(&e) {
                     push_history(shared, entry);
+                }
+                if matches!(e.kind, EventKind::AllOp) {
+                    times.reached_op(monotonic_ns());
                 }
                 if restarting && matches!(e.kind, EventKind::AllOp) {
                     note(

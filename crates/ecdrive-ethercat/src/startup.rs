@@ -275,6 +275,48 @@ pub struct ConfiguredIo {
     pub why: String,
 }
 
+/// Where start-up's time went, in milliseconds of wall time, phase by phase.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct StartupTimes {
+    /// Discovery: ethercrab's initialisation (station addresses, the SII of every device, DC
+    /// propagation delays, mailboxes, INIT → PRE-OP) and each device's identity.
+    pub discovery_ms: f64,
+    /// Within discovery, from the first to the last SII (EEPROM) access on the wire.
+    pub sii_ms: f64,
+    /// CoE configuration of the drives: PDO mapping and assignment, synchronisation objects,
+    /// start-up SDOs, read-backs, the mailbox drain.
+    pub coe_ms: f64,
+    /// The process image: ethercrab's FMMU and SyncManager set-up and the drives' fields.
+    pub image_ms: f64,
+    /// Waiting for the distributed clocks to settle (measured, not slept).
+    pub dc_settle_ms: f64,
+    /// Starting SYNC0, PRE-OP → SAFE-OP, and the checks of read-only cycle times.
+    pub safe_op_ms: f64,
+    /// SAFE-OP → OP: from the first cycle until every device reported OP (`None` until then,
+    /// or when the caller did not go to OP).
+    pub op_ms: Option<f64>,
+    /// From the start of discovery to SAFE-OP (to OP when `op_ms` is known).
+    pub total_ms: f64,
+    /// When SAFE-OP was reached (monotonic ns): where `op_ms` counts from.
+    #[serde(skip)]
+    pub safe_op_at_ns: u64,
+}
+
+impl StartupTimes {
+    /// Record that every device reached OP now (the first time only).
+    pub fn reached_op(&mut self, now_ns: u64) {
+        if self.op_ms.is_none() {
+            let op = now_ns.saturating_sub(self.safe_op_at_ns) as f64 / 1e6;
+            self.op_ms = Some(op);
+            self.total_ms += op;
+        }
+    }
+}
+
+fn ms_since(t0: u64) -> f64 {
+    crate::rt::monotonic_ns().saturating_sub(t0) as f64 / 1e6
+}
+
 /// The result of start-up: the group in SAFE-OP with DC running, and the drives.
 pub struct Started {
     /// The group.
@@ -288,6 +330,8 @@ pub struct Started {
     /// What start-up accepted but the user should know (a drive without 0x1C32, a read-only
     /// cycle time), per drive.
     pub warnings: Vec<(DriveRef, String)>,
+    /// Where the time went (discovery is filled by [`configure`] from [`Discovered`]).
+    pub times: StartupTimes,
 }
 
 const T_INIT: Duration = Duration::from_secs(30);
@@ -298,6 +342,8 @@ const T_STEP: Duration = Duration::from_secs(10);
 pub fn discover<L: FrameLink>(
     bus: &mut Bus<'_, L>,
 ) -> Result<(Group<PreOp>, Vec<DeviceInfo>), MasterError> {
+    let t0 = crate::rt::monotonic_ns();
+    let _ = bus.pump_mut().take_sii_span();
     let link = bus.pump().link_name();
     let lost = |bus: &mut Bus<'_, L>, e: super::exec::ExecError| match e {
         // The very first frames got no reply: nothing on this interface speaks EtherCAT.
@@ -420,6 +466,11 @@ pub fn discover<L: FrameLink>(
                 .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
         }
     }
+    let sii_ms = bus
+        .pump_mut()
+        .take_sii_span()
+        .map_or(0.0, |(a, b)| b.saturating_sub(a) as f64 / 1e6);
+    bus.set_discovery_ms(ms_since(t0), sii_ms);
     Ok((group, devices))
 }
 
@@ -1126,6 +1177,13 @@ pub fn configure<L: FrameLink>(
     cfg: &StartupConfig,
 ) -> Result<Started, MasterError> {
     let mut warnings: Vec<(DriveRef, String)> = Vec::new();
+    let (discovery_ms, sii_ms) = bus.discovery_ms().unwrap_or_default();
+    let mut times = StartupTimes {
+        discovery_ms,
+        sii_ms,
+        ..StartupTimes::default()
+    };
+    let t_coe = crate::rt::monotonic_ns();
     // Drives on the generic profile without a mapping in the configuration: their own mapping
     // when it carries what the mode needs, else the smallest standard one they have.
     let own = generic_mappings(bus, &devices, &mut plan, &mut warnings)?;
@@ -1195,6 +1253,8 @@ pub fn configure<L: FrameLink>(
         })?;
     }
 
+    times.coe_ms = ms_since(t_coe);
+    let t_image = crate::rt::monotonic_ns();
     let group = build_image(bus, group, &devices)?;
     let drives = resolve_drives(bus, &group, drives_plan, mappings, held_values)?;
     // The I/O devices: their images as ethercrab sized them from their own configuration.
@@ -1213,14 +1273,22 @@ pub fn configure<L: FrameLink>(
         });
     }
 
-    let group = to_safe_op(bus, group, &drives, cfg)?;
+    times.image_ms = ms_since(t_image);
+    let group = to_safe_op(bus, group, &drives, cfg, &mut times)?;
     recheck_cycle_times(bus, recheck, cfg, &mut warnings)?;
+    times.safe_op_at_ns = crate::rt::monotonic_ns();
+    times.safe_op_ms = times.safe_op_at_ns.saturating_sub(t_image) as f64 / 1e6
+        - times.image_ms
+        - times.dc_settle_ms;
+    times.total_ms =
+        times.discovery_ms + times.coe_ms + times.image_ms + times.dc_settle_ms + times.safe_op_ms;
     Ok(Started {
         group,
         drives,
         io,
         devices,
         warnings,
+        times,
     })
 }
 
@@ -1631,8 +1699,11 @@ fn to_safe_op<L: FrameLink>(
     group: Group<ethercrab::subdevice_group::PreOpPdi>,
     drives: &[ConfiguredDrive],
     cfg: &StartupConfig,
+    times: &mut StartupTimes,
 ) -> Result<Group<SafeOp, HasDc>, MasterError> {
+    let t = crate::rt::monotonic_ns();
     settle_dc(bus, &group, drives, &cfg.dc)?;
+    times.dc_settle_ms = ms_since(t);
     let dc_conf = DcConfiguration {
         start_delay: cfg.dc.start_delay,
         sync0_period: cfg.cycle,

@@ -633,6 +633,21 @@ pub fn run_report(r: &RunReport) {
             println!("  Warning:             {w}");
         }
     }
+    if let Some(t) = &r.startup {
+        println!();
+        println!(
+            "Start-up: {:.1} ms to {}: discovery {:.1} (SII {:.1}), CoE {:.1}, image {:.1}, DC settle {:.1}, SAFE-OP {:.1}{}",
+            t.total_ms,
+            if t.op_ms.is_some() { "OP" } else { "SAFE-OP" },
+            t.discovery_ms,
+            t.sii_ms,
+            t.coe_ms,
+            t.image_ms,
+            t.dc_settle_ms,
+            t.safe_op_ms,
+            t.op_ms.map(|o| format!(", OP {o:.1}")).unwrap_or_default()
+        );
+    }
     if let Some(c) = &r.cycle {
         println!();
         println!(

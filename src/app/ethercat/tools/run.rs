@@ -174,6 +174,9 @@ pub struct RunReport {
     pub cycle: Option<CycleSummary>,
     /// Whether every drive reached INIT at the end.
     pub shutdown_ok: bool,
+    /// Where start-up's time went (discovery, SII, CoE configuration, process image, DC
+    /// settle, SAFE-OP, OP), in ms.
+    pub startup: Option<crate::master::StartupTimes>,
     /// The whole event history.
     pub history: Vec<HistoryEntry>,
 }
@@ -689,6 +692,7 @@ pub fn run(
             rt_warnings: c.rt.warnings.clone(),
         }),
         shutdown_ok: report.shutdown_ok,
+        startup: report.startup,
         history: report.history,
     })
 }

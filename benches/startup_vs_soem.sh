@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# Start-up to OP over veth: ecdrive against SOEM (pysoem), same emulated drives, same segment,
+# runs interleaved, medians printed with ecdrive's phase breakdown.
+#
+#   sudo benches/startup_vs_soem.sh [DRIVES] [ROUNDS]      (default 2 drives, 5 rounds)
+#
+# DRIVES emulated drives (MR-J4-TM and BDHDE alternating) are served by `ecdrive sim` in a
+# network namespace of this script's own (ecdrive-su) on one end of a veth pair. Each round:
+#   SOEM    config_init, config_map, config_dc, SYNC0 1 ms, SAFE-OP, process data, OP, measured
+#           inside the Python process (interpreter start-up not counted);
+#   ecdrive `ecdrive run` of a file with every drive in csp at 1 ms, the `startup` figures of
+#           its --json (discovery with the SII, CoE configuration including the PDO remap, the
+#           process image, DC settle, SAFE-OP, OP), measured inside the process.
+# Needs root, a release build (`cargo build --release`) and pysoem (PYTHON names the
+# interpreter that has it; `.ci/run` installs one in target/pysoem-venv). Without pysoem the
+# SOEM column is skipped with a message.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+n="${1:-2}"
+rounds="${2:-5}"
+e=target/release/ecdrive
+py="${PYTHON:-python3}"
+[ -x "$py" ] || command -v "$py" >/dev/null || py=python3
+if [ -x target/pysoem-venv/bin/python3 ] && [ -z "${PYTHON:-}" ]; then py=target/pysoem-venv/bin/python3; fi
+soem=1
+"$py" -c "import pysoem" 2>/dev/null || { echo "pysoem not found ($py): SOEM skipped" >&2; soem=0; }
+[ -x "$e" ] || { echo "build first: cargo build --release" >&2; exit 1; }
+
+work=$(mktemp -d)
+ns=ecdrive-su
+cleanup() {
+  pkill -INT -f "ecdrive sim -i ecsu1" 2>/dev/null || true
+  sleep 0.5
+  ip netns del "$ns" 2>/dev/null || true
+  ip link del ecsu0 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+
+{
+  echo 'interface = "ecsu0"'
+  echo 'cycle = "1ms"'
+  echo 'duration = "0.1s"'
+  for i in $(seq 0 $((n - 1))); do printf '[[drive]]\nposition = %d\nmode = "csp"\n' "$i"; done
+} >"$work/run.toml"
+
+cat >"$work/soem.py" <<'EOF'
+import sys, time, pysoem
+t0 = time.monotonic()
+m = pysoem.Master()
+m.open(sys.argv[1])
+n = m.config_init()
+m.config_map()
+m.config_dc()
+for s in m.slaves:
+    s.dc_sync(True, 1_000_000)
+m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
+m.send_processdata(); m.receive_processdata(200_000)
+m.state = pysoem.OP_STATE
+m.write_state()
+ok = False
+for _ in range(5000):
+    m.send_processdata(); m.receive_processdata(200_000)
+    if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
+        ok = True
+        break
+    time.sleep(0.001)
+t = (time.monotonic() - t0) * 1e3
+m.state = pysoem.INIT_STATE; m.write_state(); m.close()
+print(f"{t:.1f}" if ok and n == int(sys.argv[2]) else "fail")
+EOF
+
+devices=()
+for i in $(seq 0 $((n - 1))); do
+  if [ $((i % 2)) -eq 0 ]; then devices+=(-d mr-j4-tm); else devices+=(-d bdhde); fi
+done
+ip netns add "$ns"
+ip link add ecsu0 type veth peer name ecsu1
+ip link set ecsu1 netns "$ns"
+ip link set ecsu0 up
+ip netns exec "$ns" ip link set ecsu1 up
+ip netns exec "$ns" "$e" sim -i ecsu1 "${devices[@]}" --no-loss-detection >"$work/sim.log" 2>&1 &
+sleep 1
+
+fields="total_ms discovery_ms sii_ms coe_ms image_ms dc_settle_ms safe_op_ms op_ms"
+for r in $(seq "$rounds"); do
+  if [ "$soem" = 1 ]; then "$py" "$work/soem.py" ecsu0 "$n" >>"$work/soem.txt"; fi
+  "$e" run -c "$work/run.toml" --json 2>/dev/null | python3 -c "
+import json, sys
+s = json.load(sys.stdin)['startup']
+print(' '.join(str(s[k]) for k in '$fields'.split()))" >>"$work/ecdrive.txt"
+done
+
+python3 - "$work" "$n" "$rounds" "$fields" "$soem" <<'EOF'
+import statistics, sys, subprocess
+work, n, rounds, fields, soem = sys.argv[1:]
+med = lambda xs: statistics.median(xs) if xs else float("nan")
+rows = [list(map(float, l.split())) for l in open(f"{work}/ecdrive.txt")]
+cols = dict(zip(fields.split(), zip(*rows)))
+commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
+print(f"start-up to OP over veth, {n} emulated drives, median of {rounds} interleaved runs (commit {commit})")
+if soem == "1":
+    s = [l.strip() for l in open(f"{work}/soem.txt")]
+    ok = [float(x) for x in s if x != "fail"]
+    print(f"  SOEM (pysoem 1.1.13)   {med(ok):8.1f} ms   ({len(s) - len(ok)} failed)")
+print(f"  ecdrive                {med(cols['total_ms']):8.1f} ms")
+for k in fields.split()[1:]:
+    print(f"    {k[:-3]:20} {med(cols[k]):8.1f} ms")
+EOF
