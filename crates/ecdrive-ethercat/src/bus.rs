@@ -104,6 +104,14 @@ pub struct Bus<'sto, L: FrameLink> {
     discovery_ms: Option<(f64, f64)>,
 }
 
+/// How many devices' mailboxes [`Bus::with_coe_each`] works on at once: each has at most one
+/// frame in flight, and ethercrab's storage holds [`MAX_FRAMES`]; half of it stays free for the
+/// rest (\[REC\]).
+pub const MAILBOXES_AT_ONCE: usize = MAX_FRAMES / 2;
+
+/// What one device's mailbox work gave: the result, the last mailbox counter, its SM0 start.
+type CoeRun<T> = (Result<T, CoeError>, u8, Option<u16>);
+
 /// Open a session on `link` and run `f` with it. The storage and the link live as long as the
 /// call; the link is returned with `f`'s result (or with the error).
 pub fn with_bus<L: FrameLink, R>(
@@ -254,6 +262,63 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
     /// The mailbox counters of the device at configured `address`.
     pub fn mailbox_sequence(&self, address: u16) -> MailboxSequence {
         self.counters.get(&address).copied().unwrap_or_default()
+    }
+
+    /// Run `op` on the mailbox of every device of `jobs` (address, drive, complete access, the
+    /// job's data), [`MAILBOXES_AT_ONCE`] devices at a time: their requests in flight together,
+    /// each device's own exchange in order. One result per job, in the order of `jobs`; each
+    /// device's mailbox counter continues as with [`with_coe`](Self::with_coe). `Err` when the
+    /// exchanges as a whole failed (the link, the segment, `timeout` per group of devices).
+    #[allow(clippy::type_complexity)]
+    pub fn with_coe_each<X, T>(
+        &mut self,
+        jobs: Vec<(u16, DriveRef, bool, X)>,
+        timeout: Duration,
+        op: impl AsyncFn(&mut CoeClient<'_>, X) -> Result<T, CoeError>,
+    ) -> Result<Vec<Result<T, CoeError>>, SessionError> {
+        let mut results = Vec::with_capacity(jobs.len());
+        let mut jobs = jobs.into_iter().peekable();
+        while jobs.peek().is_some() {
+            let chunk: Vec<(u16, DriveRef, bool, X)> =
+                jobs.by_ref().take(MAILBOXES_AT_ONCE).collect();
+            let addresses: Vec<u16> = chunk.iter().map(|j| j.0).collect();
+            let names: Vec<String> = chunk.iter().map(|j| j.1.to_string()).collect();
+            let what = || format!("{}: mailbox exchanges", names.join(", "));
+            let (md, log, mbx_timeout) = (&self.md, &self.emergencies, self.opts.mailbox_timeout);
+            let op = &op;
+            let futs: Vec<std::pin::Pin<Box<dyn Future<Output = CoeRun<T>> + '_>>> = chunk
+                .into_iter()
+                .map(|(address, drive, complete_access, x)| {
+                    let seq = self.mailbox_sequence(address);
+                    let log = log.clone();
+                    Box::pin(async move {
+                        let c = CoeClient::new(md, address, drive, log).await;
+                        let mut c = match c {
+                            Ok(c) => c
+                                .with_complete_access(complete_access)
+                                .with_timeout(mbx_timeout)
+                                .with_counter(seq.last)
+                                .avoiding(seq.ethercrab_next),
+                            Err(e) => return (Err(e), seq.last, None),
+                        };
+                        let sm0 = c.sms().out_start;
+                        let r = op(&mut c, x).await;
+                        (r, c.counter(), Some(sm0))
+                    })
+                        as std::pin::Pin<Box<dyn Future<Output = CoeRun<T>> + '_>>
+                })
+                .collect();
+            let runs = exec::run(&mut self.pump, &what, timeout, exec::join_all(futs))
+                .map_err(SessionError::Exec)?;
+            for (address, (r, counter, sm0)) in addresses.into_iter().zip(runs) {
+                if let Some(start) = sm0 {
+                    self.pump.learn_mailbox(address, start);
+                }
+                self.counters.entry(address).or_default().last = counter;
+                results.push(r);
+            }
+        }
+        Ok(results)
     }
 
     /// Run `op` with a CoE client for the device at configured `address`. The client is

@@ -66,6 +66,32 @@ impl Wake for ThreadWaker {
 /// internal poll loops).
 const PARK_SLICE_NS: u64 = 200_000;
 
+/// Run every future of `futs` to completion, polling each that is not done whenever the
+/// joined future is polled; the outputs in the order of `futs`. For start-up work over several
+/// devices at once (their mailboxes), not for the cycle.
+pub async fn join_all<'a, T>(futs: Vec<std::pin::Pin<Box<dyn Future<Output = T> + 'a>>>) -> Vec<T> {
+    let mut pending: Vec<Option<std::pin::Pin<Box<dyn Future<Output = T> + 'a>>>> =
+        futs.into_iter().map(Some).collect();
+    let mut out: Vec<Option<T>> = pending.iter().map(|_| None).collect();
+    std::future::poll_fn(|cx| {
+        let mut all = true;
+        for (slot, done) in pending.iter_mut().zip(out.iter_mut()) {
+            if let Some(f) = slot {
+                match f.as_mut().poll(cx) {
+                    Poll::Ready(v) => {
+                        *done = Some(v);
+                        *slot = None;
+                    }
+                    Poll::Pending => all = false,
+                }
+            }
+        }
+        if all { Poll::Ready(()) } else { Poll::Pending }
+    })
+    .await;
+    out.into_iter().flatten().collect()
+}
+
 /// Run `fut` to completion while pumping its frames, within `timeout`. `what` names the step for
 /// error messages ("reading the SII of drive 1 (MR-J4-TM)").
 pub fn run<L: FrameLink, F: Future>(

@@ -15,7 +15,8 @@
 //!
 //! Every failure names the drive, the object or register, and the reason.
 
-use super::bus::{Bus, MAX_PDI, MAX_SUBDEVICES};
+use super::bus::{Bus, MAX_PDI, MAX_SUBDEVICES, SessionError};
+use super::coe::{CoeClient, CoeError};
 use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
 use super::exec::exec_error;
 use super::program::{CyclicMode, Step};
@@ -1198,6 +1199,7 @@ pub fn configure<L: FrameLink>(
     let mut recheck: Vec<(u16, DriveRef, ObjectAddress)> = Vec::new();
     // Per drive: the values of the mapped outputs the cycle does not drive.
     let mut held_values: Vec<Vec<HeldValue>> = Vec::new();
+    let mut plans: Vec<(DriveRef, DriveWrites)> = Vec::new();
     for (&(d, setup, profile), mapping) in drives_plan.iter().zip(&mappings) {
         let drive = DriveRef {
             position: d.position,
@@ -1211,16 +1213,21 @@ pub fn configure<L: FrameLink>(
             !own.contains(&d.position),
             cycle_ns,
         )?;
-        let held = configure_drive(
-            bus,
-            d,
-            &drive,
-            profile,
-            writes,
-            cycle_ns,
-            &mut warnings,
-            &mut recheck,
-        )?;
+        plans.push((drive, writes));
+    }
+    // The drives' mailboxes, several at once (each drive's own writes in order).
+    let jobs = plans
+        .iter()
+        .zip(&drives_plan)
+        .map(|((drive, w), (d, _, p))| (d.address, drive.clone(), p.complete_access, w))
+        .collect();
+    let done = bus
+        .with_coe_each(jobs, T_STEP, async |c, w: &DriveWrites| {
+            configure_mailbox(c, w, cycle_ns).await
+        })
+        .map_err(MasterError::from)?;
+    for (((drive, writes), (d, _, profile)), r) in plans.iter().zip(&drives_plan).zip(done) {
+        let held = judge_drive(d, drive, profile, writes, r, &mut warnings, &mut recheck)?;
         held_values.push(held);
     }
 
@@ -1477,70 +1484,77 @@ impl DriveWrites {
     }
 }
 
-/// Write one drive's start-up configuration over CoE and judge what it answered; the values
-/// of its mapped outputs the cycle does not drive.
-#[allow(clippy::too_many_arguments)]
-fn configure_drive<L: FrameLink>(
-    bus: &mut Bus<'_, L>,
+/// What one drive's mailbox work in PRE-OP gave.
+struct MailboxDone {
+    outcomes: Vec<SyncOutcome>,
+    interpolated: Option<Result<String, String>>,
+    held: Vec<HeldValue>,
+}
+
+/// One drive's mailbox work in PRE-OP, in order: drain, the PDO remap, the synchronisation
+/// objects, 0x60C2, the start-up values, then the values of the mapped outputs the cycle does
+/// not drive (last, so that a start-up value written to such an object is what it keeps).
+async fn configure_mailbox(
+    c: &mut CoeClient<'_>,
+    plan: &DriveWrites,
+    cycle_ns: u32,
+) -> Result<MailboxDone, CoeError> {
+    let n_writes = plan.writes.len();
+    let (pdo_writes, later) = plan.writes.split_at(plan.remap_len.min(n_writes));
+    let mut done = MailboxDone {
+        outcomes: Vec::new(),
+        interpolated: None,
+        held: Vec::new(),
+    };
+    c.drain().await?;
+    for (addr, bytes, _why) in pdo_writes {
+        c.download(*addr, bytes, false).await?;
+    }
+    for w in &plan.sync_writes {
+        done.outcomes.push(write_sync(c, w).await?);
+    }
+    if let Some((unit_ns, index)) = plan.interpolation {
+        done.interpolated = Some(write_interpolation(c, cycle_ns, unit_ns, index).await?);
+    }
+    for (addr, bytes, _why) in later {
+        c.download(*addr, bytes, false).await?;
+    }
+    for a in &plan.undriven {
+        let value = match plan.carried.iter().find(|(c, _)| c == a) {
+            Some((_, bytes)) => Ok(bytes.clone()),
+            None => c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
+        };
+        done.held.push((*a, value));
+    }
+    Ok(done)
+}
+
+/// After one drive's mailbox work: the failed write named with its purpose, 0x60C2 and the
+/// synchronisation objects judged against the profile, the warnings, the read-only cycle times
+/// to check again once SYNC0 runs. Returns the held values of the undriven outputs.
+fn judge_drive(
     d: &DeviceInfo,
     drive: &DriveRef,
     profile: &DriveProfile,
-    plan: DriveWrites,
-    cycle_ns: u32,
+    plan: &DriveWrites,
+    done: Result<MailboxDone, CoeError>,
     warnings: &mut Vec<(DriveRef, String)>,
     recheck: &mut Vec<(u16, DriveRef, ObjectAddress)>,
 ) -> Result<Vec<HeldValue>, MasterError> {
-    let DriveWrites {
-        writes,
-        remap_len,
-        sync_writes,
-        interpolation,
-        carried,
-        undriven,
-    } = plan;
-    let drive = drive.clone();
-    let mut held: Vec<HeldValue> = Vec::new();
-    let complete_access = profile.complete_access;
-    let mut outcomes: Vec<SyncOutcome> = Vec::new();
-    let mut interpolated: Option<Result<String, String>> = None;
-    let n_writes = writes.len();
-    let (pdo_writes, later) = writes.split_at(remap_len.min(n_writes));
-    bus.with_coe(
-        d.address,
-        drive.clone(),
-        complete_access,
-        T_STEP,
-        async |c| {
-            c.drain().await?;
-            for (addr, bytes, _why) in pdo_writes {
-                c.download(*addr, bytes, false).await?;
-            }
-            for w in &sync_writes {
-                outcomes.push(write_sync(c, w).await?);
-            }
-            if let Some((unit_ns, index)) = interpolation {
-                interpolated = Some(write_interpolation(c, cycle_ns, unit_ns, index).await?);
-            }
-            for (addr, bytes, _why) in later {
-                c.download(*addr, bytes, false).await?;
-            }
-            // Last, so that a start-up value written to such an object is what it keeps.
-            for a in &undriven {
-                let value = match carried.iter().find(|(c, _)| c == a) {
-                    Some((_, bytes)) => Ok(bytes.clone()),
-                    None => c.upload(*a, false).await.map_err(|e| e.kind.to_string()),
-                };
-                held.push((*a, value));
-            }
-            Ok(())
-        },
-    )
-    .map_err(|e| {
-        let mut e = MasterError::from(e);
+    let MailboxDone {
+        outcomes,
+        interpolated,
+        held,
+    } = done.map_err(|e| {
+        let mut e = MasterError::from(SessionError::Coe(e));
         // Name the purpose of the write that failed.
-        if let Some((_, _, why)) = writes.iter().find(|(a, _, _)| e.step == a.to_string()) {
+        if let Some((_, _, why)) = plan.writes.iter().find(|(a, _, _)| e.step == a.to_string()) {
             e.step = format!("writing {} ({why})", e.step);
-        } else if let Some(w) = sync_writes.iter().find(|w| e.step == w.address.to_string()) {
+        } else if let Some(w) = plan
+            .sync_writes
+            .iter()
+            .find(|w| e.step == w.address.to_string())
+        {
             e.step = format!("writing {} ({})", e.step, w.describe());
         }
         e
@@ -1548,7 +1562,7 @@ fn configure_drive<L: FrameLink>(
     match interpolated {
         Some(Err(why)) => {
             return Err(MasterError::new(
-                Some(&drive),
+                Some(drive),
                 "writing 0x60C2 (interpolation time period)",
                 ErrorKind::Incompatible,
                 why,
@@ -1557,7 +1571,7 @@ fn configure_drive<L: FrameLink>(
         Some(Ok(form)) => tracing::info!("{drive}: interpolation time period {form}"),
         None => {}
     }
-    for (w, o) in sync_writes.iter().zip(&outcomes) {
+    for (w, o) in plan.sync_writes.iter().zip(&outcomes) {
         match o.judge(w, profile) {
             Ok(None) => {}
             Ok(Some(note)) => {
@@ -1566,7 +1580,7 @@ fn configure_drive<L: FrameLink>(
             }
             Err(why) => {
                 return Err(MasterError::new(
-                    Some(&drive),
+                    Some(drive),
                     format!("writing {} ({})", w.address, w.describe()),
                     ErrorKind::Incompatible,
                     why,
@@ -1577,7 +1591,7 @@ fn configure_drive<L: FrameLink>(
             recheck.push((d.address, drive.clone(), w.address));
         }
     }
-    tracing::info!("{drive}: configured ({} SDO writes)", writes.len());
+    tracing::info!("{drive}: configured ({} SDO writes)", plan.writes.len());
     for (a, r) in &held {
         if let Err(why) = r {
             warnings.push((
