@@ -1344,14 +1344,10 @@ fn run<L: FrameLink + Send>(
                 }
                 if matches!(e.kind, EventKind::AllOp) {
                     times.reached_op(monotonic_ns());
-                }
-                if restarting && matches!(e.kind, EventKind::AllOp) {
-                    note(
-                        shared,
-                        HistoryKind::Restart,
-                        false,
-                        format!("re-start {}: every drive is back in OP", before + 1),
-                    );
+                    if restarting {
+                        let text = format!("re-start {}: every drive is back in OP", before + 1);
+                        note(shared, HistoryKind::Restart, false, text);
+                    }
                 }
             }
         };
