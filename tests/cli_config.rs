@@ -44,6 +44,7 @@ lock_memory = true
 [supervision]
 lost_cycles = 10
 wkc_errors = 4
+safeop_cycles = 5
 op_timeout = "8s"
 [sim]
 devices = ["generic-coe", "generic-coe"]
@@ -83,6 +84,7 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
     assert!(c.master.cycle.rt.lock_memory);
     assert_eq!(c.master.cycle.segment_lost_after, 10);
     assert_eq!(c.master.cycle.wkc_errors_before_stop, 4);
+    assert_eq!(c.master.cycle.safeop_cycles, 5);
     assert_eq!(c.master.cycle.op_timeout, Duration::from_secs(8));
     let d = &c.master.startup.drives;
     assert_eq!(d.len(), 2);

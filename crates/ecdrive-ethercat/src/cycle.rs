@@ -63,7 +63,8 @@ pub struct CycleSettings {
     pub cycle: Duration,
     /// Real-time thread settings.
     pub rt: RtSettings,
-    /// Cycles of valid outputs in SAFE-OP before OP is requested.
+    /// Cycles of valid outputs in SAFE-OP before OP is requested (\[REC\] 20: the drive manuals
+    /// ask for valid outputs before OP and give no count).
     pub safeop_cycles: u32,
     /// How long the drives may take to reach OP.
     pub op_timeout: Duration,

@@ -16,6 +16,7 @@
 //! lost_before_stop = 3       # consecutive cycles without a reply before the axes are stopped
 //! lost_cycles = 3            # consecutive cycles without a reply before the segment counts as lost
 //! wkc_errors = 3             # consecutive wrong working counters before the axes are stopped
+//! safeop_cycles = 20         # cycles of valid outputs in SAFE-OP before OP is requested
 //! op_timeout = "5s"          # how long the drives may take to reach OP
 //!
 //! [sim]                      # only with interface = "sim"
@@ -462,6 +463,11 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
                 "supervision.wkc_errors",
                 &sv.wkc_errors,
                 &mut master.cycle.wkc_errors_before_stop,
+            ),
+            (
+                "supervision.safeop_cycles",
+                &sv.safeop_cycles,
+                &mut master.cycle.safeop_cycles,
             ),
         ] {
             if let Some(v) = v {

@@ -51,6 +51,8 @@ pub(super) struct Supervision {
     #[serde(default)]
     pub wkc_errors: Option<Spanned<u32>>,
     #[serde(default)]
+    pub safeop_cycles: Option<Spanned<u32>>,
+    #[serde(default)]
     pub op_timeout: Option<Spanned<String>>,
 }
 
