@@ -287,7 +287,14 @@ fn states_are_requested_and_reported() {
     );
     // OP: configured as the master does it (profile mapping, DC SYNC0), outputs zero.
     let j = sim.ecdrive(&["states", "OP", "--json"]).json();
-    let list = j.as_array().unwrap();
+    // Where start-up's time went, to OP.
+    let st = &j["startup"];
+    assert!(st["op_ms"].as_f64().is_some_and(|v| v > 0.0), "{j}");
+    assert!(
+        st["total_ms"].as_f64() >= st["discovery_ms"].as_f64(),
+        "{j}"
+    );
+    let list = j["devices"].as_array().unwrap();
     assert_eq!(list.len(), DEVICES.len());
     for (i, d) in list.iter().enumerate() {
         assert_eq!(d["drive"], profile(i).name);
@@ -298,9 +305,10 @@ fn states_are_requested_and_reported() {
     let one = sim
         .ecdrive(&["states", "-p", "1", "safeop", "--json"])
         .json();
-    assert_eq!(one.as_array().unwrap().len(), 1);
-    assert_eq!(one[0]["position"], 1);
-    assert_eq!(one[0]["reached"], "SAFEOP");
+    assert_eq!(one["devices"].as_array().unwrap().len(), 1);
+    assert_eq!(one["devices"][0]["position"], 1);
+    assert_eq!(one["devices"][0]["reached"], "SAFEOP");
+    assert!(one["startup"]["op_ms"].is_null(), "{one}");
     // Refused: neither drive has a bootstrap mailbox.
     let r = sim.ecdrive(&["states", "-p", "0", "BOOT"]);
     assert_eq!(r.code, Some(4), "{r:#?}");

@@ -845,20 +845,26 @@ fn dispatch(cli: Cli) -> ExitCode {
             let mut opts = tools::StatesOptions::new(state);
             opts.position = position;
             opts.cycle = Duration::from_micros(u64::from(cycle_us));
-            match session("states", &bus.interface, move |b| tools::states(b, &opts)) {
-                Ok(r) => {
+            match session("states", &bus.interface, move |b| {
+                tools::states_timed(b, &opts)
+            }) {
+                Ok(report) => {
+                    let r = &report.devices;
                     let code = if r.iter().all(|c| c.ok) {
                         ExitCode::SUCCESS
                     } else {
                         ExitCode::from(exit::REFUSED)
                     };
                     if json.json {
-                        let c = print_json("states", &r);
+                        let c = print_json("states", &report);
                         if c != ExitCode::SUCCESS {
                             return c;
                         }
                     } else {
-                        print::states(&r);
+                        print::states(r);
+                        if let Some(t) = &report.startup {
+                            print::startup(t);
+                        }
                     }
                     if code != ExitCode::SUCCESS {
                         for c in r.iter().filter(|c| !c.ok) {

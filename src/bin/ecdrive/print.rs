@@ -635,18 +635,7 @@ pub fn run_report(r: &RunReport) {
     }
     if let Some(t) = &r.startup {
         println!();
-        println!(
-            "Start-up: {:.1} ms to {}: discovery {:.1} (SII {:.1}), CoE {:.1}, image {:.1}, DC settle {:.1}, SAFE-OP {:.1}{}",
-            t.total_ms,
-            if t.op_ms.is_some() { "OP" } else { "SAFE-OP" },
-            t.discovery_ms,
-            t.sii_ms,
-            t.coe_ms,
-            t.image_ms,
-            t.dc_settle_ms,
-            t.safe_op_ms,
-            t.op_ms.map(|o| format!(", OP {o:.1}")).unwrap_or_default()
-        );
+        startup(t);
     }
     if let Some(c) = &r.cycle {
         println!();
@@ -682,4 +671,20 @@ pub fn run_report(r: &RunReport) {
     if !r.shutdown_ok {
         println!("Not every drive confirmed INIT at the end.");
     }
+}
+
+/// Where start-up's time went, one line.
+pub fn startup(t: &ecdrive::master::StartupTimes) {
+    println!(
+        "Start-up: {:.1} ms to {}: discovery {:.1} (SII {:.1}), CoE {:.1}, image {:.1}, DC settle {:.1}, SAFE-OP {:.1}{}",
+        t.total_ms,
+        if t.op_ms.is_some() { "OP" } else { "SAFE-OP" },
+        t.discovery_ms,
+        t.sii_ms,
+        t.coe_ms,
+        t.image_ms,
+        t.dc_settle_ms,
+        t.safe_op_ms,
+        t.op_ms.map(|o| format!(", OP {o:.1}")).unwrap_or_default()
+    );
 }

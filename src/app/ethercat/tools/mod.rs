@@ -57,7 +57,7 @@ pub use reg::{MAX_REGISTER_BYTES, RegisterData, reg_read, reg_write, type_len};
 pub use slaves::{
     AlStatusReport, EscInfo, MailboxReport, PortReport, SlaveDetail, SlaveReport, slaves,
 };
-pub use states::{StateChange, StatesOptions, states};
+pub use states::{StateChange, StatesOptions, StatesReport, states, states_timed};
 
 use crate::ec::{AlStatus, AlStatusCode, register};
 use crate::link::{FrameLink, LinkError, RawSocket};

@@ -168,6 +168,35 @@ pub fn states<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     opts: &StatesOptions,
 ) -> Result<Vec<StateChange>, MasterError> {
+    states_timed(bus, opts).map(|r| r.devices)
+}
+
+/// What [`states_timed`] reports: each device's state change and, for SAFEOP and OP on a
+/// segment of known drives (configured as `run` does it), where start-up's time went.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct StatesReport {
+    /// Per device, in segment order.
+    pub devices: Vec<StateChange>,
+    /// Where start-up's time went (`None` for INIT, PREOP and BOOT, and for a segment
+    /// configured from the devices' own mappings).
+    pub startup: Option<crate::master::StartupTimes>,
+}
+
+/// [`states`] with the start-up times.
+pub fn states_timed<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    opts: &StatesOptions,
+) -> Result<StatesReport, MasterError> {
+    let mut startup = None;
+    let devices = request(bus, opts, &mut startup)?;
+    Ok(StatesReport { devices, startup })
+}
+
+fn request<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    opts: &StatesOptions,
+    startup: &mut Option<crate::master::StartupTimes>,
+) -> Result<Vec<StateChange>, MasterError> {
     let found = discover(bus)?;
     let selected: Vec<DeviceInfo> = match opts.position {
         Some(p) => vec![found.device(p)?.clone()],
@@ -218,6 +247,7 @@ pub fn states<L: FrameLink>(
                 let cfg = StartupConfig::new(opts.cycle);
                 let plan = startup::plan(&found.devices, &cfg)?;
                 let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
+                let mut times = started.times;
                 let group = started.group;
                 // Valid outputs for a few cycles before OP, as the cycle does.
                 let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
@@ -234,6 +264,10 @@ pub fn states<L: FrameLink>(
                     std::thread::sleep(w);
                 }
                 drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
+                if target == AlState::Op {
+                    times.reached_op(crate::rt::monotonic_ns());
+                }
+                *startup = Some(times);
             } else {
                 let group = bus
                     .block_on(
