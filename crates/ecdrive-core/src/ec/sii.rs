@@ -260,7 +260,7 @@ impl PdoDesc {
 
 /// One distributed-clock operation mode (DC category): the one type for a DC mode, whether it
 /// comes from the SII or from an ESI file's `<Dc><OpMode>` (see `esi::OpMode`).
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub struct DcOpMode {
     /// Name, e.g. `"DC"` or `"SM-Synchron"`.
     pub name: String,

@@ -113,27 +113,6 @@ pub struct SiiPdo {
     pub entries: Vec<SiiPdoEntry>,
 }
 
-/// One DC operation mode.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
-pub struct SiiDcMode {
-    /// Name.
-    pub name: String,
-    /// Description.
-    pub description: String,
-    /// AssignActivate (0x0980/0x0981).
-    pub assign_activate: u16,
-    /// SYNC0 cycle, ns (0: the master's cycle).
-    pub cycle_time0: u32,
-    /// SYNC0 shift, ns.
-    pub shift_time0: i32,
-    /// SYNC1 shift, ns.
-    pub shift_time1: i32,
-    /// SYNC0 cycle factor.
-    pub sync0_cycle_factor: i16,
-    /// SYNC1 cycle factor.
-    pub sync1_cycle_factor: i16,
-}
-
 /// One category as it sits in the EEPROM.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
 pub struct SiiCategory {
@@ -197,7 +176,7 @@ pub struct SiiInfo {
     /// RxPDOs.
     pub rx_pdos: Vec<SiiPdo>,
     /// DC operation modes.
-    pub dc_modes: Vec<SiiDcMode>,
+    pub dc_modes: Vec<crate::ec::sii::DcOpMode>,
 }
 
 impl SiiInfo {
@@ -301,20 +280,7 @@ impl SiiInfo {
                 .collect(),
             tx_pdos: pdos(&d.tx_pdos),
             rx_pdos: pdos(&d.rx_pdos),
-            dc_modes: d
-                .dc_modes
-                .iter()
-                .map(|m| SiiDcMode {
-                    name: m.name.clone(),
-                    description: m.description.clone(),
-                    assign_activate: m.assign_activate,
-                    cycle_time0: m.cycle_time0,
-                    shift_time0: m.shift_time0,
-                    shift_time1: m.shift_time1,
-                    sync0_cycle_factor: m.sync0_cycle_factor,
-                    sync1_cycle_factor: m.sync1_cycle_factor,
-                })
-                .collect(),
+            dc_modes: d.dc_modes.clone(),
         })
     }
 }

@@ -249,7 +249,7 @@ fn request<L: FrameLink>(
                 let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
                 let mut times = started.times;
                 let group = started.group;
-                // Valid outputs for a few cycles before OP, as the cycle does.
+                // Valid outputs before OP for as many cycles as the cycle gives them.
                 let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
                     let r = bus
                         .block_on(&|| "exchanging process data".into(), T_STEP, |md| {
@@ -259,7 +259,7 @@ fn request<L: FrameLink>(
                         .map_err(|e| bus_error(None, "exchanging process data", e))?;
                     Ok(r.extra.next_cycle_wait)
                 };
-                for _ in 0..20 {
+                for _ in 0..crate::master::CycleSettings::new(opts.cycle).safeop_cycles {
                     let w = exchange(bus)?;
                     std::thread::sleep(w);
                 }
