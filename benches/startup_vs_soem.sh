@@ -7,10 +7,14 @@
 # DRIVES emulated drives (MR-J4-TM and BDHDE alternating) are served by `ecdrive sim` in a
 # network namespace of this script's own (ecdrive-su) on one end of a veth pair. Each round:
 #   SOEM    config_init, config_map, config_dc, SYNC0 1 ms, SAFE-OP, process data, OP, measured
-#           inside the Python process (interpreter start-up not counted);
+#           inside the Python process (interpreter start-up not counted), to OP and to the
+#           moment every drive has had 10 SYNC0 cycles (SOEM starts SYNC0 100 ms out and
+#           requests OP before it runs; ecdrive requests OP after 10 SYNC0 cycles), and the
+#           frames it sent (the veth's TX counter);
 #   ecdrive `ecdrive run` of a file with every drive in csp at 1 ms, the `startup` figures of
 #           its --json (discovery with the SII, CoE configuration including the PDO remap, the
-#           process image, DC settle, SAFE-OP, OP), measured inside the process.
+#           process image, DC settle, SAFE-OP, OP) and the frames each phase sent, measured
+#           inside the process.
 # Needs root, a release build (`cargo build --release`) and pysoem (PYTHON names the
 # interpreter that has it; `.ci/run` installs one in target/pysoem-venv). Without pysoem the
 # SOEM column is skipped with a message.
@@ -45,7 +49,8 @@ trap cleanup EXIT
 } >"$work/run.toml"
 
 cat >"$work/soem.py" <<'EOF'
-import sys, time, pysoem
+import sys, time, struct, pysoem
+CYCLE = 1_000_000
 t0 = time.monotonic()
 m = pysoem.Master()
 m.open(sys.argv[1])
@@ -53,7 +58,7 @@ n = m.config_init()
 m.config_map()
 m.config_dc()
 for s in m.slaves:
-    s.dc_sync(True, 1_000_000)
+    s.dc_sync(True, CYCLE)
 m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
 m.send_processdata(); m.receive_processdata(200_000)
 m.state = pysoem.OP_STATE
@@ -65,9 +70,18 @@ for _ in range(5000):
         ok = True
         break
     time.sleep(0.001)
-t = (time.monotonic() - t0) * 1e3
+t_op = (time.monotonic() - t0) * 1e3
+# ecdrive's criterion for requesting OP: every drive has had 10 SYNC0 cycles with valid
+# outputs (its first SYNC0 is in 0x0990; SOEM starts SYNC0 100 ms out).
+start = max(struct.unpack("<Q", bytes(s._fprd(0x0990, 8)))[0] for s in m.slaves)
+for _ in range(5000):
+    if m.dc_time >= start + 10 * CYCLE:
+        break
+    time.sleep(0.001)
+    m.send_processdata(); m.receive_processdata(200_000)
+t_sync = (time.monotonic() - t0) * 1e3
 m.state = pysoem.INIT_STATE; m.write_state(); m.close()
-print(f"{t:.1f}" if ok and n == int(sys.argv[2]) else "fail")
+print(f"{t_op:.1f} {t_sync:.1f}" if ok and n == int(sys.argv[2]) else "fail")
 EOF
 
 devices=()
@@ -83,27 +97,40 @@ ip netns exec "$ns" "$e" sim -i ecsu1 "${devices[@]}" --no-loss-detection >"$wor
 sleep 1
 
 fields="total_ms discovery_ms sii_ms coe_ms image_ms dc_settle_ms safe_op_ms op_ms"
+frames="discovery sii coe image dc_settle safe_op"
+tx() { cat /sys/class/net/ecsu0/statistics/tx_packets; }
 for r in $(seq "$rounds"); do
-  if [ "$soem" = 1 ]; then "$py" "$work/soem.py" ecsu0 "$n" >>"$work/soem.txt"; fi
+  if [ "$soem" = 1 ]; then
+    a=$(tx)
+    out=$("$py" "$work/soem.py" ecsu0 "$n")
+    echo "$out $(($(tx) - a))" >>"$work/soem.txt"
+  fi
   "$e" run -c "$work/run.toml" --json 2>/dev/null | python3 -c "
 import json, sys
 s = json.load(sys.stdin)['startup']
-print(' '.join(str(s[k]) for k in '$fields'.split()))" >>"$work/ecdrive.txt"
+print(' '.join([str(s[k]) for k in '$fields'.split()] + [str(s['frames'][k]) for k in '$frames'.split()]))" >>"$work/ecdrive.txt"
 done
 
-python3 - "$work" "$n" "$rounds" "$fields" "$soem" <<'EOF'
+python3 - "$work" "$n" "$rounds" "$fields" "$soem" "$frames" <<'EOF'
 import statistics, sys, subprocess
-work, n, rounds, fields, soem = sys.argv[1:]
+work, n, rounds, fields, soem, frames = sys.argv[1:]
 med = lambda xs: statistics.median(xs) if xs else float("nan")
+names = fields.split() + ["frames_" + f for f in frames.split()]
 rows = [list(map(float, l.split())) for l in open(f"{work}/ecdrive.txt")]
-cols = dict(zip(fields.split(), zip(*rows)))
+cols = dict(zip(names, zip(*rows)))
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
 print(f"start-up to OP over veth, {n} emulated drives, median of {rounds} interleaved runs (commit {commit})")
 if soem == "1":
-    s = [l.strip() for l in open(f"{work}/soem.txt")]
-    ok = [float(x) for x in s if x != "fail"]
-    print(f"  SOEM (pysoem 1.1.13)   {med(ok):8.1f} ms   ({len(s) - len(ok)} failed)")
-print(f"  ecdrive                {med(cols['total_ms']):8.1f} ms")
+    s = [l.split() for l in open(f"{work}/soem.txt")]
+    ok = [list(map(float, x)) for x in s if x[0] != "fail"]
+    print(f"  SOEM (pysoem 1.1.13)   {med([x[0] for x in ok]):8.1f} ms to OP, "
+          f"{med([x[1] for x in ok]):.1f} ms to 10 SYNC0 cycles; "
+          f"{med([x[2] for x in ok]):.0f} frames in all ({len(s) - len(ok)} failed)")
+total = sum(med(cols["frames_" + f]) for f in frames.split() if f != "sii")
+print(f"  ecdrive                {med(cols['total_ms']):8.1f} ms to OP (after 10 SYNC0 cycles); "
+      f"{total:.0f} frames before the cycle")
 for k in fields.split()[1:]:
-    print(f"    {k[:-3]:20} {med(cols[k]):8.1f} ms")
+    f = "frames_" + k[:-3]
+    extra = f"   {med(cols[f]):6.0f} frames" if f in cols else ""
+    print(f"    {k[:-3]:20} {med(cols[k]):8.1f} ms{extra}")
 EOF

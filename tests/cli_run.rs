@@ -56,9 +56,15 @@ fn the_generic_device_runs_a_program_and_reports_it() {
     assert_eq!(d.device.name, "ECD-COE402");
     assert_eq!(d.steps_done, 2);
     assert_eq!(d.modes_run, ["csp"]);
-    assert_eq!(
-        d.states.first().map(String::as_str),
-        Some("Not ready to switch on")
+    // The drive leaves Not ready to switch on by itself (CiA 402); which of the two the first
+    // cycle in OP sees depends on how long SAFE-OP took.
+    assert!(
+        matches!(
+            d.states.first().map(String::as_str),
+            Some("Not ready to switch on" | "Switch on disabled")
+        ),
+        "{:?}",
+        d.states
     );
     assert!(
         d.states.iter().any(|s| s == "Operation enabled"),

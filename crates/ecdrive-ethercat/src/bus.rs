@@ -14,6 +14,19 @@ use std::collections::HashMap;
 use std::future::Future;
 use std::time::Duration;
 
+/// What discovery took: time and frames, in all and on the SII (EEPROM).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Discovery {
+    /// From the first frame to every device's identity, ms.
+    pub ms: f64,
+    /// From the first to the last frame with an SII access, ms.
+    pub sii_ms: f64,
+    /// Frames sent.
+    pub frames: u64,
+    /// Of them, frames with an SII access.
+    pub sii_frames: u64,
+}
+
 /// Frames ethercrab may have in flight at once.
 pub const MAX_FRAMES: usize = 16;
 /// Largest number of devices on one segment.
@@ -45,7 +58,10 @@ pub struct BusOptions {
     pub state_transition: Duration,
     /// ethercrab's EEPROM timeout.
     pub eeprom: Duration,
-    /// Static drift compensation iterations at init (ethercrab's default is 10 000).
+    /// ethercrab's static drift compensation at init: frames sent whatever the clocks do
+    /// (ethercrab's default is 10 000). 0 by default: start-up compensates drift itself until
+    /// every drive's clock is measured to be within the threshold
+    /// ([`DcSettings`](crate::startup::DcSettings)), however many frames that takes.
     pub dc_static_sync_iterations: u32,
 }
 
@@ -59,7 +75,7 @@ impl Default for BusOptions {
             mailbox_timeout: Duration::from_millis(2000),
             state_transition: Duration::from_secs(10),
             eeprom: Duration::from_millis(500),
-            dc_static_sync_iterations: 1000,
+            dc_static_sync_iterations: 0,
         }
     }
 }
@@ -101,7 +117,7 @@ pub struct Bus<'sto, L: FrameLink> {
     /// ethercrab's step fails).
     last_ethercrab_mailbox: Option<u16>,
     /// The last discovery's duration and its SII span, in ms (start-up's time report).
-    discovery_ms: Option<(f64, f64)>,
+    discovery: Option<Discovery>,
 }
 
 /// How many devices' mailboxes [`Bus::with_coe_each`] works on at once: each has at most one
@@ -138,7 +154,7 @@ pub fn with_bus<L: FrameLink, R>(
         opts,
         counters: HashMap::new(),
         last_ethercrab_mailbox: None,
-        discovery_ms: None,
+        discovery: None,
     };
     let r = f(&mut bus);
     let (_, _, link) = bus.pump.into_parts();
@@ -243,14 +259,43 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
         r
     }
 
-    /// Note how long discovery took and its SII span (ms).
-    pub fn set_discovery_ms(&mut self, total: f64, sii: f64) {
-        self.discovery_ms = Some((total, sii));
+    /// Run `op` for every item, [`MAILBOXES_AT_ONCE`] items at a time with their frames in
+    /// flight together (register reads of many devices, EEPROM reads): one result per item, in
+    /// the order of `items`. `Err` when the frames as a whole failed (the link, the segment,
+    /// `timeout` per group of items).
+    pub fn block_on_each<I, T>(
+        &mut self,
+        what: &dyn Fn() -> String,
+        timeout: Duration,
+        items: Vec<I>,
+        op: impl AsyncFn(&MainDevice<'sto>, I) -> T,
+    ) -> Result<Vec<T>, ExecError> {
+        let mut out = Vec::with_capacity(items.len());
+        let mut items = items.into_iter().peekable();
+        let op = &op;
+        while items.peek().is_some() {
+            let md = &self.md;
+            let futs: Vec<std::pin::Pin<Box<dyn Future<Output = T> + '_>>> = items
+                .by_ref()
+                .take(MAILBOXES_AT_ONCE)
+                .map(|x| Box::pin(op(md, x)) as std::pin::Pin<Box<dyn Future<Output = T> + '_>>)
+                .collect();
+            self.pump.set_mailbox_tap(true);
+            let r = exec::run(&mut self.pump, what, timeout, exec::join_all(futs));
+            self.pump.set_mailbox_tap(false);
+            out.extend(r?);
+        }
+        Ok(out)
     }
 
-    /// How long the last discovery took and its SII span (ms).
-    pub fn discovery_ms(&self) -> Option<(f64, f64)> {
-        self.discovery_ms
+    /// Note what the last discovery took.
+    pub fn set_discovery(&mut self, d: Discovery) {
+        self.discovery = Some(d);
+    }
+
+    /// What the last discovery took.
+    pub fn discovery(&self) -> Option<Discovery> {
+        self.discovery
     }
 
     /// The configured address of the device to which ethercrab sent its last mailbox request

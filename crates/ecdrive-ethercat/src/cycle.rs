@@ -63,8 +63,9 @@ pub struct CycleSettings {
     pub cycle: Duration,
     /// Real-time thread settings.
     pub rt: RtSettings,
-    /// Cycles of valid outputs in SAFE-OP before OP is requested (\[REC\] 20: the drive manuals
-    /// ask for valid outputs before OP and give no count).
+    /// Cycles of valid outputs in SAFE-OP, counted with SYNC0 running on every drive, before OP
+    /// is requested (\[REC\] 10: the MR-J4-TM manual §1.4.2 (7) asks for DC synchronisation
+    /// and valid command values before OP and gives no count).
     pub safeop_cycles: u32,
     /// How long the drives may take to reach OP.
     pub op_timeout: Duration,
@@ -100,7 +101,7 @@ impl CycleSettings {
         Self {
             cycle,
             rt: RtSettings::default(),
-            safeop_cycles: 20,
+            safeop_cycles: 10,
             op_timeout: Duration::from_secs(5),
             lost_before_stop: 3,
             segment_lost_after: 3,
@@ -1009,6 +1010,9 @@ struct Constants {
     segment_gone_cycles: u64,
     stop_ramp_cycles: u64,
     stop_timeout_cycles: u64,
+    /// The DC system time from which OP may be requested: [`CycleSettings::safeop_cycles`]
+    /// SYNC0 cycles after the last drive's first SYNC0 (0 without DC).
+    op_not_before_dc: u64,
 }
 
 /// The clock of the run and the timing of the current cycle.
@@ -1202,6 +1206,13 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     .max(u64::from(settings.segment_lost_after)),
                 stop_ramp_cycles: cycles(settings.stop_ramp).max(1),
                 stop_timeout_cycles: cycles(settings.stop_timeout).max(1),
+                op_not_before_dc: drives
+                    .iter()
+                    .filter_map(|d| d.sync0_start_ns)
+                    .max()
+                    .map_or(0, |s| {
+                        s.saturating_add(u64::from(settings.safeop_cycles) * cycle_ns)
+                    }),
             },
             axes,
             addresses,
@@ -1506,11 +1517,15 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
     }
 
-    /// OP: request it after some cycles of valid outputs, then wait for it.
+    /// OP: request it once the drives have had [`CycleSettings::safeop_cycles`] cycles of
+    /// valid outputs with SYNC0 running (by the reference clock's time; or, should it never
+    /// answer, after the OP timeout, and the drives decide), then wait for it.
     fn request_op(&mut self) -> Option<CycleEnd> {
         let cycle = self.clock.cycle;
+        let synchronised = self.clock.dc_time >= self.k.op_not_before_dc
+            || cycle * self.k.cycle_ns > self.settings.op_timeout.as_nanos() as u64;
         match self.op {
-            OpState::SafeOp if cycle >= u64::from(self.settings.safeop_cycles) => {
+            OpState::SafeOp if cycle >= u64::from(self.settings.safeop_cycles) && synchronised => {
                 self.request_al_state(0x0008);
                 self.op = OpState::Requested { at: cycle };
             }

@@ -99,8 +99,9 @@ struct MailboxTap {
     seen: Vec<(u16, u8)>,
     /// (station address, FMMU number) → the block last written.
     fmmus: HashMap<(u16, u8), FmmuConfig>,
-    /// Monotonic times of the first and the last frame with an SII (EEPROM) access.
-    sii: Option<(u64, u64)>,
+    /// Monotonic times of the first and the last frame with an SII (EEPROM) access, and how
+    /// many such frames went out.
+    sii: Option<(u64, u64, u64)>,
 }
 
 impl MailboxTap {
@@ -142,7 +143,10 @@ impl MailboxTap {
         }
         if sii {
             let now = monotonic_ns();
-            self.sii = Some(self.sii.map_or((now, now), |(first, _)| (first, now)));
+            self.sii = Some(
+                self.sii
+                    .map_or((now, now, 1), |(first, _, n)| (first, now, n + 1)),
+            );
         }
     }
 }
@@ -244,8 +248,8 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     }
 
     /// The monotonic times of the first and the last frame with an SII (EEPROM) access sent
-    /// while the tap was on, since the last call.
-    pub fn take_sii_span(&mut self) -> Option<(u64, u64)> {
+    /// while the tap was on, since the last call, and the number of such frames.
+    pub fn take_sii_span(&mut self) -> Option<(u64, u64, u64)> {
         self.tap.sii.take()
     }
 

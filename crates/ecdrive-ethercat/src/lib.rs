@@ -33,7 +33,7 @@ pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};
 pub use program::{CyclicMode, Step, Target};
 pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
-pub use startup::{DriveSetup, Selector, StartupConfig, StartupTimes};
+pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};
 pub use telemetry::{
     Axes, AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
 };

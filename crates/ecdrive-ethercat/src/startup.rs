@@ -15,7 +15,7 @@
 //!
 //! Every failure names the drive, the object or register, and the reason.
 
-use super::bus::{Bus, MAX_PDI, MAX_SUBDEVICES, SessionError};
+use super::bus::{Bus, Discovery, MAILBOXES_AT_ONCE, MAX_PDI, MAX_SUBDEVICES, SessionError};
 use super::coe::{CoeClient, CoeError};
 use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
 use super::exec::exec_error;
@@ -117,20 +117,38 @@ pub struct DcSettings {
     /// a shift near 0 or a whole cycle, jitter moves frames across SYNC0 and drives count the
     /// cycles they miss).
     pub shift: Option<Duration>,
-    /// Delay before the first SYNC0.
-    pub start_delay: Duration,
-    /// The system-time difference every drive must get below before SAFE-OP → OP, ns.
+    /// From reading the reference clock to the first SYNC0. ethercrab computes one start time
+    /// for every drive from that reading and then configures the drives one after the other,
+    /// so the delay must cover all of them: start-up checks that it did and names the
+    /// setting when not. `None`: \[REC\] 10 ms plus 0.5 ms per drive with DC (a drive's SYNC0
+    /// set-up is four writes, about 0.2 ms a drive over veth at 64 drives; SOEM and IgH use a
+    /// fixed 100 ms).
+    pub start_delay: Option<Duration>,
+    /// The system-time difference every drive must get below before SYNC0 starts, ns.
     pub settle_threshold_ns: u32,
+    /// Checks in a row, each after one more drift-compensation frame, that must find every
+    /// drive below the threshold (\[REC\] 3: one check could catch a clock passing through
+    /// zero on its way to the other side).
+    pub settle_checks: u32,
     /// How long to wait for it.
     pub settle_timeout: Duration,
+}
+
+impl DcSettings {
+    /// The start delay for `dc_drives` drives with DC: the configured one or the default.
+    pub fn start_delay_for(&self, dc_drives: usize) -> Duration {
+        self.start_delay
+            .unwrap_or(Duration::from_micros(10_000 + 500 * dc_drives as u64))
+    }
 }
 
 impl Default for DcSettings {
     fn default() -> Self {
         Self {
             shift: None,
-            start_delay: Duration::from_millis(100),
+            start_delay: None,
             settle_threshold_ns: 1000,
+            settle_checks: 3,
             settle_timeout: Duration::from_secs(5),
         }
     }
@@ -260,6 +278,11 @@ pub struct ConfiguredDrive {
     pub fields: DriveFields,
     /// Its setup.
     pub setup: DriveSetup,
+    /// The DC system time of its first SYNC0 (ns), as its slave controller holds it (0x0990);
+    /// `None` without DC. The cycle requests OP only after the drives have seen SYNC0 run
+    /// (MR-J4-TM manual §1.4.2 (7): DC synchronisation is established in SAFE-OP, then valid
+    /// command values, then OP).
+    pub sync0_start_ns: Option<u64>,
 }
 
 /// A device that is not driven ([`Role::Io`]): in OP with its own PDO configuration, its
@@ -282,7 +305,8 @@ pub struct StartupTimes {
     /// Discovery: ethercrab's initialisation (station addresses, the SII of every device, DC
     /// propagation delays, mailboxes, INIT → PRE-OP) and each device's identity.
     pub discovery_ms: f64,
-    /// Within discovery, from the first to the last SII (EEPROM) access on the wire.
+    /// Within discovery, from the first to the last SII (EEPROM) access on the wire (ethercrab
+    /// measures the DC propagation delays and requests PRE-OP in between).
     pub sii_ms: f64,
     /// CoE configuration of the drives: PDO mapping and assignment, synchronisation objects,
     /// start-up SDOs, read-backs, the mailbox drain.
@@ -298,9 +322,30 @@ pub struct StartupTimes {
     pub op_ms: Option<f64>,
     /// From the start of discovery to SAFE-OP (to OP when `op_ms` is known).
     pub total_ms: f64,
+    /// Frames sent in each phase: what the wire had to carry, whatever a frame's round trip
+    /// costs on the link at hand.
+    pub frames: StartupFrames,
     /// When SAFE-OP was reached (monotonic ns): where `op_ms` counts from.
     #[serde(skip)]
     pub safe_op_at_ns: u64,
+}
+
+/// Frames sent in each phase of start-up (first transmissions; SAFE-OP → OP is the cycle's,
+/// one frame per cycle plus the OP requests).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct StartupFrames {
+    /// Discovery.
+    pub discovery: u64,
+    /// Of discovery's, frames with an SII (EEPROM) access.
+    pub sii: u64,
+    /// CoE configuration.
+    pub coe: u64,
+    /// The process image.
+    pub image: u64,
+    /// DC settle.
+    pub dc_settle: u64,
+    /// Starting SYNC0 and PRE-OP → SAFE-OP.
+    pub safe_op: u64,
 }
 
 impl StartupTimes {
@@ -344,6 +389,7 @@ pub fn discover<L: FrameLink>(
     bus: &mut Bus<'_, L>,
 ) -> Result<(Group<PreOp>, Vec<DeviceInfo>), MasterError> {
     let t0 = crate::rt::monotonic_ns();
+    let f0 = bus.pump().stats().sent;
     let _ = bus.pump_mut().take_sii_span();
     let link = bus.pump().link_name();
     let lost = |bus: &mut Bus<'_, L>, e: super::exec::ExecError| match e {
@@ -368,31 +414,32 @@ pub fn discover<L: FrameLink>(
     };
     // Each device's state as found, by position (auto-increment addressing: ethercrab's `aprd`
     // takes the position and negates it), before ethercrab resets the segment; until a
-    // position no device answers.
-    let found = bus
-        .block_on(
-            &|| format!("discovering the segment on {link}: reading each device's AL status"),
-            T_STEP,
-            |md| async move {
-                let mut found = Vec::new();
-                for i in 0..MAX_SUBDEVICES as u16 {
-                    match ethercrab::Command::aprd(i, crate::ec::register::AL_STATUS)
+    // position no device answers. Eight positions at a time, their frames in flight together.
+    let mut found: Vec<FoundState> = Vec::new();
+    'probe: for first in (0..MAX_SUBDEVICES as u16).step_by(MAILBOXES_AT_ONCE) {
+        let last = (first + MAILBOXES_AT_ONCE as u16).min(MAX_SUBDEVICES as u16);
+        let states = bus
+            .block_on_each(
+                &|| format!("discovering the segment on {link}: reading each device's AL status"),
+                T_STEP,
+                (first..last).collect(),
+                async |md, i| {
+                    ethercrab::Command::aprd(i, crate::ec::register::AL_STATUS)
                         .receive::<[u8; 6]>(md)
                         .await
-                    {
-                        Ok(b) => found.push(FoundState {
-                            status: crate::ec::AlStatus {
-                                raw: u16::from_le_bytes([b[0], b[1]]),
-                            },
-                            code: crate::ec::AlStatusCode(u16::from_le_bytes([b[4], b[5]])),
-                        }),
-                        Err(_) => break,
-                    }
-                }
-                found
-            },
-        )
-        .map_err(|e| lost(bus, e))?;
+                },
+            )
+            .map_err(|e| lost(bus, e))?;
+        for b in states {
+            let Ok(b) = b else { break 'probe };
+            found.push(FoundState {
+                status: crate::ec::AlStatus {
+                    raw: u16::from_le_bytes([b[0], b[1]]),
+                },
+                code: crate::ec::AlStatusCode(u16::from_le_bytes([b[4], b[5]])),
+            });
+        }
+    }
     let group = bus
         .block_on(
             &|| format!("discovering the segment on {link}"),
@@ -436,24 +483,23 @@ pub fn discover<L: FrameLink>(
         });
     }
     // The mailbox from the SII (words 0x18–0x1C: receive/send mailbox offset and size, the
-    // protocols), and for devices no profile matches, their device type over CoE.
-    for d in devices.iter_mut() {
-        let pos = usize::from(d.position);
-        let words = bus
-            .block_on(
-                &|| format!("device {pos}: reading the SII mailbox words (0x18–0x1C)"),
-                T_STEP,
-                |md| {
-                    let group = &group;
-                    async move {
-                        let sd = group.subdevice(md, pos)?;
-                        let mut buf = [0u8; 10];
-                        sd.eeprom_read_raw(md, 0x18, &mut buf).await?;
-                        Ok::<_, ethercrab::error::Error>(buf)
-                    }
-                },
-            )
-            .map_err(|e| exec_error(Some(&d.drive_ref()), e))?
+    // protocols), eight devices at a time; then, for devices no profile matches, their device
+    // type over CoE.
+    let words = bus
+        .block_on_each(
+            &|| "reading the SII mailbox words (0x18–0x1C) of every device".into(),
+            T_STEP,
+            (0..devices.len()).collect(),
+            async |md, pos| {
+                let sd = group.subdevice(md, pos)?;
+                let mut buf = [0u8; 10];
+                sd.eeprom_read_raw(md, 0x18, &mut buf).await?;
+                Ok::<_, ethercrab::error::Error>(buf)
+            },
+        )
+        .map_err(|e| exec_error(None, e))?;
+    for (d, words) in devices.iter_mut().zip(words) {
+        let words = words
             .map_err(|e| bus_error(Some(&d.drive_ref()), "reading the SII mailbox words", e))?;
         let w = |i: usize| u16::from_le_bytes([words[2 * i], words[2 * i + 1]]);
         d.coe = w(1) > 0 && w(3) > 0 && w(4) & 0x0004 != 0;
@@ -467,11 +513,13 @@ pub fn discover<L: FrameLink>(
                 .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
         }
     }
-    let sii_ms = bus
-        .pump_mut()
-        .take_sii_span()
-        .map_or(0.0, |(a, b)| b.saturating_sub(a) as f64 / 1e6);
-    bus.set_discovery_ms(ms_since(t0), sii_ms);
+    let sii = bus.pump_mut().take_sii_span();
+    bus.set_discovery(Discovery {
+        ms: ms_since(t0),
+        sii_ms: sii.map_or(0.0, |(a, b, _)| b.saturating_sub(a) as f64 / 1e6),
+        frames: bus.pump().stats().sent - f0,
+        sii_frames: sii.map_or(0, |(_, _, n)| n),
+    });
     Ok((group, devices))
 }
 
@@ -1178,12 +1226,19 @@ pub fn configure<L: FrameLink>(
     cfg: &StartupConfig,
 ) -> Result<Started, MasterError> {
     let mut warnings: Vec<(DriveRef, String)> = Vec::new();
-    let (discovery_ms, sii_ms) = bus.discovery_ms().unwrap_or_default();
+    let found = bus.discovery().unwrap_or_default();
     let mut times = StartupTimes {
-        discovery_ms,
-        sii_ms,
+        discovery_ms: found.ms,
+        sii_ms: found.sii_ms,
+        frames: StartupFrames {
+            discovery: found.frames,
+            sii: found.sii_frames,
+            ..StartupFrames::default()
+        },
         ..StartupTimes::default()
     };
+    let sent = |bus: &Bus<'_, L>| bus.pump().stats().sent;
+    let f_coe = sent(bus);
     let t_coe = crate::rt::monotonic_ns();
     // Drives on the generic profile without a mapping in the configuration: their own mapping
     // when it carries what the mode needs, else the smallest standard one they have.
@@ -1261,9 +1316,11 @@ pub fn configure<L: FrameLink>(
     }
 
     times.coe_ms = ms_since(t_coe);
+    times.frames.coe = sent(bus) - f_coe;
+    let f_image = sent(bus);
     let t_image = crate::rt::monotonic_ns();
     let group = build_image(bus, group, &devices)?;
-    let drives = resolve_drives(bus, &group, drives_plan, mappings, held_values)?;
+    let mut drives = resolve_drives(bus, &group, drives_plan, mappings, held_values)?;
     // The I/O devices: their images as ethercrab sized them from their own configuration.
     let mut io = Vec::new();
     for (d, r) in devices.iter().zip(&plan) {
@@ -1281,7 +1338,8 @@ pub fn configure<L: FrameLink>(
     }
 
     times.image_ms = ms_since(t_image);
-    let group = to_safe_op(bus, group, &drives, cfg, &mut times)?;
+    times.frames.image = sent(bus) - f_image;
+    let group = to_safe_op(bus, group, &mut drives, cfg, &mut times)?;
     recheck_cycle_times(bus, recheck, cfg, &mut warnings)?;
     times.safe_op_at_ns = crate::rt::monotonic_ns();
     times.safe_op_ms = times.safe_op_at_ns.saturating_sub(t_image) as f64 / 1e6
@@ -1702,6 +1760,7 @@ fn resolve_drives<L: FrameLink>(
             layout,
             fields,
             setup: setup.clone(),
+            sync0_start_ns: None,
         });
     }
     Ok(drives)
@@ -1711,15 +1770,20 @@ fn resolve_drives<L: FrameLink>(
 fn to_safe_op<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     group: Group<ethercrab::subdevice_group::PreOpPdi>,
-    drives: &[ConfiguredDrive],
+    drives: &mut [ConfiguredDrive],
     cfg: &StartupConfig,
     times: &mut StartupTimes,
 ) -> Result<Group<SafeOp, HasDc>, MasterError> {
     let t = crate::rt::monotonic_ns();
+    let f = bus.pump().stats().sent;
     settle_dc(bus, &group, drives, &cfg.dc)?;
     times.dc_settle_ms = ms_since(t);
+    times.frames.dc_settle = bus.pump().stats().sent - f;
+    let f = bus.pump().stats().sent;
+    let dc_drives = drives.iter().filter(|d| d.info.dc).count();
+    let start_delay = cfg.dc.start_delay_for(dc_drives);
     let dc_conf = DcConfiguration {
-        start_delay: cfg.dc.start_delay,
+        start_delay,
         sync0_period: cfg.cycle,
         sync0_shift: cfg.dc.shift.unwrap_or(cfg.cycle / 2),
     };
@@ -1729,13 +1793,16 @@ fn to_safe_op<L: FrameLink>(
         })
         .map_err(|e| exec_error(None, e))?
         .map_err(|e| bus_error(None, "starting SYNC0", e))?;
+    sync0_starts(bus, drives, start_delay)?;
     let addrs: Vec<(u16, DriveRef)> = drives
         .iter()
         .map(|d| (d.info.address, d.drive.clone()))
         .collect();
-    match bus.block_on(&|| "PRE-OP → SAFE-OP".into(), T_STEP, |md| {
+    let r = bus.block_on(&|| "PRE-OP → SAFE-OP".into(), T_STEP, |md| {
         group.into_safe_op(md)
-    }) {
+    });
+    times.frames.safe_op = bus.pump().stats().sent - f;
+    match r {
         Ok(Ok(g)) => Ok(g),
         Ok(Err(e)) => Err(explain_transition(
             bus,
@@ -1752,6 +1819,68 @@ fn to_safe_op<L: FrameLink>(
     }
 }
 
+/// Each DC drive's first SYNC0 (0x0990, read back), into [`ConfiguredDrive::sync0_start_ns`];
+/// then the check that it is still ahead: ethercrab computed one start time from a single
+/// reading of the reference clock and configured the drives one after the other, so a start
+/// delay too short for the segment leaves the last drives with a start time already past
+/// (their SYNC0 would not start until the clock wraps).
+fn sync0_starts<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    drives: &mut [ConfiguredDrive],
+    start_delay: Duration,
+) -> Result<(), MasterError> {
+    let dc: Vec<(usize, u16)> = drives
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.info.dc)
+        .map(|(i, d)| (i, d.info.address))
+        .collect();
+    let Some(&(_, probe)) = dc.last() else {
+        return Ok(());
+    };
+    let starts = bus
+        .block_on_each(
+            &|| "reading each drive's SYNC0 start time (0x0990)".into(),
+            T_STEP,
+            dc.iter().map(|&(_, a)| a).collect(),
+            async |md, addr| {
+                Command::fprd(addr, register::DC_START_TIME)
+                    .receive::<u64>(md)
+                    .await
+            },
+        )
+        .map_err(|e| exec_error(None, e))?;
+    // The system time of the drive configured last, read after every start time was written.
+    let now = bus
+        .block_on(
+            &|| "reading the DC system time (0x0910)".into(),
+            T_STEP,
+            |md| Command::fprd(probe, register::DC_SYSTEM_TIME).receive::<u64>(md),
+        )
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| bus_error(None, "reading the DC system time (0x0910)", e))?;
+    for (&(i, _), start) in dc.iter().zip(starts) {
+        let d = &mut drives[i];
+        let start = start
+            .map_err(|e| bus_error(Some(&d.drive), "reading the SYNC0 start time (0x0990)", e))?;
+        d.sync0_start_ns = Some(start);
+        if start <= now {
+            return Err(MasterError::new(
+                Some(&d.drive),
+                "starting SYNC0",
+                ErrorKind::DcSettle,
+                format!(
+                    "its SYNC0 start time had passed before every drive was configured (start \
+                     delay {} ms for {} drives with DC; set a longer DcSettings::start_delay)",
+                    start_delay.as_millis(),
+                    dc.len()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A read-only cycle time shows the SYNC0 cycle once SYNC0 runs (ETG.1020): check it, from the
 /// first SYNC0 on (after the start delay) for some cycles.
 fn recheck_cycle_times<L: FrameLink>(
@@ -1761,7 +1890,7 @@ fn recheck_cycle_times<L: FrameLink>(
     warnings: &mut Vec<(DriveRef, String)>,
 ) -> Result<(), MasterError> {
     let cycle_ns = u32::try_from(cfg.cycle.as_nanos()).unwrap_or(u32::MAX);
-    let wait = cfg.dc.start_delay + cfg.cycle * 20 + Duration::from_millis(200);
+    let wait = cfg.dc.start_delay_for(MAX_SUBDEVICES) + cfg.cycle * 20 + Duration::from_millis(200);
     for (addr, drive, object) in recheck {
         let until = crate::rt::monotonic_ns() + wait.as_nanos() as u64;
         let reads = loop {
@@ -1880,8 +2009,14 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
     })
 }
 
-/// Exchange process data with system-time synchronisation until every DC drive's system-time
-/// difference (0x092C) is below the threshold.
+/// Drift compensation, measured: exchange frames with system-time synchronisation (each one a
+/// step of every clock's control loop) back to back until every clock's system-time difference
+/// (0x092C) has stayed below the threshold for [`DcSettings::settle_checks`] checks in a row.
+///
+/// One broadcast read checks the whole segment: a BRD ORs every device's 0x092C, and each
+/// difference's magnitude (bits 0–30) is at most the OR of them all, so an OR below the
+/// threshold means every clock is below it. Only when it is not are the drives read one by one
+/// (eight at a time), to name the worst in the error.
 fn settle_dc<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     group: &Group<ethercrab::subdevice_group::PreOpPdi>,
@@ -1890,9 +2025,9 @@ fn settle_dc<L: FrameLink>(
 ) -> Result<(), MasterError> {
     let deadline = crate::rt::monotonic_ns() + dc.settle_timeout.as_nanos() as u64;
     // The last readings of each drive's 0x092C (newest last), for the error.
-    const KEEP: usize = 5;
     let mut last: Vec<std::collections::VecDeque<u32>> =
-        vec![std::collections::VecDeque::with_capacity(KEEP); drives.len()];
+        vec![std::collections::VecDeque::with_capacity(5); drives.len()];
+    let mut below = 0u32;
     loop {
         bus.block_on(
             &|| "synchronising distributed clocks".into(),
@@ -1901,62 +2036,100 @@ fn settle_dc<L: FrameLink>(
         )
         .map_err(|e| exec_error(None, e))?
         .map_err(|e| bus_error(None, "synchronising distributed clocks", e))?;
-        let mut worst: Option<(usize, u32)> = None;
-        for (i, d) in drives.iter().enumerate() {
-            let addr = d.info.address;
-            let raw: u32 = bus
-                .block_on(
-                    &|| format!("{}: reading 0x092C", d.drive),
-                    T_STEP,
-                    |md| async move {
-                        Command::fprd(addr, register::DC_SYSTEM_TIME_DIFFERENCE)
-                            .receive::<u32>(md)
-                            .await
-                    },
+        let or: u32 = bus
+            .block_on(&|| "reading 0x092C of every device".into(), T_STEP, |md| {
+                Command::brd(register::DC_SYSTEM_TIME_DIFFERENCE)
+                    .ignore_wkc()
+                    .receive::<u32>(md)
+            })
+            .map_err(|e| exec_error(None, e))?
+            .map_err(|e| {
+                bus_error(
+                    None,
+                    "reading the DC system-time difference (0x092C) of every device",
+                    e,
                 )
-                .map_err(|e| exec_error(Some(&d.drive), e))?
-                .map_err(|e| {
-                    bus_error(
-                        Some(&d.drive),
-                        "reading the DC system-time difference (0x092C)",
-                        e,
-                    )
-                })?;
-            let diff = raw & 0x7FFF_FFFF;
-            if let Some(l) = last.get_mut(i) {
-                if l.len() == KEEP {
-                    l.pop_front();
-                }
-                l.push_back(diff);
-            }
-            if diff >= dc.settle_threshold_ns && worst.is_none_or(|(_, w)| diff > w) {
-                worst = Some((i, diff));
-            }
-        }
-        let Some((i, diff)) = worst else {
-            return Ok(());
+            })?;
+        let worst = if or & 0x7FFF_FFFF < dc.settle_threshold_ns {
+            None
+        } else {
+            worst_drive(bus, drives, dc, &mut last)?
         };
-        if crate::rt::monotonic_ns() > deadline {
-            let d = &drives[i];
-            return Err(MasterError::new(
+        let Some((i, diff)) = worst else {
+            below += 1;
+            if below >= dc.settle_checks.max(1) {
+                return Ok(());
+            }
+            continue;
+        };
+        below = 0;
+        if crate::rt::monotonic_ns() <= deadline {
+            continue;
+        }
+        let d = &drives[i];
+        return Err(MasterError::new(
+            Some(&d.drive),
+            "waiting for distributed clocks to settle (0x092C)",
+            ErrorKind::DcSettle,
+            format!(
+                "system-time difference still {diff} ns after {} ms (threshold {} ns); \
+                 its last readings of 0x092C: {} ns (its clock does not lock to the \
+                 reference: a clock beyond the slave controller's drift range?)",
+                dc.settle_timeout.as_millis(),
+                dc.settle_threshold_ns,
+                last.get(i).map_or(String::new(), |l| l
+                    .iter()
+                    .map(u32::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", "))
+            ),
+        ));
+    }
+}
+
+/// Each drive's 0x092C, eight at a time, kept in `last` (newest last, five per drive): the
+/// drive farthest above the threshold, `None` when every drive is below it.
+fn worst_drive<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    drives: &[ConfiguredDrive],
+    dc: &DcSettings,
+    last: &mut [std::collections::VecDeque<u32>],
+) -> Result<Option<(usize, u32)>, MasterError> {
+    const KEEP: usize = 5;
+    let addrs: Vec<u16> = drives.iter().map(|d| d.info.address).collect();
+    let reads = bus
+        .block_on_each(
+            &|| "reading 0x092C of each drive".into(),
+            T_STEP,
+            addrs,
+            async |md, addr| {
+                Command::fprd(addr, register::DC_SYSTEM_TIME_DIFFERENCE)
+                    .receive::<u32>(md)
+                    .await
+            },
+        )
+        .map_err(|e| exec_error(None, e))?;
+    let mut worst: Option<(usize, u32)> = None;
+    for (i, (d, raw)) in drives.iter().zip(reads).enumerate() {
+        let raw = raw.map_err(|e| {
+            bus_error(
                 Some(&d.drive),
-                "waiting for distributed clocks to settle (0x092C)",
-                ErrorKind::DcSettle,
-                format!(
-                    "system-time difference still {diff} ns after {} ms (threshold {} ns); \
-                     its last readings of 0x092C: {} ns (its clock does not lock to the \
-                     reference: a clock beyond the slave controller's drift range?)",
-                    dc.settle_timeout.as_millis(),
-                    dc.settle_threshold_ns,
-                    last.get(i).map_or(String::new(), |l| l
-                        .iter()
-                        .map(u32::to_string)
-                        .collect::<Vec<_>>()
-                        .join(", "))
-                ),
-            ));
+                "reading the DC system-time difference (0x092C)",
+                e,
+            )
+        })?;
+        let diff = raw & 0x7FFF_FFFF;
+        if let Some(l) = last.get_mut(i) {
+            if l.len() == KEEP {
+                l.pop_front();
+            }
+            l.push_back(diff);
+        }
+        if diff >= dc.settle_threshold_ns && worst.is_none_or(|(_, w)| diff > w) {
+            worst = Some((i, diff));
         }
     }
+    Ok(worst)
 }
 
 #[cfg(test)]

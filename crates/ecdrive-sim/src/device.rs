@@ -65,6 +65,8 @@ pub struct DcSyncStatus {
     pub sync0_cycle_ns: u32,
     /// SYNC1 cycle time in ns (0x09A4).
     pub sync1_cycle_ns: u32,
+    /// SYNC0 pulses generated since SYNC0 was activated (0 until its start time).
+    pub sync0_pulses: u64,
 }
 
 /// A state change the master requested.

@@ -25,6 +25,7 @@
 //! | `outputs-in-safeop` | the outputs are applied already in SAFE-OP (the CiA 402 state machine follows the controlword there) | slaves that do not treat SAFE-OP outputs as safe state |
 //! | `following-error-zero` | 0x60F4 can be mapped but always reads 0 | drives that do not compute it in every mode |
 //! | `interpolation-index-read-only` | 0x60C2:02 (interpolation time index) is read-only at its power-on value | the BDHDE as its object table prints it |
+//! | `op-needs-sync0` | SAFE-OP → OP is refused with AL status code 0x002D (no sync) while SYNC0 is activated but has not yet fired | slave stacks that check for SYNC0 events before OP; the MR-J4-TM manual §1.4.2 (7) has DC synchronisation established in SAFE-OP before OP |
 
 use core::fmt;
 
@@ -55,6 +56,8 @@ pub enum Quirk {
     FollowingErrorZero,
     /// 0x60C2:02 read-only.
     InterpolationIndexReadOnly,
+    /// SAFE-OP → OP refused (0x002D) until SYNC0 has fired.
+    OpNeedsSync0,
 }
 
 /// The entry whose description [`Quirk::SdoInfoBadEntry`] breaks: every CoE device has it.
@@ -91,7 +94,7 @@ pub struct Capabilities {
 
 impl Quirk {
     /// Every quirk, in the order of the table above.
-    pub const ALL: [Quirk; 12] = [
+    pub const ALL: [Quirk; 13] = [
         Quirk::NoStateSkipping,
         Quirk::CycleTimeReadOnly,
         Quirk::SyncObjectsAbsent,
@@ -104,6 +107,7 @@ impl Quirk {
         Quirk::OutputsInSafeOp,
         Quirk::FollowingErrorZero,
         Quirk::InterpolationIndexReadOnly,
+        Quirk::OpNeedsSync0,
     ];
 
     /// The name after `+` in a device name.
@@ -121,6 +125,7 @@ impl Quirk {
             Quirk::OutputsInSafeOp => "outputs-in-safeop",
             Quirk::FollowingErrorZero => "following-error-zero",
             Quirk::InterpolationIndexReadOnly => "interpolation-index-read-only",
+            Quirk::OpNeedsSync0 => "op-needs-sync0",
         }
     }
 
@@ -147,13 +152,16 @@ impl Quirk {
             Quirk::InterpolationIndexReadOnly => {
                 "0x60C2:02 (interpolation time index) read-only at its power-on value"
             }
+            Quirk::OpNeedsSync0 => "SAFE-OP → OP refused (0x002D, no sync) until SYNC0 has fired",
         }
     }
 
     /// What the device needs for the quirk to mean something.
     pub const fn needs(self) -> Needs {
         match self {
-            Quirk::StaleInputsUntilOp | Quirk::OutputsInSafeOp => Needs::ProcessData,
+            Quirk::StaleInputsUntilOp | Quirk::OutputsInSafeOp | Quirk::OpNeedsSync0 => {
+                Needs::ProcessData
+            }
             Quirk::NoStateSkipping => Needs::Cia402,
             Quirk::FollowingErrorZero => Needs::FollowingError,
             _ => Needs::Coe,

@@ -16,7 +16,7 @@
 //! lost_before_stop = 3       # consecutive cycles without a reply before the axes are stopped
 //! lost_cycles = 3            # consecutive cycles without a reply before the segment counts as lost
 //! wkc_errors = 3             # consecutive wrong working counters before the axes are stopped
-//! safeop_cycles = 20         # cycles of valid outputs in SAFE-OP before OP is requested
+//! safeop_cycles = 10         # SYNC0 cycles of valid outputs in SAFE-OP before OP is requested
 //! op_timeout = "5s"          # how long the drives may take to reach OP
 //!
 //! [sim]                      # only with interface = "sim"

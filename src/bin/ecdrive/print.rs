@@ -673,18 +673,25 @@ pub fn run_report(r: &RunReport) {
     }
 }
 
-/// Where start-up's time went, one line.
+/// Where start-up's time went, one line: milliseconds, frames sent in brackets.
 pub fn startup(t: &ecdrive::master::StartupTimes) {
+    let f = &t.frames;
     println!(
-        "Start-up: {:.1} ms to {}: discovery {:.1} (SII {:.1}), CoE {:.1}, image {:.1}, DC settle {:.1}, SAFE-OP {:.1}{}",
+        "Start-up: {:.1} ms to {}: discovery {:.1} [{} frames] (SII {:.1} [{}]), CoE {:.1} [{}], image {:.1} [{}], DC settle {:.1} [{}], SAFE-OP {:.1} [{}]{}",
         t.total_ms,
         if t.op_ms.is_some() { "OP" } else { "SAFE-OP" },
         t.discovery_ms,
+        f.discovery,
         t.sii_ms,
+        f.sii,
         t.coe_ms,
+        f.coe,
         t.image_ms,
+        f.image,
         t.dc_settle_ms,
+        f.dc_settle,
         t.safe_op_ms,
+        f.safe_op,
         t.op_ms.map(|o| format!(", OP {o:.1}")).unwrap_or_default()
     );
 }

@@ -11,6 +11,11 @@ impl Esc {
             sync1_active: self.dc.sync.active && act & 0x04 != 0,
             sync0_cycle_ns: self.get_u32(0x09A0),
             sync1_cycle_ns: self.get_u32(0x09A4),
+            sync0_pulses: if self.dc.sync.active {
+                self.dc.sync.count
+            } else {
+                0
+            },
         }
     }
 
@@ -106,6 +111,13 @@ impl Esc {
                     .map(|_| SafeOp)
                     .map_err(|c| (PreOp, c)),
             },
+            (SafeOp, Op)
+                if dev.quirks().has(Quirk::OpNeedsSync0)
+                    && self.dc_status().sync0_active
+                    && self.dc_status().sync0_pulses == 0 =>
+            {
+                Err((SafeOp, AlStatusCode::NO_SYNC_ERROR))
+            }
             (SafeOp, Op) => self.ask(dev, from, to).map(|_| Op).map_err(|c| (SafeOp, c)),
             (_, Init) => Ok(Init),
             (Op, SafeOp) | (Op, PreOp) | (SafeOp, PreOp) => Ok(to),

@@ -249,7 +249,7 @@ fn request<L: FrameLink>(
                 let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
                 let mut times = started.times;
                 let group = started.group;
-                // Valid outputs before OP for as many cycles as the cycle gives them.
+                let dc_time = std::cell::Cell::new(0u64);
                 let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
                     let r = bus
                         .block_on(&|| "exchanging process data".into(), T_STEP, |md| {
@@ -257,10 +257,26 @@ fn request<L: FrameLink>(
                         })
                         .map_err(|e| exec_error(None, e))?
                         .map_err(|e| bus_error(None, "exchanging process data", e))?;
+                    dc_time.set(r.extra.dc_system_time);
                     Ok(r.extra.next_cycle_wait)
                 };
-                for _ in 0..crate::master::CycleSettings::new(opts.cycle).safeop_cycles {
+                // Valid outputs before OP, with SYNC0 running on every drive, for as many
+                // cycles as the cycle gives them (bounded by the timeout).
+                let cycles = crate::master::CycleSettings::new(opts.cycle).safeop_cycles;
+                let not_before = started
+                    .drives
+                    .iter()
+                    .filter_map(|d| d.sync0_start_ns)
+                    .max()
+                    .map_or(0, |s| s + u64::from(cycles) * opts.cycle.as_nanos() as u64);
+                let until = crate::rt::monotonic_ns() + opts.timeout.as_nanos() as u64;
+                let mut n = 0u32;
+                while n < cycles || dc_time.get() < not_before {
                     let w = exchange(bus)?;
+                    n = n.saturating_add(1);
+                    if crate::rt::monotonic_ns() > until {
+                        break;
+                    }
                     std::thread::sleep(w);
                 }
                 drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
