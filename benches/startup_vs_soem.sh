@@ -4,6 +4,9 @@
 #
 #   sudo benches/startup_vs_soem.sh [DRIVES] [ROUNDS]      (default 2 drives, 5 rounds)
 #
+# CYCLE_MS (default 1) sets the cycle and SYNC0 period of both masters: at 128 drives the
+# emulated segment, one thread answering every frame, needs more than 1 ms a cycle over veth.
+#
 # DRIVES emulated drives (MR-J4-TM and BDHDE alternating) are served by `ecdrive sim` in a
 # network namespace of this script's own (ecdrive-su) on one end of a veth pair. Each round:
 #   SOEM    config_init, config_map, config_dc, SYNC0 1 ms, SAFE-OP, process data, OP, measured
@@ -22,6 +25,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 n="${1:-2}"
 rounds="${2:-5}"
+cycle_ms="${CYCLE_MS:-1}"
 e=target/release/ecdrive
 py="${PYTHON:-python3}"
 [ -x "$py" ] || command -v "$py" >/dev/null || py=python3
@@ -37,20 +41,20 @@ cleanup() {
   sleep 0.5
   ip netns del "$ns" 2>/dev/null || true
   ip link del ecsu0 2>/dev/null || true
-  rm -rf "$work"
+  [ -n "${KEEP:-}" ] && echo "kept $work" >&2 || rm -rf "$work"
 }
 trap cleanup EXIT
 
 {
   echo 'interface = "ecsu0"'
-  echo 'cycle = "1ms"'
+  echo "cycle = \"${cycle_ms}ms\""
   echo 'duration = "0.1s"'
   for i in $(seq 0 $((n - 1))); do printf '[[drive]]\nposition = %d\nmode = "csp"\n' "$i"; done
 } >"$work/run.toml"
 
 cat >"$work/soem.py" <<'EOF'
 import sys, time, struct, pysoem
-CYCLE = 1_000_000
+CYCLE = int(sys.argv[3]) * 1_000_000
 t0 = time.monotonic()
 m = pysoem.Master()
 m.open(sys.argv[1])
@@ -102,24 +106,28 @@ tx() { cat /sys/class/net/ecsu0/statistics/tx_packets; }
 for r in $(seq "$rounds"); do
   if [ "$soem" = 1 ]; then
     a=$(tx)
-    out=$("$py" "$work/soem.py" ecsu0 "$n")
+    out=$("$py" "$work/soem.py" ecsu0 "$n" "$cycle_ms" 2>>"$work/soem.err" || echo fail)
     echo "$out $(($(tx) - a))" >>"$work/soem.txt"
   fi
-  "$e" run -c "$work/run.toml" --json 2>/dev/null | python3 -c "
+  if ! "$e" run -c "$work/run.toml" --json >"$work/one.json" 2>"$work/one.err"; then
+    echo "ecdrive run failed (round $r): $(tail -1 "$work/one.err")" >&2
+    continue
+  fi
+  python3 -c "
 import json, sys
-s = json.load(sys.stdin)['startup']
+s = json.load(open('$work/one.json'))['startup']
 print(' '.join([str(s[k]) for k in '$fields'.split()] + [str(s['frames'][k]) for k in '$frames'.split()]))" >>"$work/ecdrive.txt"
 done
 
-python3 - "$work" "$n" "$rounds" "$fields" "$soem" "$frames" <<'EOF'
+python3 - "$work" "$n" "$rounds" "$fields" "$soem" "$frames" "$cycle_ms" <<'EOF'
 import statistics, sys, subprocess
-work, n, rounds, fields, soem, frames = sys.argv[1:]
+work, n, rounds, fields, soem, frames, cycle_ms = sys.argv[1:]
 med = lambda xs: statistics.median(xs) if xs else float("nan")
 names = fields.split() + ["frames_" + f for f in frames.split()]
 rows = [list(map(float, l.split())) for l in open(f"{work}/ecdrive.txt")]
 cols = dict(zip(names, zip(*rows)))
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-print(f"start-up to OP over veth, {n} emulated drives, median of {rounds} interleaved runs (commit {commit})")
+print(f"start-up to OP over veth, {n} emulated drives, cycle {cycle_ms} ms, median of {rounds} interleaved runs (commit {commit})")
 if soem == "1":
     s = [l.split() for l in open(f"{work}/soem.txt")]
     ok = [list(map(float, x)) for x in s if x[0] != "fail"]

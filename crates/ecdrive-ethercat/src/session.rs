@@ -1343,7 +1343,8 @@ fn run<L: FrameLink + Send>(
                     push_history(shared, entry);
                 }
                 if matches!(e.kind, EventKind::AllOp) {
-                    times.reached_op(monotonic_ns());
+                    // When the cycle saw it, not when this thread got round to it.
+                    times.reached_op(e.time_ns);
                     if restarting {
                         let text = format!("re-start {}: every drive is back in OP", before + 1);
                         note(shared, HistoryKind::Restart, false, text);

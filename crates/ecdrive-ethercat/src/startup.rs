@@ -317,8 +317,9 @@ pub struct StartupTimes {
     pub dc_settle_ms: f64,
     /// Starting SYNC0, PRE-OP → SAFE-OP, and the checks of read-only cycle times.
     pub safe_op_ms: f64,
-    /// SAFE-OP → OP: from the first cycle until every device reported OP (`None` until then,
-    /// or when the caller did not go to OP).
+    /// SAFE-OP → OP: from SAFE-OP (the cycle thread's start, its SYNC0 cycles of valid
+    /// outputs, the OP request) until the cycle saw every device report OP (`None` until
+    /// then, or when the caller did not go to OP).
     pub op_ms: Option<f64>,
     /// From the start of discovery to SAFE-OP (to OP when `op_ms` is known).
     pub total_ms: f64,
