@@ -34,9 +34,10 @@ pub use ecdrive_sim as sim;
 pub use cia402::{OperationMode, State};
 pub use drives::DriveProfile;
 pub use ecdrive_ethercat::{
-    Axes, AxisTelemetry, Command, CycleTelemetry, CyclicMode, DriveRef, DriveSetup, ErrorKind,
-    Event, EventKind, HistoryEntry, HistoryKind, Master, MasterConfig, MasterError, Selector,
-    SessionReport, StartFailure, Step, StopKind, StopReason, Target, Telemetry,
+    AppAxis, AppCycle, Axes, AxisTelemetry, Command, CycleApp, CycleTelemetry, CyclicMode,
+    DriveRef, DriveSetup, EntryError, ErrorKind, Event, EventKind, HistoryEntry, HistoryKind,
+    Master, MasterConfig, MasterError, Selector, SessionReport, SetpointLimits, StartFailure, Step,
+    StopKind, StopReason, StreamProducer, Streams, Target, Telemetry,
 };
 pub use link::RawSocket;
 

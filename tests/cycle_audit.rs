@@ -8,6 +8,10 @@
 //! per-thread perf counter on the `raw_syscalls:sys_enter` tracepoint counts the cycle
 //! thread's syscalls, and those outside the allowed set. The window opens when every drive is
 //! in OP and closes when the stop command arrives; the hooks run on the cycle thread.
+//!
+//! One more run puts application code in the cycle: a `CycleApp` that reads every accessor and
+//! a mapped entry of one axis, writes its set-points (a sine), and feeds the other axis from a
+//! set-point stream that a producer thread fills while the window is open.
 
 mod support {
     pub mod generic;
@@ -20,6 +24,8 @@ use ecdrive::master::program::{CyclicMode, Step, Target};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
+use ecdrive::master::{AppCycle, CycleApp, StreamProducer, Streams};
+use ecdrive::od::ObjectAddress;
 use ecdrive::rt::audit::{
     self, AllocCounts, CountingAlloc, SyscallCounter, SyscallCounts, skip_or_fail,
 };
@@ -127,6 +133,47 @@ fn audit_run<L: FrameLink + Send + 'static>(
     allowed: &'static [libc::c_long],
     what: &str,
 ) {
+    audit_run_with(link, load, allowed, what, None);
+}
+
+/// Application code for the audit: a sine on axis 0 from everything it reads, a stream on
+/// axis 1.
+struct AuditApp {
+    streams: Streams,
+    centre: Option<i64>,
+    seen: i64,
+}
+
+impl CycleApp for AuditApp {
+    fn cycle(&mut self, c: &mut AppCycle<'_>) {
+        self.streams.cycle(c);
+        let t = c.time();
+        if let Some(a) = c.axis(0)
+            && a.enabled()
+        {
+            let centre = *self.centre.get_or_insert(a.position());
+            self.seen = self.seen.wrapping_add(
+                a.velocity() as i64
+                    + a.torque() as i64
+                    + a.following_error()
+                    + a.error_code() as i64
+                    + a.read(ObjectAddress::new(0x6041, 0)).unwrap_or(0)
+                    + a.digital_inputs().map_or(0, i64::from)
+                    + i64::from(a.mode().is_some())
+                    + i64::from(a.state().is_some()),
+            );
+            a.set_target(centre as f64 + 2000.0 * (t * 6.0).sin());
+        }
+    }
+}
+
+fn audit_run_with<L: FrameLink + Send + 'static>(
+    link: L,
+    load: Load,
+    allowed: &'static [libc::c_long],
+    what: &str,
+    app: Option<(Arc<Mutex<AuditApp>>, StreamProducer)>,
+) {
     let audit = Arc::new(Audit::new(allowed));
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
     if load == Load::Generic {
@@ -134,26 +181,35 @@ fn audit_run<L: FrameLink + Send + 'static>(
     }
     cfg.hooks = Some(audit.clone());
     cfg.cycle.segment_lost_after = 50;
+    let with_app = app.is_some();
+    let mut producer = app.map(|(a, p)| {
+        cfg.app = Some(a);
+        p
+    });
     for p in [0, 2] {
         cfg.startup.drives.push(DriveSetup {
             profile: (load == Load::Generic).then_some(&GENERIC_TEST),
-            program: vec![
-                Step::Move {
-                    target: Target::By(20_000.0),
-                    velocity: 100_000.0,
-                    acceleration: 1_000_000.0,
-                    jerk: None,
-                },
-                Step::Mode {
-                    mode: CyclicMode::Csv,
-                },
-                Step::Ramp {
-                    velocity: 50_000.0,
-                    acceleration: 1_000_000.0,
-                    hold: 0.05,
-                },
-                Step::Dwell { seconds: 0.2 },
-            ],
+            program: if with_app {
+                Vec::new()
+            } else {
+                vec![
+                    Step::Move {
+                        target: Target::By(20_000.0),
+                        velocity: 100_000.0,
+                        acceleration: 1_000_000.0,
+                        jerk: None,
+                    },
+                    Step::Mode {
+                        mode: CyclicMode::Csv,
+                    },
+                    Step::Ramp {
+                        velocity: 50_000.0,
+                        acceleration: 1_000_000.0,
+                        hold: 0.05,
+                    },
+                    Step::Dwell { seconds: 0.2 },
+                ]
+            },
             ..DriveSetup::new(Selector::Position(p))
         });
     }
@@ -169,13 +225,27 @@ fn audit_run<L: FrameLink + Send + 'static>(
             .all(|a| a.state == Some(State::OperationEnabled))
     })
     .unwrap();
-    m.command(Command::RunProgram(Axes::All)).unwrap();
-    m.wait_until(
-        "the programs and 300 cycles",
-        Duration::from_secs(20),
-        |t| t.cycle.cycle > c0 + 300 && t.axes.iter().all(|a| a.program_step >= 4),
-    )
-    .unwrap();
+    if let Some(p) = producer.as_mut() {
+        // Axis 1 from the stream: 600 set-points from where it stands, pushed as room frees.
+        let origin = m.telemetry().axes[1].position_actual;
+        let mut next = 1i64;
+        m.wait_until("the stream and 300 cycles", Duration::from_secs(20), |t| {
+            while next <= 600 && p.push((origin + 3 * next) as f64).is_ok() {
+                next += 1;
+            }
+            t.cycle.cycle > c0 + 300 && next > 600
+        })
+        .unwrap();
+        assert!(p.consumed() > 100, "{what}: the stream was not consumed");
+    } else {
+        m.command(Command::RunProgram(Axes::All)).unwrap();
+        m.wait_until(
+            "the programs and 300 cycles",
+            Duration::from_secs(20),
+            |t| t.cycle.cycle > c0 + 300 && t.axes.iter().all(|a| a.program_step >= 4),
+        )
+        .unwrap();
+    }
     let (report, _) = m.stop(StopKind::Ramp);
     assert!(report.unwrap().shutdown_ok);
 
@@ -227,6 +297,27 @@ fn steady_cycle_with_the_emulated_drives_and_emergency_polling() {
         Load::Drives,
         &[libc::SYS_clock_nanosleep, libc::SYS_futex],
         "in-process, MR-J4-TM and BDHDE, emergency polling",
+    );
+}
+
+/// With application code in the cycle (a callback reading every accessor and writing a sine)
+/// and a set-point stream fed by another thread, on the emulated drives with emergency
+/// polling: no allocation, no other syscall.
+#[test]
+fn steady_cycle_with_a_callback_and_a_stream_allocates_nothing() {
+    let mut streams = Streams::new();
+    let producer = streams.add(1, 64);
+    let app = Arc::new(Mutex::new(AuditApp {
+        streams,
+        centre: None,
+        seen: 0,
+    }));
+    audit_run_with(
+        SegmentLink::new(segment(Load::Drives)),
+        Load::Drives,
+        &[libc::SYS_clock_nanosleep, libc::SYS_futex],
+        "in-process, a callback and a stream",
+        Some((app, producer)),
     );
 }
 

@@ -14,6 +14,7 @@
 //! leaves OP: ramp (or quick stop), then disable. Ending the cycle hands the bus back to the
 //! session, which takes the drives to INIT.
 
+use super::app::{AppAxis, AppCycle, CycleApp, SetpointLimits};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
 use super::program::{CyclicMode, Runner, Tick};
@@ -417,6 +418,10 @@ struct AxisRt {
     modes_run: Vec<CyclicMode>,
     steps: SetpointSteps,
     last_out: Option<(i32, i32, i16)>,
+    /// This cycle's inputs, read before the application runs.
+    fb: Option<Feedback>,
+    /// What the application's set-points must keep.
+    limits: SetpointLimits,
 }
 
 impl AxisRt {
@@ -459,6 +464,8 @@ impl AxisRt {
             modes_run: Vec::with_capacity(8),
             steps: SetpointSteps::default(),
             last_out: None,
+            fb: None,
+            limits: d.setup.limits,
         })
     }
 
@@ -534,8 +541,14 @@ impl AxisRt {
 
     /// One cycle with a reply in OP: inputs → program and stop ramp → engine → outputs, with
     /// the engine's events, the set-point statistics, the following error and the telemetry.
-    fn step(&mut self, i: usize, inputs: &[u8], ctx: &StepContext, ev: &mut Emitter) -> Output {
-        let fb = self.read_inputs(inputs, ctx.pulse);
+    fn step(
+        &mut self,
+        i: usize,
+        fb: Feedback,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+        app: Option<&AppAxis>,
+    ) -> Output {
         let actual = self.actual();
         let st = self.axis.status();
         let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
@@ -553,6 +566,11 @@ impl AxisRt {
                 sp = s;
             }
         }
+        if let Some(app) = app {
+            if let Some(s) = self.app_requests(i, app, &st, enabled, ctx, ev) {
+                sp = s;
+            }
+        }
         if enabled {
             self.command(sp, &st);
         } else if self.stopping == Stopping::No {
@@ -564,6 +582,75 @@ impl AxisRt {
         self.record_steps(&out, enabled, ctx.cycle);
         self.follow(i, &out, ctx, ev);
         out
+    }
+
+    /// What the application asked of the axis this cycle: a mode switch (through the engine),
+    /// and a set-point, taken in Operation enabled with no program running and within the
+    /// limits; a set-point beyond them stops the axis with a ramp and names the limit.
+    fn app_requests(
+        &mut self,
+        i: usize,
+        app: &AppAxis,
+        st: &AxisStatus,
+        enabled: bool,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+    ) -> Option<Sample> {
+        if let Some(m) = app.mode_request
+            && st.active_mode.as_i8() != m.code()
+            && st.mode_switch == ModeSwitchPhase::Idle
+            && self
+                .axis
+                .request_mode(OperationMode::from_i8(m.code()))
+                .is_err()
+        {
+            ev.emit(EventKind::CommandRefused {
+                axis: i as u16,
+                why: "the application's mode switch was refused",
+            });
+        }
+        let v = app.setpoint?;
+        if !enabled || self.stopping != Stopping::No || self.program == ProgramState::Running {
+            return None;
+        }
+        let mode = CyclicMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        match self
+            .limits
+            .check(mode, v, (self.hold.pos, self.hold.vel), ctx.dt)
+        {
+            Ok((vel, acc)) => {
+                let sp = match mode {
+                    CyclicMode::Csp => Sample {
+                        pos: v,
+                        vel,
+                        acc,
+                        ..self.hold
+                    },
+                    CyclicMode::Csv => Sample {
+                        pos: self.hold.pos + v * ctx.dt,
+                        vel: v,
+                        acc,
+                        ..self.hold
+                    },
+                    CyclicMode::Cst => Sample {
+                        torque: v,
+                        ..self.hold
+                    },
+                };
+                self.hold = sp;
+                Some(sp)
+            }
+            Err((limit, value, max)) => {
+                ev.emit(EventKind::SetpointLimit {
+                    axis: i as u16,
+                    limit,
+                    value,
+                    max,
+                });
+                self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+                None
+            }
+        }
     }
 
     /// The set-point of a controlled stop (ramp to standstill, or waiting out a quick stop),
@@ -1058,6 +1145,10 @@ struct Cycle<'a, 'p, L: FrameLink> {
     others: &'a [ConfiguredIo],
     settings: &'a CycleSettings,
     hooks: Option<&'a dyn CycleHooks>,
+    /// The application's code, called once per cycle, and its view of each axis (same order
+    /// as `axes`).
+    app: Option<&'a mut (dyn CycleApp + 'static)>,
+    app_axes: Vec<AppAxis>,
     commands: &'a mut rtrb::Consumer<Command>,
     telemetry: &'a mut triple_buffer::Input<Telemetry>,
     restarts: &'a mut u32,
@@ -1097,12 +1188,13 @@ pub fn run<L: FrameLink>(
     settings: &CycleSettings,
     io: &mut CycleIo,
     hooks: Option<&dyn CycleHooks>,
+    app: Option<&mut (dyn CycleApp + 'static)>,
 ) -> CycleReport {
     let rt = settings.rt.apply_to_current_thread();
     if let Some(tx) = io.rt_report.take() {
         let _ = tx.send(rt.clone());
     }
-    let mut c = Cycle::new(md, pump, group, drives, others, settings, io, hooks);
+    let mut c = Cycle::new(md, pump, group, drives, others, settings, io, hooks, app);
     let end = loop {
         if let Some(end) = c.turn() {
             break end;
@@ -1123,11 +1215,17 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         settings: &'a CycleSettings,
         io: &'a mut CycleIo,
         hooks: Option<&'a dyn CycleHooks>,
+        app: Option<&'a mut (dyn CycleApp + 'static)>,
     ) -> Self {
         let cycle_ns = (settings.cycle.as_nanos() as u64).max(1);
         let axes: Vec<AxisRt> = drives
             .iter()
             .filter_map(|d| AxisRt::new(d, settings.cycle))
+            .collect();
+        let app_axes: Vec<AppAxis> = drives
+            .iter()
+            .filter(|d| axes.iter().any(|a| a.sub == usize::from(d.info.position)))
+            .map(app_view)
             .collect();
         for a in &axes {
             if let Ok(sd) = group.subdevice(md, a.sub) {
@@ -1188,6 +1286,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             others,
             settings,
             hooks,
+            app,
+            app_axes,
             commands,
             telemetry,
             restarts,
@@ -1634,7 +1734,34 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             stop_timeout_cycles: self.k.stop_timeout_cycles,
         };
         let (md, group) = (self.md, self.group);
-        for (i, a) in self.axes.iter_mut().enumerate() {
+        // Inputs first, for every axis; then the application; then each axis's step.
+        for (a, view) in self.axes.iter_mut().zip(self.app_axes.iter_mut()) {
+            view.clear_requests();
+            let Ok(sd) = group.subdevice(md, a.sub) else {
+                continue;
+            };
+            view.in_op = good && a.al_state & 0x0F == 8;
+            if !view.in_op {
+                view.enabled = false;
+                continue;
+            }
+            let io = sd.io_raw();
+            a.fb = Some(a.read_inputs(io.inputs(), ctx.pulse));
+            refresh_view(view, a, io.inputs(), io.outputs());
+        }
+        if let Some(app) = self.app.as_deref_mut() {
+            let ev = &mut self.ev;
+            let mut emit = |k: EventKind| ev.emit(k);
+            let mut c = AppCycle {
+                cycle: ctx.cycle,
+                dt: ctx.dt,
+                axes: &mut self.app_axes,
+                events: &mut emit,
+            };
+            app.cycle(&mut c);
+        }
+        let with_app = self.app.is_some();
+        for (i, (a, view)) in self.axes.iter_mut().zip(self.app_axes.iter()).enumerate() {
             let Ok(sd) = group.subdevice(md, a.sub) else {
                 continue;
             };
@@ -1646,8 +1773,13 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 a.below_op(sd.io_raw_mut().outputs());
                 continue;
             }
-            let out = a.step(i, sd.io_raw().inputs(), &ctx, &mut self.ev);
-            a.write_outputs(&out, sd.io_raw_mut().outputs());
+            let Some(fb) = a.fb.take() else { continue };
+            let out = a.step(i, fb, &ctx, &mut self.ev, with_app.then_some(view));
+            let mut io = sd.io_raw_mut();
+            a.write_outputs(&out, io.outputs());
+            for &(f, raw) in &view.writes {
+                let _ = f.write_raw(io.outputs(), raw);
+            }
         }
     }
 
@@ -1822,6 +1954,48 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 }
 
 /// What one reply's AL states showed.
+/// Bring the application's view of axis `a` up to date with this cycle's inputs.
+fn refresh_view(view: &mut AppAxis, a: &AxisRt, inputs: &[u8], outputs: &[u8]) {
+    view.tel = a.tel;
+    let st = a.axis.status();
+    view.tel.state = st.state;
+    view.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+    view.program_running = a.program == ProgramState::Running;
+    let n = view.inputs.len().min(inputs.len());
+    view.inputs[..n].copy_from_slice(&inputs[..n]);
+    let n = view.outputs.len().min(outputs.len());
+    view.outputs[..n].copy_from_slice(&outputs[..n]);
+}
+
+/// The application's view of drive `d` (set-up): every mapped entry, the ones the engine
+/// drives marked.
+fn app_view(d: &ConfiguredDrive) -> AppAxis {
+    let b = &d.fields.axis;
+    let mut engine: Vec<usize> = [
+        b.controlword,
+        b.mode,
+        b.target_position,
+        b.target_velocity,
+        b.target_torque,
+        b.velocity_offset,
+        b.torque_offset,
+        b.ip_position,
+    ]
+    .into_iter()
+    .flatten()
+    .map(|f| f.bit_position())
+    .collect();
+    if let Some((c, _)) = &d.fields.counter {
+        engine.push(c.bit_position());
+    }
+    let rx = d.layout.image(pdo::Direction::Rx);
+    let is_engine =
+        |a: crate::od::ObjectAddress| rx.find(a).is_some_and(|e| engine.contains(&e.bit_position));
+    let dict = crate::od::Dictionary::new(d.profile.dictionary);
+    let signed = |a: crate::od::ObjectAddress| dict.data_type(a).is_some_and(|t| t.is_signed());
+    AppAxis::new(&d.layout, &is_engine, &signed)
+}
+
 struct StateScan {
     /// The first device that did not answer.
     missing: Option<u16>,

@@ -7,13 +7,15 @@
 //! An application needs only the types at the crate root: [`Master`] with its
 //! [`MasterConfig`] (a [`DriveSetup`] per drive, found by a [`Selector`], with a program of
 //! [`Step`]s), [`Command`]s in, [`Telemetry`] and the history out, a [`SessionReport`] at the
-//! end. The modules below are the master's parts, public for the tools built on them.
+//! end. Code of its own runs in the cycle as a [`CycleApp`] (typed access to every axis through
+//! [`AppAxis`]); set-points streamed from other threads go through [`Streams`]. The modules below are the master's parts, public for the tools built on them.
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
 // The core layers this crate builds on, under the paths the modules use.
 pub(crate) use ecdrive_core::{cia402, drives, ec, link, od, pdo, rt};
 
+mod app;
 pub mod bus;
 pub mod coe;
 pub mod cycle;
@@ -25,15 +27,18 @@ pub mod program;
 pub mod session;
 pub mod setpoint;
 pub mod startup;
+mod stream;
 pub mod telemetry;
 mod wkc;
 
+pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};
 pub use program::{CyclicMode, Step, Target};
 pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
 pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};
+pub use stream::{StreamProducer, Streams};
 pub use telemetry::{
     Axes, AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
 };

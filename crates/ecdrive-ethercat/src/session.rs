@@ -7,6 +7,7 @@
 //! emergencies — its frames ride along in the cycle thread's exchanges. `stop` ends the cycle
 //! in a controlled way, takes the drives to INIT, and returns the report and the link.
 
+use super::app::CycleApp;
 use super::bus::{BusOptions, SESSION_STACK, with_bus};
 use super::coe::{CoeClient, EmergencyLog, EmergencyRecord};
 use super::cycle::{self, CycleEnd, CycleHooks, CycleReport, CycleSettings};
@@ -43,6 +44,10 @@ pub struct MasterConfig {
     pub emergency_poll: Option<Duration>,
     /// Instrumentation hooks on the cycle thread.
     pub hooks: Option<Arc<dyn CycleHooks + Send>>,
+    /// The application's code in the cycle ([`CycleApp`]), called once per cycle. The cycle
+    /// thread holds the lock for the whole run (so the caller's clone of the `Arc` can look
+    /// at it once the master has stopped, or between runs).
+    pub app: Option<Arc<Mutex<dyn CycleApp>>>,
     /// What happens when the cycle ends by itself (segment lost, a drive fell out of OP).
     pub restart: RestartPolicy,
     /// History entries kept with their text (the latest; older ones are discarded but
@@ -79,6 +84,7 @@ impl MasterConfig {
             bus: BusOptions::default(),
             emergency_poll: Some(Duration::from_millis(50)),
             hooks: None,
+            app: None,
             restart: RestartPolicy::Never,
             history_capacity: HistoryLog::DEFAULT_CAPACITY,
         }
@@ -407,6 +413,9 @@ impl Decoder {
             }
             EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
             EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
+            EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
+                (self.drive(axis), app_error(&e.kind), app_text(&e.kind))
+            }
             EventKind::Stopping { reason } => {
                 let why = self.stop_reason(reason);
                 (
@@ -426,6 +435,35 @@ impl Decoder {
             kind,
             text,
         })
+    }
+}
+
+/// The application's code, locked for a run of the cycle.
+fn lock_app(cfg: &MasterConfig) -> Option<std::sync::MutexGuard<'_, dyn CycleApp + 'static>> {
+    cfg.app
+        .as_ref()
+        .map(|a| a.lock().unwrap_or_else(std::sync::PoisonError::into_inner))
+}
+
+/// Whether an event of the application's set-points is an error.
+fn app_error(kind: &EventKind) -> bool {
+    matches!(kind, EventKind::SetpointLimit { .. })
+}
+
+/// The history text of an event of the application's set-points.
+fn app_text(kind: &EventKind) -> String {
+    match *kind {
+        EventKind::SetpointLimit {
+            limit, value, max, ..
+        } => format!(
+            "the application's set-point breaks {limit}: {value:.1} > {max:.1} (drive units); \
+             the axis is stopped"
+        ),
+        EventKind::StreamUnderrun { total, .. } => format!(
+            "set-point stream ran empty: the last set-point is held ({total} cycle(s) without a \
+             new one so far)"
+        ),
+        _ => String::new(),
     }
 }
 
@@ -451,6 +489,8 @@ fn history_kind(kind: &EventKind) -> HistoryKind {
         EventKind::FollowingError { .. } => HistoryKind::FollowingError,
         EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
         EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
+        EventKind::SetpointLimit { .. } => HistoryKind::CommandRefused,
+        EventKind::StreamUnderrun { .. } => HistoryKind::Warning,
         EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,
     }
 }
@@ -1309,8 +1349,10 @@ fn run<L: FrameLink + Send>(
             .stack_size(8 * 1024 * 1024)
             .spawn_scoped(s, || {
                 let hooks_ref = hooks.as_deref().map(|h| h as &dyn CycleHooks);
+                let mut app = lock_app(cfg);
+                let app_ref = app.as_deref_mut();
                 cycle::run(
-                    md, pump, group, drives, others, &cfg.cycle, cycle_io, hooks_ref,
+                    md, pump, group, drives, others, &cfg.cycle, cycle_io, hooks_ref, app_ref,
                 )
             });
         let h = match h {

@@ -87,6 +87,9 @@ pub struct DriveSetup {
     pub sdos: Vec<(ObjectAddress, Value)>,
     /// Master-side following-error limit (position units); `None` = no master-side check.
     pub following_error_limit: Option<u32>,
+    /// Limits the application's set-points must keep ([`crate::app::CycleApp`]; programs are
+    /// checked against the configuration's limits when it is read).
+    pub limits: crate::app::SetpointLimits,
     /// The user's units, for messages (a following error is then also said in them).
     pub units: Option<UserUnits>,
     /// The set-point program.
@@ -103,6 +106,7 @@ impl DriveSetup {
             mapping: None,
             sdos: Vec::new(),
             following_error_limit: None,
+            limits: crate::app::SetpointLimits::default(),
             units: None,
             program: Vec::new(),
         }
@@ -377,7 +381,8 @@ pub struct Started {
     /// What start-up accepted but the user should know (a drive without 0x1C32, a read-only
     /// cycle time), per drive.
     pub warnings: Vec<(DriveRef, String)>,
-    /// Where the time went (discovery is filled by [`configure`] from [`Discovered`]).
+    /// Where the time went (discovery is filled by [`configure`] from what [`discover`] noted
+    /// on the bus, [`Bus::discovery`]).
     pub times: StartupTimes,
 }
 

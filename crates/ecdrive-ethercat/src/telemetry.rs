@@ -237,6 +237,26 @@ pub enum EventKind {
         /// Why (a fixed text).
         why: &'static str,
     },
+    /// A set-point from the application broke one of the axis's limits: the axis is stopped
+    /// with a ramp.
+    SetpointLimit {
+        /// Axis index.
+        axis: u16,
+        /// The limit (`max_velocity`, `max_acceleration`, `max_torque`, or `a finite
+        /// set-point`).
+        limit: &'static str,
+        /// The value the set-point implied (drive units).
+        value: f64,
+        /// The limit's value.
+        max: f64,
+    },
+    /// A set-point stream ran empty while its axis took set-points: the last one is held.
+    StreamUnderrun {
+        /// Axis index.
+        axis: u16,
+        /// Cycles without a new set-point so far in this stream.
+        total: u64,
+    },
     /// The cycle started stopping the axes.
     Stopping {
         /// Why.

@@ -978,6 +978,14 @@ fn drive(
             mapping,
             sdos,
             following_error_limit: fe_limit,
+            limits: r.limits.as_ref().map_or_else(Default::default, |l| {
+                let l = l.get_ref();
+                crate::master::SetpointLimits {
+                    max_velocity: l.max_velocity.map(|v| v * k),
+                    max_acceleration: l.max_acceleration.map(|v| v * k),
+                    max_torque: l.max_torque,
+                }
+            }),
             units: units.clone(),
             program: steps,
         },

@@ -161,6 +161,17 @@ pub struct UnknownAlarm {
     pub known: String,
 }
 
+/// One cycle of a drive in OP as [`EmulatedDrive::record_targets`] keeps it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct TargetSample {
+    /// The SYNC0 (or frame) cycle.
+    pub cycle: u64,
+    /// Fresh outputs arrived for this cycle.
+    pub fresh: bool,
+    /// The target position (0x607A) the drive acts on.
+    pub target: i32,
+}
+
 /// An emulated drive. See the [module documentation](super).
 pub struct EmulatedDrive {
     spec: &'static DriveSpec,
@@ -214,6 +225,8 @@ pub struct EmulatedDrive {
     last_emcy: Option<Emergency>,
     last_dt_ns: u32,
     stats: DriveStats,
+    /// The target position of each cycle in OP, when recording (see [`Self::record_targets`]).
+    targets: Option<Vec<TargetSample>>,
     quirks: Quirks,
 }
 
@@ -330,6 +343,7 @@ impl EmulatedDrive {
             last_emcy: None,
             last_dt_ns: 1_000_000,
             stats: DriveStats::default(),
+            targets: None,
             quirks: Quirks::NONE,
         };
         d.power_on();
@@ -469,6 +483,18 @@ impl EmulatedDrive {
     /// Counters.
     pub fn stats(&self) -> DriveStats {
         self.stats
+    }
+
+    /// Record the target position (0x607A) the drive acts on in each cycle in OP, up to
+    /// `capacity` cycles (the buffer is allocated here, once): what reached the drive, cycle by
+    /// cycle, for tests that check delivery at the drive's side.
+    pub fn record_targets(&mut self, capacity: usize) {
+        self.targets = Some(Vec::with_capacity(capacity));
+    }
+
+    /// The cycles recorded since [`Self::record_targets`].
+    pub fn recorded_targets(&self) -> &[TargetSample] {
+        self.targets.as_deref().unwrap_or(&[])
     }
 
     /// The CoE server's counters (SDO downloads accepted, aborts sent, …).
@@ -1370,6 +1396,18 @@ impl EmulatedDrive {
         }
         if op && !fresh {
             self.stats.missed_outputs += 1;
+        }
+        if op && self.targets.is_some() {
+            let target = self.int(obj::TARGET_POSITION) as i32;
+            if let Some(t) = self.targets.as_mut()
+                && t.len() < t.capacity()
+            {
+                t.push(TargetSample {
+                    cycle: event.cycle,
+                    fresh,
+                    target,
+                });
+            }
         }
         if op && dc && self.loss_detection {
             self.supervise_cycle(fresh, dt_ns);

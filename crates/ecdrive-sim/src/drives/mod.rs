@@ -60,7 +60,7 @@ pub mod motor;
 pub mod mr_j4_tm;
 pub mod spec;
 
-pub use drive::{DriveStats, EmulatedDrive, UnknownAlarm};
+pub use drive::{DriveStats, EmulatedDrive, TargetSample, UnknownAlarm};
 pub use esi_model::{EsiModel, EsiModelError};
 pub use spec::DriveSpec;
 

@@ -1,0 +1,322 @@
+//! Application code in the cycle: a [`CycleApp`] the cycle thread calls once per cycle, after
+//! the inputs of the frame just exchanged are read and before the axes' outputs are computed,
+//! with typed access to every axis ([`AppAxis`]).
+//!
+//! The CiA 402 engine stays in charge: a set-point reaches a drive only in Operation enabled
+//! and while no program runs on the axis; it is checked against the axis's
+//! [`SetpointLimits`] first (a violation stops the axis with a ramp and names the limit); a
+//! mode request goes through the engine's switch without a jump. Other mapped entries are read
+//! and written by object address, resolved at start-up; entries the engine drives
+//! (controlword, mode, targets, the cycle counter) cannot be written.
+//!
+//! Everything here is allocation-free per cycle: the views are built once per run.
+
+use crate::cia402::State;
+use crate::od::ObjectAddress;
+use crate::pdo::{Direction, Field, Layout};
+
+use crate::program::CyclicMode;
+use crate::telemetry::AxisTelemetry;
+
+/// Application code called by the cycle thread once per cycle. It must not block, sleep,
+/// allocate or make syscalls: the cycle audit holds it to the same rules as the cycle.
+pub trait CycleApp: Send {
+    /// One cycle: read the axes, set set-points, request modes, write mapped entries.
+    fn cycle(&mut self, c: &mut AppCycle<'_>);
+}
+
+/// Limits a set-point from the application must keep (drive units; `None`: unchecked).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SetpointLimits {
+    /// Largest |velocity|, position units per second: in csp the change of the position
+    /// set-point per cycle, in csv the set-point itself.
+    pub max_velocity: Option<f64>,
+    /// Largest |acceleration|, position units per second²: the change of that velocity per
+    /// cycle.
+    pub max_acceleration: Option<f64>,
+    /// Largest |torque| set-point in cst, in the drive's torque unit.
+    pub max_torque: Option<f64>,
+}
+
+impl SetpointLimits {
+    /// Check a set-point `v` in `mode` after `prev` (position, velocity) one cycle of `dt`
+    /// seconds earlier: the velocity and acceleration it implies, or `Err((limit, value,
+    /// max))` naming the limit it breaks.
+    pub fn check(
+        &self,
+        mode: CyclicMode,
+        v: f64,
+        prev: (f64, f64),
+        dt: f64,
+    ) -> Result<(f64, f64), (&'static str, f64, f64)> {
+        if !v.is_finite() {
+            return Err(("a finite set-point", v, 0.0));
+        }
+        let (vel, acc) = match mode {
+            CyclicMode::Csp => {
+                let vel = (v - prev.0) / dt;
+                (vel, (vel - prev.1) / dt)
+            }
+            CyclicMode::Csv => (v, (v - prev.1) / dt),
+            CyclicMode::Cst => {
+                if let Some(m) = self.max_torque
+                    && v.abs() > m
+                {
+                    return Err(("max_torque", v.abs(), m));
+                }
+                return Ok((prev.1, 0.0));
+            }
+        };
+        if let Some(m) = self.max_velocity
+            && vel.abs() > m
+        {
+            return Err(("max_velocity", vel.abs(), m));
+        }
+        if let Some(m) = self.max_acceleration
+            && acc.abs() > m
+        {
+            return Err(("max_acceleration", acc.abs(), m));
+        }
+        Ok((vel, acc))
+    }
+}
+
+/// Why a write to a mapped entry was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum EntryError {
+    /// The entry is not in the axis's process image.
+    #[error("{0} is not mapped on this axis")]
+    NotMapped(ObjectAddress),
+    /// The entry is an input (drive → master).
+    #[error("{0} is an input")]
+    Input(ObjectAddress),
+    /// The CiA 402 engine drives the entry (controlword, mode, targets, cycle counter).
+    #[error("{0} is driven by the CiA 402 engine")]
+    Engine(ObjectAddress),
+    /// More writes this cycle than the axis has free outputs.
+    #[error("too many writes this cycle")]
+    TooMany,
+}
+
+/// One mapped entry of an axis, resolved at start-up.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    address: ObjectAddress,
+    field: Field,
+    direction: Direction,
+    engine: bool,
+}
+
+/// One axis as the application sees it in a cycle: the inputs just read, and what the
+/// application asks of it.
+#[derive(Debug)]
+pub struct AppAxis {
+    pub(crate) tel: AxisTelemetry,
+    pub(crate) enabled: bool,
+    pub(crate) program_running: bool,
+    pub(crate) in_op: bool,
+    pub(crate) inputs: Vec<u8>,
+    pub(crate) outputs: Vec<u8>,
+    entries: Vec<Entry>,
+    pub(crate) setpoint: Option<f64>,
+    pub(crate) mode_request: Option<CyclicMode>,
+    pub(crate) writes: Vec<(Field, u64)>,
+}
+
+impl AppAxis {
+    /// The view of an axis with `layout` (set-up: allocations allowed). `engine` says which
+    /// entries the engine drives, `signed` which hold a signed type.
+    pub(crate) fn new(
+        layout: &Layout,
+        engine: &dyn Fn(ObjectAddress) -> bool,
+        signed: &dyn Fn(ObjectAddress) -> bool,
+    ) -> Self {
+        let mut entries = Vec::new();
+        for direction in [Direction::Rx, Direction::Tx] {
+            for e in layout.image(direction).iter().filter(|e| !e.is_padding()) {
+                let Ok(field) = e.field(signed(e.address())) else {
+                    continue;
+                };
+                entries.push(Entry {
+                    address: e.address(),
+                    field,
+                    direction,
+                    engine: direction == Direction::Rx && engine(e.address()),
+                });
+            }
+        }
+        let free = entries
+            .iter()
+            .filter(|e| e.direction == Direction::Rx && !e.engine)
+            .count();
+        Self {
+            tel: AxisTelemetry::default(),
+            enabled: false,
+            program_running: false,
+            in_op: false,
+            inputs: vec![0; layout.bytes(Direction::Tx)],
+            outputs: vec![0; layout.bytes(Direction::Rx)],
+            entries,
+            setpoint: None,
+            mode_request: None,
+            writes: Vec::with_capacity(free),
+        }
+    }
+
+    /// Everything the cycle knows of the axis (inputs of this cycle; demand and following
+    /// error as computed in the last one).
+    pub fn telemetry(&self) -> &AxisTelemetry {
+        &self.tel
+    }
+    /// The CiA 402 state (`None` below OP or before the first statusword).
+    pub fn state(&self) -> Option<State> {
+        self.tel.state
+    }
+    /// In Operation enabled and taking set-points: a set-point now reaches the drive.
+    pub fn enabled(&self) -> bool {
+        self.enabled
+    }
+    /// The drive is in OP (its inputs are valid).
+    pub fn in_op(&self) -> bool {
+        self.in_op
+    }
+    /// A program of the configuration runs on the axis: its set-points win over the
+    /// application's.
+    pub fn program_running(&self) -> bool {
+        self.program_running
+    }
+    /// The mode the drive displays (0x6061), if it is a cyclic one.
+    pub fn mode(&self) -> Option<CyclicMode> {
+        CyclicMode::from_code(self.tel.mode_display)
+    }
+    /// Actual position, counts (unwrapped).
+    pub fn position(&self) -> i64 {
+        self.tel.position_actual
+    }
+    /// Actual velocity, the drive's velocity unit (0x606C).
+    pub fn velocity(&self) -> i32 {
+        self.tel.velocity_actual
+    }
+    /// Actual torque, the drive's torque unit (0x6077).
+    pub fn torque(&self) -> i16 {
+        self.tel.torque_actual
+    }
+    /// Following error as the master computes it (demand − actual), counts.
+    pub fn following_error(&self) -> i64 {
+        self.tel.following_error
+    }
+    /// The drive's error code (0x603F).
+    pub fn error_code(&self) -> u16 {
+        self.tel.error_code
+    }
+    /// Digital inputs (0x60FD), when mapped.
+    pub fn digital_inputs(&self) -> Option<u32> {
+        self.read(ObjectAddress::new(0x60FD, 0))
+            .and_then(|v| u32::try_from(v).ok())
+    }
+    /// Touch probe status (0x60B9), when mapped.
+    pub fn touch_probe_status(&self) -> Option<u16> {
+        self.read(ObjectAddress::new(0x60B9, 0))
+            .and_then(|v| u16::try_from(v).ok())
+    }
+    /// Touch probe 1 position on the positive edge (0x60BA), when mapped.
+    pub fn touch_probe_position(&self) -> Option<i32> {
+        self.read(ObjectAddress::new(0x60BA, 0))
+            .and_then(|v| i32::try_from(v).ok())
+    }
+
+    /// A mapped entry's value (inputs as read this cycle, outputs as last written), sign
+    /// extended by its data type; `None` when not mapped.
+    pub fn read(&self, address: ObjectAddress) -> Option<i64> {
+        let e = self.entries.iter().find(|e| e.address == address)?;
+        let image = match e.direction {
+            Direction::Tx => &self.inputs,
+            Direction::Rx => &self.outputs,
+        };
+        e.field
+            .read_int(image)
+            .ok()
+            .and_then(|v| i64::try_from(v).ok())
+    }
+
+    /// Write a mapped output the engine does not drive; it goes out with this cycle's outputs
+    /// and stays until written again.
+    pub fn write(&mut self, address: ObjectAddress, value: i64) -> Result<(), EntryError> {
+        let e = self
+            .entries
+            .iter()
+            .find(|e| e.address == address)
+            .ok_or(EntryError::NotMapped(address))?;
+        if e.direction == Direction::Tx {
+            return Err(EntryError::Input(address));
+        }
+        if e.engine {
+            return Err(EntryError::Engine(address));
+        }
+        if self.writes.len() == self.writes.capacity() {
+            return Err(EntryError::TooMany);
+        }
+        let bits = e.field.bits();
+        let raw = if bits >= 64 {
+            value as u64
+        } else {
+            (value as u64) & ((1u64 << bits) - 1)
+        };
+        self.writes.push((e.field, raw));
+        Ok(())
+    }
+
+    /// This cycle's set-point in the active mode (csp: position, counts; csv: velocity,
+    /// position units per second; cst: torque, the drive's unit). It is taken only in
+    /// Operation enabled with no program running, within the axis's [`SetpointLimits`].
+    pub fn set_target(&mut self, value: f64) {
+        self.setpoint = Some(value);
+    }
+
+    /// Ask for a switch to `mode` (the engine switches without a jump).
+    pub fn request_mode(&mut self, mode: CyclicMode) {
+        self.mode_request = Some(mode);
+    }
+
+    /// Clear last cycle's requests (the cycle calls this before the application).
+    pub(crate) fn clear_requests(&mut self) {
+        self.setpoint = None;
+        self.mode_request = None;
+        self.writes.clear();
+    }
+}
+
+/// What the application gets each cycle.
+pub struct AppCycle<'a> {
+    pub(crate) cycle: u64,
+    pub(crate) dt: f64,
+    pub(crate) axes: &'a mut [AppAxis],
+    pub(crate) events: &'a mut dyn FnMut(crate::telemetry::EventKind),
+}
+
+impl AppCycle<'_> {
+    /// The cycle number.
+    pub fn cycle(&self) -> u64 {
+        self.cycle
+    }
+    /// The cycle time, seconds.
+    pub fn period(&self) -> f64 {
+        self.dt
+    }
+    /// Time since the cycle began, seconds (cycle number × period).
+    pub fn time(&self) -> f64 {
+        self.cycle as f64 * self.dt
+    }
+    /// The axes, in configuration order.
+    pub fn axes(&mut self) -> &mut [AppAxis] {
+        self.axes
+    }
+    /// Axis `i`.
+    pub fn axis(&mut self, i: usize) -> Option<&mut AppAxis> {
+        self.axes.get_mut(i)
+    }
+    /// Report something in the event stream (and so the run's history).
+    pub fn emit(&mut self, kind: crate::telemetry::EventKind) {
+        (self.events)(kind);
+    }
+}

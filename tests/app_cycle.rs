@@ -1,0 +1,318 @@
+//! Application code in the cycle ([`CycleApp`]) and set-points streamed from another thread
+//! ([`Streams`]), in-process against the emulated MR-J4-TM and BDHDE, checked at the drives'
+//! side: each emulated drive records the target position it acts on in every cycle
+//! (`EmulatedDrive::record_targets`), so delivery is judged by what arrived, not by what the
+//! master meant to send.
+
+use ecdrive::cia402::State;
+use ecdrive::master::session::{Master, MasterConfig, SessionReport};
+use ecdrive::master::startup::{DriveSetup, Selector};
+use ecdrive::master::telemetry::{Axes, Command, StopKind};
+use ecdrive::master::{AppCycle, CycleApp, CyclicMode, EntryError, SetpointLimits, Streams};
+use ecdrive::od::ObjectAddress;
+use ecdrive::rt::RtSettings;
+use ecdrive::sim::drives::{EmulatedDrive, TargetSample, spec_for};
+use ecdrive::sim::transport::SegmentLink;
+use ecdrive::sim::{EscConfig, HostClock, Segment};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+const T: Duration = Duration::from_secs(20);
+const KEYS: [&str; 2] = ["mr-j4-tm", "bdhde"];
+
+/// The two drives, each recording its targets; their own supervision of the cyclic data off
+/// (a stall of a loaded test machine must not fault them: delivery is what is checked).
+fn segment() -> Segment {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (i, k) in KEYS.iter().enumerate() {
+        let mut d = EmulatedDrive::new(spec_for(k).unwrap(), 7000 + i as u32)
+            .unwrap()
+            .without_loss_detection();
+        d.record_targets(20_000);
+        seg.push(Box::new(d), EscConfig::default()).unwrap();
+    }
+    seg
+}
+
+fn config(limits: SetpointLimits) -> MasterConfig {
+    let mut cfg = MasterConfig::new(Duration::from_millis(1));
+    cfg.cycle.rt = RtSettings {
+        priority: Some(80),
+        cpu: None,
+        lock_memory: false,
+    };
+    cfg.cycle.lost_before_stop = 50;
+    cfg.cycle.segment_lost_after = 50;
+    for i in 0..KEYS.len() {
+        cfg.startup.drives.push(DriveSetup {
+            mode: CyclicMode::Csp,
+            limits,
+            ..DriveSetup::new(Selector::Position(i as u16))
+        });
+    }
+    cfg
+}
+
+/// Start, OP, enable both axes, let `cycles` cycles pass, stop; the report and each drive's
+/// recorded targets.
+fn run(cfg: MasterConfig, cycles: u64) -> (SessionReport, Vec<Vec<TargetSample>>) {
+    let mut m = Master::start(SegmentLink::new(segment()), cfg)
+        .unwrap_or_else(|f| panic!("start-up: {}", f.error));
+    m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.wait_until("both axes enabled", T, |t| {
+        t.axes.len() == 2
+            && t.axes
+                .iter()
+                .all(|a| a.state == Some(State::OperationEnabled))
+    })
+    .unwrap();
+    let c0 = m.telemetry().cycle.cycle;
+    m.wait_until("the cycles", T, |t| t.cycle.cycle >= c0 + cycles)
+        .unwrap();
+    let (r, link) = m.stop(StopKind::Ramp);
+    let seg = link.segment();
+    let targets = (0..KEYS.len())
+        .map(|i| {
+            seg.device::<EmulatedDrive>(i)
+                .unwrap()
+                .recorded_targets()
+                .to_vec()
+        })
+        .collect();
+    (r.unwrap(), targets)
+}
+
+/// A ramp of `STEP` counts per cycle from where each axis stood when it was enabled, for
+/// `STEPS` cycles, then held; plus what the entry accessors answered.
+#[derive(Default)]
+struct Ramp {
+    origin: [Option<(i64, u64)>; 2],
+    refused_engine: Option<Result<(), EntryError>>,
+    refused_input: Option<Result<(), EntryError>>,
+    statusword_seen: Option<(i64, u16)>,
+}
+
+const STEP: i64 = 10;
+const STEPS: u64 = 300;
+
+impl CycleApp for Ramp {
+    fn cycle(&mut self, c: &mut AppCycle<'_>) {
+        let now = c.cycle();
+        for (i, a) in c.axes().iter_mut().enumerate() {
+            if !a.enabled() {
+                continue;
+            }
+            let (origin, start) = *self.origin[i].get_or_insert((a.position(), now));
+            let k = (now - start).min(STEPS) as i64;
+            a.set_target((origin + STEP * k) as f64);
+            if i == 0 && self.refused_engine.is_none() {
+                self.refused_engine = Some(a.write(ObjectAddress::new(0x6040, 0), 0));
+                self.refused_input = Some(a.write(ObjectAddress::new(0x6041, 0), 0));
+                self.statusword_seen = a
+                    .read(ObjectAddress::new(0x6041, 0))
+                    .map(|v| (v, a.telemetry().statusword));
+            }
+        }
+    }
+}
+
+/// The samples of one drive from the first target of the ramp to its last. Between two
+/// consecutive cycles with fresh outputs the target moved by exactly one step: each set-point
+/// reached the drive in the cycle after the one that computed it, none repeated, none dropped.
+/// Where the drive saw no fresh outputs for some cycles (a wake-up of the master late by a
+/// whole period on a loaded machine), the set-points of those cycles came late or not at all,
+/// but still in order and never twice: the next fresh target is 1 to `gap` steps on.
+fn check_ramp(name: &str, s: &[TargetSample], origin: i64) -> usize {
+    let first = origin + STEP;
+    let last = origin + STEP * STEPS as i64;
+    let a = s
+        .iter()
+        .position(|x| i64::from(x.target) == first)
+        .unwrap_or_else(|| panic!("{name}: the ramp never reached the drive"));
+    let b = s
+        .iter()
+        .position(|x| i64::from(x.target) == last)
+        .unwrap_or_else(|| panic!("{name}: the ramp's end never reached the drive"));
+    let fresh: Vec<&TargetSample> = s[a..=b].iter().filter(|x| x.fresh).collect();
+    for w in fresh.windows(2) {
+        let (p, q) = (w[0], w[1]);
+        let moved = i64::from(q.target) - i64::from(p.target);
+        let gap = (q.cycle - p.cycle) as i64;
+        let what = format!(
+            "{name}: cycle {} carried {}, cycle {} carried {}",
+            p.cycle, p.target, q.cycle, q.target
+        );
+        if gap == 1 {
+            assert_eq!(moved, STEP, "{what}");
+        } else {
+            assert!(
+                moved % STEP == 0 && (STEP..=STEP * gap).contains(&moved),
+                "{what}"
+            );
+        }
+    }
+    fresh.len()
+}
+
+/// The callback's set-points reach each drive in the cycle they were computed for: between
+/// any two cycles with fresh outputs the drive's target moved by exactly the ramp's step per
+/// cycle (no set-point repeated, none dropped, none late). Entries the engine drives and
+/// inputs cannot be written; an input reads as the telemetry shows it.
+#[test]
+fn callback_setpoints_reach_the_drive_cycle_by_cycle() {
+    let app = Arc::new(Mutex::new(Ramp::default()));
+    let mut cfg = config(SetpointLimits::default());
+    cfg.app = Some(app.clone());
+    let (r, targets) = run(cfg, STEPS + 100);
+    assert!(r.shutdown_ok);
+    let app = app.lock().unwrap();
+    for (i, t) in targets.iter().enumerate() {
+        let (origin, _) = app.origin[i].expect("the axis was enabled");
+        let n = check_ramp(KEYS[i], t, origin);
+        assert!(n >= STEPS as usize / 2, "{}: {n} fresh cycles", KEYS[i]);
+    }
+    assert_eq!(
+        app.refused_engine,
+        Some(Err(EntryError::Engine(ObjectAddress::new(0x6040, 0))))
+    );
+    assert_eq!(
+        app.refused_input,
+        Some(Err(EntryError::Input(ObjectAddress::new(0x6041, 0))))
+    );
+    let (read, tel) = app.statusword_seen.expect("statusword mapped");
+    assert_eq!(read, i64::from(tel));
+}
+
+/// A jump of the set-point beyond the axis's max_velocity: the axis is stopped with a ramp,
+/// the history names the limit and the axis; the other axis goes on.
+#[test]
+fn a_setpoint_beyond_a_limit_stops_the_axis_naming_the_limit() {
+    struct Jump(Option<i64>);
+    impl CycleApp for Jump {
+        fn cycle(&mut self, c: &mut AppCycle<'_>) {
+            let now = c.cycle();
+            if let Some(a) = c.axis(0)
+                && a.enabled()
+            {
+                let origin = *self.0.get_or_insert(a.position());
+                // 100 cycles holding, then 1 000 counts in one cycle: 1 000 000 counts/s.
+                let jump = if now % 1000 > 100 { 1000 } else { 0 };
+                a.set_target((origin + jump) as f64);
+            }
+        }
+    }
+    let mut cfg = config(SetpointLimits {
+        max_velocity: Some(100_000.0),
+        ..SetpointLimits::default()
+    });
+    cfg.app = Some(Arc::new(Mutex::new(Jump(None))));
+    let (r, targets) = run(cfg, 1200);
+    let hit: Vec<&str> = r
+        .history
+        .iter()
+        .filter(|h| h.text.contains("breaks max_velocity"))
+        .map(|h| h.text.as_str())
+        .collect();
+    assert!(!hit.is_empty(), "{:#?}", r.history);
+    assert!(
+        r.history
+            .iter()
+            .any(|h| h.text.contains("breaks max_velocity")
+                && h.drive.as_ref().is_some_and(|d| d.position == 0)),
+        "{hit:?}"
+    );
+    // The jump never reached the drive: its target stayed within one cycle's max_velocity
+    // travel (100 counts) of where the ramp stop began.
+    let t0 = &targets[0];
+    let max_step = t0
+        .windows(2)
+        .map(|w| (i64::from(w[1].target) - i64::from(w[0].target)).abs())
+        .max()
+        .unwrap_or(0);
+    assert!(
+        max_step <= 100,
+        "a step of {max_step} counts reached the drive"
+    );
+    assert!(r.shutdown_ok);
+}
+
+/// A producer thread streams a ramp through a ring of 32 set-points; the cycle takes one per
+/// cycle while the axis is enabled, every one of them reaches the drive in order (missing only
+/// where the drive saw no fresh outputs), and once the producer stops the underrun is
+/// reported and counted.
+#[test]
+fn a_stream_is_consumed_one_per_cycle_and_an_underrun_is_reported() {
+    const N: usize = 400;
+    let mut streams = Streams::new();
+    let mut producer = streams.add(0, 32);
+    let mut cfg = config(SetpointLimits::default());
+    cfg.app = Some(Arc::new(Mutex::new(streams)));
+    let mut m = Master::start(SegmentLink::new(segment()), cfg)
+        .unwrap_or_else(|f| panic!("start-up: {}", f.error));
+    m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.wait_until("axis 0 enabled", T, |t| {
+        t.axes
+            .first()
+            .is_some_and(|a| a.state == Some(State::OperationEnabled))
+    })
+    .unwrap();
+    let origin = m.telemetry().axes[0].position_actual;
+    let values: Vec<i64> = (1..=N as i64).map(|k| origin + 5 * k).collect();
+    let feed = values.clone();
+    let producer = std::thread::spawn(move || {
+        let mut max_fill = 0;
+        for v in feed {
+            while producer.push(v as f64).is_err() {
+                std::thread::sleep(Duration::from_micros(200));
+            }
+            max_fill = max_fill.max(producer.fill());
+        }
+        (producer, max_fill)
+    });
+    let (producer, max_fill) = producer.join().unwrap();
+    assert!(max_fill > 1 && max_fill <= producer.depth());
+    let c0 = m.telemetry().cycle.cycle;
+    m.wait_until("the stream drained", T, |_| producer.fill() == 0)
+        .unwrap();
+    m.wait_until("some cycles of underrun", T, |t| t.cycle.cycle > c0 + 50)
+        .unwrap();
+    assert_eq!(producer.consumed(), N as u64);
+    assert!(producer.underruns() > 0);
+    let (r, link) = m.stop(StopKind::Ramp);
+    let r = r.unwrap();
+    let underrun_events = r
+        .history
+        .iter()
+        .filter(|h| h.text.contains("set-point stream ran empty"))
+        .count();
+    assert!(underrun_events >= 1, "{:#?}", r.history);
+    let seg = link.segment();
+    let d = seg.device::<EmulatedDrive>(0).unwrap();
+    let seen: Vec<i64> = d
+        .recorded_targets()
+        .iter()
+        .filter(|x| x.fresh)
+        .map(|x| i64::from(x.target))
+        .filter(|v| values.contains(v))
+        .collect();
+    // Up to the stream's last set-point (after it, the underrun holds that one): in order,
+    // each value once (a value repeated at the drive would be a set-point consumed twice).
+    let last = values[N - 1];
+    let end = seen
+        .iter()
+        .position(|&v| v == last)
+        .expect("the last set-point reached the drive");
+    let seen = &seen[..=end];
+    assert!(
+        seen.windows(2).all(|w| w[1] > w[0]),
+        "out of order or repeated: {seen:?}"
+    );
+    let missing = N - seen.len();
+    assert!(
+        missing as u64 <= d.stats().missed_outputs,
+        "{missing} set-points never reached the drive; it missed outputs in {} cycles",
+        d.stats().missed_outputs
+    );
+}
