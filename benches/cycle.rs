@@ -11,6 +11,11 @@
 //! `iters` cycles and reports the CPU time of `iters` cycles. Wall-clock figures (wake-up
 //! latency, jitter) are `ecdrive jitter`'s job, not a bench's.
 //!
+//! At 2 drives the same cycle also runs with application code in it (a `CycleApp` writing a
+//! sine to every axis from what it reads), with every cycle recorded (drained by another
+//! thread), and with both, in the same run: the CPU they add per cycle (`BENCH_EXTRAS=0` skips
+//! them).
+//!
 //! Run with `cargo bench --bench cycle`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -20,6 +25,7 @@ use ecdrive::master::cycle::CycleHooks;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
+use ecdrive::master::{AppCycle, CycleApp};
 use ecdrive::sim::transport::SegmentLink;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -42,7 +48,61 @@ fn line(n: usize) -> Vec<String> {
         .collect()
 }
 
-fn start(n: usize, cycle: Duration) -> (Master<SegmentLink>, ThreadCpuClock) {
+/// A sine on every enabled axis from what the callback reads.
+struct SineApp {
+    centre: Vec<Option<i64>>,
+}
+
+impl CycleApp for SineApp {
+    fn cycle(&mut self, c: &mut AppCycle<'_>) {
+        let t = c.time();
+        for (i, a) in c.axes().iter_mut().enumerate() {
+            if !a.enabled() {
+                continue;
+            }
+            let Some(slot) = self.centre.get_mut(i) else {
+                continue;
+            };
+            let centre = *slot.get_or_insert(a.position());
+            let fe = a.following_error();
+            a.set_target(
+                centre as f64 + 1000.0 * (t * 6.0).sin() + std::hint::black_box(fe) as f64 * 0.0,
+            );
+        }
+    }
+}
+
+/// What else runs in the cycle.
+#[derive(Clone, Copy, PartialEq)]
+enum Extras {
+    None,
+    Callback,
+    Record,
+    Both,
+}
+
+impl Extras {
+    fn suffix(self) -> &'static str {
+        match self {
+            Extras::None => "",
+            Extras::Callback => "_callback",
+            Extras::Record => "_record",
+            Extras::Both => "_callback_record",
+        }
+    }
+}
+
+/// The recording's drain, on a thread of its own while the bench runs.
+struct Drain {
+    done: Arc<std::sync::atomic::AtomicBool>,
+    thread: std::thread::JoinHandle<u64>,
+}
+
+fn start(
+    n: usize,
+    cycle: Duration,
+    extras: Extras,
+) -> (Master<SegmentLink>, ThreadCpuClock, Option<Drain>) {
     let names = line(n);
     let profiles = emulated::profiles(&names).expect("profiles");
     let link = SegmentLink::new(emulated::segment(&names).expect("segment"));
@@ -54,6 +114,28 @@ fn start(n: usize, cycle: Duration) -> (Master<SegmentLink>, ThreadCpuClock) {
     // stop the axes (it would stop a long line before every axis is enabled).
     cfg.cycle.segment_lost_after = 1000;
     cfg.cycle.lost_before_stop = 1000;
+    if matches!(extras, Extras::Callback | Extras::Both) {
+        cfg.app = Some(Arc::new(Mutex::new(SineApp {
+            centre: vec![None; n],
+        })));
+    }
+    let drain = matches!(extras, Extras::Record | Extras::Both).then(|| {
+        let (tx, mut rx) = ecdrive::master::recording(1 << 16);
+        cfg.record = Some(Arc::new(Mutex::new(tx)));
+        let done = Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let stop = done.clone();
+        let thread = std::thread::spawn(move || {
+            let mut n = 0u64;
+            while !stop.load(std::sync::atomic::Ordering::Acquire) {
+                n += rx.drain(|s| {
+                    std::hint::black_box(s);
+                }) as u64;
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            n
+        });
+        Drain { done, thread }
+    });
     for (i, p) in profiles.into_iter().enumerate() {
         cfg.startup.drives.push(DriveSetup {
             profile: Some(p),
@@ -88,7 +170,7 @@ fn start(n: usize, cycle: Duration) -> (Master<SegmentLink>, ThreadCpuClock) {
         .ok()
         .and_then(|c| *c)
         .expect("the cycle's CPU clock");
-    (m, c)
+    (m, c, drain)
 }
 
 fn bench(c: &mut Criterion) {
@@ -113,14 +195,23 @@ fn bench(c: &mut Criterion) {
         .ok()
         .map(|v| v.split(',').filter_map(|n| n.trim().parse().ok()).collect())
         .unwrap_or_else(|| vec![2, 16, 40, 64, 128]);
-    for n in sizes {
+    let extras = std::env::var("BENCH_EXTRAS").map_or(true, |v| v != "0");
+    let runs: Vec<(usize, Extras)> = sizes
+        .iter()
+        .flat_map(|&n| {
+            let all = [Extras::None, Extras::Callback, Extras::Record, Extras::Both];
+            let k = if n == 2 && extras { 4 } else { 1 };
+            all.into_iter().take(k).map(move |e| (n, e))
+        })
+        .collect();
+    for (n, extra) in runs {
         let cycle = if n <= 2 {
             Duration::from_micros(250)
         } else {
             Duration::from_millis(1)
         };
-        let (mut m, clock) = start(n, cycle);
-        g.bench_function(format!("{n}_drives"), |b| {
+        let (mut m, clock, drain) = start(n, cycle, extra);
+        g.bench_function(format!("{n}_drives{}", extra.suffix()), |b| {
             b.iter_custom(|iters| {
                 let c0 = m.telemetry().cycle.cycle;
                 let t0 = clock.now_ns().unwrap_or(0);
@@ -138,6 +229,10 @@ fn bench(c: &mut Criterion) {
         });
         let (r, _) = m.stop(StopKind::QuickStop);
         assert!(r.is_some_and(|r| r.shutdown_ok), "clean shutdown");
+        if let Some(d) = drain {
+            d.done.store(true, std::sync::atomic::Ordering::Release);
+            assert!(d.thread.join().unwrap_or(0) > 0, "the recording drained");
+        }
     }
     g.finish();
 }

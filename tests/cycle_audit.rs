@@ -11,7 +11,8 @@
 //!
 //! One more run puts application code in the cycle: a `CycleApp` that reads every accessor and
 //! a mapped entry of one axis, writes its set-points (a sine), and feeds the other axis from a
-//! set-point stream that a producer thread fills while the window is open.
+//! set-point stream that a producer thread fills while the window is open, with every cycle
+//! recorded.
 
 mod support {
     pub mod generic;
@@ -186,6 +187,12 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
         cfg.app = Some(a);
         p
     });
+    // With the application, every cycle is recorded too (drained by this thread below).
+    let mut recording = with_app.then(|| {
+        let (tx, rx) = ecdrive::master::recording(1 << 16);
+        cfg.record = Some(Arc::new(Mutex::new(tx)));
+        rx
+    });
     for p in [0, 2] {
         cfg.startup.drives.push(DriveSetup {
             profile: (load == Load::Generic).then_some(&GENERIC_TEST),
@@ -237,6 +244,8 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
         })
         .unwrap();
         assert!(p.consumed() > 100, "{what}: the stream was not consumed");
+        let r = recording.as_mut().expect("recording");
+        assert!(r.drain(|_| {}) > 600, "{what}: nothing recorded");
     } else {
         m.command(Command::RunProgram(Axes::All)).unwrap();
         m.wait_until(

@@ -18,6 +18,7 @@ use super::app::{AppAxis, AppCycle, CycleApp, SetpointLimits};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
 use super::program::{CyclicMode, Runner, Tick};
+use super::record::{CycleSample, RecordTx};
 use super::setpoint::Sample;
 use super::startup::{ConfiguredDrive, ConfiguredIo, DriveFields, Group};
 use super::telemetry::{
@@ -1149,6 +1150,8 @@ struct Cycle<'a, 'p, L: FrameLink> {
     /// as `axes`).
     app: Option<&'a mut (dyn CycleApp + 'static)>,
     app_axes: Vec<AppAxis>,
+    /// Where every cycle is recorded, if it is.
+    record: Option<&'a mut RecordTx>,
     commands: &'a mut rtrb::Consumer<Command>,
     telemetry: &'a mut triple_buffer::Input<Telemetry>,
     restarts: &'a mut u32,
@@ -1189,12 +1192,14 @@ pub fn run<L: FrameLink>(
     io: &mut CycleIo,
     hooks: Option<&dyn CycleHooks>,
     app: Option<&mut (dyn CycleApp + 'static)>,
+    record: Option<&mut RecordTx>,
 ) -> CycleReport {
     let rt = settings.rt.apply_to_current_thread();
     if let Some(tx) = io.rt_report.take() {
         let _ = tx.send(rt.clone());
     }
     let mut c = Cycle::new(md, pump, group, drives, others, settings, io, hooks, app);
+    c.record = record;
     let end = loop {
         if let Some(end) = c.turn() {
             break end;
@@ -1288,6 +1293,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             hooks,
             app,
             app_axes,
+            record: None,
             commands,
             telemetry,
             restarts,
@@ -1368,6 +1374,9 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.step_axes(good);
         self.supervise_axes();
         self.publish(good);
+        if good {
+            self.record_samples();
+        }
         if let Some(end) = self.leave_op() {
             return Some(end);
         }
@@ -1805,6 +1814,36 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     }
 
     /// Publish the telemetry: the cycle, every axis, every I/O device.
+    /// One sample per axis into the recording, if there is one (a full ring drops and counts).
+    fn record_samples(&mut self) {
+        let Some(r) = self.record.as_deref_mut() else {
+            return;
+        };
+        let c = &self.clock;
+        let (latency, exchange) = (
+            u32::try_from(c.latency).unwrap_or(u32::MAX),
+            u32::try_from(c.t_ex_done.saturating_sub(c.t_ex)).unwrap_or(u32::MAX),
+        );
+        for (i, a) in self.axes.iter().enumerate() {
+            let t = &a.tel;
+            r.push(CycleSample {
+                cycle: c.cycle,
+                time_ns: c.woke,
+                wake_latency_ns: latency,
+                exchange_ns: exchange,
+                wkc: self.counts.last_wkc,
+                axis: i as u16,
+                demand: t.position_demand,
+                actual: t.position_actual,
+                velocity: t.velocity_actual,
+                torque: t.torque_actual,
+                following_error: t.following_error,
+                statusword: t.statusword,
+                mode: t.mode_display,
+            });
+        }
+    }
+
     fn publish(&mut self, good: bool) {
         let c = &self.clock;
         let t = self.telemetry.input_buffer_mut();

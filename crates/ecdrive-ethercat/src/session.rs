@@ -15,6 +15,7 @@ use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec;
 pub use super::history::{HistoryEntry, HistoryKind, HistoryLog, HistorySlice};
 use super::io::FrameLink;
+use super::record::RecordTx;
 use super::startup::{self, DeviceInfo, StartupConfig};
 use super::telemetry::{
     AxisTelemetry, Command, CycleTelemetry, Event, EventKind, Phase, StopKind, StopReason,
@@ -48,6 +49,9 @@ pub struct MasterConfig {
     /// thread holds the lock for the whole run (so the caller's clone of the `Arc` can look
     /// at it once the master has stopped, or between runs).
     pub app: Option<Arc<Mutex<dyn CycleApp>>>,
+    /// Every cycle recorded into this ring ([`crate::record::recording`]); the cycle thread
+    /// holds the lock for the whole run, as with `app`.
+    pub record: Option<Arc<Mutex<RecordTx>>>,
     /// What happens when the cycle ends by itself (segment lost, a drive fell out of OP).
     pub restart: RestartPolicy,
     /// History entries kept with their text (the latest; older ones are discarded but
@@ -85,6 +89,7 @@ impl MasterConfig {
             emergency_poll: Some(Duration::from_millis(50)),
             hooks: None,
             app: None,
+            record: None,
             restart: RestartPolicy::Never,
             history_capacity: HistoryLog::DEFAULT_CAPACITY,
         }
@@ -1350,9 +1355,21 @@ fn run<L: FrameLink + Send>(
             .spawn_scoped(s, || {
                 let hooks_ref = hooks.as_deref().map(|h| h as &dyn CycleHooks);
                 let mut app = lock_app(cfg);
-                let app_ref = app.as_deref_mut();
+                let mut record = cfg
+                    .record
+                    .as_ref()
+                    .map(|r| r.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
                 cycle::run(
-                    md, pump, group, drives, others, &cfg.cycle, cycle_io, hooks_ref, app_ref,
+                    md,
+                    pump,
+                    group,
+                    drives,
+                    others,
+                    &cfg.cycle,
+                    cycle_io,
+                    hooks_ref,
+                    app.as_deref_mut(),
+                    record.as_deref_mut(),
                 )
             });
         let h = match h {

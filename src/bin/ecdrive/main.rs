@@ -317,6 +317,12 @@ enum Command {
         /// Only check the file, do not run.
         #[arg(long)]
         check: bool,
+        /// Record every cycle into this CSV file: one line per axis and cycle with a reply
+        /// (demand, actual, velocity, torque, following error, statusword, mode, wake-up
+        /// latency, exchange time, working counter; the header names the units). Written off
+        /// the cycle thread; samples it could not keep up with are counted, never waited for.
+        #[arg(long, value_name = "FILE")]
+        record: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
     },
@@ -1031,8 +1037,16 @@ fn dispatch(cli: Cli) -> ExitCode {
             interface,
             duration,
             check,
+            record,
             json,
-        } => run::run(&config, interface.as_deref(), duration, check, json.json),
+        } => run::run(
+            &config,
+            interface.as_deref(),
+            duration,
+            check,
+            record.as_deref(),
+            json.json,
+        ),
         Command::Sim {
             can: Some(bus),
             nodes,

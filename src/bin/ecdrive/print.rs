@@ -637,6 +637,18 @@ pub fn run_report(r: &RunReport) {
         println!();
         startup(t);
     }
+    if let Some(rec) = &r.record {
+        println!(
+            "Recorded: {} samples to {}{}",
+            rec.samples,
+            rec.file,
+            if rec.dropped > 0 {
+                format!(" ({} dropped: the writer fell behind)", rec.dropped)
+            } else {
+                String::new()
+            }
+        );
+    }
     if let Some(c) = &r.cycle {
         println!();
         println!(

@@ -11,6 +11,7 @@ pub fn run(
     interface: Option<&str>,
     duration: Option<Duration>,
     check: bool,
+    record: Option<&Path>,
     json: bool,
 ) -> ExitCode {
     let mut cfg = match ecdrive::app::config::load(path) {
@@ -74,6 +75,7 @@ pub fn run(
     let opts = RunOptions {
         duration,
         hurry: Some(signals.hurry),
+        record: record.map(Path::to_path_buf),
         ..RunOptions::default()
     };
     let bar = print::run_progress();

@@ -177,8 +177,21 @@ pub struct RunReport {
     /// Where start-up's time went (discovery, SII, CoE configuration, process image, DC
     /// settle, SAFE-OP, OP), in ms.
     pub startup: Option<crate::master::StartupTimes>,
+    /// The recording, if one was asked for.
+    pub record: Option<RecordSummary>,
     /// The whole event history.
     pub history: Vec<HistoryEntry>,
+}
+
+/// What `--record` wrote.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+pub struct RecordSummary {
+    /// The CSV file.
+    pub file: String,
+    /// Lines written (samples: one per axis and cycle with a reply).
+    pub samples: u64,
+    /// Samples the cycle dropped because the writer fell behind (never blocking the cycle).
+    pub dropped: u64,
 }
 
 /// What can change how [`run`] runs a file.
@@ -194,6 +207,8 @@ pub struct RunOptions {
     /// Set while the run stops (a second Ctrl-C or SIGTERM): the axes still ramping are quick
     /// stopped instead; they are disabled all the same.
     pub hurry: Option<std::sync::Arc<AtomicBool>>,
+    /// Record every cycle (one line per axis and cycle with a reply) into this CSV file.
+    pub record: Option<std::path::PathBuf>,
 }
 
 impl Default for RunOptions {
@@ -203,6 +218,7 @@ impl Default for RunOptions {
             op_timeout: Duration::from_secs(15),
             enable_timeout: Duration::from_secs(5),
             hurry: None,
+            record: None,
         }
     }
 }
@@ -242,7 +258,16 @@ pub fn run(
         steps_total: 0,
         cycles: 0,
     });
-    let mut m = Master::start(link, cfg.master.clone()).map_err(|f| f.error)?;
+    let mut master_cfg = cfg.master.clone();
+    let writer = match &opts.record {
+        Some(path) => Some(RecordWriter::start(
+            path,
+            &mut master_cfg,
+            cfg.drives.len(),
+        )?),
+        None => None,
+    };
+    let mut m = Master::start(link, master_cfg).map_err(|f| f.error)?;
     // Which file entry each axis is.
     let mut used = vec![false; cfg.drives.len()];
     let entries: Vec<Option<usize>> = m
@@ -487,6 +512,7 @@ pub fn run(
         })
         .collect();
     let (report, _link) = m.stop_watching(StopKind::Ramp, opts.hurry.as_deref());
+    let record = writer.map(RecordWriter::finish).transpose()?;
     let Some(report) = report else {
         return Err(MasterError::new(
             None,
@@ -693,6 +719,98 @@ pub fn run(
         }),
         shutdown_ok: report.shutdown_ok,
         startup: report.startup,
+        record,
         history: report.history,
     })
+}
+
+/// The thread that drains the cycle's recording into the CSV file.
+struct RecordWriter {
+    path: std::path::PathBuf,
+    done: std::sync::Arc<AtomicBool>,
+    thread: Option<std::thread::JoinHandle<std::io::Result<(u64, u64)>>>,
+}
+
+impl Drop for RecordWriter {
+    /// A run that ends early (an error before the stop) still ends the writer: it drains
+    /// what is there and closes the file.
+    fn drop(&mut self) {
+        self.done.store(true, std::sync::atomic::Ordering::Release);
+    }
+}
+
+impl RecordWriter {
+    /// Open `path`, give the cycle its end of a ring for `axes` axes (half a second of
+    /// samples), start draining.
+    fn start(
+        path: &std::path::Path,
+        cfg: &mut crate::master::MasterConfig,
+        axes: usize,
+    ) -> Result<Self, MasterError> {
+        let fail = |e: std::io::Error| {
+            MasterError::new(
+                None,
+                format!("recording to {}", path.display()),
+                ErrorKind::Config,
+                e,
+            )
+        };
+        let file = std::fs::File::create(path).map_err(fail)?;
+        let per_s = 1e9 / cfg.cycle.cycle.as_nanos().max(1) as f64;
+        let capacity = ((per_s * axes.max(1) as f64 * 0.5) as usize).max(4096);
+        let (tx, mut rx) = crate::master::recording(capacity);
+        cfg.record = Some(std::sync::Arc::new(std::sync::Mutex::new(tx)));
+        let done = std::sync::Arc::new(AtomicBool::new(false));
+        let stop = done.clone();
+        let thread = std::thread::Builder::new()
+            .name("ecdrive-record".into())
+            .spawn(move || {
+                use std::io::Write;
+                let mut out = std::io::BufWriter::new(file);
+                writeln!(out, "{}", crate::master::CSV_HEADER)?;
+                let (mut t0, mut lines) = (None, 0u64);
+                loop {
+                    let last = stop.load(std::sync::atomic::Ordering::Acquire);
+                    let mut err = Ok(());
+                    rx.drain(|s| {
+                        let t = *t0.get_or_insert(s.time_ns);
+                        if err.is_ok() {
+                            err = writeln!(out, "{}", s.csv(t));
+                            lines += 1;
+                        }
+                    });
+                    err?;
+                    if last {
+                        break;
+                    }
+                    std::thread::sleep(Duration::from_millis(20));
+                }
+                out.flush()?;
+                Ok((lines, rx.dropped()))
+            })
+            .map_err(fail)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            done,
+            thread: Some(thread),
+        })
+    }
+
+    /// Drain what is left (the cycle has ended), close the file.
+    fn finish(mut self) -> Result<RecordSummary, MasterError> {
+        self.done.store(true, std::sync::atomic::Ordering::Release);
+        let what = format!("recording to {}", self.path.display());
+        let thread = self.thread.take().ok_or_else(|| {
+            MasterError::new(None, &what, ErrorKind::Config, "the writer is gone")
+        })?;
+        let (samples, dropped) = thread
+            .join()
+            .map_err(|_| MasterError::new(None, &what, ErrorKind::Config, "the writer panicked"))?
+            .map_err(|e| MasterError::new(None, &what, ErrorKind::Config, e))?;
+        Ok(RecordSummary {
+            file: self.path.display().to_string(),
+            samples,
+            dropped,
+        })
+    }
 }
