@@ -7,3 +7,4 @@ pub mod canopen;
 pub mod config;
 pub mod ethercat;
 pub mod harness;
+pub mod plot;

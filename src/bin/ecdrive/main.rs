@@ -323,8 +323,24 @@ enum Command {
         /// the cycle thread; samples it could not keep up with are counted, never waited for.
         #[arg(long, value_name = "FILE")]
         record: Option<PathBuf>,
+        /// Draw the recording as a scope into this SVG when the run ends (needs --record).
+        #[arg(long, value_name = "OUT.svg", requires = "record")]
+        plot: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
+    },
+    /// Draw a recording of `ecdrive run --record FILE` as a scope (SVG): per axis, demand and
+    /// actual position, following error, velocity and torque against time, the mode of
+    /// operation as bands behind the position, cycles with a fault as red marks.
+    #[command(
+        after_help = "Example:\n  ecdrive run -c examples/csp_move_sine.toml --record run.csv\n  ecdrive plot run.csv -o run.svg"
+    )]
+    Plot {
+        /// The recording (CSV, as `run --record` writes it).
+        file: PathBuf,
+        /// The SVG to write.
+        #[arg(short, long, value_name = "OUT.svg")]
+        output: PathBuf,
     },
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
     /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves. With --can:
@@ -552,6 +568,23 @@ pub fn fail(cmd: &str, e: &MasterError) -> ExitCode {
 }
 
 /// Print a message as one line and return `code`.
+/// `ecdrive plot`: read a recording, draw it.
+fn plot_file(file: &std::path::Path, out: &std::path::Path) -> ExitCode {
+    use ecdrive::app::plot;
+    match plot::read(file).and_then(|r| plot::draw(&r, out).map(|()| r)) {
+        Ok(r) => {
+            eprintln!(
+                "ecdrive plot: {} axis(es), {} panels, to {}",
+                r.axes.len(),
+                r.axes.len() * plot::PANELS.len(),
+                out.display()
+            );
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail_with("plot", &e.to_string(), exit::USAGE),
+    }
+}
+
 pub fn fail_with(cmd: &str, msg: &str, code: u8) -> ExitCode {
     eprintln!("ecdrive {cmd}: {}", one_line(msg));
     ExitCode::from(code)
@@ -1038,15 +1071,30 @@ fn dispatch(cli: Cli) -> ExitCode {
             duration,
             check,
             record,
+            plot,
             json,
-        } => run::run(
-            &config,
-            interface.as_deref(),
-            duration,
-            check,
-            record.as_deref(),
-            json.json,
-        ),
+        } => {
+            let code = run::run(
+                &config,
+                interface.as_deref(),
+                duration,
+                check,
+                record.as_deref(),
+                json.json,
+            );
+            match (&record, &plot) {
+                (Some(r), Some(p)) if !check => {
+                    let drawn = plot_file(r, p);
+                    if drawn == ExitCode::SUCCESS {
+                        code
+                    } else {
+                        drawn
+                    }
+                }
+                _ => code,
+            }
+        }
+        Command::Plot { file, output } => plot_file(&file, &output),
         Command::Sim {
             can: Some(bus),
             nodes,
