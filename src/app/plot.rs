@@ -189,7 +189,7 @@ pub fn draw(rec: &Recorded, out: &Path) -> Result<(), PlotError> {
             let mut chart = ChartBuilder::on(area)
                 .caption(format!("axis {axis}: {title}"), ("sans-serif", 14))
                 .margin(6)
-                .x_label_area_size(22)
+                .x_label_area_size(34)
                 .y_label_area_size(70)
                 .build_cartesian_2d(0.0..t_end, lo..hi)
                 .map_err(|e| err(&e))?;
