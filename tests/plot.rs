@@ -45,7 +45,8 @@ fn each_example_recording_is_drawn_one_panel_per_axis_and_quantity() {
         let rec = plot::read(&csv).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(rec.axes.len(), r.drives.len(), "{name}: axes");
         let svg_path = dir.join(format!("{name}.svg"));
-        plot::draw(&rec, &svg_path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        plot::draw(&rec, &svg_path, &plot::units_of(&cfg))
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
         let svg = std::fs::read_to_string(&svg_path).unwrap();
         for axis in rec.axes.keys() {
             for panel in plot::PANELS {

@@ -158,8 +158,30 @@ fn mode_colour(mode: i8) -> RGBAColor {
     }
 }
 
-/// Draw `rec` into the SVG file `out`: one panel per axis and quantity ([`PANELS`]).
-pub fn draw(rec: &Recorded, out: &Path) -> Result<(), PlotError> {
+/// The units of the configuration's drives by axis, for [`draw`]: drives selected by position,
+/// in the order of their positions (the order of the axes); a drive selected otherwise ends
+/// the list (its axis and the ones after it stay in counts).
+pub fn units_of(
+    cfg: &crate::app::config::RunConfig,
+) -> Vec<Option<crate::master::startup::UserUnits>> {
+    let mut by_position: Vec<(u16, Option<crate::master::startup::UserUnits>)> = Vec::new();
+    for d in &cfg.drives {
+        match d.select {
+            crate::master::Selector::Position(p) => by_position.push((p, d.units.clone())),
+            _ => break,
+        }
+    }
+    by_position.sort_by_key(|(p, _)| *p);
+    by_position.into_iter().map(|(_, u)| u).collect()
+}
+
+/// Draw `rec` into the SVG file `out`: one panel per axis and quantity ([`PANELS`]); position
+/// and following error in `units[axis]` where given (else counts).
+pub fn draw(
+    rec: &Recorded,
+    out: &Path,
+    units: &[Option<crate::master::startup::UserUnits>],
+) -> Result<(), PlotError> {
     let file = out.display().to_string();
     let err = |e: &dyn std::fmt::Display| PlotError::Draw {
         file: file.clone(),
@@ -176,13 +198,27 @@ pub fn draw(rec: &Recorded, out: &Path) -> Result<(), PlotError> {
         .fold(0.0, f64::max)
         .max(1e-3);
     for (k, (axis, a)) in rec.axes.iter().enumerate() {
+        let u = units.get(usize::from(*axis)).and_then(Option::as_ref);
+        let scale = |v: &[f64]| -> Vec<f64> {
+            let k = u.map_or(1.0, |u| u.counts_per_unit);
+            v.iter().map(|x| x / k).collect()
+        };
+        let (demand, actual, fe) = (
+            scale(&a.demand),
+            scale(&a.actual),
+            scale(&a.following_error),
+        );
         let series: [Vec<(&[f64], RGBColor)>; 4] = [
-            vec![(&a.demand, BLUE), (&a.actual, RED)],
-            vec![(&a.following_error, BLACK)],
+            vec![(&demand, BLUE), (&actual, RED)],
+            vec![(&fe, BLACK)],
             vec![(&a.velocity, GREEN)],
             vec![(&a.torque, MAGENTA)],
         ];
         for (p, (title, lines)) in PANELS.iter().zip(series).enumerate() {
+            let title = match (u, p) {
+                (Some(u), 0 | 1) => title.replace("counts", &u.name),
+                _ => title.to_string(),
+            };
             let area = &panels[k * PANELS.len() + p];
             let all: Vec<f64> = lines.iter().flat_map(|(v, _)| v.iter().copied()).collect();
             let (lo, hi) = range(&all);

@@ -341,6 +341,10 @@ enum Command {
         /// The SVG to write.
         #[arg(short, long, value_name = "OUT.svg")]
         output: PathBuf,
+        /// The run's configuration: position and following error in its drives' units
+        /// (drives selected by position).
+        #[arg(short, long, value_name = "FILE")]
+        config: Option<PathBuf>,
     },
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
     /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves. With --can:
@@ -569,9 +573,18 @@ pub fn fail(cmd: &str, e: &MasterError) -> ExitCode {
 
 /// Print a message as one line and return `code`.
 /// `ecdrive plot`: read a recording, draw it.
-fn plot_file(file: &std::path::Path, out: &std::path::Path) -> ExitCode {
+fn plot_file(
+    file: &std::path::Path,
+    out: &std::path::Path,
+    config: Option<&std::path::Path>,
+) -> ExitCode {
     use ecdrive::app::plot;
-    match plot::read(file).and_then(|r| plot::draw(&r, out).map(|()| r)) {
+    let units = match config.map(ecdrive::app::config::load) {
+        Some(Ok(c)) => plot::units_of(&c),
+        Some(Err(e)) => return fail_with("plot", &e.to_string(), exit::USAGE),
+        None => Vec::new(),
+    };
+    match plot::read(file).and_then(|r| plot::draw(&r, out, &units).map(|()| r)) {
         Ok(r) => {
             eprintln!(
                 "ecdrive plot: {} axis(es), {} panels, to {}",
@@ -1084,7 +1097,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             );
             match (&record, &plot) {
                 (Some(r), Some(p)) if !check => {
-                    let drawn = plot_file(r, p);
+                    let drawn = plot_file(r, p, Some(&config));
                     if drawn == ExitCode::SUCCESS {
                         code
                     } else {
@@ -1094,7 +1107,11 @@ fn dispatch(cli: Cli) -> ExitCode {
                 _ => code,
             }
         }
-        Command::Plot { file, output } => plot_file(&file, &output),
+        Command::Plot {
+            file,
+            output,
+            config,
+        } => plot_file(&file, &output, config.as_deref()),
         Command::Sim {
             can: Some(bus),
             nodes,
