@@ -443,11 +443,23 @@ impl Decoder {
     }
 }
 
-/// The application's code, locked for a run of the cycle.
-fn lock_app(cfg: &MasterConfig) -> Option<std::sync::MutexGuard<'_, dyn CycleApp + 'static>> {
-    cfg.app
+/// The application's code and the recording, locked for a run of the cycle.
+#[allow(clippy::type_complexity)]
+fn lock_app(
+    cfg: &MasterConfig,
+) -> (
+    Option<std::sync::MutexGuard<'_, dyn CycleApp + 'static>>,
+    Option<std::sync::MutexGuard<'_, RecordTx>>,
+) {
+    let app = cfg
+        .app
         .as_ref()
-        .map(|a| a.lock().unwrap_or_else(std::sync::PoisonError::into_inner))
+        .map(|a| a.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
+    let record = cfg
+        .record
+        .as_ref()
+        .map(|r| r.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
+    (app, record)
 }
 
 /// Whether an event of the application's set-points is an error.
@@ -1276,6 +1288,23 @@ fn start_up<L: FrameLink>(
     startup::configure(bus, group, devices, plan, &cfg.startup)
 }
 
+/// Start-up's warnings into the history.
+fn note_warnings(shared: &Shared, warnings: &[(DriveRef, String)]) {
+    for (drive, w) in warnings {
+        push_history(
+            shared,
+            HistoryEntry {
+                time_ns: monotonic_ns(),
+                cycle: None,
+                drive: Some(drive.clone()),
+                error: false,
+                kind: HistoryKind::Warning,
+                text: format!("warning: {w}"),
+            },
+        );
+    }
+}
+
 /// One run: start-up, the cycle with its supervision, shutdown.
 fn run<L: FrameLink + Send>(
     bus: &mut super::bus::Bus<'_, L>,
@@ -1289,19 +1318,7 @@ fn run<L: FrameLink + Send>(
         Ok(s) => s,
         Err(e) => return RunEnd::StartFailed(e),
     };
-    for (drive, w) in &started.warnings {
-        push_history(
-            shared,
-            HistoryEntry {
-                time_ns: monotonic_ns(),
-                cycle: None,
-                drive: Some(drive.clone()),
-                error: false,
-                kind: HistoryKind::Warning,
-                text: format!("warning: {w}"),
-            },
-        );
-    }
+    note_warnings(shared, &started.warnings);
     if persist.is_none() {
         *persist = Some(Persist::first(&started, started_tx));
     } else if restarting {
@@ -1354,22 +1371,11 @@ fn run<L: FrameLink + Send>(
             .stack_size(8 * 1024 * 1024)
             .spawn_scoped(s, || {
                 let hooks_ref = hooks.as_deref().map(|h| h as &dyn CycleHooks);
-                let mut app = lock_app(cfg);
-                let mut record = cfg
-                    .record
-                    .as_ref()
-                    .map(|r| r.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
+                let (mut app, mut record) = lock_app(cfg);
+                let (app, record) = (app.as_deref_mut(), record.as_deref_mut());
+                let c = &cfg.cycle;
                 cycle::run(
-                    md,
-                    pump,
-                    group,
-                    drives,
-                    others,
-                    &cfg.cycle,
-                    cycle_io,
-                    hooks_ref,
-                    app.as_deref_mut(),
-                    record.as_deref_mut(),
+                    md, pump, group, drives, others, c, cycle_io, hooks_ref, app, record,
                 )
             });
         let h = match h {
