@@ -91,6 +91,9 @@ struct Ramp {
     refused_engine: Option<Result<(), EntryError>>,
     refused_input: Option<Result<(), EntryError>>,
     statusword_seen: Option<(i64, u16)>,
+    /// The DC time of the last cycle, and whether it ever failed to move on.
+    dc_last: u64,
+    dc_not_increasing: u32,
 }
 
 const STEP: i64 = 10;
@@ -99,6 +102,14 @@ const STEPS: u64 = 300;
 impl CycleApp for Ramp {
     fn cycle(&mut self, c: &mut AppCycle<'_>) {
         let now = c.cycle();
+        // In a cycle with a reply (a cycle without one keeps the last DC time).
+        let dc = c.dc_time_ns();
+        if c.axes().iter().any(|a| a.in_op()) {
+            if dc != 0 && self.dc_last != 0 && dc <= self.dc_last {
+                self.dc_not_increasing += 1;
+            }
+            self.dc_last = dc;
+        }
         for (i, a) in c.axes().iter_mut().enumerate() {
             if !a.enabled() {
                 continue;
@@ -182,6 +193,8 @@ fn callback_setpoints_reach_the_drive_cycle_by_cycle() {
     );
     let (read, tel) = app.statusword_seen.expect("statusword mapped");
     assert_eq!(read, i64::from(tel));
+    assert!(app.dc_last > 0, "the DC time reached the application");
+    assert_eq!(app.dc_not_increasing, 0, "the DC time went back or stood");
 }
 
 /// A jump of the set-point beyond the axis's max_velocity: the axis is stopped with a ramp,

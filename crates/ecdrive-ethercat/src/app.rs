@@ -290,6 +290,7 @@ impl AppAxis {
 pub struct AppCycle<'a> {
     pub(crate) cycle: u64,
     pub(crate) dt: f64,
+    pub(crate) dc_time_ns: u64,
     pub(crate) axes: &'a mut [AppAxis],
     pub(crate) events: &'a mut dyn FnMut(crate::telemetry::EventKind),
 }
@@ -306,6 +307,12 @@ impl AppCycle<'_> {
     /// Time since the cycle began, seconds (cycle number × period).
     pub fn time(&self) -> f64 {
         self.cycle as f64 * self.dt
+    }
+    /// The DC system time of this cycle's frame (the reference clock's, ns; 0 before it first
+    /// answered). A cycle that wakes a whole period late still counts one cycle, but the DC
+    /// time moves on: a trajectory computed from it stays with the drives' SYNC0 instants.
+    pub fn dc_time_ns(&self) -> u64 {
+        self.dc_time_ns
     }
     /// The axes, in configuration order.
     pub fn axes(&mut self) -> &mut [AppAxis] {

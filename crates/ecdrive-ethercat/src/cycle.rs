@@ -1764,6 +1764,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             let mut c = AppCycle {
                 cycle: ctx.cycle,
                 dt: ctx.dt,
+                dc_time_ns: self.clock.dc_time,
                 axes: &mut self.app_axes,
                 events: &mut emit,
             };
