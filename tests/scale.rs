@@ -376,4 +376,8 @@ fn a_wrong_working_counter_names_the_datagram_and_its_drives() {
     let want = "working counter 144, expected 146: logical datagram 2 of 2 (logical 0x000005BA, \
                 118 bytes, devices 38–47) came back with 18, expected 20";
     assert!(wkc.contains(&want), "{wkc:#?}");
+    // The frame statistics count them: every reply from the arming on had the wrong count.
+    let f = r.cycle.as_ref().expect("cycle report").frames;
+    assert!(f.wrong_wkc >= 10, "{f:?}");
+    assert!(f.answered > 0 && f.sent >= f.answered, "{f:?}");
 }

@@ -257,6 +257,27 @@ pub struct CycleReport {
     pub max_setpoint_step: Vec<SetpointSteps>,
     /// Per axis: the states it went through, in order (consecutive duplicates removed).
     pub states: Vec<Vec<State>>,
+    /// The frames of the run (the IgH `master` command's figures).
+    pub frames: FrameStats,
+}
+
+/// The frames of a run of the cycle, in total (divide by [`FrameStats::seconds`] for rates).
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct FrameStats {
+    /// Frames sent (first transmissions: cyclic frames, AL requests, mailbox polls riding along).
+    pub sent: u64,
+    /// Replies received.
+    pub answered: u64,
+    /// Retransmissions of frames that got no reply in time.
+    pub retransmitted: u64,
+    /// Cycles whose frames got no reply at all.
+    pub lost: u64,
+    /// Cycles whose reply came after the cycle's budget (counted as lost cycles too).
+    pub late: u64,
+    /// Replies with a wrong working counter.
+    pub wrong_wkc: u64,
+    /// How long the run of the cycle lasted, s.
+    pub seconds: f64,
 }
 
 /// Largest cycle-to-cycle changes of the set-points sent to one axis while it was enabled.
@@ -1135,6 +1156,12 @@ struct Counts {
     overruns: u64,
     recorded_lost: u64,
     recorded_overruns: u64,
+    /// Replies that came after the cycle's budget (counted among the lost cycles too).
+    late_total: u64,
+    /// Replies with a wrong working counter.
+    wkc_wrong_total: u64,
+    /// The pump's counters when the run began.
+    pump_at_start: crate::io::PumpStats,
 }
 
 /// One run of the cycle: what it drives, where it stands and what it has seen. See the
@@ -1284,6 +1311,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let wkc_plan = (!plan.is_empty() && plan.whole() == wkc_whole).then_some(plan);
         pump.record_logical(wkc_plan.is_some());
         let cycles = |d: Duration| d.as_nanos() as u64 / cycle_ns;
+        let pump_at_start = pump.stats();
         Self {
             md,
             pump,
@@ -1328,7 +1356,10 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 next_wake: monotonic_ns() + cycle_ns,
                 ..Clock::default()
             },
-            counts: Counts::default(),
+            counts: Counts {
+                pump_at_start,
+                ..Counts::default()
+            },
             timing: Timing::default(),
             window: if settings.steady_timing_only {
                 Window::NotYet
@@ -1452,7 +1483,11 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 self.supervise_bus(scan, resp.working_counter);
                 Ok(Exchanged::Reply)
             }
-            Ok(Err(_)) | Err(ExchangeError::Late) => Ok(Exchanged::Lost),
+            Err(ExchangeError::Late) => {
+                self.counts.late_total += 1;
+                Ok(Exchanged::Lost)
+            }
+            Ok(Err(_)) => Ok(Exchanged::Lost),
             Err(ExchangeError::Link(_)) => Err(CycleEnd::LinkFailed),
         }
     }
@@ -1547,6 +1582,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             return;
         }
         self.counts.wkc_errors += 1;
+        self.counts.wkc_wrong_total += 1;
         self.ev.emit(EventKind::WorkingCounter {
             got: wkc,
             expected,
@@ -1989,6 +2025,18 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
             max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
             states: axes.iter().map(|a| a.states.clone()).collect(),
+            frames: {
+                let (now, then) = (self.pump.stats(), self.counts.pump_at_start);
+                FrameStats {
+                    sent: now.sent - then.sent,
+                    answered: now.received - then.received,
+                    retransmitted: now.retransmitted - then.retransmitted,
+                    lost: self.counts.lost_total,
+                    late: self.counts.late_total,
+                    wrong_wkc: self.counts.wkc_wrong_total,
+                    seconds: self.clock.cycle as f64 * self.k.dt,
+                }
+            },
         }
     }
 }

@@ -663,6 +663,18 @@ pub fn run_report(r: &RunReport) {
                 (None, None) => String::new(),
             }
         );
+        let f = &c.frames;
+        let per_s = |n: u64| n as f64 / f.seconds.max(1e-9);
+        println!(
+            "Frames: {} sent ({:.0}/s), {} answered, {} retransmitted; cycles {} lost, {} late, {} with a wrong working counter",
+            f.sent,
+            per_s(f.sent),
+            f.answered,
+            f.retransmitted,
+            f.lost,
+            f.late,
+            f.wrong_wkc
+        );
         println!("                 p50 µs    p99 µs    max µs");
         for (name, s) in [
             ("wake latency", &c.wake_latency),

@@ -91,6 +91,9 @@ pub struct CycleSummary {
     pub cpu: Option<usize>,
     /// What the real-time set-up could not get.
     pub rt_warnings: Vec<String>,
+    /// The frames of the run: sent, answered, retransmitted, cycles lost and late, wrong
+    /// working counters, in total over `frames.seconds`.
+    pub frames: crate::master::cycle::FrameStats,
 }
 
 /// One drive after a run.
@@ -716,6 +719,7 @@ pub fn run(
             priority: c.rt.priority_granted,
             cpu: c.rt.cpu_pinned,
             rt_warnings: c.rt.warnings.clone(),
+            frames: c.frames,
         }),
         shutdown_ok: report.shutdown_ok,
         startup: report.startup,
