@@ -46,15 +46,7 @@ fn run<L: FrameLink + Send + 'static>(
         let (mut t0, mut lines) = (None, 0u64);
         loop {
             let last = stop.load(Ordering::Acquire);
-            let mut result = Ok(());
-            rx.drain(|s| {
-                let t = *t0.get_or_insert(s.time_ns);
-                if result.is_ok() {
-                    result = writeln!(file, "{}", s.csv(t));
-                    lines += 1;
-                }
-            });
-            result?;
+            lines += rx.drain_csv(&mut file, &mut t0)?;
             if last {
                 file.flush()?;
                 return Ok((lines, rx.dropped()));

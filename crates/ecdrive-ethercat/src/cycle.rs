@@ -1340,13 +1340,11 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     .max(u64::from(settings.segment_lost_after)),
                 stop_ramp_cycles: cycles(settings.stop_ramp).max(1),
                 stop_timeout_cycles: cycles(settings.stop_timeout).max(1),
-                op_not_before_dc: drives
-                    .iter()
-                    .filter_map(|d| d.sync0_start_ns)
-                    .max()
-                    .map_or(0, |s| {
-                        s.saturating_add(u64::from(settings.safeop_cycles) * cycle_ns)
-                    }),
+                op_not_before_dc: super::startup::op_not_before_dc(
+                    drives,
+                    settings.safeop_cycles,
+                    cycle_ns,
+                ),
             },
             axes,
             addresses,
@@ -1779,20 +1777,21 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             stop_timeout_cycles: self.k.stop_timeout_cycles,
         };
         let (md, group) = (self.md, self.group);
-        // Inputs first, for every axis; then the application; then each axis's step.
+        let with_app = self.app.is_some();
+        // Inputs first, for every axis (and the application's view of it, if there is an
+        // application); then the application; then each axis's step.
         for (a, view) in self.axes.iter_mut().zip(self.app_axes.iter_mut()) {
-            view.clear_requests();
             let Ok(sd) = group.subdevice(md, a.sub) else {
                 continue;
             };
-            view.in_op = good && a.al_state & 0x0F == 8;
-            if !view.in_op {
-                view.enabled = false;
-                continue;
-            }
+            let in_op = good && a.al_state & 0x0F == 8;
             let io = sd.io_raw();
-            a.fb = Some(a.read_inputs(io.inputs(), ctx.pulse));
-            refresh_view(view, a, io.inputs(), io.outputs());
+            if in_op {
+                a.fb = Some(a.read_inputs(io.inputs(), ctx.pulse));
+            }
+            if with_app {
+                refresh_view(view, a, in_op, io.inputs(), io.outputs());
+            }
         }
         if let Some(app) = self.app.as_deref_mut() {
             let ev = &mut self.ev;
@@ -1806,7 +1805,6 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             };
             app.cycle(&mut c);
         }
-        let with_app = self.app.is_some();
         for (i, (a, view)) in self.axes.iter_mut().zip(self.app_axes.iter()).enumerate() {
             let Ok(sd) = group.subdevice(md, a.sub) else {
                 continue;
@@ -2042,8 +2040,15 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 }
 
 /// What one reply's AL states showed.
-/// Bring the application's view of axis `a` up to date with this cycle's inputs.
-fn refresh_view(view: &mut AppAxis, a: &AxisRt, inputs: &[u8], outputs: &[u8]) {
+/// Bring the application's view of axis `a` up to date with this cycle's inputs, and clear
+/// last cycle's requests.
+fn refresh_view(view: &mut AppAxis, a: &AxisRt, in_op: bool, inputs: &[u8], outputs: &[u8]) {
+    view.clear_requests();
+    view.in_op = in_op;
+    if !in_op {
+        view.enabled = false;
+        return;
+    }
     view.tel = a.tel;
     let st = a.axis.status();
     view.tel.state = st.state;

@@ -68,6 +68,22 @@ impl Recording {
         }
         n
     }
+    /// Write every sample waiting to `out` as CSV lines; `t0_ns` is the time of the first
+    /// sample ever written (set by the first call). Lines written.
+    pub fn drain_csv(
+        &mut self,
+        out: &mut dyn std::io::Write,
+        t0_ns: &mut Option<u64>,
+    ) -> std::io::Result<u64> {
+        let mut n = 0;
+        while let Ok(s) = self.rx.pop() {
+            let t0 = *t0_ns.get_or_insert(s.time_ns);
+            s.write_csv(out, t0)?;
+            n += 1;
+        }
+        Ok(n)
+    }
+
     /// Samples the cycle had to drop because the ring was full.
     pub fn dropped(&self) -> u64 {
         self.dropped.load(Ordering::Relaxed)
@@ -88,13 +104,15 @@ pub fn recording(capacity: usize) -> (RecordTx, Recording) {
     )
 }
 
-/// The CSV header of [`CycleSample::csv`]: every column with its unit.
+/// The CSV header of [`CycleSample::write_csv`]: every column with its unit.
 pub const CSV_HEADER: &str = "cycle,time_s,axis,demand_counts,actual_counts,velocity_drive_units,torque_drive_units,following_error_counts,statusword_hex,mode,wake_latency_us,exchange_us,wkc";
 
 impl CycleSample {
-    /// One CSV line (no newline), `t0_ns` the time of the recording's first cycle.
-    pub fn csv(&self, t0_ns: u64) -> String {
-        format!(
+    /// Write this sample as one CSV line ([`CSV_HEADER`]'s columns), `t0_ns` the time of the
+    /// recording's first cycle.
+    pub fn write_csv(&self, out: &mut dyn std::io::Write, t0_ns: u64) -> std::io::Result<()> {
+        writeln!(
+            out,
             "{},{:.6},{},{},{},{},{},{},{:04X},{},{:.1},{:.1},{}",
             self.cycle,
             self.time_ns.saturating_sub(t0_ns) as f64 / 1e9,

@@ -289,6 +289,16 @@ pub struct ConfiguredDrive {
     pub sync0_start_ns: Option<u64>,
 }
 
+/// The DC system time from which OP may be requested: `cycles` SYNC0 cycles of `cycle_ns`
+/// after the last drive's first SYNC0 ([`ConfiguredDrive::sync0_start_ns`]); 0 without DC.
+pub fn op_not_before_dc(drives: &[ConfiguredDrive], cycles: u32, cycle_ns: u64) -> u64 {
+    drives
+        .iter()
+        .filter_map(|d| d.sync0_start_ns)
+        .max()
+        .map_or(0, |s| s.saturating_add(u64::from(cycles) * cycle_ns))
+}
+
 /// A device that is not driven ([`Role::Io`]): in OP with its own PDO configuration, its
 /// process data exchanged every cycle.
 #[derive(Debug, Clone, PartialEq, Eq)]

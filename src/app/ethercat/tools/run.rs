@@ -775,15 +775,7 @@ impl RecordWriter {
                 let (mut t0, mut lines) = (None, 0u64);
                 loop {
                     let last = stop.load(std::sync::atomic::Ordering::Acquire);
-                    let mut err = Ok(());
-                    rx.drain(|s| {
-                        let t = *t0.get_or_insert(s.time_ns);
-                        if err.is_ok() {
-                            err = writeln!(out, "{}", s.csv(t));
-                            lines += 1;
-                        }
-                    });
-                    err?;
+                    lines += rx.drain_csv(&mut out, &mut t0)?;
                     if last {
                         break;
                     }

@@ -263,12 +263,11 @@ fn request<L: FrameLink>(
                 // Valid outputs before OP, with SYNC0 running on every drive, for as many
                 // cycles as the cycle gives them (bounded by the timeout).
                 let cycles = crate::master::CycleSettings::new(opts.cycle).safeop_cycles;
-                let not_before = started
-                    .drives
-                    .iter()
-                    .filter_map(|d| d.sync0_start_ns)
-                    .max()
-                    .map_or(0, |s| s + u64::from(cycles) * opts.cycle.as_nanos() as u64);
+                let not_before = crate::master::startup::op_not_before_dc(
+                    &started.drives,
+                    cycles,
+                    opts.cycle.as_nanos() as u64,
+                );
                 let until = crate::rt::monotonic_ns() + opts.timeout.as_nanos() as u64;
                 let mut n = 0u32;
                 while n < cycles || dc_time.get() < not_before {
