@@ -1,6 +1,7 @@
-//! The jitter harness in-process: a short run of all three loops produces every figure the
-//! JSON promises, for each run, and an SVG that parses. No timing is asserted: only that the
-//! figures exist and are consistent with each other.
+//! The jitter harness in-process: a short run of every loop, twice, produces every figure the
+//! JSON promises, for each run and across the repetitions, and an SVG that parses; and each
+//! run is what it says (threads, link, polling). No timing is asserted: only that the figures
+//! exist and are consistent with each other.
 
 use ecdrive::app::harness::{self, JitterConfig, JitterReport, Transport};
 use serde_json::Value;
@@ -8,11 +9,22 @@ use std::time::Duration;
 
 const CYCLES: u64 = 300;
 
+/// The tests of this binary one at a time: the per-thread CPU figures name the threads a run
+/// started, and another test's run would add its own.
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static ONE: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    ONE.lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
 fn short_run() -> JitterReport {
     let mut cfg = JitterConfig::new(Duration::from_millis(1));
     cfg.cycles = CYCLES;
     cfg.transport = Transport::InProcess;
     cfg.count_syscalls = true;
+    cfg.repeat = 2;
+    // Given, but SOEM needs an interface: the report says why it did not run.
+    cfg.soem = Some("target/soem/soem_cycle".into());
     harness::run(&cfg, &|what| eprintln!("jitter: {what}")).expect("the harness runs in-process")
 }
 
@@ -42,9 +54,12 @@ fn ratio_ok(v: &Value, what: &str) {
 }
 
 #[test]
-fn every_figure_for_all_three_runs_and_a_plot() {
+fn every_figure_for_every_run_and_a_plot() {
+    let _one = serial();
     let report = short_run();
-    let json = serde_json::to_value(&report).unwrap();
+    let all = serde_json::to_value(&report).unwrap();
+    let json = &all["repetitions"][0];
+    let settings = &all["settings"];
 
     // Host conditions and settings.
     for k in [
@@ -56,15 +71,27 @@ fn every_figure_for_all_three_runs_and_a_plot() {
         "isolated_cpus",
         "sched_rt_runtime_us",
     ] {
-        assert!(json["host"].get(k).is_some(), "host.{k} missing");
+        assert!(all["host"].get(k).is_some(), "host.{k} missing");
     }
-    assert_eq!(json["schema"], "ecdrive-jitter/1");
-    assert_eq!(json["settings"]["cycle_ns"], 1_000_000);
-    assert_eq!(json["settings"]["transport"], "in-process");
-    assert_eq!(json["settings"]["drives"].as_array().unwrap().len(), 2);
+    assert_eq!(all["schema"], "ecdrive-jitter/2");
+    assert_eq!(settings["cycle_ns"], 1_000_000);
+    assert_eq!(settings["transport"], "in-process");
+    assert_eq!(settings["drives"].as_array().unwrap().len(), 2);
+    assert_eq!(settings["repeat"], 2);
+    assert!(all["load"]["loadavg_before"].is_array());
+    assert!(all["load"]["stress"].is_null());
+    // No SOEM in-process, and the reason.
+    assert!(
+        all["soem_absent"]
+            .as_str()
+            .is_some_and(|w| w.contains("network interface")),
+        "{}",
+        all["soem_absent"]
+    );
+    assert!(json["soem"].is_null() && json["ratios"]["ecdrive_to_soem"].is_null());
 
     // Whether the priority was granted, and a warning when it was not.
-    let granted = json["priority_granted"].as_bool().unwrap();
+    let granted = all["priority_granted"].as_bool().unwrap();
     let warned = report.warnings.iter().any(|w| w.contains("not granted"));
     assert_eq!(granted, !warned, "{:?}", report.warnings);
     if ecdrive::link::netns::is_root() {
@@ -174,6 +201,94 @@ fn every_figure_for_all_three_runs_and_a_plot() {
     );
 
     // The plot: well-formed SVG with one histogram per run and a legend naming them.
+    // Each run is what it says (structure, not figures).
+    let rep = &report.repetitions[0];
+    let threads = |r: &harness::RunReport| {
+        let mut t = r.structure.master_threads.clone();
+        t.sort();
+        t
+    };
+    assert_eq!(threads(&rep.sleep).len(), 1, "{:?}", rep.sleep.structure);
+    // Plain ethercrab: its loop thread, the in-process TX/RX thread, which wakes for frames
+    // only (about once a cycle), not also for each SYNC0 as it used to, and the async-io
+    // reactor that serves its timers (kernel names: 15 characters).
+    assert_eq!(
+        threads(&rep.ethercrab),
+        ["async-io", "ecdrive-sim-eth", "jitter-ethercra"],
+        "{:?}",
+        rep.ethercrab.cpu.threads
+    );
+    assert!(rep.ethercrab.structure.link.contains("frames only"));
+    let txrx = rep
+        .ethercrab
+        .cpu
+        .threads
+        .iter()
+        .find(|t| t.name == "ecdrive-sim-eth")
+        .unwrap();
+    assert!(
+        txrx.voluntary < 1.5,
+        "the TX/RX thread wakes {:.2} times a cycle",
+        txrx.voluntary
+    );
+    // ecdrive: its cycle thread (which runs the in-process slaves) and its session thread,
+    // with emergency polling on as by default, and no TX/RX thread.
+    assert_eq!(
+        threads(&rep.ecdrive),
+        ["ecdrive-cycle", "ecdrive-session"],
+        "{:?}",
+        rep.ecdrive.cpu.threads
+    );
+    assert_eq!(rep.ecdrive.structure.mailbox_poll_ms, Some(50));
+    assert!(rep.ecdrive.structure.link.contains("SegmentLink"));
+    for r in [&rep.ethercrab, &rep.ecdrive] {
+        assert!(
+            r.structure.slaves.contains("charged to the master"),
+            "{:?}",
+            r.structure
+        );
+        // The master figure is the sum of the master's threads.
+        let sum: f64 = r
+            .cpu
+            .threads
+            .iter()
+            .filter(|t| t.role == harness::cpu::ThreadRole::Master)
+            .map(|t| t.cpu_ns)
+            .sum();
+        assert_eq!(r.cpu.master_ns, Some(sum), "{}", r.name);
+    }
+
+    // Across the repetitions: each figure's median and spread, from each repetition's value.
+    assert_eq!(all["repetitions"].as_array().unwrap().len(), 2);
+    for run in ["sleep", "ethercrab", "ecdrive"] {
+        let f = &all["summary"]["runs"][run];
+        for k in [
+            "wake_latency_p50",
+            "wake_latency_p99",
+            "busy_p50",
+            "cpu_master_ns",
+        ] {
+            let sp = &f[k];
+            let v: Vec<f64> = sp["values"]
+                .as_array()
+                .unwrap_or_else(|| panic!("summary.runs.{run}.{k}: {f}"))
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            assert_eq!(v.len(), 2, "{run}.{k}");
+            let (lo, hi) = (v[0].min(v[1]), v[0].max(v[1]));
+            assert_eq!(sp["min"].as_f64(), Some(lo));
+            assert_eq!(sp["max"].as_f64(), Some(hi));
+            assert_eq!(sp["median"].as_f64(), Some((lo + hi) / 2.0));
+        }
+    }
+    let r = &all["summary"]["ratios"]["ecdrive_to_ethercrab"]["cpu_master"]["values"];
+    assert_eq!(
+        r.as_array().map(Vec::len),
+        Some(2),
+        "a ratio per repetition"
+    );
+
     let svg = harness::svg::render(&report);
     let doc = roxmltree::Document::parse(&svg).expect("the SVG parses as XML");
     assert_eq!(doc.root_element().tag_name().name(), "svg");
@@ -190,13 +305,22 @@ fn every_figure_for_all_three_runs_and_a_plot() {
 
     // The text table names every run and both ratios.
     let table = report.text();
-    for w in ["sleep", "ethercrab", "ecdrive", "÷ sleep", "÷ ethercrab"] {
+    for w in [
+        "sleep",
+        "ethercrab",
+        "ecdrive",
+        "÷ sleep",
+        "÷ ethercrab",
+        "across 2 repetitions",
+        "soem: not run",
+    ] {
         assert!(table.contains(w), "{table}");
     }
 }
 
 #[test]
 fn bad_settings_are_refused_with_the_reason() {
+    let _one = serial();
     let mut cfg = JitterConfig::new(Duration::from_micros(10));
     cfg.cycles = 100;
     let e = harness::run(&cfg, &|_| {}).unwrap_err();
@@ -213,12 +337,14 @@ fn bad_settings_are_refused_with_the_reason() {
 /// and advances the MR-J4-TM's cycle counter, so both stay in OP for the whole window.
 #[test]
 fn the_emulated_drives_run_in_every_loop() {
+    let _one = serial();
     let mut cfg = JitterConfig::new(Duration::from_micros(500));
     cfg.cycles = 200;
     cfg.drives = vec!["mr-j4-tm".into(), "bdhde".into()];
     let report = harness::run(&cfg, &|_| {}).expect("the harness runs the emulated drives");
     assert_eq!(report.settings.profiles, ["MR-J4-TM", "BDHDE"]);
-    for r in [&report.ethercrab, &report.ecdrive] {
+    let rep = &report.repetitions[0];
+    for r in [&rep.ethercrab, &rep.ecdrive] {
         assert_eq!(r.drives.len(), 2, "{}", r.name);
         assert!(r.drives.iter().all(|d| d.arrival_after_sync0.is_some()));
         // No device left OP, no drive raised an error (ecdrive's history would hold it).

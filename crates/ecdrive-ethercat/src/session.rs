@@ -1403,7 +1403,9 @@ fn run<L: FrameLink + Send>(
         }
         let before = *restarts;
         let mut drain_events = || {
+            let mut n = 0usize;
             while let Ok(e) = events.pop() {
+                n += 1;
                 if let Some(entry) = decoder.entry(&e) {
                     push_history(shared, entry);
                 }
@@ -1416,9 +1418,17 @@ fn run<L: FrameLink + Send>(
                     }
                 }
             }
+            n
         };
+        // Every 2 ms while events come, backing off to 16 ms while none do: a quiet cycle
+        // costs this thread few wake-ups (the event ring holds 4096).
+        let mut idle = SESSION_POLL_MIN;
         while !h.is_finished() {
-            drain_events();
+            idle = if drain_events() > 0 {
+                SESSION_POLL_MIN
+            } else {
+                (idle * 2).min(SESSION_POLL_MAX)
+            };
             if let Some(every) = cfg.emergency_poll
                 && monotonic_ns() >= next_poll
             {
@@ -1428,7 +1438,10 @@ fn run<L: FrameLink + Send>(
                 });
                 drain_emcy(&mut seen_emcy);
             }
-            std::thread::sleep(Duration::from_millis(2));
+            let to_poll = cfg.emergency_poll.map_or(idle, |_| {
+                Duration::from_nanos(next_poll.saturating_sub(monotonic_ns()))
+            });
+            std::thread::sleep(idle.min(to_poll).max(SESSION_POLL_MIN));
         }
         drain_events();
         h.join().ok()
@@ -1445,6 +1458,10 @@ fn run<L: FrameLink + Send>(
     *last_cycle = report;
     run_end(end, restarting, decoder)
 }
+
+/// The session thread's shortest and longest sleep between looks at the cycle's events.
+const SESSION_POLL_MIN: Duration = Duration::from_millis(2);
+const SESSION_POLL_MAX: Duration = Duration::from_millis(16);
 
 /// ": LRW 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) 18, expected 20" for a
 /// working-counter event: which datagram of the reply was wrong and whom it covers.

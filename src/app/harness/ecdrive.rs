@@ -6,8 +6,9 @@
 //! [`Timing`](crate::master::cycle::Timing) histograms and lost/overrun counts cover steady
 //! state only: from the cycle after every drive reached OP to the stop request. Once in OP every
 //! axis is enabled and holds its position in csp, so each cycle runs the whole path (exchange,
-//! AL/WKC checks, CiA 402 engine, outputs, telemetry). Emergency polling is off: the plain
-//! ethercrab loop polls no mailboxes either.
+//! AL/WKC checks, CiA 402 engine, outputs, telemetry). ecdrive's defaults stay on, emergency
+//! polling (every 50 ms) among them, although the plain ethercrab loop polls no mailboxes: the
+//! figures are those of the master as a user runs it.
 //!
 //! CPU time: a [`CycleHooks`] implementation samples the cycle thread's CPU clock, its context
 //! switches and the process CPU clock on the cycle thread when steady state begins and ends
@@ -116,7 +117,9 @@ pub fn run<L: FrameLink + Send + 'static>(
     // A stalled machine shows up as missed cycles in the figures, not as an aborted run.
     cfg.cycle.segment_lost_after =
         u32::try_from((1_000_000_000 / cycle_ns.max(1)).max(50)).unwrap_or(u32::MAX);
-    cfg.emergency_poll = None;
+    let mailbox_poll_ms = cfg
+        .emergency_poll
+        .map(|d| u64::try_from(d.as_millis()).unwrap_or(u64::MAX));
     cfg.hooks = Some(window.clone());
     for (i, p) in s.profiles.iter().enumerate() {
         cfg.startup.drives.push(DriveSetup {
@@ -165,8 +168,8 @@ pub fn run<L: FrameLink + Send + 'static>(
         exchange: Some(t.exchange.clone()),
         busy: t.busy.clone(),
     };
-    let begin = window.begin.lock().ok().and_then(|b| *b);
-    let end = window.end.lock().ok().and_then(|e| *e);
+    let begin = window.begin.lock().ok().and_then(|b| b.clone());
+    let end = window.end.lock().ok().and_then(|e| e.clone());
     let mut notes = window.notes.lock().map(|n| n.clone()).unwrap_or_default();
     let counted = window.counted.lock().ok().and_then(|mut c| c.take());
     let cpu = match (begin, end) {
@@ -203,17 +206,16 @@ pub fn run<L: FrameLink + Send + 'static>(
             text
         });
     }
-    Ok((
-        h.report(
-            "ecdrive",
-            cycle_ns,
-            cycle.rt.clone(),
-            cycle.overruns,
-            Some(cycle.lost),
-            cpu,
-            Vec::new(),
-            notes,
-        ),
-        link,
-    ))
+    let mut r = h.report(
+        "ecdrive",
+        cycle_ns,
+        cycle.rt.clone(),
+        cycle.overruns,
+        Some(cycle.lost),
+        cpu,
+        Vec::new(),
+        notes,
+    );
+    r.structure.mailbox_poll_ms = mailbox_poll_ms;
+    Ok((r, link))
 }

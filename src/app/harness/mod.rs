@@ -1,57 +1,72 @@
 //! The cycle-jitter harness behind `ecdrive jitter`: ecdrive's cycle measured against the floor
-//! of the machine, in one invocation.
+//! of the machine and against two other masters, in one invocation.
 //!
-//! [`run`] measures three loops **one after the other** (never concurrently), each for the same
-//! number of cycles at the same cycle time, with the same real-time set-up
+//! [`run`] measures up to four loops **one after the other** (never concurrently), each for the
+//! same number of cycles at the same cycle time, with the same real-time set-up
 //! ([`RtSettings`]: SCHED_FIFO priority, CPU, memory locking) and on the same emulated drives:
 //!
 //! 1. **`sleep`** — the bare sleep loop ([`sleep`]): absolute `clock_nanosleep` on a fixed grid,
 //!    nothing else; the `cyclictest` floor of this machine.
 //! 2. **`ethercrab`** — the plain ethercrab loop ([`plain`]): ethercrab alone, `tx_rx_dc` and an
 //!    absolute sleep to the instant it asks for, with ethercrab's usual separate TX/RX thread.
-//! 3. **`ecdrive`** — ecdrive's master ([`ecdrive`]): [`crate::master::session::Master`] and its
-//!    cycle, axes enabled and holding position.
+//! 3. **`soem`** — a minimal C loop on SOEM ([`soem`]), a separate process, over a network
+//!    interface only, when its program was built (`benches/soem/build.sh`); otherwise the
+//!    report says why it is absent.
+//! 4. **`ecdrive`** — ecdrive's master ([`ecdrive`]): [`crate::master::session::Master`] with
+//!    its defaults (emergency polling on), axes enabled and holding position.
+//!
+//! With [`JitterConfig::repeat`] the four are repeated, interleaved (sleep, ethercrab, soem,
+//! ecdrive, sleep, …); every figure and every ratio is kept per repetition and summarised as
+//! median, min and max ([`report::AcrossRepetitions`]). With [`JitterConfig::stress`] a
+//! documented background load ([`stress`]) runs during all of them.
 //!
 //! Transports ([`Transport`]): in-process (the emulated slaves are a
 //! [`crate::sim::transport::SegmentLink`] called by ecdrive's cycle thread, and an
-//! [`EthercrabLink`](crate::sim::transport::EthercrabLink) thread for plain ethercrab); a veth
-//! pair the harness creates, with the emulated slaves served on its far end inside a network
-//! namespace by a thread of this process (root); or any interface, whose far end is not the
-//! harness's (`ecdrive sim` elsewhere, or real drives).
+//! [`EthercrabLink`](crate::sim::transport::EthercrabLink) thread for plain ethercrab that, like
+//! ecdrive's link, wakes for frames only); a veth pair the harness creates, with the emulated
+//! slaves served on its far end inside a network namespace by a thread of this process (root);
+//! or any interface, whose far end is not the harness's (`ecdrive sim` elsewhere, or real
+//! drives).
+//!
+//! # Like for like
+//!
+//! - Both Rust masters see the same in-process link behaviour: the slaves' time-driven work
+//!   (SYNC0 events) is done when the next frame arrives, on the thread that moves frames (the
+//!   TX/RX thread for ethercrab, the cycle thread for ecdrive), so it is charged to both.
+//! - Over veth the slaves run on a harness thread (`jitter-far-end`) charged to no master.
+//! - CPU is compared as the whole master: the sum over every thread the run started (cycle,
+//!   TX/RX, session, the async-io timer thread), from `/proc/self/task/*/schedstat` at the
+//!   window's edges; SOEM's is its process's CPU time. Each run's [`report::RunStructure`]
+//!   says which threads, which link and whether mailboxes are polled.
 //!
 //! # How each figure is measured
 //!
-//! | figure | sleep | ethercrab | ecdrive |
-//! |---|---|---|---|
-//! | wake-up latency | woke − grid instant | woke − (exchange start + `next_cycle_wait`) | the cycle's `Timing::wake_latency` (same DC-aligned rule) |
-//! | period | woke − previous woke | same | `Timing::period` |
-//! | period error | \|period − cycle\|, derived from the period histogram (resolution 0.1 % of the period) | same | same |
-//! | frame round trip | — | around `tx_rx_dc().await` (includes the hand-over to and from the TX/RX thread) | `Timing::exchange`: `tx_rx_dc` polled and pumped inline |
-//! | busy | woke → ready to sleep | same | `Timing::busy` |
-//! | late cycles | wake-up more than one cycle late | same | the cycle's overruns (same rule) |
-//! | missed cycles | — | `tx_rx_dc` failed, or the reply came later than 0.8 cycle after the wake-up | cycles without a reply within the cycle's reply budget (0.8 cycle) |
-//! | syscalls per cycle (opt-in) | the cycle thread's, `raw_syscalls:sys_enter` tracepoint ([`cpu::SyscallWindow`]) | the loop thread's (not the TX/RX thread's) | the cycle thread's |
-//! | CPU per cycle | see [`cpu`]: thread CPU clocks read when the window opens and closes, ÷ cycles | loop thread + TX/RX thread (reported apart too) | cycle thread (frame I/O included), sampled by `CycleHooks` on the cycle thread |
-//! | DC system-time difference | — | \|0x092C\| of each emulated ESC after every drift-compensation write in OP, read from the emulated ESC after the run ([`crate::sim::esc::TimingStats`]) | same |
-//! | frame arrival after SYNC0 | — | at each emulated ESC, time from the latest SYNC0 to the frame completing its outputs, in OP; and SYNC0 pulses that found no fresh outputs | same |
+//! | figure | sleep | ethercrab | soem | ecdrive |
+//! |---|---|---|---|---|
+//! | wake-up latency | woke − grid instant | woke − (exchange start + `next_cycle_wait`) | woke − intended instant (steered to the reference clock by the loop) | the cycle's `Timing::wake_latency` (same DC-aligned rule) |
+//! | period | woke − previous woke | same | same | `Timing::period` |
+//! | period error | \|period − cycle\|, derived from the period histogram (resolution 0.1 % of the period) | same | same | same |
+//! | frame round trip | — | around `tx_rx_dc().await` (includes the hand-over to and from the TX/RX thread) | around `ec_send_processdata` + `ec_receive_processdata` | `Timing::exchange`: `tx_rx_dc` polled and pumped inline |
+//! | busy | woke → ready to sleep | same | same | `Timing::busy` |
+//! | late cycles | wake-up more than one cycle late | same | same | the cycle's overruns (same rule) |
+//! | missed cycles | — | `tx_rx_dc` failed, or the reply came later than 0.8 cycle after the wake-up | no frame, wrong working counter, or later than 0.8 cycle | cycles without a reply within the cycle's reply budget (0.8 cycle) |
+//! | syscalls per cycle (opt-in) | the cycle thread's, `raw_syscalls:sys_enter` tracepoint ([`cpu::SyscallWindow`]) | the loop thread's (not the TX/RX thread's) | — | the cycle thread's |
+//! | CPU per cycle | see [`cpu`] | every master thread (loop, TX/RX, async-io) | its process | every master thread (cycle, session) |
+//! | DC system-time difference | — | \|0x092C\| of each emulated ESC after every drift-compensation write in OP, read from the emulated ESC after the run ([`crate::sim::esc::TimingStats`]) | same | same |
+//! | frame arrival after SYNC0 | — | at each emulated ESC, time from the latest SYNC0 to the frame completing its outputs, in OP; and SYNC0 pulses that found no fresh outputs | same | same |
 //!
-//! The steady-state window: plain ethercrab from the first cycle after every device reported
-//! OP; ecdrive from the cycle after every drive reached OP to the stop request
+//! The steady-state window: plain ethercrab and SOEM from the first cycle after every device
+//! reported OP; ecdrive from the cycle after every drive reached OP to the stop request
 //! ([`CycleSettings::steady_timing_only`](crate::master::cycle::CycleSettings)); the sleep loop
 //! after 10 warm-up cycles. The drive figures (DC difference, SYNC0) come from the emulated
 //! slaves and are empty when the far end is not the harness's (`--interface`); they cover the
-//! whole time each drive was in OP from its first SYNC0 pulse on (both masters start SYNC0
-//! 100 ms after the DC set-up, and an emulated drive may reach OP before that).
+//! whole time each drive was in OP from its first SYNC0 pulse on.
 //!
-//! Both masters configure the same DC SYNC0: 100 ms start delay, SYNC0 period = cycle, frames
-//! sent [`JitterConfig::sync0_shift`] after SYNC0 (default half a cycle, ecdrive's default).
+//! Every master configures the same DC SYNC0: SYNC0 period = cycle, frames sent
+//! [`JitterConfig::sync0_shift`] after SYNC0 (default half a cycle, ecdrive's default).
 //!
 //! Emulated drives: any sim device with a drive profile (`generic-coe`, the only one that runs
 //! at 125 µs, and the emulated `mr-j4-tm` and `bdhde` from 250 µs).
-//!
-//! In-process, the emulated slaves run on ecdrive's cycle thread and on plain ethercrab's TX/RX
-//! thread, so the master CPU figure (cycle thread + TX/RX thread) contains the same slave work
-//! in both; over a veth pair it contains none.
 //!
 //! # JSON
 //!
@@ -60,37 +75,49 @@
 //!
 //! ```text
 //! {
-//!   "schema": "ecdrive-jitter/1", "version": "0.1.0",
+//!   "schema": "ecdrive-jitter/2", "version": "0.1.0",
 //!   "host": { "kernel", "preempt_rt", "cpu_model", "cpus", "governor", "isolated_cpus",
 //!             "sched_rt_runtime_us" },
 //!   "settings": { "cycle_ns", "cycles", "transport", "interface", "priority", "cpu",
 //!                 "lock_memory", "drives": [..], "profiles": [..], "ecdrive_axes",
-//!                 "count_syscalls", "sync0_shift_ns" },
-//!   "priority_granted": bool, "warnings": [..],
-//!   "sleep" | "ethercrab" | "ecdrive": {
-//!     "name", "rt": { "priority_granted", "cpu_pinned", "memory_locked", "warnings" },
-//!     "cycles",
-//!     "wake_latency" | "period" | "period_error" | "busy": SUMMARY,
-//!     "exchange": SUMMARY | null,
-//!     "late": n, "missed": n | null,
-//!     "cpu": { "method", "cycles", "window_s", "cycle_thread_ns", "io_thread_ns",
-//!              "master_ns", "process_ns", "voluntary_switches", "involuntary_switches",
-//!              "syscalls" },
-//!     "drives": [ { "position", "device", "dc_difference": SUMMARY | null,
-//!                   "arrival_after_sync0": SUMMARY | null, "sync0_pulses",
-//!                   "sync0_without_outputs" } ],
-//!     "wake_latency_histogram": [ { "lo_ns", "hi_ns", "count" } ],
-//!     "notes": [..]
-//!   },
-//!   "ratios": { "ecdrive_to_sleep" | "ecdrive_to_ethercrab": {
-//!     "wake_latency" | "period_error" | "busy": RATIO, "exchange": RATIO | null,
-//!     "late", "missed", "cpu_master", "cpu_cycle_thread", "cpu_process",
-//!     "drives": [ { "position", "dc_difference": RATIO | null,
-//!                   "arrival_after_sync0": RATIO | null } ] } },
+//!                 "count_syscalls", "sync0_shift_ns", "repeat", "soem_program" },
+//!   "load": { "loadavg_before", "loadavg_after", "stress", "stress_cpus" },
+//!   "priority_granted": bool, "warnings": [..], "soem_absent": "why" | null,
+//!   "repetitions": [ {
+//!     "index",
+//!     "sleep" | "ethercrab" | "soem" (or null) | "ecdrive": {
+//!       "name", "structure": { "link", "mailbox_poll_ms", "master_threads", "slaves" },
+//!       "rt": { "priority_granted", "cpu_pinned", "memory_locked", "warnings" },
+//!       "cycles",
+//!       "wake_latency" | "period" | "period_error" | "busy": SUMMARY,
+//!       "exchange": SUMMARY | null,
+//!       "late": n, "missed": n | null,
+//!       "cpu": { "method", "cycles", "window_s", "cycle_thread_ns", "io_thread_ns",
+//!                "master_ns", "process_ns", "voluntary_switches", "involuntary_switches",
+//!                "syscalls", "threads": [ { "name", "role", "cpu_ns", "voluntary",
+//!                "involuntary" } ] },
+//!       "drives": [ { "position", "device", "dc_difference": SUMMARY | null,
+//!                     "arrival_after_sync0": SUMMARY | null, "sync0_pulses",
+//!                     "sync0_without_outputs" } ],
+//!       "wake_latency_histogram": [ { "lo_ns", "hi_ns", "count" } ],
+//!       "notes": [..]
+//!     },
+//!     "ratios": { "ecdrive_to_sleep" | "ecdrive_to_ethercrab" | "ecdrive_to_soem" (or null): {
+//!       "wake_latency" | "period_error" | "busy": RATIO, "exchange": RATIO | null,
+//!       "late", "missed", "cpu_master", "cpu_cycle_thread", "cpu_process",
+//!       "drives": [ { "position", "dc_difference": RATIO | null,
+//!                     "arrival_after_sync0": RATIO | null } ] } }
+//!   } ],
+//!   "summary": { "runs": { RUN: { FIGURE: SPREAD } }, "ratios": { RATIO_NAME: { FIGURE: SPREAD } } },
 //!   "command": "ecdrive jitter …"   (added by the CLI)
 //! }
 //! SUMMARY = { "count", "min", "p50", "p90", "p99", "p999", "max", "mean" }
 //! RATIO   = { "p50", "p90", "p99", "p999", "max" }
+//! SPREAD  = { "median", "min", "max", "values": [one per repetition] }
+//! FIGURE  = wake_latency_p50 | _p99 | _p999 | _max, period_error_p50 | _max, exchange_p50 |
+//!           _p99 | _max, busy_p50 | _max, cpu_master_ns, cpu_process_ns, late, missed
+//!           (ratios: wake_latency_p50 | _p99 | _max, period_error_p50, exchange_p50 | _p99,
+//!           busy_p50, cpu_master, cpu_process, missed)
 //! ```
 
 pub mod cpu;
@@ -100,10 +127,14 @@ pub mod far_end;
 pub mod plain;
 pub mod report;
 pub mod sleep;
+pub mod soem;
+pub mod stress;
 pub mod svg;
 
 pub use emulated::EmulationError;
-pub use report::{AllRatios, JitterReport, Ratios, RunReport};
+pub use report::{AllRatios, JitterReport, Ratios, Repetition, RunReport};
+
+use cpu::FAR_END_THREAD;
 
 use crate::link::netns::{NetnsError, VethPair, is_root};
 use crate::link::{LinkError, RawSocket};
@@ -146,9 +177,15 @@ pub struct JitterConfig {
     /// Also count each run's cycle-thread syscalls per cycle (root or `perf_event_paranoid`
     /// ≤ 1; the tracepoint adds a little to every syscall, so leave it off for CPU figures).
     pub count_syscalls: bool,
-    /// When both masters send their frame after SYNC0; `None`: half a cycle (ecdrive's
+    /// When every master sends its frame after SYNC0; `None`: half a cycle (ecdrive's
     /// default, see [`crate::master::startup::DcSettings`]).
     pub sync0_shift: Option<Duration>,
+    /// Repetitions, interleaved: sleep, ethercrab, SOEM, ecdrive, sleep, … (1–100).
+    pub repeat: usize,
+    /// Run a background load during the measurements ([`stress`]).
+    pub stress: bool,
+    /// The SOEM loop program (`benches/soem/build.sh` builds it); `None`: no SOEM run.
+    pub soem: Option<std::path::PathBuf>,
 }
 
 impl JitterConfig {
@@ -168,6 +205,9 @@ impl JitterConfig {
             op_timeout: Duration::from_secs(10),
             count_syscalls: false,
             sync0_shift: None,
+            repeat: 1,
+            stress: false,
+            soem: None,
         }
     }
 }
@@ -257,7 +297,246 @@ fn drive_timings(segment: &Segment, names: &[String]) -> Vec<DriveTiming> {
         .collect()
 }
 
-/// Run the three measurements. `progress` is told what starts (one line each).
+/// Why there is no SOEM run with these settings and this program (`None`: it runs).
+fn soem_absent(cfg: &JitterConfig) -> Option<String> {
+    if cfg.transport == Transport::InProcess {
+        return Some(
+            "SOEM needs a network interface (--veth or --interface); this measurement is \
+             in-process"
+                .into(),
+        );
+    }
+    match &cfg.soem {
+        None => Some("no SOEM loop program was given (--soem, or --no-soem)".into()),
+        Some(p) => soem::unusable(p),
+    }
+}
+
+/// What every repetition shares.
+struct Plan<'a> {
+    cfg: &'a JitterConfig,
+    cycle_ns: u64,
+    drives: Vec<String>,
+    profiles: Vec<&'static crate::drives::DriveProfile>,
+    sync0_shift: Duration,
+    veth: Option<VethPair>,
+    interface: Option<String>,
+    soem: Option<std::path::PathBuf>,
+}
+
+impl Plan<'_> {
+    /// Serve the emulated drives on the veth far end (`None` without the harness's veth).
+    fn far_end(&self, run: &'static str) -> Result<Option<far_end::FarEnd>, HarnessError> {
+        let Some(v) = &self.veth else {
+            return Ok(None);
+        };
+        let socket = v.open_peer_socket()?;
+        let seg = emulated::segment(&self.cfg.drives)?;
+        let rt = RtSettings {
+            priority: self.cfg.rt.priority,
+            cpu: None,
+            lock_memory: false,
+        };
+        far_end::FarEnd::spawn(socket, seg, rt)
+            .map(Some)
+            .map_err(|e| HarnessError::Run {
+                run,
+                what: "starting the emulated drives on the veth far end".into(),
+                reason: e.to_string(),
+            })
+    }
+
+    /// The drives' figures of a run (from the segment it ran against, if the harness has it).
+    fn drives_of(&self, seg: Option<Segment>, run: &mut RunReport) {
+        if let Some(seg) = &seg {
+            run.drives = drive_timings(seg, &self.drives);
+        } else if self.interface.is_some() {
+            run.notes
+                .push("the far end is not the harness's: no DC difference or SYNC0 figures".into());
+        }
+    }
+
+    fn slaves(&self, in_process_on: &str) -> String {
+        match (&self.cfg.transport, &self.veth) {
+            (Transport::InProcess, _) => format!(
+                "in this process, on {in_process_on} (charged to the master, as in the other \
+                 master's run)"
+            ),
+            (_, Some(_)) => format!(
+                "a thread of the harness ({FAR_END_THREAD}) on the veth far end, in a network \
+                 namespace (charged to no master)"
+            ),
+            _ => "on the far end of the interface (not this machine's figures)".into(),
+        }
+    }
+
+    fn repetition(
+        &self,
+        index: usize,
+        progress: &dyn Fn(&str),
+    ) -> Result<Repetition, HarnessError> {
+        let cfg = self.cfg;
+        let tag = if cfg.repeat > 1 {
+            format!("[{index}/{}] ", cfg.repeat)
+        } else {
+            String::new()
+        };
+        // 1. The bare sleep loop.
+        cpu::begin_run();
+        progress(&format!(
+            "{tag}sleep: {} cycles of {} µs",
+            cfg.cycles,
+            self.cycle_ns / 1000
+        ));
+        let mut sleep =
+            sleep::run(cfg.cycle, cfg.cycles, &cfg.rt, cfg.count_syscalls).map_err(|e| {
+                HarnessError::Run {
+                    run: "sleep",
+                    what: "running".into(),
+                    reason: e.to_string(),
+                }
+            })?;
+        sleep.structure.link = "none (no frames)".into();
+        sleep.structure.slaves = "none".into();
+
+        // 2. Plain ethercrab.
+        cpu::begin_run();
+        progress(&format!(
+            "{tag}ethercrab: start-up, then the measured cycles"
+        ));
+        let plain_settings = plain::PlainSettings {
+            cycle: cfg.cycle,
+            cycles: cfg.cycles,
+            rt: cfg.rt.clone(),
+            profiles: self.profiles.clone(),
+            op_timeout: cfg.op_timeout,
+            reply_budget: 0.8,
+            count_syscalls: cfg.count_syscalls,
+            sync0_shift: self.sync0_shift,
+        };
+        let (mut ethercrab, seg) = match &cfg.transport {
+            Transport::InProcess => plain::run(
+                plain::PlainTransport::InProcess(emulated::segment(&cfg.drives)?),
+                &plain_settings,
+            )?,
+            Transport::Veth | Transport::Interface(_) => {
+                let fe = self.far_end("ethercrab")?;
+                let iface = self.interface.clone().unwrap_or_default();
+                let r = plain::run(plain::PlainTransport::Interface(iface), &plain_settings);
+                let seg = stop_far_end(fe, "ethercrab");
+                let (rep, _) = r?;
+                (rep, seg)
+            }
+        };
+        self.drives_of(seg, &mut ethercrab);
+        ethercrab.structure.link = match cfg.transport {
+            Transport::InProcess => "ecdrive-sim's EthercrabLink thread as ethercrab's TX/RX \
+                thread, woken by frames only (Wakeups::FramesOnly), like ecdrive's in-process \
+                link"
+                .into(),
+            _ => "ethercrab::std::tx_rx_task on its own thread, raw socket".into(),
+        };
+        ethercrab.structure.slaves = self.slaves("the TX/RX thread");
+
+        // 3. SOEM.
+        cpu::begin_run();
+        let soem_run = match &self.soem {
+            Some(program) => {
+                progress(&format!("{tag}soem: start-up, then the measured cycles"));
+                let fe = self.far_end("soem")?;
+                let r = soem::run(&soem::SoemSettings {
+                    program: program.clone(),
+                    interface: self.interface.clone().unwrap_or_default(),
+                    cycle: cfg.cycle,
+                    cycles: cfg.cycles,
+                    rt: cfg.rt.clone(),
+                    profiles: self.profiles.clone(),
+                    op_timeout: cfg.op_timeout,
+                    sync0_shift: self.sync0_shift,
+                    reply_budget: 0.8,
+                });
+                let seg = stop_far_end(fe, "soem");
+                let mut r = r?;
+                self.drives_of(seg, &mut r);
+                r.structure.slaves = self.slaves("-");
+                Some(r)
+            }
+            None => None,
+        };
+
+        // 4. ecdrive.
+        cpu::begin_run();
+        progress(&format!("{tag}ecdrive: start-up, then the measured cycles"));
+        let ec_settings = ecdrive::EcdriveSettings {
+            cycle: cfg.cycle,
+            cycles: cfg.cycles,
+            rt: cfg.rt.clone(),
+            profiles: self.profiles.clone(),
+            op_timeout: cfg.op_timeout,
+            count_syscalls: cfg.count_syscalls,
+            sync0_shift: self.sync0_shift,
+        };
+        let (mut ecd, seg) = match &cfg.transport {
+            Transport::InProcess => {
+                let link = SegmentLink::new(emulated::segment(&cfg.drives)?);
+                let (rep, link) = ecdrive::run(link, &ec_settings)?;
+                (rep, Some(link.into_segment()))
+            }
+            Transport::Veth | Transport::Interface(_) => {
+                let fe = self.far_end("ecdrive")?;
+                let iface = self.interface.clone().unwrap_or_default();
+                let r = RawSocket::open(&iface)
+                    .map_err(HarnessError::from)
+                    .and_then(|s| ecdrive::run(s, &ec_settings));
+                let seg = stop_far_end(fe, "ecdrive");
+                let (rep, _) = r?;
+                (rep, seg)
+            }
+        };
+        self.drives_of(seg, &mut ecd);
+        ecd.structure.link = match cfg.transport {
+            Transport::InProcess => {
+                "ecdrive-sim's SegmentLink, called by the cycle thread (no TX/RX thread)".into()
+            }
+            _ => {
+                "raw socket, frames sent and received by the cycle thread (no TX/RX thread)".into()
+            }
+        };
+        ecd.structure.slaves = self.slaves("the cycle thread");
+
+        let ratios = AllRatios {
+            ecdrive_to_sleep: Ratios::of(&ecd, &sleep),
+            ecdrive_to_ethercrab: Ratios::of(&ecd, &ethercrab),
+            ecdrive_to_soem: soem_run.as_ref().map(|s| Ratios::of(&ecd, s)),
+        };
+        Ok(Repetition {
+            index,
+            sleep,
+            ethercrab,
+            soem: soem_run,
+            ecdrive: ecd,
+            ratios,
+        })
+    }
+}
+
+fn stop_far_end(f: Option<far_end::FarEnd>, run: &'static str) -> Option<Segment> {
+    let f = f?;
+    match f.stop() {
+        Ok((seg, Ok(_))) => Some(seg),
+        Ok((seg, Err(e))) => {
+            tracing::warn!("{run} run: the veth far end reported: {e}");
+            Some(seg)
+        }
+        Err(e) => {
+            tracing::warn!("{run} run: {e}");
+            None
+        }
+    }
+}
+
+/// Run the measurements: `cfg.repeat` repetitions of sleep, ethercrab, SOEM (when it can run)
+/// and ecdrive, interleaved. `progress` is told what starts (one line each).
 pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, HarnessError> {
     let cycle_ns = u64::try_from(cfg.cycle.as_nanos()).unwrap_or(u64::MAX);
     if !(50_000..=100_000_000).contains(&cycle_ns) {
@@ -270,6 +549,12 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         return Err(HarnessError::Settings(format!(
             "{} cycles per run are too few (at least 10)",
             cfg.cycles
+        )));
+    }
+    if !(1..=100).contains(&cfg.repeat) {
+        return Err(HarnessError::Settings(format!(
+            "{} repetitions: between 1 and 100",
+            cfg.repeat
         )));
     }
     let (drives, profiles) = match &cfg.transport {
@@ -300,140 +585,64 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         (Transport::Interface(i), None) => Some(i.clone()),
         _ => None,
     };
-    let far_end = |what: &'static str| -> Result<Option<far_end::FarEnd>, HarnessError> {
-        match &veth {
-            Some(v) => {
-                let socket = v.open_peer_socket()?;
-                let seg = emulated::segment(&cfg.drives)?;
-                let rt = RtSettings {
-                    priority: cfg.rt.priority,
-                    cpu: None,
-                    lock_memory: false,
-                };
-                far_end::FarEnd::spawn(socket, seg, rt)
-                    .map(Some)
-                    .map_err(|e| HarnessError::Run {
-                        run: what,
-                        what: "starting the emulated drives on the veth far end".into(),
-                        reason: e.to_string(),
-                    })
-            }
-            None => Ok(None),
-        }
+    let absent = soem_absent(cfg);
+    let plan = Plan {
+        cfg,
+        cycle_ns,
+        drives,
+        profiles,
+        sync0_shift,
+        veth,
+        interface,
+        soem: if absent.is_none() {
+            cfg.soem.clone()
+        } else {
+            None
+        },
     };
-    let stop_far_end = |f: Option<far_end::FarEnd>, run: &'static str| -> Option<Segment> {
-        let f = f?;
-        match f.stop() {
-            Ok((seg, Ok(_))) => Some(seg),
-            Ok((seg, Err(e))) => {
-                tracing::warn!("{run} run: the veth far end reported: {e}");
-                Some(seg)
-            }
+    if let Some(why) = &absent {
+        progress(&format!("soem: not run: {why}"));
+    }
+    let loadavg_before = report::loadavg();
+    let stress = if cfg.stress {
+        let s = stress::Stress::start(cfg.rt.cpu)
+            .map_err(|e| HarnessError::Settings(format!("starting the --stress load: {e}")))?;
+        progress(&format!("stress: load on CPU(s) {:?}", s.cpus));
+        Some(s)
+    } else {
+        None
+    };
+    let mut repetitions = Vec::with_capacity(cfg.repeat);
+    let mut failed = None;
+    for index in 1..=cfg.repeat {
+        match plan.repetition(index, progress) {
+            Ok(r) => repetitions.push(r),
             Err(e) => {
-                tracing::warn!("{run} run: {e}");
-                None
+                failed = Some(e);
+                break;
             }
         }
-    };
-
-    // 1. The bare sleep loop.
-    progress(&format!(
-        "sleep: {} cycles of {} µs",
-        cfg.cycles,
-        cycle_ns / 1000
-    ));
-    let sleep = sleep::run(cfg.cycle, cfg.cycles, &cfg.rt, cfg.count_syscalls).map_err(|e| {
-        HarnessError::Run {
-            run: "sleep",
-            what: "running".into(),
-            reason: e.to_string(),
-        }
-    })?;
-
-    // 2. Plain ethercrab.
-    progress("ethercrab: start-up, then the measured cycles");
-    let plain_settings = plain::PlainSettings {
-        cycle: cfg.cycle,
-        cycles: cfg.cycles,
-        rt: cfg.rt.clone(),
-        profiles: profiles.clone(),
-        op_timeout: cfg.op_timeout,
-        reply_budget: 0.8,
-        count_syscalls: cfg.count_syscalls,
-        sync0_shift,
-    };
-    let (mut ethercrab, seg) = match &cfg.transport {
-        Transport::InProcess => plain::run(
-            plain::PlainTransport::InProcess(emulated::segment(&cfg.drives)?),
-            &plain_settings,
-        )?,
-        Transport::Veth | Transport::Interface(_) => {
-            let fe = far_end("ethercrab")?;
-            let iface = interface.clone().unwrap_or_default();
-            let r = plain::run(plain::PlainTransport::Interface(iface), &plain_settings);
-            let seg = stop_far_end(fe, "ethercrab");
-            let (rep, _) = r?;
-            (rep, seg)
-        }
-    };
-    if let Some(seg) = &seg {
-        ethercrab.drives = drive_timings(seg, &drives);
     }
-
-    // 3. ecdrive.
-    progress("ecdrive: start-up, then the measured cycles");
-    let ec_settings = ecdrive::EcdriveSettings {
-        cycle: cfg.cycle,
-        cycles: cfg.cycles,
-        rt: cfg.rt.clone(),
-        profiles: profiles.clone(),
-        op_timeout: cfg.op_timeout,
-        count_syscalls: cfg.count_syscalls,
-        sync0_shift,
-    };
-    let (mut ecd, seg) = match &cfg.transport {
-        Transport::InProcess => {
-            let link = SegmentLink::new(emulated::segment(&cfg.drives)?);
-            let (rep, link) = ecdrive::run(link, &ec_settings)?;
-            (rep, Some(link.into_segment()))
-        }
-        Transport::Veth | Transport::Interface(_) => {
-            let fe = far_end("ecdrive")?;
-            let iface = interface.clone().unwrap_or_default();
-            let r = RawSocket::open(&iface)
-                .map_err(HarnessError::from)
-                .and_then(|s| ecdrive::run(s, &ec_settings));
-            let seg = stop_far_end(fe, "ecdrive");
-            let (rep, _) = r?;
-            (rep, seg)
-        }
-    };
-    if let Some(seg) = &seg {
-        ecd.drives = drive_timings(seg, &drives);
+    let stress_cpus = stress.as_ref().map(|s| s.cpus.clone()).unwrap_or_default();
+    if let Some(s) = stress {
+        s.stop();
     }
-    if interface.is_some() && veth.is_none() {
-        for r in [&mut ethercrab, &mut ecd] {
-            r.notes
-                .push("the far end is not the harness's: no DC difference or SYNC0 figures".into());
-        }
+    if let Some(e) = failed {
+        return Err(e);
     }
+    let loadavg_after = report::loadavg();
 
     let mut warnings: Vec<String> = Vec::new();
-    for r in [&sleep, &ethercrab, &ecd] {
+    let mut granted = cfg.rt.priority.is_some();
+    for r in repetitions.iter().flat_map(Repetition::runs) {
         for w in &r.rt.warnings {
             if !warnings.contains(w) {
                 warnings.push(w.clone());
             }
         }
+        granted &= r.rt.priority_granted == cfg.rt.priority;
     }
-    let priority_granted = cfg.rt.priority.is_some()
-        && [&sleep, &ethercrab, &ecd]
-            .iter()
-            .all(|r| r.rt.priority_granted == cfg.rt.priority);
-    let ratios = AllRatios {
-        ecdrive_to_sleep: Ratios::of(&ecd, &sleep),
-        ecdrive_to_ethercrab: Ratios::of(&ecd, &ethercrab),
-    };
+    let summary = report::AcrossRepetitions::of(&repetitions);
     Ok(JitterReport {
         schema: report::SCHEMA,
         version: env!("CARGO_PKG_VERSION"),
@@ -449,19 +658,28 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
                 Transport::Interface(_) => "interface",
             }
             .into(),
-            interface,
+            interface: plan.interface.clone(),
             priority: cfg.rt.priority,
             cpu: cfg.rt.cpu,
             lock_memory: cfg.rt.lock_memory,
-            drives,
-            profiles: profiles.iter().map(|p| p.name.to_string()).collect(),
-            ecdrive_axes: "enabled in csp once in OP, holding position".into(),
+            drives: plan.drives.clone(),
+            profiles: plan.profiles.iter().map(|p| p.name.to_string()).collect(),
+            ecdrive_axes: "enabled in csp once in OP, holding position; ecdrive's defaults \
+                (emergency polling on)"
+                .into(),
+            repeat: cfg.repeat,
+            soem_program: plan.soem.as_ref().map(|p| p.display().to_string()),
         },
-        priority_granted,
+        load: report::LoadReport {
+            loadavg_before,
+            loadavg_after,
+            stress: cfg.stress.then(|| stress::WHAT.to_string()),
+            stress_cpus,
+        },
+        priority_granted: granted,
         warnings,
-        sleep,
-        ethercrab,
-        ecdrive: ecd,
-        ratios,
+        soem_absent: absent,
+        repetitions,
+        summary,
     })
 }

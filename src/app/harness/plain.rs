@@ -15,8 +15,9 @@
 //! are its usual `async_io` timers.
 //!
 //! The frames are moved by a separate TX/RX thread, as with ethercrab's own drivers:
-//! in-process by [`EthercrabLink`] (which also runs the emulated slaves), on an interface by
-//! `ethercrab::std::tx_rx_task`. It gets the same real-time set-up as the loop thread, and its
+//! in-process by [`EthercrabLink`] (which also runs the emulated slaves, and wakes for frames
+//! only, as ecdrive's in-process link does its slaves' work only when a frame comes), on an
+//! interface by `ethercrab::std::tx_rx_task`. It gets the same real-time set-up as the loop thread, and its
 //! CPU time is reported separately.
 
 use super::HarnessError;
@@ -27,7 +28,7 @@ use crate::od::{self, ObjectAddress};
 use crate::pdo::{self, Direction, Field, RemapOptions};
 use crate::rt::{RtReport, RtSettings, monotonic_ns, sleep_until_ns};
 use crate::sim::Segment;
-use crate::sim::transport::EthercrabLink;
+use crate::sim::transport::{EthercrabLink, Wakeups};
 use ethercrab::std::ethercat_now;
 use ethercrab::subdevice_group::DcConfiguration;
 use ethercrab::{DcSync, MainDevice, MainDeviceConfig, PduStorage, Timeouts};
@@ -114,7 +115,7 @@ pub fn run(
     }
     let io = match transport {
         PlainTransport::InProcess(segment) => Io::Link(
-            EthercrabLink::spawn_with(segment, tx, rx, on_start)
+            EthercrabLink::spawn_configured(segment, tx, rx, Wakeups::FramesOnly, on_start)
                 .map_err(|e| err("starting the in-process TX/RX thread", e))?,
         ),
         PlainTransport::Interface(iface) => {
@@ -196,16 +197,16 @@ pub fn run(
 /// What the plain loop does for one drive, from its profile (data, as any ethercrab
 /// application would hard-code it): PRE-OP SDO writes, outputs that must not be zero, and the
 /// cycle counter a drive may require to advance every cycle.
-struct DrivePlan {
+pub(super) struct DrivePlan {
     /// `(object, little-endian value, why)`.
-    writes: Vec<(ObjectAddress, Vec<u8>, String)>,
+    pub(super) writes: Vec<(ObjectAddress, Vec<u8>, String)>,
     /// Output fields set once before the first cycle.
-    defaults: Vec<(Field, i64)>,
+    pub(super) defaults: Vec<(Field, i64)>,
     /// Output field incremented (mod 256) every cycle.
-    counter: Option<Field>,
+    pub(super) counter: Option<Field>,
 }
 
-fn drive_plan(
+pub(super) fn drive_plan(
     profile: &DriveProfile,
     cycle_ns: u32,
     position: usize,

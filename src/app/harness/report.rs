@@ -7,10 +7,11 @@ use crate::rt::host::HostInfo;
 use crate::rt::{LatencyHistogram, RtReport, Summary};
 use hdrhistogram::Histogram;
 use serde::Serialize;
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
 /// Version tag of the JSON layout.
-pub const SCHEMA: &str = "ecdrive-jitter/1";
+pub const SCHEMA: &str = "ecdrive-jitter/2";
 
 /// The percentile summary of an hdrhistogram (ns).
 pub fn summary_of(h: &Histogram<u64>) -> Summary {
@@ -92,11 +93,29 @@ pub struct DriveTiming {
     pub sync0_without_outputs: u64,
 }
 
-/// One measured run: the bare sleep loop, the plain ethercrab loop or ecdrive.
+/// What a run consists of, so that a reader (and a test) can check that each run is what it
+/// says: how frames reach the slaves, which threads the master has, whether it polls
+/// mailboxes, and where the emulated slaves' work is charged.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct RunStructure {
+    /// How the frames reach the emulated slaves.
+    pub link: String,
+    /// Mailbox (emergency) polling during the window: its period, ms; `None`: no polling.
+    pub mailbox_poll_ms: Option<u64>,
+    /// The master's threads that ran during the window (kernel names, at most 15
+    /// characters).
+    pub master_threads: Vec<String>,
+    /// Where the emulated slaves ran, and whose CPU figure holds their work.
+    pub slaves: String,
+}
+
+/// One measured run: the bare sleep loop, the plain ethercrab loop, the SOEM loop or ecdrive.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RunReport {
-    /// `sleep`, `ethercrab` or `ecdrive`.
+    /// `sleep`, `ethercrab`, `soem` or `ecdrive`.
     pub name: &'static str,
+    /// What the run consists of.
+    pub structure: RunStructure,
     /// What the real-time set-up of the cycle thread got.
     pub rt: RtReport,
     /// Cycles in the measured window.
@@ -180,8 +199,18 @@ impl RunHistograms {
         drives: Vec<DriveTiming>,
         notes: Vec<String>,
     ) -> RunReport {
+        let master_threads = cpu
+            .threads
+            .iter()
+            .filter(|t| t.role == super::cpu::ThreadRole::Master && t.cpu_ns > 0.0)
+            .map(|t| t.name.clone())
+            .collect();
         RunReport {
             name,
+            structure: RunStructure {
+                master_threads,
+                ..RunStructure::default()
+            },
             rt,
             cycles: self.wake_latency.len(),
             wake_latency: self.wake_latency.summary(),
@@ -319,13 +348,198 @@ impl Ratios {
     }
 }
 
-/// The ratios of ecdrive to both baselines.
+/// The ratios of ecdrive to the baselines.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct AllRatios {
     /// ecdrive / bare sleep loop.
     pub ecdrive_to_sleep: Ratios,
     /// ecdrive / plain ethercrab loop.
     pub ecdrive_to_ethercrab: Ratios,
+    /// ecdrive / SOEM loop (`None` when SOEM did not run).
+    pub ecdrive_to_soem: Option<Ratios>,
+}
+
+/// One repetition: every run once, in the order sleep, ethercrab, SOEM, ecdrive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Repetition {
+    /// 1-based.
+    pub index: usize,
+    /// The bare sleep loop.
+    pub sleep: RunReport,
+    /// The plain ethercrab `tx_rx_dc` loop.
+    pub ethercrab: RunReport,
+    /// The SOEM loop (`None`: see [`JitterReport::soem_absent`]).
+    pub soem: Option<RunReport>,
+    /// ecdrive's cycle.
+    pub ecdrive: RunReport,
+    /// ecdrive's figures as ratios to the baselines of this repetition.
+    pub ratios: AllRatios,
+}
+
+impl Repetition {
+    /// The runs in the order they ran.
+    pub fn runs(&self) -> Vec<&RunReport> {
+        let mut v = vec![&self.sleep, &self.ethercrab];
+        v.extend(self.soem.as_ref());
+        v.push(&self.ecdrive);
+        v
+    }
+}
+
+/// One figure across repetitions.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Spread {
+    /// Median of the repetitions' values (the mean of the middle two for an even count).
+    pub median: f64,
+    /// Smallest.
+    pub min: f64,
+    /// Largest.
+    pub max: f64,
+    /// Each repetition's value, in order.
+    pub values: Vec<f64>,
+}
+
+impl Spread {
+    /// The spread of `values` (`None` if there are none).
+    pub fn of(values: Vec<f64>) -> Option<Self> {
+        if values.is_empty() {
+            return None;
+        }
+        let mut v = values.clone();
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        let median = if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            (v[n / 2 - 1] + v[n / 2]) / 2.0
+        };
+        Some(Self {
+            median,
+            min: v[0],
+            max: v[n - 1],
+            values,
+        })
+    }
+}
+
+/// The figures of a run that are summarised across repetitions (ns, or counts), in table
+/// order.
+pub fn run_figures(r: &RunReport) -> Vec<(&'static str, Option<f64>)> {
+    let f = |v: u64| Some(v as f64);
+    let ex = r.exchange.as_ref();
+    vec![
+        ("wake_latency_p50", f(r.wake_latency.p50)),
+        ("wake_latency_p99", f(r.wake_latency.p99)),
+        ("wake_latency_p999", f(r.wake_latency.p999)),
+        ("wake_latency_max", f(r.wake_latency.max)),
+        ("period_error_p50", f(r.period_error.p50)),
+        ("period_error_max", f(r.period_error.max)),
+        ("exchange_p50", ex.map(|e| e.p50 as f64)),
+        ("exchange_p99", ex.map(|e| e.p99 as f64)),
+        ("exchange_max", ex.map(|e| e.max as f64)),
+        ("busy_p50", f(r.busy.p50)),
+        ("busy_max", f(r.busy.max)),
+        ("cpu_master_ns", r.cpu.master_ns),
+        ("cpu_process_ns", r.cpu.process_ns),
+        ("late", f(r.late)),
+        ("missed", r.missed.map(|m| m as f64)),
+    ]
+}
+
+/// The ratios summarised across repetitions, in table order.
+pub fn ratio_figures(q: &Ratios) -> Vec<(&'static str, Option<f64>)> {
+    let ex = q.exchange.as_ref();
+    vec![
+        ("wake_latency_p50", q.wake_latency.p50),
+        ("wake_latency_p99", q.wake_latency.p99),
+        ("wake_latency_max", q.wake_latency.max),
+        ("period_error_p50", q.period_error.p50),
+        ("exchange_p50", ex.and_then(|e| e.p50)),
+        ("exchange_p99", ex.and_then(|e| e.p99)),
+        ("busy_p50", q.busy.p50),
+        ("cpu_master", q.cpu_master),
+        ("cpu_process", q.cpu_process),
+        ("missed", q.missed),
+    ]
+}
+
+/// Every figure across the repetitions: per run name (and per ratio name) per figure.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct AcrossRepetitions {
+    /// `sleep` | `ethercrab` | `soem` | `ecdrive` → figure → spread.
+    pub runs: BTreeMap<String, BTreeMap<String, Spread>>,
+    /// `ecdrive_to_sleep` | `ecdrive_to_ethercrab` | `ecdrive_to_soem` → figure → spread of
+    /// the per-repetition ratios.
+    pub ratios: BTreeMap<String, BTreeMap<String, Spread>>,
+}
+
+impl AcrossRepetitions {
+    /// Summarise `reps`.
+    pub fn of(reps: &[Repetition]) -> Self {
+        let mut out = Self::default();
+        let collect = |into: &mut BTreeMap<String, BTreeMap<String, Spread>>,
+                       name: &str,
+                       rows: Vec<Vec<(&'static str, Option<f64>)>>| {
+            let Some(first) = rows.first() else {
+                return;
+            };
+            let mut m = BTreeMap::new();
+            for (i, (key, _)) in first.iter().enumerate() {
+                let vals: Vec<f64> = rows.iter().filter_map(|r| r.get(i)?.1).collect();
+                if let Some(sp) = Spread::of(vals) {
+                    m.insert((*key).to_string(), sp);
+                }
+            }
+            into.insert(name.to_string(), m);
+        };
+        for name in ["sleep", "ethercrab", "soem", "ecdrive"] {
+            let rows: Vec<_> = reps
+                .iter()
+                .filter_map(|r| r.runs().into_iter().find(|x| x.name == name))
+                .map(run_figures)
+                .collect();
+            if !rows.is_empty() {
+                collect(&mut out.runs, name, rows);
+            }
+        }
+        type Pick = fn(&AllRatios) -> Option<&Ratios>;
+        let picks: [(&str, Pick); 3] = [
+            ("ecdrive_to_sleep", |a| Some(&a.ecdrive_to_sleep)),
+            ("ecdrive_to_ethercrab", |a| Some(&a.ecdrive_to_ethercrab)),
+            ("ecdrive_to_soem", |a| a.ecdrive_to_soem.as_ref()),
+        ];
+        for (name, pick) in picks {
+            let rows: Vec<_> = reps
+                .iter()
+                .filter_map(|r| pick(&r.ratios))
+                .map(ratio_figures)
+                .collect();
+            if !rows.is_empty() {
+                collect(&mut out.ratios, name, rows);
+            }
+        }
+        out
+    }
+}
+
+/// The background load during the runs.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct LoadReport {
+    /// `/proc/loadavg` (1, 5, 15 min) before the first run.
+    pub loadavg_before: Option<[f64; 3]>,
+    /// `/proc/loadavg` after the last run.
+    pub loadavg_after: Option<[f64; 3]>,
+    /// The `--stress` load, if any: what it does.
+    pub stress: Option<String>,
+    /// CPUs the stress threads were pinned to.
+    pub stress_cpus: Vec<usize>,
+}
+
+/// The load averages from `/proc/loadavg`.
+pub fn loadavg() -> Option<[f64; 3]> {
+    let s = std::fs::read_to_string("/proc/loadavg").ok()?;
+    let mut it = s.split_whitespace().map(|v| v.parse::<f64>().ok());
+    Some([it.next()??, it.next()??, it.next()??])
 }
 
 /// The settings a measurement ran with.
@@ -353,8 +567,12 @@ pub struct SettingsReport {
     pub ecdrive_axes: String,
     /// Whether syscalls were counted (which costs a little on every syscall).
     pub count_syscalls: bool,
-    /// When both masters send their frame after SYNC0, ns.
+    /// When every master sends its frame after SYNC0, ns.
     pub sync0_shift_ns: u64,
+    /// Repetitions (each runs sleep, ethercrab, SOEM, ecdrive once, in that order).
+    pub repeat: usize,
+    /// The SOEM loop's program, if one was found.
+    pub soem_program: Option<String>,
 }
 
 /// The whole measurement. See [the module documentation](super) for the JSON layout.
@@ -368,19 +586,19 @@ pub struct JitterReport {
     pub host: HostInfo,
     /// Settings.
     pub settings: SettingsReport,
+    /// The load on the machine.
+    pub load: LoadReport,
     /// Whether every run got the real-time priority requested (`false` also when none was
     /// requested).
     pub priority_granted: bool,
     /// Warnings (priority not granted, memory not locked, …), each once.
     pub warnings: Vec<String>,
-    /// The bare sleep loop.
-    pub sleep: RunReport,
-    /// The plain ethercrab `tx_rx_dc` loop.
-    pub ethercrab: RunReport,
-    /// ecdrive's cycle.
-    pub ecdrive: RunReport,
-    /// ecdrive's figures as ratios to the baselines.
-    pub ratios: AllRatios,
+    /// Why there is no SOEM run (`None` when SOEM ran).
+    pub soem_absent: Option<String>,
+    /// Every repetition.
+    pub repetitions: Vec<Repetition>,
+    /// Every figure and ratio across the repetitions.
+    pub summary: AcrossRepetitions,
 }
 
 fn us(ns: u64) -> String {
@@ -395,17 +613,71 @@ fn x(v: Option<f64>) -> String {
     v.map_or("-".into(), |r| format!("{r:.2}"))
 }
 
+fn across(s: Option<&Spread>, f: impl Fn(f64) -> String) -> String {
+    s.map_or("-".into(), |s| {
+        if s.values.len() == 1 {
+            f(s.median)
+        } else {
+            format!("{} [{}–{}]", f(s.median), f(s.min), f(s.max))
+        }
+    })
+}
+
 impl JitterReport {
-    /// A plain-text table of the figures, for a terminal.
+    /// A plain-text report for a terminal: the settings, each repetition's table, the figures
+    /// across repetitions, the first repetition's CPU threads and drive figures, notes.
     pub fn text(&self) -> String {
         let mut s = String::new();
+        self.header(&mut s);
+        for rep in &self.repetitions {
+            let _ = writeln!(s);
+            if self.repetitions.len() > 1 {
+                let _ = writeln!(s, "repetition {} of {}", rep.index, self.repetitions.len());
+            }
+            rep_table(&mut s, rep);
+        }
+        if self.repetitions.len() > 1 {
+            let _ = writeln!(s);
+            self.across_table(&mut s);
+        }
+        if let Some(rep) = self.repetitions.first() {
+            let _ = writeln!(s);
+            threads_table(&mut s, rep);
+            drives_table(&mut s, rep);
+        }
+        if let Some(why) = &self.soem_absent {
+            let _ = writeln!(s);
+            let _ = writeln!(s, "soem: not run: {why}");
+        }
+        let mut notes: Vec<String> = Vec::new();
+        for rep in &self.repetitions {
+            for r in rep.runs() {
+                for n in &r.notes {
+                    let n = format!("{}: {n}", r.name);
+                    if !notes.contains(&n) {
+                        notes.push(n);
+                    }
+                }
+            }
+        }
+        if !notes.is_empty() {
+            let _ = writeln!(s);
+            for n in notes {
+                let _ = writeln!(s, "note: {n}");
+            }
+        }
+        s
+    }
+
+    fn header(&self, s: &mut String) {
         let st = &self.settings;
         let h = &self.host;
         let _ = writeln!(
             s,
-            "cycle {} µs, {} cycles per run, {}{}, drives: {}",
+            "cycle {} µs, {} cycles per run, {} repetition(s), {}{}, drives: {}",
             st.cycle_ns / 1000,
             st.cycles,
+            st.repeat,
             st.transport,
             st.interface
                 .as_deref()
@@ -429,6 +701,18 @@ impl JitterReport {
             h.sched_rt_runtime_us
                 .map_or("n/a".into(), |v| v.to_string())
         );
+        let la = |l: Option<[f64; 3]>| {
+            l.map_or("n/a".into(), |l| {
+                format!("{:.2} {:.2} {:.2}", l[0], l[1], l[2])
+            })
+        };
+        let _ = writeln!(
+            s,
+            "load: {}; load average before {}, after {}",
+            self.load.stress.as_deref().unwrap_or("no --stress"),
+            la(self.load.loadavg_before),
+            la(self.load.loadavg_after)
+        );
         let _ = writeln!(
             s,
             "priority: {} ({}), CPU {}, memory lock {}",
@@ -442,128 +726,198 @@ impl JitterReport {
             st.cpu.map_or("any".into(), |c| c.to_string()),
             if st.lock_memory { "requested" } else { "off" }
         );
-        let _ = writeln!(s);
+    }
+
+    fn across_table(&self, s: &mut String) {
+        let n = self.repetitions.len();
+        let _ = writeln!(
+            s,
+            "across {n} repetitions: median [min–max] of each repetition's figure (µs)"
+        );
+        let _ = writeln!(
+            s,
+            "{:<10} {:>22} {:>22} {:>22} {:>22} {:>22} {:>16}",
+            "",
+            "wake-up p50",
+            "wake-up p99",
+            "wake-up max",
+            "exchange p50",
+            "CPU/cycle (master)",
+            "missed"
+        );
+        let u = |v: f64| format!("{:.1}", v / 1000.0);
+        let c = |v: f64| format!("{v:.0}");
+        for (name, f) in &self.summary.runs {
+            let g = |k: &str| f.get(k);
+            let _ = writeln!(
+                s,
+                "{:<10} {:>22} {:>22} {:>22} {:>22} {:>22} {:>16}",
+                name,
+                across(g("wake_latency_p50"), u),
+                across(g("wake_latency_p99"), u),
+                across(g("wake_latency_max"), u),
+                across(g("exchange_p50"), u),
+                across(g("cpu_master_ns"), u),
+                across(g("missed"), c),
+            );
+        }
+        let r = |v: f64| format!("{v:.2}");
+        for (name, f) in &self.summary.ratios {
+            let g = |k: &str| f.get(k);
+            let _ = writeln!(
+                s,
+                "{:<10} {:>22} {:>22} {:>22} {:>22} {:>22}",
+                name.replace("ecdrive_to_", "÷ "),
+                across(g("wake_latency_p50"), r),
+                across(g("wake_latency_p99"), r),
+                across(g("wake_latency_max"), r),
+                across(g("exchange_p50"), r),
+                across(g("cpu_master"), r),
+            );
+        }
+    }
+}
+
+fn rep_table(s: &mut String, rep: &Repetition) {
+    let _ = writeln!(
+        s,
+        "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14} {:>6} {:>6}",
+        "all µs",
+        "wake-up latency p50/p99/p99.9/max",
+        "period err p50/max",
+        "exchange p50/max",
+        "busy p50/max",
+        "CPU/cycle",
+        "late",
+        "missed"
+    );
+    for r in rep.runs() {
+        let w = &r.wake_latency;
         let _ = writeln!(
             s,
             "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14} {:>6} {:>6}",
-            "all µs",
-            "wake-up latency p50/p99/p99.9/max",
-            "period err p50/max",
-            "exchange p50/max",
-            "busy p50/max",
-            "CPU/cycle",
-            "late",
-            "missed"
+            r.name,
+            format!(
+                "{} / {} / {} / {}",
+                us(w.p50),
+                us(w.p99),
+                us(w.p999),
+                us(w.max)
+            ),
+            format!("{} / {}", us(r.period_error.p50), us(r.period_error.max)),
+            r.exchange
+                .as_ref()
+                .map_or("-".into(), |e| format!("{} / {}", us(e.p50), us(e.max))),
+            format!("{} / {}", us(r.busy.p50), us(r.busy.max)),
+            opt_us(r.cpu.master_ns),
+            r.late,
+            r.missed.map_or("-".into(), |m| m.to_string()),
         );
-        for r in [&self.sleep, &self.ethercrab, &self.ecdrive] {
-            let w = &r.wake_latency;
-            let _ = writeln!(
-                s,
-                "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14} {:>6} {:>6}",
-                r.name,
-                format!(
-                    "{} / {} / {} / {}",
-                    us(w.p50),
-                    us(w.p99),
-                    us(w.p999),
-                    us(w.max)
-                ),
-                format!("{} / {}", us(r.period_error.p50), us(r.period_error.max)),
-                r.exchange.as_ref().map_or("-".into(), |e| format!(
-                    "{} / {}",
-                    us(e.p50),
-                    us(e.max)
-                )),
-                format!("{} / {}", us(r.busy.p50), us(r.busy.max)),
-                opt_us(r.cpu.master_ns),
-                r.late,
-                r.missed.map_or("-".into(), |m| m.to_string()),
-            );
-        }
-        for (name, q) in [
-            ("÷ sleep", &self.ratios.ecdrive_to_sleep),
-            ("÷ ethercrab", &self.ratios.ecdrive_to_ethercrab),
-        ] {
-            let w = &q.wake_latency;
-            let _ = writeln!(
-                s,
-                "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14}",
-                name,
-                format!("{} / {} / {} / {}", x(w.p50), x(w.p99), x(w.p999), x(w.max)),
-                format!("{} / {}", x(q.period_error.p50), x(q.period_error.max)),
-                q.exchange
-                    .as_ref()
-                    .map_or("-".into(), |e| format!("{} / {}", x(e.p50), x(e.max))),
-                format!("{} / {}", x(q.busy.p50), x(q.busy.max)),
-                x(q.cpu_master),
-            );
-        }
-        let _ = writeln!(s);
+    }
+    let mut ratios = vec![
+        ("÷ sleep", &rep.ratios.ecdrive_to_sleep),
+        ("÷ ethercrab", &rep.ratios.ecdrive_to_ethercrab),
+    ];
+    if let Some(q) = &rep.ratios.ecdrive_to_soem {
+        ratios.push(("÷ soem", q));
+    }
+    for (name, q) in ratios {
+        let w = &q.wake_latency;
         let _ = writeln!(
             s,
-            "CPU per cycle (µs): {:<10} {:>12} {:>12} {:>12} {:>14} {:>9}",
-            "", "cycle thr", "TX/RX thr", "process", "ctx sw vol/inv", "syscalls"
+            "{:<10} {:>33} {:>20} {:>20} {:>20} {:>14}",
+            name,
+            format!("{} / {} / {} / {}", x(w.p50), x(w.p99), x(w.p999), x(w.max)),
+            format!("{} / {}", x(q.period_error.p50), x(q.period_error.max)),
+            q.exchange
+                .as_ref()
+                .map_or("-".into(), |e| format!("{} / {}", x(e.p50), x(e.max))),
+            format!("{} / {}", x(q.busy.p50), x(q.busy.max)),
+            x(q.cpu_master),
         );
-        for r in [&self.sleep, &self.ethercrab, &self.ecdrive] {
-            let c = &r.cpu;
-            let _ = writeln!(
-                s,
-                "                    {:<10} {:>12} {:>12} {:>12} {:>14} {:>9}",
-                r.name,
-                opt_us(c.cycle_thread_ns),
-                opt_us(c.io_thread_ns),
-                opt_us(c.process_ns),
-                format!(
-                    "{} / {}",
-                    c.voluntary_switches
-                        .map_or("-".into(), |v| format!("{v:.2}")),
-                    c.involuntary_switches
-                        .map_or("-".into(), |v| format!("{v:.2}"))
-                ),
-                c.syscalls.map_or("-".into(), |v| format!("{v:.2}")),
-            );
-        }
-        if !self.ecdrive.drives.is_empty() || !self.ethercrab.drives.is_empty() {
-            let _ = writeln!(s);
-            let _ = writeln!(
-                s,
-                "at the drives (µs)  {:<10} {:>5} {:>24} {:>26} {:>10}",
-                "",
-                "drive",
-                "|DC diff| ns p50/p99/max",
-                "arrival after SYNC0 p50/max",
-                "no outputs"
-            );
-            for r in [&self.ethercrab, &self.ecdrive] {
-                for d in &r.drives {
-                    let _ = writeln!(
-                        s,
-                        "                    {:<10} {:>5} {:>24} {:>26} {:>10}",
-                        r.name,
-                        d.position,
-                        d.dc_difference
-                            .map_or("-".into(), |v| format!("{} / {} / {}", v.p50, v.p99, v.max)),
-                        d.arrival_after_sync0.map_or("-".into(), |v| format!(
-                            "{} / {}",
-                            us(v.p50),
-                            us(v.max)
-                        )),
-                        format!("{}/{}", d.sync0_without_outputs, d.sync0_pulses),
-                    );
-                }
-            }
-        }
-        let notes: Vec<String> = [&self.sleep, &self.ethercrab, &self.ecdrive]
+    }
+}
+
+fn threads_table(s: &mut String, rep: &Repetition) {
+    let _ = writeln!(
+        s,
+        "CPU per cycle, repetition {} (µs; wake-ups = voluntary context switches per cycle):",
+        rep.index
+    );
+    for r in rep.runs() {
+        let c = &r.cpu;
+        let threads: Vec<String> = c
+            .threads
             .iter()
-            .flat_map(|r| r.notes.iter().map(move |n| format!("{}: {n}", r.name)))
+            .filter(|t| t.cpu_ns > 0.0 || t.voluntary > 0.0)
+            .map(|t| {
+                format!(
+                    "{} [{}] {:.2} µs, {:.2} wake-ups",
+                    t.name,
+                    serde_json::to_value(t.role)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_string))
+                        .unwrap_or_default(),
+                    t.cpu_ns / 1000.0,
+                    t.voluntary
+                )
+            })
             .collect();
-        if !notes.is_empty() {
-            let _ = writeln!(s);
-            for n in notes {
-                let _ = writeln!(s, "note: {n}");
+        let _ = writeln!(
+            s,
+            "  {:<10} master {} | process {} | syscalls {} | {}",
+            r.name,
+            opt_us(c.master_ns),
+            opt_us(c.process_ns),
+            c.syscalls.map_or("-".into(), |v| format!("{v:.2}")),
+            if threads.is_empty() {
+                "no per-thread figures".to_string()
+            } else {
+                threads.join("; ")
             }
+        );
+        let st = &r.structure;
+        if !st.link.is_empty() {
+            let _ = writeln!(
+                s,
+                "  {:<10} link: {}; mailbox polling {}; slaves: {}",
+                "",
+                st.link,
+                st.mailbox_poll_ms
+                    .map_or("off".into(), |m| format!("every {m} ms")),
+                st.slaves
+            );
         }
-        s
+    }
+}
+
+fn drives_table(s: &mut String, rep: &Repetition) {
+    if rep.runs().iter().all(|r| r.drives.is_empty()) {
+        return;
+    }
+    let _ = writeln!(s);
+    let _ = writeln!(
+        s,
+        "at the drives (µs)  {:<10} {:>5} {:>24} {:>26} {:>10}",
+        "", "drive", "|DC diff| ns p50/p99/max", "arrival after SYNC0 p50/max", "no outputs"
+    );
+    for r in rep.runs() {
+        for d in &r.drives {
+            let _ = writeln!(
+                s,
+                "                    {:<10} {:>5} {:>24} {:>26} {:>10}",
+                r.name,
+                d.position,
+                d.dc_difference
+                    .map_or("-".into(), |v| format!("{} / {} / {}", v.p50, v.p99, v.max)),
+                d.arrival_after_sync0.map_or("-".into(), |v| format!(
+                    "{} / {}",
+                    us(v.p50),
+                    us(v.max)
+                )),
+                format!("{}/{}", d.sync0_without_outputs, d.sync0_pulses),
+            );
+        }
     }
 }
 
@@ -613,5 +967,14 @@ mod tests {
         let r = SummaryRatio::of(&a, &b);
         assert_eq!(r.p50, Some(2.0));
         assert_eq!(r.max, None);
+    }
+
+    #[test]
+    fn a_spread_has_the_median_and_the_extremes_in_run_order() {
+        let sp = Spread::of(vec![3.0, 1.0, 2.0, 10.0]).unwrap();
+        assert_eq!((sp.median, sp.min, sp.max), (2.5, 1.0, 10.0));
+        assert_eq!(sp.values, [3.0, 1.0, 2.0, 10.0]);
+        assert_eq!(Spread::of(vec![4.0]).unwrap().median, 4.0);
+        assert!(Spread::of(Vec::new()).is_none());
     }
 }

@@ -1,4 +1,5 @@
-//! The `--svg` plot: the wake-up latency histograms of the three runs on one log–log plot
+//! The `--svg` plot: the wake-up latency histograms of the runs of the first repetition on one
+//! log–log plot
 //! (latency on x, samples per bin on y), written by hand as plain SVG 1.1 (a few paths and
 //! texts; no plotting crate needed).
 
@@ -12,11 +13,19 @@ const RIGHT: f64 = 24.0;
 const TOP: f64 = 64.0;
 const BOTTOM: f64 = 64.0;
 
-const COLOURS: [(&str, &str); 3] = [
+const COLOURS: [(&str, &str); 4] = [
     ("sleep", "#7f7f7f"),
     ("ethercrab", "#1f77b4"),
+    ("soem", "#2ca02c"),
     ("ecdrive", "#d62728"),
 ];
+
+fn colour(name: &str) -> &'static str {
+    COLOURS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map_or("#000000", |(_, c)| c)
+}
 
 fn esc(s: &str) -> String {
     s.replace('&', "&amp;")
@@ -96,7 +105,11 @@ fn label_ns(ns: f64) -> String {
 
 /// The plot for a report, as an SVG document.
 pub fn render(report: &JitterReport) -> String {
-    let runs: [&RunReport; 3] = [&report.sleep, &report.ethercrab, &report.ecdrive];
+    let runs: Vec<&RunReport> = report
+        .repetitions
+        .first()
+        .map(|r| r.runs())
+        .unwrap_or_default();
     let all = runs.iter().flat_map(|r| r.wake_latency_histogram.iter());
     let lo = all.clone().map(|b| b.lo_ns).min().unwrap_or(1_000).max(1);
     let hi = all
@@ -121,9 +134,14 @@ pub fn render(report: &JitterReport) -> String {
     );
     let st = &report.settings;
     let title = format!(
-        "Wake-up latency, cycle {} µs, {} cycles per run, {}, {} drive(s); priority {}",
+        "Wake-up latency, cycle {} µs, {} cycles per run{}, {}, {} drive(s); priority {}",
         st.cycle_ns / 1000,
         st.cycles,
+        if st.repeat > 1 {
+            format!(" (repetition 1 of {})", st.repeat)
+        } else {
+            String::new()
+        },
         st.transport,
         st.drives.len(),
         match st.priority {
@@ -213,7 +231,8 @@ pub fn render(report: &JitterReport) -> String {
     );
 
     // The three histograms and the legend.
-    for (i, (r, (name, colour))) in runs.iter().zip(COLOURS).enumerate() {
+    for (i, r) in runs.iter().enumerate() {
+        let (name, colour) = (r.name, colour(r.name));
         let d = step_path(&ax, &r.wake_latency_histogram);
         if !d.is_empty() {
             let _ = writeln!(

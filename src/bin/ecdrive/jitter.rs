@@ -8,8 +8,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-/// Measure ecdrive's cycle against a bare sleep loop and a plain ethercrab loop, one after the
-/// other, at the same period, priority and CPU, on emulated drives.
+/// Measure ecdrive's cycle against a bare sleep loop, a plain ethercrab loop and (over an
+/// interface) a SOEM loop, one after the other, at the same period, priority and CPU, on
+/// emulated drives; repeated and interleaved with --repeat.
 #[derive(Args, Debug)]
 pub struct JitterArgs {
     /// Cycle time in µs (e.g. 1000, 500, 250, 125).
@@ -58,10 +59,27 @@ pub struct JitterArgs {
     /// a little to every syscall, so leave it off when the CPU figures matter).
     #[arg(long)]
     syscalls: bool,
+    /// Repeat the measurement N times, interleaved (sleep, ethercrab, SOEM, ecdrive, sleep, …),
+    /// and report each figure's median and spread across the repetitions.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=100))]
+    repeat: u16,
+    /// Load the machine during the runs: one normal-priority thread on each CPU other than
+    /// --cpu (each CPU without --cpu) writing through a 16 MiB buffer and yielding after each
+    /// MiB.
+    #[arg(long)]
+    stress: bool,
+    /// The SOEM loop program (built by benches/soem/build.sh). Default: $ECDRIVE_SOEM_LOOP,
+    /// else target/soem/soem_cycle. Runs over --veth or --interface only; when it is missing
+    /// the report says why there is no SOEM run.
+    #[arg(long, value_name = "PATH", conflicts_with = "no_soem")]
+    soem: Option<PathBuf>,
+    /// Do not run the SOEM loop.
+    #[arg(long)]
+    no_soem: bool,
     /// Write every figure as JSON to this file.
     #[arg(long, value_name = "FILE")]
     json: Option<PathBuf>,
-    /// Draw the latency histograms of the three runs on one log-scale plot (SVG).
+    /// Draw the latency histograms of the first repetition's runs on one log-scale plot (SVG).
     #[arg(long, value_name = "FILE")]
     svg: Option<PathBuf>,
 }
@@ -97,6 +115,17 @@ pub fn run(args: JitterArgs) -> ExitCode {
     cfg.op_timeout = Duration::from_secs(args.op_timeout);
     cfg.count_syscalls = args.syscalls;
     cfg.sync0_shift = args.shift_us.map(Duration::from_micros);
+    cfg.repeat = usize::from(args.repeat);
+    cfg.stress = args.stress;
+    cfg.soem = if args.no_soem {
+        None
+    } else {
+        Some(args.soem.clone().unwrap_or_else(|| {
+            std::env::var_os("ECDRIVE_SOEM_LOOP")
+                .map(PathBuf::from)
+                .unwrap_or_else(|| PathBuf::from("target/soem/soem_cycle"))
+        }))
+    };
     cfg.rt = RtSettings {
         priority: (args.priority > 0).then_some(args.priority),
         cpu: args.cpu,

@@ -24,6 +24,20 @@ struct Shared {
     lost: AtomicU64,
 }
 
+/// When the pump thread wakes up other than for a frame from the master.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Wakeups {
+    /// At each of the segment's deadlines (SYNC0 pulses, watchdog expiry) as well: the
+    /// slaves' time-driven work happens on time even while the master is silent.
+    #[default]
+    Deadlines,
+    /// Only for frames (and replies held back by an injected delay): the slaves' time-driven
+    /// work is done when the next frame arrives, as [`super::SegmentLink`] does it on the
+    /// master's own thread. An idle master is still noticed every 5 ms. The jitter harness
+    /// uses this, so that the in-process baseline wakes no more often than ecdrive's cycle.
+    FramesOnly,
+}
+
 struct Unpark(Thread);
 
 impl Wake for Unpark {
@@ -83,6 +97,17 @@ impl EthercrabLink {
         rx: PduRx<'static>,
         on_start: impl FnOnce() + Send + 'static,
     ) -> std::io::Result<Self> {
+        Self::spawn_configured(segment, tx, rx, Wakeups::Deadlines, on_start)
+    }
+
+    /// Like [`spawn_with`](Self::spawn_with), waking as `wakeups` says.
+    pub fn spawn_configured(
+        segment: Segment,
+        tx: PduTx<'static>,
+        rx: PduRx<'static>,
+        wakeups: Wakeups,
+        on_start: impl FnOnce() + Send + 'static,
+    ) -> std::io::Result<Self> {
         let shared = Arc::new(Shared {
             segment: Mutex::new(segment),
             stop: AtomicBool::new(false),
@@ -95,7 +120,7 @@ impl EthercrabLink {
             .name("ecdrive-sim-ethercrab".into())
             .spawn(move || {
                 on_start();
-                pump(&s, tx, rx)
+                pump(&s, tx, rx, wakeups)
             })?;
         Ok(Self {
             shared,
@@ -157,7 +182,7 @@ impl Drop for EthercrabLink {
 /// Delayed replies held at once at most.
 const HELD: usize = 32;
 
-fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>) {
+fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>, wakeups: Wakeups) {
     let waker = Waker::from(Arc::new(Unpark(thread::current())));
     let mut buf: Vec<u8> = vec![0; 2048];
     let mut held = HeldReplies::new(HELD);
@@ -229,7 +254,11 @@ fn pump(shared: &Shared, mut tx: PduTx<'static>, mut rx: PduRx<'static>) {
                 let mut seg = lock(&shared.segment);
                 seg.poll();
                 let now = seg.clock().now_ns();
-                let next = match (seg.next_deadline(), held.next_due()) {
+                let deadline = match wakeups {
+                    Wakeups::Deadlines => seg.next_deadline(),
+                    Wakeups::FramesOnly => None,
+                };
+                let next = match (deadline, held.next_due()) {
                     (Some(a), Some(b)) => Some(a.min(b)),
                     (a, b) => a.or(b),
                 };

@@ -18,7 +18,7 @@ mod held;
 mod raw;
 mod segment_link;
 
-pub use ethercrab_link::EthercrabLink;
+pub use ethercrab_link::{EthercrabLink, Wakeups};
 pub use raw::{RawServer, ServeStats, serve};
 pub use segment_link::{IN_FLIGHT, SegmentLink};
 
