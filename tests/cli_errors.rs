@@ -278,3 +278,17 @@ fn canopen_nodes_on_the_virtual_bus() {
     ecdrive(&["upload", "--can", "virtual", "-n", "0x7F", "0x1008:00"])
         .fails(2, &["node 127", "give the type"]);
 }
+
+/// `ecdrive version`: this build's facts, as text and JSON (the commit is git's, or `unknown`
+/// outside a checkout).
+#[test]
+fn version_names_ecdrive_ethercrab_and_the_profiles() {
+    let text = ecdrive(&["version"]).ok().to_string();
+    assert!(text.starts_with("ecdrive 0.1.0 (commit "), "{text}");
+    assert!(text.contains("ethercrab 0.7.1"), "{text}");
+    assert!(text.contains("mr-j4-tm (MR-J4-TM)"), "{text}");
+    let v = ecdrive(&["version", "--json"]).json();
+    assert_eq!(v["ethercrab"], "0.7.1");
+    assert!(v["commit"].as_str().is_some_and(|c| !c.is_empty()));
+    assert!(v["features"].is_array());
+}

@@ -8,3 +8,4 @@ pub mod config;
 pub mod ethercat;
 pub mod harness;
 pub mod plot;
+pub mod version;

@@ -395,9 +395,16 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
-    /// Measure the cycle's timing against a bare sleep loop and a plain ethercrab loop, on
-    /// emulated drives (in-process, or over a veth pair or an interface).
+    /// Measure the cycle's timing against a bare sleep loop, a plain ethercrab loop and a SOEM
+    /// loop, on emulated drives (in-process, or over a veth pair or an interface), repeated
+    /// and interleaved.
     Jitter(jitter::JitterArgs),
+    /// Print what this build is: ecdrive's version and commit, ethercrab's version, the
+    /// compiler, the build's profile and features, the drive profiles built in.
+    Version {
+        #[command(flatten)]
+        json: Json,
+    },
 }
 
 #[derive(Subcommand, Clone)]
@@ -1112,6 +1119,15 @@ fn dispatch(cli: Cli) -> ExitCode {
             output,
             config,
         } => plot_file(&file, &output, config.as_deref()),
+        Command::Version { json } => {
+            let v = ecdrive::app::version::Version::this_build();
+            if json.json {
+                print_json("version", &v)
+            } else {
+                println!("{}", v.text());
+                ExitCode::SUCCESS
+            }
+        }
         Command::Sim {
             can: Some(bus),
             nodes,
