@@ -169,6 +169,20 @@ pub enum LinkFault {
     Disconnect,
     /// The cable is back: frames reach the slaves again.
     Reconnect,
+    /// A bit error on the cable into the device at `position` (its port 0) for each of the
+    /// next `frames` frames, as silicon sees it: that device counts an RX error on port 0
+    /// (0x0301), marks the frame, and every device after it counts a forwarded RX error on
+    /// port 0 (0x0308), every device with port 1 open another on port 1 (0x0309) as the frame
+    /// comes back; the frame is processed by no device (the model keeps it simple: silicon
+    /// would let the devices before `position` process it) and never answered. Counted in
+    /// `SegmentStats::crc_errors`. A position past the last device is ignored when the frame
+    /// comes.
+    CrcErrorAt {
+        /// Position of the device whose incoming cable flips a bit.
+        position: u16,
+        /// Frames affected.
+        frames: u32,
+    },
     /// Restart the random generator with this seed.
     Seed(u64),
 }
@@ -239,6 +253,8 @@ pub(super) enum Fate {
     LostReturn,
     /// Cable pulled.
     Disconnected,
+    /// A bit error on the cable into this device.
+    CrcError(u16),
 }
 
 /// The link-fault state of a segment. Allocation-free.
@@ -254,6 +270,8 @@ pub(super) struct LinkState {
     corrupt_next: u32,
     corruption: Corruption,
     disconnected: bool,
+    crc_at: u16,
+    crc_next: u32,
 }
 
 impl Default for LinkState {
@@ -268,6 +286,8 @@ impl Default for LinkState {
             corrupt_next: 0,
             corruption: Corruption::WorkingCounter,
             disconnected: false,
+            crc_at: 0,
+            crc_next: 0,
         }
     }
 }
@@ -292,6 +312,10 @@ impl LinkState {
             LinkFault::CorruptWith(c) => self.corruption = c,
             LinkFault::Disconnect => self.disconnected = true,
             LinkFault::Reconnect => self.disconnected = false,
+            LinkFault::CrcErrorAt { position, frames } => {
+                self.crc_at = position;
+                self.crc_next = frames;
+            }
             LinkFault::Seed(s) => self.rng = s,
         }
     }
@@ -319,6 +343,10 @@ impl LinkState {
     pub(super) fn fate(&mut self) -> Fate {
         if self.disconnected {
             return Fate::Disconnected;
+        }
+        if self.crc_next > 0 {
+            self.crc_next -= 1;
+            return Fate::CrcError(self.crc_at);
         }
         let mut drop = self.chance(self.drop_threshold);
         if self.drop_next > 0 {

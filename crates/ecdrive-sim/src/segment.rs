@@ -27,7 +27,7 @@
 use super::clock::Clock;
 use super::device::Device;
 use super::esc::{Esc, EscConfig, Hop};
-use super::faults::{Corruption, Fate, Fault, LinkState, SlaveFault};
+use super::faults::{Corruption, Fate, Fault, LinkFault, LinkState, SlaveFault};
 use super::sii::SiiError;
 use crate::ec::Command;
 use crate::ec::frame::{Datagram, EthercatFrame, EthernetFrame, FrameError};
@@ -114,6 +114,9 @@ pub struct SegmentStats {
     pub datagrams: u64,
     /// Frames dropped as malformed.
     pub invalid_frames: u64,
+    /// Frames lost to an injected bit error on a cable
+    /// ([`LinkFault::CrcErrorAt`](super::faults::LinkFault::CrcErrorAt)).
+    pub crc_errors: u64,
     /// Frames lost by an injected drop ([`LinkFault::DropFraction`],
     /// [`LinkFault::DropNext`]), on either leg.
     ///
@@ -248,6 +251,12 @@ impl Segment {
                 }
             },
             Fault::Link(l) => {
+                // A pulled cable is a lost link at the first device's port 0 (0x0310).
+                if matches!(l, LinkFault::Disconnect) && !self.faults.link.disconnected() {
+                    if let Some(s) = self.slaves.first_mut() {
+                        s.esc.count_lost_link(0);
+                    }
+                }
                 self.faults.link.apply(l);
                 true
             }
@@ -446,6 +455,27 @@ impl Segment {
                 self.stats.lost_disconnected += 1;
                 self.run_due(now, false);
                 return Err(SegmentError::Disconnected);
+            }
+            Fate::CrcError(at) => {
+                self.run_due(now, false);
+                let at = usize::from(at);
+                if at >= self.slaves.len() {
+                    return self.process_frame(frame);
+                }
+                self.stats.crc_errors += 1;
+                for (k, s) in self.slaves.iter_mut().enumerate() {
+                    if k == at {
+                        s.esc.count_rx_error(0);
+                    } else if k > at {
+                        s.esc.count_forwarded_error(0);
+                    }
+                    if s.esc.port1_open() {
+                        s.esc.count_forwarded_error(1);
+                    }
+                }
+                return Err(SegmentError::Lost {
+                    reached_slaves: false,
+                });
             }
         };
         let len = frame.len();

@@ -251,6 +251,24 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
+    /// The ESC error counters and link status of every device (or one), with the links that
+    /// look broken named in words. Reads by position without a discovery: the segment's state
+    /// is not touched, so it can run while another master cycles it.
+    #[command(
+        after_help = "Examples:\n  ecdrive diag -i eth1\n  ecdrive diag -i eth1 -p 3\n  ecdrive diag -i eth1 --reset\n\nCounters: invalid frames and RX errors per port (0x0300+2p, 0x0301+2p), forwarded RX\nerrors (0x0308+p), processing unit and PDI errors (0x030C, 0x030D), lost links (0x0310+p).\nThey saturate at 255; --reset clears them after reading."
+    )]
+    Diag {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Only the device at this position (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: Option<u16>,
+        /// Clear the counters after reading them.
+        #[arg(long)]
+        reset: bool,
+        #[command(flatten)]
+        json: Json,
+    },
     /// Read or write ESC registers of one device.
     #[command(
         after_help = "Examples:\n  ecdrive reg -i eth1 -p 0 read 0x0130 2\n  ecdrive reg -i eth1 -p 0 read 0x0910 --type u64\n  ecdrive reg -i eth1 -p 0 write 0x0120 2 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 0x1234 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 \"34 12\" --bytes"
@@ -947,6 +965,21 @@ fn dispatch(cli: Cli) -> ExitCode {
                 Err(code) => code,
             }
         }
+        Command::Diag {
+            bus,
+            position,
+            reset,
+            json,
+        } => match session("diag", &bus.interface, move |b| {
+            tools::diag::diag(b, position, reset)
+        }) {
+            Ok(r) if json.json => print_json("diag", &r),
+            Ok(r) => {
+                println!("{}", r.text());
+                ExitCode::SUCCESS
+            }
+            Err(code) => code,
+        },
         Command::Reg {
             bus,
             position,

@@ -56,6 +56,11 @@ pub struct FaultArgs {
     /// What --corrupt-at corrupts.
     #[arg(long, value_enum, value_name = "KIND", default_value_t)]
     corrupt_kind: Kind,
+    /// A bit error on the cable into device POS for N frames (default 1) from time T:
+    /// `POS@T[:N]`. That device counts RX errors on port 0, the devices after it forwarded
+    /// RX errors (`ecdrive diag` shows them); the frames are lost. Repeatable.
+    #[arg(long, value_name = "POS@T[:N]", value_parser = parse_crc_error)]
+    crc_error_at: Vec<ScheduledFault>,
     /// Pull the cable at time T: nothing reaches the slaves, which keep running (SYNC0,
     /// watchdogs, the drives' loss-of-data alarms). Repeatable.
     #[arg(long, value_name = "T", value_parser = parse_disconnect)]
@@ -125,6 +130,7 @@ impl FaultArgs {
         out.extend(self.delay.iter().cloned());
         for v in [
             &self.corrupt_at,
+            &self.crc_error_at,
             &self.disconnect_at,
             &self.reconnect_at,
             &self.reset_at,
@@ -145,6 +151,7 @@ impl FaultArgs {
             && self.delay.is_none()
             && self.seed.is_none()
             && self.corrupt_at.is_empty()
+            && self.crc_error_at.is_empty()
             && self.disconnect_at.is_empty()
             && self.reconnect_at.is_empty()
             && self.reset_at.is_empty()
@@ -284,6 +291,28 @@ fn parse_reconnect(s: &str) -> Result<ScheduledFault, String> {
         s,
         time(s)?,
         FaultSpec::Link(LinkFault::Reconnect),
+    ))
+}
+
+fn parse_crc_error(s: &str) -> Result<ScheduledFault, String> {
+    let (p, rest) = s
+        .split_once('@')
+        .ok_or_else(|| format!("{s:?}: expected POS@T[:N], e.g. 1@2s:5"))?;
+    let (t, n) = match rest.split_once(':') {
+        Some((t, n)) => (t, bounded::<u32>(n, "count", u64::from(u32::MAX))?),
+        None => (rest, 1),
+    };
+    if n == 0 {
+        return Err(format!("the count in {s:?} is zero"));
+    }
+    Ok(sched(
+        "crc-error-at",
+        s,
+        time(t)?,
+        FaultSpec::Link(LinkFault::CrcErrorAt {
+            position: position(p)?,
+            frames: n,
+        }),
     ))
 }
 

@@ -501,7 +501,29 @@ impl Esc {
 
     /// Increment the invalid-frame counter of port 0 (0x0300), saturating.
     pub fn count_invalid_frame(&mut self) {
-        if let Some(b) = self.mem.get_mut(0x0300) {
+        self.count(0x0300);
+    }
+
+    /// Increment the RX error counter of `port` (0x0301 + 2 × port), saturating: a frame
+    /// received with a bit error (CRC, symbol error) on that port.
+    pub fn count_rx_error(&mut self, port: u8) {
+        self.count(0x0301 + 2 * usize::from(port.min(3)));
+    }
+
+    /// Increment the forwarded RX error counter of `port` (0x0308 + port), saturating: a frame
+    /// received on that port already marked as erroneous by a device before this one.
+    pub fn count_forwarded_error(&mut self, port: u8) {
+        self.count(0x0308 + usize::from(port.min(3)));
+    }
+
+    /// Increment the lost link counter of `port` (0x0310 + port), saturating.
+    pub fn count_lost_link(&mut self, port: u8) {
+        self.count(0x0310 + usize::from(port.min(3)));
+    }
+
+    /// The 8-bit error counter at `at`: saturates at 0xFF as the ESC's do.
+    fn count(&mut self, at: usize) {
+        if let Some(b) = self.mem.get_mut(at) {
             *b = b.saturating_add(1);
         }
     }

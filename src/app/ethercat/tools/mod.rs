@@ -13,6 +13,7 @@
 //! | `esi` | [`esi::show`], [`esi::check`] | [`esi::EsiSummary`], [`esi::EsiCheck`] |
 //! | `run` | [`run::run`] (with a [`crate::app::config::RunConfig`]) | [`run::RunReport`] |
 //! | `reset` | [`reset::reset`] | [`reset::ResetReport`] |
+//! | `diag` | [`diag::diag`] (no discovery: reads by position, disturbs nothing) | [`diag::DiagReport`] |
 //!
 //! ecdrive is not a resident master: every operation starts with a fresh discovery
 //! ([`startup::discover`]: ethercrab resets every device to INIT, assigns station addresses,
@@ -38,6 +39,7 @@
 //! position out of range, a value out of range, a type that cannot be inferred) from bus
 //! failures and from drives refusing ([`ErrorKind::Sdo`], [`ErrorKind::AlState`]).
 
+pub mod diag;
 pub mod esi;
 mod od;
 mod pdos;
