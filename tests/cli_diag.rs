@@ -97,3 +97,87 @@ fn diag_shows_bit_errors_and_a_cable_pull_and_reset_clears_them() {
     sim.ecdrive(&["diag", "-p", "3"])
         .fails(2, &["position 3", "the segment has 3 devices"]);
 }
+
+/// `ecdrive graph` over veth: the DOT names every device with its identity and state and the
+/// cables port to port; Graphviz renders it (installed by `.ci/run`); `--json` is the same as
+/// data.
+#[test]
+fn graph_draws_the_segment() {
+    let Some(sim) = SimOnVeth::start(
+        "cli_diag::graph_draws_the_segment",
+        &["mr-j4-tm", "bdhde", "generic-io"],
+    ) else {
+        return;
+    };
+    let dot = sim.ecdrive(&["graph"]).ok().to_string();
+    // Identities as the manuals give them (MR-J4-TM: vendor 0x00000A1E product 0x00000201;
+    // BDHDE: vendor 0x000002E1 product 0x000BE2EB), read through the bus from the SII.
+    assert!(
+        dot.contains("d0 [label=\"0: MR-J4-TM\\nvendor 0x00000A1E product 0x00000201"),
+        "{dot}"
+    );
+    assert!(
+        dot.contains("d1 [label=\"1: BDHDE\\nvendor 0x000002E1 product 0x000BE2EB"),
+        "{dot}"
+    );
+    assert!(dot.contains("master -- d0 [headlabel=\"0\"]"), "{dot}");
+    assert!(
+        dot.contains("d0 -- d1 [taillabel=\"1\", headlabel=\"0\"]"),
+        "{dot}"
+    );
+    assert!(
+        dot.contains("d1 -- d2 [taillabel=\"1\", headlabel=\"0\"]"),
+        "{dot}"
+    );
+    assert_eq!(dot.matches(" -- ").count(), 3, "{dot}");
+    // Graphviz draws it.
+    let ci = std::env::var_os("ECDRIVE_CI").is_some();
+    match std::process::Command::new("dot")
+        .arg("-Tsvg")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+    {
+        Ok(mut child) => {
+            use std::io::Write as _;
+            child
+                .stdin
+                .take()
+                .unwrap()
+                .write_all(dot.as_bytes())
+                .unwrap();
+            let out = child.wait_with_output().unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let svg = String::from_utf8(out.stdout).unwrap();
+            assert!(svg.contains("<svg") && svg.contains("BDHDE"), "{svg}");
+        }
+        Err(e) if !ci => eprintln!("SKIPPED: Graphviz `dot` not available ({e})"),
+        Err(e) => panic!("Graphviz `dot` must be installed under CI: {e}"),
+    }
+    let j = sim.ecdrive(&["graph", "--json"]).json();
+    assert_eq!(j["nodes"].as_array().unwrap().len(), 3);
+    assert_eq!(j["nodes"][0]["vendor_id"], 0x0A1E);
+    assert_eq!(j["nodes"][2]["open_ports"], serde_json::json!([0]));
+    assert_eq!(
+        j["links"][0],
+        serde_json::json!({"from": null, "from_port": null, "to": 0, "to_port": 0})
+    );
+    assert_eq!(
+        j["links"][2],
+        serde_json::json!({"from": 1, "from_port": 1, "to": 2, "to_port": 0})
+    );
+    assert!(j["dangling"].as_array().unwrap().is_empty());
+    // Nothing was configured by reading: every device is still in INIT.
+    assert!(
+        j["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|n| n["al_state"] == "INIT")
+    );
+}

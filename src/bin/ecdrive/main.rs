@@ -269,6 +269,18 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
+    /// The segment's topology (which port of which device connects to which) as Graphviz DOT,
+    /// with each device's identity and state; --json gives the same as data. Reads by position
+    /// without a discovery, like diag.
+    #[command(
+        after_help = "Examples:\n  ecdrive graph -i eth1 | dot -Tsvg > segment.svg\n  ecdrive graph -i eth1 --json"
+    )]
+    Graph {
+        #[command(flatten)]
+        bus: BusArgs,
+        #[command(flatten)]
+        json: Json,
+    },
     /// Read or write ESC registers of one device.
     #[command(
         after_help = "Examples:\n  ecdrive reg -i eth1 -p 0 read 0x0130 2\n  ecdrive reg -i eth1 -p 0 read 0x0910 --type u64\n  ecdrive reg -i eth1 -p 0 write 0x0120 2 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 0x1234 --type u16\n  ecdrive reg -i eth1 -p 0 write 0x0012 \"34 12\" --bytes"
@@ -980,6 +992,17 @@ fn dispatch(cli: Cli) -> ExitCode {
             }
             Err(code) => code,
         },
+        Command::Graph { bus, json } => {
+            let master = bus.interface.clone();
+            match session("graph", &bus.interface, tools::graph::graph) {
+                Ok(g) if json.json => print_json("graph", &g),
+                Ok(g) => {
+                    print!("{}", g.dot(&master));
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
         Command::Reg {
             bus,
             position,

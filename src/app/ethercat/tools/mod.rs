@@ -13,6 +13,7 @@
 //! | `esi` | [`esi::show`], [`esi::check`] | [`esi::EsiSummary`], [`esi::EsiCheck`] |
 //! | `run` | [`run::run`] (with a [`crate::app::config::RunConfig`]) | [`run::RunReport`] |
 //! | `reset` | [`reset::reset`] | [`reset::ResetReport`] |
+//! | `graph` | [`graph::graph`] (no discovery), then [`graph::Graph::dot`] | [`graph::Graph`] |
 //! | `diag` | [`diag::diag`] (no discovery: reads by position, disturbs nothing) | [`diag::DiagReport`] |
 //!
 //! ecdrive is not a resident master: every operation starts with a fresh discovery
@@ -41,6 +42,7 @@
 
 pub mod diag;
 pub mod esi;
+pub mod graph;
 mod od;
 mod pdos;
 mod reg;
