@@ -20,7 +20,11 @@ ECDRIVE=./target/release/ecdrive
 [ "$(id -u)" = 0 ] || { echo "jitter_tables.sh: needs root (veth, SCHED_FIFO)" >&2; exit 2; }
 [ -x "$ECDRIVE" ] || { echo "jitter_tables.sh: build first: cargo build --release" >&2; exit 2; }
 mkdir -p "$OUT"
-{ git rev-parse --short HEAD; git status --porcelain --untracked-files=no | grep -q . && echo "(with uncommitted changes)"; } | paste -sd" " > "$OUT/commit.txt"
+commit="$(git rev-parse --short HEAD)"
+if [ -n "$(git status --porcelain --untracked-files=no)" ]; then
+    commit="$commit (with uncommitted changes)"
+fi
+echo "$commit" > "$OUT/commit.txt"
 # The SOEM loop, if it can be built here (the harness says why SOEM is absent otherwise).
 benches/soem/build.sh || echo "jitter_tables.sh: continuing without the SOEM loop" >&2
 for C in 1000 500 250 125; do
