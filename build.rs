@@ -12,7 +12,27 @@ fn run(cmd: &str, args: &[&str]) -> Option<String> {
 }
 
 fn main() {
-    let commit = run("git", &["rev-parse", "--short=12", "HEAD"]);
+    // The commit, and whether the sources differ from it (a build of uncommitted work must
+    // not claim the commit's name alone).
+    let commit = run("git", &["rev-parse", "--short=12", "HEAD"]).map(|c| {
+        match run(
+            "git",
+            &[
+                "status",
+                "--porcelain",
+                "--untracked-files=no",
+                "--",
+                "src",
+                "crates",
+                "Cargo.toml",
+                "Cargo.lock",
+                "build.rs",
+            ],
+        ) {
+            Some(_) => format!("{c}+uncommitted changes"),
+            None => c,
+        }
+    });
     println!(
         "cargo:rustc-env=ECDRIVE_GIT_COMMIT={}",
         commit.as_deref().unwrap_or("unknown")
@@ -22,9 +42,17 @@ fn main() {
         "cargo:rustc-env=ECDRIVE_RUSTC={}",
         run(&rustc, &["--version"]).unwrap_or_else(|| "unknown".into())
     );
-    // A new commit moves HEAD or the branch it names (not the index: every `git add` would
-    // rebuild the crate).
-    println!("cargo:rerun-if-changed=.git/HEAD");
-    println!("cargo:rerun-if-changed=.git/refs/heads");
-    println!("cargo:rerun-if-changed=build.rs");
+    // Again when a commit moves HEAD or its branch, or when the sources change (then the crate
+    // is rebuilt anyway). Not on the index: every `git add` would rebuild the crate.
+    for path in [
+        ".git/HEAD",
+        ".git/refs/heads",
+        "src",
+        "crates",
+        "Cargo.toml",
+        "Cargo.lock",
+        "build.rs",
+    ] {
+        println!("cargo:rerun-if-changed={path}");
+    }
 }

@@ -59,7 +59,8 @@ def table(reports):
 
 def main():
     d = sys.argv[1]
-    commit = open(os.path.join(d, "commit.txt")).read().strip() if os.path.exists(os.path.join(d, "commit.txt")) else "?"
+    commit_file = os.path.join(d, "commit.txt")
+    commit = open(commit_file).read().strip() if os.path.exists(commit_file) else "?"
     for key, title in VARIANTS:
         reports = []
         for c in CYCLES:
@@ -69,6 +70,9 @@ def main():
         if not reports:
             continue
         r0 = reports[0][1]
+        # The JSON names the commit its binary was built from (older files do not).
+        commits = sorted({r.get("commit", commit) for _, r in reports})
+        commit_text = ", ".join(commits)
         h = r0["host"]
         st = r0["settings"]
         cmd = r0.get("command", "?").replace(f"--cycle-us {reports[0][0]}", "--cycle-us C")
@@ -79,7 +83,7 @@ def main():
         )
         print(f"#### {title}\n")
         print(
-            f"`{cmd}` at C = {', '.join(str(c) for c, _ in reports)}; commit {commit}; "
+            f"`{cmd}` at C = {', '.join(str(c) for c, _ in reports)}; commit {commit_text}; "
             f"{st['repeat']} repetitions of {st['cycles']} cycles at 1000 µs "
             f"(the same number of seconds at each cycle time), drives {', '.join(st['drives'])}, "
             f"SCHED_FIFO {st['priority']}{' granted' if r0['priority_granted'] else ' NOT granted'}, "

@@ -75,7 +75,7 @@
 //!
 //! ```text
 //! {
-//!   "schema": "ecdrive-jitter/2", "version": "0.1.0",
+//!   "schema": "ecdrive-jitter/2", "version": "0.1.0", "commit": "…",
 //!   "host": { "kernel", "preempt_rt", "cpu_model", "cpus", "governor", "isolated_cpus",
 //!             "sched_rt_runtime_us" },
 //!   "settings": { "cycle_ns", "cycles", "transport", "interface", "priority", "cpu",
@@ -646,6 +646,7 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
     Ok(JitterReport {
         schema: report::SCHEMA,
         version: env!("CARGO_PKG_VERSION"),
+        commit: env!("ECDRIVE_GIT_COMMIT"),
         host: HostInfo::read(),
         settings: SettingsReport {
             count_syscalls: cfg.count_syscalls,

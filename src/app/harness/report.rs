@@ -582,6 +582,8 @@ pub struct JitterReport {
     pub schema: &'static str,
     /// ecdrive's version.
     pub version: &'static str,
+    /// The commit the binary was built from (`ecdrive version`).
+    pub commit: &'static str,
     /// Host conditions.
     pub host: HostInfo,
     /// Settings.
@@ -672,6 +674,7 @@ impl JitterReport {
     fn header(&self, s: &mut String) {
         let st = &self.settings;
         let h = &self.host;
+        let _ = writeln!(s, "ecdrive {} (commit {})", self.version, self.commit);
         let _ = writeln!(
             s,
             "cycle {} µs, {} cycles per run, {} repetition(s), {}{}, drives: {}",
