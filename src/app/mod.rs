@@ -4,6 +4,7 @@
 //! ([`harness`]). They may use every layer; no layer uses them.
 
 pub mod canopen;
+pub mod capture;
 pub mod config;
 pub mod ethercat;
 pub mod harness;

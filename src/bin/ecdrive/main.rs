@@ -59,8 +59,35 @@ Exit codes:
 #[derive(Parser)]
 #[command(name = "ecdrive", version, about, long_about, after_help = EXIT_CODES)]
 struct Cli {
+    /// Write the master's frames, both directions, with timestamps, to this pcapng file
+    /// (Wireshark reads it), from bus commands and `run`; written off the cycle thread, frames
+    /// the writer could not keep up with are counted, never waited for.
+    #[arg(long, global = true, value_name = "FILE")]
+    pcap: Option<PathBuf>,
     #[command(subcommand)]
     command: Command,
+}
+
+/// `--pcap`, for the commands' sessions.
+static PCAP: std::sync::OnceLock<Option<PathBuf>> = std::sync::OnceLock::new();
+
+/// The capture file asked for with `--pcap`, if any.
+pub fn pcap() -> Option<&'static std::path::Path> {
+    PCAP.get().and_then(|p| p.as_deref())
+}
+
+/// Say what a capture wrote (stderr, one line).
+pub fn report_capture(cmd: &str, c: &ecdrive::app::capture::CaptureSummary) {
+    eprintln!(
+        "ecdrive {cmd}: capture {}: {} frames{}",
+        c.path.display(),
+        c.frames,
+        if c.dropped > 0 {
+            format!(", {} dropped (the writer fell behind)", c.dropped)
+        } else {
+            String::new()
+        }
+    );
 }
 
 #[derive(Args, Clone)]
@@ -685,7 +712,11 @@ where
         + 'static,
 {
     let t: Target = target.parse().map_err(|e| fail(cmd, &e))?;
-    tools::session(&t, f).map_err(|e| fail(cmd, &e))
+    let (r, capture) = tools::session_captured(&t, pcap(), f).map_err(|e| fail(cmd, &e))?;
+    if let Some(c) = &capture {
+        report_capture(cmd, c);
+    }
+    Ok(r)
 }
 
 fn main() -> ExitCode {
@@ -741,6 +772,29 @@ fn main() -> ExitCode {
 }
 
 fn dispatch(cli: Cli) -> ExitCode {
+    if cli.pcap.is_some()
+        && !matches!(
+            cli.command,
+            Command::Slaves { .. }
+                | Command::Upload { .. }
+                | Command::Download { .. }
+                | Command::Sdos { .. }
+                | Command::Pdos { .. }
+                | Command::States { .. }
+                | Command::Diag { .. }
+                | Command::Graph { .. }
+                | Command::Reg { .. }
+                | Command::Sii { .. }
+                | Command::Run { .. }
+        )
+    {
+        eprintln!(
+            "ecdrive: --pcap captures the EtherCAT frames of the bus commands and run; this \
+             command sends none through it"
+        );
+        return ExitCode::from(exit::USAGE);
+    }
+    let _ = PCAP.set(cli.pcap.clone());
     match cli.command {
         Command::Demo(args) => demo::run(args),
         Command::Soak(args) => soak::run(args),

@@ -76,6 +76,7 @@ pub fn run(
         duration,
         hurry: Some(signals.hurry),
         record: record.map(Path::to_path_buf),
+        pcap: crate::pcap().map(Path::to_path_buf),
         ..RunOptions::default()
     };
     let bar = print::run_progress();
@@ -86,6 +87,9 @@ pub fn run(
         Ok(r) => r,
         Err(e) => return fail("run", &e),
     };
+    if let Some(c) = &report.capture {
+        crate::report_capture("run", c);
+    }
     let code = match report.outcome {
         Outcome::Completed | Outcome::Interrupted => exit::OK,
         Outcome::DriveFault => exit::FAULT,

@@ -63,6 +63,7 @@ pub use slaves::{
 };
 pub use states::{StateChange, StatesOptions, StatesReport, states, states_timed};
 
+use crate::app::capture::{CaptureFile, CaptureSummary, CaptureTap};
 use crate::ec::{AlStatus, AlStatusCode, register};
 use crate::link::{FrameLink, LinkError, RawSocket};
 use crate::master::bus::{Bus, BusOptions, run_session};
@@ -121,13 +122,23 @@ impl core::fmt::Display for Target {
     }
 }
 
-/// The link of a [`Target`]: a raw socket or the in-process segment.
+/// The link of a [`Target`]: a raw socket or the in-process segment, optionally captured.
 #[derive(Debug)]
 pub enum ToolLink {
     /// A raw socket on an interface.
     Raw(RawSocket),
     /// Emulated devices in-process.
     Sim(Box<SegmentLink>),
+    /// Another link whose frames, both directions, are also copied to a capture (`--pcap`,
+    /// [`crate::app::capture`]).
+    Captured(Box<ToolLink>, Box<CaptureTap>),
+}
+
+impl ToolLink {
+    /// This link, its frames also copied to `tap`.
+    pub fn captured(self, tap: CaptureTap) -> Self {
+        Self::Captured(Box::new(self), Box::new(tap))
+    }
 }
 
 impl FrameLink for ToolLink {
@@ -135,6 +146,10 @@ impl FrameLink for ToolLink {
         match self {
             Self::Raw(r) => r.send(frame),
             Self::Sim(s) => s.send(frame),
+            Self::Captured(l, tap) => {
+                tap.frame(true, frame);
+                l.send(frame)
+            }
         }
     }
 
@@ -146,6 +161,13 @@ impl FrameLink for ToolLink {
         match self {
             Self::Raw(r) => r.recv(buf, timeout),
             Self::Sim(s) => s.recv(buf, timeout),
+            Self::Captured(l, tap) => {
+                let n = l.recv(buf, timeout)?;
+                if let Some(frame) = n.and_then(|n| buf.get(..n)) {
+                    tap.frame(false, frame);
+                }
+                Ok(n)
+            }
         }
     }
 
@@ -153,6 +175,7 @@ impl FrameLink for ToolLink {
         match self {
             Self::Raw(r) => r.describe(),
             Self::Sim(s) => s.describe(),
+            Self::Captured(l, _) => l.describe(),
         }
     }
 }
@@ -230,8 +253,52 @@ where
     R: Send + 'static,
     F: FnOnce(&mut Bus<'_, ToolLink>) -> Result<R, MasterError> + Send + 'static,
 {
+    session_captured(target, None, f).map(|(r, _)| r)
+}
+
+/// [`session`], with every frame also written to the pcapng file `pcap` (if given); the
+/// capture's summary with the result. A capture that cannot be written is an error, after `f`
+/// ran.
+pub fn session_captured<R, F>(
+    target: &Target,
+    pcap: Option<&std::path::Path>,
+    f: F,
+) -> Result<(R, Option<CaptureSummary>), MasterError>
+where
+    R: Send + 'static,
+    F: FnOnce(&mut Bus<'_, ToolLink>) -> Result<R, MasterError> + Send + 'static,
+{
     let link = target.open()?;
-    on_link(link, f).map(|(r, _)| r)
+    let (link, file) = capture_link(link, target, pcap)?;
+    let r = on_link(link, f).map(|(r, link)| {
+        drop(link);
+        r
+    });
+    let summary = finish_capture(file)?;
+    r.map(|r| (r, summary))
+}
+
+/// Wrap `link` in a capture into `pcap`, if given.
+pub fn capture_link(
+    link: ToolLink,
+    target: &Target,
+    pcap: Option<&std::path::Path>,
+) -> Result<(ToolLink, Option<CaptureFile>), MasterError> {
+    let Some(path) = pcap else {
+        return Ok((link, None));
+    };
+    let (tap, file) = crate::app::capture::start(path, &target.to_string())
+        .map_err(|e| MasterError::new(None, "starting the capture", ErrorKind::Config, e))?;
+    Ok((link.captured(tap), Some(file)))
+}
+
+/// Close a capture started by [`capture_link`] (after the link was dropped).
+pub fn finish_capture(file: Option<CaptureFile>) -> Result<Option<CaptureSummary>, MasterError> {
+    file.map(|f| {
+        f.finish()
+            .map_err(|e| MasterError::new(None, "finishing the capture", ErrorKind::Config, e))
+    })
+    .transpose()
 }
 
 /// Run `f` with a bus session on `link` (any [`FrameLink`]); returns the link with the result.

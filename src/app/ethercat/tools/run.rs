@@ -182,6 +182,8 @@ pub struct RunReport {
     pub startup: Option<crate::master::StartupTimes>,
     /// The recording, if one was asked for.
     pub record: Option<RecordSummary>,
+    /// The capture of the frames (`--pcap`), if one was asked for.
+    pub capture: Option<crate::app::capture::CaptureSummary>,
     /// The whole event history.
     pub history: Vec<HistoryEntry>,
 }
@@ -212,6 +214,8 @@ pub struct RunOptions {
     pub hurry: Option<std::sync::Arc<AtomicBool>>,
     /// Record every cycle (one line per axis and cycle with a reply) into this CSV file.
     pub record: Option<std::path::PathBuf>,
+    /// Write every frame, both directions, to this pcapng file (off the cycle thread).
+    pub pcap: Option<std::path::PathBuf>,
 }
 
 impl Default for RunOptions {
@@ -222,6 +226,7 @@ impl Default for RunOptions {
             enable_timeout: Duration::from_secs(5),
             hurry: None,
             record: None,
+            pcap: None,
         }
     }
 }
@@ -253,6 +258,7 @@ pub fn run(
 ) -> Result<RunReport, MasterError> {
     let duration = opts.duration.or(cfg.duration);
     let link = cfg.target.open_with(&cfg.sim)?;
+    let (link, capture) = super::capture_link(link, &cfg.target, opts.pcap.as_deref())?;
     progress(&RunProgress {
         phase: "starting",
         elapsed: Duration::ZERO,
@@ -270,7 +276,14 @@ pub fn run(
         )?),
         None => None,
     };
-    let mut m = Master::start(link, master_cfg).map_err(|f| f.error)?;
+    let mut m = match Master::start(link, master_cfg) {
+        Ok(m) => m,
+        Err(f) => {
+            drop(f.link);
+            let _ = super::finish_capture(capture);
+            return Err(f.error);
+        }
+    };
     // Which file entry each axis is.
     let mut used = vec![false; cfg.drives.len()];
     let entries: Vec<Option<usize>> = m
@@ -514,7 +527,9 @@ pub fn run(
                 .unwrap_or_default(),
         })
         .collect();
-    let (report, _link) = m.stop_watching(StopKind::Ramp, opts.hurry.as_deref());
+    let (report, link) = m.stop_watching(StopKind::Ramp, opts.hurry.as_deref());
+    drop(link);
+    let capture = super::finish_capture(capture)?;
     let record = writer.map(RecordWriter::finish).transpose()?;
     let Some(report) = report else {
         return Err(MasterError::new(
@@ -724,6 +739,7 @@ pub fn run(
         shutdown_ok: report.shutdown_ok,
         startup: report.startup,
         record,
+        capture,
         history: report.history,
     })
 }
