@@ -1420,15 +1420,9 @@ fn run<L: FrameLink + Send>(
             }
             n
         };
-        // Every 2 ms while events come, backing off to 16 ms while none do: a quiet cycle
-        // costs this thread few wake-ups (the event ring holds 4096).
         let mut idle = SESSION_POLL_MIN;
         while !h.is_finished() {
-            idle = if drain_events() > 0 {
-                SESSION_POLL_MIN
-            } else {
-                (idle * 2).min(SESSION_POLL_MAX)
-            };
+            idle = next_idle(idle, drain_events());
             if let Some(every) = cfg.emergency_poll
                 && monotonic_ns() >= next_poll
             {
@@ -1438,10 +1432,7 @@ fn run<L: FrameLink + Send>(
                 });
                 drain_emcy(&mut seen_emcy);
             }
-            let to_poll = cfg.emergency_poll.map_or(idle, |_| {
-                Duration::from_nanos(next_poll.saturating_sub(monotonic_ns()))
-            });
-            std::thread::sleep(idle.min(to_poll).max(SESSION_POLL_MIN));
+            std::thread::sleep(session_pause(idle, cfg.emergency_poll, next_poll));
         }
         drain_events();
         h.join().ok()
@@ -1462,6 +1453,24 @@ fn run<L: FrameLink + Send>(
 /// The session thread's shortest and longest sleep between looks at the cycle's events.
 const SESSION_POLL_MIN: Duration = Duration::from_millis(2);
 const SESSION_POLL_MAX: Duration = Duration::from_millis(16);
+
+/// The session thread looks every 2 ms while events come and backs off to 16 ms while none do:
+/// a quiet cycle costs it few wake-ups (the event ring holds 4096).
+fn next_idle(idle: Duration, events: usize) -> Duration {
+    if events > 0 {
+        SESSION_POLL_MIN
+    } else {
+        (idle * 2).min(SESSION_POLL_MAX)
+    }
+}
+
+/// How long the session thread sleeps: `idle`, but not past the next mailbox poll.
+fn session_pause(idle: Duration, poll: Option<Duration>, next_poll_ns: u64) -> Duration {
+    let to_poll = poll.map_or(idle, |_| {
+        Duration::from_nanos(next_poll_ns.saturating_sub(monotonic_ns()))
+    });
+    idle.min(to_poll).max(SESSION_POLL_MIN)
+}
 
 /// ": LRW 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) 18, expected 20" for a
 /// working-counter event: which datagram of the reply was wrong and whom it covers.
