@@ -88,6 +88,20 @@ fn a_run_capture_opens_in_tshark_without_a_malformed_frame() {
 }
 
 #[test]
+fn the_demo_captures_its_in_process_frames() {
+    let dir = std::env::temp_dir().join(format!("ecdrive-pcap-demo-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("demo.pcapng");
+    let p = path.to_str().unwrap();
+    let r = ecdrive(&["demo", "--pcap", p]);
+    r.ok();
+    check(p, frames_written(&r.stderr, p));
+    // A command that sends no EtherCAT frames through it refuses --pcap.
+    ecdrive(&["sim", "--list-devices", "--pcap", p]).fails(2, &["--pcap"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn a_tool_capture_over_veth() {
     let Some(sim) = SimOnVeth::start("cli_pcap::a_tool_capture_over_veth", &["mr-j4-tm", "bdhde"])
     else {

@@ -7,6 +7,7 @@
 //! the privilege for SCHED_FIFO it says so and runs at normal priority).
 
 use super::recovery::{self, Operator};
+use crate::app::ethercat::tools::{ToolLink, finish_capture};
 use crate::drives::{self, DriveProfile};
 use crate::master::cycle::CycleSettings;
 use crate::master::error::{ErrorKind, MasterError};
@@ -29,6 +30,8 @@ pub struct DemoOptions {
     pub cycle: Duration,
     /// Real-time settings of the cycle thread.
     pub rt: RtSettings,
+    /// Write every frame to this pcapng file (`--pcap`, see [`crate::app::capture`]).
+    pub pcap: Option<std::path::PathBuf>,
 }
 
 impl Default for DemoOptions {
@@ -40,6 +43,7 @@ impl Default for DemoOptions {
                 cpu: None,
                 lock_memory: true,
             },
+            pcap: None,
         }
     }
 }
@@ -91,6 +95,8 @@ pub struct DemoTiming {
 pub struct DemoReport {
     /// Cycle time, µs.
     pub cycle_us: u64,
+    /// The capture of the frames (`--pcap`), if one was asked for.
+    pub capture: Option<crate::app::capture::CaptureSummary>,
     /// The drives.
     pub drives: Vec<DemoDrive>,
     /// Timing.
@@ -235,7 +241,25 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         });
     }
     let steps: Vec<usize> = profiles.iter().map(|p| program(p).len()).collect();
-    let mut m = Master::start(SegmentLink::new(segment()?), cfg).map_err(|f| f.error)?;
+    let link = ToolLink::Sim(Box::new(SegmentLink::new(segment()?)));
+    let (link, capture) = match &opts.pcap {
+        Some(path) => {
+            let (tap, file) = crate::app::capture::start(path, "in-process (ecdrive demo)")
+                .map_err(|e| {
+                    MasterError::new(None, "starting the capture", ErrorKind::Config, e)
+                })?;
+            (link.captured(tap), Some(file))
+        }
+        None => (link, None),
+    };
+    let mut m = match Master::start(link, cfg) {
+        Ok(m) => m,
+        Err(f) => {
+            drop(f.link);
+            let _ = finish_capture(capture);
+            return Err(f.error);
+        }
+    };
     m.wait_until("every drive in OP", Duration::from_secs(10), |t| {
         t.cycle.all_op
     })?;
@@ -271,7 +295,9 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         }
     }
     let done = op.programs_completed > 0;
-    let (report, _) = m.stop(StopKind::Ramp);
+    let (report, link) = m.stop(StopKind::Ramp);
+    drop(link);
+    let capture = finish_capture(capture)?;
     let report = report.ok_or_else(|| {
         MasterError::new(
             None,
@@ -353,6 +379,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         errors,
         unhandled,
         history,
+        capture,
         ok,
     })
 }

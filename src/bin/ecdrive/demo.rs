@@ -177,9 +177,13 @@ pub fn run(args: DemoArgs) -> ExitCode {
             cpu: args.cpu,
             lock_memory: true,
         },
+        pcap: crate::pcap().map(std::path::Path::to_path_buf),
     };
     match demo::run(&opts) {
         Ok(r) => {
+            if let Some(c) = &r.capture {
+                crate::report_capture("demo", c);
+            }
             if args.json {
                 let code = crate::print_json("demo", &r);
                 if !r.ok {

@@ -60,7 +60,7 @@ Exit codes:
 #[command(name = "ecdrive", version, about, long_about, after_help = EXIT_CODES)]
 struct Cli {
     /// Write the master's frames, both directions, with timestamps, to this pcapng file
-    /// (Wireshark reads it), from bus commands and `run`; written off the cycle thread, frames
+    /// (Wireshark reads it), from bus commands, `run` and `demo`; written off the cycle thread, frames
     /// the writer could not keep up with are counted, never waited for.
     #[arg(long, global = true, value_name = "FILE")]
     pcap: Option<PathBuf>,
@@ -786,6 +786,7 @@ fn dispatch(cli: Cli) -> ExitCode {
                 | Command::Reg { .. }
                 | Command::Sii { .. }
                 | Command::Run { .. }
+                | Command::Demo(_)
         )
     {
         eprintln!(
