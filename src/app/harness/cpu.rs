@@ -162,6 +162,18 @@ pub enum ThreadRole {
     Harness,
 }
 
+impl ThreadRole {
+    /// The name the JSON uses.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Master => "master",
+            Self::Segment => "segment",
+            Self::Load => "load",
+            Self::Harness => "harness",
+        }
+    }
+}
+
 /// The role of a thread: by its name, else whether the run started it. Names are the kernel's
 /// (`comm`, at most 15 characters: `ecdrive-sim-ethercrab` reads `ecdrive-sim-eth`).
 pub fn role_of(t: &ThreadTime) -> ThreadRole {

@@ -857,10 +857,7 @@ fn threads_table(s: &mut String, rep: &Repetition) {
                 format!(
                     "{} [{}] {:.2} µs, {:.2} wake-ups",
                     t.name,
-                    serde_json::to_value(t.role)
-                        .ok()
-                        .and_then(|v| v.as_str().map(str::to_string))
-                        .unwrap_or_default(),
+                    t.role.name(),
                     t.cpu_ns / 1000.0,
                     t.voluntary
                 )

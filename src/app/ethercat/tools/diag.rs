@@ -33,7 +33,7 @@ use serde::Serialize;
 use std::time::Duration;
 
 /// How long one register access may take.
-const T_REG: Duration = Duration::from_millis(500);
+pub(super) const T_REG: Duration = Duration::from_millis(500);
 
 /// The counters and link bits of one port.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -226,16 +226,16 @@ fn count_devices<L: FrameLink>(bus: &mut Bus<'_, L>) -> Result<u16, MasterError>
     }
 }
 
-fn aprd<L: FrameLink>(
+/// Read `len` bytes of `register` of the device at `position` (APRD: no station address needed).
+pub(super) fn aprd<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     position: u16,
     register: u16,
     len: u16,
 ) -> Result<Vec<u8>, MasterError> {
-    let address = position;
     let step = format!("device {position}: reading register 0x{register:04X} ({len} bytes)");
     bus.block_on(&|| step.clone(), T_REG, |md| async move {
-        Command::aprd(address, register)
+        Command::aprd(position, register)
             .receive_slice(md, len)
             .await
             .map(|b| b.to_vec())
@@ -244,22 +244,16 @@ fn aprd<L: FrameLink>(
     .map_err(|e| bus_error(None, step.clone(), e))
 }
 
-fn apwr_zero<L: FrameLink>(
+/// Write `data` to `register` of the device at `position` (APWR).
+pub(super) fn apwr<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     position: u16,
     register: u16,
-    len: usize,
+    data: &[u8],
 ) -> Result<(), MasterError> {
-    let address = position;
-    let step = format!("device {position}: clearing register 0x{register:04X}");
-    let zeros = vec![0u8; len];
-    bus.block_on(&|| step.clone(), T_REG, |md| {
-        let zeros = zeros.clone();
-        async move {
-            Command::apwr(address, register)
-                .send(md, zeros.as_slice())
-                .await
-        }
+    let step = format!("device {position}: writing register 0x{register:04X}");
+    bus.block_on(&|| step.clone(), T_REG, |md| async move {
+        Command::apwr(position, register).send(md, data).await
     })
     .map_err(|e| exec_error(None, e))?
     .map_err(|e| bus_error(None, step.clone(), e))
@@ -307,9 +301,9 @@ pub fn diag<L: FrameLink>(
     }
     if reset {
         for &p in &positions {
-            apwr_zero(bus, p, 0x0300, 1)?;
-            apwr_zero(bus, p, 0x030C, 2)?;
-            apwr_zero(bus, p, 0x0310, 4)?;
+            apwr(bus, p, 0x0300, &[0])?;
+            apwr(bus, p, 0x030C, &[0; 2])?;
+            apwr(bus, p, 0x0310, &[0; 4])?;
         }
     }
     let findings = findings(&devices);

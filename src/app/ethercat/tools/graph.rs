@@ -12,19 +12,16 @@
 //! open port in that order, its subtree follows, then the next open port's (ETG.1000.4, the
 //! ESC frame processing order; the same rule SOEM and IgH use).
 
-use super::diag::DeviceDiag;
 #[cfg(test)]
 use super::diag::decode;
+use super::diag::{DeviceDiag, aprd, apwr};
 use crate::link::FrameLink;
 use crate::master::bus::Bus;
-use crate::master::error::{ErrorKind, MasterError, bus_error};
-use crate::master::exec::exec_error;
-use ethercrab::Command;
+use crate::master::error::{ErrorKind, MasterError};
 use serde::Serialize;
 use std::fmt::Write as _;
 use std::time::{Duration, Instant};
 
-const T_REG: Duration = Duration::from_millis(500);
 /// How long the EEPROM interface may stay busy for one read (\[REC\]).
 const T_EEPROM: Duration = Duration::from_millis(100);
 
@@ -130,23 +127,6 @@ pub fn topology(devices: &[DeviceDiag]) -> (Vec<Link>, Vec<(u16, u8)>) {
     (links, dangling)
 }
 
-fn aprd<L: FrameLink>(
-    bus: &mut Bus<'_, L>,
-    position: u16,
-    register: u16,
-    len: u16,
-) -> Result<Vec<u8>, MasterError> {
-    let step = format!("device {position}: reading register 0x{register:04X}");
-    bus.block_on(&|| step.clone(), T_REG, |md| async move {
-        Command::aprd(position, register)
-            .receive_slice(md, len)
-            .await
-            .map(|b| b.to_vec())
-    })
-    .map_err(|e| exec_error(None, e))?
-    .map_err(|e| bus_error(None, step.clone(), e))
-}
-
 /// Read 4 bytes of the SII EEPROM from `word` of the device at `position`.
 fn sii_u32<L: FrameLink>(
     bus: &mut Bus<'_, L>,
@@ -157,13 +137,7 @@ fn sii_u32<L: FrameLink>(
     // Control (0x0502): read command (bit 8); address (0x0504): the word.
     let w = word.to_le_bytes();
     let request = [0x00, 0x01, w[0], w[1], 0, 0];
-    bus.block_on(&|| step.clone(), T_REG, |md| async move {
-        Command::apwr(position, 0x0502)
-            .send(md, request.as_slice())
-            .await
-    })
-    .map_err(|e| exec_error(None, e))?
-    .map_err(|e| bus_error(None, step.clone(), e))?;
+    apwr(bus, position, 0x0502, &request)?;
     let until = Instant::now() + T_EEPROM;
     loop {
         let c = aprd(bus, position, 0x0502, 2)?;
