@@ -721,3 +721,62 @@ fn csp_start_edge_sets_bit_4_while_streaming() {
         assert_eq!(while_streaming, want, "edge {edge}");
     }
 }
+
+/// cst → csp on the MR-J4-TM while the motor turns: a torque of 0 would only let it coast (the
+/// generative test's case `cc daae7c29…`), so the engine brakes in csv first, then writes csp at
+/// zero speed. The drive never refuses a mode write and never switches while moving.
+#[test]
+fn zero_speed_switch_from_turning_cst_brakes_in_csv() {
+    let caps = drives::MR_J4_TM;
+    let mut drive = SimServo::new(caps, State::SwitchOnDisabled, CST);
+    let mut axis = Axis::new(caps, config(&caps, CST)).unwrap();
+    enable(&mut axis, &mut drive);
+    axis.set_torque(300).unwrap();
+    for _ in 0..5 {
+        cycle(&mut axis, &mut drive);
+    }
+    axis.set_torque(0).unwrap();
+    cycle(&mut axis, &mut drive);
+    assert!(drive.velocity > 0, "coasting: {}", drive.velocity);
+    events(&mut axis);
+    axis.request_mode(CSP).unwrap();
+    let mut modes = Vec::new();
+    for _ in 0..200 {
+        let out = cycle(&mut axis, &mut drive);
+        if modes.last() != Some(&out.mode) {
+            modes.push(out.mode);
+        }
+        assert_eq!(axis.status().mode_switch_error, None);
+        if axis.status().mode_switch == ModeSwitchPhase::Idle {
+            break;
+        }
+        let phase = axis.status().mode_switch;
+        assert!(
+            phase == ModeSwitchPhase::Stopping { to: CSP }
+                || phase == ModeSwitchPhase::Requested { to: CSP },
+            "{phase:?}"
+        );
+    }
+    assert_eq!(modes, [CSV, CSP]);
+    assert_eq!(axis.status().active_mode, CSP);
+    assert_eq!(drive.refused_mode_writes, 0);
+    assert_eq!(drive.switched_while_moving, 0);
+    assert_eq!(drive.velocity, 0);
+    let velocities: Vec<i32> = drive
+        .outputs
+        .iter()
+        .filter(|o| o.mode == CSV)
+        .map(|o| o.target_velocity)
+        .collect();
+    assert!(
+        velocities.windows(2).all(|w| w[1].abs() <= w[0].abs()),
+        "the csv set-point only falls: {velocities:?}"
+    );
+    let ev = events(&mut axis);
+    assert!(ev.contains(&Event::ModeSwitched { from: CSV, to: CSP }));
+    let out = cycle(&mut axis, &mut drive);
+    assert_eq!(
+        out.target_position, drive.position,
+        "csp starts where the axis is"
+    );
+}

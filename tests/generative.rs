@@ -663,3 +663,28 @@ fn mapped_limits_the_master_does_not_drive_keep_the_drives_values() {
     };
     run_case(&c).unwrap_or_else(|e| panic!("{e}"));
 }
+
+/// Found by the generative test (`cc daae7c29…`): an MR-J4-TM whose cst program left the motor
+/// turning could not switch to csp. The drive switches to or from a position mode only at zero
+/// speed, and a torque set-point ramped to 0 only lets the motor coast, so the engine gave up
+/// after its timeout. It now brakes in csv first. Both drives, and a cst → csv → csp chain.
+#[test]
+fn a_turning_torque_axis_switches_to_a_position_mode() {
+    for kind in [Kind::MrJ4, Kind::Bdhde] {
+        let c = Case {
+            devices: vec![drive(kind, CyclicMode::Cst)],
+            cycle_us: 2000,
+            ops: vec![
+                Op::Enable,
+                Op::QuickStopThenEnable,
+                Op::Program,
+                Op::Mode(0, 0),
+                Op::Mode(0, 2),
+                Op::Program,
+                Op::Mode(0, 1),
+                Op::Mode(0, 0),
+            ],
+        };
+        run_case(&c).unwrap_or_else(|e| panic!("{}: {e}", kind.name()));
+    }
+}

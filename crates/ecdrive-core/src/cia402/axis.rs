@@ -43,6 +43,12 @@
 //!    drive stops by 0x605D. It waits for standstill (the drive's zero-speed flag if given, else
 //!    the velocity or position-change threshold, for [`StandstillConfig::cycles`] cycles). Only
 //!    then does it write 0x6060.
+//!
+//!    A torque set-point of 0 only lets the motor coast, so an axis that turns in a torque
+//!    mode (cst, cstca, tq) is first switched to a velocity mode the drive supports (csv from a
+//!    cyclic mode, pv from tq; no zero-speed rule applies between those) and ramped to 0 there.
+//!    The phase reads [`ModeSwitchPhase::Stopping`] throughout, and the switch's `from` is that
+//!    velocity mode from then on. A drive with no such mode gets the torque ramp and coasts.
 //! 2. It writes the new mode to 0x6060 ([`ModeSwitchPhase::Requested`]). Until 0x6061 shows the
 //!    new mode it **holds the old mode's last set-point** and the new mode's field keeps tracking
 //!    the actual value, so both modes' command values are valid whichever the drive uses (MR-J4-TM
@@ -487,6 +493,13 @@ impl EventQueue {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum ModeSwitch {
     Idle,
+    /// A turning torque-mode axis on its way to a position mode: 0x6060 = `via` (a velocity
+    /// mode) first, so the axis can be ramped to zero speed.
+    Braking {
+        via: OperationMode,
+        to: OperationMode,
+        cycles: u32,
+    },
     Stopping {
         to: OperationMode,
         cycles: u32,
@@ -653,7 +666,9 @@ impl Axis {
         }
         match self.switch {
             ModeSwitch::Idle => {}
-            ModeSwitch::Stopping { to, .. } | ModeSwitch::Requested { to, .. } => {
+            ModeSwitch::Braking { to, .. }
+            | ModeSwitch::Stopping { to, .. }
+            | ModeSwitch::Requested { to, .. } => {
                 return if to == mode {
                     Ok(())
                 } else {
@@ -667,14 +682,16 @@ impl Axis {
         let needs_stop = self.caps.position_mode_switch_needs_zero_speed
             && (self.caps.is_position_mode(mode) || self.caps.is_position_mode(self.active_mode));
         if needs_stop {
-            let n = self.config.stop_ramp.cycles.max(1);
-            self.switch = ModeSwitch::Stopping {
-                to: mode,
-                cycles: 0,
-                position_step: step_size(self.position_delta.unsigned_abs(), n),
-                velocity_step: step_size(self.velocity.unsigned_abs(), n),
-                torque_step: step_size(u32::from(self.torque.unsigned_abs()), n),
-            };
+            if let Some(via) = self.braking_mode() {
+                self.commanded_mode = via;
+                self.switch = ModeSwitch::Braking {
+                    via,
+                    to: mode,
+                    cycles: 0,
+                };
+            } else {
+                self.switch = self.stopping(mode);
+            }
         } else {
             self.commanded_mode = mode;
             self.switch = ModeSwitch::Requested {
@@ -684,6 +701,38 @@ impl Axis {
             };
         }
         Ok(())
+    }
+
+    /// The Stopping phase toward `to`, with ramps from the present commanded values.
+    fn stopping(&self, to: OperationMode) -> ModeSwitch {
+        let n = self.config.stop_ramp.cycles.max(1);
+        ModeSwitch::Stopping {
+            to,
+            cycles: 0,
+            position_step: step_size(self.position_delta.unsigned_abs(), n),
+            velocity_step: step_size(self.velocity.unsigned_abs(), n),
+            torque_step: step_size(u32::from(self.torque.unsigned_abs()), n),
+        }
+    }
+
+    /// The velocity mode to brake in when the axis turns in a torque mode and must reach zero
+    /// speed: a torque set-point of 0 only lets the motor coast, so the engine switches to csv
+    /// (from a cyclic torque mode) or pv (from tq) and ramps the velocity to 0 there. `None`
+    /// when the axis is not turning, not enabled, or the drive has no such mode.
+    fn braking_mode(&self) -> Option<OperationMode> {
+        if self.active_mode.set_point_kind() != Some(SetPointKind::Torque)
+            || self.standstill
+            || self.state != Some(State::OperationEnabled)
+            || self.fault
+        {
+            return None;
+        }
+        let via = if self.active_mode.is_cyclic() {
+            OperationMode::CyclicSyncVelocity
+        } else {
+            OperationMode::ProfileVelocity
+        };
+        (self.caps.supported_modes.contains(via) && !self.caps.is_position_mode(via)).then_some(via)
     }
 
     /// Target position (0x607A) for pp, ip, csp.
@@ -746,7 +795,9 @@ impl Axis {
             displayed_mode: self.displayed_mode,
             mode_switch: match self.switch {
                 ModeSwitch::Idle => ModeSwitchPhase::Idle,
-                ModeSwitch::Stopping { to, .. } => ModeSwitchPhase::Stopping { to },
+                ModeSwitch::Braking { to, .. } | ModeSwitch::Stopping { to, .. } => {
+                    ModeSwitchPhase::Stopping { to }
+                }
                 ModeSwitch::Requested { to, .. } => ModeSwitchPhase::Requested { to },
             },
             streaming: self.streaming(),
@@ -882,7 +933,10 @@ impl Axis {
                 phase: self.phase(),
             });
         }
-        if let ModeSwitch::Stopping { to, .. } | ModeSwitch::Requested { to, .. } = self.switch {
+        if let ModeSwitch::Braking { to, .. }
+        | ModeSwitch::Stopping { to, .. }
+        | ModeSwitch::Requested { to, .. } = self.switch
+        {
             return Err(AxisError::ModeSwitchInProgress { to });
         }
         if !self.streaming() {
@@ -946,7 +1000,9 @@ impl Axis {
                 ) {
                     self.set_target(Target::SwitchOnDisabled);
                 }
-                if let ModeSwitch::Stopping { to, cycles, .. } = self.switch {
+                if let ModeSwitch::Braking { to, cycles, .. }
+                | ModeSwitch::Stopping { to, cycles, .. } = self.switch
+                {
                     self.abandon_switch(to, ModeSwitchFailure::Fault, cycles);
                 }
                 self.events.push(Event::Fault {
@@ -990,6 +1046,24 @@ impl Axis {
                 }
                 _ => self.mismatch_reported = false,
             },
+            ModeSwitch::Braking { via, to, cycles } => {
+                if fb.mode_display.is_none_or(|d| d == via) {
+                    // Now in the velocity mode, silently: the application asked for `to`.
+                    self.active_mode = via;
+                    self.mode_bits = ControlWord::empty();
+                    self.switch = self.stopping(to);
+                } else if cycles >= timeout {
+                    self.abandon_switch(
+                        to,
+                        ModeSwitchFailure::NotConfirmed {
+                            displayed: fb.mode_display,
+                        },
+                        cycles,
+                    );
+                } else if let ModeSwitch::Braking { cycles: c, .. } = &mut self.switch {
+                    *c = cycles.saturating_add(1);
+                }
+            }
             ModeSwitch::Stopping { to, cycles, .. } => {
                 if self.standstill {
                     self.commanded_mode = to;
