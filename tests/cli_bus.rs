@@ -309,8 +309,8 @@ fn states_are_requested_and_reported() {
     assert_eq!(one["devices"][0]["position"], 1);
     assert_eq!(one["devices"][0]["reached"], "SAFEOP");
     assert!(one["startup"]["op_ms"].is_null(), "{one}");
-    // Refused: neither drive has a bootstrap mailbox.
-    let r = sim.ecdrive(&["states", "-p", "0", "BOOT"]);
+    // Refused: the BDHDE has no bootstrap mailbox (the MR-J4-TM has one: tests/cli_foe.rs).
+    let r = sim.ecdrive(&["states", "-p", "1", "BOOT"]);
     assert_eq!(r.code, Some(4), "{r:#?}");
     assert!(
         r.stdout
@@ -318,25 +318,25 @@ fn states_are_requested_and_reported() {
         "{r:#?}"
     );
     assert!(
-        r.stderr.contains("drive 0 (MR-J4-TM) did not reach BOOT"),
+        r.stderr.contains("drive 1 (BDHDE) did not reach BOOT"),
         "{r:#?}"
     );
     // `slaves` shows the state each device was left in, as found, before discovery resets it:
-    // the refused BOOT request left the MR-J4-TM with the error flag and its code (ETG.1000.6
-    // 0x0013 "Bootstrap not supported"); the BDHDE in PREOP, where that command's discovery
+    // the refused BOOT request left the BDHDE with the error flag and its code (ETG.1000.6
+    // 0x0013 "Bootstrap not supported"); the MR-J4-TM in PREOP, where that command's discovery
     // took it.
     let text = sim.ecdrive(&["slaves"]).ok().to_string();
-    let row0 = text.lines().nth(1).unwrap();
-    assert!(row0.contains(" INIT+ERR(0x0013) "), "{text}");
-    assert!(text.lines().nth(2).unwrap().contains(" PREOP "), "{text}");
-    sim.ecdrive(&["states", "-p", "0", "BOOT"]);
+    let row1 = text.lines().nth(2).unwrap();
+    assert!(row1.contains(" INIT+ERR(0x0013) "), "{text}");
+    assert!(text.lines().nth(1).unwrap().contains(" PREOP "), "{text}");
+    sim.ecdrive(&["states", "-p", "1", "BOOT"]);
     let found = sim.ecdrive(&["slaves", "--json"]).json();
-    assert_eq!(found[0]["found"]["state"], "INIT+ERR", "{found:#}");
-    assert_eq!(found[0]["found"]["error"], true, "{found:#}");
-    assert_eq!(found[0]["found"]["code"], 0x0013, "{found:#}");
-    assert_eq!(found[0]["al"]["state"], "PREOP", "{found:#}");
-    assert_eq!(found[0]["al"]["error"], false, "{found:#}");
-    assert_eq!(found[1]["found"]["state"], "PREOP", "{found:#}");
+    assert_eq!(found[1]["found"]["state"], "INIT+ERR", "{found:#}");
+    assert_eq!(found[1]["found"]["error"], true, "{found:#}");
+    assert_eq!(found[1]["found"]["code"], 0x0013, "{found:#}");
+    assert_eq!(found[1]["al"]["state"], "PREOP", "{found:#}");
+    assert_eq!(found[1]["al"]["error"], false, "{found:#}");
+    assert_eq!(found[0]["found"]["state"], "PREOP", "{found:#}");
     sim.ecdrive(&["states", "-p", "1", "SAFEOP"]).ok();
     let v = sim.ecdrive(&["slaves", "--verbose"]).ok().to_string();
     assert!(

@@ -477,6 +477,49 @@ fn sii_write_needs_write_enable_and_reload_applies_alias() {
     assert!(img.checksum_ok());
 }
 
+/// A power cycle (in-process): every register back to its reset value, the station address
+/// gone, the device in INIT, and the alias written to the EEPROM (with its checksum) loaded
+/// into 0x0012 from the EEPROM, which keeps its content.
+#[test]
+fn a_power_cycle_keeps_the_eeprom_and_loads_the_alias() {
+    let (mut p, _) = io_segment(2);
+    let mut head = sii_read(&mut p, 0x1000, 0);
+    head.extend(sii_read(&mut p, 0x1000, 4));
+    head[8..10].copy_from_slice(&[0xCD, 0xAB]);
+    let crc = SII_CRC.checksum(&head[..14]);
+    for (word, v) in [(4u8, [0xCD, 0xAB]), (7, [crc, 0])] {
+        p.fpwr(0x1000, 0x0508, &v).unwrap();
+        p.fpwr(0x1000, 0x0502, &[0x01, 0x02, word, 0, 0, 0]).unwrap();
+    }
+    p.request_state(0x1000, AlState::PreOp as u16).unwrap();
+    assert_eq!(p.read_u16(0x1000, 0x0012).unwrap().0, 0, "not before a power cycle");
+    assert!(p.segment.power_cycle(0));
+    assert!(!p.segment.power_cycle(9));
+    // The station address is gone (reset value 0): address the device by position.
+    let r = p.aprd(0, 0x0010, 2).unwrap();
+    assert_eq!(r.data, [0, 0]);
+    assert_eq!(p.aprd(0, 0x0012, 2).unwrap().data, [0xCD, 0xAB]);
+    assert_eq!(p.aprd(0, 0x0130, 2).unwrap().data, [AlState::Init as u8, 0]);
+    // The other device was not touched.
+    assert_eq!(p.read_u16(0x1001, 0x0012).unwrap().0, 0);
+}
+
+/// A write-protected EEPROM does not acknowledge a write (0x0502 bit 13); the word keeps its
+/// value.
+#[test]
+fn a_write_protected_eeprom_does_not_acknowledge() {
+    let (mut p, _) = io_segment(1);
+    p.segment
+        .slave_mut(0)
+        .unwrap()
+        .esc
+        .set_eeprom_write_protected(true);
+    p.fpwr(0x1000, 0x0508, &[0x34, 0x12]).unwrap();
+    p.fpwr(0x1000, 0x0502, &[0x01, 0x02, 4, 0, 0, 0]).unwrap();
+    assert_eq!(p.read_u16(0x1000, 0x0502).unwrap().0 & 0x6000, 0x2000);
+    assert_eq!(&sii_read(&mut p, 0x1000, 4)[0..2], &[0, 0]);
+}
+
 // ------------------------------------------------------------------------------ AL state machine
 
 #[test]

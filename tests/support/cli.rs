@@ -103,6 +103,9 @@ pub fn ecdrive(args: &[&str]) -> Run {
 pub struct SimOnVeth {
     child: Child,
     stderr: Option<BufReader<ChildStderr>>,
+    /// The `ecdrive sim` arguments after the interface, and the device count.
+    args: Vec<String>,
+    devices: usize,
     /// The banner `ecdrive sim` printed (one line per device).
     pub banner: String,
     // Dropped after the child is stopped (fields drop in declaration order).
@@ -121,13 +124,31 @@ impl SimOnVeth {
             return None;
         }
         let veth = VethPair::create().expect("veth pair");
+        let mut args: Vec<String> = Vec::new();
+        for d in devices {
+            args.extend(["--device".to_string(), d.to_string()]);
+        }
+        args.extend(extra.iter().map(|a| a.to_string()));
+        let (child, stderr, banner) = Self::spawn(&veth, &args, devices.len());
+        Some(Self {
+            child,
+            stderr: Some(stderr),
+            args,
+            devices: devices.len(),
+            banner,
+            veth,
+        })
+    }
+
+    fn spawn(
+        veth: &VethPair,
+        args: &[String],
+        devices: usize,
+    ) -> (Child, BufReader<ChildStderr>, String) {
         let mut cmd = Command::new("ip");
         cmd.args(["netns", "exec", veth.netns().name(), ECDRIVE, "sim"])
-            .args(["--interface", veth.peer(), "--sm-watchdog", "0"]);
-        for d in devices {
-            cmd.args(["--device", d]);
-        }
-        cmd.args(extra);
+            .args(["--interface", veth.peer(), "--sm-watchdog", "0"])
+            .args(args);
         let mut child = cmd
             .stdin(Stdio::null())
             .stdout(Stdio::null())
@@ -137,7 +158,7 @@ impl SimOnVeth {
         let mut stderr = BufReader::new(child.stderr.take().expect("stderr"));
         let mut banner = String::new();
         let mut line = String::new();
-        let last = format!("  {}: ", devices.len() - 1);
+        let last = format!("  {}: ", devices - 1);
         while stderr.read_line(&mut line).expect("read sim stderr") > 0 {
             banner.push_str(&line);
             if line.starts_with(&last) {
@@ -146,15 +167,21 @@ impl SimOnVeth {
             line.clear();
         }
         assert!(
-            banner.contains(&format!("serving {} device(s)", devices.len())),
+            banner.contains(&format!("serving {devices} device(s)")),
             "ecdrive sim did not start:\n{banner}"
         );
-        Some(Self {
-            child,
-            stderr: Some(stderr),
-            banner,
-            veth,
-        })
+        (child, stderr, banner)
+    }
+
+    /// Switch the emulated devices off and on: stop the simulator (SIGINT) and start it again
+    /// with the same arguments on the same pair. Returns what it printed when stopping.
+    pub fn power_cycle(&mut self) -> String {
+        let out = self.stop_inner();
+        let (child, stderr, banner) = Self::spawn(&self.veth, &self.args, self.devices);
+        self.child = child;
+        self.stderr = Some(stderr);
+        self.banner = banner;
+        out
     }
 
     /// The interface the commands under test use.
@@ -165,7 +192,10 @@ impl SimOnVeth {
     /// Run `ecdrive` with `args`, `-i <host end>` inserted after the command name.
     pub fn ecdrive(&self, args: &[&str]) -> Run {
         let mut all: Vec<&str> = args.to_vec();
-        let at = all.len().min(1);
+        // After the command name; after the subcommand's for the commands whose subcommands
+        // take the interface (`foe read`, `sii write`).
+        let nested = matches!(all.as_slice(), ["foe", ..] | ["sii", "write", ..]);
+        let at = all.len().min(if nested { 2 } else { 1 });
         all.splice(at..at, ["-i", self.host()]);
         ecdrive(&all)
     }

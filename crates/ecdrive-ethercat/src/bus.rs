@@ -377,6 +377,32 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
         timeout: Duration,
         op: impl AsyncFnOnce(&mut CoeClient<'_>) -> Result<T, CoeError>,
     ) -> Result<T, SessionError> {
+        self.mailbox(address, drive, complete_access, false, timeout, op)
+    }
+
+    /// [`with_coe`](Self::with_coe) for a device this session did not discover (a tool that
+    /// addresses a device as another session left it, in BOOT for instance): its mailbox's
+    /// history is unknown, so the first request carries counter 0, which a device never takes
+    /// for a repeat ([`CoeClient::with_unknown_history`]).
+    pub fn with_mailbox_as_found<T>(
+        &mut self,
+        address: u16,
+        drive: DriveRef,
+        timeout: Duration,
+        op: impl AsyncFnOnce(&mut CoeClient<'_>) -> Result<T, CoeError>,
+    ) -> Result<T, SessionError> {
+        self.mailbox(address, drive, false, true, timeout, op)
+    }
+
+    fn mailbox<T>(
+        &mut self,
+        address: u16,
+        drive: DriveRef,
+        complete_access: bool,
+        unknown_history: bool,
+        timeout: Duration,
+        op: impl AsyncFnOnce(&mut CoeClient<'_>) -> Result<T, CoeError>,
+    ) -> Result<T, SessionError> {
         let log = self.emergencies.clone();
         let mbx_timeout = self.opts.mailbox_timeout;
         let d = drive.clone();
@@ -393,6 +419,9 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
                 .with_timeout(mbx_timeout)
                 .with_counter(seq.last)
                 .avoiding(seq.ethercrab_next);
+            if unknown_history {
+                c = c.with_unknown_history();
+            }
             *sm0_out = Some(c.sms().out_start);
             let r = op(&mut c).await;
             *counter_out = c.counter();

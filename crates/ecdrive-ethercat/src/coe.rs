@@ -20,6 +20,10 @@ use ethercrab::{Command, MainDevice};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
+#[path = "foe.rs"]
+mod foe;
+pub use foe::FoeTransfer;
+
 /// The mailbox SyncManagers of a drive, as configured in the ESC.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct MailboxSms {
@@ -77,6 +81,14 @@ pub enum CoeErrorKind {
     /// An EtherCAT access failed.
     #[error("bus error: {0}")]
     Bus(String),
+    /// The device ended an FoE transfer with an error.
+    #[error("FoE error {code}{}", if .text.is_empty() { String::new() } else { format!(": {}", .text) })]
+    Foe {
+        /// The code.
+        code: crate::ec::mailbox::FoeErrorCode,
+        /// The device's text.
+        text: String,
+    },
     /// The data does not fit a mailbox transfer.
     #[error("{0}")]
     TooLarge(String),
@@ -163,6 +175,8 @@ pub struct CoeClient<'a> {
     sms: MailboxSms,
     counter: u8,
     avoid: u8,
+    /// The next request carries counter 0 (the start value, never taken for a repeat).
+    zero_next: bool,
     complete_access: bool,
     timeout: Duration,
     log: EmergencyLog,
@@ -212,6 +226,7 @@ impl<'a> CoeClient<'a> {
             sms,
             counter: 0,
             avoid: 0,
+            zero_next: false,
             complete_access: false,
             timeout: Duration::from_millis(1000),
             log,
@@ -270,7 +285,20 @@ impl<'a> CoeClient<'a> {
         }
     }
 
+    /// Start the counter sequence at 0, the mailbox counter's start value (ETG.1000.4), which a
+    /// device never takes for a repeat: for a client that does not know what the device
+    /// received last (a tool that addresses a device without a discovery of its own).
+    pub fn with_unknown_history(mut self) -> Self {
+        self.zero_next = true;
+        self
+    }
+
     fn next_counter(&mut self) -> u8 {
+        if self.zero_next {
+            self.zero_next = false;
+            self.counter = 0;
+            return 0;
+        }
         // Counters run 1..=7; 0 is reserved.
         self.counter = self.counter % 7 + 1;
         if self.counter == self.avoid {

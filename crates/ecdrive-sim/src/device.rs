@@ -171,6 +171,10 @@ pub trait Device: AsAny + Send {
     /// and abort segmented transfers.
     fn mailbox_reset(&mut self) {}
 
+    /// The device was switched off and on ([`crate::esc::Esc::power_cycle`]): back to its
+    /// power-on state, keeping only what it keeps in non-volatile memory.
+    fn power_cycle(&mut self) {}
+
     /// The foreign-device behaviour this device shows ([`super::quirks`]). The ESC applies the
     /// process-data ones itself ([`Quirk::StaleInputsUntilOp`](super::quirks::Quirk::StaleInputsUntilOp),
     /// [`Quirk::OutputsInSafeOp`](super::quirks::Quirk::OutputsInSafeOp)); the device applies

@@ -10,6 +10,7 @@
 //! - [`transport`]: serving a segment on a raw socket, to ethercrab's `PduTx`/`PduRx`
 //!   in-process, or as a synchronous [`crate::link::FrameLink`];
 //! - [`coe`]: the CoE mailbox server and object dictionary store devices use;
+//! - [`foe`]: the FoE server (files, firmware images) of devices with file access;
 //! - [`devices`]: ready-made test devices (generic CoE servo, EEPROM-only I/O, mailbox echo);
 //! - [`drives`]: the emulated drives (MR-J4-TM, BDHDE), built from their ESI files and their
 //!   own behaviour tables;
@@ -55,6 +56,7 @@ pub mod devices;
 pub mod drives;
 pub mod esc;
 pub mod faults;
+pub mod foe;
 pub mod probe;
 pub mod quirks;
 pub mod rec;

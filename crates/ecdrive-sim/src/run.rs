@@ -227,6 +227,27 @@ pub struct SimOptions {
     pub priority: Option<u8>,
     /// Pin the serving thread to this CPU.
     pub cpu: Option<usize>,
+    /// Keep each device's EEPROM in this directory (`POS-NAME.sii`): loaded at start when
+    /// there, saved when serving ends, so what a master wrote (a station alias, a whole SII)
+    /// is still there after a restart, as on a device that was switched off and on.
+    pub eeprom_dir: Option<std::path::PathBuf>,
+    /// Positions whose EEPROM is write-protected (writes are not acknowledged).
+    pub eeprom_write_protected: Vec<u16>,
+}
+
+/// The file of the device at `position` named `name` in an EEPROM directory.
+pub fn eeprom_file(dir: &std::path::Path, position: usize, name: &str) -> std::path::PathBuf {
+    let clean: String = name
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    dir.join(format!("{position}-{clean}.sii"))
 }
 
 /// Why a segment cannot be served.
@@ -269,6 +290,14 @@ pub enum SimError {
     /// Frame I/O failed.
     #[error(transparent)]
     Link(#[from] LinkError),
+    /// An EEPROM file cannot be read, used or written.
+    #[error("EEPROM file {path}: {reason}")]
+    Eeprom {
+        /// The file.
+        path: String,
+        /// Why.
+        reason: String,
+    },
 }
 
 /// Build a segment of named devices on the host clock.
@@ -291,6 +320,41 @@ pub fn build_segment(names: &[String], esc: &EscConfig) -> Result<Segment, SimEr
     Ok(seg)
 }
 
+/// Load the EEPROM of each device from `dir` where its file is there (the directory is
+/// created if missing).
+fn load_eeproms(
+    segment: &mut Segment,
+    dir: &std::path::Path,
+    names: &[String],
+) -> Result<(), SimError> {
+    std::fs::create_dir_all(dir).map_err(|e| SimError::Eeprom {
+        path: dir.display().to_string(),
+        reason: e.to_string(),
+    })?;
+    for (i, name) in names.iter().enumerate() {
+        let path = eeprom_file(dir, i, name);
+        let bytes = match std::fs::read(&path) {
+            Ok(b) => b,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => continue,
+            Err(e) => {
+                return Err(SimError::Eeprom {
+                    path: path.display().to_string(),
+                    reason: e.to_string(),
+                });
+            }
+        };
+        if let Some(s) = segment.slave_mut(i) {
+            s.esc
+                .load_eeprom(&bytes)
+                .map_err(|reason| SimError::Eeprom {
+                    path: path.display().to_string(),
+                    reason,
+                })?;
+        }
+    }
+    Ok(())
+}
+
 /// A segment of named devices with its socket open, ready to serve.
 #[derive(Debug)]
 pub struct Prepared {
@@ -299,6 +363,8 @@ pub struct Prepared {
     /// Faults still to inject, by time.
     schedule: Vec<(Duration, Fault)>,
     handle: Option<FaultHandle>,
+    eeprom_dir: Option<std::path::PathBuf>,
+    names: Vec<String>,
 }
 
 /// Check the faults of `opts` against `segment`, apply the immediate ones and return the rest
@@ -368,6 +434,19 @@ impl Prepared {
                 }
             }
         }
+        for &p in &opts.eeprom_write_protected {
+            let n = segment.len();
+            let s = segment
+                .slave_mut(usize::from(p))
+                .ok_or_else(|| SimError::Fault {
+                    source_text: format!("--eeprom-write-protect {p}"),
+                    reason: format!("no device at position {p} (0–{})", n.saturating_sub(1)),
+                })?;
+            s.esc.set_eeprom_write_protected(true);
+        }
+        if let Some(dir) = &opts.eeprom_dir {
+            load_eeproms(&mut segment, dir, &opts.devices)?;
+        }
         let schedule = plan_faults(&mut segment, &opts.faults)?;
         let handle = (!schedule.is_empty()).then(|| segment.fault_handle());
         let socket = RawSocket::open(&opts.interface)?;
@@ -376,7 +455,28 @@ impl Prepared {
             segment: Mutex::new(segment),
             schedule,
             handle,
+            eeprom_dir: opts.eeprom_dir.clone(),
+            names: opts.devices.clone(),
         })
+    }
+
+    /// Save every device's EEPROM into the EEPROM directory, if one was given; returns the
+    /// files written.
+    pub fn save_eeproms(&self) -> Result<Vec<std::path::PathBuf>, SimError> {
+        let Some(dir) = &self.eeprom_dir else {
+            return Ok(Vec::new());
+        };
+        let seg = super::transport::lock(&self.segment);
+        let mut out = Vec::new();
+        for (i, (s, name)) in seg.slaves().iter().zip(&self.names).enumerate() {
+            let path = eeprom_file(dir, i, name);
+            std::fs::write(&path, s.esc.sii().bytes()).map_err(|e| SimError::Eeprom {
+                path: path.display().to_string(),
+                reason: e.to_string(),
+            })?;
+            out.push(path);
+        }
+        Ok(out)
     }
 
     /// The segment's counters (frames, injected faults).

@@ -322,6 +322,18 @@ impl Segment {
         self.slaves.get_mut(position)
     }
 
+    /// Switch the slave at `position` off and on ([`Esc::power_cycle`]): its EEPROM keeps
+    /// what was written to it. `false` if there is no such slave.
+    pub fn power_cycle(&mut self, position: usize) -> bool {
+        match self.slaves.get_mut(position) {
+            Some(s) => {
+                s.esc.power_cycle(s.device.as_mut());
+                true
+            }
+            None => false,
+        }
+    }
+
     /// All slaves in line order.
     pub fn slaves(&self) -> &[Slave] {
         &self.slaves

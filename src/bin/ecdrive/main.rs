@@ -326,14 +326,19 @@ enum Command {
     /// Read a device's SII EEPROM: a decoded summary, a hex dump, the raw bytes to a file, or
     /// an ESI skeleton.
     #[command(
-        after_help = "Examples:\n  ecdrive sii -i eth1 -p 0\n  ecdrive sii -i eth1 -p 0 --hex\n  ecdrive sii -i eth1 -p 0 -o drive0.bin\n  ecdrive sii -i eth1 -p 0 --esi > drive0.xml"
+        after_help = "Examples:\n  ecdrive sii -i eth1 -p 0\n  ecdrive sii -i eth1 -p 0 --hex\n  ecdrive sii -i eth1 -p 0 -o drive0.bin\n  ecdrive sii -i eth1 -p 0 --esi > drive0.xml\n  ecdrive sii write -i eth1 -p 0 drive0.bin",
+        subcommand_negates_reqs = true
     )]
     Sii {
-        #[command(flatten)]
-        bus: BusArgs,
+        #[command(subcommand)]
+        op: Option<SiiOp>,
+        /// Network interface of the EtherCAT segment, or `sim:DEVICE,…` for emulated devices
+        /// in-process.
+        #[arg(short, long, value_name = "IF", required = true)]
+        interface: Option<String>,
         /// Position of the device on the segment (0 = first).
-        #[arg(short, long, value_name = "POS")]
-        position: u16,
+        #[arg(short, long, value_name = "POS", required = true)]
+        position: Option<u16>,
         /// Render the SII as an ESI skeleton (XML) on stdout.
         #[arg(long, conflicts_with_all = ["hex", "json"])]
         esi: bool,
@@ -345,6 +350,34 @@ enum Command {
         output: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
+    },
+    /// Set a device's station alias in its SII EEPROM (word 4, with the header checksum), and
+    /// read it back. By position, without a discovery; the device must be in INIT or PRE-OP.
+    /// The ESC loads the new alias at the device's next power cycle.
+    #[command(
+        after_help = "Examples:\n  ecdrive alias -i eth1 -p 0 0x1001\n  ecdrive alias -i eth1 -p 2 0 --json"
+    )]
+    Alias {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        /// The alias (decimal or 0x hex, 0–0xFFFF; 0 = none).
+        #[arg(value_name = "ALIAS", value_parser = parse_u16)]
+        alias: u16,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Read or write a file on a device over FoE (File access over EtherCAT): firmware in
+    /// BOOT. By position, without a discovery: the device as it is (put it into BOOT with
+    /// `ecdrive states -p POS BOOT` first).
+    #[command(
+        after_help = "Examples:\n  ecdrive states -i eth1 -p 0 BOOT\n  ecdrive foe write -i eth1 -p 0 --password 0x4D524A34 firmware.efw fw-b5.efw\n  ecdrive foe read -i eth1 -p 0 --password 0x4D524A34 firmware.efw back.efw\n  ecdrive states -i eth1 -p 0 INIT\n\nFoE errors are the device's: 0x8009 not in Bootstrap, 0x800A wrong password, 0x8001\nfile not found, 0x8004 illegal (a file the device does not take)."
+    )]
+    Foe {
+        #[command(subcommand)]
+        op: FoeOp,
     },
     /// Show what the parser reads from an ESI file, or check it and say why it is invalid.
     #[command(
@@ -412,7 +445,7 @@ enum Command {
     )]
     Sim {
         /// Interface to serve on (e.g. one end of a veth pair).
-        #[arg(long, short, required_unless_present_any = ["list_devices", "can"], conflicts_with = "can")]
+        #[arg(long, short, required_unless_present_any = ["list_devices", "can", "make_firmware"], conflicts_with = "can")]
         interface: Option<String>,
         /// Serve emulated CANopen drives on this CAN bus instead: a SocketCAN interface (vcan0,
         /// can0) or vbus:PATH (a virtual bus shared between processes; the hub starts at PATH
@@ -450,6 +483,8 @@ enum Command {
         #[command(flatten)]
         faults: Box<sim::FaultArgs>,
         #[command(flatten)]
+        store: sim::StoreArgs,
+        #[command(flatten)]
         json: Json,
     },
     /// Measure the cycle's timing against a bare sleep loop, a plain ethercrab loop and a SOEM
@@ -459,6 +494,71 @@ enum Command {
     /// Print what this build is: ecdrive's version and commit, ethercrab's version, the
     /// compiler, the build's profile and features, the drive profiles built in.
     Version {
+        #[command(flatten)]
+        json: Json,
+    },
+}
+
+#[derive(Subcommand, Clone)]
+enum SiiOp {
+    /// Write a whole SII image (an `ecdrive sii -o` file, a vendor's .bin) into the device's
+    /// EEPROM: only the words that differ, all read back. Checked first: the size against the
+    /// EEPROM (always), the header checksum, the categories and the identity (--force
+    /// overrides these). The device must be in INIT or PRE-OP.
+    Write {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        /// The SII image.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
+        /// Write it even if the checksum, the categories or the identity do not fit.
+        #[arg(long)]
+        force: bool,
+        #[command(flatten)]
+        json: Json,
+    },
+}
+
+#[derive(Subcommand, Clone)]
+enum FoeOp {
+    /// Read file NAME from the device into FILE (`-` or none: standard output).
+    Read {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        /// The FoE password (decimal or 0x hex; 0 = none).
+        #[arg(long, value_name = "N", default_value = "0", value_parser = parse_u32)]
+        password: u32,
+        /// The file's name on the device.
+        #[arg(value_name = "NAME")]
+        name: String,
+        /// Where to put it.
+        #[arg(value_name = "FILE")]
+        file: Option<PathBuf>,
+        #[command(flatten)]
+        json: Json,
+    },
+    /// Write FILE to the device as file NAME.
+    Write {
+        #[command(flatten)]
+        bus: BusArgs,
+        /// Position of the device on the segment (0 = first).
+        #[arg(short, long, value_name = "POS")]
+        position: u16,
+        /// The FoE password (decimal or 0x hex; 0 = none).
+        #[arg(long, value_name = "N", default_value = "0", value_parser = parse_u32)]
+        password: u32,
+        /// The file's name on the device.
+        #[arg(value_name = "NAME")]
+        name: String,
+        /// The file to send.
+        #[arg(value_name = "FILE")]
+        file: PathBuf,
         #[command(flatten)]
         json: Json,
     },
@@ -541,6 +641,15 @@ fn parse_node(s: &str) -> Result<u8, String> {
 fn parse_state(s: &str) -> Result<AlState, String> {
     AlState::parse(s)
         .ok_or_else(|| format!("unknown state {s:?} (use INIT, PREOP, SAFEOP, OP or BOOT)"))
+}
+
+fn parse_u32(s: &str) -> Result<u32, String> {
+    let t = s.trim();
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(h) => u32::from_str_radix(h, 16),
+        None => t.parse::<u32>(),
+    }
+    .map_err(|_| format!("{s:?} is not a 32-bit number (decimal or 0x hex)"))
 }
 
 fn parse_u16(s: &str) -> Result<u16, String> {
@@ -719,6 +828,152 @@ where
     Ok(r)
 }
 
+/// `ecdrive sii write`.
+fn sii_write(
+    interface: &str,
+    position: u16,
+    file: &std::path::Path,
+    force: bool,
+    json: bool,
+) -> ExitCode {
+    let image = match std::fs::read(file) {
+        Ok(b) => b,
+        Err(e) => {
+            return fail_with(
+                "sii",
+                &format!("reading {}: {e}", file.display()),
+                exit::USAGE,
+            );
+        }
+    };
+    let bar = print::progress("writing the EEPROM");
+    let b2 = bar.clone();
+    let r = session("sii", interface, move |b| {
+        tools::alias::sii_write(b, position, &image, force, &mut |done, total| {
+            b2.set_length(total as u64);
+            b2.set_position(done as u64);
+        })
+    });
+    bar.finish_and_clear();
+    match r {
+        Ok(r) if json => print_json("sii", &r),
+        Ok(r) => {
+            for o in &r.overridden {
+                eprintln!("ecdrive sii: --force: {o}");
+            }
+            println!(
+                "device {}: {} bytes written to the EEPROM ({} words changed, {} unchanged), \
+                 read back",
+                r.position, r.bytes, r.words_written, r.words_unchanged
+            );
+            ExitCode::SUCCESS
+        }
+        Err(code) => code,
+    }
+}
+
+/// `ecdrive foe read|write`.
+fn foe(op: FoeOp) -> ExitCode {
+    match op {
+        FoeOp::Write {
+            bus,
+            position,
+            password,
+            name,
+            file,
+            json,
+        } => {
+            let data = match std::fs::read(&file) {
+                Ok(b) => b,
+                Err(e) => {
+                    return fail_with(
+                        "foe",
+                        &format!("reading {}: {e}", file.display()),
+                        exit::USAGE,
+                    );
+                }
+            };
+            let bar = print::progress("writing over FoE");
+            let b2 = bar.clone();
+            let r = session("foe", &bus.interface, move |b| {
+                tools::foe::foe_write(b, position, &name, password, &data, &mut |done, total| {
+                    b2.set_length(total as u64);
+                    b2.set_position(done as u64);
+                })
+            });
+            bar.finish_and_clear();
+            match r {
+                Ok(r) if json.json => print_json("foe", &r),
+                Ok(r) => {
+                    println!(
+                        "drive {} ({}, {}): wrote {} bytes as {:?} in {} packet(s)",
+                        r.position,
+                        r.drive,
+                        r.al_state,
+                        r.transfer.bytes,
+                        r.name,
+                        r.transfer.packets
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(code) => code,
+            }
+        }
+        FoeOp::Read {
+            bus,
+            position,
+            password,
+            name,
+            file,
+            json,
+        } => {
+            let to_stdout = file.as_ref().is_none_or(|f| f.as_os_str() == "-");
+            if json.json && to_stdout {
+                return fail_with(
+                    "foe",
+                    "--json prints the report: give FILE for the data",
+                    exit::USAGE,
+                );
+            }
+            let bar = print::progress("reading over FoE");
+            let b2 = bar.clone();
+            let r = session("foe", &bus.interface, move |b| {
+                tools::foe::foe_read(b, position, &name, password, &mut |done| {
+                    b2.set_position(done as u64);
+                })
+            });
+            bar.finish_and_clear();
+            let (data, report) = match r {
+                Ok(x) => x,
+                Err(code) => return code,
+            };
+            if to_stdout {
+                use std::io::Write as _;
+                if let Err(e) = std::io::stdout().write_all(&data) {
+                    return fail_with("foe", &format!("writing standard output: {e}"), exit::USAGE);
+                }
+            } else if let Some(f) = &file
+                && let Err(e) = std::fs::write(f, &data)
+            {
+                return fail_with("foe", &format!("writing {}: {e}", f.display()), exit::USAGE);
+            }
+            if json.json {
+                return print_json("foe", &report);
+            }
+            eprintln!(
+                "drive {} ({}, {}): read {} bytes of {:?} in {} packet(s)",
+                report.position,
+                report.drive,
+                report.al_state,
+                report.transfer.bytes,
+                report.name,
+                report.transfer.packets
+            );
+            ExitCode::SUCCESS
+        }
+    }
+}
+
 fn main() -> ExitCode {
     // Output piped into `head` and the like: end quietly when the reader goes away, as Unix
     // tools do, instead of failing on every later write.
@@ -785,6 +1040,8 @@ fn dispatch(cli: Cli) -> ExitCode {
                 | Command::Graph { .. }
                 | Command::Reg { .. }
                 | Command::Sii { .. }
+                | Command::Alias { .. }
+                | Command::Foe { .. }
                 | Command::Run { .. }
                 | Command::Demo(_)
         )
@@ -1101,13 +1358,47 @@ fn dispatch(cli: Cli) -> ExitCode {
             }
         }
         Command::Sii {
+            op:
+                Some(SiiOp::Write {
+                    bus,
+                    position,
+                    file,
+                    force,
+                    json,
+                }),
+            ..
+        } => sii_write(&bus.interface, position, &file, force, json.json),
+        Command::Alias {
             bus,
             position,
+            alias,
+            json,
+        } => match session("alias", &bus.interface, move |b| {
+            tools::alias::alias(b, position, alias)
+        }) {
+            Ok(r) if json.json => print_json("alias", &r),
+            Ok(r) => {
+                println!(
+                    "device {}: station alias 0x{:04X} (was 0x{:04X}); {} EEPROM word(s) written, \
+                     checksum 0x{:02X}, read back. The ESC loads it at the next power cycle \
+                     (0x0012 reads 0x{:04X} now).",
+                    r.position, r.alias, r.previous, r.words_written, r.checksum, r.register_0x0012
+                );
+                ExitCode::SUCCESS
+            }
+            Err(code) => code,
+        },
+        Command::Foe { op } => foe(op),
+        Command::Sii {
+            op: None,
+            interface: Some(interface),
+            position: Some(position),
             esi,
             hex,
             output,
             json,
         } => {
+            let bus = BusArgs { interface };
             let bar = print::progress("reading the EEPROM");
             let b2 = bar.clone();
             let r = session("sii", &bus.interface, move |b| {
@@ -1256,6 +1547,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             cpu,
             list_devices,
             faults,
+            store,
             json,
         } => sim::sim(
             sim::SimRt {
@@ -1268,8 +1560,14 @@ fn dispatch(cli: Cli) -> ExitCode {
             devices,
             list_devices,
             faults,
+            store,
             json.json,
         ),
         Command::Jitter(args) => jitter::run(args),
+        Command::Sii { op: None, .. } => fail_with(
+            "sii",
+            "--interface and --position are required (see --help)",
+            exit::USAGE,
+        ),
     }
 }

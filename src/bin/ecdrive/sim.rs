@@ -33,6 +33,95 @@ pub enum Kind {
     Data,
 }
 
+/// EEPROM and firmware options of `ecdrive sim`.
+#[derive(clap::Args, Clone, Debug, Default)]
+#[command(next_help_heading = "EEPROM and firmware")]
+pub struct StoreArgs {
+    /// Keep each device's EEPROM in DIR (POS-NAME.sii): loaded at start when there, saved
+    /// when the sim stops, so a station alias or SII a master wrote is still there at the next
+    /// start, as on a device switched off and on.
+    #[arg(long, value_name = "DIR")]
+    pub eeprom_dir: Option<std::path::PathBuf>,
+    /// Write-protect the EEPROM of the device at POS (writes are not acknowledged); repeat for
+    /// more.
+    #[arg(long, value_name = "POS")]
+    pub eeprom_write_protect: Vec<u16>,
+    /// Write a firmware image in the emulation's format for the first --device (one that
+    /// takes firmware over FoE, the MR-J4-TM) to FILE and exit.
+    #[arg(long, value_name = "FILE")]
+    pub make_firmware: Option<std::path::PathBuf>,
+    /// With --make-firmware: the revision number the image gives the device (0x1018:03).
+    #[arg(long, value_name = "N", default_value = "0x00030000", value_parser = parse_u32)]
+    pub firmware_revision: u32,
+    /// With --make-firmware: the software version it gives the device (0x100A, ≤ 16 chars).
+    #[arg(long, value_name = "TEXT", default_value = "B5")]
+    pub firmware_version: String,
+}
+
+fn parse_u32(s: &str) -> Result<u32, String> {
+    let t = s.trim();
+    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(h) => u32::from_str_radix(h, 16),
+        None => t.parse::<u32>(),
+    }
+    .map_err(|_| format!("{s:?} is not a 32-bit number (decimal or 0x hex)"))
+}
+
+/// `--make-firmware`: an image for the first device of `devices`.
+fn make_firmware(devices: &[String], store: &StoreArgs, path: &std::path::Path) -> ExitCode {
+    let Some(name) = devices.first() else {
+        return fail_with("sim", "--make-firmware needs --device", exit::USAGE);
+    };
+    let Some(spec) = ecdrive::sim::drives::spec_for(name.split('+').next().unwrap_or(name)) else {
+        return fail_with(
+            "sim",
+            &format!("--make-firmware: {name:?} is not an emulated EtherCAT drive"),
+            exit::USAGE,
+        );
+    };
+    let Some((vendor_id, product_code)) = spec.foe.and_then(|f| f.firmware_for) else {
+        return fail_with(
+            "sim",
+            &format!(
+                "--make-firmware: the emulated {} takes no firmware over FoE",
+                spec.name
+            ),
+            exit::USAGE,
+        );
+    };
+    if store.firmware_version.len() > 16 || !store.firmware_version.is_ascii() {
+        return fail_with(
+            "sim",
+            "--firmware-version: at most 16 ASCII characters",
+            exit::USAGE,
+        );
+    }
+    let image = ecdrive::sim::foe::FirmwareImage {
+        vendor_id,
+        product_code,
+        revision: store.firmware_revision,
+        version: store.firmware_version.clone(),
+        payload: (0..4096u32).map(|i| (i * 7 + 3) as u8).collect(),
+    };
+    let bytes = image.encode();
+    if let Err(e) = std::fs::write(path, &bytes) {
+        return fail_with(
+            "sim",
+            &format!("writing {}: {e}", path.display()),
+            exit::USAGE,
+        );
+    }
+    eprintln!(
+        "ecdrive sim: {} bytes: firmware for the {} (revision 0x{:08X}, version {}) in {}",
+        bytes.len(),
+        spec.name,
+        image.revision,
+        image.version,
+        path.display()
+    );
+    ExitCode::SUCCESS
+}
+
 /// Fault injection options of `ecdrive sim`. Times (T) count from when serving starts, with a
 /// unit: `500ms`, `5s`. Positions (POS) are 0-based in `--device` order. Numbers may be
 /// decimal or 0x hex.
@@ -472,8 +561,12 @@ pub fn sim(
     devices: Vec<String>,
     list_devices: bool,
     faults: Box<FaultArgs>,
+    store: StoreArgs,
     json: bool,
 ) -> ExitCode {
+    if let Some(path) = &store.make_firmware {
+        return make_firmware(&devices, &store, path);
+    }
     if list_devices {
         use ecdrive::app::canopen::tools::EMULATED_NODES;
         let names = ecdrive::sim::devices::device_names();
@@ -552,6 +645,8 @@ pub fn sim(
         faults: faults.faults(),
         priority: rt.priority.filter(|p| *p > 0),
         cpu: rt.cpu,
+        eeprom_dir: store.eeprom_dir.clone(),
+        eeprom_write_protected: store.eeprom_write_protect.clone(),
     };
     let mut prepared = match ecdrive::sim::run::Prepared::new(&opts) {
         Ok(p) => p,
@@ -578,7 +673,22 @@ pub fn sim(
         cpu: opts.cpu,
         lock_memory: false,
     };
-    match prepared.serve_rt(&stop, &settings) {
+    let served = prepared.serve_rt(&stop, &settings);
+    match prepared.save_eeproms() {
+        Ok(files) if !files.is_empty() => {
+            eprintln!(
+                "ecdrive sim: EEPROMs saved in {}",
+                store
+                    .eeprom_dir
+                    .as_deref()
+                    .unwrap_or(std::path::Path::new("."))
+                    .display()
+            );
+        }
+        Ok(_) => {}
+        Err(e) => eprintln!("ecdrive sim: {e}"),
+    }
+    match served {
         Ok(stats) => {
             let seg = prepared.segment_stats();
             eprintln!(

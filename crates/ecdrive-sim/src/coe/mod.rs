@@ -290,6 +290,20 @@ impl CoeServer {
         od: &mut dyn ObjectStore,
         reply: &mut [u8],
     ) -> Option<usize> {
+        self.handle_with_foe(request, state, od, None, reply)
+    }
+
+    /// [`CoeServer::handle`] for a device that also serves FoE: type-4 mailboxes go to `foe`
+    /// (one counter sequence, one repeat check for both protocols, as the mailbox is one).
+    /// Without `foe` they get the mailbox error "protocol not supported".
+    pub fn handle_with_foe(
+        &mut self,
+        request: &[u8],
+        state: AlState,
+        od: &mut dyn ObjectStore,
+        foe: Option<&mut crate::foe::FoeServer>,
+        reply: &mut [u8],
+    ) -> Option<usize> {
         let mbx = match Mailbox::new_checked(request) {
             Ok(m) => m,
             Err(mailbox::Error::BadLength { .. }) => {
@@ -307,8 +321,13 @@ impl CoeServer {
         // A new request from the master ends an SDO information response still being sent.
         self.pending_info = None;
         let payload = mbx.payload();
-        match mbx.mailbox_type() {
-            Some(MailboxType::Coe) => {}
+        match (mbx.mailbox_type(), foe) {
+            (Some(MailboxType::Coe), _) => {}
+            (Some(MailboxType::Foe), Some(foe)) => {
+                let size = reply.len();
+                let r = foe.handle(payload, state, size)?;
+                return self.emit(reply, |c, b| r.message().emit_mailbox(c, b));
+            }
             _ => return self.mailbox_error(MailboxErrorDetail::UnsupportedProtocol, reply),
         }
         let Ok(coe) = Coe::new_checked(payload) else {

@@ -283,6 +283,8 @@ pub static SPEC: DriveSpec = DriveSpec {
     homing_on_current_position: REC_HOMING_ON_CURRENT_POSITION,
     sync_cycle_mismatch: AlStatusCode::DC_INVALID_CYCLE_TIME,
     abort_codes: REC_ABORT_CODES,
+    // The manual names a BOOT state (LED "very fast flashing") but no file access.
+    foe: None,
 };
 
 // ============================================================================================

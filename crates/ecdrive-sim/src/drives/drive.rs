@@ -178,6 +178,10 @@ pub struct EmulatedDrive {
     serial: u32,
     stored: Vec<(ObjectAddress, i64)>,
     coe: CoeServer,
+    /// File access, if the drive has it; its files live in flash (kept over a power cycle).
+    foe: Option<crate::foe::FoeServer>,
+    /// The firmware image in force since an update over FoE (its revision and version).
+    firmware: Option<crate::foe::FirmwareImage>,
     od: OdStore,
     rx: Vec<Slot>,
     tx: Vec<Slot>,
@@ -298,6 +302,8 @@ impl EmulatedDrive {
             serial,
             stored: Vec::new(),
             coe,
+            foe: spec.foe.map(crate::foe::FoeServer::new),
+            firmware: None,
             od,
             rx: Vec::new(),
             tx: Vec::new(),
@@ -369,6 +375,29 @@ impl EmulatedDrive {
         self.power_on();
     }
 
+    /// 0x1018:03 and 0x100A from the firmware in force (after an update over FoE).
+    fn apply_firmware(&mut self) {
+        let Some(fw) = &self.firmware else { return };
+        let (revision, version) = (u64::from(fw.revision), fw.version.clone());
+        let d = self.od.dict_mut();
+        let r = d
+            .set_uint(ObjectAddress::new(0x1018, 3), revision)
+            .and_then(|()| d.set_raw(ObjectAddress::new(0x100A, 0), version.as_bytes()));
+        if let Err(code) = r {
+            tracing::warn!(drive = self.spec.name, %code, "firmware identity not accepted");
+        }
+    }
+
+    /// The firmware image in force since an update over FoE, if any.
+    pub fn firmware(&self) -> Option<&crate::foe::FirmwareImage> {
+        self.firmware.as_ref()
+    }
+
+    /// The FoE server's counters, if the drive has file access.
+    pub fn foe_stats(&self) -> Option<crate::foe::FoeStats> {
+        self.foe.as_ref().map(|f| f.stats())
+    }
+
     fn power_on(&mut self) {
         let spec = self.spec;
         for p in spec.power_on {
@@ -393,6 +422,7 @@ impl EmulatedDrive {
                 tracing::warn!(drive = spec.name, address = %a, %code, "stored value not accepted");
             }
         }
+        self.apply_firmware();
         let rules = spec.modes;
         let (modes, initial) = match rules.selector {
             Some(sel) => {
@@ -1522,6 +1552,10 @@ fn esi_sdo_info(spec: &DriveSpec) -> bool {
 }
 
 impl Device for EmulatedDrive {
+    fn power_cycle(&mut self) {
+        EmulatedDrive::power_cycle(self);
+    }
+
     fn quirks(&self) -> Quirks {
         self.quirks
     }
@@ -1599,6 +1633,19 @@ impl Device for EmulatedDrive {
 
     fn state_changed(&mut self, from: AlState, to: AlState, _error: Option<AlStatusCode>) {
         self.al = to;
+        if from == AlState::Bootstrap && to == AlState::Init {
+            // The device restarts with the firmware written in BOOT, if any.
+            if let Some(fw) = self.foe.as_mut().and_then(|f| f.take_firmware()) {
+                tracing::info!(
+                    drive = self.spec.name,
+                    revision = fw.revision,
+                    version = %fw.version,
+                    "firmware updated"
+                );
+                self.firmware = Some(fw);
+                self.apply_firmware();
+            }
+        }
         if from == AlState::PreOp && to == AlState::SafeOp {
             if let Ok(m) = self.od.mapping() {
                 self.rx = layout(&m, Direction::Rx);
@@ -1644,7 +1691,8 @@ impl Device for EmulatedDrive {
         request: &[u8],
         reply: &mut [u8],
     ) -> Option<usize> {
-        self.coe.handle(request, state, &mut self.od, reply)
+        self.coe
+            .handle_with_foe(request, state, &mut self.od, self.foe.as_mut(), reply)
     }
 
     fn mailbox_poll(&mut self, reply: &mut [u8]) -> Option<usize> {
@@ -1653,6 +1701,9 @@ impl Device for EmulatedDrive {
 
     fn mailbox_reset(&mut self) {
         self.coe.reset();
+        if let Some(f) = self.foe.as_mut() {
+            f.reset();
+        }
     }
 
     fn inject(&mut self, fault: &crate::faults::DeviceFault) -> bool {

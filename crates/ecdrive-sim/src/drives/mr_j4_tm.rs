@@ -320,6 +320,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     homing_on_current_position: &[35, 37],
     sync_cycle_mismatch: REC_SYNC_CYCLE_MISMATCH,
     abort_codes: REC_ABORT_CODES,
+    foe: Some(REC_FOE),
 };
 
 // ============================================================================================
@@ -464,3 +465,19 @@ pub const REC_ABORT_CODES: &[(SdoAbortCode, SdoAbortCode)] = &[
 /// \[REC\] SAFE-OP → OP with a SYNC0 cycle that differs from 0x1C32:02 (or that the drive does
 /// not support) is refused with AL status 0x0035 "invalid sync cycle time".
 pub const REC_SYNC_CYCLE_MISMATCH: AlStatusCode = AlStatusCode::DC_INVALID_CYCLE_TIME;
+
+/// FoE on the MR-J4-TM: the manual says the drive supports FoE (software B3 or later, §1.2) and
+/// that in the Bootstrap state "the mailbox communication with the FoE protocol can be
+/// performed. Firmware can be updated through EtherCAT in this state" (§1.4.1); for details it
+/// refers to the sales office. Everything else is \[REC\] (MANUAL GAP): files only in BOOT
+/// (error 0x8009 elsewhere); the password 0x4D524A34 ("MRJ4"; error 0x800A when wrong); files
+/// up to 4 MiB; a written file must be a firmware image for vendor 0xA1E, product 0x201 in the
+/// emulation's own format ([`crate::foe::FirmwareImage`]; error 0x8004 otherwise); it is
+/// applied at the next BOOT → INIT: 0x1018:03 and 0x100A (the network module's revision and
+/// software version, §7.3.1(6), (9)) then report the image's.
+pub const REC_FOE: crate::foe::FoeSpec = crate::foe::FoeSpec {
+    password: 0x4D52_4A34,
+    boot_only: true,
+    max_file_bytes: 4 << 20,
+    firmware_for: Some((0x0000_0A1E, 0x0000_0201)),
+};

@@ -489,6 +489,10 @@ pub struct DriveSpec {
     /// (ETG.1000.6 / CiA 301): `(standard, this drive's)`. A drive whose manual lists fewer codes
     /// answers with those it lists.
     pub abort_codes: &'static [(SdoAbortCode, SdoAbortCode)],
+    /// File access over EtherCAT, if the drive has it: what its FoE server allows. A firmware
+    /// image written completely takes effect at the next BOOT → INIT (revision 0x1018:03 and
+    /// software version 0x100A).
+    pub foe: Option<crate::foe::FoeSpec>,
 }
 
 impl DriveSpec {

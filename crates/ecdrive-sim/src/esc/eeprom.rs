@@ -49,6 +49,8 @@ impl Esc {
             2 => {
                 if ctl & 0x0001 == 0 {
                     status |= 0x40; // write enable error
+                } else if self.cfg.eeprom_write_protected {
+                    status |= 0x20; // the EEPROM does not acknowledge
                 } else {
                     let addr = self.get_u32(0x0504) as usize;
                     let v = [self.byte(0x0508), self.byte(0x0509)];

@@ -89,6 +89,9 @@ pub struct EscConfig {
     pub clock_offset_ns: i64,
     /// Local clock drift against the host clock in ppb.
     pub clock_drift_ppb: i64,
+    /// The EEPROM's write protection is on (its WP pin tied high): a write command is not
+    /// acknowledged (0x0502 bit 13, "acknowledge/command error") and the word keeps its value.
+    pub eeprom_write_protected: bool,
 }
 
 impl Default for EscConfig {
@@ -107,6 +110,7 @@ impl Default for EscConfig {
             pdi_watchdog: 1000,
             clock_offset_ns: 0,
             clock_drift_ppb: 0,
+            eeprom_write_protected: false,
         }
     }
 }
@@ -392,6 +396,41 @@ impl Esc {
     /// The SII EEPROM content.
     pub fn sii(&self) -> &SiiImage {
         &self.sii
+    }
+
+    /// Turn the EEPROM's write protection on or off ([`EscConfig::eeprom_write_protected`]).
+    pub fn set_eeprom_write_protected(&mut self, on: bool) {
+        self.cfg.eeprom_write_protected = on;
+    }
+
+    /// Replace the EEPROM's content (as saved from an earlier run: an EEPROM keeps what was
+    /// written to it) and load the ESC configuration area from it. The size must be the
+    /// EEPROM's.
+    pub fn load_eeprom(&mut self, bytes: &[u8]) -> Result<(), String> {
+        let size = self.sii.bytes().len();
+        if bytes.len() != size {
+            return Err(format!(
+                "{} bytes, but this device's EEPROM has {size}",
+                bytes.len()
+            ));
+        }
+        self.sii.bytes_mut().copy_from_slice(bytes);
+        self.sii_reload();
+        Ok(())
+    }
+
+    /// Switch the slave off and on: every register to its power-on state, the configuration
+    /// area loaded from the EEPROM (which keeps its content), the device told it is in INIT
+    /// and its mailbox reset. A device with power-on behaviour of its own (the emulated
+    /// drives) gets [`Device::power_cycle`] as well.
+    pub fn power_cycle(&mut self, dev: &mut dyn Device) {
+        let from = self.state;
+        self.power_on();
+        dev.mailbox_reset();
+        if from != AlState::Init {
+            dev.state_changed(from, AlState::Init, None);
+        }
+        dev.power_cycle();
     }
 
     /// Configured station address (0x0010).

@@ -12,18 +12,14 @@
 //! open port in that order, its subtree follows, then the next open port's (ETG.1000.4, the
 //! ESC frame processing order; the same rule SOEM and IgH use).
 
+use super::diag::DeviceDiag;
 #[cfg(test)]
 use super::diag::decode;
-use super::diag::{DeviceDiag, aprd, apwr};
 use crate::link::FrameLink;
 use crate::master::bus::Bus;
-use crate::master::error::{ErrorKind, MasterError};
+use crate::master::error::MasterError;
 use serde::Serialize;
 use std::fmt::Write as _;
-use std::time::{Duration, Instant};
-
-/// How long the EEPROM interface may stay busy for one read (\[REC\]).
-const T_EEPROM: Duration = Duration::from_millis(100);
 
 /// One device.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize)]
@@ -127,54 +123,15 @@ pub fn topology(devices: &[DeviceDiag]) -> (Vec<Link>, Vec<(u16, u8)>) {
     (links, dangling)
 }
 
-/// Read 4 bytes of the SII EEPROM from `word` of the device at `position`.
-fn sii_u32<L: FrameLink>(
-    bus: &mut Bus<'_, L>,
-    position: u16,
-    word: u16,
-) -> Result<u32, MasterError> {
-    let step = format!("device {position}: reading SII word 0x{word:04X}");
-    // Control (0x0502): read command (bit 8); address (0x0504): the word.
-    let w = word.to_le_bytes();
-    let request = [0x00, 0x01, w[0], w[1], 0, 0];
-    apwr(bus, position, 0x0502, &request)?;
-    let until = Instant::now() + T_EEPROM;
-    loop {
-        let c = aprd(bus, position, 0x0502, 2)?;
-        if c.get(1).is_some_and(|b| b & 0x80 == 0) {
-            break;
-        }
-        if Instant::now() > until {
-            return Err(MasterError::new(
-                None,
-                step.clone(),
-                ErrorKind::Timeout,
-                format!(
-                    "the EEPROM interface stayed busy for {} ms",
-                    T_EEPROM.as_millis()
-                ),
-            ));
-        }
-        std::thread::sleep(Duration::from_micros(200));
-    }
-    let d = aprd(bus, position, 0x0508, 4)?;
-    Ok(u32::from_le_bytes([
-        d.first().copied().unwrap_or(0),
-        d.get(1).copied().unwrap_or(0),
-        d.get(2).copied().unwrap_or(0),
-        d.get(3).copied().unwrap_or(0),
-    ]))
-}
-
 /// Read the topology of the segment.
 pub fn graph<L: FrameLink>(bus: &mut Bus<'_, L>) -> Result<Graph, MasterError> {
     let report = super::diag::diag(bus, None, false)?;
     let mut nodes = Vec::with_capacity(report.devices.len());
     for d in &report.devices {
         let p = d.position;
-        let vendor_id = sii_u32(bus, p, 0x0008)?;
-        let product_code = sii_u32(bus, p, 0x000A)?;
-        let revision = sii_u32(bus, p, 0x000C)?;
+        let vendor_id = super::eeprom::read_u32(bus, p, 0x0008)?;
+        let product_code = super::eeprom::read_u32(bus, p, 0x000A)?;
+        let revision = super::eeprom::read_u32(bus, p, 0x000C)?;
         nodes.push(Node {
             position: p,
             profile: crate::drives::by_identity(vendor_id, product_code)

@@ -15,6 +15,8 @@
 //! | `reset` | [`reset::reset`] | [`reset::ResetReport`] |
 //! | `graph` | [`graph::graph`] (no discovery), then [`graph::Graph::dot`] | [`graph::Graph`] |
 //! | `diag` | [`diag::diag`] (no discovery: reads by position, disturbs nothing) | [`diag::DiagReport`] |
+//! | `alias` / `sii write` | [`alias::alias`], [`alias::sii_write`] (no discovery; INIT or PRE-OP only) | [`alias::AliasReport`], [`alias::SiiWriteReport`] |
+//! | `foe read` / `foe write` | [`foe::foe_read`], [`foe::foe_write`] (no discovery: the device as it is, in BOOT for firmware) | [`foe::FoeReport`] |
 //!
 //! ecdrive is not a resident master: every operation starts with a fresh discovery
 //! ([`startup::discover`]: ethercrab resets every device to INIT, assigns station addresses,
@@ -40,8 +42,11 @@
 //! position out of range, a value out of range, a type that cannot be inferred) from bus
 //! failures and from drives refusing ([`ErrorKind::Sdo`], [`ErrorKind::AlState`]).
 
+pub mod alias;
 pub mod diag;
+pub mod eeprom;
 pub mod esi;
+pub mod foe;
 pub mod graph;
 mod od;
 mod pdos;

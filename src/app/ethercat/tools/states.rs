@@ -140,6 +140,57 @@ fn drive_to<L: FrameLink>(
     }
 }
 
+/// Set SM0/SM1 to the bootstrap mailbox the device's SII gives (words 0x14–0x17: receive
+/// offset and size, send offset and size), as INIT → BOOT requires (ETG.1000.6: the ESC checks
+/// the mailbox SyncManagers against it). A device without one is left as it is: it refuses
+/// BOOT itself (AL status code 0x0013 "Bootstrap not supported").
+fn configure_bootstrap_mailbox<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    group: &crate::master::startup::Group<ethercrab::subdevice_group::PreOp>,
+    position: u16,
+    address: u16,
+    drive: &DriveRef,
+) -> Result<(), MasterError> {
+    let none = &mut |_: usize, _: usize| {};
+    let w = super::sii::read_eeprom(bus, group, position, drive, 0x0014, 8, none)?;
+    let word = |i: usize| {
+        u16::from_le_bytes([
+            w.get(2 * i).copied().unwrap_or(0),
+            w.get(2 * i + 1).copied().unwrap_or(0),
+        ])
+    };
+    let (rx_start, rx_len, tx_start, tx_len) = (word(0), word(1), word(2), word(3));
+    let valid = |start: u16, len: u16| start >= 0x1000 && len > 0 && len != 0xFFFF;
+    if !valid(rx_start, rx_len) || !valid(tx_start, tx_len) {
+        return Ok(());
+    }
+    // Control 0x26: mailbox, master writes, PDI interrupt; 0x22: mailbox, master reads.
+    // Activate bit 0: enabled.
+    let sm = |start: u16, len: u16, control: u8| {
+        let (s, l) = (start.to_le_bytes(), len.to_le_bytes());
+        [s[0], s[1], l[0], l[1], control, 0, 0x01, 0]
+    };
+    let mut regs = [0u8; 16];
+    regs[..8].copy_from_slice(&sm(rx_start, rx_len, 0x26));
+    regs[8..].copy_from_slice(&sm(tx_start, tx_len, 0x22));
+    // An ESC takes a SyncManager's start, length and control only while it is deactivated:
+    // first deactivate both (the standard mailbox of PRE-OP may still be set up), then write.
+    let off = [0u8; 16];
+    for (data, what) in [
+        (off, "deactivating SM0/SM1"),
+        (regs, "writing the bootstrap mailbox SyncManagers (SM0/SM1)"),
+    ] {
+        bus.block_on(&|| format!("{drive}: {what}"), T_STEP, |md| async move {
+            ethercrab::Command::fpwr(address, register::sm(0))
+                .send(md, data)
+                .await
+        })
+        .map_err(|e| exec_error(Some(drive), e))?
+        .map_err(|e| bus_error(Some(drive), what, e))?;
+    }
+    Ok(())
+}
+
 fn no_exchange<L: FrameLink>(_: &mut Bus<'_, L>) -> Result<Duration, MasterError> {
     Ok(Duration::from_millis(1))
 }
@@ -230,6 +281,9 @@ fn request<L: FrameLink>(
                 .collect();
             for p in &mut pending {
                 p.done = None;
+            }
+            for (p, d) in pending.iter().zip(&selected) {
+                configure_bootstrap_mailbox(bus, &found.group, d.position, p.address, &p.drive)?;
             }
             drive_to(bus, &mut pending, target, opts.timeout, &mut no_exchange)?;
             for (p, f) in pending.iter_mut().zip(failed) {

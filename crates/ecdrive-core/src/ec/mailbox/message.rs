@@ -25,6 +25,8 @@ pub enum MailboxMessage<'a> {
         /// The data after the CoE header.
         payload: &'a [u8],
     },
+    /// An FoE message.
+    Foe(FoeMessage<'a>),
     /// Another mailbox protocol, undecoded.
     Other {
         /// The raw type field.
@@ -57,6 +59,7 @@ impl<'a> MailboxMessage<'a> {
                     },
                 }
             }
+            Some(MailboxType::Foe) => Self::Foe(FoeMessage::parse(payload)?),
             _ => Self::Other {
                 mailbox_type: mbx.mailbox_type_raw(),
                 payload,

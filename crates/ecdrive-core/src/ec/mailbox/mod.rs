@@ -172,6 +172,7 @@ fn space(what: &'static str, needed: usize, available: usize) -> Result<(), Erro
 
 mod coe;
 mod errors;
+mod foe;
 mod header;
 mod message;
 mod sdo;
@@ -181,6 +182,7 @@ mod tests;
 
 pub use coe::*;
 pub use errors::*;
+pub use foe::*;
 pub use header::*;
 pub use message::*;
 pub use sdo::*;
