@@ -95,7 +95,7 @@ fn alias_survives_a_power_cycle_and_write_protection_and_state_refuse_it() {
 
     // Write-protected EEPROM: the write is not acknowledged, the command names it.
     sim.ecdrive(&["alias", "-p", "2", "5"])
-        .fails(3, &["device 2", "EEPROM word 0x0004", "write-protected"]);
+        .fails(4, &["device 2", "EEPROM word 0x0004", "write-protected"]);
     // Outside INIT/PRE-OP: refused before anything is written.
     sim.ecdrive(&["states", "SAFEOP"]).ok();
     sim.ecdrive(&["alias", "-p", "0", "9"]).fails(
@@ -172,12 +172,12 @@ fn firmware_round_trips_over_foe_in_boot_and_takes_effect_after_init() {
     // In PRE-OP the drive refuses file access: 0x8009 (not in Bootstrap).
     sim.ecdrive(&["states", "PREOP"]).ok();
     sim.ecdrive(&["foe", "write", "-p", "0", "--password", PW, "fw", fw_s])
-        .fails(3, &["drive 0 (MR-J4-TM)", "FoE write", "0x8009"]);
+        .fails(4, &["drive 0 (MR-J4-TM)", "FoE write", "0x8009"]);
     // BOOT: wrong password → 0x800A; right one → written; read back equal.
     let t = sim.ecdrive(&["states", "-p", "0", "BOOT"]).ok().to_string();
     assert!(t.contains("BOOT       BOOT"), "{t}");
     sim.ecdrive(&["foe", "write", "-p", "0", "--password", "1", "fw", fw_s])
-        .fails(3, &["drive 0 (MR-J4-TM)", "0x800A"]);
+        .fails(4, &["drive 0 (MR-J4-TM)", "0x800A"]);
     let w = sim
         .ecdrive(&[
             "foe",
@@ -225,7 +225,7 @@ fn firmware_round_trips_over_foe_in_boot_and_takes_effect_after_init() {
         "nothing",
         back.to_str().unwrap(),
     ])
-    .fails(3, &["0x8001"]);
+    .fails(4, &["0x8001"]);
     // Not a firmware image: 0x8004 (illegal).
     let junk = tmp("foe", "junk.bin");
     std::fs::write(&junk, vec![0x55u8; 3000]).unwrap();
@@ -239,7 +239,7 @@ fn firmware_round_trips_over_foe_in_boot_and_takes_effect_after_init() {
         "junk",
         junk.to_str().unwrap(),
     ])
-    .fails(3, &["0x8004"]);
+    .fails(4, &["0x8004"]);
     // BOOT → INIT: the drive restarts with the new firmware; its identity through CoE says so.
     sim.ecdrive(&["states", "-p", "0", "INIT"]).ok();
     let rev = sim

@@ -489,10 +489,15 @@ fn a_power_cycle_keeps_the_eeprom_and_loads_the_alias() {
     let crc = SII_CRC.checksum(&head[..14]);
     for (word, v) in [(4u8, [0xCD, 0xAB]), (7, [crc, 0])] {
         p.fpwr(0x1000, 0x0508, &v).unwrap();
-        p.fpwr(0x1000, 0x0502, &[0x01, 0x02, word, 0, 0, 0]).unwrap();
+        p.fpwr(0x1000, 0x0502, &[0x01, 0x02, word, 0, 0, 0])
+            .unwrap();
     }
     p.request_state(0x1000, AlState::PreOp as u16).unwrap();
-    assert_eq!(p.read_u16(0x1000, 0x0012).unwrap().0, 0, "not before a power cycle");
+    assert_eq!(
+        p.read_u16(0x1000, 0x0012).unwrap().0,
+        0,
+        "not before a power cycle"
+    );
     assert!(p.segment.power_cycle(0));
     assert!(!p.segment.power_cycle(9));
     // The station address is gone (reset value 0): address the device by position.

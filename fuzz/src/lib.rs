@@ -230,8 +230,10 @@ fn answers_correctly(server: &mut CoeServer, od: &mut OdStore, sm: usize) {
     panic!("no answer to a correct request");
 }
 
-/// `coe` target: `CoeServer::handle` (with `poll_unsolicited`) on arbitrary mailboxes, and the
-/// master's mailbox views on arbitrary bytes and on every reply.
+/// `coe` target: `CoeServer::handle_with_foe` (with `poll_unsolicited`) on arbitrary mailboxes,
+/// with the emulated MR-J4-TM's FoE server behind it (so FoE requests, type 4, reach file
+/// access and firmware checks in every state), and the master's mailbox views (CoE and FoE) on
+/// arbitrary bytes and on every reply.
 ///
 /// Input: a config byte (bit 0: the generic fixture dictionary or the MR-J4-TM's; bits 1–3:
 /// the AL state; bits 4–5: the SyncManager size 16, 48, 128 or 1486), then mailboxes, each as a
@@ -258,6 +260,7 @@ pub fn coe(data: &[u8]) {
     };
     let sm = [16usize, 48, 128, 1486][usize::from((cfg >> 4) & 3)];
     let mut server = CoeServer::new(CoeConfig::default());
+    let mut foe = ecdrive::sim::foe::FoeServer::new(ecdrive::sim::drives::mr_j4_tm::REC_FOE);
     let mut sm0 = vec![0u8; sm];
     let mut sm1 = vec![0u8; sm];
     let mut n = 0;
@@ -270,7 +273,7 @@ pub fn coe(data: &[u8]) {
         sm0.fill(0);
         let k = msg.len().min(sm);
         sm0[..k].copy_from_slice(&msg[..k]);
-        if let Some(r) = server.handle(&sm0, state, &mut od, &mut sm1) {
+        if let Some(r) = server.handle_with_foe(&sm0, state, &mut od, Some(&mut foe), &mut sm1) {
             check_reply(&sm1, r);
         }
         for _ in 0..64 {

@@ -459,6 +459,7 @@ impl From<SessionError> for MasterError {
                     Some(code) => ErrorKind::Sdo(code),
                     None => match c.kind {
                         super::coe::CoeErrorKind::Timeout(_) => ErrorKind::Timeout,
+                        super::coe::CoeErrorKind::Foe { .. } => ErrorKind::Refused,
                         _ => ErrorKind::Bus,
                     },
                 };

@@ -38,6 +38,9 @@ pub enum ErrorKind {
     /// A setting the drive holds fixed (a read-only synchronisation object, say) does not fit
     /// the configuration.
     Incompatible,
+    /// The device refused a request outside SDO and the state machine: it ended a file
+    /// access with an FoE error, or its EEPROM did not acknowledge a write.
+    Refused,
     /// The bus did not answer in time.
     Timeout,
     /// The link (interface, socket) failed.

@@ -733,7 +733,8 @@ pub fn exit_code(kind: &ErrorKind) -> u8 {
         ErrorKind::Sdo(_)
         | ErrorKind::AlState(_)
         | ErrorKind::DcSettle
-        | ErrorKind::Incompatible => exit::REFUSED,
+        | ErrorKind::Incompatible
+        | ErrorKind::Refused => exit::REFUSED,
         ErrorKind::DriveFault => exit::FAULT,
     }
 }

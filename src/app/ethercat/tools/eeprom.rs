@@ -181,7 +181,7 @@ pub fn write_word<L: FrameLink>(
     Err(MasterError::new(
         None,
         step(),
-        ErrorKind::Bus,
+        ErrorKind::Refused,
         "the EEPROM did not acknowledge the write (0x0502 bit 13): it is write-protected or \
          faulty",
     ))
