@@ -136,6 +136,9 @@ pub struct RunConfig {
     /// What the check could not judge without the bus (a drive whose profile is not known
     /// from the file), one line each; start-up checks it.
     pub unchecked: Vec<String>,
+    /// What the check decided for the user, one line each, naming the key: the PDOs chosen
+    /// from a drive's ESI file for the modes its program runs.
+    pub notes: Vec<String>,
 }
 
 impl core::fmt::Debug for RunConfig {
@@ -486,6 +489,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
     let mut drives = Vec::with_capacity(f.drive.len());
     let mut warnings = Vec::new();
     let mut unchecked = Vec::new();
+    let mut notes = Vec::new();
     for (i, d) in f.drive.iter().enumerate() {
         let (setup, dc) = drive(
             &cx,
@@ -494,7 +498,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
             sim_names.as_deref(),
             cycle,
             &f.cycle,
-            &mut warnings,
+            (&mut warnings, &mut notes),
         )?;
         if dc.profile.is_none() {
             unchecked.push(format!(
@@ -578,6 +582,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         reset_faults: f.reset_faults,
         warnings,
         unchecked,
+        notes,
     })
 }
 
@@ -599,6 +604,135 @@ fn online_cpus() -> Option<Vec<usize>> {
     Some(out)
 }
 
+/// The device of `esi = "FILE"` (relative to the configuration file's folder): the one the
+/// selector's identity names, or the file's only device. Every problem of the file is found
+/// here, before the bus is touched: the ESI parser's line and column, a device the file does
+/// not have. Returns the file, the device's index in it and the file's name as shown.
+fn esi_device(
+    cx: &Ctx<'_>,
+    e: &Spanned<String>,
+    select: Selector,
+    key: &str,
+) -> Result<(crate::esi::EsiFile, usize, String), ConfigError> {
+    let dir = Path::new(cx.file).parent().unwrap_or(Path::new(""));
+    let path = dir.join(e.get_ref());
+    let shown = path.display().to_string();
+    let f = crate::esi::EsiFile::from_path(&path)
+        .map_err(|x| cx.err(e.span(), key, format!("ESI file {shown}: {x}")))?;
+    let index = match select {
+        Selector::Identity {
+            vendor_id,
+            product_code,
+        } => {
+            if f.vendor.id != vendor_id {
+                return Err(cx.err(
+                    e.span(),
+                    key,
+                    format!(
+                        "ESI file {shown} is from vendor 0x{:08X}, the drive's identity says \
+                         0x{vendor_id:08X}",
+                        f.vendor.id
+                    ),
+                ));
+            }
+            let newest = f.device(product_code, None).map(|d| d.position);
+            f.devices
+                .iter()
+                .position(|d| Some(d.position) == newest)
+                .ok_or_else(|| {
+                    cx.err(
+                        e.span(),
+                        key,
+                        format!(
+                            "ESI file {shown} has no device with product code \
+                             0x{product_code:08X}"
+                        ),
+                    )
+                })?
+        }
+        _ => match f.devices.len() {
+            1 => 0,
+            n => {
+                let list: Vec<String> = f
+                    .devices
+                    .iter()
+                    .map(|d| format!("{} (0x{:08X})", d.type_.name_text, d.type_.product_code))
+                    .collect();
+                return Err(cx.err(
+                    e.span(),
+                    key,
+                    format!(
+                        "ESI file {shown} describes {n} devices ({}): select the drive by \
+                         identity to say which",
+                        list.join(", ")
+                    ),
+                ));
+            }
+        },
+    };
+    Ok((f, index, shown))
+}
+
+/// The mapping for `modes` chosen from the drive's ESI file ([`crate::esi::mapping_for`]), with
+/// a note saying which PDOs; a drive whose PDOs cannot carry the modes is refused here, naming
+/// what is missing.
+fn esi_mapping(
+    cx: &Ctx<'_>,
+    key: &str,
+    e: &Spanned<String>,
+    f: &crate::esi::EsiFile,
+    dev: usize,
+    modes: &[CyclicMode],
+    notes: &mut Vec<String>,
+) -> Result<Mapping, ConfigError> {
+    let refs: Vec<crate::esi::CyclicModeRef> = crate::esi::CYCLIC_MODES
+        .iter()
+        .copied()
+        .filter(|m| modes.iter().any(|x| x.code() == m.code))
+        .collect();
+    let d = f
+        .devices
+        .get(dev)
+        .ok_or_else(|| cx.err(e.span(), key, "device index out of range"))?;
+    let m = crate::esi::mapping_for(d, &refs);
+    let names: Vec<&str> = refs.iter().map(|m| m.name).collect();
+    let side = |r: &Result<crate::esi::DirectionChoice, String>| match r {
+        Ok(c) => Ok(c
+            .pdos
+            .iter()
+            .map(|p| format!("0x{p:04X}"))
+            .collect::<Vec<_>>()
+            .join("+")
+            + match c.source {
+                crate::esi::MappingSource::Default => " (the file's default)",
+                crate::esi::MappingSource::Chosen => " (chosen from the file's PDOs)",
+                crate::esi::MappingSource::Built => " (configured)",
+            }),
+        Err(why) => Err(why.clone()),
+    };
+    match (side(&m.rx), side(&m.tx), m.mapping) {
+        (Ok(rx), Ok(tx), Some(mapping)) => {
+            notes.push(format!(
+                "{key}: {} from the ESI file: RxPDO {rx}, TxPDO {tx}",
+                names.join("+")
+            ));
+            Ok(mapping)
+        }
+        (rx, tx, _) => {
+            let why: Vec<String> = [rx.err(), tx.err()].into_iter().flatten().collect();
+            Err(cx.err(
+                e.span(),
+                key,
+                format!(
+                    "the drive's PDOs cannot carry {}: {}",
+                    names.join("+"),
+                    why.join("; ")
+                ),
+            ))
+        }
+    }
+}
+
 fn profile_keys() -> String {
     let mut keys: Vec<&str> = crate::drives::all().iter().map(|p| p.key).collect();
     if let Some(g) = crate::drives::by_key("generic-cia402") {
@@ -618,7 +752,7 @@ fn drive(
     sim: Option<&[String]>,
     cycle: Duration,
     cycle_key: &Option<Spanned<String>>,
-    warnings: &mut Vec<String>,
+    (warnings, notes): (&mut Vec<String>, &mut Vec<String>),
 ) -> Result<(DriveSetup, DriveConfig), ConfigError> {
     let key = |k: &str| {
         if k.is_empty() {
@@ -661,28 +795,51 @@ fn drive(
         }
     };
     // The profile, if it can be known now.
-    let profile = match &r.profile {
-        Some(p) => Some(crate::drives::by_key(p.get_ref()).ok_or_else(|| {
-            cx.err(
-                p.span(),
-                key("profile"),
-                format!(
-                    "unknown drive profile {:?}; known: {}",
-                    p.get_ref(),
-                    profile_keys()
-                ),
-            )
-        })?),
-        None => match select {
-            Selector::Identity {
-                vendor_id,
-                product_code,
-            } => crate::drives::by_identity(vendor_id, product_code),
-            Selector::Position(p) => sim
-                .and_then(|names| names.get(usize::from(p)))
-                .and_then(|n| crate::sim::quirks::split_name(n).ok())
-                .and_then(|(n, _)| crate::drives::by_key(n)),
-            Selector::Alias(_) => None,
+    let mut esi_source: Option<(crate::esi::EsiFile, usize)> = None;
+    let profile = match (&r.esi, &r.profile) {
+        (Some(e), Some(_)) => {
+            return Err(cx.err(
+                e.span(),
+                key("esi"),
+                "give the drive's profile or its ESI file, not both",
+            ));
+        }
+        (Some(e), None) => {
+            let (f, dev, shown) = esi_device(cx, e, select, &key("esi"))?;
+            let p = f
+                .devices
+                .get(dev)
+                .ok_or_else(|| cx.err(e.span(), key("esi"), "device index out of range"))
+                .and_then(|d| {
+                    crate::drives::esi_profile::from_esi(&f, d, &shown)
+                        .map_err(|x| cx.err(e.span(), key("esi"), x.to_string()))
+                })?;
+            esi_source = Some((f, dev));
+            Some(p)
+        }
+        (None, p) => match p {
+            Some(p) => Some(crate::drives::by_key(p.get_ref()).ok_or_else(|| {
+                cx.err(
+                    p.span(),
+                    key("profile"),
+                    format!(
+                        "unknown drive profile {:?}; known: {}",
+                        p.get_ref(),
+                        profile_keys()
+                    ),
+                )
+            })?),
+            None => match select {
+                Selector::Identity {
+                    vendor_id,
+                    product_code,
+                } => crate::drives::by_identity(vendor_id, product_code),
+                Selector::Position(p) => sim
+                    .and_then(|names| names.get(usize::from(p)))
+                    .and_then(|n| crate::sim::quirks::split_name(n).ok())
+                    .and_then(|(n, _)| crate::drives::by_key(n)),
+                Selector::Alias(_) => None,
+            },
         },
     };
     // The emulated device at the position, when the file lists them: a forced profile must
@@ -870,6 +1027,15 @@ fn drive(
         cx.err(span, key(&format!("program[{n}]")), e.to_string())
     })?;
 
+    // Every mode the program runs in.
+    let mut modes = vec![mode];
+    for s in &steps {
+        if let Step::Mode { mode } = s
+            && !modes.contains(mode)
+        {
+            modes.push(*mode);
+        }
+    }
     // Mapping override.
     let mapping = match &r.mapping {
         Some(m) => {
@@ -880,14 +1046,6 @@ fn drive(
             }
             // What the cycle needs of every drive, and the set-point of every mode the
             // program runs in (start-up refuses the same).
-            let mut modes = vec![mode];
-            for s in &steps {
-                if let Step::Mode { mode } = s
-                    && !modes.contains(mode)
-                {
-                    modes.push(*mode);
-                }
-            }
             let a = ObjectAddress::new;
             let mut need = vec![
                 (Direction::Rx, a(0x6040, 0), "the controlword".to_string()),
@@ -919,7 +1077,12 @@ fn drive(
             }
             Some(mapping)
         }
-        None => None,
+        None => match (&esi_source, &r.esi) {
+            (Some((f, dev)), Some(e)) => {
+                Some(esi_mapping(cx, &key("esi"), e, f, *dev, &modes, notes)?)
+            }
+            _ => None,
+        },
     };
 
     // Start-up SDOs.

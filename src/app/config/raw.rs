@@ -85,6 +85,8 @@ pub(super) struct Drive {
     #[serde(default)]
     pub profile: Option<Spanned<String>>,
     #[serde(default)]
+    pub esi: Option<Spanned<String>>,
+    #[serde(default)]
     pub mode: Option<Spanned<String>>,
     #[serde(default)]
     pub mapping: Option<Spanned<Mapping>>,

@@ -69,6 +69,7 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
         cyclic_mapping: Mapping::fixed(RX, TX),
         required_objects: &[],
         startup: &[],
+        init_cmds: &[],
         output_defaults: &[],
         cycle_counter: None,
         sync: SyncSpec {

@@ -485,6 +485,63 @@ pub fn esi_summary(s: &EsiSummary) {
         if let Some(b) = d.eeprom_bytes {
             println!("  EEPROM: {b} bytes");
         }
+        esi_plan(&d.plan);
+    }
+}
+
+/// The "as ecdrive would drive it" part of `esi show`.
+fn esi_plan(p: &ecdrive::esi::DrivePlan) {
+    use ecdrive::esi::MappingSource;
+    println!(
+        "  From this file alone: cyclic modes {} ({})",
+        p.modes.join(", "),
+        if p.modes_from_0x6502 {
+            "0x6502"
+        } else {
+            "assumed: the file has no 0x6502 default"
+        }
+    );
+    let side = |r: &Result<ecdrive::esi::DirectionChoice, String>| match r {
+        Ok(c) => {
+            let pdos: Vec<String> = c.pdos.iter().map(|p| format!("0x{p:04X}")).collect();
+            let how = match c.source {
+                MappingSource::Default => "default",
+                MappingSource::Chosen => "chosen",
+                MappingSource::Built => "configured",
+            };
+            format!("{} ({how})", pdos.join("+"))
+        }
+        Err(e) => format!("impossible: {e}"),
+    };
+    for m in &p.mappings {
+        println!(
+            "    {:<12} RxPDO {}; TxPDO {}",
+            m.modes.join("+"),
+            side(&m.rx),
+            side(&m.tx)
+        );
+    }
+    match &p.dc {
+        Some(dc) => println!(
+            "    DC: {:?}, AssignActivate 0x{:04X}, SYNC0 = {} x cycle, shift {} ns",
+            dc.name, dc.assign_activate, dc.sync0_factor, dc.shift_ns
+        ),
+        None => println!("    DC: none (free run)"),
+    }
+    match p.cycle_time_writable {
+        Some(true) => println!("    0x1C32:02 (cycle time): writable in PRE-OP"),
+        Some(false) => println!("    0x1C32:02 (cycle time): read-only"),
+        None => println!("    0x1C32:02 (cycle time): not in the dictionary"),
+    }
+    for c in &p.init_cmds {
+        println!(
+            "    InitCmd line {}: {} {} = {}  {:?}",
+            c.line,
+            c.transitions.join(","),
+            c.object,
+            c.data,
+            c.comment
+        );
     }
 }
 

@@ -57,6 +57,9 @@ pub fn run(
             cfg.master.cycle.cycle.as_micros(),
             cfg.target
         );
+        for n in &cfg.notes {
+            println!("note: {n}");
+        }
         for w in &cfg.warnings {
             println!("warning: {w}");
         }
@@ -64,6 +67,9 @@ pub fn run(
             println!("not checked: {u}");
         }
         return ExitCode::SUCCESS;
+    }
+    for n in &cfg.notes {
+        eprintln!("ecdrive run: {n}");
     }
     for w in &cfg.warnings {
         eprintln!("ecdrive run: warning: {w}");

@@ -475,6 +475,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
         cyclic_mapping: CYCLIC_MAPPING,
         required_objects: REQUIRED_OBJECTS,
         startup: STARTUP,
+        init_cmds: &[],
         output_defaults: &[],
         cycle_counter: None,
         sync: SYNC,

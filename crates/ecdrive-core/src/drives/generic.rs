@@ -215,6 +215,7 @@ pub static GENERIC_CIA402: DriveProfile = DriveProfile {
         cyclic_mapping: CYCLIC_MAPPING,
         required_objects: REQUIRED_OBJECTS,
         startup: &[],
+        init_cmds: &[],
         output_defaults: &[],
         cycle_counter: None,
         sync: SYNC,

@@ -33,6 +33,7 @@
 pub mod asda_a2;
 pub mod bdhde;
 pub mod blv_r;
+pub mod esi_profile;
 pub mod generic;
 pub mod lexium_mdrive;
 pub mod mr_j4_tm;
@@ -46,6 +47,6 @@ pub use registry::{
 
 pub use profile::{
     CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, EtherCat,
-    IdentityMatch, OutputDefault, Rating, Ratings, StartupSdo, StartupWhen, StatusFlag, SyncSpec,
-    SyncWrite, Units, interpolation_cycle_ns, interpolation_standard_form,
+    IdentityMatch, InitCommand, OutputDefault, Rating, Ratings, StartupSdo, StartupWhen,
+    StatusFlag, SyncSpec, SyncWrite, Units, interpolation_cycle_ns, interpolation_standard_form,
 };

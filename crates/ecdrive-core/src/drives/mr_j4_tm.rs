@@ -503,6 +503,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
         cyclic_mapping: CYCLIC_MAPPING,
         required_objects: REQUIRED_OBJECTS,
         startup: STARTUP,
+        init_cmds: &[],
         output_defaults: OUTPUT_DEFAULTS,
         cycle_counter: Some(CYCLE_COUNTER),
         sync: SYNC,

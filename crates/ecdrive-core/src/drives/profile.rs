@@ -122,6 +122,24 @@ pub enum StartupWhen {
     IfNotMapped,
 }
 
+/// An `<InitCmd>` of the drive's ESI file: an SDO download the configuration tool sends at the
+/// transitions it names, in file order, with its data as written.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct InitCommand {
+    /// The transitions (`PS`: PRE-OP → SAFE-OP, `SO`: SAFE-OP → OP, `IP`: INIT → PRE-OP, …).
+    pub transitions: &'static [crate::esi::Transition],
+    /// The object.
+    pub address: ObjectAddress,
+    /// The bytes to download.
+    pub data: &'static [u8],
+    /// The file's comment (named in errors).
+    pub comment: &'static str,
+    /// Complete access.
+    pub complete_access: bool,
+    /// Line of the `<InitCmd>` in the file.
+    pub line: u32,
+}
+
 /// An SDO the master writes in PRE-OP for a safe start.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StartupSdo {
@@ -183,6 +201,9 @@ pub struct EtherCat {
     pub required_objects: &'static [RequiredObjects],
     /// SDOs written in PRE-OP for a safe start.
     pub startup: &'static [StartupSdo],
+    /// The ESI file's `<InitCmd>`s (profiles built from an ESI; empty for the built-in ones,
+    /// whose files have none).
+    pub init_cmds: &'static [InitCommand],
     /// Values mapped outputs must carry from the first cycle.
     pub output_defaults: &'static [OutputDefault],
     /// A counter to advance every cycle when mapped.

@@ -148,3 +148,61 @@ impl Device {
         })
     }
 }
+
+fn leak_str(s: &str) -> &'static str {
+    String::leak(s.to_owned())
+}
+
+fn constant(v: &Option<crate::od::Value>) -> crate::od::ConstValue {
+    use crate::od::{ConstValue, Value};
+    match v {
+        None => ConstValue::None,
+        Some(Value::Int(i)) => ConstValue::Int(*i),
+        Some(Value::Uint(u)) => ConstValue::Uint(*u),
+        Some(Value::Real(r)) => ConstValue::Real(*r),
+        Some(Value::Str(s)) => ConstValue::Str(leak_str(s)),
+        Some(Value::Bytes(b)) => ConstValue::Bytes(Vec::leak(b.clone())),
+    }
+}
+
+/// The device's object dictionary as `'static` object descriptions, sorted by index: what a
+/// drive profile built from the file and an emulated device built from it both use. The
+/// descriptions are leaked: build them once per file and process (at start-up, never in a
+/// cycle). The error names the entry whose type is unknown or too long.
+pub fn static_dictionary(dev: &Device) -> Result<&'static [crate::od::ObjectDesc], String> {
+    use crate::od::{EntryDesc, ObjectDesc};
+    let dict = dev
+        .dictionary()
+        .ok_or_else(|| "the device has no object dictionary".to_string())?;
+    let resolved = dict.resolve_all().map_err(|e| e.to_string())?;
+    let mut objects = Vec::with_capacity(resolved.len());
+    for o in resolved {
+        let mut entries = Vec::with_capacity(o.entries.len());
+        for e in &o.entries {
+            let at = format!("0x{:04X}:{:02X}", o.index, e.sub);
+            let data_type = e
+                .data_type
+                .ok_or_else(|| format!("{at}: unknown data type {:?}", e.type_name))?;
+            let bit_len = u16::try_from(e.bit_len)
+                .map_err(|_| format!("{at}: bit length {} too large", e.bit_len))?;
+            entries.push(EntryDesc {
+                sub: e.sub,
+                name: leak_str(&e.name),
+                data_type,
+                bit_len,
+                access: e.access,
+                default: constant(&e.default),
+                min: constant(&e.min),
+                max: constant(&e.max),
+            });
+        }
+        objects.push(ObjectDesc {
+            index: o.index,
+            name: leak_str(&o.name),
+            code: o.code,
+            entries: Vec::leak(entries),
+        });
+    }
+    objects.sort_by_key(|o| o.index);
+    Ok(Vec::leak(objects))
+}

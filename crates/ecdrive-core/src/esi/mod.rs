@@ -40,16 +40,21 @@
 mod check;
 mod convert;
 mod dictionary;
+mod drive_plan;
 mod error;
 mod model;
 mod num;
 mod parse;
 
 pub use check::CheckIssue;
-pub use convert::EsiConvertError;
+pub use convert::{EsiConvertError, static_dictionary};
 pub use dictionary::{
     ArrayInfo, Category, Dictionary, EsiDataType, EsiObject, EsiSubItem, EsiValue, Flags,
     ObjectDiff, ObjectInfo, ResolvedEntry, ResolvedObject,
+};
+pub use drive_plan::{
+    CYCLIC_MODES, CyclicModeRef, DcPlan, DirectionChoice, DrivePlan, InitCmdPlan, MappingSource,
+    ModeMapping, mapping_for, required_objects,
 };
 pub use error::{EsiError, EsiErrorKind, Position};
 pub use model::{

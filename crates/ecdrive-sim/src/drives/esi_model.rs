@@ -11,7 +11,7 @@
 //! life of the process (the object store holds `'static` descriptions).
 
 use crate::esi::{self, EsiFile};
-use crate::od::{ConstValue, EntryDesc, ObjectDesc, Value};
+use crate::od::ObjectDesc;
 use crate::sii::DeviceDescription;
 
 /// The parts of a drive's ESI file the emulation is built from.
@@ -68,39 +68,7 @@ impl EsiModel {
             .devices
             .get(device)
             .ok_or_else(|| err("device index out of range".into()))?;
-        let dict = dev
-            .dictionary()
-            .ok_or_else(|| err("the device has no object dictionary".into()))?;
-        let resolved = dict.resolve_all().map_err(|e| err(e.to_string()))?;
-        let mut objects = Vec::with_capacity(resolved.len());
-        for o in resolved {
-            let mut entries = Vec::with_capacity(o.entries.len());
-            for e in &o.entries {
-                let at = format!("0x{:04X}:{:02X}", o.index, e.sub);
-                let data_type = e
-                    .data_type
-                    .ok_or_else(|| err(format!("{at}: unknown data type {:?}", e.type_name)))?;
-                let bit_len = u16::try_from(e.bit_len)
-                    .map_err(|_| err(format!("{at}: bit length {} too large", e.bit_len)))?;
-                entries.push(EntryDesc {
-                    sub: e.sub,
-                    name: leak_str(&e.name),
-                    data_type,
-                    bit_len,
-                    access: e.access,
-                    default: constant(&e.default),
-                    min: constant(&e.min),
-                    max: constant(&e.max),
-                });
-            }
-            objects.push(ObjectDesc {
-                index: o.index,
-                name: leak_str(&o.name),
-                code: o.code,
-                entries: Vec::leak(entries),
-            });
-        }
-        objects.sort_by_key(|o| o.index);
+        let dictionary = esi::static_dictionary(dev).map_err(err)?;
         let coe = dev.mailbox.as_ref().and_then(|m| m.coe.as_ref());
         let mode = |sync0: bool| {
             dev.dc
@@ -125,7 +93,7 @@ impl EsiModel {
             vendor_name: file.vendor.name.clone(),
             product_code: dev.type_.product_code,
             revision: dev.type_.revision_no.unwrap_or(0),
-            dictionary: Vec::leak(objects),
+            dictionary,
             complete_access: coe.is_some_and(|c| c.complete_access),
             sdo_info: coe.is_none_or(|c| c.sdo_info),
             free_run,
@@ -157,20 +125,5 @@ impl EsiModel {
             Some(None) => true,
             Some(Some(times)) => times.contains(ns),
         }
-    }
-}
-
-fn leak_str(s: &str) -> &'static str {
-    String::leak(s.to_owned())
-}
-
-fn constant(v: &Option<Value>) -> ConstValue {
-    match v {
-        None => ConstValue::None,
-        Some(Value::Int(i)) => ConstValue::Int(*i),
-        Some(Value::Uint(u)) => ConstValue::Uint(*u),
-        Some(Value::Real(r)) => ConstValue::Real(*r),
-        Some(Value::Str(s)) => ConstValue::Str(leak_str(s)),
-        Some(Value::Bytes(b)) => ConstValue::Bytes(Vec::leak(b.clone())),
     }
 }

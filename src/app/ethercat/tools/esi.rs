@@ -41,7 +41,7 @@ pub struct EsiSmSummary {
 }
 
 /// One device of the file.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EsiDeviceSummary {
     /// Product code.
     pub product_code: u32,
@@ -67,10 +67,13 @@ pub struct EsiDeviceSummary {
     pub dictionary_objects: usize,
     /// EEPROM size, bytes, if given.
     pub eeprom_bytes: Option<u32>,
+    /// What ecdrive would make of the device from this file alone (without a drive profile):
+    /// modes, the mapping for each cyclic mode, DC mode, cycle-time object, InitCmds.
+    pub plan: crate::esi::DrivePlan,
 }
 
 /// What `esi show` prints.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EsiSummary {
     /// The file.
     pub file: String,
@@ -173,6 +176,7 @@ pub fn show(path: &Path) -> Result<EsiSummary, EsiError> {
                     .collect(),
                 dictionary_objects: d.dictionary().map_or(0, |x| x.objects.len()),
                 eeprom_bytes: d.eeprom.as_ref().and_then(|e| e.byte_size),
+                plan: crate::esi::DrivePlan::new(&f, d),
             }
         })
         .collect();

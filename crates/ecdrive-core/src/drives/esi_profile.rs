@@ -1,0 +1,257 @@
+//! A drive profile built from a vendor's ESI file, for a CiA 402 drive ecdrive has no profile
+//! for: the generic CiA 402 behaviour ([`super::generic`]) with what the file says in place of
+//! the generic assumptions.
+//!
+//! | profile field | from the file |
+//! |---|---|
+//! | identity, revision, name, vendor | `<Vendor><Id>`, `<Type ProductCode RevisionNo>`, `<Name>` |
+//! | dictionary | `<Profile><Dictionary>`, resolved, with types and access (so `upload`/`download` know types) |
+//! | supported modes | 0x6502's default (csp, csv, cst bits); the generic three if absent |
+//! | default mapping | the default assignment (PDOs with `Sm`, and the mandatory ones) |
+//! | cyclic mapping | [`DrivePlan`]: the PDOs carrying csp, csv and cst together, else those of the first mode that can be carried |
+//! | PDO limits | the file's PDO indices, entries per mapping object from its dictionary, bytes from the SyncManager's `MaxSize` |
+//! | synchronisation | the DC `<OpMode>` with SYNC0 (AssignActivate), free run if offered, the cycle times it lists; 0x1C32:01/02 written only where the dictionary makes them writable |
+//! | InitCmds | `<InitCmd>`s with their transitions, in file order ([`InitCommand`]) |
+//! | complete access | `<CoE CompleteAccess>` |
+//!
+//! Profiles built this way live for the rest of the process (the profile type holds `'static`
+//! data): a configuration builds each once, at start-up, never in the cycle.
+
+use super::profile::{
+    CycleTimeObject, CycleTimes, DriveProfile, EtherCat, IdentityMatch, InitCommand, SyncSpec,
+};
+use crate::cia402::SupportedModes;
+use crate::esi::{Device, DrivePlan, EsiFile, SmKind};
+use crate::od::{EntryAccess, ObjectAddress, ObjectDesc};
+use crate::pdo::{Direction, DirectionLimits, Mapping, PdoLimits, PdoRange};
+
+/// Why a profile cannot be built from a file.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{file}: device {device}: {reason}")]
+pub struct EsiProfileError {
+    /// The file.
+    pub file: String,
+    /// The device (order name and product code).
+    pub device: String,
+    /// What is missing or wrong.
+    pub reason: String,
+}
+
+fn leak(s: &str) -> &'static str {
+    String::leak(s.to_owned())
+}
+
+/// PDO index ranges of one direction: each PDO of the file on its own, with as many entries
+/// as the dictionary's mapping object has sub-indices (the file's own entry count if the
+/// dictionary does not say).
+fn ranges(dev: &Device, dir: Direction, dict: &[ObjectDesc]) -> (Vec<PdoRange>, usize) {
+    let mut out = Vec::new();
+    let mut most = 0;
+    for p in dev.pdos(dir) {
+        let n = dict
+            .iter()
+            .find(|o| o.index == p.index)
+            .map(|o| o.entries.iter().filter(|e| e.sub > 0).count())
+            .unwrap_or(p.entries.len())
+            .clamp(p.entries.len(), 255);
+        most = most.max(n);
+        out.push(PdoRange::new(p.index, p.index, n as u8));
+    }
+    (out, most)
+}
+
+fn sm_bytes(dev: &Device, kind: SmKind) -> u16 {
+    dev.sync_manager(kind)
+        .and_then(|s| s.max_size.or(s.default_size))
+        .unwrap_or(1024)
+}
+
+/// `pdos` PDOs of at most `entries` entries each, as the limits' types hold them.
+fn counts(pdos: usize, entries: usize) -> (u8, u16) {
+    let pdos = pdos.clamp(1, 255);
+    let total = entries.max(1).saturating_mul(pdos).min(usize::from(u16::MAX));
+    (pdos as u8, total as u16)
+}
+
+fn writable(dict: &[ObjectDesc], a: ObjectAddress) -> bool {
+    dict.iter()
+        .find(|o| o.index == a.index)
+        .and_then(|o| o.entries.iter().find(|e| e.sub == a.sub))
+        .is_some_and(|e| e.access.contains(EntryAccess::WRITE_PREOP))
+}
+
+/// Build the profile of `dev` from `file` (named `source` in errors and in the profile's key,
+/// `esi:ORDER`).
+pub fn from_esi(
+    file: &EsiFile,
+    dev: &Device,
+    source: &str,
+) -> Result<&'static DriveProfile, EsiProfileError> {
+    let err = |reason: String| EsiProfileError {
+        file: source.to_string(),
+        device: format!(
+            "{} (product 0x{:08X})",
+            dev.type_.name_text, dev.type_.product_code
+        ),
+        reason,
+    };
+    if !dev.has_coe() {
+        return Err(err(
+            "it has no CoE mailbox: a CiA 402 drive is configured over CoE".into(),
+        ));
+    }
+    let dictionary = crate::esi::static_dictionary(dev).map_err(err)?;
+    let plan = DrivePlan::new(file, dev);
+    let mut modes = 0u32;
+    for m in &plan.modes {
+        modes |= match *m {
+            "csp" => 1 << 7,
+            "csv" => 1 << 8,
+            _ => 1 << 9,
+        };
+    }
+    // Every mode at once if the PDOs allow it (the last entry), else the first mode that
+    // can be carried (csp before csv before cst).
+    let cyclic = plan
+        .mappings
+        .last()
+        .and_then(|m| m.mapping.clone())
+        .or_else(|| plan.mappings.iter().find_map(|m| m.mapping.clone()))
+        .ok_or_else(|| {
+            let why: Vec<String> = plan
+                .mappings
+                .iter()
+                .map(|m| {
+                    let side = |r: &Result<_, String>| r.as_ref().err().cloned();
+                    format!(
+                        "{}: {}",
+                        m.modes.join("+"),
+                        [side(&m.rx), side(&m.tx)]
+                            .into_iter()
+                            .flatten()
+                            .collect::<Vec<_>>()
+                            .join("; ")
+                    )
+                })
+                .collect();
+            err(format!(
+                "no cyclic mode can be mapped ({})",
+                why.join(" | ")
+            ))
+        })?;
+    let default_mapping = dev
+        .default_mapping()
+        .unwrap_or_else(|_| Mapping::fixed(&[], &[]));
+    let (rx_ranges, rx_most) = ranges(dev, Direction::Rx, dictionary);
+    let (tx_ranges, tx_most) = ranges(dev, Direction::Tx, dictionary);
+    let name = leak(&dev.name);
+    let coe = dev.mailbox.as_ref().and_then(|m| m.coe.as_ref());
+    let (rx_assigned, rx_entries) = counts(dev.rx_pdos.len(), rx_most);
+    let (tx_assigned, tx_entries) = counts(dev.tx_pdos.len(), tx_most);
+    let pdo_limits = PdoLimits {
+        drive: name,
+        rx: DirectionLimits {
+            pdos: Vec::leak(rx_ranges),
+            max_assigned: rx_assigned,
+            max_entries: rx_entries,
+            max_bytes: sm_bytes(dev, SmKind::Outputs),
+        },
+        tx: DirectionLimits {
+            pdos: Vec::leak(tx_ranges),
+            max_assigned: tx_assigned,
+            max_entries: tx_entries,
+            max_bytes: sm_bytes(dev, SmKind::Inputs),
+        },
+        assignment_writable: coe.is_some_and(|c| c.pdo_assign),
+    };
+    let sync_type = ObjectAddress::new(0x1C32, 1);
+    let cycle_time = ObjectAddress::new(0x1C32, 2);
+    let sync0_mode = dev.dc.iter().find(|m| m.mode.sync0());
+    let free_run = dev.dc.is_empty() || dev.dc.iter().any(|m| m.mode.assign_activate == 0);
+    let cycle_times = sync0_mode
+        .and_then(|m| m.allowed_cycle_times.as_ref())
+        .map(|t| match t {
+            crate::esi::CycleTimes::List(l) => CycleTimes::List(Vec::leak(l.clone())),
+            crate::esi::CycleTimes::Range { min, max, step } => CycleTimes::Range {
+                min_ns: *min,
+                max_ns: *max,
+                step_ns: (*step).max(1),
+            },
+        })
+        .unwrap_or(super::generic::SYNC.cycle_times);
+    let sync = SyncSpec {
+        free_run,
+        dc_sync0: sync0_mode.is_some(),
+        cycle_times,
+        assign_activate: sync0_mode.map_or(0x0300, |m| m.mode.assign_activate),
+        sync_type_object: writable(dictionary, sync_type).then_some(sync_type),
+        cycle_time_object: writable(dictionary, cycle_time)
+            .then_some(CycleTimeObject::Nanoseconds(cycle_time)),
+    };
+    let init_cmds: Vec<InitCommand> = dev
+        .mailbox
+        .as_ref()
+        .map(|m| {
+            m.init_cmds
+                .iter()
+                .map(|c| InitCommand {
+                    transitions: Vec::leak(c.transitions.clone()),
+                    address: ObjectAddress::new(c.index, c.sub),
+                    data: Vec::leak(c.data.clone()),
+                    comment: leak(&c.comment),
+                    complete_access: c.complete_access,
+                    line: c.position.line,
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    let generic = &super::generic::GENERIC_CIA402;
+    let profile = DriveProfile {
+        name,
+        vendor: leak(&file.vendor.name),
+        caps: crate::cia402::DriveCaps {
+            supported_modes: SupportedModes::from_raw(modes),
+            ..generic.caps
+        },
+        dictionary,
+        units: generic.units,
+        bus: EtherCat {
+            key: leak(&format!("esi:{}", dev.type_.name_text)),
+            identity: IdentityMatch {
+                vendor_id: file.vendor.id,
+                product_code: dev.type_.product_code,
+            },
+            revision: dev.type_.revision_no.unwrap_or(0),
+            pdo_limits,
+            default_mapping,
+            cyclic_mapping: cyclic,
+            required_objects: super::generic::REQUIRED_OBJECTS,
+            startup: &[],
+            init_cmds: Vec::leak(init_cmds),
+            output_defaults: &[],
+            cycle_counter: None,
+            sync,
+            complete_access: coe.is_some_and(|c| c.complete_access),
+            esi: "",
+            zero_speed_flag: None,
+            ratings: crate::drives::Ratings::NONE,
+        },
+    };
+    Ok(Box::leak(Box::new(profile)))
+}
+
+/// The profile of the device with `vendor_id`/`product_code` (and `revision`, if the file
+/// distinguishes revisions) in `file`, if the file describes it.
+pub fn find_in(
+    file: &EsiFile,
+    source: &str,
+    vendor_id: u32,
+    product_code: u32,
+    revision: Option<u32>,
+) -> Option<Result<&'static DriveProfile, EsiProfileError>> {
+    if file.vendor.id != vendor_id {
+        return None;
+    }
+    file.device(product_code, revision)
+        .map(|d| from_esi(file, d, source))
+}

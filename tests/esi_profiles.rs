@@ -1,0 +1,319 @@
+//! What ecdrive makes of a drive from its ESI file alone (`esi::DrivePlan`, printed by `ecdrive
+//! esi show`), on three vendor-shaped files that are not ecdrive's two drives
+//! (`tests/data/esi/make_drives.py` wrote them): fixed PDOs with alternatives excluded by
+//! `<Exclude>` (Nordwind ND40), configurable PDOs with 10 entries per mapping object (Kestrel
+//! KS2), and a read-only 0x1C32 with InitCmds that set the cycle time through a vendor object
+//! (Taiga TX7). The expected values are read off the files, not off the code.
+
+mod support {
+    pub mod cli;
+}
+
+use ecdrive::esi::{CYCLIC_MODES, DrivePlan, EsiFile, MappingSource, mapping_for};
+use ecdrive::od::ObjectAddress;
+use ecdrive::pdo::Direction;
+
+fn path(name: &str) -> String {
+    format!("{}/tests/data/esi/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn plan(name: &str) -> (EsiFile, DrivePlan) {
+    let f = EsiFile::from_path(path(name)).unwrap_or_else(|e| panic!("{e}"));
+    let d = f.devices.first().expect("one device").clone();
+    let p = DrivePlan::new(&f, &d);
+    (f, p)
+}
+
+fn pdos(m: &ecdrive::esi::ModeMapping, dir: Direction) -> (MappingSource, Vec<u16>) {
+    let side = match dir {
+        Direction::Rx => &m.rx,
+        Direction::Tx => &m.tx,
+    };
+    let c = side
+        .as_ref()
+        .unwrap_or_else(|e| panic!("{:?}: {e}", m.modes));
+    (c.source.clone(), c.pdos.clone())
+}
+
+#[test]
+fn fixed_pdos_with_exclusions_one_per_mode() {
+    let (_, p) = plan("Nordwind_ND40.xml");
+    assert_eq!((p.vendor_id, p.product_code), (0x0E01, 0x40));
+    assert_eq!(p.modes, ["csp", "csv", "cst"]);
+    assert!(p.modes_from_0x6502);
+    let by = |name: &str| {
+        p.mappings
+            .iter()
+            .find(|m| m.modes.join("+") == name)
+            .unwrap()
+    };
+    // csp: the default assignment (0x1600 on SM2, 0x1A00 on SM3).
+    assert_eq!(
+        pdos(by("csp"), Direction::Rx),
+        (MappingSource::Default, vec![0x1600])
+    );
+    assert_eq!(
+        pdos(by("csp"), Direction::Tx),
+        (MappingSource::Default, vec![0x1A00])
+    );
+    // csv and cst: the alternative fixed RxPDO that carries the set-point.
+    assert_eq!(
+        pdos(by("csv"), Direction::Rx),
+        (MappingSource::Chosen, vec![0x1601])
+    );
+    assert_eq!(
+        pdos(by("cst"), Direction::Rx),
+        (MappingSource::Chosen, vec![0x1602])
+    );
+    // All three at once: the PDOs exclude each other and cannot be configured.
+    let all = by("csp+csv+cst");
+    assert!(!all.ok());
+    let why = all.rx.as_ref().unwrap_err();
+    assert!(why.contains("0x60FF:00 (Target velocity)"), "{why}");
+    assert!(why.contains("0x6071:00 (Target torque)"), "{why}");
+    assert!(why.contains("cannot be configured"), "{why}");
+    // The chosen mapping is the file's PDO, entry for entry.
+    let m = by("csv").mapping.as_ref().unwrap();
+    assert!(m.contains(Direction::Rx, ObjectAddress::new(0x60FF, 0)));
+    assert_eq!(m.bytes(Direction::Rx), 8);
+    let dc = p.dc.as_ref().unwrap();
+    assert_eq!(
+        (dc.name.as_str(), dc.assign_activate, dc.sync0_factor),
+        ("DC", 0x0300, 1)
+    );
+    assert_eq!(p.cycle_time_writable, Some(true));
+    assert_eq!(p.init_cmds.len(), 1);
+    assert_eq!(p.init_cmds[0].object, "0x605A:00");
+    assert_eq!(p.init_cmds[0].data, "0200");
+    assert_eq!(p.init_cmds[0].transitions, ["PS"]);
+}
+
+#[test]
+fn configurable_pdos_are_built_within_the_entry_limit() {
+    let (f, p) = plan("Kestrel_KS2.xml");
+    let by = |name: &str| {
+        p.mappings
+            .iter()
+            .find(|m| m.modes.join("+") == name)
+            .unwrap()
+    };
+    assert_eq!(
+        pdos(by("csp"), Direction::Rx),
+        (MappingSource::Default, vec![0x1600])
+    );
+    assert_eq!(
+        pdos(by("csv"), Direction::Rx),
+        (MappingSource::Built, vec![0x1600])
+    );
+    let all = by("csp+csv+cst");
+    assert_eq!(
+        pdos(all, Direction::Rx),
+        (MappingSource::Built, vec![0x1600])
+    );
+    assert_eq!(
+        pdos(all, Direction::Tx),
+        (MappingSource::Built, vec![0x1A00])
+    );
+    let m = all.mapping.as_ref().unwrap();
+    // The default entries first, then what the modes need, each with its dictionary length.
+    let rx: Vec<(u16, u8)> = m.pdos(Direction::Rx)[0]
+        .entries
+        .iter()
+        .map(|e| (e.index, e.bits))
+        .collect();
+    assert_eq!(
+        rx,
+        [
+            (0x6040, 16),
+            (0x607A, 32),
+            (0x60FF, 32),
+            (0x6071, 16),
+            (0x6060, 8)
+        ]
+    );
+    assert!(m.contains(Direction::Tx, ObjectAddress::new(0x6061, 0)));
+    // The limit the dictionary implies: 0x1600 has sub-indices 1–10. With 8 more objects in
+    // the default PDO, three modes need 13 entries.
+    let mut d = f.devices[0].clone();
+    let extra = d.rx_pdos[0].entries[0].clone();
+    for i in 0..8u16 {
+        let mut e = extra.clone();
+        e.index = 0x2000 + i;
+        d.rx_pdos[0].entries.push(e);
+    }
+    let m = mapping_for(&d, &CYCLIC_MODES);
+    let why = m.rx.unwrap_err();
+    assert!(
+        why.contains("RxPDO 0x1600 would need 13 entries; the file's dictionary gives it 10"),
+        "{why}"
+    );
+}
+
+#[test]
+fn read_only_cycle_time_and_init_commands_in_file_order() {
+    let (_, p) = plan("Taiga_TX7.xml");
+    assert_eq!(p.cycle_time_writable, Some(false));
+    let all = p
+        .mappings
+        .iter()
+        .find(|m| m.modes.len() == 3)
+        .expect("all modes");
+    assert_eq!(
+        pdos(all, Direction::Rx),
+        (MappingSource::Default, vec![0x1600])
+    );
+    assert_eq!(
+        pdos(all, Direction::Tx),
+        (MappingSource::Default, vec![0x1A00])
+    );
+    let cmds: Vec<(&str, &str, String)> = p
+        .init_cmds
+        .iter()
+        .map(|c| (c.object.as_str(), c.data.as_str(), c.transitions.join(",")))
+        .collect();
+    assert_eq!(
+        cmds,
+        [
+            ("0x2010:00", "E803", "PS".to_string()),
+            ("0x2011:00", "01", "PS".to_string()),
+            ("0x6060:00", "08", "PS,SO".to_string()),
+        ]
+    );
+    assert!(p.init_cmds[0].comment.contains("0x1C32:02 is read-only"));
+    assert!(p.init_cmds[0].line < p.init_cmds[1].line);
+}
+
+#[test]
+fn esi_show_prints_the_plan() {
+    let r = support::cli::ecdrive(&["esi", "show", &path("Nordwind_ND40.xml")]);
+    let text = r.ok().to_string();
+    assert!(
+        text.contains("From this file alone: cyclic modes csp, csv, cst (0x6502)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("csv          RxPDO 0x1601 (chosen); TxPDO 0x1A00 (default)"),
+        "{text}"
+    );
+    assert!(text.contains("csp+csv+cst  RxPDO impossible: "), "{text}");
+    assert!(text.contains("InitCmd line "), "{text}");
+    let j = support::cli::ecdrive(&["esi", "show", &path("Taiga_TX7.xml"), "--json"]).json();
+    let plan = &j["devices"][0]["plan"];
+    assert_eq!(plan["cycle_time_writable"], false, "{plan}");
+    assert_eq!(plan["init_cmds"][2]["object"], "0x6060:00", "{plan}");
+    assert_eq!(
+        plan["mappings"][0]["rx"]["Ok"]["source"], "default",
+        "{plan}"
+    );
+}
+
+/// A configuration file next to the ESI files (so `esi = "…"` is relative to it).
+fn config(
+    body: &str,
+) -> Result<ecdrive::app::config::RunConfig, ecdrive::app::config::ConfigError> {
+    let text = format!("interface = \"eth9\"\ncycle = \"1ms\"\n{body}");
+    ecdrive::app::config::parse(&text, &path("drives.toml"))
+}
+
+#[test]
+fn a_configuration_drive_gets_its_profile_from_the_esi_file() {
+    let cfg = config(
+        "[[drive]]\nposition = 0\nesi = \"Taiga_TX7.xml\"\nmode = \"csv\"\n\
+         program = [{ step = \"dwell\", seconds = 0.1 }]\n",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let p = cfg.drives[0].profile.expect("a profile from the ESI");
+    assert_eq!(p.bus.key, "esi:TX7");
+    assert_eq!(
+        (p.bus.identity.vendor_id, p.bus.identity.product_code),
+        (0x0E03, 0x0007_0007)
+    );
+    // 0x1C32:02 is read-only in the file: ecdrive does not write the cycle time there; the
+    // InitCmds set it through 0x2010.
+    assert_eq!(p.bus.sync.cycle_time_object, None);
+    assert_eq!(p.bus.init_cmds.len(), 3);
+    assert_eq!(p.bus.init_cmds[0].address, ObjectAddress::new(0x2010, 0));
+    assert_eq!(p.bus.init_cmds[0].data, [0xE8, 0x03]);
+    // Types for upload/download come from the file's dictionary.
+    let d = ecdrive::od::Dictionary::new(p.dictionary);
+    assert!(d.entry(ObjectAddress::new(0x2010, 0)).is_some());
+    assert!(
+        p.bus
+            .cyclic_mapping
+            .contains(Direction::Rx, ObjectAddress::new(0x60FF, 0))
+    );
+
+    // The ND40 cannot carry csp, csv and cst at once, but each alone: its cyclic mapping is
+    // the one of csp (its default assignment); for a csv program the file's csv PDO is chosen
+    // and the check says so.
+    let cfg = config("[[drive]]\nposition = 0\nesi = \"Nordwind_ND40.xml\"\n").unwrap();
+    let p = cfg.drives[0].profile.unwrap();
+    assert!(
+        p.bus
+            .cyclic_mapping
+            .contains(Direction::Rx, ObjectAddress::new(0x607A, 0))
+    );
+    assert!(p.bus.sync.cycle_time_object.is_some());
+    let cfg =
+        config("[[drive]]\nposition = 0\nesi = \"Nordwind_ND40.xml\"\nmode = \"csv\"\n").unwrap();
+    let m = cfg.master.startup.drives[0]
+        .mapping
+        .as_ref()
+        .expect("chosen");
+    assert_eq!(m.pdos(Direction::Rx)[0].index, 0x1601);
+    assert_eq!(
+        cfg.notes,
+        [
+            "drive[0].esi: csv from the ESI file: RxPDO 0x1601 (chosen from the file's PDOs), \
+          TxPDO 0x1A00 (the file's default)"
+        ]
+    );
+    // A program that switches csp → csv needs both set-points at once: refused, named.
+    let e = config(
+        "[[drive]]\nposition = 0\nesi = \"Nordwind_ND40.xml\"\nmode = \"csp\"\n\
+         program = [{ step = \"mode\", mode = \"csv\" }]\n",
+    )
+    .unwrap_err();
+    assert!(e.message.contains("cannot carry csp+csv"), "{e}");
+    assert!(e.message.contains("0x60FF:00 (Target velocity)"), "{e}");
+}
+
+#[test]
+fn a_bad_or_missing_esi_is_named_before_the_bus_is_touched() {
+    let e = config("[[drive]]\nposition = 0\nesi = \"Nowhere.xml\"\n").unwrap_err();
+    assert_eq!((e.line, e.key.as_deref()), (5, Some("drive[0].esi")), "{e}");
+    assert!(e.message.contains("Nowhere.xml"), "{e}");
+    let e = config("[[drive]]\nposition = 0\nesi = \"Acme_Terminals.xml\"\n").unwrap_err();
+    assert!(e.message.contains("describes 4 devices"), "{e}");
+    let e = config(
+        "[[drive]]\nidentity = { vendor_id = 0x0E01, product_code = 0x41 }\n\
+         esi = \"Nordwind_ND40.xml\"\n",
+    )
+    .unwrap_err();
+    assert!(
+        e.message.contains("no device with product code 0x00000041"),
+        "{e}"
+    );
+    let e = config("[[drive]]\nposition = 0\nesi = \"Kestrel_KS2.xml\"\nprofile = \"mr-j4-tm\"\n")
+        .unwrap_err();
+    assert!(e.message.contains("not both"), "{e}");
+    // A broken file: the parser's line and column inside it.
+    let dir = std::env::temp_dir().join(format!("ecdrive-esi-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(path("Kestrel_KS2.xml")).unwrap();
+    std::fs::write(
+        dir.join("broken.xml"),
+        text.replacen("<BitLen>16</BitLen>", "<BitLen>sixteen</BitLen>", 1),
+    )
+    .unwrap();
+    let e = ecdrive::app::config::parse(
+        "interface = \"eth9\"\n[[drive]]\nposition = 0\nesi = \"broken.xml\"\n",
+        dir.join("c.toml").to_str().unwrap(),
+    )
+    .unwrap_err();
+    assert!(e.message.contains("broken.xml"), "{e}");
+    assert!(e.message.contains("line "), "{e}");
+    assert!(e.message.contains("column "), "{e}");
+    assert!(e.message.contains("sixteen"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
