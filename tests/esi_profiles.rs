@@ -317,3 +317,59 @@ fn a_bad_or_missing_esi_is_named_before_the_bus_is_touched() {
     assert!(e.message.contains("sixteen"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The emulated MR-J4-TM driven with a profile built from its ESI file alone (no Rust
+/// profile), the file given two `<InitCmd>`s: the run reaches OP and completes a move; an
+/// InitCmd the drive refuses (a write to the read-only 0x1018:01) stops start-up with the
+/// drive, the object, the transition, the line and the comment named.
+#[test]
+fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
+    use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    let dir = std::env::temp_dir().join(format!("ecdrive-esi-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let esi = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/esi/Mitsubishi_MR-J4-TM.xml"
+    ))
+    .unwrap();
+    let with = |cmds: &str| {
+        let open = esi.find("<CoE SdoInfo=").expect("<CoE>");
+        let close = open + esi[open..].find("/>").expect("self-closing <CoE/>");
+        format!("{}>{cmds}</CoE>{}", &esi[..close], &esi[close + 2..])
+    };
+    let good = "<InitCmd><Transition>PS</Transition><Index>#x6065</Index><SubIndex>0</SubIndex>\
+                <Data>00100000</Data><Comment>following error window</Comment></InitCmd>";
+    let bad = "<InitCmd><Transition>PS</Transition><Index>#x1018</Index><SubIndex>1</SubIndex>\
+               <Data>00000000</Data><Comment>a vendor ID written by mistake</Comment></InitCmd>";
+    std::fs::write(dir.join("good.xml"), with(good)).unwrap();
+    std::fs::write(dir.join("bad.xml"), with(&format!("{good}{bad}"))).unwrap();
+    let cfg = |file: &str| {
+        let text = format!(
+            "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n\
+             [[drive]]\nposition = 0\nesi = \"{file}\"\nmode = \"csp\"\n\
+             program = [{{ step = \"move\", by = 100000, velocity = 1000000, acceleration = 10000000 }}]\n"
+        );
+        ecdrive::app::config::parse(&text, dir.join("run.toml").to_str().unwrap())
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let c = cfg("good.xml");
+    assert_eq!(c.drives[0].profile.unwrap().bus.init_cmds.len(), 1);
+    let r = run(&c, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let e = match run(&cfg("bad.xml"), &RunOptions::default(), &stop, &mut |_| {}) {
+        Err(e) => e.to_string(),
+        Ok(r) => format!("{:?}: {}", r.outcome, r.reason),
+    };
+    for part in [
+        "drive 0",
+        "0x1018:01",
+        "InitCmd at line",
+        "PS",
+        "a vendor ID written by mistake",
+        "0x06010002",
+    ] {
+        assert!(e.contains(part), "{part:?} not in: {e}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

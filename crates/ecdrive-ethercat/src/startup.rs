@@ -1545,6 +1545,32 @@ impl DriveWrites {
             })?;
             writes.push((*a, bytes, format!("user start-up value {v}")));
         }
+        // The ESI file's InitCmds for INIT → PRE-OP and PRE-OP → SAFE-OP, in file order (the
+        // master is in PRE-OP now and goes to SAFE-OP next). Those writing the PDO assignment
+        // or mapping objects are left out: the master writes the mapping it chose itself.
+        for ic in profile.init_cmds {
+            let when: Vec<&str> = ic
+                .transitions
+                .iter()
+                .map(|t| t.name())
+                .filter(|t| matches!(*t, "IP" | "PS"))
+                .collect();
+            let a = ic.address.index;
+            let mapping_object = matches!(a, 0x1C12 | 0x1C13 | 0x1600..=0x17FF | 0x1A00..=0x1BFF);
+            if when.is_empty() || mapping_object {
+                continue;
+            }
+            writes.push((
+                ic.address,
+                ic.data.to_vec(),
+                format!(
+                    "InitCmd at line {} of the ESI file, {}: {:?}",
+                    ic.line,
+                    when.join(","),
+                    ic.comment
+                ),
+            ));
+        }
         // Mode of operation: by SDO only when 0x6060 is not mapped.
         if !mapping.contains(Direction::Rx, MODE) {
             writes.push((

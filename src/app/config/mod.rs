@@ -1136,7 +1136,13 @@ fn drive(
     Ok((
         DriveSetup {
             select,
-            profile: r.profile.as_ref().and(profile),
+            // Forced when the file names a profile or an ESI file; else start-up identifies
+            // the device.
+            profile: if r.profile.is_some() || r.esi.is_some() {
+                profile
+            } else {
+                None
+            },
             mode,
             mapping,
             sdos,

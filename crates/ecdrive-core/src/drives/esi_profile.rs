@@ -69,7 +69,10 @@ fn sm_bytes(dev: &Device, kind: SmKind) -> u16 {
 /// `pdos` PDOs of at most `entries` entries each, as the limits' types hold them.
 fn counts(pdos: usize, entries: usize) -> (u8, u16) {
     let pdos = pdos.clamp(1, 255);
-    let total = entries.max(1).saturating_mul(pdos).min(usize::from(u16::MAX));
+    let total = entries
+        .max(1)
+        .saturating_mul(pdos)
+        .min(usize::from(u16::MAX));
     (pdos as u8, total as u16)
 }
 
