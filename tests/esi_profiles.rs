@@ -373,3 +373,204 @@ fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+// ---- the three files as emulated devices (`esi:FILE`), driven from the files alone ---------
+
+/// A configuration running the device of `file` (emulated from the same file) with `esi =`.
+fn run_config(file: &str, mode: &str, program: &str) -> String {
+    format!(
+        "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"esi:{}\"]\n\
+         [[drive]]\nposition = 0\nesi = \"{file}\"\nmode = \"{mode}\"\nprogram = [{program}]\n",
+        path(file)
+    )
+}
+
+const CSP_MOVE: &str = "{ step = \"move\", by = 20000, velocity = 100000, acceleration = 1000000 }";
+
+#[test]
+fn each_vendor_file_reaches_op_and_moves_with_only_its_esi() {
+    use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    for (file, mode, program) in [
+        ("Nordwind_ND40.xml", "csp", CSP_MOVE),
+        (
+            "Nordwind_ND40.xml",
+            "csv",
+            "{ step = \"ramp\", velocity = 20000, acceleration = 200000, hold = 0.05 }, { step = \"ramp\", velocity = 0, acceleration = 200000 }",
+        ),
+        ("Kestrel_KS2.xml", "csp", CSP_MOVE),
+        // csv on the KS2 needs 0x60FF configured into its RxPDO 0x1600.
+        (
+            "Kestrel_KS2.xml",
+            "csv",
+            "{ step = \"ramp\", velocity = 20000, acceleration = 200000, hold = 0.05 }, { step = \"ramp\", velocity = 0, acceleration = 200000 }",
+        ),
+        ("Taiga_TX7.xml", "csp", CSP_MOVE),
+    ] {
+        let text = run_config(file, mode, program);
+        let cfg = ecdrive::app::config::parse(&text, &path("run.toml"))
+            .unwrap_or_else(|e| panic!("{file} {mode}: {e}"));
+        assert!(
+            cfg.notes[0].contains(&format!("{mode} from the ESI file")),
+            "{:?}",
+            cfg.notes
+        );
+        let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
+            .unwrap_or_else(|e| panic!("{file} {mode}: {e}"));
+        assert_eq!(r.outcome, Outcome::Completed, "{file} {mode}: {}", r.reason);
+    }
+}
+
+/// A link that keeps every mailbox request the master writes to the first device's SM0
+/// (station 0x1000, SM0 at 0x1000 in these files), as the bytes went on the wire.
+struct MailboxTap<L> {
+    inner: L,
+    seen: std::sync::Arc<std::sync::Mutex<Vec<Vec<u8>>>>,
+}
+
+impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for MailboxTap<L> {
+    fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive::link::LinkError> {
+        const FPWR: u8 = 5;
+        if let Ok(eth) = ecdrive::ec::frame::EthernetFrame::new_checked(frame)
+            && let Ok(ecat) = ecdrive::ec::frame::EthercatFrame::new_checked(eth.payload())
+            && let Ok(mut seen) = self.seen.lock()
+        {
+            for d in ecat.datagrams().flatten() {
+                if d.command_raw() == FPWR && d.adp() == 0x1000 && d.ado() == 0x1000 {
+                    seen.push(d.data().to_vec());
+                }
+            }
+        }
+        self.inner.send(frame)
+    }
+
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Option<std::time::Duration>,
+    ) -> Result<Option<usize>, ecdrive::link::LinkError> {
+        self.inner.recv(buf, timeout)
+    }
+}
+
+/// The TX7's InitCmds arrive at the drive in file order, before SAFE-OP, each once, and the
+/// drive accepts them (the session reaches OP): 0x2010 (its cycle time, as 0x1C32:02 is
+/// read-only), 0x2011, then 0x6060 = 8. ecdrive writes nothing to the read-only 0x1C32:02.
+#[test]
+fn init_commands_arrive_in_file_order() {
+    use ecdrive::ec::mailbox::{MailboxMessage, SdoRequest};
+    use ecdrive::master::session::{Master, MasterConfig};
+    let text = run_config("Taiga_TX7.xml", "csp", CSP_MOVE);
+    let cfg = ecdrive::app::config::parse(&text, &path("run.toml")).unwrap();
+    let seg = ecdrive::sim::run::build_segment(
+        &[format!("esi:{}", path("Taiga_TX7.xml"))],
+        &ecdrive::sim::EscConfig::default(),
+    )
+    .unwrap();
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let link = MailboxTap {
+        inner: ecdrive::sim::transport::SegmentLink::new(seg),
+        seen: seen.clone(),
+    };
+    let mc: MasterConfig = cfg.master.clone();
+    let mut m = Master::start(link, mc).map_err(|f| f.error).unwrap();
+    m.wait_until("OP", std::time::Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    let _ = m.stop(ecdrive::master::telemetry::StopKind::Ramp);
+    let downloads: Vec<(u16, u8, Vec<u8>)> = seen
+        .lock()
+        .unwrap()
+        .iter()
+        .filter_map(|b| match MailboxMessage::parse(b) {
+            Ok((
+                _,
+                MailboxMessage::SdoRequest(SdoRequest::DownloadExpedited {
+                    index, sub, data, ..
+                }),
+            )) => Some((index, sub, data.to_vec())),
+            _ => None,
+        })
+        .collect();
+    let of = |i: u16| downloads.iter().position(|(x, _, _)| *x == i);
+    let (a, b, c) = (of(0x2010), of(0x2011), of(0x6060));
+    assert!(a.is_some() && b.is_some() && c.is_some(), "{downloads:x?}");
+    assert!(a < b && b < c, "file order: {downloads:x?}");
+    assert_eq!(downloads[a.unwrap()].2, [0xE8, 0x03]);
+    assert_eq!(downloads.iter().filter(|(x, _, _)| *x == 0x2010).count(), 1);
+    assert!(
+        !downloads.iter().any(|(x, s, _)| (*x, *s) == (0x1C32, 2)),
+        "0x1C32:02 is read-only in the file: {downloads:x?}"
+    );
+}
+
+/// Over veth: `ecdrive sim -d esi:FILE` serves the KS2 as its file describes it, and `ecdrive
+/// run` drives it in csv from the same file (its RxPDO configured with 0x60FF).
+#[test]
+fn a_vendor_file_over_veth() {
+    let dev = format!("esi:{}", path("Kestrel_KS2.xml"));
+    let Some(sim) =
+        support::cli::SimOnVeth::start("esi_profiles::a_vendor_file_over_veth", &[dev.as_str()])
+    else {
+        return;
+    };
+    assert!(sim.banner.contains("KS2"), "{}", sim.banner);
+    let dir = std::env::temp_dir().join(format!("ecdrive-esi-veth-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("ks2.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "interface = \"eth9\"\ncycle = \"1ms\"\n[[drive]]\nposition = 0\nesi = \"{}\"\n\
+             mode = \"csv\"\nprogram = [{{ step = \"ramp\", velocity = 20000, acceleration = 200000, \
+             hold = 0.05 }}, {{ step = \"ramp\", velocity = 0, acceleration = 200000 }}]\n",
+            path("Kestrel_KS2.xml")
+        ),
+    )
+    .unwrap();
+    let j = sim.run_json(file.to_str().unwrap(), &[]);
+    assert_eq!(j["outcome"], "completed", "{j:#}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `ecdrive run --esi DIR`: the drives of a configuration that names neither a profile nor an
+/// ESI file are found by identity among the folder's files; without it they are unknown. The
+/// folder's terminals (Acme_Terminals.xml) are listed as not usable, and do not stop the run.
+#[test]
+fn a_folder_of_vendor_files_is_searched_by_identity() {
+    let (profiles, skipped) =
+        ecdrive::drives::esi_profile::load_dir(std::path::Path::new(&path(""))).unwrap();
+    let mut keys: Vec<&str> = profiles.iter().map(|p| p.bus.key).collect();
+    keys.sort_unstable();
+    assert_eq!(keys, ["esi:KS2", "esi:ND40", "esi:TX7"]);
+    assert!(
+        skipped
+            .iter()
+            .any(|s| s.contains("Acme_Terminals.xml") && s.contains("AC3102")),
+        "{skipped:?}"
+    );
+
+    let dir = std::env::temp_dir().join(format!("ecdrive-esi-dir-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("two.toml");
+    std::fs::write(
+        &file,
+        format!(
+            "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"esi:{}\", \"esi:{}\"]\n\
+             [[drive]]\nposition = 0\nprogram = [{CSP_MOVE}]\n\
+             [[drive]]\nposition = 1\nprogram = [{CSP_MOVE}]\n",
+            path("Nordwind_ND40.xml"),
+            path("Taiga_TX7.xml")
+        ),
+    )
+    .unwrap();
+    let f = file.to_str().unwrap();
+    let without = support::cli::ecdrive(&["run", "-c", f]);
+    assert_ne!(without.code, Some(0), "{without:#?}");
+    assert!(without.stderr.contains("vendor 0x00000E01"), "{without:#?}");
+    let with = support::cli::ecdrive(&["run", "-c", f, "--esi", &path(""), "--json"]);
+    let j = with.json();
+    assert_eq!(j["outcome"], "completed", "{j:#}");
+    assert!(with.stderr.contains("--esi: ND40 servo drive"), "{with:#?}");
+    assert!(with.stderr.contains("warning: --esi: "), "{with:#?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

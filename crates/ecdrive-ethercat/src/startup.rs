@@ -158,6 +158,21 @@ impl Default for DcSettings {
     }
 }
 
+/// The profile of `d` among profiles built from ESI files: the same identity and revision,
+/// else the same identity.
+fn esi_profile_for(
+    profiles: &[&'static DriveProfile],
+    d: &DeviceInfo,
+) -> Option<&'static DriveProfile> {
+    let same = |p: &&&'static DriveProfile| p.identity.matches(d.vendor_id, d.product_code);
+    profiles
+        .iter()
+        .filter(same)
+        .find(|p| p.revision == d.revision)
+        .or_else(|| profiles.iter().find(same))
+        .copied()
+}
+
 /// The start-up configuration.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StartupConfig {
@@ -171,6 +186,10 @@ pub struct StartupConfig {
     /// Run unknown devices with the generic CiA 402 profile
     /// ([`crate::drives::generic::GENERIC_CIA402`]); only when the user asks for it.
     pub allow_generic: bool,
+    /// Profiles built from vendor ESI files (`ecdrive run --esi DIR`,
+    /// [`crate::drives::esi_profile::load_dir`]): a device no built-in profile matches is
+    /// matched against these by identity (the same revision first, then any).
+    pub esi_profiles: Vec<&'static DriveProfile>,
 }
 
 impl StartupConfig {
@@ -181,6 +200,7 @@ impl StartupConfig {
             dc: DcSettings::default(),
             drives: Vec::new(),
             allow_generic: false,
+            esi_profiles: Vec::new(),
         }
     }
 }
@@ -668,7 +688,9 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                 }
                 p
             }
-            None => match crate::drives::by_identity(d.vendor_id, d.product_code) {
+            None => match crate::drives::by_identity(d.vendor_id, d.product_code)
+                .or_else(|| esi_profile_for(&cfg.esi_profiles, d))
+            {
                 Some(p) => p,
                 None if cfg.allow_generic && d.declares_cia402() => generic,
                 None if named => {

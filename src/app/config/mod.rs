@@ -849,7 +849,8 @@ fn drive(
     {
         let base = crate::sim::quirks::split_name(name).map_or(name.as_str(), |(b, _)| b);
         let device_profile = crate::drives::by_key(base);
-        let drivable = device_profile.is_some() || base == "generic-coe";
+        let drivable =
+            device_profile.is_some() || base == "generic-coe" || base.starts_with("esi:");
         let span = r.profile.as_ref().map_or_else(
             || r.position.as_ref().map_or(d.span(), Spanned::span),
             Spanned::span,

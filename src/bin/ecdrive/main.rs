@@ -416,6 +416,11 @@ enum Command {
         /// Draw the recording as a scope into this SVG when the run ends (needs --record).
         #[arg(long, value_name = "OUT.svg", requires = "record")]
         plot: Option<PathBuf>,
+        /// A folder of vendor ESI files (*.xml): a drive no built-in profile matches gets the
+        /// profile its ESI file gives, found by identity (files and devices that cannot be used
+        /// are listed as warnings).
+        #[arg(long, value_name = "DIR")]
+        esi: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
     },
@@ -458,7 +463,8 @@ enum Command {
         nodes: Vec<String>,
         /// A device, in line order, optionally repeated (`mr-j4-tm:32`); repeat the option for
         /// more devices. NAME+QUIRK[+QUIRK…] makes it behave like a device ecdrive did not
-        /// write (see --list-devices).
+        /// write (see --list-devices). `esi:FILE` serves the device an ESI file describes
+        /// (its identity, SII and dictionary) with the generic servo's behaviour.
         #[arg(long = "device", short = 'd', value_name = "NAME[:COUNT]")]
         devices: Vec<String>,
         /// SM watchdog reset value in units of 100 µs (0 disables it; default: the ESC reset
@@ -1495,6 +1501,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             check,
             record,
             plot,
+            esi,
             json,
         } => {
             let code = run::run(
@@ -1503,6 +1510,7 @@ fn dispatch(cli: Cli) -> ExitCode {
                 duration,
                 check,
                 record.as_deref(),
+                esi.as_deref(),
                 json.json,
             );
             match (&record, &plot) {

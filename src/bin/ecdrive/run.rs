@@ -12,12 +12,44 @@ pub fn run(
     duration: Option<Duration>,
     check: bool,
     record: Option<&Path>,
+    esi: Option<&Path>,
     json: bool,
 ) -> ExitCode {
     let mut cfg = match ecdrive::app::config::load(path) {
         Ok(c) => c,
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
+    if let Some(dir) = esi {
+        match ecdrive::drives::esi_profile::load_dir(dir) {
+            Ok((profiles, skipped)) if !profiles.is_empty() => {
+                for s in skipped {
+                    cfg.warnings.push(format!("--esi: {s}"));
+                }
+                for p in &profiles {
+                    cfg.notes.push(format!(
+                        "--esi: {} (vendor 0x{:08X} product 0x{:08X} revision 0x{:08X})",
+                        p.name, p.identity.vendor_id, p.identity.product_code, p.revision
+                    ));
+                }
+                cfg.master.startup.esi_profiles = profiles;
+            }
+            Ok((_, skipped)) => {
+                let why = if skipped.is_empty() {
+                    "no ESI file (*.xml) there".to_string()
+                } else {
+                    format!("no drive in its ESI files: {}", skipped.join("; "))
+                };
+                return fail_with(
+                    "run",
+                    &format!("--esi {}: {why}", dir.display()),
+                    exit::USAGE,
+                );
+            }
+            Err(e) => {
+                return fail_with("run", &format!("--esi {}: {e}", dir.display()), exit::USAGE);
+            }
+        }
+    }
     if let Some(i) = interface {
         match i.parse() {
             Ok(t) => cfg.target = t,

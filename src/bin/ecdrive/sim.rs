@@ -736,7 +736,10 @@ pub(crate) fn repeat_devices(devices: &[String]) -> Result<Vec<String>, String> 
     let max = ecdrive::master::bus::MAX_SUBDEVICES;
     let mut out = Vec::new();
     for d in devices {
-        match d.rsplit_once(':') {
+        match d
+            .rsplit_once(':')
+            .filter(|(_, n)| n.chars().all(|c| c.is_ascii_digit()))
+        {
             Some((name, n)) => {
                 let n: usize = n
                     .parse()

@@ -9,7 +9,7 @@
 //! | supported modes | 0x6502's default (csp, csv, cst bits); the generic three if absent |
 //! | default mapping | the default assignment (PDOs with `Sm`, and the mandatory ones) |
 //! | cyclic mapping | [`DrivePlan`]: the PDOs carrying csp, csv and cst together, else those of the first mode that can be carried |
-//! | PDO limits | the file's PDO indices, entries per mapping object from its dictionary, bytes from the SyncManager's `MaxSize` |
+//! | PDO limits | the file's PDO indices (fixed when `Fixed` or without `<CoE PdoConfig>`: assigned, never rewritten), entries per mapping object from its dictionary, bytes from the SyncManager's `MaxSize` |
 //! | synchronisation | the DC `<OpMode>` with SYNC0 (AssignActivate), free run if offered, the cycle times it lists; 0x1C32:01/02 written only where the dictionary makes them writable |
 //! | InitCmds | `<InitCmd>`s with their transitions, in file order ([`InitCommand`]) |
 //! | complete access | `<CoE CompleteAccess>` |
@@ -44,7 +44,14 @@ fn leak(s: &str) -> &'static str {
 /// PDO index ranges of one direction: each PDO of the file on its own, with as many entries
 /// as the dictionary's mapping object has sub-indices (the file's own entry count if the
 /// dictionary does not say).
-fn ranges(dev: &Device, dir: Direction, dict: &[ObjectDesc]) -> (Vec<PdoRange>, usize) {
+/// A PDO that is `Fixed`, or any PDO of a file without `<CoE PdoConfig>`, keeps its content:
+/// its range is fixed, so the master assigns it but never writes its mapping object.
+fn ranges(
+    dev: &Device,
+    dir: Direction,
+    dict: &[ObjectDesc],
+    configurable: bool,
+) -> (Vec<PdoRange>, usize) {
     let mut out = Vec::new();
     let mut most = 0;
     for p in dev.pdos(dir) {
@@ -55,7 +62,12 @@ fn ranges(dev: &Device, dir: Direction, dict: &[ObjectDesc]) -> (Vec<PdoRange>, 
             .unwrap_or(p.entries.len())
             .clamp(p.entries.len(), 255);
         most = most.max(n);
-        out.push(PdoRange::new(p.index, p.index, n as u8));
+        let r = PdoRange::single(p.index, n as u8);
+        out.push(if p.fixed || !configurable {
+            r.fixed()
+        } else {
+            r
+        });
     }
     (out, most)
 }
@@ -145,10 +157,11 @@ pub fn from_esi(
     let default_mapping = dev
         .default_mapping()
         .unwrap_or_else(|_| Mapping::fixed(&[], &[]));
-    let (rx_ranges, rx_most) = ranges(dev, Direction::Rx, dictionary);
-    let (tx_ranges, tx_most) = ranges(dev, Direction::Tx, dictionary);
-    let name = leak(&dev.name);
     let coe = dev.mailbox.as_ref().and_then(|m| m.coe.as_ref());
+    let configurable = coe.is_some_and(|c| c.pdo_config);
+    let (rx_ranges, rx_most) = ranges(dev, Direction::Rx, dictionary, configurable);
+    let (tx_ranges, tx_most) = ranges(dev, Direction::Tx, dictionary, configurable);
+    let name = leak(&dev.name);
     let (rx_assigned, rx_entries) = counts(dev.rx_pdos.len(), rx_most);
     let (tx_assigned, tx_entries) = counts(dev.tx_pdos.len(), tx_most);
     let pdo_limits = PdoLimits {
@@ -257,4 +270,41 @@ pub fn find_in(
     }
     file.device(product_code, revision)
         .map(|d| from_esi(file, d, source))
+}
+
+/// Every drive profile the ESI files in `dir` (`*.xml`, in name order) give: one per device
+/// with a CoE mailbox whose PDOs can carry a cyclic mode. What cannot be used is listed in the
+/// second vector, one line each naming the file (and for a file that does not parse, the line
+/// and column): a folder of vendor files holds terminals and couplers too.
+pub fn load_dir(
+    dir: &std::path::Path,
+) -> Result<(Vec<&'static DriveProfile>, Vec<String>), std::io::Error> {
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("xml")))
+        .collect();
+    files.sort();
+    let mut profiles = Vec::new();
+    let mut skipped = Vec::new();
+    for path in files {
+        let shown = path.display().to_string();
+        let file = match EsiFile::from_path(&path) {
+            Ok(f) => f,
+            Err(e) => {
+                skipped.push(format!("{shown}: {e}"));
+                continue;
+            }
+        };
+        for dev in &file.devices {
+            if !dev.has_coe() {
+                continue;
+            }
+            match from_esi(&file, dev, &shown) {
+                Ok(p) => profiles.push(p),
+                Err(e) => skipped.push(e.to_string()),
+            }
+        }
+    }
+    Ok((profiles, skipped))
 }

@@ -366,6 +366,8 @@ pub struct GenericCoeDevice {
     power: PowerState,
     prev_cw: u16,
     quirks: Quirks,
+    /// The SII description and order code, when the device was built from an ESI file.
+    esi: Option<(Box<DeviceDescription>, &'static str)>,
     /// What the device has seen.
     pub seen: CoeObservations,
 }
@@ -418,6 +420,72 @@ impl GenericCoeDevice {
             power: PowerState::SwitchOnDisabled,
             prev_cw: 0,
             quirks: Quirks::NONE,
+            esi: None,
+            seen: CoeObservations::default(),
+        })
+    }
+
+    /// The same application behind a device described by an ESI file: the file's identity,
+    /// SII (SyncManagers, PDOs, DC modes, mailbox) and object dictionary with its defaults, so
+    /// that a master sees the vendor's device; the behaviour is this generic servo's (CiA 402
+    /// device control, csp/csv following, the synchronisation checks at SAFE-OP → OP against
+    /// 0x1C32). For drives ecdrive has no emulation of: a master configured from the same file
+    /// meets what the file promises. The device must have 0x6040 and 0x6041.
+    pub fn from_esi(
+        file: &crate::esi::EsiFile,
+        dev: &crate::esi::Device,
+        serial: u32,
+    ) -> Result<Self, String> {
+        let dictionary = crate::esi::static_dictionary(dev)?;
+        for a in [0x6040u16, 0x6041] {
+            if !dictionary.iter().any(|o| o.index == a) {
+                return Err(format!(
+                    "{}: no 0x{a:04X} in its dictionary: not a CiA 402 drive",
+                    dev.type_.name_text
+                ));
+            }
+        }
+        let mut od = OdStore::new(dictionary).map_err(|e| e.to_string())?;
+        let _ = od
+            .dict_mut()
+            .set_uint(ObjectAddress::new(0x1018, 4), u64::from(serial));
+        let writable = |a: ObjectAddress| {
+            dictionary
+                .iter()
+                .find(|o| o.index == a.index)
+                .and_then(|o| o.entries.iter().find(|e| e.sub == a.sub))
+                .is_some_and(|e| e.access.contains(EntryAccess::WRITE_PREOP))
+        };
+        let mut hooks = Chain::new();
+        for (a, b) in [
+            (SYNC_TYPE, ObjectAddress::new(0x1C33, 1)),
+            (CYCLE_TIME, ObjectAddress::new(0x1C33, 2)),
+        ] {
+            if writable(a) && writable(b) {
+                hooks = hooks.with(Mirror { a, b });
+            }
+        }
+        let od = od.with_hooks(hooks);
+        let description =
+            crate::sii::from_esi(file.vendor.id, dev, serial).map_err(|e| e.to_string())?;
+        let coe = dev.mailbox.as_ref().and_then(|m| m.coe.as_ref());
+        Ok(Self {
+            serial,
+            coe: CoeServer::new(CoeConfig {
+                complete_access: coe.is_some_and(|c| c.complete_access),
+                sdo_info: coe.is_none_or(|c| c.sdo_info),
+                ..CoeConfig::default()
+            }),
+            od,
+            rx: Vec::new(),
+            tx: Vec::new(),
+            power: PowerState::SwitchOnDisabled,
+            prev_cw: 0,
+            quirks: Quirks::NONE,
+            esi: Some((
+                Box::new(description),
+                String::leak(dev.type_.name_text.clone()),
+            )),
             seen: CoeObservations::default(),
         })
     }
@@ -433,11 +501,12 @@ impl GenericCoeDevice {
     /// The same device behaving like one ecdrive did not write ([`crate::quirks`]).
     /// [`Quirk::FollowingErrorZero`] does not apply (it has no 0x60F4).
     pub fn with_quirks(mut self, quirks: Quirks) -> Result<Self, String> {
-        quirks.check_for(GENERIC_COE_ORDER, Self::CAPABILITIES)?;
+        let order = self.esi.as_ref().map_or(GENERIC_COE_ORDER, |(_, o)| *o);
+        quirks.check_for(order, Self::CAPABILITIES)?;
         self.quirks = quirks;
         self.coe = CoeServer::new(CoeConfig {
             quirks,
-            ..CoeConfig::default()
+            ..*self.coe.config()
         });
         self.od.set_quirks(quirks);
         Ok(self)
@@ -597,6 +666,9 @@ impl Device for GenericCoeDevice {
     }
 
     fn description(&self) -> DeviceDescription {
+        if let Some((d, _)) = &self.esi {
+            return (**d).clone();
+        }
         DeviceDescription {
             identity: Identity {
                 vendor_id: TEST_VENDOR_ID,

@@ -79,7 +79,8 @@ pub fn check_name(name: &str) -> Result<(), DeviceError> {
         reason,
     })?;
     let known = super::drives::specs().iter().any(|s| s.key == base)
-        || DEVICE_NAMES.iter().any(|(n, _)| *n == base);
+        || DEVICE_NAMES.iter().any(|(n, _)| *n == base)
+        || base.starts_with("esi:");
     if known {
         Ok(())
     } else {
@@ -92,7 +93,8 @@ pub fn check_name(name: &str) -> Result<(), DeviceError> {
 
 /// Create a device by name (see [`device_names`]), with the quirks named after `+`
 /// (`bdhde+no-state-skipping`, see [`crate::quirks`]). `position` makes serial numbers
-/// unique.
+/// unique. `esi:PATH` is the generic CoE servo behind the one device of the ESI file at PATH
+/// ([`GenericCoeDevice::from_esi`]).
 pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
     let serial = u32::try_from(position).unwrap_or(u32::MAX);
     let (base, quirks) = split_name(name).map_err(|reason| DeviceError::Quirk {
@@ -103,6 +105,27 @@ pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceErr
         name: name.into(),
         reason,
     };
+    if let Some(path) = base.strip_prefix("esi:") {
+        let build = |reason: String| DeviceError::Build {
+            name: name.into(),
+            reason,
+        };
+        let file = crate::esi::EsiFile::from_path(path).map_err(|e| build(e.to_string()))?;
+        let dev = match file.devices.as_slice() {
+            [d] => d,
+            many => {
+                return Err(build(format!(
+                    "the file describes {} devices; one is needed",
+                    many.len()
+                )));
+            }
+        };
+        return GenericCoeDevice::from_esi(&file, dev, serial)
+            .map_err(build)?
+            .with_quirks(quirks)
+            .map(|d| Box::new(d) as Box<dyn Device>)
+            .map_err(quirk_error);
+    }
     match base {
         "generic-coe" => GenericCoeDevice::new(serial)
             .map_err(|e| DeviceError::Build {
