@@ -116,6 +116,15 @@ pub fn from_esi(
         ));
     }
     let dictionary = crate::esi::static_dictionary(dev).map_err(err)?;
+    if let Some(missing) = [(0x6040u16, "controlword"), (0x6041, "statusword")]
+        .iter()
+        .find(|(i, _)| !dictionary.iter().any(|o| o.index == *i))
+    {
+        return Err(err(format!(
+            "not a CiA 402 drive: no 0x{:04X} ({}) in its dictionary",
+            missing.0, missing.1
+        )));
+    }
     let plan = DrivePlan::new(file, dev);
     let mut modes = 0u32;
     for m in &plan.modes {
