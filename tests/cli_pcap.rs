@@ -9,6 +9,11 @@ use support::cli::{SimOnVeth, ecdrive};
 
 /// `tshark` with `args`, its stdout; `None` (after a loud skip line) when it is not installed
 /// outside CI.
+/// The tests of this file each run a real-time cycle (a run, the demo, a sim over veth): run
+/// together on a two-core CI machine they stalled each other for 20 ms and the emulated drives'
+/// loss supervision stopped the demo. One at a time.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
 fn tshark(args: &[&str]) -> Option<String> {
     match std::process::Command::new("tshark").args(args).output() {
         Ok(out) => {
@@ -74,6 +79,7 @@ fn check(path: &str, written: usize) {
 
 #[test]
 fn a_run_capture_opens_in_tshark_without_a_malformed_frame() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = std::env::temp_dir().join(format!("ecdrive-pcap-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("run.pcapng");
@@ -101,6 +107,7 @@ fn a_run_capture_opens_in_tshark_without_a_malformed_frame() {
 
 #[test]
 fn the_demo_captures_its_in_process_frames() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let dir = std::env::temp_dir().join(format!("ecdrive-pcap-demo-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("demo.pcapng");
@@ -115,6 +122,7 @@ fn the_demo_captures_its_in_process_frames() {
 
 #[test]
 fn a_tool_capture_over_veth() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     let Some(sim) = SimOnVeth::start("cli_pcap::a_tool_capture_over_veth", &["mr-j4-tm", "bdhde"])
     else {
         return;
