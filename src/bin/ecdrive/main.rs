@@ -649,7 +649,8 @@ fn parse_state(s: &str) -> Result<AlState, String> {
         .ok_or_else(|| format!("unknown state {s:?} (use INIT, PREOP, SAFEOP, OP or BOOT)"))
 }
 
-fn parse_u32(s: &str) -> Result<u32, String> {
+/// A 32-bit number from the command line, decimal or 0x hex (also `ecdrive sim`'s).
+pub(crate) fn parse_u32(s: &str) -> Result<u32, String> {
     let t = s.trim();
     match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
         Some(h) => u32::from_str_radix(h, 16),

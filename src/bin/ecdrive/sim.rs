@@ -51,20 +51,11 @@ pub struct StoreArgs {
     #[arg(long, value_name = "FILE")]
     pub make_firmware: Option<std::path::PathBuf>,
     /// With --make-firmware: the revision number the image gives the device (0x1018:03).
-    #[arg(long, value_name = "N", default_value = "0x00030000", value_parser = parse_u32)]
+    #[arg(long, value_name = "N", default_value = "0x00030000", value_parser = crate::parse_u32)]
     pub firmware_revision: u32,
     /// With --make-firmware: the software version it gives the device (0x100A, ≤ 16 chars).
     #[arg(long, value_name = "TEXT", default_value = "B5")]
     pub firmware_version: String,
-}
-
-fn parse_u32(s: &str) -> Result<u32, String> {
-    let t = s.trim();
-    match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-        Some(h) => u32::from_str_radix(h, 16),
-        None => t.parse::<u32>(),
-    }
-    .map_err(|_| format!("{s:?} is not a 32-bit number (decimal or 0x hex)"))
 }
 
 /// `--make-firmware`: an image for the first device of `devices`.
