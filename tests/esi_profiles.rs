@@ -176,11 +176,45 @@ fn read_only_cycle_time_and_init_commands_in_file_order() {
         [
             ("0x2010:00", "E803", "PS".to_string()),
             ("0x2011:00", "01", "PS".to_string()),
+            ("0x2FFF:00", "01", "PS".to_string()),
             ("0x6060:00", "08", "PS,SO".to_string()),
         ]
     );
     assert!(p.init_cmds[0].comment.contains("0x1C32:02 is read-only"));
     assert!(p.init_cmds[0].line < p.init_cmds[1].line);
+    // Its attributes and the network description's elements, as the file writes them.
+    let c0 = &p.init_cmds[0];
+    assert!(c0.fixed && !c0.disabled);
+    assert_eq!((c0.timeout_ms, c0.retries), (Some(3000), 1));
+    let c1 = &p.init_cmds[1];
+    assert!(!c1.fixed && !c1.disabled);
+    assert_eq!((c1.timeout_ms, c1.retries), (None, 0));
+    assert!(p.init_cmds[2].disabled);
+}
+
+/// A configuration value for the object of a `Fixed` InitCmd is refused before anything is
+/// written, naming the drive, the object, the InitCmd's line and comment.
+#[test]
+fn a_value_for_a_fixed_init_command_object_is_refused() {
+    use ecdrive::app::ethercat::tools::run::{RunOptions, run};
+    let text = run_config("Taiga_TX7.xml", "csp", CSP_MOVE)
+        .replace("esi = ", "sdos = { \"0x2010:00\" = 500 }\nesi = ");
+    let cfg =
+        ecdrive::app::config::parse(&text, &path("run.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let e = match run(&cfg, &RunOptions::default(), &stop, &mut |_| {}) {
+        Err(e) => e.to_string(),
+        Ok(r) => format!("{:?}: {}", r.outcome, r.reason),
+    };
+    for part in [
+        "drive 0",
+        "0x2010:00",
+        "InitCmd at line",
+        "Fixed",
+        "cycle time 1000 us",
+    ] {
+        assert!(e.contains(part), "{part:?} not in: {e}");
+    }
 }
 
 #[test]
@@ -200,7 +234,9 @@ fn esi_show_prints_the_plan() {
     let j = support::cli::ecdrive(&["esi", "show", &path("Taiga_TX7.xml"), "--json"]).json();
     let plan = &j["devices"][0]["plan"];
     assert_eq!(plan["cycle_time_writable"], false, "{plan}");
-    assert_eq!(plan["init_cmds"][2]["object"], "0x6060:00", "{plan}");
+    assert_eq!(plan["init_cmds"][3]["object"], "0x6060:00", "{plan}");
+    assert_eq!(plan["init_cmds"][2]["disabled"], true, "{plan}");
+    assert_eq!(plan["init_cmds"][0]["timeout_ms"], 3000, "{plan}");
     assert_eq!(
         plan["mappings"][0]["rx"]["Ok"]["source"], "default",
         "{plan}"
@@ -231,7 +267,17 @@ fn a_configuration_drive_gets_its_profile_from_the_esi_file() {
     // 0x1C32:02 is read-only in the file: ecdrive does not write the cycle time there; the
     // InitCmds set it through 0x2010.
     assert_eq!(p.bus.sync.cycle_time_object, None);
+    // The disabled one (0x2FFF) is not in the profile.
     assert_eq!(p.bus.init_cmds.len(), 3);
+    assert!(p.bus.init_cmds.iter().all(|c| c.address.index != 0x2FFF));
+    assert_eq!(
+        (
+            p.bus.init_cmds[0].timeout_ms,
+            p.bus.init_cmds[0].retries,
+            p.bus.init_cmds[0].fixed
+        ),
+        (Some(3000), 1, true)
+    );
     assert_eq!(p.bus.init_cmds[0].address, ObjectAddress::new(0x2010, 0));
     assert_eq!(p.bus.init_cmds[0].data, [0xE8, 0x03]);
     // Types for upload/download come from the file's dictionary.
@@ -320,8 +366,9 @@ fn a_bad_or_missing_esi_is_named_before_the_bus_is_touched() {
 
 /// The emulated MR-J4-TM driven with a profile built from its ESI file alone (no Rust
 /// profile), the file given two `<InitCmd>`s: the run reaches OP and completes a move; an
-/// InitCmd the drive refuses (a write to the read-only 0x1018:01) stops start-up with the
-/// drive, the object, the transition, the line and the comment named.
+/// InitCmd the drive refuses (a write to the read-only 0x1018:01), sent again as its
+/// `<Retries>` say, stops start-up with the drive, the object, the transition, the line and
+/// the comment named.
 #[test]
 fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
     use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
@@ -340,7 +387,8 @@ fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
     let good = "<InitCmd><Transition>PS</Transition><Index>#x6065</Index><SubIndex>0</SubIndex>\
                 <Data>00100000</Data><Comment>following error window</Comment></InitCmd>";
     let bad = "<InitCmd><Transition>PS</Transition><Index>#x1018</Index><SubIndex>1</SubIndex>\
-               <Data>00000000</Data><Comment>a vendor ID written by mistake</Comment></InitCmd>";
+               <Data>00000000</Data><Comment>a vendor ID written by mistake</Comment>\
+               <Retries>2</Retries></InitCmd>";
     std::fs::write(dir.join("good.xml"), with(good)).unwrap();
     std::fs::write(dir.join("bad.xml"), with(&format!("{good}{bad}"))).unwrap();
     let cfg = |file: &str| {
@@ -368,6 +416,7 @@ fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
         "PS",
         "a vendor ID written by mistake",
         "0x06010002",
+        "sent 3 times",
     ] {
         assert!(e.contains(part), "{part:?} not in: {e}");
     }
@@ -421,12 +470,16 @@ fn each_vendor_file_reaches_op_and_moves_with_only_its_esi() {
     }
 }
 
-/// A link that keeps every mailbox request the master writes to the first device's SM0
-/// (station 0x1000, SM0 at 0x1000 in these files), as the bytes went on the wire.
+/// A link that keeps, in wire order, every mailbox request the master writes to the first
+/// device's SM0 (station 0x1000, SM0 at 0x1000 in these files) and every AL control write to
+/// it (0x0120), as (register, bytes).
 struct MailboxTap<L> {
     inner: L,
-    seen: std::sync::Arc<std::sync::Mutex<Vec<Vec<u8>>>>,
+    seen: Seen,
 }
+
+/// What a [`MailboxTap`] saw: (register, bytes), in wire order.
+type Seen = std::sync::Arc<std::sync::Mutex<Vec<(u16, Vec<u8>)>>>;
 
 impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for MailboxTap<L> {
     fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive::link::LinkError> {
@@ -436,8 +489,11 @@ impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for MailboxTap<L> {
             && let Ok(mut seen) = self.seen.lock()
         {
             for d in ecat.datagrams().flatten() {
-                if d.command_raw() == FPWR && d.adp() == 0x1000 && d.ado() == 0x1000 {
-                    seen.push(d.data().to_vec());
+                if d.command_raw() == FPWR
+                    && d.adp() == 0x1000
+                    && matches!(d.ado(), 0x1000 | 0x0120)
+                {
+                    seen.push((d.ado(), d.data().to_vec()));
                 }
             }
         }
@@ -453,11 +509,13 @@ impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for MailboxTap<L> {
     }
 }
 
-/// The TX7's InitCmds arrive at the drive in file order, before SAFE-OP, each once, and the
-/// drive accepts them (the session reaches OP): 0x2010 (its cycle time, as 0x1C32:02 is
-/// read-only), 0x2011, then 0x6060 = 8. ecdrive writes nothing to the read-only 0x1C32:02.
+/// The TX7's InitCmds arrive at the drive in file order, each once, and the drive accepts
+/// them (the session reaches OP): in PRE-OP before SAFE-OP is requested, 0x2010 (its cycle
+/// time, as 0x1C32:02 is read-only), 0x2011, then 0x6060 = 8; in SAFE-OP before OP is
+/// requested, 0x6060 = 8 again (the file gives it PS and SO). The disabled one (0x2FFF) never
+/// goes out, and ecdrive writes nothing to the read-only 0x1C32:02.
 #[test]
-fn init_commands_arrive_in_file_order() {
+fn init_commands_arrive_in_file_order_at_their_transitions() {
     use ecdrive::ec::mailbox::{MailboxMessage, SdoRequest};
     use ecdrive::master::session::{Master, MasterConfig};
     let text = run_config("Taiga_TX7.xml", "csp", CSP_MOVE);
@@ -477,29 +535,60 @@ fn init_commands_arrive_in_file_order() {
     m.wait_until("OP", std::time::Duration::from_secs(10), |t| t.cycle.all_op)
         .unwrap();
     let _ = m.stop(ecdrive::master::telemetry::StopKind::Ramp);
-    let downloads: Vec<(u16, u8, Vec<u8>)> = seen
+    // The wire, in order: "S4" for an AL control request of SAFE-OP, "S8" for OP, and
+    // "IIII:SS=data" for each expedited download.
+    let events: Vec<String> = seen
         .lock()
         .unwrap()
         .iter()
-        .filter_map(|b| match MailboxMessage::parse(b) {
-            Ok((
+        .filter_map(|(reg, b)| match (reg, MailboxMessage::parse(b)) {
+            (0x0120, _) => Some(format!("S{}", b.first().copied().unwrap_or(0) & 0x0F)),
+            (
                 _,
-                MailboxMessage::SdoRequest(SdoRequest::DownloadExpedited {
-                    index, sub, data, ..
-                }),
-            )) => Some((index, sub, data.to_vec())),
+                Ok((
+                    _,
+                    MailboxMessage::SdoRequest(SdoRequest::DownloadExpedited {
+                        index,
+                        sub,
+                        data,
+                        ..
+                    }),
+                )),
+            ) => Some(format!(
+                "{index:04X}:{sub:02X}={}",
+                data.iter().map(|x| format!("{x:02X}")).collect::<String>()
+            )),
             _ => None,
         })
         .collect();
-    let of = |i: u16| downloads.iter().position(|(x, _, _)| *x == i);
-    let (a, b, c) = (of(0x2010), of(0x2011), of(0x6060));
-    assert!(a.is_some() && b.is_some() && c.is_some(), "{downloads:x?}");
-    assert!(a < b && b < c, "file order: {downloads:x?}");
-    assert_eq!(downloads[a.unwrap()].2, [0xE8, 0x03]);
-    assert_eq!(downloads.iter().filter(|(x, _, _)| *x == 0x2010).count(), 1);
+    eprintln!("{events:?}");
+    let at = |e: &str| events.iter().position(|x| x == e);
+    let all = |e: &str| {
+        events
+            .iter()
+            .enumerate()
+            .filter(|(_, x)| *x == e)
+            .map(|(i, _)| i)
+            .collect::<Vec<_>>()
+    };
+    let (safe_op, op) = (at("S4"), at("S8"));
+    let (c2010, c2011, mode) = (at("2010:00=E803"), at("2011:00=01"), all("6060:00=08"));
+    assert!(safe_op.is_some() && op.is_some(), "{events:?}");
+    assert!(c2010.is_some() && c2011.is_some(), "{events:?}");
+    assert_eq!(mode.len(), 2, "0x6060 at PS and at SO: {events:?}");
+    // PS: in file order, before SAFE-OP is requested.
+    assert!(c2010 < c2011 && c2011 < Some(mode[0]), "{events:?}");
+    assert!(Some(mode[0]) < safe_op, "{events:?}");
+    // SO: after SAFE-OP, before OP.
+    assert!(safe_op < Some(mode[1]) && Some(mode[1]) < op, "{events:?}");
+    assert_eq!(all("2010:00=E803").len(), 1, "{events:?}");
     assert!(
-        !downloads.iter().any(|(x, s, _)| (*x, *s) == (0x1C32, 2)),
-        "0x1C32:02 is read-only in the file: {downloads:x?}"
+        !events.iter().any(|e| e.starts_with("2FFF")),
+        "disabled: {events:?}"
+    );
+    assert!(
+        !events.iter().any(|e| e.starts_with("1C32:02")),
+        "0x1C32:02 is read-only in the file: {events:?}"
     );
 }
 

@@ -267,6 +267,16 @@ impl<'a> CoeClient<'a> {
         self
     }
 
+    /// How long it waits for each reply.
+    pub fn timeout(&self) -> Duration {
+        self.timeout
+    }
+
+    /// Change how long it waits for each reply, from the next request on.
+    pub fn set_timeout(&mut self, timeout: Duration) {
+        self.timeout = timeout;
+    }
+
     /// The drive.
     pub fn drive(&self) -> &DriveRef {
         &self.drive

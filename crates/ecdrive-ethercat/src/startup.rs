@@ -20,7 +20,7 @@ use super::coe::{CoeClient, CoeError};
 use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
 use super::exec::exec_error;
 use super::program::{CyclicMode, Step};
-use crate::drives::{CycleTimeObject, DriveProfile, StartupWhen};
+use crate::drives::{CycleTimeObject, DriveProfile, InitCommand, StartupWhen};
 use crate::ec::{AlState, AlStatusCode, register};
 use crate::link::FrameLink;
 use crate::od::{self, DataType, ObjectAddress, Value};
@@ -1323,6 +1323,15 @@ pub fn configure<L: FrameLink>(
         let held = judge_drive(d, drive, profile, writes, r, &mut warnings, &mut recheck)?;
         held_values.push(held);
     }
+    // The InitCmds for SAFE-OP → OP, sent once the drives are in SAFE-OP.
+    let so_jobs: Vec<(u16, DriveRef, bool, &[&'static InitCommand])> = plans
+        .iter()
+        .zip(&drives_plan)
+        .filter(|((_, w), _)| !w.init_so.is_empty())
+        .map(|((drive, w), (d, _, p))| {
+            (d.address, drive.clone(), p.complete_access, &w.init_so[..])
+        })
+        .collect();
 
     // SYNC0 on every drive; the SYNC0 start itself comes with `configure_dc_sync`. I/O devices
     // run free (SM-synchronous): the process data frame updates them.
@@ -1378,6 +1387,7 @@ pub fn configure<L: FrameLink>(
     times.image_ms = ms_since(t_image);
     times.frames.image = sent(bus) - f_image;
     let group = to_safe_op(bus, group, &mut drives, cfg, &mut times)?;
+    send_so_init_cmds(bus, so_jobs)?;
     recheck_cycle_times(bus, recheck, cfg, &mut warnings)?;
     times.safe_op_at_ns = crate::rt::monotonic_ns();
     times.safe_op_ms = times.safe_op_at_ns.saturating_sub(t_image) as f64 / 1e6
@@ -1411,6 +1421,12 @@ struct DriveWrites {
     /// The mapped outputs the cycle does not drive: their values are read once every start-up
     /// value is written, and sent (`held_outputs`).
     undriven: Vec<ObjectAddress>,
+    /// The ESI file's InitCmds for INIT → PRE-OP and PRE-OP → SAFE-OP, in file order, sent in
+    /// PRE-OP right after the PDO remap (so the profile's and the user's values, written
+    /// later, override those that are not `Fixed`).
+    init_pre: Vec<&'static InitCommand>,
+    /// Those for SAFE-OP → OP, sent once the drive is in SAFE-OP (`send_so_init_cmds`).
+    init_so: Vec<&'static InitCommand>,
 }
 
 impl DriveWrites {
@@ -1430,7 +1446,10 @@ impl DriveWrites {
             interpolation: None,
             carried: Vec::new(),
             undriven: Vec::new(),
+            init_pre: Vec::new(),
+            init_so: Vec::new(),
         };
+        w.plan_init_cmds(drive, setup, profile)?;
         if remap {
             let seq = pdo::remap_sequence(
                 mapping,
@@ -1467,6 +1486,42 @@ impl DriveWrites {
             .map(|e| e.address())
             .collect();
         Ok(w)
+    }
+
+    /// The ESI file's InitCmds by the state they are sent in. Those writing the PDO assignment
+    /// or mapping objects are left out: the master writes the mapping it chose itself. A
+    /// configuration value for the object of a `Fixed` one is refused.
+    fn plan_init_cmds(
+        &mut self,
+        drive: &DriveRef,
+        setup: &DriveSetup,
+        profile: &'static DriveProfile,
+    ) -> Result<(), MasterError> {
+        use ecdrive_core::esi::Transition;
+        for ic in profile.init_cmds {
+            if ic.writes_mapping() {
+                continue;
+            }
+            if ic.fixed && setup.sdos.iter().any(|(a, _)| *a == ic.address) {
+                return Err(MasterError::new(
+                    Some(drive),
+                    format!("start-up SDO {}", ic.address),
+                    ErrorKind::Config,
+                    format!(
+                        "the {} sets this object and is Fixed: the configuration may not \
+                         write it",
+                        ic.describe()
+                    ),
+                ));
+            }
+            if ic.at(Transition::IP) || ic.at(Transition::PS) {
+                self.init_pre.push(ic);
+            }
+            if ic.at(Transition::SO) {
+                self.init_so.push(ic);
+            }
+        }
+        Ok(())
     }
 
     /// The synchronisation type and the cycle time, in whichever object the drive takes it.
@@ -1567,32 +1622,6 @@ impl DriveWrites {
             })?;
             writes.push((*a, bytes, format!("user start-up value {v}")));
         }
-        // The ESI file's InitCmds for INIT → PRE-OP and PRE-OP → SAFE-OP, in file order (the
-        // master is in PRE-OP now and goes to SAFE-OP next). Those writing the PDO assignment
-        // or mapping objects are left out: the master writes the mapping it chose itself.
-        for ic in profile.init_cmds {
-            let when: Vec<&str> = ic
-                .transitions
-                .iter()
-                .map(|t| t.name())
-                .filter(|t| matches!(*t, "IP" | "PS"))
-                .collect();
-            let a = ic.address.index;
-            let mapping_object = matches!(a, 0x1C12 | 0x1C13 | 0x1600..=0x17FF | 0x1A00..=0x1BFF);
-            if when.is_empty() || mapping_object {
-                continue;
-            }
-            writes.push((
-                ic.address,
-                ic.data.to_vec(),
-                format!(
-                    "InitCmd at line {} of the ESI file, {}: {:?}",
-                    ic.line,
-                    when.join(","),
-                    ic.comment
-                ),
-            ));
-        }
         // Mode of operation: by SDO only when 0x6060 is not mapped.
         if !mapping.contains(Direction::Rx, MODE) {
             writes.push((
@@ -1611,6 +1640,99 @@ struct MailboxDone {
     outcomes: Vec<SyncOutcome>,
     interpolated: Option<Result<String, String>>,
     held: Vec<HeldValue>,
+    /// The InitCmd that failed (after its retries) and why; nothing after it was written.
+    init_failed: Option<(&'static InitCommand, CoeError)>,
+}
+
+/// Send one InitCmd with its own timeout, again after a timeout or a refusal as often as its
+/// `<Retries>` say. The client's timeout is restored afterwards.
+async fn send_init_cmd(c: &mut CoeClient<'_>, ic: &InitCommand) -> Result<(), CoeError> {
+    let before = c.timeout();
+    if let Some(ms) = ic.timeout_ms {
+        c.set_timeout(Duration::from_millis(u64::from(ms)));
+    }
+    let mut r = Ok(());
+    for attempt in 0..=ic.retries {
+        r = c
+            .download(ic.address, ic.data, ic.complete_access)
+            .await
+            .map(|_| ());
+        match &r {
+            Ok(()) => break,
+            Err(e) if attempt < ic.retries => {
+                tracing::info!(
+                    "{}: {} failed ({}), sent again",
+                    e.drive,
+                    ic.describe(),
+                    e.kind
+                )
+            }
+            Err(_) => {}
+        }
+    }
+    c.set_timeout(before);
+    r
+}
+
+/// The InitCmds `cmds` in order; the first that fails ends the list.
+async fn send_init_cmds(
+    c: &mut CoeClient<'_>,
+    cmds: &[&'static InitCommand],
+) -> Result<Option<(&'static InitCommand, CoeError)>, CoeError> {
+    for ic in cmds {
+        match send_init_cmd(c, ic).await {
+            Ok(()) => {}
+            // A drive that stopped answering is a bus problem, not the command's.
+            Err(e) if matches!(e.kind, crate::coe::CoeErrorKind::Bus(_)) => return Err(e),
+            Err(e) => return Ok(Some((ic, e))),
+        }
+    }
+    Ok(None)
+}
+
+/// The ESI files' InitCmds for SAFE-OP → OP, each drive's in file order, sent in SAFE-OP before
+/// OP is requested.
+fn send_so_init_cmds<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    jobs: Vec<(u16, DriveRef, bool, &[&'static InitCommand])>,
+) -> Result<(), MasterError> {
+    if jobs.is_empty() {
+        return Ok(());
+    }
+    let drives: Vec<DriveRef> = jobs.iter().map(|j| j.1.clone()).collect();
+    let done = bus
+        .with_coe_each(jobs, T_STEP, async |c, cmds: &[&'static InitCommand]| {
+            send_init_cmds(c, cmds).await
+        })
+        .map_err(MasterError::from)?;
+    for (drive, r) in drives.iter().zip(done) {
+        match r {
+            Ok(None) => {}
+            Ok(Some((ic, e))) => return Err(init_cmd_error(drive, ic, &e)),
+            Err(e) => return Err(MasterError::from(SessionError::Coe(e))),
+        }
+    }
+    Ok(())
+}
+
+/// The error for an InitCmd that failed: the drive, the object, the line, transitions and
+/// comment from the file, and the drive's reason.
+fn init_cmd_error(drive: &DriveRef, ic: &InitCommand, e: &CoeError) -> MasterError {
+    let reason = match e.abort_code() {
+        Some(code) => format!("refused: {code}"),
+        None => e.kind.to_string(),
+    };
+    let tries = if ic.retries > 0 {
+        format!(" (sent {} times)", u32::from(ic.retries) + 1)
+    } else {
+        String::new()
+    };
+    MasterError::new(
+        Some(drive),
+        format!("writing {} ({})", ic.address, ic.describe()),
+        ErrorKind::Incompatible,
+        format!("{reason}{tries}"),
+    )
 }
 
 /// One drive's mailbox work in PRE-OP, in order: drain, the PDO remap, the synchronisation
@@ -1627,10 +1749,15 @@ async fn configure_mailbox(
         outcomes: Vec::new(),
         interpolated: None,
         held: Vec::new(),
+        init_failed: None,
     };
     c.drain().await?;
     for (addr, bytes, _why) in pdo_writes {
         c.download(*addr, bytes, false).await?;
+    }
+    done.init_failed = send_init_cmds(c, &plan.init_pre).await?;
+    if done.init_failed.is_some() {
+        return Ok(done);
     }
     for w in &plan.sync_writes {
         done.outcomes.push(write_sync(c, w).await?);
@@ -1667,6 +1794,7 @@ fn judge_drive(
         outcomes,
         interpolated,
         held,
+        init_failed,
     } = done.map_err(|e| {
         let mut e = MasterError::from(SessionError::Coe(e));
         // Name the purpose of the write that failed.
@@ -1681,6 +1809,9 @@ fn judge_drive(
         }
         e
     })?;
+    if let Some((ic, e)) = init_failed {
+        return Err(init_cmd_error(drive, ic, &e));
+    }
     match interpolated {
         Some(Err(why)) => {
             return Err(MasterError::new(

@@ -534,8 +534,32 @@ fn esi_plan(p: &ecdrive::esi::DrivePlan) {
         None => println!("    0x1C32:02 (cycle time): not in the dictionary"),
     }
     for c in &p.init_cmds {
+        let mut how = Vec::new();
+        if c.disabled {
+            how.push("disabled: not sent".to_string());
+        }
+        if c.fixed {
+            how.push("fixed".to_string());
+        }
+        if let Some(ms) = c.timeout_ms {
+            how.push(format!("timeout {ms} ms"));
+        }
+        if c.retries > 0 {
+            how.push(format!("retries {}", c.retries));
+        }
+        if ["0x1C12", "0x1C13", "0x16", "0x17", "0x1A", "0x1B"]
+            .iter()
+            .any(|p| c.object.starts_with(p))
+        {
+            how.push("mapping object: ecdrive writes the mapping it chose instead".to_string());
+        }
+        let how = if how.is_empty() {
+            String::new()
+        } else {
+            format!(" [{}]", how.join(", "))
+        };
         println!(
-            "    InitCmd line {}: {} {} = {}  {:?}",
+            "    InitCmd line {}: {} {} = {}  {:?}{how}",
             c.line,
             c.transitions.join(","),
             c.object,

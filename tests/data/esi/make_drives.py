@@ -202,14 +202,24 @@ def device(vendor_id, product, revision, order, name, pdos, sync, init_cmds, ext
         L.append(f'        </{tag}>')
     L.append('        <Mailbox DataLinkLayer="true">')
     L.append(f'          <CoE SdoInfo="true" PdoAssign="true" PdoConfig="{"true" if pdo_config else "false"}" CompleteAccess="false" SegmentedSdo="true">')
-    for (trans, idx, sub, data, comment) in init_cmds:
-        L.append('            <InitCmd>')
+    for cmd in init_cmds:
+        (trans, idx, sub, data, comment) = cmd[:5]
+        extra = cmd[5] if len(cmd) > 5 else {}
+        fixed = ' Fixed="true"' if extra.get("fixed") else ''
+        L.append(f'            <InitCmd{fixed}>')
         for t in trans:
             L.append(f'              <Transition>{t}</Transition>')
         L.append(f'              <Index>#x{idx:04x}</Index>')
         L.append(f'              <SubIndex>{sub}</SubIndex>')
         L.append(f'              <Data>{data}</Data>')
         L.append(f'              <Comment>{comment}</Comment>')
+        # Elements of the network description (ETG.2100) that vendor files carry too.
+        if "timeout" in extra:
+            L.append(f'              <Timeout>{extra["timeout"]}</Timeout>')
+        if "retries" in extra:
+            L.append(f'              <Retries>{extra["retries"]}</Retries>')
+        if extra.get("disabled"):
+            L.append('              <Disabled>true</Disabled>')
         L.append('            </InitCmd>')
     L.append('          </CoE>')
     L.append('        </Mailbox>')
@@ -295,8 +305,11 @@ write("Taiga_TX7.xml", 0x0E03, "Taiga Drives (ecdrive test vendor)",
               ("Tx", 0x1A00, "Inputs", 3, True, True, [], [SW, MODED, PAD8, APOS, AVEL, ATQ, ERR])],
              {"type": 2, "type_access": "ro", "cycle_access": "ro", "cycle_ns": 1000000,
               "min_ns": 1000000, "modes_supported": CSP_CSV_CST},
-             [(["PS"], 0x2010, 0, "e803", "cycle time 1000 us (vendor object; 0x1C32:02 is read-only)"),
+             [(["PS"], 0x2010, 0, "e803", "cycle time 1000 us (vendor object; 0x1C32:02 is read-only)",
+               {"fixed": True, "timeout": 3000, "retries": 1}),
               (["PS"], 0x2011, 0, "01", "synchronise to SYNC0"),
+              (["PS"], 0x2FFF, 0, "01", "factory test mode (disabled: never sent)",
+               {"disabled": True}),
               (["PS", "SO"], 0x6060, 0, "08", "mode of operation: csp")],
              [(0x2010, "Cycle time (us)", "UINT", 16, "rw", le(1000, 2)),
               (0x2011, "Sync source", "USINT", 8, "rw", "00")],

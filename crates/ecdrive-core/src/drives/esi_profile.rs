@@ -219,6 +219,7 @@ pub fn from_esi(
         .map(|m| {
             m.init_cmds
                 .iter()
+                .filter(|c| !c.disabled)
                 .map(|c| InitCommand {
                     transitions: Vec::leak(c.transitions.clone()),
                     address: ObjectAddress::new(c.index, c.sub),
@@ -226,6 +227,9 @@ pub fn from_esi(
                     comment: leak(&c.comment),
                     complete_access: c.complete_access,
                     line: c.position.line,
+                    timeout_ms: c.timeout_ms,
+                    retries: c.retries,
+                    fixed: c.fixed,
                 })
                 .collect()
         })

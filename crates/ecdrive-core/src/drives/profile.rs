@@ -138,6 +138,41 @@ pub struct InitCommand {
     pub complete_access: bool,
     /// Line of the `<InitCmd>` in the file.
     pub line: u32,
+    /// `<Timeout>`, ms: how long the drive may take to answer (None: the master's SDO
+    /// timeout).
+    pub timeout_ms: Option<u32>,
+    /// `<Retries>`: how often it is sent again after a timeout or a refusal before the
+    /// transition fails.
+    pub retries: u8,
+    /// `Fixed`: the configuration may not write the same object.
+    pub fixed: bool,
+}
+
+impl InitCommand {
+    /// Whether it is sent at `t`.
+    pub fn at(&self, t: crate::esi::Transition) -> bool {
+        self.transitions.contains(&t)
+    }
+
+    /// Whether it writes a PDO assignment or mapping object (0x1C12, 0x1C13, 0x1600–0x17FF,
+    /// 0x1A00–0x1BFF): the master writes the mapping it chose itself and leaves these out.
+    pub fn writes_mapping(&self) -> bool {
+        matches!(
+            self.address.index,
+            0x1C12 | 0x1C13 | 0x1600..=0x17FF | 0x1A00..=0x1BFF
+        )
+    }
+
+    /// How it is named in errors and logs: line, transitions and the file's comment.
+    pub fn describe(&self) -> String {
+        let t: Vec<&str> = self.transitions.iter().map(|t| t.name()).collect();
+        format!(
+            "InitCmd at line {} of the ESI file, {}: {:?}",
+            self.line,
+            t.join(","),
+            self.comment
+        )
+    }
 }
 
 /// An SDO the master writes in PRE-OP for a safe start.

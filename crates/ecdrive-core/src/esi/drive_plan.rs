@@ -141,6 +141,14 @@ pub struct InitCmdPlan {
     pub comment: String,
     /// Complete access.
     pub complete_access: bool,
+    /// `Fixed`: a configuration value for the same object is refused.
+    pub fixed: bool,
+    /// `<Timeout>`, ms (None: the master's SDO timeout).
+    pub timeout_ms: Option<u32>,
+    /// `<Retries>`.
+    pub retries: u8,
+    /// `<Disabled>`: not sent.
+    pub disabled: bool,
 }
 
 /// The DC operation mode ecdrive would use.
@@ -456,5 +464,9 @@ fn init_cmd_plan(c: &InitCmd) -> InitCmdPlan {
         data: hex(&c.data),
         comment: c.comment.clone(),
         complete_access: c.complete_access,
+        fixed: c.fixed,
+        timeout_ms: c.timeout_ms,
+        retries: c.retries,
+        disabled: c.disabled,
     }
 }

@@ -472,6 +472,15 @@ pub struct InitCmd {
     pub complete_access: bool,
     /// `Fixed` attribute: a configuration tool must not change it.
     pub fixed: bool,
+    /// `<Timeout>` (ms; the element of the network description, ETG.2100, that vendor files
+    /// carry too): how long the command may take. `None` when absent or 0: the master's SDO
+    /// timeout.
+    pub timeout_ms: Option<u32>,
+    /// `<Retries>`: how often a command that timed out or was refused is sent again before the
+    /// transition fails (0 when absent).
+    pub retries: u8,
+    /// `<Disabled>`: the command is listed but not sent.
+    pub disabled: bool,
 }
 
 /// The allowed cycle times of a DC operation mode. ETG.2000 has no element for this; the

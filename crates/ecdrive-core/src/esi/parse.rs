@@ -246,6 +246,17 @@ impl<'a, 'input> P<'a, 'input> {
         })
     }
 
+    /// A boolean in child element `name` (`true`/`false`/`1`/`0`), if present.
+    fn bool_child(&self, node: Node, name: &'static str, scope: &str) -> R<Option<bool>> {
+        let Some(c) = child(node, name) else {
+            return Ok(None);
+        };
+        let t = text_of(c);
+        num::parse_bool(&t)
+            .map(Some)
+            .map_err(|m| self.invalid(self.text_pos(c), format!("{scope} has {name} {t:?}: {m}")))
+    }
+
     fn flag(&self, node: Node, name: &'static str, scope: &str) -> R<bool> {
         Ok(self.attr_bool(node, name, scope)?.unwrap_or(false))
     }
@@ -561,6 +572,9 @@ impl<'a, 'input> P<'a, 'input> {
                     comment: child(ic, "Comment").map(text_of).unwrap_or_default(),
                     complete_access: self.flag(ic, "CompleteAccess", &s)?,
                     fixed: self.flag(ic, "Fixed", &s)?,
+                    timeout_ms: self.num_child::<u32>(ic, "Timeout", &s)?.filter(|t| *t > 0),
+                    retries: self.num_child(ic, "Retries", &s)?.unwrap_or(0),
+                    disabled: self.bool_child(ic, "Disabled", &s)?.unwrap_or(false),
                 });
             }
         }
