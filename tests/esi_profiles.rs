@@ -340,9 +340,10 @@ fn a_bad_or_missing_esi_is_named_before_the_bus_is_touched() {
         e.message.contains("no device with product code 0x00000041"),
         "{e}"
     );
+    // A built-in profile refined by another drive's file.
     let e = config("[[drive]]\nposition = 0\nesi = \"Kestrel_KS2.xml\"\nprofile = \"mr-j4-tm\"\n")
         .unwrap_err();
-    assert!(e.message.contains("not both"), "{e}");
+    assert!(e.message.contains("is from vendor 0x00000E02"), "{e}");
     // A broken file: the parser's line and column inside it.
     let dir = std::env::temp_dir().join(format!("ecdrive-esi-bad-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -404,6 +405,28 @@ fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
     let c = cfg("good.xml");
     assert_eq!(c.drives[0].profile.unwrap().bus.init_cmds.len(), 1);
     let r = run(&c, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    // The built-in profile refined by the same file: the manual's profile (its key, its
+    // start-up values) with the file's InitCmd; it runs the same move.
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n\
+         [[drive]]\nposition = 0\nprofile = \"mr-j4-tm\"\nesi = \"good.xml\"\nmode = \"csp\"\n\
+         program = [{ step = \"move\", by = 100000, velocity = 1000000, acceleration = 10000000 }]\n";
+    let refined = ecdrive::app::config::parse(text, dir.join("run.toml").to_str().unwrap())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let p = refined.drives[0].profile.unwrap();
+    let builtin = ecdrive::drives::by_key("mr-j4-tm").unwrap();
+    assert_eq!(p.bus.key, builtin.bus.key);
+    assert_eq!(p.bus.startup.len(), builtin.bus.startup.len());
+    assert_eq!(p.bus.cyclic_mapping, builtin.bus.cyclic_mapping);
+    assert_eq!(p.bus.init_cmds.len(), 1);
+    assert_eq!(p.bus.init_cmds[0].address, ObjectAddress::new(0x6065, 0));
+    assert!(
+        refined.notes.iter().any(|n| n.contains("refined by")),
+        "{:?}",
+        refined.notes
+    );
+    let r =
+        run(&refined, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
     let e = match run(&cfg("bad.xml"), &RunOptions::default(), &stop, &mut |_| {}) {
         Err(e) => e.to_string(),
@@ -661,5 +684,224 @@ fn a_folder_of_vendor_files_is_searched_by_identity() {
     assert_eq!(j["outcome"], "completed", "{j:#}");
     assert!(with.stderr.contains("--esi: ND40 servo drive"), "{with:#?}");
     assert!(with.stderr.contains("warning: --esi: "), "{with:#?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+// ---- `esi profile` and `[[drive]] profile_file` ---------------------------------------------
+
+/// A fresh folder with a copy of the vendor file `name` in it.
+fn folder_with(name: &str, tag: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("ecdrive-profile-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::copy(path(name), dir.join(name)).unwrap();
+    dir
+}
+
+/// A configuration in `dir` that runs the emulated device of `esi` with `drive` keys.
+fn profile_run_config(dir: &std::path::Path, esi: &str, drive: &str, mode: &str) -> String {
+    format!(
+        "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"esi:{}\"]\n\
+         [[drive]]\nposition = 0\n{drive}\nmode = \"{mode}\"\nprogram = [{CSP_MOVE}]\n",
+        dir.join(esi).display()
+    )
+}
+
+/// `ecdrive esi profile FILE -o P.toml` for each of the three vendor files, then
+/// `[[drive]] profile_file = "P.toml"`: the loaded profile is the one `esi = FILE` builds
+/// (identity, modes, units, synchronisation, mapping, InitCmds), and the run reaches OP and
+/// completes a csp move on the device emulated from the file.
+#[test]
+fn an_esi_profile_file_loads_as_the_profile_the_esi_builds() {
+    use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    for file in ["Nordwind_ND40.xml", "Kestrel_KS2.xml", "Taiga_TX7.xml"] {
+        let dir = folder_with(file, "rt");
+        let out = dir.join("drive.toml");
+        let r = support::cli::ecdrive(&[
+            "esi",
+            "profile",
+            dir.join(file).to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        r.ok();
+        let text = std::fs::read_to_string(&out).unwrap();
+        assert!(text.contains(&format!("esi = \"{file}\"")), "{text}");
+        let by_file = |keys: &str| {
+            let t = profile_run_config(&dir, file, keys, "csp");
+            ecdrive::app::config::parse(&t, dir.join("run.toml").to_str().unwrap())
+                .unwrap_or_else(|e| panic!("{file}: {e}"))
+        };
+        let a = by_file("profile_file = \"drive.toml\"");
+        let b = by_file(&format!("esi = \"{file}\""));
+        let (pa, pb) = (a.drives[0].profile.unwrap(), b.drives[0].profile.unwrap());
+        assert_eq!(pa.bus.identity, pb.bus.identity, "{file}");
+        assert_eq!(pa.bus.revision, pb.bus.revision, "{file}");
+        assert_eq!(
+            pa.caps.supported_modes.raw(),
+            pb.caps.supported_modes.raw(),
+            "{file}"
+        );
+        assert_eq!(pa.units, pb.units, "{file}");
+        assert_eq!(pa.bus.sync.dc_sync0, pb.bus.sync.dc_sync0, "{file}");
+        assert_eq!(pa.bus.sync.free_run, pb.bus.sync.free_run, "{file}");
+        assert_eq!(
+            pa.bus.sync.assign_activate, pb.bus.sync.assign_activate,
+            "{file}"
+        );
+        assert_eq!(
+            pa.bus.sync.sync_type_object, pb.bus.sync.sync_type_object,
+            "{file}"
+        );
+        assert_eq!(
+            pa.bus.sync.cycle_time_object, pb.bus.sync.cycle_time_object,
+            "{file}"
+        );
+        assert_eq!(pa.bus.cyclic_mapping, pb.bus.cyclic_mapping, "{file}");
+        assert_eq!(pa.bus.init_cmds, pb.bus.init_cmds, "{file}");
+        let stop = std::sync::atomic::AtomicBool::new(false);
+        let r = run(&a, &RunOptions::default(), &stop, &mut |_| {})
+            .unwrap_or_else(|e| panic!("{file}: {e}"));
+        assert_eq!(r.outcome, Outcome::Completed, "{file}: {}", r.reason);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    // The KS2 gives 0x608F: 2^23 increments per revolution reach the profile's units.
+    let f = EsiFile::from_path(path("Kestrel_KS2.xml")).unwrap();
+    let p = ecdrive::drives::esi_profile::from_esi(&f, &f.devices[0], "KS2").unwrap();
+    assert_eq!(p.units.position_per_rev, 8_388_608.0);
+}
+
+/// What a user edits in the profile file is what goes to the drive: the TX7's InitCmd for
+/// 0x2011 given other data, the one for 0x6060 removed.
+#[test]
+fn an_edited_profile_file_is_what_the_drive_gets() {
+    use ecdrive::ec::mailbox::{MailboxMessage, SdoRequest};
+    use ecdrive::master::session::{Master, MasterConfig};
+    let file = "Taiga_TX7.xml";
+    let dir = folder_with(file, "edit");
+    let r = support::cli::ecdrive(&["esi", "profile", dir.join(file).to_str().unwrap()]);
+    // TOML, whose inline tables the Rust-Debug check of `ok()` would take for Debug text.
+    assert_eq!(r.code, Some(0), "{}", r.stderr);
+    let text = r.stdout.clone();
+    // Run from the folder: name the ESI file relative to it.
+    let text = text.replace(
+        &format!("esi = \"{}\"", dir.join(file).display()),
+        &format!("esi = \"{file}\""),
+    );
+    let start = text
+        .find("[[init_cmd]]\ntransitions = [\"PS\", \"SO\"]")
+        .expect("0x6060's InitCmd");
+    let edited = format!("{}\n", &text[..start]).replace("data = \"01\"", "data = \"00\"");
+    assert!(
+        edited.contains("object = \"0x2011:00\"\ndata = \"00\""),
+        "{edited}"
+    );
+    std::fs::write(dir.join("drive.toml"), &edited).unwrap();
+    let cfg_text = profile_run_config(&dir, file, "profile_file = \"drive.toml\"", "csp");
+    let cfg = ecdrive::app::config::parse(&cfg_text, dir.join("run.toml").to_str().unwrap())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(cfg.drives[0].profile.unwrap().bus.init_cmds.len(), 2);
+    let seg = ecdrive::sim::run::build_segment(
+        &[format!("esi:{}", dir.join(file).display())],
+        &ecdrive::sim::EscConfig::default(),
+    )
+    .unwrap();
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let link = MailboxTap {
+        inner: ecdrive::sim::transport::SegmentLink::new(seg),
+        seen: seen.clone(),
+    };
+    let mut m = Master::start(link, MasterConfig::clone(&cfg.master))
+        .map_err(|f| f.error)
+        .unwrap();
+    m.wait_until("OP", std::time::Duration::from_secs(10), |t| t.cycle.all_op)
+        .unwrap();
+    let _ = m.stop(ecdrive::master::telemetry::StopKind::Ramp);
+    let downloads: Vec<(u16, Vec<u8>)> = seen
+        .lock()
+        .unwrap()
+        .iter()
+        .filter_map(|(_, b)| match MailboxMessage::parse(b) {
+            Ok((
+                _,
+                MailboxMessage::SdoRequest(SdoRequest::DownloadExpedited { index, data, .. }),
+            )) => Some((index, data.to_vec())),
+            _ => None,
+        })
+        .collect();
+    assert!(downloads.contains(&(0x2011, vec![0x00])), "{downloads:x?}");
+    assert!(!downloads.contains(&(0x2011, vec![0x01])), "{downloads:x?}");
+    assert!(
+        downloads.contains(&(0x2010, vec![0xE8, 0x03])),
+        "{downloads:x?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A profile file with a mistake is named with its line and column before the bus is touched;
+/// profile_file does not combine with profile or esi.
+#[test]
+fn a_bad_profile_file_is_named_with_line_and_column() {
+    let file = "Kestrel_KS2.xml";
+    let dir = folder_with(file, "bad");
+    let out = dir.join("drive.toml");
+    support::cli::ecdrive(&[
+        "esi",
+        "profile",
+        dir.join(file).to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ])
+    .ok();
+    let good = std::fs::read_to_string(&out).unwrap();
+    let cfg = |drive: &str| {
+        let t = profile_run_config(&dir, file, drive, "csp");
+        ecdrive::app::config::parse(&t, dir.join("run.toml").to_str().unwrap())
+    };
+    for (from, to, want) in [
+        (
+            "velocity = \"position/s\"",
+            "velocity = \"fast\"",
+            "units.velocity",
+        ),
+        (
+            "dc_sync0 = true",
+            "dc_sync0 = true\nsync0_shift = 5",
+            "unknown key",
+        ),
+        (
+            "{ object = \"0x6040:00\", bits = 16 }",
+            "{ object = \"0x6040:00\", bits = 12 }",
+            "mapping",
+        ),
+        (
+            "device = \"KS2\"",
+            "device = \"KS3\"",
+            "has no device \"KS3\"",
+        ),
+    ] {
+        assert!(good.contains(from), "{from:?} not in the written profile");
+        std::fs::write(&out, good.replace(from, to)).unwrap();
+        let e = cfg("profile_file = \"drive.toml\"")
+            .expect_err("refused")
+            .to_string();
+        assert!(
+            e.contains("drive.toml line ") && e.contains(want),
+            "{want:?}: {e}"
+        );
+        let line = e
+            .split("drive.toml line ")
+            .nth(1)
+            .and_then(|r| r.split(',').next());
+        assert!(
+            line.is_some_and(|l| l.parse::<u32>().is_ok_and(|n| n > 1)),
+            "line: {e}"
+        );
+    }
+    std::fs::write(&out, &good).unwrap();
+    let e = cfg(&format!("profile_file = \"drive.toml\"\nesi = \"{file}\""))
+        .expect_err("refused")
+        .to_string();
+    assert!(e.contains("profile_file alone"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -51,6 +51,7 @@
 //! in `name`, velocities in `name`/s, accelerations in `name`/s², jerks in `name`/s³), otherwise
 //! in position counts; torques are always in the drive's torque unit.
 
+pub mod profile_file;
 mod raw;
 
 use crate::app::ethercat::tools::{SimSettings, Target};
@@ -306,11 +307,10 @@ fn key_span(item: &toml_edit::Item, key: &str) -> Option<Range<usize>> {
     }
 }
 
-/// Check a configuration file's text. `source` names it in errors.
-pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
-    let cx = Ctx { text, file: source };
-    let de = toml::Deserializer::new(text);
-    let f: raw::File = serde_path_to_error::deserialize(de).map_err(|e| {
+/// The file's text as `T`, an error located at the key (line and column) when it does not fit.
+fn deserialize<T: serde::de::DeserializeOwned>(cx: &Ctx<'_>) -> Result<T, ConfigError> {
+    let de = toml::Deserializer::new(cx.text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
         let key = key_path(e.path());
         let segments: Vec<Segment> = e
             .path()
@@ -343,7 +343,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         let unknown = message
             .strip_prefix("unknown field `")
             .and_then(|r| r.split('`').next());
-        let located = locate(text, &segments, unknown);
+        let located = locate(cx.text, &segments, unknown);
         let span = match (toml_span, located) {
             (Some(t), Some(l)) if l.start >= t.start && l.end <= t.end => l,
             (Some(t), _) => t,
@@ -352,7 +352,13 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         };
         let key = if key == "." { String::new() } else { key };
         cx.err(span, key, friendly(&message))
-    })?;
+    })
+}
+
+/// Check a configuration file's text. `source` names it in errors.
+pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
+    let cx = Ctx { text, file: source };
+    let f: raw::File = deserialize(&cx)?;
 
     // Where the segment is.
     let (target, sim_names) = match (f.interface.get_ref().as_str(), &f.sim) {
@@ -796,13 +802,60 @@ fn drive(
     };
     // The profile, if it can be known now.
     let mut esi_source: Option<(crate::esi::EsiFile, usize)> = None;
+    if let (Some(f), true) = (&r.profile_file, r.esi.is_some() || r.profile.is_some()) {
+        return Err(cx.err(
+            f.span(),
+            key("profile_file"),
+            "a profile file names its ESI file itself: give profile_file alone, without \
+             profile or esi",
+        ));
+    }
     let profile = match (&r.esi, &r.profile) {
-        (Some(e), Some(_)) => {
-            return Err(cx.err(
-                e.span(),
-                key("esi"),
-                "give the drive's profile or its ESI file, not both",
+        // A built-in profile refined by the drive's ESI file: its InitCmds and the objects
+        // its dictionary adds.
+        (Some(e), Some(p)) => {
+            let base = crate::drives::by_key(p.get_ref()).ok_or_else(|| {
+                cx.err(
+                    p.span(),
+                    key("profile"),
+                    format!(
+                        "unknown drive profile {:?}; known: {}",
+                        p.get_ref(),
+                        profile_keys()
+                    ),
+                )
+            })?;
+            let sel = match select {
+                Selector::Identity { .. } => select,
+                _ => Selector::Identity {
+                    vendor_id: base.bus.identity.vendor_id,
+                    product_code: base.bus.identity.product_code,
+                },
+            };
+            let (f, dev, shown) = esi_device(cx, e, sel, &key("esi"))?;
+            let refined = f
+                .devices
+                .get(dev)
+                .ok_or_else(|| cx.err(e.span(), key("esi"), "device index out of range"))
+                .and_then(|d| {
+                    crate::drives::esi_profile::refine(base, &f, d, &shown)
+                        .map_err(|x| cx.err(e.span(), key("esi"), x.to_string()))
+                })?;
+            notes.push(format!(
+                "{}: the {} profile refined by {shown} ({} InitCmds)",
+                key(""),
+                base.name,
+                refined.bus.init_cmds.len()
             ));
+            Some(refined)
+        }
+        (None, None) if r.profile_file.is_some() => {
+            let f = r
+                .profile_file
+                .as_ref()
+                .map_or_else(String::new, |f| f.get_ref().clone());
+            let dir = Path::new(cx.file).parent().unwrap_or(Path::new(""));
+            Some(profile_file::load(&dir.join(&f))?)
         }
         (Some(e), None) => {
             let (f, dev, shown) = esi_device(cx, e, select, &key("esi"))?;
@@ -1139,7 +1192,7 @@ fn drive(
             select,
             // Forced when the file names a profile or an ESI file; else start-up identifies
             // the device.
-            profile: if r.profile.is_some() || r.esi.is_some() {
+            profile: if r.profile.is_some() || r.esi.is_some() || r.profile_file.is_some() {
                 profile
             } else {
                 None

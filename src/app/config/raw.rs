@@ -87,6 +87,8 @@ pub(super) struct Drive {
     #[serde(default)]
     pub esi: Option<Spanned<String>>,
     #[serde(default)]
+    pub profile_file: Option<Spanned<String>>,
+    #[serde(default)]
     pub mode: Option<Spanned<String>>,
     #[serde(default)]
     pub mapping: Option<Spanned<Mapping>>,

@@ -381,7 +381,7 @@ enum Command {
     },
     /// Show what the parser reads from an ESI file, or check it and say why it is invalid.
     #[command(
-        after_help = "Examples:\n  ecdrive esi show esi/Mitsubishi_MR-J4-TM.xml\n  ecdrive esi check vendor.xml\n  ecdrive esi show esi/Servotronix_BDHDE.xml --json"
+        after_help = "Examples:\n  ecdrive esi show esi/Mitsubishi_MR-J4-TM.xml\n  ecdrive esi check vendor.xml\n  ecdrive esi show esi/Servotronix_BDHDE.xml --json\n  ecdrive esi profile vendor.xml -o drive.toml"
     )]
     Esi {
         #[command(subcommand)]
@@ -612,6 +612,20 @@ enum EsiOp {
         file: PathBuf,
         #[command(flatten)]
         json: Json,
+    },
+    /// Write the drive profile ecdrive builds from the file as TOML to edit and use with
+    /// `[[drive]] profile_file = "…"` (identity, modes, units, synchronisation, mapping,
+    /// InitCmds).
+    Profile {
+        /// The ESI file.
+        file: PathBuf,
+        /// The device's <Type> name in the file (when the file describes several).
+        #[arg(long, value_name = "TYPE")]
+        device: Option<String>,
+        /// Write to FILE instead of standard output (the ESI file is then named relative to
+        /// it).
+        #[arg(short = 'o', long, value_name = "FILE")]
+        output: Option<PathBuf>,
     },
     /// Parse and check for consistency; exit 2 with every problem (line, column, what) if the
     /// file is invalid.
@@ -1477,6 +1491,30 @@ fn dispatch(cli: Cli) -> ExitCode {
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail_with("esi", &e.to_string(), exit::USAGE),
+            },
+            EsiOp::Profile {
+                file,
+                device,
+                output,
+            } => match tools::esi::profile(&file, device.as_deref(), output.as_deref()) {
+                Ok(text) => match output {
+                    Some(o) => match std::fs::write(&o, text) {
+                        Ok(()) => {
+                            eprintln!("wrote {}", o.display());
+                            ExitCode::SUCCESS
+                        }
+                        Err(e) => fail_with(
+                            "esi",
+                            &format!("cannot write {}: {e}", o.display()),
+                            exit::USAGE,
+                        ),
+                    },
+                    None => {
+                        print!("{text}");
+                        ExitCode::SUCCESS
+                    }
+                },
+                Err(e) => fail_with("esi", &e, exit::USAGE),
             },
             EsiOp::Check { file, json } => {
                 let c = tools::esi::check(&file);

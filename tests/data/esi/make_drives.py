@@ -108,7 +108,7 @@ CIA = {  # index: (name, type, bits, access, pdo)
 }
 
 def device(vendor_id, product, revision, order, name, pdos, sync, init_cmds, extra_objs,
-           pdo_config, map_entries, dc_modes, comments):
+           pdo_config, map_entries, dc_modes, comments, encoder=None):
     """pdos: list of (dir, index, name, sm, fixed, mandatory, excludes, entries)"""
     L = []
     L.append('      <Device Physics="YY">')
@@ -138,6 +138,10 @@ def device(vendor_id, product, revision, order, name, pdos, sync, init_cmds, ext
                              (3, "Shift Time", "UDINT", 32, "ro", None),
                              (4, "Synchronization Types supported", "UINT", 16, "ro", None),
                              (5, "Minimum Cycle Time", "UDINT", 32, "ro", None)])
+    if encoder:
+        L += dt_record("DT608F", [(0, "SubIndex 000", "USINT", 8, "ro", None),
+                                  (1, "Encoder increments", "UDINT", 32, "rw", None),
+                                  (2, "Motor revolutions", "UDINT", 32, "rw", None)])
     L.append('            </DataTypes>')
     L.append('            <Objects>')
     objs = []
@@ -170,6 +174,11 @@ def device(vendor_id, product, revision, order, name, pdos, sync, init_cmds, ext
         objs += obj_var(idx, n, t, b, acc, pdo, default)
     for (idx, n, t, b, acc, default) in extra_objs:
         objs += obj_var(idx, n, t, b, acc, None, default)
+    if encoder:
+        (inc, revs) = encoder
+        objs += obj_rec(0x608F, "Position encoder resolution", "DT608F", 80,
+                        [("SubIndex 000", "02"), ("Encoder increments", le(inc, 4)),
+                         ("Motor revolutions", le(revs, 4))])
     L += [o for o in objs if o is not None]
     L.append('            </Objects>')
     L.append('          </Dictionary>')
@@ -294,7 +303,9 @@ write("Kestrel_KS2.xml", 0x0E02, "Kestrel Motion (ecdrive test vendor)",
              {"type": 2, "type_access": "rw", "cycle_access": "rw", "cycle_ns": 2000000,
               "min_ns": 500000, "modes_supported": CSP_CSV_CST},
              [], [], True, 10, DC,
-             ["PDOs: configurable, 10 entries per mapping object"]))
+             ["PDOs: configurable, 10 entries per mapping object",
+              "0x608F: 8388608 increments per revolution (a 23-bit encoder)"],
+             encoder=(8388608, 1)))
 
 write("Taiga_TX7.xml", 0x0E03, "Taiga Drives (ecdrive test vendor)",
       "Vendor-shaped ESI written for ecdrive's tests: fixed PDOs, read-only 0x1C32 (the cycle "

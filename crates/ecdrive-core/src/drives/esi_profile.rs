@@ -13,6 +13,7 @@
 //! | synchronisation | the DC `<OpMode>` with SYNC0 (AssignActivate), free run if offered, the cycle times it lists; 0x1C32:01/02 written only where the dictionary makes them writable |
 //! | InitCmds | `<InitCmd>`s with their transitions, in file order ([`InitCommand`]) |
 //! | complete access | `<CoE CompleteAccess>` |
+//! | units | CiA 402's (increments, increments/s, ‰ of rated torque); increments per revolution from 0x608F's defaults ([`units_from`]) |
 //!
 //! Profiles built this way live for the rest of the process (the profile type holds `'static`
 //! data): a configuration builds each once, at start-up, never in the cycle.
@@ -93,6 +94,36 @@ fn writable(dict: &[ObjectDesc], a: ObjectAddress) -> bool {
         .find(|o| o.index == a.index)
         .and_then(|o| o.entries.iter().find(|e| e.sub == a.sub))
         .is_some_and(|e| e.access.contains(EntryAccess::WRITE_PREOP))
+}
+
+/// The default of `a` in the dictionary as an unsigned number, if the file gives one.
+fn default_u64(dict: &[ObjectDesc], a: ObjectAddress) -> Option<u64> {
+    let e = dict
+        .iter()
+        .find(|o| o.index == a.index)?
+        .entries
+        .iter()
+        .find(|e| e.sub == a.sub)?;
+    u64::try_from(e.default.as_i128()?).ok()
+}
+
+/// The units the file gives: CiA 402's own (position in increments, velocity in increments per
+/// second, torque in per mille of rated torque), with the increments per motor revolution from
+/// the default of 0x608F (position encoder resolution: :01 increments per :02 revolutions)
+/// when the dictionary gives both. Without it a revolution is 1 increment, as in the generic
+/// profile, and only the drive's own units apply.
+pub fn units_from(dict: &[ObjectDesc]) -> crate::cia402::Units {
+    let generic = super::generic::UNITS;
+    let inc = default_u64(dict, ObjectAddress::new(0x608F, 1));
+    let revs = default_u64(dict, ObjectAddress::new(0x608F, 2));
+    match (inc, revs) {
+        (Some(i), Some(r)) if i > 0 && r > 0 => crate::cia402::Units {
+            position_name: "increment",
+            position_per_rev: i as f64 / r as f64,
+            ..generic
+        },
+        _ => generic,
+    }
 }
 
 /// Build the profile of `dev` from `file` (named `source` in errors and in the profile's key,
@@ -213,27 +244,7 @@ pub fn from_esi(
         cycle_time_object: writable(dictionary, cycle_time)
             .then_some(CycleTimeObject::Nanoseconds(cycle_time)),
     };
-    let init_cmds: Vec<InitCommand> = dev
-        .mailbox
-        .as_ref()
-        .map(|m| {
-            m.init_cmds
-                .iter()
-                .filter(|c| !c.disabled)
-                .map(|c| InitCommand {
-                    transitions: Vec::leak(c.transitions.clone()),
-                    address: ObjectAddress::new(c.index, c.sub),
-                    data: Vec::leak(c.data.clone()),
-                    comment: leak(&c.comment),
-                    complete_access: c.complete_access,
-                    line: c.position.line,
-                    timeout_ms: c.timeout_ms,
-                    retries: c.retries,
-                    fixed: c.fixed,
-                })
-                .collect()
-        })
-        .unwrap_or_default();
+    let init_cmds = init_commands(dev);
     let generic = &super::generic::GENERIC_CIA402;
     let profile = DriveProfile {
         name,
@@ -243,7 +254,7 @@ pub fn from_esi(
             ..generic.caps
         },
         dictionary,
-        units: generic.units,
+        units: units_from(dictionary),
         bus: EtherCat {
             key: leak(&format!("esi:{}", dev.type_.name_text)),
             identity: IdentityMatch {
@@ -267,6 +278,71 @@ pub fn from_esi(
         },
     };
     Ok(Box::leak(Box::new(profile)))
+}
+
+/// A built-in profile refined by the drive's ESI file: everything the profile says (the
+/// manual's facts: mapping, synchronisation, start-up values, units) stays, and the file adds
+/// its `<InitCmd>`s and the dictionary objects the profile does not have (so `upload` and
+/// `download` know their types, e.g. a newer firmware's objects). The file's device must have
+/// the profile's identity.
+pub fn refine(
+    base: &'static DriveProfile,
+    file: &EsiFile,
+    dev: &Device,
+    source: &str,
+) -> Result<&'static DriveProfile, EsiProfileError> {
+    let err = |reason: String| EsiProfileError {
+        file: source.to_string(),
+        device: format!(
+            "{} (product 0x{:08X})",
+            dev.type_.name_text, dev.type_.product_code
+        ),
+        reason,
+    };
+    let id = base.bus.identity;
+    if (file.vendor.id, dev.type_.product_code) != (id.vendor_id, id.product_code) {
+        return Err(err(format!(
+            "is vendor 0x{:08X} product 0x{:08X}; the {} profile is vendor 0x{:08X} product \
+             0x{:08X}",
+            file.vendor.id, dev.type_.product_code, base.name, id.vendor_id, id.product_code
+        )));
+    }
+    let from_file = crate::esi::static_dictionary(dev).map_err(err)?;
+    let mut dictionary: Vec<ObjectDesc> = base.dictionary.to_vec();
+    for o in from_file {
+        if !dictionary.iter().any(|b| b.index == o.index) {
+            dictionary.push(*o);
+        }
+    }
+    dictionary.sort_by_key(|o| o.index);
+    let mut profile = base.clone();
+    profile.dictionary = Vec::leak(dictionary);
+    profile.bus.init_cmds = Vec::leak(init_commands(dev));
+    Ok(Box::leak(Box::new(profile)))
+}
+
+/// The device's `<InitCmd>`s, in file order, without the disabled ones.
+fn init_commands(dev: &Device) -> Vec<InitCommand> {
+    dev.mailbox
+        .as_ref()
+        .map(|m| {
+            m.init_cmds
+                .iter()
+                .filter(|c| !c.disabled)
+                .map(|c| InitCommand {
+                    transitions: Vec::leak(c.transitions.clone()),
+                    address: ObjectAddress::new(c.index, c.sub),
+                    data: Vec::leak(c.data.clone()),
+                    comment: leak(&c.comment),
+                    complete_access: c.complete_access,
+                    line: c.position.line,
+                    timeout_ms: c.timeout_ms,
+                    retries: c.retries,
+                    fixed: c.fixed,
+                })
+                .collect()
+        })
+        .unwrap_or_default()
 }
 
 /// The profile of the device with `vendor_id`/`product_code` (and `revision`, if the file

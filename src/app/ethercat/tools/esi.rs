@@ -115,6 +115,56 @@ fn protocols(m: Option<&crate::esi::Mailbox>) -> Vec<String> {
     super::slaves::protocol_names(m.map_or(0, |m| m.protocols.bits()))
 }
 
+/// `esi profile`: the TOML profile of the file's device `device` (its `<Type>` name; the only
+/// one when `None`), naming the ESI file relative to `output`'s folder when it is written
+/// there (as given otherwise).
+pub fn profile(path: &Path, device: Option<&str>, output: Option<&Path>) -> Result<String, String> {
+    let shown = path.display().to_string();
+    let f = EsiFile::from_path(path).map_err(|e| format!("{shown}: {e}"))?;
+    let names: Vec<&str> = f
+        .devices
+        .iter()
+        .map(|d| d.type_.name_text.as_str())
+        .collect();
+    let dev = match device {
+        Some(n) => f
+            .devices
+            .iter()
+            .find(|d| d.type_.name_text == n)
+            .ok_or_else(|| format!("{shown} has no device {n:?} (it has {})", names.join(", ")))?,
+        None => match f.devices.as_slice() {
+            [d] => d,
+            _ => {
+                return Err(format!(
+                    "{shown} describes {} devices ({}): say which with --device",
+                    names.len(),
+                    names.join(", ")
+                ));
+            }
+        },
+    };
+    let named = match output.and_then(Path::parent) {
+        Some(dir) => {
+            let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
+            let (esi, dir) = (
+                abs(path),
+                abs(if dir.as_os_str().is_empty() {
+                    Path::new(".")
+                } else {
+                    dir
+                }),
+            );
+            esi.strip_prefix(&dir)
+                .map(Path::to_path_buf)
+                .unwrap_or(esi)
+                .display()
+                .to_string()
+        }
+        None => shown.clone(),
+    };
+    crate::app::config::profile_file::write(&f, dev, &named).map_err(|e| e.to_string())
+}
+
 /// Parse `path` and summarise what the parser reads.
 pub fn show(path: &Path) -> Result<EsiSummary, EsiError> {
     let f = EsiFile::from_path(path)?;
