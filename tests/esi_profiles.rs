@@ -905,3 +905,33 @@ fn a_bad_profile_file_is_named_with_line_and_column() {
     assert!(e.contains("profile_file alone"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A DC mode asking SYNC0 at another cycle than the bus's, or a SYNC0 shift of its own, is
+/// said when the configuration is checked (ecdrive gives every drive SYNC0 at the cycle, with
+/// the segment's shift).
+#[test]
+fn a_dc_mode_ecdrive_cannot_follow_is_said_at_the_check() {
+    let dir = folder_with("Nordwind_ND40.xml", "dc");
+    let f = dir.join("Nordwind_ND40.xml");
+    let text = std::fs::read_to_string(&f).unwrap().replace(
+        "<CycleTimeSync0 Factor=\"1\">0</CycleTimeSync0>\n            <ShiftTimeSync0>0</ShiftTimeSync0>",
+        "<CycleTimeSync0 Factor=\"2\">0</CycleTimeSync0>\n            <ShiftTimeSync0>250000</ShiftTimeSync0>",
+    );
+    assert!(text.contains("Factor=\"2\""));
+    std::fs::write(&f, text).unwrap();
+    let t = profile_run_config(
+        &dir,
+        "Nordwind_ND40.xml",
+        "esi = \"Nordwind_ND40.xml\"",
+        "csp",
+    );
+    let cfg = ecdrive::app::config::parse(&t, dir.join("run.toml").to_str().unwrap())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let notes = cfg.notes.join("\n");
+    assert!(
+        notes.contains("SYNC0 = 2 × the cycle (Factor 2)"),
+        "{notes}"
+    );
+    assert!(notes.contains("SYNC0 shift of 250000 ns"), "{notes}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

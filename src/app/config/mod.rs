@@ -867,6 +867,11 @@ fn drive(
                     crate::drives::esi_profile::from_esi(&f, d, &shown)
                         .map_err(|x| cx.err(e.span(), key("esi"), x.to_string()))
                 })?;
+            if let Some(d) = f.devices.get(dev) {
+                for n in crate::drives::esi_profile::dc_notes(d) {
+                    notes.push(format!("{}: {n}", key("esi")));
+                }
+            }
             esi_source = Some((f, dev));
             Some(p)
         }

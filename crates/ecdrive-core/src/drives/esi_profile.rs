@@ -280,6 +280,38 @@ pub fn from_esi(
     Ok(Box::leak(Box::new(profile)))
 }
 
+/// What the file's DC mode with SYNC0 asks that ecdrive does not do, one line each: a SYNC0
+/// cycle other than the bus cycle (`<CycleTimeSync0 Factor>` ≠ 1) and a SYNC0 shift of its own
+/// (`<ShiftTimeSync0>` ≠ 0). ecdrive gives every drive SYNC0 at the cycle, with the segment's
+/// shift (ethercrab 0.7.1 sets one SYNC0 period and start time for the group).
+pub fn dc_notes(dev: &Device) -> Vec<String> {
+    let Some(m) = dev.dc.iter().find(|m| m.mode.sync0()) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let f = m.mode.sync0_cycle_factor;
+    if f != 0 && f != 1 {
+        out.push(format!(
+            "the file's DC mode {:?} asks SYNC0 = {} the cycle (Factor {f}); ecdrive runs \
+             SYNC0 at the cycle: choose the cycle the drive needs SYNC0 at",
+            m.mode.name,
+            if f > 0 {
+                format!("{f} ×")
+            } else {
+                format!("1/{} of", f.unsigned_abs())
+            }
+        ));
+    }
+    if m.mode.shift_time0 != 0 {
+        out.push(format!(
+            "the file's DC mode {:?} asks a SYNC0 shift of {} ns; ecdrive uses the segment's \
+             (dc shift in the configuration) for every drive",
+            m.mode.name, m.mode.shift_time0
+        ));
+    }
+    out
+}
+
 /// A built-in profile refined by the drive's ESI file: everything the profile says (the
 /// manual's facts: mapping, synchronisation, start-up values, units) stays, and the file adds
 /// its `<InitCmd>`s and the dictionary objects the profile does not have (so `upload` and
