@@ -346,27 +346,7 @@ fn mode_switching() {
 
 /// A drive with a stored parameter, brought to OP like `Wire::op_cyclic`.
 fn op_with(drive: EmulatedDrive, p: &DriveProfile) -> Wire {
-    let mut w = Wire::new(vec![Box::new(drive)]);
-    w.preop(0);
-    wire::remap(&mut w, 0, &p.cyclic_mapping);
-    for s in p.startup {
-        let e = p.od().entry(s.address).unwrap();
-        let b = s.value.to_value().unwrap().encode(e.data_type).unwrap();
-        w.download(0, s.address.index, s.address.sub, &b).unwrap();
-    }
-    for s in p.sync_writes(1_000_000, true).unwrap() {
-        let e = p.od().entry(s.address).unwrap();
-        let b = ecdrive::od::Value::Int(s.value)
-            .encode(e.data_type)
-            .unwrap();
-        w.download(0, s.address.index, s.address.sub, &b).unwrap();
-    }
-    w.configure_pd(&[cyclic::sizes(p)]);
-    assert_eq!(w.request(0, 4), (4, 0));
-    w.activate_dc(1_000_000);
-    assert_eq!(w.request(0, 8), (8, 0));
-    w.cycle();
-    w
+    Wire::op_drive(drive, p, 1_000_000)
 }
 
 /// Profile position, velocity and torque and homing at the level of their statusword bits
@@ -444,14 +424,20 @@ fn profile_modes() {
         let sw = w.command(0, 0x001F);
         assert_eq!(sw & 0x1400, 0x1400, "{}: homing attained", p.name);
         assert_eq!(cyclic::position(w.inputs(0)), 0, "{}", p.name);
-        // Another method has no switches to find: homing error (bit 13).
-        let other: i8 = if p.key == "mr-j4-tm" { -1 } else { 1 };
-        w.command(0, 0x000F);
-        enable(&mut w, 4);
-        enable(&mut w, 6);
-        w.download(0, 0x6098, 0, &[other as u8]).unwrap();
-        let sw = w.command(0, 0x001F);
-        assert_ne!(sw & 0x2000, 0, "{}: homing error", p.name);
+        // A method the emulated MR-J4-TM lists but does not model (its vendor methods):
+        // homing error (bit 13) with its AL.90 warning (bit 7). Homing on switches, the index
+        // pulse and failures: tests/drives_homing.rs.
+        if p.key == "mr-j4-tm" {
+            w.command(0, 0x000F);
+            enable(&mut w, 4);
+            enable(&mut w, 6);
+            w.download(0, 0x6098, 0, &[-1i8 as u8]).unwrap();
+            w.command(0, 0x001F);
+            // The warning bit comes with the next statusword the state machine writes.
+            w.cycle();
+            let sw = cyclic::sw(w.inputs(0));
+            assert_eq!(sw & 0x2080, 0x2080, "{}: homing error", p.name);
+        }
         // tq: the torque ramps at the slope 0x6087 to the target; bit 10 once there.
         enable(&mut w, 4);
         cyclic::set_torque(w.outputs_mut(0), 100);
@@ -465,12 +451,14 @@ fn profile_modes() {
         for _ in 0..200 {
             w.cycle();
         }
-        assert_ne!(
-            cyclic::sw(w.inputs(0)) & 0x0400,
-            0,
-            "{}: torque reached",
-            p.name
-        );
+        // The BDHDE reports the target torque reached (§5.10); the MR-J4-TM does not support
+        // bit 10 in tq (§5.4.8 (3)): its torque demand shows the ramp's end instead.
+        let reached = cyclic::sw(w.inputs(0)) & 0x0400 != 0;
+        assert_eq!(reached, p.key != "mr-j4-tm", "{}: bit 10 in tq", p.name);
+        if p.key == "mr-j4-tm" {
+            let demand = w.upload(0, 0x6074, 0).unwrap();
+            assert_eq!(i16::from_le_bytes([demand[0], demand[1]]), 100);
+        }
     }
 }
 

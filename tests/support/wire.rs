@@ -591,6 +591,34 @@ impl Wire {
         w
     }
 
+    /// One emulated `drive` (built by the test: a stored parameter, another machine) brought
+    /// to OP with `p`'s cyclic mapping, start-up values and DC at `cycle_ns`, like
+    /// [`Wire::op_cyclic`].
+    #[allow(dead_code)]
+    pub fn op_drive(drive: EmulatedDrive, p: &DriveProfile, cycle_ns: u32) -> Self {
+        let mut w = Self::new(vec![Box::new(drive)]);
+        w.preop(0);
+        remap(&mut w, 0, &p.cyclic_mapping);
+        for s in p.startup {
+            let e = p.od().entry(s.address).unwrap();
+            let b = s.value.to_value().unwrap().encode(e.data_type).unwrap();
+            w.download(0, s.address.index, s.address.sub, &b).unwrap();
+        }
+        for s in p.sync_writes(cycle_ns, true).unwrap() {
+            let e = p.od().entry(s.address).unwrap();
+            let b = ecdrive::od::Value::Int(s.value)
+                .encode(e.data_type)
+                .unwrap();
+            w.download(0, s.address.index, s.address.sub, &b).unwrap();
+        }
+        w.configure_pd(&[cyclic::sizes(p)]);
+        assert_eq!(w.request(0, 4), (4, 0));
+        w.activate_dc(cycle_ns);
+        assert_eq!(w.request(0, 8), (8, 0));
+        w.cycle();
+        w
+    }
+
     /// Set the controlword of `pos`, run two cycles (the drive acts at the first SYNC0, the
     /// second frame reads the result) and return the statusword.
     pub fn command(&mut self, pos: usize, cw: u16) -> u16 {

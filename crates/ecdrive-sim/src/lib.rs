@@ -57,6 +57,7 @@ pub mod drives;
 pub mod esc;
 pub mod faults;
 pub mod foe;
+pub mod machine;
 pub mod probe;
 pub mod quirks;
 pub mod rec;

@@ -29,27 +29,7 @@ pub const TORQUE_TIME_CONSTANT_S: f64 = 0.05;
 /// **\[REC\]** Homing: distance before the reference at which the slow speed takes over, rev.
 pub const HOMING_CREEP_REV: f64 = 0.05;
 
-/// The machine around the emulated motor. **\[REC\]** values, not from any manual.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct World {
-    /// Negative limit switch position, rev.
-    pub negative_limit_rev: f64,
-    /// Positive limit switch position, rev.
-    pub positive_limit_rev: f64,
-    /// Home switch edge, rev.
-    pub home_switch_rev: f64,
-}
-
-impl Default for World {
-    /// **\[REC\]** limits at ±10 rev, home switch at +2.5 rev; index pulses at whole revolutions.
-    fn default() -> Self {
-        Self {
-            negative_limit_rev: -10.0,
-            positive_limit_rev: 10.0,
-            home_switch_rev: 2.5,
-        }
-    }
-}
+pub use crate::machine::World;
 
 /// The objects the motion reads each tick (already converted where noted).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -188,18 +168,7 @@ impl Motion {
 
     /// Digital inputs 60FDh: bit 0 negative limit, bit 1 positive limit, bit 2 home switch.
     pub fn digital_inputs(&self) -> u32 {
-        let rev = self.pos / self.ppr;
-        let mut d = 0;
-        if rev <= self.world.negative_limit_rev {
-            d |= 1;
-        }
-        if rev >= self.world.positive_limit_rev {
-            d |= 2;
-        }
-        if rev >= self.world.home_switch_rev {
-            d |= 4;
-        }
-        d
+        self.world.digital_inputs(self.pos, self.ppr)
     }
 
     fn stopped(&self) -> bool {
@@ -464,31 +433,13 @@ impl Motion {
         false
     }
 
+    /// Where the method ends on the machine ([`crate::machine::homing_end`]); `None` when it
+    /// cannot (unknown method, no index pulse, no home switch to find).
     fn homing_reference(&self, method: i8, hs: &HomingSupport) -> Option<f64> {
-        let ppr = self.ppr;
-        let w = &self.world;
-        let index_above = |x: f64| (x / ppr).floor() * ppr + ppr;
-        let index_below = |x: f64| (x / ppr).ceil() * ppr - ppr;
-        let needs_index = matches!(method, 1..=14 | 33 | 34);
-        if needs_index && !hs.index_pulse {
-            return None;
+        match crate::machine::homing_end(method, &self.world, self.pos, self.ppr, hs.index_pulse) {
+            crate::machine::HomingEnd::Reference(r) => Some(r),
+            _ => None,
         }
-        let neg = w.negative_limit_rev * ppr;
-        let pos = w.positive_limit_rev * ppr;
-        let home = w.home_switch_rev * ppr;
-        Some(match method {
-            1 => index_above(neg),
-            2 => index_below(pos),
-            3 | 4 | 7..=10 => index_above(home),
-            5 | 6 | 11..=14 => index_below(home),
-            17 => neg,
-            18 => pos,
-            19..=30 | -1 => home,
-            33 => index_below(self.pos + 1e-9),
-            34 => index_above(self.pos - 1e-9),
-            35 | 37 => self.pos,
-            _ => return None,
-        })
     }
 
     fn homing(&mut self, dt: f64, cw: ControlWord, p: &Params, hs: &HomingSupport) -> StatusWord {

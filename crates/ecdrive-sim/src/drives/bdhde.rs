@@ -24,9 +24,9 @@
 
 use super::spec::{
     AlarmDef, CommandCheck, Condition, CycleSource, DriveSpec, EmcyData, ErrorReporting,
-    FollowingErrorSpec, LossDetection, LossLimit, ModeRules, Monitor, MotorSpec, PowerOff,
-    PowerOnData, PowerOnValue, Quantity, Scaling, StateMachineSpec, StatusBit, SyncObjects,
-    TorqueLimits, TorqueSlopeUnit, WriteRule,
+    FollowingErrorSpec, HomingFailure, HomingSpec, LossDetection, LossLimit, ModeRules, Monitor,
+    MotorSpec, PowerOff, PowerOnData, PowerOnValue, Quantity, Scaling, StateMachineSpec, StatusBit,
+    SyncObjects, TorqueLimits, TorqueSlopeUnit, WriteRule,
 };
 use crate::cia402::QuickStopOption;
 use crate::ec::AlStatusCode;
@@ -280,7 +280,17 @@ pub static SPEC: DriveSpec = DriveSpec {
             condition: Condition::PowerStageOn,
         },
     ],
-    homing_on_current_position: REC_HOMING_ON_CURRENT_POSITION,
+    homing: HomingSpec {
+        methods: REC_HOMING_METHODS,
+        index_pulse: true,
+        // Table 10-4: fault 0x6100 "Homing Error" (HE, FLT 174); §10.2: a non-zero 0x603F is a
+        // fault and the state machine enters Fault.
+        failure: HomingFailure::Fault { alarm: "HE" },
+    },
+    // §5.10: "Bit 10 = Target reached 0 = Target torque not reached 1 = Target torque reached".
+    tq_target_reached: true,
+    // 60B8h bit 2: "trigger with zero pulse signal or position encoder (not support)".
+    touch_probe_index_pulse: false,
     sync_cycle_mismatch: AlStatusCode::DC_INVALID_CYCLE_TIME,
     abort_codes: REC_ABORT_CODES,
     // The manual names a BOOT state (LED "very fast flashing") but no file access.
@@ -388,10 +398,13 @@ pub const REC_LEAVE_OP_ALARM: Option<&str> = Some("Fb9");
 /// \[REC\] An EMCY with code 0x0000 when a fault is reset (the manual does not say).
 pub const REC_EMCY_ON_RESET: bool = true;
 
-/// \[REC\] Homing: method 35 (CiA 402 "homing on the current position") sets the position to
-/// the home offset 0x607C; the emulator has no switches, so every other method reports a homing
-/// error (statusword bit 13).
-pub const REC_HOMING_ON_CURRENT_POSITION: &[i8] = &[35];
+/// \[REC\] Homing methods: the manual gives 0x6098 "the value range is 1 to 35" (§5.8) and
+/// refers to CiA 402 for the methods, with no list and no 0x60E3; the emulated drive runs the
+/// CiA 402 methods in that range the machine model knows (1–14, 17–30, 33–35).
+pub const REC_HOMING_METHODS: &[i8] = &[
+    1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 17, 18, 19, 20, 21, 22, 23, 24, 25, 26, 27, 28,
+    29, 30, 33, 34, 35,
+];
 
 /// \[REC\] The BDHDE's SDO abort codes (Table 10-2) have no "object cannot be mapped" and no
 /// "PDO length exceeded" (0x06040041/0x06040042); the emulated drive answers a mapping entry

@@ -54,6 +54,16 @@ mod obj {
     pub const QUICK_STOP_DECELERATION: ObjectAddress = a(0x6085);
     pub const TORQUE_SLOPE: ObjectAddress = a(0x6087);
     pub const HOMING_METHOD: ObjectAddress = a(0x6098);
+    pub const HOMING_SPEED_SWITCH: ObjectAddress = ObjectAddress::new(0x6099, 1);
+    pub const HOMING_SPEED_ZERO: ObjectAddress = ObjectAddress::new(0x6099, 2);
+    pub const HOMING_ACCELERATION: ObjectAddress = a(0x609A);
+    pub const TOUCH_PROBE_FUNCTION: ObjectAddress = a(0x60B8);
+    pub const TOUCH_PROBE_STATUS: ObjectAddress = a(0x60B9);
+    pub const TOUCH_PROBE_1_RISING: ObjectAddress = a(0x60BA);
+    pub const TOUCH_PROBE_1_FALLING: ObjectAddress = a(0x60BB);
+    pub const TOUCH_PROBE_2_RISING: ObjectAddress = a(0x60BC);
+    pub const TOUCH_PROBE_2_FALLING: ObjectAddress = a(0x60BD);
+    pub const DIGITAL_INPUTS: ObjectAddress = a(0x60FD);
     pub const POSITION_OFFSET: ObjectAddress = a(0x60B0);
     pub const VELOCITY_OFFSET: ObjectAddress = a(0x60B1);
     pub const TORQUE_OFFSET: ObjectAddress = a(0x60B2);
@@ -128,11 +138,28 @@ struct ProfilePosition {
 }
 
 /// Homing state.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-struct Homing {
-    attained: bool,
-    error: bool,
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+enum Homing {
+    /// Not started (or interrupted).
+    #[default]
+    Idle,
+    /// Moving to the home (`failing`: to the limit switch where the search fails), reported
+    /// units, at `speed` units/s now.
+    Running {
+        target: f64,
+        failing: bool,
+        speed: f64,
+    },
+    /// Homing attained: the reference reads as the home position.
+    Attained,
+    /// Homing failed.
+    Error,
 }
+
+/// **\[REC\]** Homing: distance before the reference at which the slow speed (0x6099:02)
+/// takes over from the switch-search speed (0x6099:01), rev (the machine model's creep
+/// distance).
+const HOMING_CREEP_REV: f64 = 0.05;
 
 /// What the emulated drive has done, for tests and the master's fault-injection tests.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -204,6 +231,14 @@ pub struct EmulatedDrive {
     torque_demand_permille: f64,
     pp: ProfilePosition,
     homing: Homing,
+    /// The machine around the motor: switches, index pulse, probe inputs.
+    world: crate::machine::World,
+    /// A warning the drive shows (statusword bit 7): its id and text.
+    warning: Option<(&'static str, &'static str)>,
+    /// The touch-probe latches seen in 0x60B9 (bits 1, 2, 9, 10) and the 0x60B8 the probe runs
+    /// with (its enable bits' edges re-arm).
+    probe_status: u16,
+    probe_function: u16,
     prev_cw: u16,
     /// csp motion started by bit 4's edge ([`DriveSpec::csp_start_edge`]).
     csp_started: bool,
@@ -329,6 +364,10 @@ impl EmulatedDrive {
             torque_demand_permille: 0.0,
             pp: ProfilePosition::default(),
             homing: Homing::default(),
+            world: crate::machine::World::default(),
+            warning: None,
+            probe_status: 0,
+            probe_function: 0,
             prev_cw: 0,
             csp_started: false,
             in_window_ns: 0,
@@ -354,6 +393,22 @@ impl EmulatedDrive {
         };
         d.power_on();
         Ok(d)
+    }
+
+    /// The same drive on another machine ([`crate::machine::World`]: switches, probe inputs).
+    pub fn with_world(mut self, world: crate::machine::World) -> Self {
+        self.world = world;
+        self
+    }
+
+    /// The machine around the motor.
+    pub fn world(&self) -> &crate::machine::World {
+        &self.world
+    }
+
+    /// The warning the drive shows (statusword bit 7), by its id and text.
+    pub fn warning(&self) -> Option<(&'static str, &'static str)> {
+        self.warning
     }
 
     /// The same drive with a parameter stored in its non-volatile memory, in effect from power-on
@@ -964,7 +1019,11 @@ impl EmulatedDrive {
         }
         self.mode = requested;
         self.reset_motion_state();
-        self.homing = Homing::default();
+        // A completed homing stays reported when hm is entered again (MR-J4-TM §5.4.9 (3)
+        // POINT); one in progress is interrupted.
+        if self.homing != Homing::Attained {
+            self.homing = Homing::default();
+        }
     }
 
     /// The plan of the next cycle in Operation enabled, by the mode of operation.
@@ -1154,28 +1213,169 @@ impl EmulatedDrive {
         self.plan_position(dt);
     }
 
-    /// Homing.
+    /// Homing: on bit 4's edge the method's end on the machine ([`crate::machine::homing_end`]);
+    /// the demand moves there at 0x6099:01, the last [`HOMING_CREEP_REV`] at 0x6099:02, with
+    /// 0x609A; there the reference reads as 0x607C. A search that runs into a limit switch, a
+    /// method the drive does not run, or one the model does not know fails as the drive's spec
+    /// says. Bit 4 falling stops the run (interrupted).
     fn operate_hm(&mut self, m: &Motion) {
         let (edge4, dt) = (m.edge4, m.dt);
-        if edge4 && !self.homing.attained {
+        let bit4 = m.cw.contains(ControlWord::HOMING_START);
+        let upr = self.units_per_rev();
+        if edge4 {
+            self.warning = None;
             let method = self.int(obj::HOMING_METHOD) as i8;
-            if self.spec.homing_on_current_position.contains(&method) {
-                let home = self.int(obj::HOME_OFFSET) as f64;
-                self.offset_units += home - self.actual_units();
-                self.demand = home;
-                self.demand_prev = home;
-                self.homing = Homing {
-                    attained: true,
-                    error: false,
-                };
+            let world_pos = self.motor.position_rev() * upr;
+            let h = self.spec.homing;
+            let end = if h.methods.contains(&method) {
+                crate::machine::homing_end(method, &self.world, world_pos, upr, h.index_pulse)
             } else {
-                self.homing = Homing {
-                    attained: false,
-                    error: true,
+                crate::machine::HomingEnd::NotSupported
+            };
+            self.homing = match end {
+                crate::machine::HomingEnd::Reference(r) => Homing::Running {
+                    target: r + self.offset_units,
+                    failing: false,
+                    speed: 0.0,
+                },
+                crate::machine::HomingEnd::Fails { at } => Homing::Running {
+                    target: at + self.offset_units,
+                    failing: true,
+                    speed: 0.0,
+                },
+                crate::machine::HomingEnd::NotSupported => {
+                    self.homing_failed();
+                    Homing::Error
+                }
+            };
+        }
+        if let Homing::Running {
+            target,
+            failing,
+            speed,
+        } = self.homing
+        {
+            if !bit4 || m.halt {
+                self.homing = Homing::Idle;
+            } else {
+                let vpr = self.velocity_per_rev_s();
+                let fast = self.od.dict().uint(obj::HOMING_SPEED_SWITCH).unwrap_or(0) as f64;
+                let slow = self.od.dict().uint(obj::HOMING_SPEED_ZERO).unwrap_or(0) as f64;
+                let near = (target - self.demand).abs() <= HOMING_CREEP_REV * upr;
+                let vmax = (if near { slow } else { fast }) / vpr * upr;
+                let vmax = vmax.min(self.limits.speed_rev_s * upr);
+                let acc = self.ramp_rev_s2(obj::HOMING_ACCELERATION, None) * upr;
+                let acc = if acc.is_finite() { acc } else { f64::MAX / 4.0 };
+                let (arrived, v) = step_toward(&mut self.demand, target, speed, vmax, acc, dt);
+                self.homing = Homing::Running {
+                    target,
+                    failing,
+                    speed: v,
                 };
+                if arrived && failing {
+                    self.homing_failed();
+                    self.homing = Homing::Error;
+                } else if arrived {
+                    let home = self.int(obj::HOME_OFFSET) as f64;
+                    self.offset_units += home - target;
+                    self.demand = home;
+                    self.demand_prev = home;
+                    self.homing = Homing::Attained;
+                    self.plan_position(dt);
+                    return;
+                }
             }
         }
         self.plan_position(dt);
+    }
+
+    /// The touch probe over one cycle's travel from `from_rev` to `to_rev` (motor revolutions):
+    /// 0x60B8 enables each probe (bit 0/8), chooses one or every edge (bit 1/9), the input or
+    /// the index pulse (bit 2/10, where the drive has that), and which edges are sampled (bits
+    /// 4/5, 12/13); a sampled edge latches the position where the motor crossed the input's
+    /// boundary into 0x60BA/0x60BB (probe 1) or 0x60BC/0x60BD (probe 2) and sets its bit in
+    /// 0x60B9 (1/2, 9/10; 0/8 mirror the enables). Clearing a sample bit clears its stored
+    /// bit, which re-arms a single-edge probe; so does enabling it again.
+    fn touch_probe(&mut self, from_rev: f64, to_rev: f64) {
+        let f = self.od.dict().uint(obj::TOUCH_PROBE_FUNCTION).unwrap_or(0) as u16;
+        if f == 0 && self.probe_status == 0 {
+            self.probe_function = 0;
+            return;
+        }
+        let upr = self.units_per_rev();
+        let (from, to) = (from_rev * upr, to_rev * upr);
+        let mut st = self.probe_status;
+        let latches = [
+            (obj::TOUCH_PROBE_1_RISING, obj::TOUCH_PROBE_1_FALLING),
+            (obj::TOUCH_PROBE_2_RISING, obj::TOUCH_PROBE_2_FALLING),
+        ];
+        for (n, (base, (rise_obj, fall_obj))) in
+            [1u8, 2].into_iter().zip([0u16, 8].into_iter().zip(latches))
+        {
+            let bit = |b: u16| f >> (base + b) & 1 != 0;
+            if !bit(0) {
+                st &= !(0x0007 << base);
+                continue;
+            }
+            let was_enabled = self.probe_function >> base & 1 != 0;
+            st |= 1 << base;
+            if !was_enabled {
+                st &= !(0x0006 << base);
+            }
+            for (sample, stored) in [(4u16, 1u16), (5, 2)] {
+                if !bit(sample) {
+                    st &= !(1 << (base + stored));
+                }
+            }
+            let edge = if bit(2) {
+                // The encoder's zero point (index pulse, whole revolutions), where the drive
+                // offers it as a trigger: a rising edge each time the motor passes one.
+                self.spec
+                    .touch_probe_index_pulse
+                    .then(|| {
+                        let (lo, hi) = if from < to { (from, to) } else { (to, from) };
+                        let k = (hi / upr).floor();
+                        (k * upr > lo && k * upr <= hi).then_some((k * upr, true))
+                    })
+                    .flatten()
+            } else {
+                self.world.probe_edge(n, from, to, upr)
+            };
+            let Some((at, rising)) = edge else {
+                continue;
+            };
+            let (sample, stored, obj) = if rising {
+                (4u16, 1u16, rise_obj)
+            } else {
+                (5, 2, fall_obj)
+            };
+            let continuous = bit(1);
+            if bit(sample) && (continuous || st >> (base + stored) & 1 == 0) {
+                let latched = (at + self.offset_units).round() as i64;
+                let _ = self.od.dict_mut().set_int(obj, latched);
+                st |= 1 << (base + stored);
+            }
+        }
+        self.probe_status = st;
+        self.probe_function = f;
+        let _ = self
+            .od
+            .dict_mut()
+            .set_uint(obj::TOUCH_PROBE_STATUS, u64::from(st));
+    }
+
+    /// Report a failed homing as the drive's spec says.
+    fn homing_failed(&mut self) {
+        match self.spec.homing.failure {
+            super::spec::HomingFailure::Warning { id, text } => {
+                self.warning = Some((id, text));
+            }
+            super::spec::HomingFailure::Fault { alarm } => {
+                if let Some(a) = self.alarm_by_id(Some(alarm)) {
+                    self.pending = Some(a);
+                }
+            }
+        }
     }
 
     fn plan_position(&mut self, _dt: f64) {
@@ -1299,18 +1499,29 @@ impl EmulatedDrive {
             }
             4 => {
                 let target = self.int(obj::TARGET_TORQUE) as f64;
-                if (self.torque_demand_permille - target).abs() < 0.5 {
+                if self.spec.tq_target_reached && (self.torque_demand_permille - target).abs() < 0.5
+                {
                     sw |= StatusWord::TARGET_REACHED.bits();
                 }
             }
-            6 => {
-                if self.homing.attained {
-                    sw |= StatusWord::HOMING_ATTAINED.bits() | StatusWord::TARGET_REACHED.bits();
+            // The manual's table (MR-J4-TM §5.4.9 (3)): 000 in progress, 001 interrupted or not
+            // started, 011 completed, 10x error (velocity not 0 / 0).
+            6 => match self.homing {
+                Homing::Idle => sw |= StatusWord::TARGET_REACHED.bits(),
+                Homing::Running { .. } => {}
+                Homing::Attained => {
+                    sw |= StatusWord::HOMING_ATTAINED.bits();
+                    if self.motor.stopped() {
+                        sw |= StatusWord::TARGET_REACHED.bits();
+                    }
                 }
-                if self.homing.error {
+                Homing::Error => {
                     sw |= StatusWord::HOMING_ERROR.bits();
+                    if self.motor.stopped() {
+                        sw |= StatusWord::TARGET_REACHED.bits();
+                    }
                 }
-            }
+            },
             _ => {}
         }
         sw
@@ -1340,7 +1551,14 @@ impl EmulatedDrive {
         let torque_permille = self.motor.torque_nm() / self.spec.motor.rated_torque_nm * 1000.0;
         let powered = self.plan != Drive::Off;
         let sw = self.fsa.statusword().bits() | mode_bits;
+        let upr = self.units_per_rev();
+        let switches = self
+            .world
+            .digital_inputs(self.motor.position_rev() * upr, upr);
         let d = self.od.dict_mut();
+        // 0x60FD bits 0–2: negative and positive limit switch, home switch (the machine's).
+        let inputs = d.uint(obj::DIGITAL_INPUTS).unwrap_or(0) & !0x7;
+        let _ = d.set_uint(obj::DIGITAL_INPUTS, inputs | u64::from(switches));
         let _ = d.set_uint(obj::STATUSWORD, u64::from(sw));
         let _ = d.set_int(obj::MODES_DISPLAY, i64::from(self.mode));
         let _ = d.set_int(obj::POSITION_ACTUAL, clamp_i32(actual));
@@ -1404,9 +1622,11 @@ impl EmulatedDrive {
         } else {
             self.free_run_cycle_ns()
         };
-        // 1. The motion of the cycle that just ended.
+        // 1. The motion of the cycle that just ended, and the touch probe on it.
         self.last_dt_ns = dt_ns;
+        let before = self.motor.position_rev();
         self.integrate(dt_ns);
+        self.touch_probe(before, self.motor.position_rev());
         // 2. The outputs of this cycle.
         let op = event.outputs_enabled && self.al == AlState::Op;
         let mut fresh = !dc || event.outputs_fresh();
@@ -1472,7 +1692,7 @@ impl EmulatedDrive {
             motion_stopped: stopped,
             main_power: self.main_power,
             remote: self.remote,
-            warning: false,
+            warning: self.warning.is_some(),
         });
         let state = self.fsa.state();
         if let Reaction::Transition(t) = reaction
@@ -1514,6 +1734,22 @@ impl EmulatedDrive {
 }
 
 /// Move `from` towards `to` by at most `step` (≥ 0).
+/// One cycle of a trapezoidal move of `pos` to `target` from speed `v` (units/s) within `vmax`
+/// and `acc`; returns whether it arrived (then at the target, stopped) and the new speed.
+fn step_toward(pos: &mut f64, target: f64, v: f64, vmax: f64, acc: f64, dt: f64) -> (bool, f64) {
+    let d = target - *pos;
+    let brake = (2.0 * acc * d.abs()).sqrt();
+    let wanted = d.signum() * vmax.abs().min(brake);
+    let nv = approach(v, wanted, acc * dt);
+    let step = nv * dt;
+    if d.abs() < 0.5 || (step != 0.0 && step.abs() >= d.abs() && step.signum() == d.signum()) {
+        *pos = target;
+        return (true, 0.0);
+    }
+    *pos += step;
+    (false, nv)
+}
+
 fn approach(from: f64, to: f64, step: f64) -> f64 {
     let step = if step.is_finite() {
         step.abs()

@@ -62,7 +62,7 @@ pub mod spec;
 
 pub use drive::{DriveStats, EmulatedDrive, TargetSample, UnknownAlarm};
 pub use esi_model::{EsiModel, EsiModelError};
-pub use spec::DriveSpec;
+pub use spec::{DriveSpec, HomingFailure, HomingSpec};
 
 use super::device::Device;
 use super::quirks::Quirks;

@@ -29,9 +29,9 @@
 
 use super::spec::{
     AlarmDef, CommandCheck, Condition, CycleCounterSpec, CycleSource, DriveSpec, EmcyData,
-    ErrorReporting, FollowingErrorSpec, LossDetection, LossLimit, ModeGroup, ModeRules, Monitor,
-    MotorSpec, PowerOff, PowerOnData, PowerOnValue, Quantity, Scaling, StateMachineSpec, StatusBit,
-    SyncObjects, TorqueLimits, TorqueSlopeUnit, WriteRule,
+    ErrorReporting, FollowingErrorSpec, HomingFailure, HomingSpec, LossDetection, LossLimit,
+    ModeGroup, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData, PowerOnValue, Quantity,
+    Scaling, StateMachineSpec, StatusBit, SyncObjects, TorqueLimits, TorqueSlopeUnit, WriteRule,
 };
 use crate::cia402::QuickStopOption;
 use crate::ec::AlStatusCode;
@@ -317,7 +317,25 @@ pub static SPEC: DriveSpec = DriveSpec {
             condition: Condition::SpeedLimited,
         },
     ],
-    homing_on_current_position: &[35, 37],
+    homing: HomingSpec {
+        // 0x60E3's CiA 402 methods (§7.3.13 (5)(a): 37, 35, 34, 33, 28, 27, 24, 23, 22, 21,
+        // 20, 19, 12, 11, 8, 7, 6, 5, 4, 3); its vendor methods −1 … −43 are not modelled.
+        methods: &[
+            37, 35, 34, 33, 28, 27, 24, 23, 22, 21, 20, 19, 12, 11, 8, 7, 6, 5, 4, 3,
+        ],
+        // The encoder's Z phase (§5.4.9 (4): methods 3–12 and 33/34 end on it).
+        index_pulse: true,
+        // §5.4.9 (4): a stroke end during methods 3–6 and 19–22 gives [AL. 90 Home position
+        // return incomplete warning]; a warning (statusword bit 7, §5.3.1).
+        failure: HomingFailure::Warning {
+            id: "AL.90",
+            text: "Home position return incomplete warning",
+        },
+    },
+    // §5.4.8 (3): in tq, "Bit 10 Target reached (not supported)".
+    tq_target_reached: false,
+    // §5.5: "encoder zero point" as a trigger with 60B8h bit 2/10 = 1 [SW B2+].
+    touch_probe_index_pulse: true,
     sync_cycle_mismatch: REC_SYNC_CYCLE_MISMATCH,
     abort_codes: REC_ABORT_CODES,
     foe: Some(REC_FOE),

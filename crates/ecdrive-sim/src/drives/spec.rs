@@ -480,9 +480,15 @@ pub struct DriveSpec {
     pub monitors: &'static [Monitor],
     /// Manufacturer status bits.
     pub status_bits: &'static [StatusBit],
-    /// Homing methods that set the current position as home (35, 37); others report a homing
-    /// error.
-    pub homing_on_current_position: &'static [i8],
+    /// Homing: the methods the drive runs on the emulated machine ([`crate::machine`]) and how
+    /// it reports a homing that fails.
+    pub homing: HomingSpec,
+    /// In tq, statusword bit 10 says the target torque is reached (false: the drive does not
+    /// support it and leaves the bit 0).
+    pub tq_target_reached: bool,
+    /// The touch probe can trigger on the encoder's zero point (0x60B8 bit 2/10 = 1); without
+    /// it those settings never latch.
+    pub touch_probe_index_pulse: bool,
     /// SAFE-OP → OP refusal when the SYNC0 cycle does not match the drive's cycle object.
     pub sync_cycle_mismatch: crate::ec::AlStatusCode,
     /// The drive's own abort codes for refusals the store reports with the standard ones
@@ -493,6 +499,37 @@ pub struct DriveSpec {
     /// image written completely takes effect at the next BOOT → INIT (revision 0x1018:03 and
     /// software version 0x100A).
     pub foe: Option<crate::foe::FoeSpec>,
+}
+
+/// How a drive reports a homing that fails: a search that runs into a limit switch without
+/// finding what it looks for, or a method it does not run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HomingFailure {
+    /// Statusword bit 13 (homing error) and bit 7 (warning); the drive stays in Operation
+    /// enabled and names the warning only on its display.
+    Warning {
+        /// The drive's name for it.
+        id: &'static str,
+        /// What it means.
+        text: &'static str,
+    },
+    /// Statusword bit 13 and a fault: the alarm with this id (0x603F, EMCY).
+    Fault {
+        /// The alarm's id in the drive's alarm table.
+        alarm: &'static str,
+    },
+}
+
+/// A drive's homing (hm, 0x6060 = 6).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HomingSpec {
+    /// The 0x6098 values the emulated drive runs. Methods the drive lists but the model does
+    /// not know end in a homing failure.
+    pub methods: &'static [i8],
+    /// The encoder has an index pulse (Z phase) once per revolution.
+    pub index_pulse: bool,
+    /// How a failure is reported.
+    pub failure: HomingFailure,
 }
 
 impl DriveSpec {
