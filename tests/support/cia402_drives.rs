@@ -54,4 +54,5 @@ pub const BLV_R: DriveCaps = DriveCaps {
     supported_modes: SupportedModes::from_raw(0x0000_002D),
     error_table: BLV_R_ERRORS,
     csp_start_edge: false,
+    homing_failure: "",
 };

@@ -320,6 +320,19 @@ enum ProgramState {
     Running,
 }
 
+/// Where a program's `home` step is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum HomeRun {
+    /// No home step running.
+    Idle,
+    /// hm requested; waiting for the drive to confirm it.
+    ToHm,
+    /// Homing (controlword bit 4 through [`cia402::Homing`]).
+    Running { method: i8 },
+    /// Homed; back to the program's mode requested.
+    Back,
+}
+
 /// Where the drives stand on the way to OP.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum OpState {
@@ -414,6 +427,11 @@ struct AxisRt {
     velocity_unit: f64,
     runner: Runner,
     program: ProgramState,
+    /// The home step's homing engine and where the step is.
+    homing: cia402::Homing,
+    home: HomeRun,
+    /// How the drive's manual names a failed homing ([`cia402::DriveCaps::homing_failure`]).
+    homing_failure: &'static str,
     /// Set-point held when no program runs (position/velocity/torque by mode).
     hold: Sample,
     mode: CyclicMode,
@@ -465,6 +483,9 @@ impl AxisRt {
             velocity_unit: d.profile.units.velocity_position_per_s(),
             runner: Runner::new(d.setup.program.clone(), d.setup.mode),
             program: ProgramState::Idle,
+            homing: cia402::Homing::default(),
+            home: HomeRun::Idle,
+            homing_failure: caps.homing_failure,
             hold: Sample::default(),
             mode: d.setup.mode,
             requested_mode: None,
@@ -598,6 +619,9 @@ impl AxisRt {
         } else if self.stopping == Stopping::No {
             // Not enabled: track the actual values so enabling starts without a jump.
             self.hold = actual;
+        }
+        if matches!(self.home, HomeRun::Running { .. }) {
+            self.homing.step(&mut self.axis, fb.statusword);
         }
         let out = self.axis.step(&fb);
         self.engine_events(i, actual, ctx, ev);
@@ -768,6 +792,7 @@ impl AxisRt {
                 self.program = ProgramState::Idle;
                 ev.emit(EventKind::ProgramDone { axis: i as u16 });
             }
+            Tick::Home { method } => self.home_step(i, method, st, actual, ctx, ev),
         }
         let idx = self.runner.step_index() as u16;
         if idx != self.tel.program_step {
@@ -777,6 +802,82 @@ impl AxisRt {
             });
         }
         sp
+    }
+
+    /// One cycle of a `home` step: hm requested (the engine handles the zero-speed rule), the
+    /// homing run once the drive is in hm, then back to the program's mode; the program goes on
+    /// from the position homing defined. A homing error (or a run that times out or is cut
+    /// short) stops the axes, naming the drive's own report.
+    fn home_step(
+        &mut self,
+        i: usize,
+        method: i8,
+        st: &AxisStatus,
+        actual: Sample,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+    ) {
+        let idle = st.mode_switch == ModeSwitchPhase::Idle;
+        match self.home {
+            HomeRun::Idle => {
+                self.home = HomeRun::ToHm;
+                if self.axis.request_mode(OperationMode::Homing).is_err() {
+                    self.home = HomeRun::Idle;
+                    self.program = ProgramState::Idle;
+                    ev.emit(EventKind::CommandRefused {
+                        axis: i as u16,
+                        why: "the program's home step was refused: the drive has no homing mode",
+                    });
+                }
+            }
+            HomeRun::ToHm => {
+                if idle && st.active_mode == OperationMode::Homing && st.streaming {
+                    self.homing.start();
+                    self.home = HomeRun::Running { method };
+                }
+            }
+            HomeRun::Running { method } => match self.homing.outcome() {
+                None => {}
+                Some(cia402::HomingOutcome::Completed) => {
+                    self.home = HomeRun::Back;
+                    self.requested_mode = None;
+                    if self
+                        .axis
+                        .request_mode(OperationMode::from_i8(self.mode.code()))
+                        .is_err()
+                    {
+                        self.home = HomeRun::Idle;
+                        self.program = ProgramState::Idle;
+                        ev.emit(EventKind::CommandRefused {
+                            axis: i as u16,
+                            why: "the program stopped: the switch back from homing failed",
+                        });
+                    }
+                }
+                Some(outcome) => {
+                    self.home = HomeRun::Idle;
+                    self.program = ProgramState::Idle;
+                    ev.emit(EventKind::HomingFailed {
+                        axis: i as u16,
+                        method,
+                        outcome,
+                        drive_says: self.homing_failure,
+                    });
+                    ev.emit(EventKind::Stopping {
+                        reason: StopReason::HomingFailed { axis: i as u16 },
+                    });
+                    // This axis stops; the run then stops the others.
+                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+                }
+            },
+            HomeRun::Back => {
+                if idle && st.active_mode.as_i8() == self.mode.code() {
+                    self.home = HomeRun::Idle;
+                    self.runner.homed(actual);
+                    self.hold = actual;
+                }
+            }
+        }
     }
 
     /// The set-point into the engine, in the active mode.
@@ -904,10 +1005,17 @@ impl AxisRt {
         };
         let state = StatusWord::from_raw(self.tel.statusword).state();
         let energised = state.is_some_and(State::is_energised);
+        // In hm the drive moves on its own and its position jumps at the home: there is no
+        // demand to follow, and none from before may be judged against the positions after.
+        let homing = out.mode == OperationMode::Homing;
+        if homing {
+            self.carried = [(u64::MAX, 0); CARRIED];
+            self.tel.following_error = 0;
+        }
         // Without the demand (lost frames just before) the last value stands. The newest
         // demand whose frame passed by pulse s − 2 (two frames after one pulse: the later
         // one's demand is what the drive took).
-        if let Some(s) = ctx.pulse.checked_sub(FEEDBACK_PULSES) {
+        if let Some(s) = ctx.pulse.checked_sub(FEEDBACK_PULSES).filter(|_| !homing) {
             let newest_first = (1..=CARRIED).map(|k| (self.carried_next + CARRIED - k) % CARRIED);
             for k in newest_first {
                 if let Some(&(p, d)) = self.carried.get(k)
@@ -920,8 +1028,9 @@ impl AxisRt {
             }
         }
         let moving = self.last_demand.is_some_and(|l| l != demand);
-        self.last_demand = Some(demand);
-        if energised && self.mode == CyclicMode::Csp {
+        self.last_demand = (!homing).then_some(demand);
+        // The master's following error only while csp runs (in hm the drive moves on its own).
+        if energised && self.mode == CyclicMode::Csp && out.mode.as_i8() == CyclicMode::Csp.code() {
             self.judge_following_error(i, moving, ctx.cycle, ev);
         }
         let t = &mut self.tel;

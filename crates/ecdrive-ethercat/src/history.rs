@@ -47,6 +47,8 @@ pub enum HistoryKind {
     StateMachine,
     /// A command was refused.
     CommandRefused,
+    /// A program's home step failed (the drive's report named).
+    Homing,
     /// A command came while no cycle ran (the cycle had ended, the session was waiting for or
     /// making a re-start) and was not carried out. A command sent on the last snapshot of a
     /// cycle that was ending lands here; send it again once the cycle runs.

@@ -130,6 +130,14 @@ pub enum Step {
         /// Seconds.
         seconds: f64,
     },
+    /// Home the axis: the drive runs homing mode (hm, 0x6060 = 6) with `method` (0x6098) at
+    /// the speeds and acceleration start-up wrote (0x6099:01/02, 0x609A); the axis then
+    /// returns to the mode the program is in, from the position homing defines. A homing error
+    /// stops the run, naming the drive's own report.
+    Home {
+        /// The homing method (0x6098).
+        method: i8,
+    },
 }
 
 impl Step {
@@ -150,13 +158,14 @@ impl Step {
             Self::Jog { velocity, .. } => format!("jog at {velocity}/s"),
             Self::Torque { torque, .. } => format!("torque {torque}"),
             Self::Dwell { seconds } => format!("dwell {seconds} s"),
+            Self::Home { method } => format!("home (method {method})"),
         }
     }
 
     /// The modes this step can run in.
     pub fn runs_in(&self, mode: CyclicMode) -> bool {
         match self {
-            Self::Mode { .. } | Self::Dwell { .. } => true,
+            Self::Mode { .. } | Self::Dwell { .. } | Self::Home { .. } => true,
             Self::Move { .. } | Self::Sine { .. } | Self::Ramp { .. } | Self::Jog { .. } => {
                 mode != CyclicMode::Cst
             }
@@ -234,11 +243,13 @@ enum Planned {
     Torque(TorqueStep),
     Dwell { hold: Sample, seconds: f64 },
     Mode,
+    Home,
 }
 
 fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
     Ok(match *step {
         Step::Mode { .. } => Planned::Mode,
+        Step::Home { .. } => Planned::Home,
         Step::Move {
             target,
             velocity,
@@ -327,6 +338,12 @@ pub enum Tick {
     SwitchMode(CyclicMode),
     /// The program is finished; hold the last set-point.
     Finished(Sample),
+    /// Home the axis with this method (hold the set-point meanwhile), then call
+    /// [`Runner::homed`].
+    Home {
+        /// The homing method (0x6098).
+        method: i8,
+    },
 }
 
 /// Runs a program on one axis. Built before the cycle starts; [`Runner::tick`] does not
@@ -426,6 +443,15 @@ impl Runner {
         }
     }
 
+    /// The axis homed (back in the program's mode): continue with the next step from `actual`
+    /// (the position homing defined).
+    pub fn homed(&mut self, actual: Sample) {
+        if matches!(self.steps.get(self.index), Some(Step::Home { .. })) {
+            self.index += 1;
+            self.seed(actual);
+        }
+    }
+
     /// The set-point at time `now` (seconds, any monotonic origin).
     pub fn tick(&mut self, now: f64) -> Tick {
         if self.entering && self.failed.is_none() && self.index < self.steps.len() {
@@ -444,6 +470,9 @@ impl Runner {
             if let Step::Mode { mode } = step {
                 self.waiting_for_mode = true;
                 return Tick::SwitchMode(*mode);
+            }
+            if let Step::Home { method } = step {
+                return Tick::Home { method: *method };
             }
             let planned = match self.planned {
                 Some(p) => p,
@@ -481,7 +510,7 @@ impl Runner {
                     done: t >= seconds,
                     ..hold
                 },
-                Planned::Mode => Sample {
+                Planned::Mode | Planned::Home => Sample {
                     done: true,
                     ..self.last
                 },
@@ -552,7 +581,7 @@ mod tests {
         for t in &ticks {
             let p = match t {
                 Tick::Setpoint(s) | Tick::Finished(s) => s.pos,
-                Tick::SwitchMode(_) => continue,
+                Tick::SwitchMode(_) | Tick::Home { .. } => continue,
             };
             // The fastest step is the sine: 100 · 2π · 5 ≈ 3142 counts/s.
             let vmax = 2000.0f64.max(100.0 * 2.0 * std::f64::consts::PI * 5.0);
@@ -705,5 +734,42 @@ mod tests {
             }
             t => panic!("{t:?}"),
         }
+    }
+
+    /// A home step holds the program until the cycle says the axis homed; the next step is
+    /// planned from the position homing defined, not from the one before it.
+    #[test]
+    fn a_home_step_waits_and_the_next_step_starts_from_the_home() {
+        let steps = vec![
+            Step::Home { method: 19 },
+            Step::Move {
+                target: Target::By(100.0),
+                velocity: 1000.0,
+                acceleration: 10_000.0,
+                jerk: None,
+            },
+        ];
+        validate(&steps, CyclicMode::Csp).unwrap();
+        let mut r = Runner::new(steps, CyclicMode::Csp);
+        r.seed(Sample {
+            pos: 5000.0,
+            ..Sample::default()
+        });
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csp));
+        r.mode_switched(r.last);
+        for k in 0..5 {
+            assert_eq!(r.tick(0.001 * f64::from(k)), Tick::Home { method: 19 });
+        }
+        assert_eq!(r.step_index(), 0);
+        r.homed(Sample::default());
+        assert_eq!(r.step_index(), 1);
+        let mut last = None;
+        for k in 0..1000 {
+            if let Tick::Setpoint(s) | Tick::Finished(s) = r.tick(0.01 + 0.001 * f64::from(k)) {
+                last = Some(s.pos);
+            }
+        }
+        assert_eq!(last, Some(100.0), "by 100 from the home at 0");
+        assert!(r.finished());
     }
 }

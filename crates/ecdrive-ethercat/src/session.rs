@@ -297,6 +297,7 @@ impl Decoder {
                 format!("{} left OP", self.device_name(device))
             }
             StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
+            StopReason::HomingFailed { axis } => format!("homing of {} failed", self.name(axis)),
         }
     }
 
@@ -418,6 +419,24 @@ impl Decoder {
             }
             EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
             EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
+            EventKind::HomingFailed {
+                axis,
+                method,
+                outcome,
+                drive_says,
+            } => (
+                self.drive(axis),
+                true,
+                format!(
+                    "homing (method {method}) failed: {}{}",
+                    crate::telemetry::homing_outcome_text(outcome),
+                    if drive_says.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; the drive's manual names it {drive_says}")
+                    }
+                ),
+            ),
             EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
                 (self.drive(axis), app_error(&e.kind), app_text(&e.kind))
             }
@@ -506,6 +525,7 @@ fn history_kind(kind: &EventKind) -> HistoryKind {
         EventKind::FollowingError { .. } => HistoryKind::FollowingError,
         EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
         EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
+        EventKind::HomingFailed { .. } => HistoryKind::Homing,
         EventKind::SetpointLimit { .. } => HistoryKind::CommandRefused,
         EventKind::StreamUnderrun { .. } => HistoryKind::Warning,
         EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,

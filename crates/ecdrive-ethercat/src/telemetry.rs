@@ -124,6 +124,11 @@ pub enum StopReason {
     },
     /// The working counter stayed wrong.
     WorkingCounter,
+    /// A program's home step failed.
+    HomingFailed {
+        /// Axis index.
+        axis: u16,
+    },
 }
 
 /// Something the cycle observed.
@@ -229,6 +234,19 @@ pub enum EventKind {
     ProgramDone {
         /// Axis index.
         axis: u16,
+    },
+    /// A program's home step failed: the drive reported a homing error (statusword bit 13),
+    /// or the run timed out or was cut short.
+    HomingFailed {
+        /// Axis index.
+        axis: u16,
+        /// The homing method (0x6098).
+        method: i8,
+        /// How the run ended.
+        #[serde(serialize_with = "homing_outcome_name")]
+        outcome: crate::cia402::HomingOutcome,
+        /// How the drive's manual names the failure (empty when it names none).
+        drive_says: &'static str,
     },
     /// A command could not be carried out.
     CommandRefused {
@@ -421,4 +439,26 @@ pub struct Telemetry {
     pub axes: Vec<AxisTelemetry>,
     /// One entry per I/O device (not driven), in segment order.
     pub io: Vec<IoTelemetry>,
+}
+
+fn homing_outcome_name<S: serde::Serializer>(
+    o: &crate::cia402::HomingOutcome,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    s.serialize_str(homing_outcome_text(*o))
+}
+
+/// A homing run's end in words.
+pub fn homing_outcome_text(o: crate::cia402::HomingOutcome) -> &'static str {
+    use crate::cia402::HomingOutcome as H;
+    match o {
+        H::Completed => "completed",
+        H::Error { moving: true } => {
+            "the drive reported a homing error (statusword bit 13), the motor still moving"
+        }
+        H::Error { moving: false } => "the drive reported a homing error (statusword bit 13)",
+        H::Aborted => "cut short (the axis stopped streaming in hm)",
+        H::Timeout => "no result in time",
+        H::NotReady => "the axis was not in hm",
+    }
 }

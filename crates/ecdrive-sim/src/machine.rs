@@ -151,7 +151,11 @@ pub fn homing_end(method: i8, world: &World, pos: f64, ppr: f64, index_pulse: bo
                 at: fails_at(method),
             },
             Some(h) => HomingEnd::Reference(match method {
-                3 | 4 | 7..=10 => index_above(h),
+                // 3: back from the switch's edge to the first index pulse below it (MR-J4-TM
+                // §5.4.9 (4): "move back away from the dog; home = first Z-phase"); 4: the
+                // first index pulse after the edge ("dog cradle").
+                3 => index_below(h),
+                4 | 7..=10 => index_above(h),
                 5 | 6 | 11..=14 => index_below(h),
                 _ => h,
             }),
@@ -177,6 +181,7 @@ mod tests {
         let end = |m| homing_end(m, &w, 400.0, PPR, true);
         assert_eq!(end(19), HomingEnd::Reference(2500.0));
         assert_eq!(end(4), HomingEnd::Reference(3000.0));
+        assert_eq!(end(3), HomingEnd::Reference(2000.0));
         assert_eq!(end(5), HomingEnd::Reference(2000.0));
         assert_eq!(end(33), HomingEnd::Reference(0.0));
         assert_eq!(end(34), HomingEnd::Reference(1000.0));

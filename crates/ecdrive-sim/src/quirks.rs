@@ -58,6 +58,8 @@ pub enum Quirk {
     InterpolationIndexReadOnly,
     /// SAFE-OP → OP refused (0x002D) until SYNC0 has fired.
     OpNeedsSync0,
+    /// The machine around the motor has no home switch.
+    NoHomeSwitch,
 }
 
 /// The entry whose description [`Quirk::SdoInfoBadEntry`] breaks: every CoE device has it.
@@ -94,7 +96,7 @@ pub struct Capabilities {
 
 impl Quirk {
     /// Every quirk, in the order of the table above.
-    pub const ALL: [Quirk; 13] = [
+    pub const ALL: [Quirk; 14] = [
         Quirk::NoStateSkipping,
         Quirk::CycleTimeReadOnly,
         Quirk::SyncObjectsAbsent,
@@ -108,6 +110,7 @@ impl Quirk {
         Quirk::FollowingErrorZero,
         Quirk::InterpolationIndexReadOnly,
         Quirk::OpNeedsSync0,
+        Quirk::NoHomeSwitch,
     ];
 
     /// The name after `+` in a device name.
@@ -126,6 +129,7 @@ impl Quirk {
             Quirk::FollowingErrorZero => "following-error-zero",
             Quirk::InterpolationIndexReadOnly => "interpolation-index-read-only",
             Quirk::OpNeedsSync0 => "op-needs-sync0",
+            Quirk::NoHomeSwitch => "no-home-switch",
         }
     }
 
@@ -153,6 +157,10 @@ impl Quirk {
                 "0x60C2:02 (interpolation time index) read-only at its power-on value"
             }
             Quirk::OpNeedsSync0 => "SAFE-OP → OP refused (0x002D, no sync) until SYNC0 has fired",
+            Quirk::NoHomeSwitch => {
+                "no home switch on the emulated machine: homing on it runs into a limit switch \
+                 and fails as the drive reports it"
+            }
         }
     }
 
@@ -162,7 +170,7 @@ impl Quirk {
             Quirk::StaleInputsUntilOp | Quirk::OutputsInSafeOp | Quirk::OpNeedsSync0 => {
                 Needs::ProcessData
             }
-            Quirk::NoStateSkipping => Needs::Cia402,
+            Quirk::NoStateSkipping | Quirk::NoHomeSwitch => Needs::Cia402,
             Quirk::FollowingErrorZero => Needs::FollowingError,
             _ => Needs::Coe,
         }

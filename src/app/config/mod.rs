@@ -1086,6 +1086,13 @@ fn drive(
         cx.err(span, key(&format!("program[{n}]")), e.to_string())
     })?;
 
+    // The home steps' start-up writes.
+    let homing = homing_writes(&r.program, profile, k).map_err(|(n, m)| {
+        let span = r.program.get(n).map_or(d.span(), Spanned::span);
+        cx.err(span, key(&format!("program[{n}]")), m)
+    })?;
+    let has_home = !homing.is_empty();
+
     // Every mode the program runs in.
     let mut modes = vec![mode];
     for s in &steps {
@@ -1118,7 +1125,7 @@ fn drive(
                 };
                 need.push((Direction::Rx, obj, format!("the {what} of {}", m.name())));
             }
-            if modes.len() > 1 {
+            if modes.len() > 1 || has_home {
                 need.push((
                     Direction::Rx,
                     a(0x6060, 0),
@@ -1192,6 +1199,9 @@ fn drive(
             sdos.push((addr, value));
         }
     }
+    // The home steps' writes go first: a start-up value the file gives for the same object
+    // is written after them and wins.
+    sdos.splice(0..0, homing);
     Ok((
         DriveSetup {
             select,
@@ -1410,7 +1420,128 @@ fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
             hold,
         },
         raw::Step::Dwell { seconds } => Step::Dwell { seconds },
+        raw::Step::Home {
+            method,
+            speed_switch,
+            speed_zero,
+            acceleration,
+        } => {
+            for (name, v) in [
+                ("speed_switch", speed_switch),
+                ("speed_zero", speed_zero),
+                ("acceleration", acceleration),
+            ] {
+                if !(v.is_finite() && v > 0.0) {
+                    return Err(format!("home: {name} must be a positive number, not {v}"));
+                }
+            }
+            Step::Home { method }
+        }
     })
+}
+
+/// The start-up writes of the program's `home` steps (0x6098, 0x6099:01/02, 0x609A in the
+/// drive's units): they are written once, in PRE-OP, so every home step of a drive must ask
+/// the same. Checks the method against the drive's 0x60E3 (where its dictionary lists it) and
+/// that the drive has hm.
+fn homing_writes(
+    program: &[Spanned<raw::Step>],
+    p: Option<&'static DriveProfile>,
+    k: f64,
+) -> Result<Vec<(ObjectAddress, Value)>, (usize, String)> {
+    use crate::cia402::{AccelUnit, OperationMode};
+    let mut first: Option<(usize, i8, f64, f64, f64)> = None;
+    for (n, s) in program.iter().enumerate() {
+        let raw::Step::Home {
+            method,
+            speed_switch,
+            speed_zero,
+            acceleration,
+        } = *s.get_ref()
+        else {
+            continue;
+        };
+        match first {
+            None => first = Some((n, method, speed_switch, speed_zero, acceleration)),
+            Some((_, m, a, b, c))
+                if (m, a, b, c) == (method, speed_switch, speed_zero, acceleration) => {}
+            Some((f, ..)) => {
+                return Err((
+                    n,
+                    format!(
+                        "this home step differs from program[{f}]'s: the homing method, speeds and \
+                         acceleration are written once at start-up, so every home step of a \
+                         drive must give the same"
+                    ),
+                ));
+            }
+        }
+    }
+    let Some((n, method, v1, v2, acc)) = first else {
+        return Ok(Vec::new());
+    };
+    let Some(p) = p else {
+        return Err((
+            n,
+            "a home step needs the drive's profile to write its homing objects in the drive's \
+             units: give profile, esi or profile_file"
+                .into(),
+        ));
+    };
+    if !p.caps.supported_modes.contains(OperationMode::Homing) {
+        return Err((n, format!("the {} has no homing mode (0x6502)", p.name)));
+    }
+    // The methods the drive lists in 0x60E3 (its dictionary's defaults), if it has the object.
+    let listed: Vec<i64> = p
+        .dictionary
+        .iter()
+        .find(|o| o.index == 0x60E3)
+        .map(|o| {
+            o.entries
+                .iter()
+                .filter(|e| e.sub > 0)
+                .filter_map(|e| e.default.as_i128())
+                .filter_map(|v| i64::try_from(v).ok())
+                .map(|v| i64::from(v as u8 as i8))
+                .filter(|v| *v != 0)
+                .collect()
+        })
+        .unwrap_or_default();
+    if !listed.is_empty() && !listed.contains(&i64::from(method)) {
+        let l: Vec<String> = listed.iter().map(i64::to_string).collect();
+        return Err((
+            n,
+            format!(
+                "homing method {method} is not one the {} lists in 0x60E3 ({})",
+                p.name,
+                l.join(", ")
+            ),
+        ));
+    }
+    let Some(pu) = p.units.profile else {
+        return Err((
+            n,
+            format!("the {} profile does not give its homing units", p.name),
+        ));
+    };
+    let u = &p.units;
+    let speed = |v: f64| -> Value {
+        let rps = v * k / u.position_per_rev;
+        Value::Uint(u.from_rev_per_s(pu.homing_velocity, rps).round().max(0.0) as u64)
+    };
+    let acc_rev_s2 = acc * k / u.position_per_rev;
+    let acc_value = match pu.acceleration {
+        AccelUnit::MillisecondsTo { rpm } => (rpm / 60.0 / acc_rev_s2 * 1000.0).round(),
+        AccelUnit::RpmPerSecond => (acc_rev_s2 * 60.0).round(),
+        AccelUnit::PositionPerSecond2 => (acc * k).round(),
+    };
+    let a = ObjectAddress::new;
+    Ok(vec![
+        (a(0x6098, 0), Value::Int(i64::from(method))),
+        (a(0x6099, 1), speed(v1)),
+        (a(0x6099, 2), speed(v2)),
+        (a(0x609A, 0), Value::Uint(acc_value.max(0.0) as u64)),
+    ])
 }
 
 /// Check a step against the drive's limits (in user units).
@@ -1462,6 +1593,14 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
             )),
             _ => Ok(()),
         },
+        raw::Step::Home {
+            speed_switch,
+            speed_zero,
+            ..
+        } => {
+            over("speed_switch", speed_switch, l.max_velocity, "/s")?;
+            over("speed_zero", speed_zero, l.max_velocity, "/s")
+        }
         raw::Step::Mode { .. } | raw::Step::Dwell { .. } => Ok(()),
     }
 }
@@ -1527,6 +1666,12 @@ fn describe(s: &raw::Step, u: &str) -> String {
         } => format!("jog at {velocity} {u}/s for {seconds} s"),
         raw::Step::Torque { torque, hold, .. } => format!("torque {torque} for {hold} s"),
         raw::Step::Dwell { seconds } => format!("dwell {seconds} s"),
+        raw::Step::Home {
+            method,
+            speed_switch,
+            speed_zero,
+            ..
+        } => format!("home (method {method}) at {speed_switch}/{speed_zero} {u}/s"),
     }
 }
 

@@ -181,4 +181,10 @@ pub(super) enum Step {
     Dwell {
         seconds: f64,
     },
+    Home {
+        method: i8,
+        speed_switch: f64,
+        speed_zero: f64,
+        acceleration: f64,
+    },
 }

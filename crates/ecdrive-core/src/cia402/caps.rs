@@ -164,6 +164,9 @@ pub struct DriveCaps {
     /// raises bit 4 when csp starts streaming and keeps it set; drives without the rule
     /// ignore the bit.
     pub csp_start_edge: bool,
+    /// How the drive's manual names a failed homing besides statusword bit 13 (a warning or an
+    /// alarm), for messages; empty when it names none.
+    pub homing_failure: &'static str,
 }
 
 impl DriveCaps {
@@ -181,6 +184,7 @@ impl DriveCaps {
         supported_modes: SupportedModes::ALL_STANDARD,
         error_table: &[],
         csp_start_edge: false,
+        homing_failure: "",
     };
 
     /// Whether `mode` is a position mode on this drive: the standard ones, plus the listed

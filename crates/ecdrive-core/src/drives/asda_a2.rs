@@ -309,6 +309,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     supported_modes: SUPPORTED_MODES,
     error_table: ERROR_TABLE,
     csp_start_edge: false,
+    homing_failure: "",
 };
 
 // ============================================================================================

@@ -390,6 +390,9 @@ pub const CAPS: DriveCaps = DriveCaps {
     // Starts a movement to a target position"): read as written, the drive follows the target
     // only after the edge. ecdrive's choice: give the edge (harmless where bit 4 is reserved).
     csp_start_edge: true,
+    // Table 10-4: fault 0x6100 "Homing Error" (display HE, FLT 174); §10.2: the drive enters
+    // Fault.
+    homing_failure: "fault 0x6100 Homing Error (HE, FLT 174)",
 };
 
 // ============================================================================================
@@ -438,8 +441,18 @@ pub const UNITS: Units = Units {
     velocity: VelocityUnit::PositionPerSecond,
     // 0.1 % of rated torque (0x6076).
     torque_per_mille: 1.0,
-    // The profile modes are not run on this drive yet: their units are not described here.
-    profile: None,
+    profile: Some(crate::cia402::ProfileUnits {
+        // 6081h, 6099h:01/02: "CAN user velocity units" (p.193, p.201), position units/s
+        // (§6.3).
+        profile_velocity: VelocityUnit::PositionPerSecond,
+        homing_velocity: VelocityUnit::PositionPerSecond,
+        // 6083h/6084h/609Ah: "CAN user acceleration/deceleration units" (p.194, p.203),
+        // position units/s² (§6.4).
+        acceleration: crate::cia402::AccelUnit::PositionPerSecond2,
+        // 6087h: per mille of 6076h per second by §6.6; its object page says mN·m/s (the
+        // manual contradicts itself; tq is not run by ecdrive on this drive yet).
+        torque_slope: crate::cia402::TorqueSlopeUnit::PerMillePerSecond,
+    }),
 };
 
 // ============================================================================================

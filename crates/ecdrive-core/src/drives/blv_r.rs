@@ -192,6 +192,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     supported_modes: SUPPORTED_MODES,
     error_table: ERROR_TABLE,
     csp_start_edge: false,
+    homing_failure: "",
 };
 
 // ============================================================================================

@@ -194,6 +194,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     supported_modes: SUPPORTED_MODES,
     error_table: ERROR_TABLE,
     csp_start_edge: false,
+    homing_failure: "",
 };
 
 /// The closed-loop capability set: as [`CAPS`] plus tq.

@@ -397,6 +397,10 @@ pub const CAPS: DriveCaps = DriveCaps {
     supported_modes: SupportedModes::from_raw(0x000B_03AD).with_vendor_bits(VENDOR_MODE_BITS),
     error_table: ERRORS,
     csp_start_edge: false,
+    // §5.4.9 (4): a stroke end during homing (methods 3–6, 19–22) gives [AL. 90 Home position
+    // return incomplete warning], a warning (statusword bit 7, §5.3.1): the drive stays
+    // enabled.
+    homing_failure: "AL.90 Home position return incomplete warning",
 };
 
 // ============================================================================================
@@ -437,9 +441,26 @@ pub const UNITS: Units = Units {
     velocity: VelocityUnit::RevPerMinute { scale: 0.01 },
     // 0.1 % of rated torque.
     torque_per_mille: 1.0,
-    // The profile modes are not run on this drive yet: their units are not described here.
-    profile: None,
+    profile: Some(crate::cia402::ProfileUnits {
+        // 6081h and 6099h:01/02: "Unit: [0.01 r/min]" (§7.3.12 (6), §7.3.13 (3)).
+        profile_velocity: VelocityUnit::RevPerMinute { scale: 0.01 },
+        homing_velocity: VelocityUnit::RevPerMinute { scale: 0.01 },
+        // 6083h/6084h/6085h/609Ah: "a time for the servo motor to reach the rated speed", ms
+        // (§7.3.12 (7)(8), §7.3.13 (4)); the rated speed is the motor's (MANUAL GAP:
+        // REC_RATED_SPEED_RPM).
+        acceleration: crate::cia402::AccelUnit::MillisecondsTo {
+            rpm: REC_RATED_SPEED_RPM,
+        },
+        // 6087h: "Unit: 0.1%/s (rated torque of 100%)" (§5.4.8 (1)).
+        torque_slope: crate::cia402::TorqueSlopeUnit::PerMillePerSecond,
+    }),
 };
+
+/// **MANUAL GAP** \[REC\]: the rated speed the ramp time constants (6083h, 6084h, 6085h,
+/// 609Ah) refer to is the motor's, which this manual does not give; 3000 r/min, the rated speed
+/// of the HG-KR/HG-MR motors the MR-J4 rotary series is usually combined with (the emulated
+/// motor's too).
+pub const REC_RATED_SPEED_RPM: f64 = 3000.0;
 
 // ============================================================================================
 // Start-up (§1.4.2, §3.3 notes, §5.9, §6.2)

@@ -762,6 +762,9 @@ impl EmulatedDrive {
         });
         self.od.set_quirks(quirks);
         self.fsa = Fsa::with_state(self.fsa_config(), self.fsa.state());
+        if quirks.has(Quirk::NoHomeSwitch) {
+            self.world.home_switch_rev = None;
+        }
         self
     }
 

@@ -601,6 +601,12 @@ pub fn run(
                     ))
                 });
             }
+            (_, Some(StopReason::HomingFailed { axis })) => {
+                outcome = Outcome::DriveFault;
+                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
+                ended_by = entry(HistoryKind::Homing, pos)
+                    .or_else(|| Some(format!("homing of {} failed", drive_name(axis))));
+            }
             (CycleEnd::DriveLeftOp { device, .. }, _)
             | (_, Some(StopReason::DriveLeftOp { device })) => {
                 outcome = Outcome::DriveFault;
