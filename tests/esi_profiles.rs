@@ -192,22 +192,18 @@ fn read_only_cycle_time_and_init_commands_in_file_order() {
     assert!(p.init_cmds[2].disabled);
 }
 
-/// A configuration value for the object of a `Fixed` InitCmd is refused before anything is
-/// written, naming the drive, the object, the InitCmd's line and comment.
+/// A configuration value for the object of a `Fixed` InitCmd is refused when the configuration
+/// is checked, naming the key, the object, the InitCmd's line and comment.
 #[test]
 fn a_value_for_a_fixed_init_command_object_is_refused() {
-    use ecdrive::app::ethercat::tools::run::{RunOptions, run};
     let text = run_config("Taiga_TX7.xml", "csp", CSP_MOVE)
         .replace("esi = ", "sdos = { \"0x2010:00\" = 500 }\nesi = ");
-    let cfg =
-        ecdrive::app::config::parse(&text, &path("run.toml")).unwrap_or_else(|e| panic!("{e}"));
-    let stop = std::sync::atomic::AtomicBool::new(false);
-    let e = match run(&cfg, &RunOptions::default(), &stop, &mut |_| {}) {
-        Err(e) => e.to_string(),
-        Ok(r) => format!("{:?}: {}", r.outcome, r.reason),
-    };
+    let e = ecdrive::app::config::parse(&text, &path("run.toml"))
+        .expect_err("a value for a Fixed InitCmd's object")
+        .to_string();
     for part in [
-        "drive 0",
+        "run.toml line ",
+        "drive[0].sdos",
         "0x2010:00",
         "InitCmd at line",
         "Fixed",
@@ -394,7 +390,7 @@ fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
     std::fs::write(dir.join("bad.xml"), with(&format!("{good}{bad}"))).unwrap();
     let cfg = |file: &str| {
         let text = format!(
-            "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n\
+            "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\nloss_detection = false\n\
              [[drive]]\nposition = 0\nesi = \"{file}\"\nmode = \"csp\"\n\
              program = [{{ step = \"move\", by = 100000, velocity = 1000000, acceleration = 10000000 }}]\n"
         );
@@ -408,7 +404,7 @@ fn a_run_on_a_profile_from_the_esi_sends_its_init_commands() {
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
     // The built-in profile refined by the same file: the manual's profile (its key, its
     // start-up values) with the file's InitCmd; it runs the same move.
-    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n\
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\nloss_detection = false\n\
          [[drive]]\nposition = 0\nprofile = \"mr-j4-tm\"\nesi = \"good.xml\"\nmode = \"csp\"\n\
          program = [{ step = \"move\", by = 100000, velocity = 1000000, acceleration = 10000000 }]\n";
     let refined = ecdrive::app::config::parse(text, dir.join("run.toml").to_str().unwrap())

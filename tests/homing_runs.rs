@@ -193,3 +193,34 @@ fn home_steps_are_checked_with_the_configuration() {
     // 1 rev/s = 60 r/min = 6000 × 0.01 r/min.
     assert_eq!(get(0x6099, 1), Some(ecdrive::od::Value::Uint(6000)));
 }
+
+/// A home step after a move, away from where the drive started: homing redefines the position,
+/// and nothing from before the home is commanded after it (the following-error limit of 5°
+/// would stop the run on any jump).
+#[test]
+fn a_home_step_after_a_move_goes_on_without_a_jump() {
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\", \"bdhde\"]\n\
+                loss_detection = false\n\
+                [[drive]]\nposition = 0\nmode = \"csp\"\n\
+                units = { name = \"deg\", counts_per_unit = 11650.844444 }\n\
+                limits = { following_error = 5 }\nprogram = [\n\
+                { step = \"move\", by = 360, velocity = 720, acceleration = 7200 },\n\
+                { step = \"home\", method = 19, speed_switch = 1440, speed_zero = 90, acceleration = 7200 },\n\
+                { step = \"move\", to = 90, velocity = 360, acceleration = 3600 },\n]\n\
+                [[drive]]\nposition = 1\nmode = \"csp\"\n\
+                units = { name = \"deg\", counts_per_unit = 2912.711111 }\n\
+                limits = { following_error = 5 }\nprogram = [\n\
+                { step = \"move\", by = -360, velocity = 720, acceleration = 7200 },\n\
+                { step = \"home\", method = 19, speed_switch = 1440, speed_zero = 90, acceleration = 7200 },\n\
+                { step = \"move\", to = -45, velocity = 360, acceleration = 3600 },\n]\n";
+    let cfg =
+        ecdrive::app::config::parse(text, "after_move.toml").unwrap_or_else(|e| panic!("{e}"));
+    let stop = AtomicBool::new(false);
+    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    for d in &r.drives {
+        assert_eq!(d.steps_done, 3, "{}: {:?}", d.name, d.errors);
+        let fe = d.max_following_error_units.unwrap_or(f64::MAX);
+        assert!(fe < 5.0, "{}: following error {fe}°", d.name);
+    }
+}

@@ -320,6 +320,10 @@ enum ProgramState {
     Running,
 }
 
+/// **\[REC\]** How long a program's home step may take before it counts as failed: two
+/// minutes (a search over a long axis at creep speed), whatever the cycle time.
+const HOMING_TIMEOUT: Duration = Duration::from_secs(120);
+
 /// Where a program's `home` step is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum HomeRun {
@@ -483,7 +487,11 @@ impl AxisRt {
             velocity_unit: d.profile.units.velocity_position_per_s(),
             runner: Runner::new(d.setup.program.clone(), d.setup.mode),
             program: ProgramState::Idle,
-            homing: cia402::Homing::default(),
+            homing: cia402::Homing::new(cia402::HomingConfig {
+                timeout_cycles: u32::try_from(HOMING_TIMEOUT.as_nanos() / cycle.as_nanos().max(1))
+                    .unwrap_or(u32::MAX),
+                ..cia402::HomingConfig::default()
+            }),
             home: HomeRun::Idle,
             homing_failure: caps.homing_failure,
             hold: Sample::default(),
@@ -792,7 +800,14 @@ impl AxisRt {
                 self.program = ProgramState::Idle;
                 ev.emit(EventKind::ProgramDone { axis: i as u16 });
             }
-            Tick::Home { method } => self.home_step(i, method, st, actual, ctx, ev),
+            Tick::Home { method } => {
+                // Homing moves the drive on its own and redefines its position: the held
+                // set-point follows the actual one, so nothing from before the home is ever
+                // commanded after it.
+                self.home_step(i, method, st, actual, ctx, ev);
+                self.hold = actual;
+                sp = Some(actual);
+            }
         }
         let idx = self.runner.step_index() as u16;
         if idx != self.tel.program_step {
@@ -821,13 +836,22 @@ impl AxisRt {
         match self.home {
             HomeRun::Idle => {
                 self.home = HomeRun::ToHm;
-                if self.axis.request_mode(OperationMode::Homing).is_err() {
+                if let Err(e) = self.axis.request_mode(OperationMode::Homing) {
                     self.home = HomeRun::Idle;
                     self.program = ProgramState::Idle;
                     ev.emit(EventKind::CommandRefused {
                         axis: i as u16,
-                        why: "the program's home step was refused: the drive has no homing mode",
+                        why: match e {
+                            cia402::AxisError::ModeNotSupported { .. } => {
+                                "the program's home step was refused: the drive has no homing mode"
+                            }
+                            cia402::AxisError::ModeSwitchInProgress { .. } => {
+                                "the program's home step was refused: another mode switch was under way"
+                            }
+                            _ => "the program's home step was refused by the axis",
+                        },
                     });
+                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
                 }
             }
             HomeRun::ToHm => {
@@ -852,6 +876,7 @@ impl AxisRt {
                             axis: i as u16,
                             why: "the program stopped: the switch back from homing failed",
                         });
+                        self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
                     }
                 }
                 Some(outcome) => {
@@ -877,6 +902,16 @@ impl AxisRt {
                     self.hold = actual;
                 }
             }
+        }
+    }
+
+    /// Leave a home step: controlword bit 4 drops (homing interrupted), nothing stays armed
+    /// for a later run of the program.
+    fn abort_home(&mut self) {
+        if self.home != HomeRun::Idle {
+            self.homing.stop();
+            self.axis.set_mode_bits(cia402::ControlWord::empty());
+            self.home = HomeRun::Idle;
         }
     }
 
@@ -914,6 +949,20 @@ impl AxisRt {
                         }
                     }
                 }
+                cia402::Event::ModeSwitchFailed(f)
+                    if matches!(self.home, HomeRun::ToHm | HomeRun::Back) =>
+                {
+                    // The switch into or out of hm failed: the home step cannot go on.
+                    self.home = HomeRun::Idle;
+                    self.program = ProgramState::Idle;
+                    if f.reason != cia402::ModeSwitchFailure::Fault {
+                        ev.emit(EventKind::CommandRefused {
+                            axis: i as u16,
+                            why: "the program stopped: the switch into or out of homing mode failed",
+                        });
+                        self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+                    }
+                }
                 cia402::Event::ModeSwitchFailed(f) if self.requested_mode.is_some() => {
                     // The program asked for this switch and cannot go on without it. A fault
                     // cut it short: the fault itself is what gets reported.
@@ -928,6 +977,20 @@ impl AxisRt {
                 }
                 cia402::Event::Fault { .. } if !ctx.ending => {
                     self.program = ProgramState::Idle;
+                    if let HomeRun::Running { method } = self.home {
+                        // A drive that faults on a homing error (the BDHDE's 0x6100): the home
+                        // step's account first, the fault after it.
+                        ev.emit(EventKind::HomingFailed {
+                            axis: i as u16,
+                            method,
+                            outcome: self
+                                .homing
+                                .outcome()
+                                .unwrap_or(cia402::HomingOutcome::Aborted),
+                            drive_says: self.homing_failure,
+                        });
+                    }
+                    self.abort_home();
                     ev.emit(EventKind::Axis {
                         axis: i as u16,
                         event: e,
@@ -1104,6 +1167,7 @@ impl AxisRt {
     /// timeout's).
     fn begin_stop(&mut self, kind: StopKind, tick: u64, cycle: u64) {
         self.program = ProgramState::Idle;
+        self.abort_home();
         let st = self.axis.status();
         if !st.state.is_some_and(State::is_energised) {
             self.axis.request_disable();
@@ -1152,11 +1216,13 @@ impl AxisRt {
             }
             Command::Disable(ax) if ax.includes(i) => {
                 self.program = ProgramState::Idle;
+                self.abort_home();
                 self.axis.request_disable();
                 None
             }
             Command::QuickStop(ax) if ax.includes(i) => {
                 self.program = ProgramState::Idle;
+                self.abort_home();
                 self.axis.request_quick_stop();
                 None
             }
@@ -1178,11 +1244,13 @@ impl AxisRt {
                 }
                 self.runner.restart();
                 self.requested_mode = None;
+                self.abort_home();
                 self.program = ProgramState::Pending;
                 None
             }
             Command::HoldProgram(ax) if ax.includes(i) => {
                 self.program = ProgramState::Idle;
+                self.abort_home();
                 None
             }
             Command::Setpoint(axis, v) if axis as usize == i => {

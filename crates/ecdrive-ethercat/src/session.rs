@@ -427,15 +427,7 @@ impl Decoder {
             } => (
                 self.drive(axis),
                 true,
-                format!(
-                    "homing (method {method}) failed: {}{}",
-                    crate::telemetry::homing_outcome_text(outcome),
-                    if drive_says.is_empty() {
-                        String::new()
-                    } else {
-                        format!("; the drive's manual names it {drive_says}")
-                    }
-                ),
+                crate::telemetry::homing_failure_text(method, outcome, drive_says),
             ),
             EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
                 (self.drive(axis), app_error(&e.kind), app_text(&e.kind))

@@ -448,6 +448,24 @@ fn homing_outcome_name<S: serde::Serializer>(
     s.serialize_str(homing_outcome_text(*o))
 }
 
+/// A failed home step in words: the method, how the run ended, and the drive manual's name for
+/// the failure when it gives one.
+pub fn homing_failure_text(
+    method: i8,
+    outcome: crate::cia402::HomingOutcome,
+    drive_says: &str,
+) -> String {
+    let named = if drive_says.is_empty() {
+        String::new()
+    } else {
+        format!("; the drive's manual names it {drive_says}")
+    };
+    format!(
+        "homing (method {method}) failed: {}{named}",
+        homing_outcome_text(outcome)
+    )
+}
+
 /// A homing run's end in words.
 pub fn homing_outcome_text(o: crate::cia402::HomingOutcome) -> &'static str {
     use crate::cia402::HomingOutcome as H;

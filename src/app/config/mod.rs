@@ -1199,8 +1199,36 @@ fn drive(
             sdos.push((addr, value));
         }
     }
-    // The home steps' writes go first: a start-up value the file gives for the same object
-    // is written after them and wins.
+    // A start-up value for an object a home step writes would silently change the homing.
+    if has_home
+        && let Some((a, _)) = sdos
+            .iter()
+            .find(|(a, _)| homing.iter().any(|(h, _)| h == a))
+    {
+        let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
+        return Err(cx.err(
+            span,
+            key("sdos"),
+            format!("{a} is written by the program's home step: give it there, not in sdos"),
+        ));
+    }
+    // A value for the object of one of the ESI file's Fixed InitCmds.
+    if let Some(p) = profile
+        && let Some(ic) = p.bus.init_cmds.iter().find(|ic| {
+            ic.fixed && !ic.writes_mapping() && sdos.iter().any(|(a, _)| *a == ic.address)
+        })
+    {
+        let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
+        return Err(cx.err(
+            span,
+            key("sdos"),
+            format!(
+                "{} is set by the {} and is Fixed: the configuration may not write it",
+                ic.address,
+                ic.describe()
+            ),
+        ));
+    }
     sdos.splice(0..0, homing);
     Ok((
         DriveSetup {
@@ -1525,22 +1553,36 @@ fn homing_writes(
         ));
     };
     let u = &p.units;
-    let speed = |v: f64| -> Value {
-        let rps = v * k / u.position_per_rev;
-        Value::Uint(u.from_rev_per_s(pu.homing_velocity, rps).round().max(0.0) as u64)
+    // Each value in the drive's unit must be a whole number the object holds (UNSIGNED32)
+    // and not 0: a speed of 0 never moves, an acceleration of 0 means something else.
+    let fits = |what: &str, obj: &str, v: f64| -> Result<Value, (usize, String)> {
+        let r = v.round();
+        if r >= 1.0 && r <= f64::from(u32::MAX) {
+            Ok(Value::Uint(r as u64))
+        } else {
+            Err((
+                n,
+                format!(
+                    "the home step's {what} is {r} in the {}'s unit of {obj}: it must be 1 to {}",
+                    p.name,
+                    u32::MAX
+                ),
+            ))
+        }
     };
+    let speed = |v: f64| u.from_rev_per_s(pu.homing_velocity, v * k / u.position_per_rev);
     let acc_rev_s2 = acc * k / u.position_per_rev;
     let acc_value = match pu.acceleration {
-        AccelUnit::MillisecondsTo { rpm } => (rpm / 60.0 / acc_rev_s2 * 1000.0).round(),
-        AccelUnit::RpmPerSecond => (acc_rev_s2 * 60.0).round(),
-        AccelUnit::PositionPerSecond2 => (acc * k).round(),
+        AccelUnit::MillisecondsTo { rpm } => rpm / 60.0 / acc_rev_s2 * 1000.0,
+        AccelUnit::RpmPerSecond => acc_rev_s2 * 60.0,
+        AccelUnit::PositionPerSecond2 => acc * k,
     };
     let a = ObjectAddress::new;
     Ok(vec![
         (a(0x6098, 0), Value::Int(i64::from(method))),
-        (a(0x6099, 1), speed(v1)),
-        (a(0x6099, 2), speed(v2)),
-        (a(0x609A, 0), Value::Uint(acc_value.max(0.0) as u64)),
+        (a(0x6099, 1), fits("speed_switch", "0x6099:01", speed(v1))?),
+        (a(0x6099, 2), fits("speed_zero", "0x6099:02", speed(v2))?),
+        (a(0x609A, 0), fits("acceleration", "0x609A", acc_value)?),
     ])
 }
 
@@ -1596,10 +1638,12 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
         raw::Step::Home {
             speed_switch,
             speed_zero,
+            acceleration,
             ..
         } => {
             over("speed_switch", speed_switch, l.max_velocity, "/s")?;
-            over("speed_zero", speed_zero, l.max_velocity, "/s")
+            over("speed_zero", speed_zero, l.max_velocity, "/s")?;
+            over("acceleration", acceleration, l.max_acceleration, "/s²")
         }
         raw::Step::Mode { .. } | raw::Step::Dwell { .. } => Ok(()),
     }

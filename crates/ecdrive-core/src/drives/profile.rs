@@ -136,7 +136,7 @@ pub struct InitCommand {
     pub comment: &'static str,
     /// Complete access.
     pub complete_access: bool,
-    /// Line of the `<InitCmd>` in the file.
+    /// Line of the `<InitCmd>` in the file (0: written by hand in a profile file).
     pub line: u32,
     /// `<Timeout>`, ms: how long the drive may take to answer (None: the master's SDO
     /// timeout).
@@ -166,12 +166,12 @@ impl InitCommand {
     /// How it is named in errors and logs: line, transitions and the file's comment.
     pub fn describe(&self) -> String {
         let t: Vec<&str> = self.transitions.iter().map(|t| t.name()).collect();
-        format!(
-            "InitCmd at line {} of the ESI file, {}: {:?}",
-            self.line,
-            t.join(","),
-            self.comment
-        )
+        let from = if self.line == 0 {
+            "InitCmd of the profile file".to_string()
+        } else {
+            format!("InitCmd at line {} of the ESI file", self.line)
+        };
+        format!("{from}, {}: {:?}", t.join(","), self.comment)
     }
 }
 

@@ -436,6 +436,9 @@ impl Motion {
     /// Where the method ends on the machine ([`crate::machine::homing_end`]); `None` when it
     /// cannot (unknown method, no index pulse, no home switch to find).
     fn homing_reference(&self, method: i8, hs: &HomingSupport) -> Option<f64> {
+        // **\[REC\]** A vendor method −1 (the BLV-R lists it) ends on the home switch's edge,
+        // as method 19 does.
+        let method = if method == -1 { 19 } else { method };
         match crate::machine::homing_end(method, &self.world, self.pos, self.ppr, hs.index_pulse) {
             crate::machine::HomingEnd::Reference(r) => Some(r),
             _ => None,
