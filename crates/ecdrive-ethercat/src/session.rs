@@ -419,15 +419,10 @@ impl Decoder {
             }
             EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
             EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
-            EventKind::HomingFailed {
-                axis,
-                method,
-                outcome,
-                drive_says,
-            } => (
+            EventKind::HomingFailed { axis, .. } => (
                 self.drive(axis),
                 true,
-                crate::telemetry::homing_failure_text(method, outcome, drive_says),
+                crate::telemetry::event_text(&e.kind),
             ),
             EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
                 (self.drive(axis), app_error(&e.kind), app_text(&e.kind))

@@ -448,6 +448,19 @@ fn homing_outcome_name<S: serde::Serializer>(
     s.serialize_str(homing_outcome_text(*o))
 }
 
+/// The text of an event that carries its own account (a failed home step); empty for others.
+pub fn event_text(kind: &EventKind) -> String {
+    match *kind {
+        EventKind::HomingFailed {
+            method,
+            outcome,
+            drive_says,
+            ..
+        } => homing_failure_text(method, outcome, drive_says),
+        _ => String::new(),
+    }
+}
+
 /// A failed home step in words: the method, how the run ended, and the drive manual's name for
 /// the failure when it gives one.
 pub fn homing_failure_text(
