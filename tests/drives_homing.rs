@@ -277,3 +277,39 @@ fn the_probe_on_the_index_pulse_where_the_drive_has_it() {
         }
     }
 }
+
+/// Homing interrupted (bit 4 dropped mid-way): the drive decelerates on the homing
+/// acceleration (MR-J4-TM §5.7: "hm: The servo motor decelerates to a stop with Homing
+/// acceleration (609Ah)"), not at once, and then reports "interrupted or not started" (bit 10
+/// only, §5.4.9 (3)).
+#[test]
+fn an_interrupted_homing_decelerates_then_reports_interrupted() {
+    for p in [MR, BD] {
+        let mut w = on(p, MACHINE);
+        let v = vpr(p);
+        w.write_u32(0, 0x6099, 1, (4.0 * v) as u32).unwrap();
+        w.write_u32(0, 0x6099, 2, (0.5 * v) as u32).unwrap();
+        w.download(0, 0x6098, 0, &[19]).unwrap();
+        enable(&mut w, 6);
+        w.command(0, 0x001F);
+        for _ in 0..200 {
+            w.cycle();
+        }
+        let running = w.drive(0).speed_rev_s();
+        assert!(running > 3.0, "{}: searching at {running} rev/s", p.name);
+        w.command(0, 0x000F);
+        let braking = w.drive(0).speed_rev_s();
+        assert!(
+            braking > 0.5 && braking < running,
+            "{}: {braking} rev/s two cycles after bit 4 dropped (from {running})",
+            p.name
+        );
+        for _ in 0..500 {
+            w.cycle();
+        }
+        let stopped = w.drive(0).speed_rev_s();
+        assert!(stopped.abs() < 1e-6, "{}: {stopped} rev/s", p.name);
+        let sw = cyclic::sw(w.inputs(0));
+        assert_eq!(sw & 0x3400, 0x0400, "{}: interrupted, 0x{sw:04X}", p.name);
+    }
+}

@@ -13,7 +13,7 @@
 //! | synchronisation | the DC `<OpMode>` with SYNC0 (AssignActivate), free run if offered, the cycle times it lists; 0x1C32:01/02 written only where the dictionary makes them writable |
 //! | InitCmds | `<InitCmd>`s with their transitions, in file order ([`InitCommand`]) |
 //! | complete access | `<CoE CompleteAccess>` |
-//! | units | CiA 402's (increments, increments/s, ‰ of rated torque); increments per revolution from 0x608F's defaults ([`units_from`]) |
+//! | units | CiA 402's (position units, units/s, ‰ of rated torque); units per revolution from 0x6092/0x6091's defaults, else 0x608F's ([`units_from`]) |
 //!
 //! Profiles built this way live for the rest of the process (the profile type holds `'static`
 //! data): a configuration builds each once, at start-up, never in the cycle.
@@ -107,22 +107,44 @@ fn default_u64(dict: &[ObjectDesc], a: ObjectAddress) -> Option<u64> {
     u64::try_from(e.default.as_i128()?).ok()
 }
 
-/// The units the file gives: CiA 402's own (position in increments, velocity in increments per
-/// second, torque in per mille of rated torque), with the increments per motor revolution from
-/// the default of 0x608F (position encoder resolution: :01 increments per :02 revolutions)
-/// when the dictionary gives both. Without it a revolution is 1 increment, as in the generic
-/// profile, and only the drive's own units apply.
+/// The units the file gives: CiA 402's own (position units, position units per second, per
+/// mille of rated torque), with the position units per motor revolution from the dictionary's
+/// defaults:
+/// - with the factor group's feed constant 0x6092 (feed :01 per :02 driving-shaft
+///   revolutions), that feed per motor revolution, through the gear ratio 0x6091 (:01 motor
+///   per :02 driving-shaft revolutions, 1:1 when absent);
+/// - else, without 0x6091/0x6092 (position in encoder increments), the encoder resolution
+///   0x608F (:01 increments per :02 revolutions).
+///
+/// Without either a revolution is 1 unit, as in the generic profile, and only the drive's own
+/// units apply.
 pub fn units_from(dict: &[ObjectDesc]) -> crate::cia402::Units {
     let generic = super::generic::UNITS;
-    let inc = default_u64(dict, ObjectAddress::new(0x608F, 1));
-    let revs = default_u64(dict, ObjectAddress::new(0x608F, 2));
-    match (inc, revs) {
-        (Some(i), Some(r)) if i > 0 && r > 0 => crate::cia402::Units {
-            position_name: "increment",
-            position_per_rev: i as f64 / r as f64,
+    let get = |i: u16, s: u8| default_u64(dict, ObjectAddress::new(i, s)).filter(|v| *v > 0);
+    let has = |i: u16| dict.iter().any(|o| o.index == i);
+    let per_rev = if has(0x6092) {
+        match (get(0x6092, 1), get(0x6092, 2)) {
+            (Some(feed), Some(shaft)) => {
+                let (motor, driven) = (get(0x6091, 1).unwrap_or(1), get(0x6091, 2).unwrap_or(1));
+                Some(feed as f64 / shaft as f64 * driven as f64 / motor as f64)
+            }
+            _ => None,
+        }
+    } else if !has(0x6091) {
+        match (get(0x608F, 1), get(0x608F, 2)) {
+            (Some(i), Some(r)) => Some(i as f64 / r as f64),
+            _ => None,
+        }
+    } else {
+        None
+    };
+    match per_rev {
+        Some(n) => crate::cia402::Units {
+            position_name: "position unit",
+            position_per_rev: n,
             ..generic
         },
-        _ => generic,
+        None => generic,
     }
 }
 

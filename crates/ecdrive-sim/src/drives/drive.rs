@@ -150,6 +150,9 @@ enum Homing {
         failing: bool,
         speed: f64,
     },
+    /// Interrupted (bit 4 dropped, or halt): decelerating at 0x609A from `speed` units/s;
+    /// then Idle.
+    Stopping { speed: f64 },
     /// Homing attained: the reference reads as the home position.
     Attained,
     /// Homing failed.
@@ -1259,7 +1262,7 @@ impl EmulatedDrive {
         } = self.homing
         {
             if !bit4 || m.halt {
-                self.homing = Homing::Idle;
+                self.homing = Homing::Stopping { speed };
             } else {
                 let vpr = self.velocity_per_rev_s();
                 let fast = self.od.dict().uint(obj::HOMING_SPEED_SWITCH).unwrap_or(0) as f64;
@@ -1288,6 +1291,19 @@ impl EmulatedDrive {
                     return;
                 }
             }
+        }
+        if let Homing::Stopping { speed } = self.homing {
+            // An interrupted homing decelerates on the homing acceleration (MR-J4-TM §5.7:
+            // "hm: The servo motor decelerates to a stop with Homing acceleration (609Ah)").
+            let acc = self.ramp_rev_s2(obj::HOMING_ACCELERATION, None) * upr;
+            let step = if acc.is_finite() { acc * dt } else { f64::MAX };
+            let v = approach(speed, 0.0, step);
+            self.demand += v * dt;
+            self.homing = if v == 0.0 {
+                Homing::Idle
+            } else {
+                Homing::Stopping { speed: v }
+            };
         }
         self.plan_position(dt);
     }
@@ -1511,7 +1527,7 @@ impl EmulatedDrive {
             // started, 011 completed, 10x error (velocity not 0 / 0).
             6 => match self.homing {
                 Homing::Idle => sw |= StatusWord::TARGET_REACHED.bits(),
-                Homing::Running { .. } => {}
+                Homing::Running { .. } | Homing::Stopping { .. } => {}
                 Homing::Attained => {
                     sw |= StatusWord::HOMING_ATTAINED.bits();
                     if self.motor.stopped() {
