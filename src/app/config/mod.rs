@@ -195,15 +195,23 @@ pub fn parse_duration(text: &str) -> Result<Duration, String> {
 
 /// Read and check a configuration file.
 pub fn load(path: &Path) -> Result<RunConfig, ConfigError> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
-        file: file.clone(),
-        line: 0,
-        column: 0,
-        key: None,
-        message: format!("cannot read the file: {e}"),
-    })?;
+    let (text, file) = read_text(path, "the file")?;
     parse(&text, &file)
+}
+
+/// The text of `path` and its name as shown, or an error saying `what` cannot be read.
+fn read_text(path: &Path, what: &str) -> Result<(String, String), ConfigError> {
+    let file = path.display().to_string();
+    match std::fs::read_to_string(path) {
+        Ok(text) => Ok((text, file)),
+        Err(e) => Err(ConfigError {
+            file,
+            line: 0,
+            column: 0,
+            key: None,
+            message: format!("cannot read {what}: {e}"),
+        }),
+    }
 }
 
 struct Ctx<'a> {
@@ -739,6 +747,25 @@ fn esi_mapping(
     }
 }
 
+/// The built-in profile `p` names, or an error listing the known ones.
+fn builtin_profile(
+    cx: &Ctx<'_>,
+    p: &Spanned<String>,
+    key: &str,
+) -> Result<&'static DriveProfile, ConfigError> {
+    crate::drives::by_key(p.get_ref()).ok_or_else(|| {
+        cx.err(
+            p.span(),
+            key,
+            format!(
+                "unknown drive profile {:?}; known: {}",
+                p.get_ref(),
+                profile_keys()
+            ),
+        )
+    })
+}
+
 fn profile_keys() -> String {
     let mut keys: Vec<&str> = crate::drives::all().iter().map(|p| p.key).collect();
     if let Some(g) = crate::drives::by_key("generic-cia402") {
@@ -814,17 +841,7 @@ fn drive(
         // A built-in profile refined by the drive's ESI file: its InitCmds and the objects
         // its dictionary adds.
         (Some(e), Some(p)) => {
-            let base = crate::drives::by_key(p.get_ref()).ok_or_else(|| {
-                cx.err(
-                    p.span(),
-                    key("profile"),
-                    format!(
-                        "unknown drive profile {:?}; known: {}",
-                        p.get_ref(),
-                        profile_keys()
-                    ),
-                )
-            })?;
+            let base = builtin_profile(cx, p, &key("profile"))?;
             let sel = match select {
                 Selector::Identity { .. } => select,
                 _ => Selector::Identity {
@@ -876,17 +893,7 @@ fn drive(
             Some(p)
         }
         (None, p) => match p {
-            Some(p) => Some(crate::drives::by_key(p.get_ref()).ok_or_else(|| {
-                cx.err(
-                    p.span(),
-                    key("profile"),
-                    format!(
-                        "unknown drive profile {:?}; known: {}",
-                        p.get_ref(),
-                        profile_keys()
-                    ),
-                )
-            })?),
+            Some(p) => Some(builtin_profile(cx, p, &key("profile"))?),
             None => match select {
                 Selector::Identity {
                     vendor_id,

@@ -8,7 +8,7 @@
 //! synchronisation, the cyclic mapping (in the syntax of `[[drive]] mapping`) and the
 //! InitCmds.
 
-use super::{ConfigError, Ctx, build_mapping, deserialize, raw};
+use super::{ConfigError, Ctx, build_mapping, deserialize, raw, read_text};
 use crate::drives::esi_profile::{self, EsiProfileError};
 use crate::drives::{CycleTimeObject, DriveProfile, InitCommand};
 use crate::esi::{Device, EsiFile, Transition};
@@ -249,14 +249,7 @@ fn leak(s: &str) -> &'static str {
 
 /// Load the profile file at `path` (every problem named with the file's line and column).
 pub fn load(path: &Path) -> Result<&'static DriveProfile, ConfigError> {
-    let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| ConfigError {
-        file: file.clone(),
-        line: 0,
-        column: 0,
-        key: None,
-        message: format!("cannot read the profile file: {e}"),
-    })?;
+    let (text, file) = read_text(path, "the profile file")?;
     let cx = Ctx {
         text: &text,
         file: &file,

@@ -38,6 +38,20 @@ pub struct EsiProfileError {
     pub reason: String,
 }
 
+impl EsiProfileError {
+    /// The error for device `dev` of the file named `source`.
+    pub fn new(source: &str, dev: &Device, reason: String) -> Self {
+        Self {
+            file: source.to_string(),
+            device: format!(
+                "{} (product 0x{:08X})",
+                dev.type_.name_text, dev.type_.product_code
+            ),
+            reason,
+        }
+    }
+}
+
 fn leak(s: &str) -> &'static str {
     String::leak(s.to_owned())
 }
@@ -155,14 +169,7 @@ pub fn from_esi(
     dev: &Device,
     source: &str,
 ) -> Result<&'static DriveProfile, EsiProfileError> {
-    let err = |reason: String| EsiProfileError {
-        file: source.to_string(),
-        device: format!(
-            "{} (product 0x{:08X})",
-            dev.type_.name_text, dev.type_.product_code
-        ),
-        reason,
-    };
+    let err = |reason: String| EsiProfileError::new(source, dev, reason);
     if !dev.has_coe() {
         return Err(err(
             "it has no CoE mailbox: a CiA 402 drive is configured over CoE".into(),
@@ -345,14 +352,7 @@ pub fn refine(
     dev: &Device,
     source: &str,
 ) -> Result<&'static DriveProfile, EsiProfileError> {
-    let err = |reason: String| EsiProfileError {
-        file: source.to_string(),
-        device: format!(
-            "{} (product 0x{:08X})",
-            dev.type_.name_text, dev.type_.product_code
-        ),
-        reason,
-    };
+    let err = |reason: String| EsiProfileError::new(source, dev, reason);
     let id = base.bus.identity;
     if (file.vendor.id, dev.type_.product_code) != (id.vendor_id, id.product_code) {
         return Err(err(format!(
