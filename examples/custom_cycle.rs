@@ -12,7 +12,7 @@ use ecdrive::link::FrameLink;
 use ecdrive::link::RawSocket;
 use ecdrive::sim::transport::SegmentLink;
 use ecdrive::{
-    AppCycle, Axes, Command, CycleApp, CyclicMode, DriveSetup, Master, MasterConfig, Selector,
+    AppCycle, Axes, Command, CycleApp, DriveSetup, Master, MasterConfig, RunMode, Selector,
     SetpointLimits, State, StopKind,
 };
 use std::sync::{Arc, Mutex};
@@ -50,7 +50,7 @@ fn config(app: Arc<Mutex<Sine>>) -> MasterConfig {
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
     for i in 0..2 {
         cfg.startup.drives.push(DriveSetup {
-            mode: CyclicMode::Csp,
+            mode: RunMode::Csp,
             // The sine's peak velocity is 2π·f·A ≈ 126 000 counts/s: leave room, refuse a jump.
             limits: SetpointLimits {
                 max_velocity: Some(200_000.0),

@@ -12,7 +12,7 @@
 use ecdrive::link::{FrameLink, RawSocket};
 use ecdrive::sim::transport::SegmentLink;
 use ecdrive::{
-    Axes, Command, CyclicMode, DriveSetup, HistoryKind, Master, MasterConfig, Selector, State,
+    Axes, Command, DriveSetup, HistoryKind, Master, MasterConfig, RunMode, Selector, State,
     StopKind, Streams,
 };
 use std::sync::{Arc, Mutex};
@@ -26,7 +26,7 @@ fn run<L: FrameLink + Send + 'static>(
     let mut producer = streams.add(0, 50);
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
     cfg.startup.drives.push(DriveSetup {
-        mode: CyclicMode::Csp,
+        mode: RunMode::Csp,
         ..DriveSetup::new(Selector::Position(0))
     });
     cfg.app = Some(Arc::new(Mutex::new(streams)));

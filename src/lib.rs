@@ -34,10 +34,10 @@ pub use ecdrive_sim as sim;
 pub use cia402::{OperationMode, State};
 pub use drives::DriveProfile;
 pub use ecdrive_ethercat::{
-    AppAxis, AppCycle, Axes, AxisTelemetry, Command, CycleApp, CycleTelemetry, CyclicMode,
-    DriveRef, DriveSetup, EntryError, ErrorKind, Event, EventKind, HistoryEntry, HistoryKind,
-    Master, MasterConfig, MasterError, Selector, SessionReport, SetpointLimits, StartFailure, Step,
-    StopKind, StopReason, StreamProducer, Streams, Target, Telemetry,
+    AppAxis, AppCycle, Axes, AxisTelemetry, Command, CycleApp, CycleTelemetry, DriveRef,
+    DriveSetup, EntryError, ErrorKind, Event, EventKind, HistoryEntry, HistoryKind, Master,
+    MasterConfig, MasterError, RunMode, Selector, SessionReport, SetpointLimits, StartFailure,
+    Step, StopKind, StopReason, StreamProducer, Streams, Target, Telemetry,
 };
 pub use link::RawSocket;
 

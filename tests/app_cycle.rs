@@ -8,7 +8,7 @@ use ecdrive::cia402::State;
 use ecdrive::master::session::{Master, MasterConfig, SessionReport};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
-use ecdrive::master::{AppCycle, CycleApp, CyclicMode, EntryError, SetpointLimits, Streams};
+use ecdrive::master::{AppCycle, CycleApp, EntryError, RunMode, SetpointLimits, Streams};
 use ecdrive::od::ObjectAddress;
 use ecdrive::rt::RtSettings;
 use ecdrive::sim::drives::{EmulatedDrive, TargetSample, spec_for};
@@ -45,7 +45,7 @@ fn config(limits: SetpointLimits) -> MasterConfig {
     cfg.cycle.segment_lost_after = 50;
     for i in 0..KEYS.len() {
         cfg.startup.drives.push(DriveSetup {
-            mode: CyclicMode::Csp,
+            mode: RunMode::Csp,
             limits,
             ..DriveSetup::new(Selector::Position(i as u16))
         });

@@ -3,7 +3,7 @@
 
 use ecdrive::app::config::{ConfigError, parse, parse_duration};
 use ecdrive::app::ethercat::tools::Target;
-use ecdrive::master::program::{CyclicMode, Step, Target as MoveTarget};
+use ecdrive::master::program::{RunMode, Step, Target as MoveTarget};
 use ecdrive::master::startup::Selector;
 use std::time::Duration;
 
@@ -89,7 +89,7 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
     let d = &c.master.startup.drives;
     assert_eq!(d.len(), 2);
     assert_eq!(d[0].select, Selector::Position(1));
-    assert_eq!(d[0].mode, CyclicMode::Csv);
+    assert_eq!(d[0].mode, RunMode::Csv);
     // User units: mm at 1000 counts/mm.
     assert_eq!(d[0].following_error_limit, Some(500));
     assert_eq!(
@@ -100,12 +100,7 @@ program = [{ step = "torque", torque = 50, slope = 500, hold = 0.2 }]
             hold: 0.1
         }
     );
-    assert_eq!(
-        d[0].program[1],
-        Step::Mode {
-            mode: CyclicMode::Csp
-        }
-    );
+    assert_eq!(d[0].program[1], Step::Mode { mode: RunMode::Csp });
     assert_eq!(
         d[0].program[2],
         Step::Move {

@@ -21,7 +21,7 @@ use ecdrive::cia402::State;
 use ecdrive::link::FrameLink;
 use ecdrive::link::netns::{VethPair, require_root};
 use ecdrive::master::cycle::CycleHooks;
-use ecdrive::master::program::{CyclicMode, Step, Target};
+use ecdrive::master::program::{RunMode, Step, Target};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
@@ -206,9 +206,7 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
                         acceleration: 1_000_000.0,
                         jerk: None,
                     },
-                    Step::Mode {
-                        mode: CyclicMode::Csv,
-                    },
+                    Step::Mode { mode: RunMode::Csv },
                     Step::Ramp {
                         velocity: 50_000.0,
                         acceleration: 1_000_000.0,

@@ -19,7 +19,7 @@
 
 use ecdrive::cia402::State;
 use ecdrive::drives::DriveProfile;
-use ecdrive::master::program::CyclicMode;
+use ecdrive::master::program::RunMode;
 use ecdrive::master::session::Master;
 use ecdrive::master::telemetry::{Axes, Command, StopKind, Telemetry};
 use ecdrive::od::EntryAccess;
@@ -62,10 +62,20 @@ impl Kind {
     }
 
     /// Modes the device supports (the generic CoE servo: csp and csv).
-    fn modes(self) -> &'static [CyclicMode] {
+    fn modes(self) -> &'static [RunMode] {
         match self {
-            Kind::MrJ4 | Kind::Bdhde => &[CyclicMode::Csp, CyclicMode::Csv, CyclicMode::Cst],
-            Kind::GenericCoe => &[CyclicMode::Csp, CyclicMode::Csv],
+            Kind::MrJ4 => &[RunMode::Csp, RunMode::Csv, RunMode::Cst],
+            // The BDHDE runs every mode in one setting (the MR-J4-TM needs [Pr. PA01] = 2
+            // for the profile modes, and then no cyclic one).
+            Kind::Bdhde => &[
+                RunMode::Csp,
+                RunMode::Csv,
+                RunMode::Cst,
+                RunMode::Pp,
+                RunMode::Pv,
+                RunMode::Tq,
+            ],
+            Kind::GenericCoe => &[RunMode::Csp, RunMode::Csv],
             Kind::GenericIo => &[],
         }
     }
@@ -102,7 +112,7 @@ impl Kind {
 struct Device {
     kind: Kind,
     quirks: Vec<&'static str>,
-    mode: CyclicMode,
+    mode: RunMode,
     /// A mapping override (profiled drives only).
     mapping: Option<Mapping>,
 }
@@ -131,11 +141,11 @@ struct Case {
 
 const A: fn(u16, u8) -> ecdrive::od::ObjectAddress = ecdrive::od::ObjectAddress::new;
 
-fn setpoint(m: CyclicMode) -> ecdrive::od::ObjectAddress {
+fn setpoint(m: RunMode) -> ecdrive::od::ObjectAddress {
     match m {
-        CyclicMode::Csp => A(0x607A, 0),
-        CyclicMode::Csv => A(0x60FF, 0),
-        CyclicMode::Cst => A(0x6071, 0),
+        RunMode::Csp | RunMode::Pp => A(0x607A, 0),
+        RunMode::Csv | RunMode::Pv => A(0x60FF, 0),
+        RunMode::Cst | RunMode::Tq => A(0x6071, 0),
     }
 }
 
@@ -145,7 +155,7 @@ fn setpoint(m: CyclicMode) -> ecdrive::od::ObjectAddress {
 /// drive's limits.
 fn mapping(
     p: &'static DriveProfile,
-    modes: &[CyclicMode],
+    modes: &[RunMode],
     picks: (&[usize], &[usize]),
     pads: (Option<u8>, Option<u8>),
 ) -> Option<Mapping> {
@@ -268,10 +278,10 @@ fn device() -> impl Strategy<Value = Device> {
             let mode = modes
                 .get(mode_pick % modes.len().max(1))
                 .copied()
-                .unwrap_or(CyclicMode::Csp);
+                .unwrap_or(RunMode::Csp);
             let mapping = match (kind.profile(), map) {
                 (Some(p), Some((rx, tx, prx, ptx, all_modes))) => {
-                    let ms: Vec<CyclicMode> = if all_modes {
+                    let ms: Vec<RunMode> = if all_modes {
                         let mut v = vec![mode];
                         v.extend(modes.iter().filter(|m| **m != mode));
                         v
@@ -383,15 +393,18 @@ fn toml(c: &Case) -> String {
 }
 
 /// A short program in the start mode.
-fn program(m: CyclicMode) -> &'static str {
+fn program(m: RunMode) -> &'static str {
     match m {
-        CyclicMode::Csp => {
+        RunMode::Csp => {
             "{ step = \"move\", by = 20000, velocity = 200000, acceleration = 4000000 }"
         }
-        CyclicMode::Csv => {
-            "{ step = \"ramp\", velocity = 20000, acceleration = 400000, hold = 0.05 }"
+        RunMode::Csv => "{ step = \"ramp\", velocity = 20000, acceleration = 400000, hold = 0.05 }",
+        RunMode::Cst => "{ step = \"torque\", torque = 20, hold = 0.05 }",
+        RunMode::Pp => {
+            "{ step = \"pp\", by = [20000, -10000], velocity = 200000, acceleration = 4000000 }"
         }
-        CyclicMode::Cst => "{ step = \"torque\", torque = 20, hold = 0.05 }",
+        RunMode::Pv => "{ step = \"pv\", velocity = 20000, acceleration = 400000, seconds = 0.05 }",
+        RunMode::Tq => "{ step = \"tq\", torque = 20, seconds = 0.05 }",
     }
 }
 
@@ -433,7 +446,7 @@ fn run_case(c: &Case) -> Result<(), TestCaseError> {
     let enabled = |t: &Telemetry| all_axes(t, |s| s == Some(State::OperationEnabled));
     let disabled = |t: &Telemetry| all_axes(t, |s| !s.is_some_and(State::is_energised));
     let mut is_enabled = false;
-    let mut modes: Vec<CyclicMode> = drives.iter().map(|d| d.mode).collect();
+    let mut modes: Vec<RunMode> = drives.iter().map(|d| d.mode).collect();
     for op in &c.ops {
         match *op {
             Op::Enable => {
@@ -465,7 +478,7 @@ fn run_case(c: &Case) -> Result<(), TestCaseError> {
                 let d = drives[n];
                 // A switch while enabled needs the mode object and the target's set-point
                 // mapped (the default mappings carry every mode).
-                let mapped: Vec<CyclicMode> = d
+                let mapped: Vec<RunMode> = d
                     .kind
                     .modes()
                     .iter()
@@ -561,7 +574,7 @@ proptest! {
 
 // ---- named regression cases ------------------------------------------------------------------
 
-fn drive(kind: Kind, mode: CyclicMode) -> Device {
+fn drive(kind: Kind, mode: RunMode) -> Device {
     Device {
         kind,
         quirks: Vec::new(),
@@ -582,7 +595,7 @@ fn every_entry_count_remaps_without_a_mailbox_counter_collision() {
         for extra in 0..=20usize {
             let rx: Vec<usize> = (0..extra / 2).collect();
             let tx: Vec<usize> = (0..extra - extra / 2).collect();
-            let Some(m) = mapping(p, &[CyclicMode::Csp], (&rx, &tx), (None, None)) else {
+            let Some(m) = mapping(p, &[RunMode::Csp], (&rx, &tx), (None, None)) else {
                 continue;
             };
             let n = m.pdos(Direction::Rx)[0].entries.len() + m.pdos(Direction::Tx)[0].entries.len();
@@ -590,7 +603,7 @@ fn every_entry_count_remaps_without_a_mailbox_counter_collision() {
                 continue;
             }
             seen.push(n);
-            let mut d = drive(kind, CyclicMode::Csp);
+            let mut d = drive(kind, RunMode::Csp);
             d.mapping = Some(m);
             let c = Case {
                 devices: vec![d],
@@ -617,14 +630,14 @@ fn every_entry_count_remaps_without_a_mailbox_counter_collision() {
 /// and the generic servo: enable, quick stop, enable, program.
 #[test]
 fn standard_transitions_only_in_a_mixed_segment() {
-    let mut a = drive(Kind::MrJ4, CyclicMode::Csp);
+    let mut a = drive(Kind::MrJ4, RunMode::Csp);
     a.quirks = vec!["no-state-skipping"];
-    let mut b = drive(Kind::Bdhde, CyclicMode::Csv);
+    let mut b = drive(Kind::Bdhde, RunMode::Csv);
     b.quirks = vec!["no-state-skipping"];
-    let mut g = drive(Kind::GenericCoe, CyclicMode::Csp);
+    let mut g = drive(Kind::GenericCoe, RunMode::Csp);
     g.quirks = vec!["no-state-skipping", "cycle-time-read-only"];
     let c = Case {
-        devices: vec![a, drive(Kind::GenericIo, CyclicMode::Csp), b, g],
+        devices: vec![a, drive(Kind::GenericIo, RunMode::Csp), b, g],
         cycle_us: 1000,
         ops: vec![Op::Enable, Op::QuickStopThenEnable, Op::Program],
     };
@@ -654,7 +667,7 @@ fn mapped_limits_the_master_does_not_drive_keep_the_drives_values() {
         vec![Pdo::owned(0x1A00, vec![e(0x6041, 16), e(0x6064, 32)])],
     );
     ecdrive::pdo::validate(&m, &p.pdo_limits, Some(p.dictionary)).unwrap();
-    let mut d = drive(Kind::Bdhde, CyclicMode::Csp);
+    let mut d = drive(Kind::Bdhde, RunMode::Csp);
     d.mapping = Some(m);
     let c = Case {
         devices: vec![d],
@@ -672,7 +685,7 @@ fn mapped_limits_the_master_does_not_drive_keep_the_drives_values() {
 fn a_turning_torque_axis_switches_to_a_position_mode() {
     for kind in [Kind::MrJ4, Kind::Bdhde] {
         let c = Case {
-            devices: vec![drive(kind, CyclicMode::Cst)],
+            devices: vec![drive(kind, RunMode::Cst)],
             cycle_us: 2000,
             ops: vec![
                 Op::Enable,

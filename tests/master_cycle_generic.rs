@@ -4,7 +4,7 @@
 mod support {
     pub mod generic;
 }
-use ecdrive::master::program::CyclicMode;
+use ecdrive::master::program::RunMode;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::StopKind;
@@ -18,7 +18,7 @@ fn cycle_reaches_op_and_stops_to_init() {
     for p in 0..3 {
         cfg.startup.drives.push(DriveSetup {
             profile: Some(&GENERIC_TEST),
-            mode: CyclicMode::Csp,
+            mode: RunMode::Csp,
             ..DriveSetup::new(Selector::Position(p))
         });
     }

@@ -11,7 +11,7 @@ use ecdrive::link::FrameLink;
 use ecdrive::link::netns::{VethPair, require_root};
 use ecdrive::master::cycle::CycleEnd;
 use ecdrive::master::error::ErrorKind;
-use ecdrive::master::program::{CyclicMode, Step, Target};
+use ecdrive::master::program::{RunMode, Step, Target};
 use ecdrive::master::session::{HistoryKind, Master, MasterConfig, SessionReport};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind, Telemetry};
@@ -199,9 +199,7 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
             // 1: settle.
             Step::Dwell { seconds: 0.2 },
             // 2, 3: csv ramp to 1 rev/s and hold.
-            Step::Mode {
-                mode: CyclicMode::Csv,
-            },
+            Step::Mode { mode: RunMode::Csv },
             Step::Ramp {
                 velocity: rev,
                 acceleration: 10.0 * rev,
@@ -214,9 +212,7 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
                 hold: 0.1,
             },
             // 5, 6: cst step of 3 % rated torque and back.
-            Step::Mode {
-                mode: CyclicMode::Cst,
-            },
+            Step::Mode { mode: RunMode::Cst },
             Step::Torque {
                 torque: 30.0,
                 slope: None,
@@ -228,17 +224,13 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
                 hold: 0.1,
             },
             // 8..: brake through csv, back to csp.
-            Step::Mode {
-                mode: CyclicMode::Csv,
-            },
+            Step::Mode { mode: RunMode::Csv },
             Step::Ramp {
                 velocity: 0.0,
                 acceleration: 10.0 * rev,
                 hold: 0.05,
             },
-            Step::Mode {
-                mode: CyclicMode::Csp,
-            },
+            Step::Mode { mode: RunMode::Csp },
             Step::Dwell { seconds: 0.05 },
         ]
     };
@@ -314,13 +306,16 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
             s.torque
         );
         assert_eq!(
-            cyc.modes_run[i],
-            vec![
-                CyclicMode::Csp,
-                CyclicMode::Csv,
-                CyclicMode::Cst,
-                CyclicMode::Csv,
-                CyclicMode::Csp
+            cyc.modes_run[i]
+                .iter()
+                .map(|m| RunMode::from_code(m.as_i8()))
+                .collect::<Vec<_>>(),
+            [
+                Some(RunMode::Csp),
+                Some(RunMode::Csv),
+                Some(RunMode::Cst),
+                Some(RunMode::Csv),
+                Some(RunMode::Csp)
             ],
             "{}",
             p.name
@@ -543,9 +538,7 @@ fn a_program_cut_short_in_csv_runs_again_from_its_start_mode() {
                 acceleration: 20.0 * rev,
                 jerk: None,
             },
-            Step::Mode {
-                mode: CyclicMode::Csv,
-            },
+            Step::Mode { mode: RunMode::Csv },
             Step::Ramp {
                 velocity: 0.5 * rev,
                 acceleration: 5.0 * rev,
@@ -556,9 +549,7 @@ fn a_program_cut_short_in_csv_runs_again_from_its_start_mode() {
                 acceleration: 5.0 * rev,
                 hold: 0.05,
             },
-            Step::Mode {
-                mode: CyclicMode::Csp,
-            },
+            Step::Mode { mode: RunMode::Csp },
             Step::Dwell { seconds: 0.05 },
         ]
     };
@@ -626,13 +617,16 @@ fn a_program_cut_short_in_csv_runs_again_from_its_start_mode() {
     for (i, p) in PROFILES.iter().enumerate() {
         // First run csp → csv (cut short); second run back to csp first, then csv → csp.
         assert_eq!(
-            cyc.modes_run[i],
-            vec![
-                CyclicMode::Csp,
-                CyclicMode::Csv,
-                CyclicMode::Csp,
-                CyclicMode::Csv,
-                CyclicMode::Csp
+            cyc.modes_run[i]
+                .iter()
+                .map(|m| RunMode::from_code(m.as_i8()))
+                .collect::<Vec<_>>(),
+            [
+                Some(RunMode::Csp),
+                Some(RunMode::Csv),
+                Some(RunMode::Csp),
+                Some(RunMode::Csv),
+                Some(RunMode::Csp)
             ],
             "{}",
             p.name

@@ -6,7 +6,7 @@ mod support {
 }
 use ecdrive::master::bus::{BusOptions, run_session as with_bus};
 use ecdrive::master::error::ErrorKind;
-use ecdrive::master::program::CyclicMode;
+use ecdrive::master::program::RunMode;
 use ecdrive::master::startup::{self, DriveSetup, Selector, StartupConfig};
 use ecdrive::od::ObjectAddress;
 use ecdrive::pdo::{Mapping, Pdo, PdoEntry};
@@ -170,7 +170,7 @@ fn a_mapping_over_the_limit_is_refused_before_anything_is_written() {
 fn a_cycle_time_the_drive_does_not_accept_is_refused() {
     let mut cfg = config(1);
     cfg.cycle = Duration::from_micros(300);
-    cfg.drives[0].mode = CyclicMode::Csp;
+    cfg.drives[0].mode = RunMode::Csp;
     let (r, _) = with_bus(
         SegmentLink::new(segment(1)),
         BusOptions::default(),

@@ -18,7 +18,7 @@ use ecdrive::link::netns::{VethPair, require_root};
 use ecdrive::link::{FrameLink, LinkError};
 use ecdrive::master::HistoryKind;
 use ecdrive::master::cycle::CycleEnd;
-use ecdrive::master::program::{CyclicMode, Step, Target};
+use ecdrive::master::program::{RunMode, Step, Target};
 use ecdrive::master::session::{Master, MasterConfig, SessionReport};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
@@ -161,7 +161,7 @@ fn config(drives: usize, cycle: Duration) -> MasterConfig {
                 },
                 Step::Dwell { seconds: 0.02 },
             ],
-            mode: CyclicMode::Csp,
+            mode: RunMode::Csp,
             ..DriveSetup::new(Selector::Position(i as u16))
         });
     }

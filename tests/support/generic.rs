@@ -86,6 +86,7 @@ pub static GENERIC_TEST: DriveProfile = DriveProfile {
         complete_access: false,
         esi: "",
         zero_speed_flag: None,
+        mode_selector: None,
         ratings: ecdrive::drives::Ratings::NONE,
     },
 };

@@ -15,7 +15,7 @@ use crate::cia402::State;
 use crate::od::ObjectAddress;
 use crate::pdo::{Direction, Field, Layout};
 
-use crate::program::CyclicMode;
+use crate::program::RunMode;
 use crate::telemetry::AxisTelemetry;
 
 /// Application code called by the cycle thread once per cycle. It must not block, sleep,
@@ -44,7 +44,7 @@ impl SetpointLimits {
     /// max))` naming the limit it breaks.
     pub fn check(
         &self,
-        mode: CyclicMode,
+        mode: RunMode,
         v: f64,
         prev: (f64, f64),
         dt: f64,
@@ -53,12 +53,14 @@ impl SetpointLimits {
             return Err(("a finite set-point", v, 0.0));
         }
         let (vel, acc) = match mode {
-            CyclicMode::Csp => {
+            RunMode::Csp => {
                 let vel = (v - prev.0) / dt;
                 (vel, (vel - prev.1) / dt)
             }
-            CyclicMode::Csv => (v, (v - prev.1) / dt),
-            CyclicMode::Cst => {
+            RunMode::Csv | RunMode::Pv => (v, (v - prev.1) / dt),
+            // The drive generates the motion to a pp target.
+            RunMode::Pp => return Ok((prev.1, 0.0)),
+            RunMode::Cst | RunMode::Tq => {
                 if let Some(m) = self.max_torque
                     && v.abs() > m
                 {
@@ -119,7 +121,7 @@ pub struct AppAxis {
     pub(crate) outputs: Vec<u8>,
     entries: Vec<Entry>,
     pub(crate) setpoint: Option<f64>,
-    pub(crate) mode_request: Option<CyclicMode>,
+    pub(crate) mode_request: Option<RunMode>,
     pub(crate) writes: Vec<(Field, u64)>,
 }
 
@@ -186,8 +188,8 @@ impl AppAxis {
         self.program_running
     }
     /// The mode the drive displays (0x6061), if it is a cyclic one.
-    pub fn mode(&self) -> Option<CyclicMode> {
-        CyclicMode::from_code(self.tel.mode_display)
+    pub fn mode(&self) -> Option<RunMode> {
+        RunMode::from_code(self.tel.mode_display)
     }
     /// Actual position, counts (unwrapped).
     pub fn position(&self) -> i64 {
@@ -274,7 +276,7 @@ impl AppAxis {
     }
 
     /// Ask for a switch to `mode` (the engine switches without a jump).
-    pub fn request_mode(&mut self, mode: CyclicMode) {
+    pub fn request_mode(&mut self, mode: RunMode) {
         self.mode_request = Some(mode);
     }
 

@@ -17,7 +17,7 @@
 use super::app::{AppAxis, AppCycle, CycleApp, SetpointLimits};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
-use super::program::{CyclicMode, Runner, Tick};
+use super::program::{ProbeEdge, RunMode, Runner, Step, Tick};
 use super::record::{CycleSample, RecordTx};
 use super::setpoint::Sample;
 use super::startup::{ConfiguredDrive, ConfiguredIo, DriveFields, Group};
@@ -250,8 +250,10 @@ pub struct CycleReport {
     pub max_following_error_drive: Vec<Option<i64>>,
     /// Per axis: 0x60F4 stayed 0 while the axis moved ([`EventKind::DriveFollowingErrorStuck`]).
     pub following_error_drive_stuck: Vec<bool>,
-    /// Per axis: the modes it ran set-points in.
-    pub modes_run: Vec<Vec<CyclicMode>>,
+    /// Per axis: the modes it ran in while enabled, in order (hm for a home step).
+    pub modes_run: Vec<Vec<OperationMode>>,
+    /// Per axis: the touch-probe latches, in order: (probe, edge, position in counts).
+    pub probe_latches: Vec<Vec<(u8, ProbeEdge, i64)>>,
     /// Per axis: the largest change of the streamed set-point from one cycle to the next while
     /// the drive was enabled, for each kind (across mode switches too: a jump shows here).
     pub max_setpoint_step: Vec<SetpointSteps>,
@@ -336,6 +338,67 @@ enum HomeRun {
     /// Homed; back to the program's mode requested.
     Back,
 }
+
+/// A pp, pv or tq step the drive runs (the step is the runner's step `index`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum DriveRun {
+    /// None running.
+    Idle,
+    /// pp: `given` targets handed to the handshake engine; `settled` cycles with nothing in
+    /// flight; `reached` the drive reported the targets given so far reached.
+    Pp {
+        index: usize,
+        given: usize,
+        settled: u32,
+        reached: bool,
+    },
+    /// pv or tq: the target went out at good cycle `since` (`None`: the axis is not yet
+    /// taking it).
+    Profile { index: usize, since: Option<u64> },
+}
+
+/// One touch probe as the cycle drives it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum ProbeArm {
+    /// Not armed.
+    Off,
+    /// The probe's function bits go 0 for one cycle (a drive latches again only after its
+    /// sample bit was cleared), then it is armed.
+    Rearm(ProbeEdge),
+    /// Armed on `edge`; `clear` once the drive's stored bit was seen 0 since (a bit still
+    /// set from an earlier latch is not this one).
+    Armed { edge: ProbeEdge, clear: bool },
+    /// Latched and reported; the drive keeps the value (first-event mode).
+    Latched(ProbeEdge),
+}
+
+impl ProbeArm {
+    /// This probe's bits of 0x60B8 (`base` 0 for probe 1, 8 for probe 2): enable, first event,
+    /// the probe input, the edge's sample bit.
+    fn function_bits(self, base: u16) -> u16 {
+        let edge = match self {
+            Self::Off | Self::Rearm(_) => return 0,
+            Self::Armed { edge, .. } | Self::Latched(edge) => edge,
+        };
+        let sample = match edge {
+            ProbeEdge::Rising => 1 << 4,
+            ProbeEdge::Falling => 1 << 5,
+        };
+        (1 | sample) << base
+    }
+}
+
+/// **\[REC\]** The longest a tq step waits, beyond twice its ramp down, for the drive to
+/// report the torque back near 0 (2 % of the step's torque).
+const TQ_SETTLE_MAX_S: f64 = 1.0;
+
+/// Touch-probe latches a run keeps per axis (more are still reported as events).
+const PROBE_LATCHES: usize = 16;
+
+/// **\[REC\]** Cycles with nothing in flight and statusword bit 10 set before a pp target
+/// counts as reached: the round trip of the last handshake (as [`cia402::profile_velocity`]'s
+/// settling).
+const PP_SETTLE_CYCLES: u32 = 3;
 
 /// Where the drives stand on the way to OP.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -436,10 +499,22 @@ struct AxisRt {
     home: HomeRun,
     /// How the drive's manual names a failed homing ([`cia402::DriveCaps::homing_failure`]).
     homing_failure: &'static str,
+    /// The pp/pv/tq step the drive runs, and the engines of those modes.
+    drive_run: DriveRun,
+    pp: cia402::ProfilePosition,
+    pv: cia402::ProfileVelocity,
+    tq: cia402::ProfileTorque,
+    /// Touch probes 1 and 2.
+    probes: [ProbeArm; 2],
+    /// 0x60B9 and 0x60BA–0x60BD as read this cycle (0 where not mapped).
+    probe_status: u16,
+    probe_positions: [i32; 4],
+    /// 0x60B8 to write (once a probe was armed).
+    probe_function: Option<u16>,
     /// Set-point held when no program runs (position/velocity/torque by mode).
     hold: Sample,
-    mode: CyclicMode,
-    requested_mode: Option<CyclicMode>,
+    mode: RunMode,
+    requested_mode: Option<RunMode>,
     fe_limit: Option<u32>,
     /// 0x60F4 was seen other than 0 while the axis moved in csp.
     fe_drive_alive: bool,
@@ -459,7 +534,9 @@ struct AxisRt {
     tel: AxisTelemetry,
     last_state: Option<State>,
     states: Vec<State>,
-    modes_run: Vec<CyclicMode>,
+    modes_run: Vec<OperationMode>,
+    /// The touch-probe latches of the run (at most [`PROBE_LATCHES`] kept).
+    latches: Vec<(u8, ProbeEdge, i64)>,
     steps: SetpointSteps,
     last_out: Option<(i32, i32, i16)>,
     /// This cycle's inputs, read before the application runs.
@@ -494,6 +571,14 @@ impl AxisRt {
             }),
             home: HomeRun::Idle,
             homing_failure: caps.homing_failure,
+            drive_run: DriveRun::Idle,
+            pp: cia402::ProfilePosition::default(),
+            pv: cia402::ProfileVelocity::new(false),
+            tq: cia402::ProfileTorque::new(),
+            probes: [ProbeArm::Off; 2],
+            probe_status: 0,
+            probe_positions: [0; 4],
+            probe_function: None,
             hold: Sample::default(),
             mode: d.setup.mode,
             requested_mode: None,
@@ -513,6 +598,7 @@ impl AxisRt {
             last_state: None,
             states: Vec::with_capacity(64),
             modes_run: Vec::with_capacity(8),
+            latches: Vec::with_capacity(PROBE_LATCHES),
             steps: SetpointSteps::default(),
             last_out: None,
             fb: None,
@@ -556,6 +642,11 @@ impl AxisRt {
         if let Some(d) = self.last_demand {
             self.carried[self.carried_next] = (pulse, d);
             self.carried_next = (self.carried_next + 1) % CARRIED;
+        }
+        let pf = &self.fields.probe;
+        self.probe_status = pdo::axis::read(pf.status, inputs).unwrap_or(0) as u16;
+        for (v, f) in self.probe_positions.iter_mut().zip(pf.positions) {
+            *v = pdo::axis::read(f, inputs).unwrap_or(0) as i32;
         }
         let b = &self.fields.axis;
         let fb = b.feedback(inputs);
@@ -624,6 +715,11 @@ impl AxisRt {
         }
         if enabled {
             self.command(sp, &st);
+            let m = st.active_mode;
+            if self.modes_run.last() != Some(&m) && self.modes_run.len() < self.modes_run.capacity()
+            {
+                self.modes_run.push(m);
+            }
         } else if self.stopping == Stopping::No {
             // Not enabled: track the actual values so enabling starts without a jump.
             self.hold = actual;
@@ -631,6 +727,8 @@ impl AxisRt {
         if matches!(self.home, HomeRun::Running { .. }) {
             self.homing.step(&mut self.axis, fb.statusword);
         }
+        self.profile_mode(i, fb.statusword, actual, ctx, ev);
+        self.probe(i, ev);
         let out = self.axis.step(&fb);
         self.engine_events(i, actual, ctx, ev);
         self.record_steps(&out, enabled, ctx.cycle);
@@ -667,29 +765,31 @@ impl AxisRt {
         if !enabled || self.stopping != Stopping::No || self.program == ProgramState::Running {
             return None;
         }
-        let mode = CyclicMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
         match self
             .limits
             .check(mode, v, (self.hold.pos, self.hold.vel), ctx.dt)
         {
             Ok((vel, acc)) => {
                 let sp = match mode {
-                    CyclicMode::Csp => Sample {
+                    RunMode::Csp => Sample {
                         pos: v,
                         vel,
                         acc,
                         ..self.hold
                     },
-                    CyclicMode::Csv => Sample {
+                    RunMode::Csv => Sample {
                         pos: self.hold.pos + v * ctx.dt,
                         vel: v,
                         acc,
                         ..self.hold
                     },
-                    CyclicMode::Cst => Sample {
+                    RunMode::Cst => Sample {
                         torque: v,
                         ..self.hold
                     },
+                    // The drive generates the motion in the profile modes.
+                    RunMode::Pp | RunMode::Pv | RunMode::Tq => return None,
                 };
                 self.hold = sp;
                 Some(sp)
@@ -800,6 +900,31 @@ impl AxisRt {
                 self.program = ProgramState::Idle;
                 ev.emit(EventKind::ProgramDone { axis: i as u16 });
             }
+            Tick::Drive { index } => {
+                if self.drive_run == DriveRun::Idle {
+                    self.drive_run = match self.runner.steps().get(index) {
+                        Some(Step::Pp { .. }) => {
+                            self.pp.set_halt(false);
+                            DriveRun::Pp {
+                                index,
+                                given: 0,
+                                settled: 0,
+                                reached: false,
+                            }
+                        }
+                        _ => DriveRun::Profile { index, since: None },
+                    };
+                }
+                self.hold = actual;
+                sp = Some(actual);
+            }
+            Tick::Probe { probe, edge, hold } => {
+                if let Some(p) = self.probes.get_mut(usize::from(probe).saturating_sub(1)) {
+                    *p = ProbeArm::Rearm(edge);
+                }
+                sp = Some(hold);
+                self.hold = hold;
+            }
             Tick::Home { method } => {
                 // Homing moves the drive on its own and redefines its position: the held
                 // set-point follows the actual one, so nothing from before the home is ever
@@ -898,7 +1023,7 @@ impl AxisRt {
             HomeRun::Back => {
                 if idle && st.active_mode.as_i8() == self.mode.code() {
                     self.home = HomeRun::Idle;
-                    self.runner.homed(actual);
+                    self.runner.drive_done(actual);
                     self.hold = actual;
                 }
             }
@@ -913,27 +1038,261 @@ impl AxisRt {
             self.axis.set_mode_bits(cia402::ControlWord::empty());
             self.home = HomeRun::Idle;
         }
+        self.abort_drive_run();
+    }
+
+    /// Leave a pp/pv/tq step: the queue of pp targets is dropped and the move halted
+    /// (controlword bit 8, the drive's own deceleration); pv and tq go to target 0.
+    fn abort_drive_run(&mut self) {
+        if self.drive_run != DriveRun::Idle {
+            self.pp.clear();
+            self.pp.set_halt(true);
+            self.pv.set_target(0);
+            self.tq.set_target(0);
+            self.drive_run = DriveRun::Idle;
+        }
+    }
+
+    /// One cycle in a profile mode (pp, pv, tq): the running step's targets through the mode's
+    /// engine (the new-set-point handshake in pp), the step's end, and, with no step running,
+    /// what the axis holds (pp: the last target; pv: velocity 0; tq: torque 0).
+    fn profile_mode(
+        &mut self,
+        i: usize,
+        sw: StatusWord,
+        actual: Sample,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+    ) {
+        let st = self.axis.status();
+        let Some(mode) = RunMode::from_code(st.active_mode.as_i8()).filter(|m| !m.is_cyclic())
+        else {
+            return;
+        };
+        let stopping = self.stopping != Stopping::No;
+        if stopping {
+            self.abort_drive_run();
+        }
+        match (mode, self.drive_run) {
+            (RunMode::Pp, DriveRun::Pp { .. }) => self.pp_step(i, sw, actual, ctx, ev),
+            (RunMode::Pp, _) => {
+                if stopping {
+                    self.pp.set_halt(true);
+                }
+                let _ = self.pp.step(&mut self.axis, sw);
+            }
+            (RunMode::Pv | RunMode::Tq, DriveRun::Profile { index, since }) => {
+                let since = since.or(st.streaming.then_some(ctx.tick));
+                self.drive_run = DriveRun::Profile { index, since };
+                let t = since.map_or(0.0, |s| ctx.tick.saturating_sub(s) as f64 * ctx.dt);
+                let done = match self.runner.steps().get(index) {
+                    Some(&Step::Pv { velocity, seconds }) if mode == RunMode::Pv => {
+                        let on = since.is_none() || t < seconds;
+                        let v = (velocity / self.velocity_unit)
+                            .round()
+                            .clamp(f64::from(i32::MIN), f64::from(i32::MAX))
+                            as i32;
+                        self.pv.set_target(if on { v } else { 0 });
+                        let s = self.pv.step(&mut self.axis, sw);
+                        !on && s.streaming && s.target_reached
+                    }
+                    Some(&Step::Tq {
+                        torque,
+                        seconds,
+                        ramp,
+                    }) if mode == RunMode::Tq => {
+                        let on = since.is_none() || t < ramp + seconds;
+                        let q = torque
+                            .round()
+                            .clamp(f64::from(i16::MIN), f64::from(i16::MAX))
+                            as i16;
+                        self.tq.set_target(if on { q } else { 0 });
+                        let s = self.tq.step(&mut self.axis, sw);
+                        // Done once the ramp down has had its time and the drive reports the
+                        // torque back near 0 (a drive whose slope unit differs from its
+                        // profile's takes longer), or, without that, after twice the time.
+                        let settle = f64::from(cia402::profile_velocity::SETTLE_CYCLES) * ctx.dt;
+                        let down = t >= 2.0 * ramp + seconds + settle;
+                        let near_zero = f64::from(self.tel.torque_actual).abs()
+                            <= (torque.abs() / 50.0).max(1.0);
+                        !on && s.streaming
+                            && down
+                            && (near_zero || t >= 4.0 * ramp + seconds + TQ_SETTLE_MAX_S)
+                    }
+                    _ => {
+                        // Not this mode's step (a mode switch under way): hold.
+                        self.hold_profile(mode, sw);
+                        false
+                    }
+                };
+                if done {
+                    self.drive_run = DriveRun::Idle;
+                    self.runner.drive_done(actual);
+                    self.hold = actual;
+                }
+            }
+            _ => self.hold_profile(mode, sw),
+        }
+    }
+
+    /// In pv or tq with no step running: velocity 0, torque 0.
+    fn hold_profile(&mut self, mode: RunMode, sw: StatusWord) {
+        match mode {
+            RunMode::Pv => {
+                self.pv.set_target(0);
+                let _ = self.pv.step(&mut self.axis, sw);
+            }
+            RunMode::Tq => {
+                self.tq.set_target(0);
+                let _ = self.tq.step(&mut self.axis, sw);
+            }
+            _ => {}
+        }
+    }
+
+    /// One cycle of a pp step: targets into the handshake engine (a set of set-points: as the
+    /// engine's queue takes them; single set-points: each once the last is reached), the
+    /// handshake, and the step's end once the drive reports the last target reached.
+    fn pp_step(
+        &mut self,
+        i: usize,
+        sw: StatusWord,
+        actual: Sample,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+    ) {
+        let DriveRun::Pp {
+            index,
+            mut given,
+            mut settled,
+            reached,
+        } = self.drive_run
+        else {
+            return;
+        };
+        let Some(Step::Pp {
+            targets,
+            relative,
+            immediate,
+        }) = self.runner.steps().get(index)
+        else {
+            self.drive_run = DriveRun::Idle;
+            return;
+        };
+        let (relative, immediate, n) = (*relative, *immediate, targets.len());
+        if let Some(&t) = targets.get(given)
+            && (!immediate || given == 0 || reached)
+        {
+            let sp = cia402::SetPoint {
+                target: t.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32,
+                relative,
+                immediate,
+            };
+            if self.pp.push(sp).is_ok() {
+                given += 1;
+            }
+        }
+        let s = self.pp.step(&mut self.axis, sw);
+        if s.error.is_some() {
+            self.drive_run = DriveRun::Idle;
+            self.program = ProgramState::Idle;
+            ev.emit(EventKind::CommandRefused {
+                axis: i as u16,
+                why: "the program stopped: the drive did not acknowledge a pp target \
+                      (statusword bit 12 stayed 0 after controlword bit 4 rose)",
+            });
+            self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+            return;
+        }
+        settled = if s.queued == 0 && s.phase == cia402::PpPhase::Idle {
+            settled.saturating_add(1)
+        } else {
+            0
+        };
+        let reached = s.target_reached && settled >= PP_SETTLE_CYCLES;
+        if given == n && reached {
+            self.drive_run = DriveRun::Idle;
+            self.runner.drive_done(actual);
+            self.hold = actual;
+            return;
+        }
+        self.drive_run = DriveRun::Pp {
+            index,
+            given,
+            settled,
+            reached,
+        };
+    }
+
+    /// The touch probes: 0x60B8 from what is armed, and a latch in 0x60B9 reported with the
+    /// position the drive latched (0x60BA–0x60BD), unwrapped like the actual position.
+    fn probe(&mut self, i: usize, ev: &mut Emitter) {
+        let status = self.probe_status;
+        let mut function = 0u16;
+        for (k, base) in [(0usize, 0u16), (1, 8)] {
+            let Some(arm) = self.probes.get(k).copied() else {
+                continue;
+            };
+            let next = match arm {
+                ProbeArm::Rearm(edge) => ProbeArm::Armed { edge, clear: false },
+                ProbeArm::Armed { edge, clear } => {
+                    let stored = base
+                        + match edge {
+                            ProbeEdge::Rising => 1,
+                            ProbeEdge::Falling => 2,
+                        };
+                    let enabled = status >> base & 1 != 0;
+                    let set = status >> stored & 1 != 0;
+                    if enabled && !set {
+                        ProbeArm::Armed { edge, clear: true }
+                    } else if enabled && set && clear {
+                        let probe = k as u8 + 1;
+                        let slot = usize::from(k as u8 * 2 + u8::from(edge == ProbeEdge::Falling));
+                        let raw = self.probe_positions.get(slot).copied().unwrap_or(0);
+                        let position = self.pos + i64::from(raw.wrapping_sub(self.pos_raw));
+                        if self.latches.len() < self.latches.capacity() {
+                            self.latches.push((probe, edge, position));
+                        }
+                        ev.emit(EventKind::ProbeLatched {
+                            axis: i as u16,
+                            probe,
+                            edge,
+                            position,
+                        });
+                        ProbeArm::Latched(edge)
+                    } else {
+                        arm
+                    }
+                }
+                other => other,
+            };
+            if let Some(p) = self.probes.get_mut(k) {
+                *p = next;
+            }
+            function |= next.function_bits(base);
+        }
+        if self.probes != [ProbeArm::Off; 2] {
+            self.probe_function = Some(function);
+        }
     }
 
     /// The set-point into the engine, in the active mode.
     fn command(&mut self, sp: Sample, st: &AxisStatus) {
-        let mode = CyclicMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
         self.mode = mode;
         let _ = match mode {
-            CyclicMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
-            CyclicMode::Csv => self.axis.set_velocity(
+            // The drive generates the motion; `profile_mode` gives it its targets.
+            RunMode::Pp | RunMode::Pv | RunMode::Tq => Ok(()),
+            RunMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
+            RunMode::Csv => self.axis.set_velocity(
                 (sp.vel / self.velocity_unit)
                     .round()
                     .clamp(i32::MIN as f64, i32::MAX as f64) as i32,
             ),
-            CyclicMode::Cst => self
+            RunMode::Cst => self
                 .axis
                 .set_torque(sp.torque.round().clamp(i16::MIN as f64, i16::MAX as f64) as i16),
         };
-        if self.modes_run.last() != Some(&mode) && self.modes_run.len() < self.modes_run.capacity()
-        {
-            self.modes_run.push(mode);
-        }
     }
 
     /// The engine's events of this step: mode switches the program waits for, faults.
@@ -941,7 +1300,7 @@ impl AxisRt {
         while let Some(e) = self.axis.poll_event() {
             match e {
                 cia402::Event::ModeSwitched { to, .. } => {
-                    if let Some(m) = CyclicMode::from_code(to.as_i8()) {
+                    if let Some(m) = RunMode::from_code(to.as_i8()) {
                         self.mode = m;
                         if self.requested_mode == Some(m) {
                             self.requested_mode = None;
@@ -962,6 +1321,19 @@ impl AxisRt {
                         });
                         self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
                     }
+                }
+                cia402::Event::ModeSwitchFailed(f)
+                    if self.program == ProgramState::Pending
+                        && f.reason != cia402::ModeSwitchFailure::Fault =>
+                {
+                    // The drive never took the mode the program starts in: the program cannot
+                    // start, and the axis does not stay enabled waiting for it.
+                    self.program = ProgramState::Idle;
+                    ev.emit(EventKind::CommandRefused {
+                        axis: i as u16,
+                        why: "the program could not start: the drive did not take its start mode",
+                    });
+                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
                 }
                 cia402::Event::ModeSwitchFailed(f) if self.requested_mode.is_some() => {
                     // The program asked for this switch and cannot go on without it. A fault
@@ -1016,6 +1388,9 @@ impl AxisRt {
     /// The engine's outputs into the process image, and the cycle counter.
     fn write_outputs(&mut self, out: &Output, image: &mut [u8]) {
         self.fields.axis.write(out, image);
+        if let Some(f) = self.probe_function {
+            pdo::axis::write(self.fields.probe.function, image, i64::from(f));
+        }
         self.count(image);
     }
 
@@ -1029,23 +1404,23 @@ impl AxisRt {
         }
         if let Some((p, v, t)) = self.last_out {
             let s = &mut self.steps;
-            let step = match CyclicMode::from_code(running.active_mode.as_i8()) {
-                Some(CyclicMode::Csp) => Some((
+            let step = match RunMode::from_code(running.active_mode.as_i8()) {
+                Some(RunMode::Csp) => Some((
                     i64::from(out.target_position.wrapping_sub(p)).abs(),
                     &mut s.position,
                     0,
                 )),
-                Some(CyclicMode::Csv) => Some((
+                Some(RunMode::Csv) => Some((
                     (i64::from(out.target_velocity) - i64::from(v)).abs(),
                     &mut s.velocity,
                     1,
                 )),
-                Some(CyclicMode::Cst) => Some((
+                Some(RunMode::Cst) => Some((
                     (i64::from(out.target_torque) - i64::from(t)).abs(),
                     &mut s.torque,
                     2,
                 )),
-                None => None,
+                _ => None,
             };
             if let Some((d, max, at)) = step
                 && d > *max
@@ -1068,9 +1443,10 @@ impl AxisRt {
         };
         let state = StatusWord::from_raw(self.tel.statusword).state();
         let energised = state.is_some_and(State::is_energised);
-        // In hm the drive moves on its own and its position jumps at the home: there is no
-        // demand to follow, and none from before may be judged against the positions after.
-        let homing = out.mode == OperationMode::Homing;
+        // In hm, pp, pv and tq the drive moves on its own (and in hm its position jumps at the
+        // home): there is no demand to follow, and none from before may be judged against the
+        // positions after.
+        let homing = !RunMode::from_code(out.mode.as_i8()).is_some_and(RunMode::is_cyclic);
         if homing {
             self.carried = [(u64::MAX, 0); CARRIED];
             self.tel.following_error = 0;
@@ -1093,7 +1469,7 @@ impl AxisRt {
         let moving = self.last_demand.is_some_and(|l| l != demand);
         self.last_demand = (!homing).then_some(demand);
         // The master's following error only while csp runs (in hm the drive moves on its own).
-        if energised && self.mode == CyclicMode::Csp && out.mode.as_i8() == CyclicMode::Csp.code() {
+        if energised && self.mode == RunMode::Csp && out.mode.as_i8() == RunMode::Csp.code() {
             self.judge_following_error(i, moving, ctx.cycle, ev);
         }
         let t = &mut self.tel;
@@ -1255,9 +1631,12 @@ impl AxisRt {
             }
             Command::Setpoint(axis, v) if axis as usize == i => {
                 match self.mode {
-                    CyclicMode::Csp => self.hold.pos = v,
-                    CyclicMode::Csv => self.hold.vel = v,
-                    CyclicMode::Cst => self.hold.torque = v,
+                    RunMode::Csp => self.hold.pos = v,
+                    RunMode::Csv => self.hold.vel = v,
+                    RunMode::Cst => self.hold.torque = v,
+                    RunMode::Pp | RunMode::Pv | RunMode::Tq => {
+                        return Some("a set-point command needs csp, csv or cst");
+                    }
                 }
                 None
             }
@@ -2198,6 +2577,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 .map(|a| a.tel.following_error_drive_stuck)
                 .collect(),
             modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
+            probe_latches: axes.iter().map(|a| a.latches.clone()).collect(),
             max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
             states: axes.iter().map(|a| a.states.clone()).collect(),
             frames: {

@@ -49,6 +49,8 @@ pub enum HistoryKind {
     CommandRefused,
     /// A program's home step failed (the drive's report named).
     Homing,
+    /// A touch probe latched (the position, in the user's units where configured).
+    Probe,
     /// A command came while no cycle ran (the cycle had ended, the session was waiting for or
     /// making a re-start) and was not carried out. A command sent on the last snapshot of a
     /// cycle that was ending lands here; send it again once the cycle runs.

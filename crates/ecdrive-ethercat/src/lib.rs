@@ -36,7 +36,7 @@ pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};
-pub use program::{CyclicMode, Step, Target};
+pub use program::{RunMode, Step, Target};
 pub use record::{CSV_HEADER, CycleSample, RecordTx, Recording, recording};
 pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
 pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};

@@ -12,45 +12,79 @@ use serde::{Deserialize, Serialize};
 // The configuration file (the application's) reads the TOML form of programs, with file
 // positions in its errors; these types only serialize, for reports.
 
-/// The cyclic synchronous modes a program can run in.
+/// The modes of operation a program (and the application) can run an axis in: the cyclic
+/// synchronous ones, where the master streams the set-point every cycle, and the profile ones,
+/// where the drive generates the motion from a target and its profile objects. Homing (hm) is
+/// not one: a `home` step enters it and comes back.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
-pub enum CyclicMode {
+pub enum RunMode {
     /// Cyclic synchronous position (0x6060 = 8): the program streams target positions.
     Csp,
     /// Cyclic synchronous velocity (0x6060 = 9): the program streams target velocities.
     Csv,
     /// Cyclic synchronous torque (0x6060 = 10): the program streams target torques.
     Cst,
+    /// Profile position (0x6060 = 1): `pp` steps hand targets to the drive with the
+    /// new-set-point handshake.
+    Pp,
+    /// Profile velocity (0x6060 = 3): `pv` steps give the drive a target velocity.
+    Pv,
+    /// Profile torque (0x6060 = 4): `tq` steps give the drive a target torque.
+    Tq,
 }
 
-impl CyclicMode {
+impl RunMode {
+    /// Every mode, in 0x6060 order of the cyclic ones first.
+    pub const ALL: [RunMode; 6] = [
+        Self::Csp,
+        Self::Csv,
+        Self::Cst,
+        Self::Pp,
+        Self::Pv,
+        Self::Tq,
+    ];
+
     /// The 0x6060 value.
     pub const fn code(self) -> i8 {
         match self {
             Self::Csp => 8,
             Self::Csv => 9,
             Self::Cst => 10,
+            Self::Pp => 1,
+            Self::Pv => 3,
+            Self::Tq => 4,
         }
     }
 
-    /// The mode for a 0x6060/0x6061 value, if it is a cyclic synchronous mode.
+    /// The mode for a 0x6060/0x6061 value, if a program can run in it.
     pub const fn from_code(code: i8) -> Option<Self> {
         match code {
             8 => Some(Self::Csp),
             9 => Some(Self::Csv),
             10 => Some(Self::Cst),
+            1 => Some(Self::Pp),
+            3 => Some(Self::Pv),
+            4 => Some(Self::Tq),
             _ => None,
         }
     }
 
-    /// `"csp"`, `"csv"` or `"cst"`.
+    /// `"csp"`, `"csv"`, `"cst"`, `"pp"`, `"pv"` or `"tq"`.
     pub const fn name(self) -> &'static str {
         match self {
             Self::Csp => "csp",
             Self::Csv => "csv",
             Self::Cst => "cst",
+            Self::Pp => "pp",
+            Self::Pv => "pv",
+            Self::Tq => "tq",
         }
+    }
+
+    /// Whether the master streams the set-point every cycle (csp, csv, cst).
+    pub const fn is_cyclic(self) -> bool {
+        matches!(self, Self::Csp | Self::Csv | Self::Cst)
     }
 }
 
@@ -72,7 +106,7 @@ pub enum Step {
     /// actual values).
     Mode {
         /// The new mode.
-        mode: CyclicMode,
+        mode: RunMode,
     },
     /// A point-to-point move (csp: positions; csv: the profile's velocities).
     Move {
@@ -138,6 +172,69 @@ pub enum Step {
         /// The homing method (0x6098).
         method: i8,
     },
+    /// Profile position (pp): the drive moves to each target in turn with the profile
+    /// velocity and accelerations start-up wrote (0x6081, 0x6083, 0x6084), each target handed
+    /// over with the new-set-point handshake (controlword bit 4, statusword bit 12). Done when
+    /// the drive reports the last target reached (statusword bit 10).
+    Pp {
+        /// Targets (counts): absolute, or with `relative` each from the previous target.
+        targets: Vec<f64>,
+        /// Controlword bit 6: the targets are relative.
+        relative: bool,
+        /// `false` (set of set-points, bit 5 = 0): every target is queued at once and the drive
+        /// runs them one after the other. `true` (single set-point, bit 5 = 1): each target is
+        /// handed over once the drive reports the previous one reached.
+        immediate: bool,
+    },
+    /// Profile velocity (pv): the drive ramps to `velocity` with 0x6083/0x6084, holds it for
+    /// `seconds`, then ramps to standstill. Done when the drive reports velocity 0 reached.
+    Pv {
+        /// Velocity (counts/s), converted to the drive's velocity unit for 0x60FF.
+        velocity: f64,
+        /// Time at the velocity (s), from the switch of the target.
+        seconds: f64,
+    },
+    /// Profile torque (tq): the drive ramps to `torque` with the slope 0x6087, holds it for
+    /// `seconds`, then ramps it back to 0 (the time the slope needs, from the drive's own
+    /// 0x6087, is waited out: not every drive reports torque reached).
+    Tq {
+        /// Torque (the drive's torque unit), for 0x6071.
+        torque: f64,
+        /// Time at the torque (s), from the switch of the target.
+        seconds: f64,
+        /// Seconds the drive takes to ramp 0 → `torque` with its slope (0 for a step); the
+        /// configuration computes it from the 0x6087 it writes.
+        ramp: f64,
+    },
+    /// Arm a touch probe (0x60B8): the drive latches the position at the next edge of its
+    /// probe input; the program goes on at once, and the latch is reported when the drive
+    /// sets it (0x60B9, 0x60BA–0x60BD).
+    TouchProbe {
+        /// Probe 1 or 2.
+        probe: u8,
+        /// The edge to latch on.
+        edge: ProbeEdge,
+    },
+}
+
+/// A touch-probe edge.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProbeEdge {
+    /// Input going on.
+    Rising,
+    /// Input going off.
+    Falling,
+}
+
+impl ProbeEdge {
+    /// `"rising"` or `"falling"`.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Rising => "rising",
+            Self::Falling => "falling",
+        }
+    }
 }
 
 impl Step {
@@ -159,18 +256,57 @@ impl Step {
             Self::Torque { torque, .. } => format!("torque {torque}"),
             Self::Dwell { seconds } => format!("dwell {seconds} s"),
             Self::Home { method } => format!("home (method {method})"),
+            Self::Pp {
+                targets, relative, ..
+            } => format!(
+                "pp {} {} target{}",
+                if *relative { "relative" } else { "absolute" },
+                targets.len(),
+                if targets.len() == 1 { "" } else { "s" }
+            ),
+            Self::Pv { velocity, .. } => format!("pv at {velocity}/s"),
+            Self::Tq { torque, .. } => format!("tq {torque}"),
+            Self::TouchProbe { probe, edge } => {
+                format!("arm touch probe {probe} ({} edge)", edge.name())
+            }
         }
     }
 
     /// The modes this step can run in.
-    pub fn runs_in(&self, mode: CyclicMode) -> bool {
+    pub fn runs_in(&self, mode: RunMode) -> bool {
         match self {
-            Self::Mode { .. } | Self::Dwell { .. } | Self::Home { .. } => true,
+            Self::Mode { .. }
+            | Self::Dwell { .. }
+            | Self::Home { .. }
+            | Self::TouchProbe { .. } => true,
             Self::Move { .. } | Self::Sine { .. } | Self::Ramp { .. } | Self::Jog { .. } => {
-                mode != CyclicMode::Cst
+                matches!(mode, RunMode::Csp | RunMode::Csv)
             }
-            Self::Torque { .. } => mode == CyclicMode::Cst,
+            Self::Torque { .. } => mode == RunMode::Cst,
+            Self::Pp { .. } => mode == RunMode::Pp,
+            Self::Pv { .. } => mode == RunMode::Pv,
+            Self::Tq { .. } => mode == RunMode::Tq,
         }
+    }
+
+    /// Why this step needs another mode (for [`ProgramError::WrongMode`]).
+    fn mode_rule(&self) -> &'static str {
+        match self {
+            Self::Torque { .. } => "torque steps need cst",
+            Self::Pp { .. } => "pp steps need pp (a `mode` step switches)",
+            Self::Pv { .. } => "pv steps need pv (a `mode` step switches)",
+            Self::Tq { .. } => "tq steps need tq (a `mode` step switches)",
+            _ => "position and velocity steps need csp or csv",
+        }
+    }
+
+    /// Whether the drive runs this step on its own (hm, pp, pv, tq): the cycle runs it and
+    /// calls [`Runner::drive_done`].
+    pub fn run_by_drive(&self) -> bool {
+        matches!(
+            self,
+            Self::Home { .. } | Self::Pp { .. } | Self::Pv { .. } | Self::Tq { .. }
+        )
     }
 }
 
@@ -203,7 +339,7 @@ pub enum ProgramError {
 
 /// Check that every step runs in the mode the program is in at that point. `start` is the mode
 /// the axis starts in.
-pub fn validate(steps: &[Step], start: CyclicMode) -> Result<(), ProgramError> {
+pub fn validate(steps: &[Step], start: RunMode) -> Result<(), ProgramError> {
     let mut mode = start;
     for (index, s) in steps.iter().enumerate() {
         if let Step::Mode { mode: m } = s {
@@ -215,10 +351,7 @@ pub fn validate(steps: &[Step], start: CyclicMode) -> Result<(), ProgramError> {
                 index,
                 what: s.describe(),
                 mode: mode.name(),
-                why: match s {
-                    Step::Torque { .. } => "torque steps need cst",
-                    _ => "position and velocity steps need csp or csv",
-                },
+                why: s.mode_rule(),
             });
         }
         // Plan it once from a neutral state to check the parameters.
@@ -231,6 +364,36 @@ pub fn validate(steps: &[Step], start: CyclicMode) -> Result<(), ProgramError> {
     Ok(())
 }
 
+/// The modes of operation (0x6060 values) a program runs the axis in, starting in `start`:
+/// the start mode, each `mode` step's, and hm (6) for a `home` step; each once, in order.
+pub fn modes_used(steps: &[Step], start: RunMode) -> Vec<i8> {
+    let mut out = vec![start.code()];
+    for s in steps {
+        let code = match s {
+            Step::Mode { mode } => mode.code(),
+            Step::Home { .. } => 6,
+            _ => continue,
+        };
+        if !out.contains(&code) {
+            out.push(code);
+        }
+    }
+    out
+}
+
+/// The touch probes a program arms: (probe, edge), each once, in order.
+pub fn probes_used(steps: &[Step]) -> Vec<(u8, ProbeEdge)> {
+    let mut out = Vec::new();
+    for s in steps {
+        if let Step::TouchProbe { probe, edge } = *s
+            && !out.contains(&(probe, edge))
+        {
+            out.push((probe, edge));
+        }
+    }
+    out
+}
+
 /// A planned step, sampled per cycle.
 // Boxing the large variant would allocate when a step starts, which happens in the cycle.
 #[allow(clippy::large_enum_variant)]
@@ -239,17 +402,66 @@ enum Planned {
     Move(Move),
     Sine(Sine),
     Ramp(VelocityRamp),
-    Jog { jog: Jog, until: f64 },
+    Jog {
+        jog: Jog,
+        until: f64,
+    },
     Torque(TorqueStep),
-    Dwell { hold: Sample, seconds: f64 },
+    Dwell {
+        hold: Sample,
+        seconds: f64,
+    },
+    /// A mode switch, or a probe armed: nothing to sample.
     Mode,
-    Home,
+    /// A step the drive runs (hm, pp, pv, tq).
+    Drive,
 }
 
 fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
     Ok(match *step {
         Step::Mode { .. } => Planned::Mode,
-        Step::Home { .. } => Planned::Home,
+        Step::Home { .. } => Planned::Drive,
+        Step::Pp { ref targets, .. } => {
+            if targets.is_empty() {
+                return Err(ProfileError::NotFinite {
+                    name: "targets (none given)",
+                    value: f64::NAN,
+                });
+            }
+            for &t in targets {
+                if !(t.is_finite() && t.abs() <= f64::from(i32::MAX)) {
+                    return Err(ProfileError::NotFinite {
+                        name: "a pp target (within ±2^31 counts)",
+                        value: t,
+                    });
+                }
+            }
+            Planned::Drive
+        }
+        Step::Pv { velocity, seconds } => {
+            finite("velocity", velocity)?;
+            non_negative("seconds", seconds)?;
+            Planned::Drive
+        }
+        Step::Tq {
+            torque,
+            seconds,
+            ramp,
+        } => {
+            finite("torque", torque)?;
+            non_negative("seconds", seconds)?;
+            non_negative("ramp", ramp)?;
+            Planned::Drive
+        }
+        Step::TouchProbe { probe, .. } => {
+            if !matches!(probe, 1 | 2) {
+                return Err(ProfileError::NotFinite {
+                    name: "probe (1 or 2)",
+                    value: f64::from(probe),
+                });
+            }
+            Planned::Mode
+        }
         Step::Move {
             target,
             velocity,
@@ -288,12 +500,7 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
         } => {
             let mut jog = Jog::new(from.pos, acceleration)?;
             jog.set_target(velocity);
-            if !(seconds.is_finite() && seconds >= 0.0) {
-                return Err(ProfileError::NotFinite {
-                    name: "seconds",
-                    value: seconds,
-                });
-            }
+            non_negative("seconds", seconds)?;
             Planned::Jog {
                 jog,
                 until: seconds + velocity.abs() / acceleration,
@@ -310,12 +517,7 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
             hold,
         )?),
         Step::Dwell { seconds } => {
-            if !(seconds.is_finite() && seconds >= 0.0) {
-                return Err(ProfileError::NotFinite {
-                    name: "seconds",
-                    value: seconds,
-                });
-            }
+            non_negative("seconds", seconds)?;
             Planned::Dwell {
                 hold: Sample {
                     vel: 0.0,
@@ -329,20 +531,51 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
     })
 }
 
+fn finite(name: &'static str, value: f64) -> Result<f64, ProfileError> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(ProfileError::NotFinite { name, value })
+    }
+}
+
+fn non_negative(name: &'static str, value: f64) -> Result<f64, ProfileError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(ProfileError::NotFinite { name, value })
+    }
+}
+
 /// What the runner wants this cycle.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Tick {
     /// Stream this set-point.
     Setpoint(Sample),
     /// Switch to this mode, then call [`Runner::mode_switched`] once the drive confirms it.
-    SwitchMode(CyclicMode),
+    SwitchMode(RunMode),
     /// The program is finished; hold the last set-point.
     Finished(Sample),
     /// Home the axis with this method (hold the set-point meanwhile), then call
-    /// [`Runner::homed`].
+    /// [`Runner::drive_done`].
     Home {
         /// The homing method (0x6098).
         method: i8,
+    },
+    /// The drive runs step `index` (pp, pv or tq; the step is [`Runner::steps`]`[index]`):
+    /// run it, then call [`Runner::drive_done`].
+    Drive {
+        /// The step's index.
+        index: usize,
+    },
+    /// Arm this touch probe (the program goes on with the next tick); hold the set-point.
+    Probe {
+        /// Probe 1 or 2.
+        probe: u8,
+        /// The edge.
+        edge: ProbeEdge,
+        /// The held set-point.
+        hold: Sample,
     },
 }
 
@@ -357,7 +590,7 @@ pub enum Tick {
 pub struct Runner {
     steps: Vec<Step>,
     /// The mode the program was validated for.
-    start: CyclicMode,
+    start: RunMode,
     /// The run has not yet confirmed the start mode.
     entering: bool,
     index: usize,
@@ -372,7 +605,7 @@ pub struct Runner {
 
 impl Runner {
     /// A runner for steps validated (with [`validate`]) for the mode `start`.
-    pub fn new(steps: Vec<Step>, start: CyclicMode) -> Self {
+    pub fn new(steps: Vec<Step>, start: RunMode) -> Self {
         Self {
             steps,
             start,
@@ -443,10 +676,11 @@ impl Runner {
         }
     }
 
-    /// The axis homed (back in the program's mode): continue with the next step from `actual`
-    /// (the position homing defined).
-    pub fn homed(&mut self, actual: Sample) {
-        if matches!(self.steps.get(self.index), Some(Step::Home { .. })) {
+    /// The drive finished the step it runs ([`Tick::Home`], [`Tick::Drive`]; after a home,
+    /// back in the program's mode): continue with the next step from `actual` (for a home,
+    /// the position homing defined).
+    pub fn drive_done(&mut self, actual: Sample) {
+        if self.steps.get(self.index).is_some_and(Step::run_by_drive) {
             self.index += 1;
             self.seed(actual);
         }
@@ -471,8 +705,45 @@ impl Runner {
                 self.waiting_for_mode = true;
                 return Tick::SwitchMode(*mode);
             }
-            if let Step::Home { method } = step {
-                return Tick::Home { method: *method };
+            match step {
+                Step::Home { method } => return Tick::Home { method: *method },
+                Step::TouchProbe { probe, edge } => {
+                    if !matches!(probe, 1 | 2) {
+                        self.failed = Some((
+                            self.index,
+                            ProfileError::NotFinite {
+                                name: "probe (1 or 2)",
+                                value: f64::from(*probe),
+                            },
+                        ));
+                        continue;
+                    }
+                    let (probe, edge) = (*probe, *edge);
+                    self.index += 1;
+                    self.planned = None;
+                    return Tick::Probe {
+                        probe,
+                        edge,
+                        hold: Sample {
+                            done: false,
+                            ..self.last
+                        },
+                    };
+                }
+                s if s.run_by_drive() => {
+                    // Checked once, when the step starts.
+                    if self.planned.is_none() {
+                        match plan(s, &self.last) {
+                            Ok(p) => self.planned = Some(p),
+                            Err(e) => {
+                                self.failed = Some((self.index, e));
+                                continue;
+                            }
+                        }
+                    }
+                    return Tick::Drive { index: self.index };
+                }
+                _ => {}
             }
             let planned = match self.planned {
                 Some(p) => p,
@@ -510,7 +781,7 @@ impl Runner {
                     done: t >= seconds,
                     ..hold
                 },
-                Planned::Mode | Planned::Home => Sample {
+                Planned::Mode | Planned::Drive => Sample {
                     done: true,
                     ..self.last
                 },
@@ -537,7 +808,7 @@ mod tests {
     use super::*;
 
     fn run(steps: Vec<Step>, dt: f64, seconds: f64) -> (Runner, Vec<Tick>) {
-        let mut r = Runner::new(steps, CyclicMode::Csp);
+        let mut r = Runner::new(steps, RunMode::Csp);
         r.seed(Sample::default());
         let mut out = vec![];
         let mut t = 0.0;
@@ -574,14 +845,17 @@ mod tests {
                 jerk: Some(1e6),
             },
         ];
-        validate(&steps, CyclicMode::Csp).unwrap();
+        validate(&steps, RunMode::Csp).unwrap();
         let (r, ticks) = run(steps, 0.001, 3.0);
         assert!(r.finished());
         let mut prev = 0.0;
         for t in &ticks {
             let p = match t {
                 Tick::Setpoint(s) | Tick::Finished(s) => s.pos,
-                Tick::SwitchMode(_) | Tick::Home { .. } => continue,
+                Tick::SwitchMode(_)
+                | Tick::Home { .. }
+                | Tick::Drive { .. }
+                | Tick::Probe { .. } => continue,
             };
             // The fastest step is the sine: 100 · 2π · 5 ≈ 3142 counts/s.
             let vmax = 2000.0f64.max(100.0 * 2.0 * std::f64::consts::PI * 5.0);
@@ -598,24 +872,22 @@ mod tests {
     fn mode_switch_waits_for_confirmation() {
         let mut r = Runner::new(
             vec![
-                Step::Mode {
-                    mode: CyclicMode::Csv,
-                },
+                Step::Mode { mode: RunMode::Csv },
                 Step::Ramp {
                     velocity: 100.0,
                     acceleration: 1000.0,
                     hold: 0.0,
                 },
             ],
-            CyclicMode::Csp,
+            RunMode::Csp,
         );
         r.seed(Sample::default());
         // Every run first asks for the start mode.
-        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csp));
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(RunMode::Csp));
         r.mode_switched(Sample::default());
-        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csv));
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(RunMode::Csv));
         // Until the drive confirms, the runner keeps asking.
-        assert_eq!(r.tick(0.001), Tick::SwitchMode(CyclicMode::Csv));
+        assert_eq!(r.tick(0.001), Tick::SwitchMode(RunMode::Csv));
         r.mode_switched(Sample {
             pos: 42.0,
             ..Sample::default()
@@ -635,19 +907,17 @@ mod tests {
                 acceleration: 10_000.0,
                 jerk: None,
             },
-            Step::Mode {
-                mode: CyclicMode::Csv,
-            },
+            Step::Mode { mode: RunMode::Csv },
             Step::Ramp {
                 velocity: 100.0,
                 acceleration: 1000.0,
                 hold: 0.5,
             },
         ];
-        validate(&steps, CyclicMode::Csp).unwrap();
-        let mut r = Runner::new(steps, CyclicMode::Csp);
+        validate(&steps, RunMode::Csp).unwrap();
+        let mut r = Runner::new(steps, RunMode::Csp);
         r.seed(Sample::default());
-        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csp));
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(RunMode::Csp));
         r.mode_switched(Sample::default());
         assert!(matches!(r.tick(0.0), Tick::Setpoint(_)));
         // Run into the csv ramp, then cut the run short (a fault) and start over.
@@ -655,7 +925,7 @@ mod tests {
         while r.step_index() < 2 {
             t += 0.001;
             if let Tick::SwitchMode(m) = r.tick(t) {
-                assert_eq!(m, CyclicMode::Csv);
+                assert_eq!(m, RunMode::Csv);
                 r.mode_switched(r.last);
             }
         }
@@ -667,8 +937,8 @@ mod tests {
         r.seed(here);
         // The axis is in csv now: the move must not run there; the runner asks for csp first,
         // keeps asking until it is confirmed, and then plans the move from where the axis is.
-        assert_eq!(r.tick(t), Tick::SwitchMode(CyclicMode::Csp));
-        assert_eq!(r.tick(t + 0.001), Tick::SwitchMode(CyclicMode::Csp));
+        assert_eq!(r.tick(t), Tick::SwitchMode(RunMode::Csp));
+        assert_eq!(r.tick(t + 0.001), Tick::SwitchMode(RunMode::Csp));
         assert_eq!(r.step_index(), 0);
         r.mode_switched(here);
         match r.tick(t + 0.002) {
@@ -686,7 +956,7 @@ mod tests {
                 slope: None,
                 hold: 1.0,
             }],
-            CyclicMode::Csp,
+            RunMode::Csp,
         )
         .unwrap_err();
         assert_eq!(
@@ -700,7 +970,7 @@ mod tests {
                 acceleration: 1.0,
                 jerk: None,
             }],
-            CyclicMode::Csp,
+            RunMode::Csp,
         )
         .unwrap_err();
         assert!(e.to_string().contains("velocity must be a positive"), "{e}");
@@ -749,19 +1019,19 @@ mod tests {
                 jerk: None,
             },
         ];
-        validate(&steps, CyclicMode::Csp).unwrap();
-        let mut r = Runner::new(steps, CyclicMode::Csp);
+        validate(&steps, RunMode::Csp).unwrap();
+        let mut r = Runner::new(steps, RunMode::Csp);
         r.seed(Sample {
             pos: 5000.0,
             ..Sample::default()
         });
-        assert_eq!(r.tick(0.0), Tick::SwitchMode(CyclicMode::Csp));
+        assert_eq!(r.tick(0.0), Tick::SwitchMode(RunMode::Csp));
         r.mode_switched(r.last);
         for k in 0..5 {
             assert_eq!(r.tick(0.001 * f64::from(k)), Tick::Home { method: 19 });
         }
         assert_eq!(r.step_index(), 0);
-        r.homed(Sample::default());
+        r.drive_done(Sample::default());
         assert_eq!(r.step_index(), 1);
         let mut last = None;
         for k in 0..1000 {

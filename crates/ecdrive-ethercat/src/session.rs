@@ -220,6 +220,19 @@ impl Decoder {
         self.drives.get(axis as usize).map(|(d, _)| d.clone())
     }
 
+    /// A position in the axis's units where it has them ("1.3000 rev (109051904 counts)"),
+    /// else in counts.
+    fn in_units(&self, axis: u16, counts: i64) -> String {
+        match self.units.get(axis as usize).and_then(Option::as_ref) {
+            Some(u) => format!(
+                "{:.4} {} ({counts} counts)",
+                counts as f64 / u.counts_per_unit,
+                u.name
+            ),
+            None => format!("{counts} counts"),
+        }
+    }
+
     fn name(&self, axis: u16) -> String {
         self.drive(axis)
             .map_or_else(|| format!("axis {axis}"), |d| d.to_string())
@@ -424,6 +437,20 @@ impl Decoder {
                 true,
                 crate::telemetry::event_text(&e.kind),
             ),
+            EventKind::ProbeLatched {
+                axis,
+                probe,
+                edge,
+                position,
+            } => (
+                self.drive(axis),
+                false,
+                format!(
+                    "touch probe {probe} latched on the {} edge at {}",
+                    edge.name(),
+                    self.in_units(axis, position)
+                ),
+            ),
             EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
                 (self.drive(axis), app_error(&e.kind), app_text(&e.kind))
             }
@@ -513,6 +540,7 @@ fn history_kind(kind: &EventKind) -> HistoryKind {
         EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
         EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
         EventKind::HomingFailed { .. } => HistoryKind::Homing,
+        EventKind::ProbeLatched { .. } => HistoryKind::Probe,
         EventKind::SetpointLimit { .. } => HistoryKind::CommandRefused,
         EventKind::StreamUnderrun { .. } => HistoryKind::Warning,
         EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,

@@ -19,8 +19,8 @@ use super::bus::{Bus, Discovery, MAILBOXES_AT_ONCE, MAX_PDI, MAX_SUBDEVICES, Ses
 use super::coe::{CoeClient, CoeError};
 use super::error::{DriveRef, ErrorKind, MasterError, bus_error};
 use super::exec::exec_error;
-use super::program::{CyclicMode, Step};
-use crate::drives::{CycleTimeObject, DriveProfile, InitCommand, StartupWhen};
+use super::program::{RunMode, Step};
+use crate::drives::{CycleTimeObject, DriveProfile, InitCommand, ModeSelector, StartupWhen};
 use crate::ec::{AlState, AlStatusCode, register};
 use crate::link::FrameLink;
 use crate::od::{self, DataType, ObjectAddress, Value};
@@ -80,7 +80,7 @@ pub struct DriveSetup {
     /// Force a profile instead of matching by identity (e.g. the generic CiA 402 profile).
     pub profile: Option<&'static DriveProfile>,
     /// Mode of operation at start.
-    pub mode: CyclicMode,
+    pub mode: RunMode,
     /// PDO mapping; `None` = the profile's recommended cyclic mapping.
     pub mapping: Option<Mapping>,
     /// Extra start-up SDOs, written after the profile's.
@@ -102,7 +102,7 @@ impl DriveSetup {
         Self {
             select,
             profile: None,
-            mode: CyclicMode::Csp,
+            mode: RunMode::Csp,
             mapping: None,
             sdos: Vec::new(),
             following_error_limit: None,
@@ -283,6 +283,39 @@ pub struct DriveFields {
     /// the drive holds at the end of the PRE-OP configuration (its own, or a start-up value),
     /// so that mapping an object does not set it to 0.
     pub held_outputs: Vec<(Field, u64)>,
+    /// The touch-probe objects, where mapped.
+    pub probe: ProbeFields,
+}
+
+/// The touch-probe objects of one drive (CiA 402 0x60B8–0x60BD), where mapped.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ProbeFields {
+    /// 0x60B8 Touch probe function (output).
+    pub function: Option<Field>,
+    /// 0x60B9 Touch probe status (input).
+    pub status: Option<Field>,
+    /// The latched positions: 0x60BA (probe 1 rising), 0x60BB (probe 1 falling), 0x60BC
+    /// (probe 2 rising), 0x60BD (probe 2 falling) (inputs).
+    pub positions: [Option<Field>; 4],
+}
+
+/// The touch-probe function object (0x60B8).
+pub const PROBE_FUNCTION: ObjectAddress = ObjectAddress::new(0x60B8, 0);
+/// The touch-probe status object (0x60B9).
+pub const PROBE_STATUS: ObjectAddress = ObjectAddress::new(0x60B9, 0);
+
+/// The object holding the position latched by `probe` (1 or 2) on `edge`: 0x60BA–0x60BD.
+pub const fn probe_position_object(probe: u8, edge: crate::program::ProbeEdge) -> ObjectAddress {
+    let rising = matches!(edge, crate::program::ProbeEdge::Rising);
+    ObjectAddress::new(
+        match (probe, rising) {
+            (1, true) => 0x60BA,
+            (1, false) => 0x60BB,
+            (_, true) => 0x60BC,
+            (_, false) => 0x60BD,
+        },
+        0,
+    )
 }
 
 /// One drive after start-up.
@@ -784,23 +817,8 @@ pub fn validate(
                 "the device's ESC reports no distributed-clock support",
             ));
         }
-        let mode = crate::cia402::OperationMode::from_i8(setup.mode.code());
-        if !profile.caps.supported_modes.contains(mode) {
-            return Err(MasterError::new(
-                Some(&drive),
-                "checking the mode of operation",
-                ErrorKind::Config,
-                format!(
-                    "the {} does not support {}",
-                    profile.name,
-                    setup.mode.name()
-                ),
-            ));
-        }
-        let mapping = setup
-            .mapping
-            .clone()
-            .unwrap_or_else(|| profile.cyclic_mapping.clone());
+        let mapping = mapping_for_program(setup, profile)
+            .map_err(|(what, e)| MasterError::new(Some(&drive), what, ErrorKind::Config, e))?;
         pdo::limits::validate(&mapping, &profile.pdo_limits, Some(profile.dictionary)).map_err(
             |e| {
                 MasterError::new(
@@ -811,24 +829,6 @@ pub fn validate(
                 )
             },
         )?;
-        for (dir, addr, what) in [
-            (Direction::Rx, CW, "the controlword 0x6040"),
-            (Direction::Tx, SW, "the statusword 0x6041"),
-            (
-                Direction::Rx,
-                setpoint_object(setup.mode),
-                "the set-point of the mode",
-            ),
-        ] {
-            if !mapping.contains(dir, addr) {
-                return Err(MasterError::new(
-                    Some(&drive),
-                    "checking the PDO mapping",
-                    ErrorKind::Config,
-                    format!("{what} ({addr}) must be mapped in the {}", dir.name()),
-                ));
-            }
-        }
         if Layout::new(&mapping).bytes(Direction::Rx) == 0 {
             return Err(MasterError::new(
                 Some(&drive),
@@ -845,15 +845,233 @@ pub fn validate(
     Ok(mappings)
 }
 
+/// The mapping a drive runs its program with, checked against the modes the program uses:
+/// every mode must be one the drive supports, and its objects (the profile's table of objects
+/// per mode, else the controlword, statusword and the mode's set-point) must be mapped. A
+/// program that arms a touch probe needs 0x60B8 out and 0x60B9 plus the latched positions in:
+/// with the profile's own mapping they are added (in the same PDO while the drive allows,
+/// else in the next free one); a mapping of the user's must carry them. The error is
+/// (what was being checked, why).
+fn mapping_for_program(
+    setup: &DriveSetup,
+    profile: &'static DriveProfile,
+) -> Result<Mapping, (&'static str, String)> {
+    let modes = super::program::modes_used(&setup.program, setup.mode);
+    for &code in &modes {
+        let mode = crate::cia402::OperationMode::from_i8(code);
+        if !profile.caps.supported_modes.contains(mode) {
+            return Err((
+                "checking the mode of operation",
+                format!(
+                    "the {} does not support {}{}",
+                    profile.name,
+                    mode.short_name(),
+                    if code == setup.mode.code() {
+                        ""
+                    } else {
+                        ", which the program uses"
+                    }
+                ),
+            ));
+        }
+    }
+    let probes = super::program::probes_used(&setup.program);
+    let mut need: Vec<(Direction, ObjectAddress)> = Vec::new();
+    if !probes.is_empty() {
+        need.push((Direction::Rx, PROBE_FUNCTION));
+        need.push((Direction::Tx, PROBE_STATUS));
+        for &(probe, edge) in &probes {
+            need.push((Direction::Tx, probe_position_object(probe, edge)));
+        }
+    }
+    let mapping = match &setup.mapping {
+        Some(m) => m.clone(),
+        None => with_objects(&profile.cyclic_mapping, &need, profile).map_err(|e| {
+            (
+                "choosing the PDO mapping",
+                format!("the touch probe needs {e}"),
+            )
+        })?,
+    };
+    for (dir, addr, what) in [
+        (Direction::Rx, CW, "the controlword 0x6040"),
+        (Direction::Tx, SW, "the statusword 0x6041"),
+    ] {
+        if !mapping.contains(dir, addr) {
+            return Err((
+                "checking the PDO mapping",
+                format!("{what} ({addr}) must be mapped in the {}", dir.name()),
+            ));
+        }
+    }
+    for &code in &modes {
+        match pdo::limits::RequiredObjects::find(profile.required_objects, code) {
+            Some(req) => req
+                .check(&mapping, profile.name)
+                .map_err(|e| ("checking the PDO mapping", e.to_string()))?,
+            None => {
+                if let Some(m) = RunMode::from_code(code) {
+                    let addr = setpoint_object(m);
+                    if !mapping.contains(Direction::Rx, addr) {
+                        return Err((
+                            "checking the PDO mapping",
+                            format!(
+                                "the set-point of {} ({addr}) must be mapped in the {}",
+                                m.name(),
+                                Direction::Rx.name()
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    for &(dir, addr) in &need {
+        if !mapping.contains(dir, addr) {
+            return Err((
+                "checking the PDO mapping",
+                format!(
+                    "the program arms a touch probe: {addr} must be mapped in the {}",
+                    dir.name()
+                ),
+            ));
+        }
+    }
+    Ok(mapping)
+}
+
+/// `base` with the objects of `need` it lacks added: in the last PDO of their direction while
+/// the drive's limits allow, else in new PDOs at the first free indices of a writable range,
+/// else in the last PDO in place of inputs the cycle can do without ([`DROPPABLE`]). The error
+/// names the objects that do not fit.
+fn with_objects(
+    base: &Mapping,
+    need: &[(Direction, ObjectAddress)],
+    profile: &DriveProfile,
+) -> Result<Mapping, String> {
+    let dict = od::Dictionary::new(profile.dictionary);
+    let mut out = base.clone();
+    for dir in [Direction::Rx, Direction::Tx] {
+        let mut entries = Vec::new();
+        for &(d, addr) in need {
+            if d != dir || base.contains(dir, addr) {
+                continue;
+            }
+            let bits = dict
+                .data_type(addr)
+                .or_else(|| pdo::axis::standard_type(addr))
+                .and_then(|t| t.bit_len())
+                .ok_or_else(|| format!("{addr}, which the {} dictionary lacks", profile.name))?;
+            entries.push(pdo::PdoEntry::new(addr.index, addr.sub, bits as u8));
+        }
+        if entries.is_empty() {
+            continue;
+        }
+        let fits = |m: &Mapping| {
+            pdo::limits::validate(m, &profile.pdo_limits, Some(profile.dictionary)).is_ok()
+        };
+        let mut pdos = out.pdos(dir).to_vec();
+        // In the last PDO.
+        if let Some(last) = pdos.last() {
+            let mut e = last.entries.to_vec();
+            e.extend(entries.iter().copied());
+            let mut grown = pdos.clone();
+            if let Some(l) = grown.last_mut() {
+                *l = pdo::Pdo::owned(l.index, e);
+            }
+            let trial = set_pdos(&out, dir, grown);
+            if fits(&trial) {
+                out = trial;
+                continue;
+            }
+        }
+        // In new PDOs, as many entries each as the range allows.
+        let limits = profile.pdo_limits.direction(dir);
+        let used: Vec<u16> = pdos.iter().map(|p| p.index).collect();
+        let mut free = limits
+            .pdos
+            .iter()
+            .filter(|r| r.mapping_writable)
+            .flat_map(|r| r.indices().map(move |i| (i, r.max_entries)))
+            .filter(|(i, _)| !used.contains(i));
+        let mut rest = entries.as_slice();
+        while !rest.is_empty() {
+            let Some((index, max)) = free.next() else {
+                break;
+            };
+            let (now, later) = rest.split_at(usize::from(max).min(rest.len()));
+            pdos.push(pdo::Pdo::owned(index, now.to_vec()));
+            rest = later;
+        }
+        let trial = set_pdos(&out, dir, pdos);
+        if rest.is_empty() && fits(&trial) {
+            out = trial;
+            continue;
+        }
+        // In the last PDO, in place of inputs the cycle can do without (the drive's own
+        // following error, the torque, the error code, in that order), as few as it takes.
+        let pdos = out.pdos(dir).to_vec();
+        if let Some(last) = pdos.last() {
+            let mut e: Vec<pdo::PdoEntry> = last.entries.to_vec();
+            for drop in DROPPABLE {
+                if dir != Direction::Tx {
+                    break;
+                }
+                e.retain(|x| x.address() != drop);
+                let mut grown = pdos.clone();
+                if let Some(l) = grown.last_mut() {
+                    let mut with = e.clone();
+                    with.extend(entries.iter().copied());
+                    *l = pdo::Pdo::owned(l.index, with);
+                }
+                let trial = set_pdos(&out, dir, grown);
+                if fits(&trial) {
+                    out = trial;
+                    break;
+                }
+            }
+            if entries.iter().all(|x| out.contains(dir, x.address())) {
+                continue;
+            }
+        }
+        let names: Vec<String> = entries.iter().map(|e| e.address().to_string()).collect();
+        return Err(format!(
+            "{} in the {}, and the {}'s mapping has no room for them: give a mapping that \
+             carries them",
+            names.join(", "),
+            dir.name(),
+            profile.name
+        ));
+    }
+    Ok(out)
+}
+
+/// Inputs of a profile's mapping the cycle can do without, in the order they give way to
+/// objects a program needs: the drive's following error 0x60F4 (the master computes its own),
+/// the torque actual value 0x6077 (telemetry only), the error code 0x603F (the fault is still
+/// seen in the statusword, and read by SDO).
+const DROPPABLE: [ObjectAddress; 3] = [
+    ObjectAddress::new(0x60F4, 0),
+    ObjectAddress::new(0x6077, 0),
+    ObjectAddress::new(0x603F, 0),
+];
+
+fn set_pdos(m: &Mapping, dir: Direction, pdos: Vec<pdo::Pdo>) -> Mapping {
+    match dir {
+        Direction::Rx => Mapping::owned(pdos, m.tx.to_vec()),
+        Direction::Tx => Mapping::owned(m.rx.to_vec(), pdos),
+    }
+}
+
 const CW: ObjectAddress = ObjectAddress::new(0x6040, 0);
 const SW: ObjectAddress = ObjectAddress::new(0x6041, 0);
 const MODE: ObjectAddress = ObjectAddress::new(0x6060, 0);
 
-fn setpoint_object(mode: CyclicMode) -> ObjectAddress {
+fn setpoint_object(mode: RunMode) -> ObjectAddress {
     match mode {
-        CyclicMode::Csp => ObjectAddress::new(0x607A, 0),
-        CyclicMode::Csv => ObjectAddress::new(0x60FF, 0),
-        CyclicMode::Cst => ObjectAddress::new(0x6071, 0),
+        RunMode::Csp | RunMode::Pp => ObjectAddress::new(0x607A, 0),
+        RunMode::Csv | RunMode::Pv => ObjectAddress::new(0x60FF, 0),
+        RunMode::Cst | RunMode::Tq => ObjectAddress::new(0x6071, 0),
     }
 }
 
@@ -1427,6 +1645,8 @@ struct DriveWrites {
     init_pre: Vec<&'static InitCommand>,
     /// Those for SAFE-OP → OP, sent once the drive is in SAFE-OP (`send_so_init_cmds`).
     init_so: Vec<&'static InitCommand>,
+    /// The profile's mode selector and the modes the program uses: read and judged first.
+    mode_selector: Option<(ModeSelector, Vec<i8>)>,
 }
 
 impl DriveWrites {
@@ -1448,6 +1668,9 @@ impl DriveWrites {
             undriven: Vec::new(),
             init_pre: Vec::new(),
             init_so: Vec::new(),
+            mode_selector: profile
+                .mode_selector
+                .map(|m| (m, super::program::modes_used(&setup.program, setup.mode))),
         };
         w.plan_init_cmds(drive, setup, profile)?;
         if remap {
@@ -1642,6 +1865,51 @@ struct MailboxDone {
     held: Vec<HeldValue>,
     /// The InitCmd that failed (after its retries) and why; nothing after it was written.
     init_failed: Option<(&'static InitCommand, CoeError)>,
+    /// The mode selector's value does not allow the program's modes: why (nothing was
+    /// written).
+    modes_refused: Option<String>,
+}
+
+/// Whether the mode selector's value allows every mode the program uses; `Err` says which
+/// mode, the setting read, what it allows, and the setting that would.
+fn judge_mode_selector(sel: &ModeSelector, modes: &[i8], raw: &[u8]) -> Result<(), String> {
+    let mut b = [0u8; 8];
+    for (d, s) in b.iter_mut().zip(raw) {
+        *d = *s;
+    }
+    let value = i64::from_le_bytes(b);
+    let names = |ms: &[i8]| -> String {
+        ms.iter()
+            .map(|m| crate::cia402::OperationMode::from_i8(*m).short_name())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let group = sel.group(value);
+    let Some(&bad) = modes
+        .iter()
+        .find(|m| !group.is_some_and(|g| g.modes.contains(m)))
+    else {
+        return Ok(());
+    };
+    let now = match group {
+        Some(g) => format!("\"{}\" (allows {})", g.name, names(g.modes)),
+        None => "a setting the manual does not list".to_string(),
+    };
+    let fix = match sel.group_for(modes) {
+        Some(g) => format!("set it to \"{}\" and power-cycle the drive", g.name),
+        None => format!(
+            "no one setting allows all of {}: split the program",
+            names(modes)
+        ),
+    };
+    Err(format!(
+        "the program runs {}, which {} ({}) = 0x{value:04X} does not allow: it selects {now} \
+         ({}); {fix}",
+        crate::cia402::OperationMode::from_i8(bad).short_name(),
+        sel.name,
+        sel.object,
+        sel.source
+    ))
 }
 
 /// Send one InitCmd with its own timeout, again after a timeout or a refusal as often as its
@@ -1750,8 +2018,16 @@ async fn configure_mailbox(
         interpolated: None,
         held: Vec::new(),
         init_failed: None,
+        modes_refused: None,
     };
     c.drain().await?;
+    if let Some((sel, modes)) = &plan.mode_selector {
+        let raw = c.upload(sel.object, false).await?;
+        if let Err(why) = judge_mode_selector(sel, modes, &raw) {
+            done.modes_refused = Some(why);
+            return Ok(done);
+        }
+    }
     for (addr, bytes, _why) in pdo_writes {
         c.download(*addr, bytes, false).await?;
     }
@@ -1795,6 +2071,7 @@ fn judge_drive(
         interpolated,
         held,
         init_failed,
+        modes_refused,
     } = done.map_err(|e| {
         let mut e = MasterError::from(SessionError::Coe(e));
         // Name the purpose of the write that failed.
@@ -1809,6 +2086,14 @@ fn judge_drive(
         }
         e
     })?;
+    if let Some(why) = modes_refused {
+        return Err(MasterError::new(
+            Some(drive),
+            "checking the modes of operation",
+            ErrorKind::Config,
+            why,
+        ));
+    }
     if let Some((ic, e)) = init_failed {
         return Err(init_cmd_error(drive, ic, &e));
     }
@@ -2196,11 +2481,20 @@ fn resolve_fields(layout: &Layout, profile: &DriveProfile) -> Result<DriveFields
             output_defaults.push((f, d.value));
         }
     }
+    let mut probe = ProbeFields {
+        function: get(Direction::Rx, PROBE_FUNCTION)?,
+        status: get(Direction::Tx, PROBE_STATUS)?,
+        positions: [None; 4],
+    };
+    for (slot, index) in probe.positions.iter_mut().zip(0x60BAu16..=0x60BD) {
+        *slot = get(Direction::Tx, ObjectAddress::new(index, 0))?;
+    }
     Ok(DriveFields {
         axis,
         counter,
         output_defaults,
         held_outputs: Vec::new(),
+        probe,
     })
 }
 

@@ -9,7 +9,7 @@
 //!   (`triple_buffer`): the cycle writes into a pre-allocated back buffer and publishes; readers
 //!   always get a complete, recent snapshot, and neither side ever waits for the other.
 
-use super::program::CyclicMode;
+use super::program::RunMode;
 use crate::cia402;
 use serde::Serialize;
 
@@ -53,7 +53,7 @@ pub enum Command {
     /// Reset a fault (rising edge on controlword bit 7).
     FaultReset(Axes),
     /// Switch the mode of operation while enabled (no jump).
-    Mode(Axes, CyclicMode),
+    Mode(Axes, RunMode),
     /// Start (or restart) the axis's configured program once enabled.
     RunProgram(Axes),
     /// Stop the running program and hold the set-point.
@@ -247,6 +247,17 @@ pub enum EventKind {
         outcome: crate::cia402::HomingOutcome,
         /// How the drive's manual names the failure (empty when it names none).
         drive_says: &'static str,
+    },
+    /// A touch probe latched: the position the drive latched at the probe's edge.
+    ProbeLatched {
+        /// Axis index.
+        axis: u16,
+        /// Probe 1 or 2.
+        probe: u8,
+        /// The edge.
+        edge: crate::program::ProbeEdge,
+        /// The latched position (counts, unwrapped like the actual position).
+        position: i64,
     },
     /// A command could not be carried out.
     CommandRefused {

@@ -9,7 +9,9 @@
 //!
 //! By name, a device takes quirks after a `+`: `bdhde+no-state-skipping`,
 //! `mr-j4-tm+cycle-time-read-only+stale-inputs-until-op` (`ecdrive sim --device`, `-i sim:…`,
-//! `[sim] devices`). In the library: [`Quirks`] and each device's `with_quirks`.
+//! `[sim] devices`). In the library: [`Quirks`] and each device's `with_quirks`. An emulated
+//! drive also takes parameters stored in its non-volatile memory after an `@`
+//! (`mr-j4-tm@0x2001=2`, [`stored_params`]).
 //!
 //! | quirk | what the device does | seen on |
 //! |---|---|---|
@@ -269,7 +271,8 @@ impl fmt::Display for Quirks {
 /// Split a device name into its base name and quirks: `bdhde+no-state-skipping` →
 /// (`bdhde`, {no-state-skipping}). The error names an unknown quirk and lists the known ones.
 pub fn split_name(name: &str) -> Result<(&str, Quirks), String> {
-    let mut parts = name.split('+');
+    let quirked = name.split_once('@').map_or(name, |(q, _)| q);
+    let mut parts = quirked.split('+');
     let base = parts.next().unwrap_or_default();
     let mut quirks = Quirks::NONE;
     for p in parts {
@@ -282,6 +285,31 @@ pub fn split_name(name: &str) -> Result<(&str, Quirks), String> {
         quirks = quirks.with(q);
     }
     Ok((base, quirks))
+}
+
+/// The parameters stored in an emulated drive's non-volatile memory, named after `@`:
+/// `mr-j4-tm@0x2001=2` is an MR-J4-TM whose [Pr. PA01] (0x2001) holds 2 from power-on (the
+/// profile modes); several are `@A=V@B=W`. Values are decimal or `0x` hex.
+pub fn stored_params(name: &str) -> Result<Vec<(crate::od::ObjectAddress, i64)>, String> {
+    let mut out = Vec::new();
+    for p in name.split('@').skip(1) {
+        let (obj, value) = p
+            .split_once('=')
+            .ok_or_else(|| format!("stored parameter {p:?} in {name:?} is not OBJECT=VALUE"))?;
+        let addr: crate::od::ObjectAddress = obj
+            .parse()
+            .map_err(|e| format!("stored parameter {p:?} in {name:?}: {e}"))?;
+        let v = match value
+            .strip_prefix("0x")
+            .or_else(|| value.strip_prefix("0X"))
+        {
+            Some(h) => i64::from_str_radix(h, 16),
+            None => value.parse(),
+        }
+        .map_err(|_| format!("stored parameter {p:?} in {name:?}: {value:?} is not a number"))?;
+        out.push((addr, v));
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

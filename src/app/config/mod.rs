@@ -56,7 +56,7 @@ mod raw;
 
 use crate::app::ethercat::tools::{SimSettings, Target};
 use crate::drives::DriveProfile;
-use crate::master::program::{self, CyclicMode, Step, Target as MoveTarget};
+use crate::master::program::{self, ProbeEdge, RunMode, Step, Target as MoveTarget};
 use crate::master::session::MasterConfig;
 use crate::master::startup::{DriveSetup, Selector};
 use crate::od::{Dictionary, ObjectAddress, Value};
@@ -696,7 +696,7 @@ fn esi_mapping(
     e: &Spanned<String>,
     f: &crate::esi::EsiFile,
     dev: usize,
-    modes: &[CyclicMode],
+    modes: &[RunMode],
     notes: &mut Vec<String>,
 ) -> Result<Mapping, ConfigError> {
     let refs: Vec<crate::esi::CyclicModeRef> = crate::esi::CYCLIC_MODES
@@ -985,7 +985,7 @@ fn drive(
             }
             mode
         }
-        None => CyclicMode::Csp,
+        None => RunMode::Csp,
     };
     if let Some(p) = profile {
         let ns = u32::try_from(cycle.as_nanos()).unwrap_or(u32::MAX);
@@ -1099,6 +1099,10 @@ fn drive(
         cx.err(span, key(&format!("program[{n}]")), m)
     })?;
     let has_home = !homing.is_empty();
+    let profile_objects = profile_writes(&r.program, profile, k).map_err(|(n, m)| {
+        let span = r.program.get(n).map_or(d.span(), Spanned::span);
+        cx.err(span, key(&format!("program[{n}]")), m)
+    })?;
 
     // Every mode the program runs in.
     let mut modes = vec![mode];
@@ -1126,11 +1130,27 @@ fn drive(
             ];
             for m in &modes {
                 let (obj, what) = match m {
-                    CyclicMode::Csp => (a(0x607A, 0), "target position"),
-                    CyclicMode::Csv => (a(0x60FF, 0), "target velocity"),
-                    CyclicMode::Cst => (a(0x6071, 0), "target torque"),
+                    RunMode::Csp | RunMode::Pp => (a(0x607A, 0), "target position"),
+                    RunMode::Csv | RunMode::Pv => (a(0x60FF, 0), "target velocity"),
+                    RunMode::Cst | RunMode::Tq => (a(0x6071, 0), "target torque"),
                 };
                 need.push((Direction::Rx, obj, format!("the {what} of {}", m.name())));
+            }
+            for (probe, edge) in program::probes_used(&steps) {
+                for (dir, obj) in [
+                    (Direction::Rx, a(0x60B8, 0)),
+                    (Direction::Tx, a(0x60B9, 0)),
+                    (
+                        Direction::Tx,
+                        crate::master::startup::probe_position_object(probe, edge),
+                    ),
+                ] {
+                    need.push((
+                        dir,
+                        obj,
+                        format!("for touch probe {probe} ({} edge), {obj}", edge.name()),
+                    ));
+                }
             }
             if modes.len() > 1 || has_home {
                 need.push((
@@ -1206,17 +1226,17 @@ fn drive(
             sdos.push((addr, value));
         }
     }
-    // A start-up value for an object a home step writes would silently change the homing.
-    if has_home
-        && let Some((a, _)) = sdos
-            .iter()
-            .find(|(a, _)| homing.iter().any(|(h, _)| h == a))
+    // A start-up value for an object a home, pp, pv or tq step writes would silently change
+    // that step.
+    if let Some((a, _)) = sdos
+        .iter()
+        .find(|(a, _)| homing.iter().chain(&profile_objects).any(|(h, _)| h == a))
     {
         let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
         return Err(cx.err(
             span,
             key("sdos"),
-            format!("{a} is written by the program's home step: give it there, not in sdos"),
+            format!("{a} is written by a step of the program: give it there, not in sdos"),
         ));
     }
     // A value for the object of one of the ESI file's Fixed InitCmds.
@@ -1236,7 +1256,7 @@ fn drive(
             ),
         ));
     }
-    sdos.splice(0..0, homing);
+    sdos.splice(0..0, homing.into_iter().chain(profile_objects));
     Ok((
         DriveSetup {
             select,
@@ -1385,13 +1405,17 @@ fn build_mapping(
     Ok(Mapping::owned(rx, tx))
 }
 
-fn mode_of(s: &str) -> Result<CyclicMode, String> {
+fn mode_of(s: &str) -> Result<RunMode, String> {
     match s.to_ascii_lowercase().as_str() {
-        "csp" => Ok(CyclicMode::Csp),
-        "csv" => Ok(CyclicMode::Csv),
-        "cst" => Ok(CyclicMode::Cst),
+        "csp" => Ok(RunMode::Csp),
+        "csv" => Ok(RunMode::Csv),
+        "cst" => Ok(RunMode::Cst),
+        "pp" => Ok(RunMode::Pp),
+        "pv" => Ok(RunMode::Pv),
+        "tq" => Ok(RunMode::Tq),
         other => Err(format!(
-            "unknown mode {other:?}; the cyclic modes are csp, csv and cst"
+            "unknown mode {other:?}; the modes are csp, csv, cst, pp, pv and tq (hm through a \
+             home step)"
         )),
     }
 }
@@ -1472,7 +1496,211 @@ fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
             }
             Step::Home { method }
         }
+        raw::Step::Pp {
+            ref to,
+            ref by,
+            velocity,
+            acceleration,
+            deceleration,
+            immediate,
+        } => {
+            positive_all(
+                "pp",
+                &[
+                    ("velocity", velocity),
+                    ("acceleration", acceleration),
+                    ("deceleration", deceleration.unwrap_or(acceleration)),
+                ],
+            )?;
+            let (targets, relative) = match (to, by) {
+                (Some(t), None) => (t, false),
+                (None, Some(b)) => (b, true),
+                _ => return Err("a pp step needs exactly one of `to` and `by` (lists)".into()),
+            };
+            if targets.is_empty() {
+                return Err("a pp step needs at least one target".into());
+            }
+            Step::Pp {
+                targets: targets.iter().map(|t| t * k).collect(),
+                relative,
+                immediate,
+            }
+        }
+        raw::Step::Pv {
+            velocity,
+            acceleration,
+            deceleration,
+            seconds,
+        } => {
+            positive_all(
+                "pv",
+                &[
+                    ("acceleration", acceleration),
+                    ("deceleration", deceleration.unwrap_or(acceleration)),
+                ],
+            )?;
+            Step::Pv {
+                velocity: velocity * k,
+                seconds,
+            }
+        }
+        raw::Step::Tq {
+            torque,
+            slope,
+            seconds,
+        } => {
+            if let Some(sl) = slope {
+                positive_all("tq", &[("slope", sl)])?;
+            }
+            Step::Tq {
+                torque,
+                seconds,
+                ramp: slope.map_or(0.0, |sl| torque.abs() / sl),
+            }
+        }
+        raw::Step::TouchProbe { probe, ref edge } => Step::TouchProbe {
+            probe: if matches!(probe, 1 | 2) {
+                probe
+            } else {
+                return Err(format!("touch_probe: probe must be 1 or 2, not {probe}"));
+            },
+            edge: match edge.as_str() {
+                "rising" => ProbeEdge::Rising,
+                "falling" => ProbeEdge::Falling,
+                other => {
+                    return Err(format!(
+                        "touch_probe: edge must be \"rising\" or \"falling\", not {other:?}"
+                    ));
+                }
+            },
+        },
     })
+}
+
+fn positive_all(step: &str, values: &[(&str, f64)]) -> Result<(), String> {
+    for &(name, v) in values {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(format!("{step}: {name} must be a positive number, not {v}"));
+        }
+    }
+    Ok(())
+}
+
+/// The start-up writes of the program's pp, pv and tq steps in the drive's units: 0x6081
+/// (pp velocity), 0x6083/0x6084 (pp and pv acceleration and deceleration), 0x6087 (tq slope).
+/// They are written once, in PRE-OP, so every step that sets one object must ask the same
+/// value of it (the error names both steps).
+fn profile_writes(
+    program: &[Spanned<raw::Step>],
+    p: Option<&'static DriveProfile>,
+    k: f64,
+) -> Result<Vec<(ObjectAddress, Value)>, (usize, String)> {
+    use crate::cia402::{AccelUnit, TorqueSlopeUnit};
+    let a = ObjectAddress::new;
+    let mut out: Vec<(ObjectAddress, Value, usize)> = Vec::new();
+    for (n, s) in program.iter().enumerate() {
+        let wants: Vec<(ObjectAddress, &str, f64)> = match *s.get_ref() {
+            raw::Step::Pp {
+                velocity,
+                acceleration,
+                deceleration,
+                ..
+            } => vec![
+                (a(0x6081, 0), "velocity", velocity),
+                (a(0x6083, 0), "acceleration", acceleration),
+                (
+                    a(0x6084, 0),
+                    "deceleration",
+                    deceleration.unwrap_or(acceleration),
+                ),
+            ],
+            raw::Step::Pv {
+                acceleration,
+                deceleration,
+                ..
+            } => vec![
+                (a(0x6083, 0), "acceleration", acceleration),
+                (
+                    a(0x6084, 0),
+                    "deceleration",
+                    deceleration.unwrap_or(acceleration),
+                ),
+            ],
+            raw::Step::Tq {
+                slope: Some(slope), ..
+            } => vec![(a(0x6087, 0), "slope", slope)],
+            raw::Step::Tq { slope: None, .. } => vec![(a(0x6087, 0), "slope", 0.0)],
+            _ => continue,
+        };
+        let Some(p) = p else {
+            return Err((
+                n,
+                "a pp, pv or tq step needs the drive's profile to write its profile objects in \
+                 the drive's units: give profile, esi or profile_file"
+                    .into(),
+            ));
+        };
+        let Some(pu) = p.units.profile else {
+            return Err((
+                n,
+                format!(
+                    "the {} profile does not give the units of its profile objects",
+                    p.name
+                ),
+            ));
+        };
+        let u = &p.units;
+        for (obj, what, v) in wants {
+            let drive_value = match obj.index {
+                0x6081 => u.from_rev_per_s(pu.profile_velocity, v * k / u.position_per_rev),
+                0x6083 | 0x6084 => {
+                    let rev_s2 = v * k / u.position_per_rev;
+                    match pu.acceleration {
+                        AccelUnit::MillisecondsTo { rpm } => rpm / 60.0 / rev_s2 * 1000.0,
+                        AccelUnit::RpmPerSecond => rev_s2 * 60.0,
+                        AccelUnit::PositionPerSecond2 => v * k,
+                    }
+                }
+                // 0 = a step.
+                _ if v == 0.0 => 0.0,
+                _ => {
+                    let permille_s = v * u.torque_per_mille;
+                    match pu.torque_slope {
+                        TorqueSlopeUnit::PerMillePerSecond => permille_s,
+                        TorqueSlopeUnit::MillisecondsToRated => 1000.0 / permille_s * 1000.0,
+                    }
+                }
+            };
+            let r = drive_value.round();
+            let min = if obj.index == 0x6087 { 0.0 } else { 1.0 };
+            if !(r >= min && r <= f64::from(u32::MAX)) {
+                return Err((
+                    n,
+                    format!(
+                        "the step's {what} is {r} in the {}'s unit of {obj}: it must be {min} to {}",
+                        p.name,
+                        u32::MAX
+                    ),
+                ));
+            }
+            let value = Value::Uint(r as u64);
+            match out.iter().find(|(o, ..)| *o == obj) {
+                Some((_, v0, f)) if *v0 != value => {
+                    return Err((
+                        n,
+                        format!(
+                            "this step's {what} sets {obj} to {r}, program[{f}] sets it \
+                             otherwise: profile objects are written once at start-up, so the \
+                             steps of a drive must agree"
+                        ),
+                    ));
+                }
+                Some(_) => {}
+                None => out.push((obj, value, n)),
+            }
+        }
+    }
+    Ok(out.into_iter().map(|(o, v, _)| (o, v)).collect())
 }
 
 /// The start-up writes of the program's `home` steps (0x6098, 0x6099:01/02, 0x609A in the
@@ -1652,7 +1880,44 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
             over("speed_zero", speed_zero, l.max_velocity, "/s")?;
             over("acceleration", acceleration, l.max_acceleration, "/s²")
         }
-        raw::Step::Mode { .. } | raw::Step::Dwell { .. } => Ok(()),
+        raw::Step::Pp {
+            velocity,
+            acceleration,
+            deceleration,
+            ..
+        } => {
+            over("velocity", velocity, l.max_velocity, "/s")?;
+            over("acceleration", acceleration, l.max_acceleration, "/s²")?;
+            over(
+                "deceleration",
+                deceleration.unwrap_or(acceleration),
+                l.max_acceleration,
+                "/s²",
+            )
+        }
+        raw::Step::Pv {
+            velocity,
+            acceleration,
+            deceleration,
+            ..
+        } => {
+            over("velocity", velocity, l.max_velocity, "/s")?;
+            over("acceleration", acceleration, l.max_acceleration, "/s²")?;
+            over(
+                "deceleration",
+                deceleration.unwrap_or(acceleration),
+                l.max_acceleration,
+                "/s²",
+            )
+        }
+        raw::Step::Tq { torque, .. } => match l.max_torque {
+            Some(lim) if torque.abs() > lim => Err(format!(
+                "torque {} exceeds the drive's limit of {lim}",
+                torque.abs()
+            )),
+            _ => Ok(()),
+        },
+        raw::Step::Mode { .. } | raw::Step::Dwell { .. } | raw::Step::TouchProbe { .. } => Ok(()),
     }
 }
 
@@ -1665,7 +1930,9 @@ fn rated(i: usize, p: &DriveProfile, r: &raw::Drive, k: f64, warnings: &mut Vec<
         let velocity = match *s.get_ref() {
             raw::Step::Move { velocity, .. }
             | raw::Step::Ramp { velocity, .. }
-            | raw::Step::Jog { velocity, .. } => Some(velocity.abs()),
+            | raw::Step::Jog { velocity, .. }
+            | raw::Step::Pp { velocity, .. }
+            | raw::Step::Pv { velocity, .. } => Some(velocity.abs()),
             raw::Step::Sine {
                 amplitude,
                 frequency,
@@ -1685,7 +1952,7 @@ fn rated(i: usize, p: &DriveProfile, r: &raw::Drive, k: f64, warnings: &mut Vec<
                 ));
             }
         }
-        if let (raw::Step::Torque { torque, .. }, Some(rating)) =
+        if let (raw::Step::Torque { torque, .. } | raw::Step::Tq { torque, .. }, Some(rating)) =
             (s.get_ref(), p.ratings.max_torque)
             && torque.abs() > rating.value
         {
@@ -1723,7 +1990,21 @@ fn describe(s: &raw::Step, u: &str) -> String {
             speed_zero,
             ..
         } => format!("home (method {method}) at {speed_switch}/{speed_zero} {u}/s"),
+        raw::Step::Pp { to: Some(t), .. } => format!("pp to {} {u}", list(t)),
+        raw::Step::Pp { by, .. } => format!("pp by {} {u}", list(by.as_deref().unwrap_or(&[]))),
+        raw::Step::Pv {
+            velocity, seconds, ..
+        } => format!("pv at {velocity} {u}/s for {seconds} s"),
+        raw::Step::Tq {
+            torque, seconds, ..
+        } => format!("tq {torque} for {seconds} s"),
+        raw::Step::TouchProbe { probe, edge } => format!("arm touch probe {probe} ({edge} edge)"),
     }
+}
+
+fn list(v: &[f64]) -> String {
+    let items: Vec<String> = v.iter().map(f64::to_string).collect();
+    items.join(", ")
 }
 
 #[cfg(test)]

@@ -187,4 +187,33 @@ pub(super) enum Step {
         speed_zero: f64,
         acceleration: f64,
     },
+    Pp {
+        #[serde(default)]
+        to: Option<Vec<f64>>,
+        #[serde(default)]
+        by: Option<Vec<f64>>,
+        velocity: f64,
+        acceleration: f64,
+        #[serde(default)]
+        deceleration: Option<f64>,
+        #[serde(default)]
+        immediate: bool,
+    },
+    Pv {
+        velocity: f64,
+        acceleration: f64,
+        #[serde(default)]
+        deceleration: Option<f64>,
+        seconds: f64,
+    },
+    Tq {
+        torque: f64,
+        #[serde(default)]
+        slope: Option<f64>,
+        seconds: f64,
+    },
+    TouchProbe {
+        probe: u8,
+        edge: String,
+    },
 }

@@ -11,7 +11,7 @@ use crate::app::ethercat::tools::{ToolLink, finish_capture};
 use crate::drives::{self, DriveProfile};
 use crate::master::cycle::CycleSettings;
 use crate::master::error::{ErrorKind, MasterError};
-use crate::master::program::{CyclicMode, Step, Target};
+use crate::master::program::{RunMode, Step, Target};
 use crate::master::session::{HistoryEntry, Master, MasterConfig};
 use crate::master::startup::{DriveSetup, Selector};
 use crate::master::telemetry::StopKind;
@@ -142,9 +142,7 @@ pub fn program(profile: &DriveProfile) -> Vec<Step> {
             frequency: 2.0,
             periods: 2.0,
         },
-        Step::Mode {
-            mode: CyclicMode::Csv,
-        },
+        Step::Mode { mode: RunMode::Csv },
         Step::Ramp {
             velocity: 1.0 * rev,
             acceleration: 10.0 * rev,
@@ -155,9 +153,7 @@ pub fn program(profile: &DriveProfile) -> Vec<Step> {
             acceleration: 10.0 * rev,
             hold: 0.05,
         },
-        Step::Mode {
-            mode: CyclicMode::Cst,
-        },
+        Step::Mode { mode: RunMode::Cst },
         Step::Torque {
             torque: 50.0,
             slope: Some(1000.0),
@@ -171,17 +167,13 @@ pub fn program(profile: &DriveProfile) -> Vec<Step> {
         // Back to position control through csv, which brakes with the drive's velocity loop
         // (with zero torque a free motor coasts, and the MR-J4-TM switches to a position mode
         // only at zero speed).
-        Step::Mode {
-            mode: CyclicMode::Csv,
-        },
+        Step::Mode { mode: RunMode::Csv },
         Step::Ramp {
             velocity: 0.0,
             acceleration: 10.0 * rev,
             hold: 0.05,
         },
-        Step::Mode {
-            mode: CyclicMode::Csp,
-        },
+        Step::Mode { mode: RunMode::Csp },
         Step::Move {
             target: Target::By(-0.5 * rev),
             velocity: 2.0 * rev,
@@ -332,7 +324,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
                 modes: cycle
                     .modes_run
                     .get(i)
-                    .map(|v| v.iter().map(|m| m.name().to_string()).collect())
+                    .map(|v| v.iter().map(|m| m.short_name().to_string()).collect())
                     .unwrap_or_default(),
                 max_following_error: fe,
                 max_following_error_rev: fe as f64 / rev,

@@ -87,6 +87,7 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
         complete_access: false,
         esi: "",
         zero_speed_flag: None,
+        mode_selector: None,
         ratings: crate::drives::Ratings::NONE,
     },
 };

@@ -681,6 +681,16 @@ pub fn run_report(r: &RunReport) {
                 d.modes_run.join(", ")
             }
         );
+        for l in &d.probe_latches {
+            let at = match (&d.units, l.value) {
+                (Some(u), Some(v)) => format!("{v:.4} {} ({} counts)", u.name, l.counts),
+                _ => format!("{} counts", l.counts),
+            };
+            println!(
+                "  Touch probe {}:       latched on the {} edge at {at}",
+                l.probe, l.edge
+            );
+        }
         let drive_fe = if d.following_error_drive_stuck {
             "; the drive's 0x60F4 stayed 0 while moving (not trusted)".to_string()
         } else {

@@ -497,6 +497,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
         complete_access: false,
         esi: include_str!("../../../../esi/Servotronix_BDHDE.xml"),
         zero_speed_flag: None,
+        mode_selector: None,
         ratings: RATINGS,
     },
 };

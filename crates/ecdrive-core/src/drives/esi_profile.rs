@@ -303,6 +303,7 @@ pub fn from_esi(
             complete_access: coe.is_some_and(|c| c.complete_access),
             esi: "",
             zero_speed_flag: None,
+            mode_selector: None,
             ratings: crate::drives::Ratings::NONE,
         },
     };

@@ -222,6 +222,7 @@ pub static GENERIC_CIA402: DriveProfile = DriveProfile {
         complete_access: false,
         esi: "",
         zero_speed_flag: None,
+        mode_selector: None,
         ratings: crate::drives::Ratings::NONE,
     },
 };

@@ -47,6 +47,7 @@ pub use registry::{
 
 pub use profile::{
     CycleCounter, CycleTimeError, CycleTimeObject, CycleTimes, DriveProfile, EtherCat,
-    IdentityMatch, InitCommand, OutputDefault, Rating, Ratings, StartupSdo, StartupWhen,
-    StatusFlag, SyncSpec, SyncWrite, Units, interpolation_cycle_ns, interpolation_standard_form,
+    IdentityMatch, InitCommand, ModeGroup, ModeSelector, OutputDefault, Rating, Ratings,
+    StartupSdo, StartupWhen, StatusFlag, SyncSpec, SyncWrite, Units, interpolation_cycle_ns,
+    interpolation_standard_form,
 };

@@ -18,8 +18,8 @@
 //!   taken where the manual contradicts itself (DISCREPANCY), in one section at the end.
 
 use super::profile::{
-    CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, OutputDefault,
-    StartupSdo, StatusFlag, SyncSpec, Units,
+    CycleCounter, CycleTimeObject, CycleTimes, DriveProfile, IdentityMatch, ModeGroup,
+    ModeSelector, OutputDefault, StartupSdo, StatusFlag, SyncSpec, Units,
 };
 use crate::cia402::VelocityUnit;
 use crate::cia402::{DriveCaps, ErrorEntry, QuickStopOption, SupportedModes, VendorModeBit};
@@ -331,6 +331,44 @@ pub const REQUIRED_OBJECTS: &[RequiredObjects] = &[
 // CiA 402 behaviour (§5.1, §5.4, §5.6, §7.3.1(3), §7.3.8)
 // ============================================================================================
 
+/// [Pr. PA01] (0x2001) selects the usable modes, read at power-on (§5.4.1 table: "usable
+/// control modes are limited depending on the setting of [Pr. PA01]"). The low hex digit
+/// selects: ___0 / ___1 the cyclic synchronous modes (and hm), ___2 the profile modes (and
+/// hm), ___6 / ___8 the point-table and indexer methods (software version B2 or later).
+pub const MODE_SELECTOR: ModeSelector = ModeSelector {
+    object: ObjectAddress::new(0x2001, 0),
+    name: "[Pr. PA01] Operation mode",
+    mask: 0xF,
+    groups: &[
+        ModeGroup {
+            value: 0,
+            name: "___0: Automatic selection by each network",
+            modes: &[6, 8, 9, 10],
+        },
+        ModeGroup {
+            value: 1,
+            name: "___1: Cyclic synchronous mode",
+            modes: &[6, 8, 9, 10],
+        },
+        ModeGroup {
+            value: 2,
+            name: "___2: Profile mode",
+            modes: &[1, 3, 4, 6],
+        },
+        ModeGroup {
+            value: 6,
+            name: "___6: Positioning mode (point table method)",
+            modes: &[6, -100, -101],
+        },
+        ModeGroup {
+            value: 8,
+            name: "___8: Positioning mode (indexer method)",
+            modes: &[6, -100, -103],
+        },
+    ],
+    source: "MR-J4-TM manual §5.4.1",
+};
+
 /// 0x6502 vendor bits (§7.3.8(8)): bit 16 jg (−100), bit 17 pt (−101), bit 19 idx (−103).
 pub const VENDOR_MODE_BITS: &[VendorModeBit] = &[
     VendorModeBit {
@@ -535,6 +573,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
             address: ObjectAddress::new(0x2D12, 0),
             bit: 3,
         }),
+        mode_selector: Some(MODE_SELECTOR),
         ratings: RATINGS,
     },
 };

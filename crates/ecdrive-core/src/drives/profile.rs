@@ -253,9 +253,53 @@ pub struct EtherCat {
     /// A status bit the drive sets at zero speed, which the CiA 402 engine uses (when mapped)
     /// to decide standstill before a mode switch that needs it (MR-J4-TM: 0x2D12 bit 3 S_ZSP).
     pub zero_speed_flag: Option<StatusFlag>,
+    /// A parameter that selects which modes of operation are usable, read at power-on
+    /// (MR-J4-TM [Pr. PA01]: the cyclic modes or the profile modes, never both). Start-up reads
+    /// it and refuses a program that needs a mode it does not allow, naming the setting.
+    pub mode_selector: Option<ModeSelector>,
     /// The largest torque and speed the drive itself documents, whatever the motor: a program
     /// beyond them gets a warning when the configuration is checked.
     pub ratings: Ratings,
+}
+
+/// A parameter that selects the usable modes of operation ([`EtherCat::mode_selector`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeSelector {
+    /// The parameter.
+    pub object: ObjectAddress,
+    /// How the manual names it ("[Pr. PA01] Operation mode").
+    pub name: &'static str,
+    /// The bits of the value that select the group (the group is `value & mask`).
+    pub mask: i64,
+    /// The groups.
+    pub groups: &'static [ModeGroup],
+    /// Where the manual says so.
+    pub source: &'static str,
+}
+
+/// The modes one setting of a [`ModeSelector`] allows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeGroup {
+    /// The selector value (after the mask).
+    pub value: i64,
+    /// How the manual names the setting ("___2: Profile mode").
+    pub name: &'static str,
+    /// The 0x6060 values it allows.
+    pub modes: &'static [i8],
+}
+
+impl ModeSelector {
+    /// The group a read value selects (`None`: a value the manual does not list).
+    pub fn group(&self, value: i64) -> Option<&'static ModeGroup> {
+        self.groups.iter().find(|g| g.value == value & self.mask)
+    }
+
+    /// A group that allows every one of `modes`, if there is one.
+    pub fn group_for(&self, modes: &[i8]) -> Option<&'static ModeGroup> {
+        self.groups
+            .iter()
+            .find(|g| modes.iter().all(|m| g.modes.contains(m)))
+    }
 }
 
 /// One documented maximum, with where it comes from.

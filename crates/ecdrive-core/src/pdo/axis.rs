@@ -62,6 +62,9 @@ pub fn standard_type(addr: ObjectAddress) -> Option<DataType> {
         (0x6071 | 0x6077 | 0x60B2, 0) => DataType::Integer16,
         (0x60B1, 0) => DataType::Integer32,
         (0x60FD, 0) => DataType::Unsigned32,
+        // Touch probe function and status, and the latched positions.
+        (0x60B8 | 0x60B9, 0) => DataType::Unsigned16,
+        (0x60BA..=0x60BD, 0) => DataType::Integer32,
         (0x60C1, 1) => DataType::Integer32,
         _ => return None,
     })

@@ -22,7 +22,7 @@ pub use generic_coe::{CoeObservations, GenericCoeDevice};
 pub use io::{IoDevice, IoObservations, TEST_VENDOR_ID};
 
 use super::device::Device;
-use super::quirks::split_name;
+use super::quirks::{split_name, stored_params};
 
 pub use crate::device::DeviceError;
 
@@ -78,9 +78,19 @@ pub fn check_name(name: &str) -> Result<(), DeviceError> {
         name: name.into(),
         reason,
     })?;
-    let known = super::drives::specs().iter().any(|s| s.key == base)
-        || DEVICE_NAMES.iter().any(|(n, _)| *n == base)
-        || base.starts_with("esi:");
+    let stored = stored_params(name).map_err(|reason| DeviceError::Quirk {
+        name: name.into(),
+        reason,
+    })?;
+    let is_drive = super::drives::specs().iter().any(|s| s.key == base);
+    if !stored.is_empty() && !is_drive {
+        return Err(DeviceError::Quirk {
+            name: name.into(),
+            reason: "only the emulated drives keep stored parameters (`@OBJECT=VALUE`)".into(),
+        });
+    }
+    let known =
+        is_drive || DEVICE_NAMES.iter().any(|(n, _)| *n == base) || base.starts_with("esi:");
     if known {
         Ok(())
     } else {
@@ -92,11 +102,17 @@ pub fn check_name(name: &str) -> Result<(), DeviceError> {
 }
 
 /// Create a device by name (see [`device_names`]), with the quirks named after `+`
-/// (`bdhde+no-state-skipping`, see [`crate::quirks`]). `position` makes serial numbers
+/// (`bdhde+no-state-skipping`, see [`crate::quirks`]) and, for an emulated drive, the
+/// parameters stored in it after `@` (`mr-j4-tm@0x2001=2`, [`stored_params`]). `position` makes serial numbers
 /// unique. `esi:PATH` is the generic CoE servo behind the one device of the ESI file at PATH
 /// ([`GenericCoeDevice::from_esi`]).
 pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceError> {
+    check_name(name)?;
     let serial = u32::try_from(position).unwrap_or(u32::MAX);
+    let stored = stored_params(name).map_err(|reason| DeviceError::Quirk {
+        name: name.into(),
+        reason,
+    })?;
     let (base, quirks) = split_name(name).map_err(|reason| DeviceError::Quirk {
         name: name.into(),
         reason,
@@ -145,7 +161,7 @@ pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceErr
             "the echo-mailbox device takes no quirks".into(),
         )),
         _ => match super::drives::spec_for(base) {
-            Some(spec) => super::drives::emulated_with(spec.key, serial, quirks),
+            Some(spec) => super::drives::emulated_stored(spec.key, serial, quirks, &stored),
             None => Err(DeviceError::Unknown {
                 name: base.into(),
                 known: known_names(),

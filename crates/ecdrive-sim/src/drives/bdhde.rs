@@ -249,6 +249,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     torque_slope: TorqueSlopeUnit::MilliNewtonMetrePerSecond,
     torque_mode_quick_stop_immediate: false,
     halt_in_cyclic_modes: true,
+    pp_ack_while_moving: false,
     // CSP example, "Starting the Operating Mode": "The movement is started via the
     // Controlword. … Bit 4: New Target Value 0 » 1 Starts a movement to a target position."
     csp_start_edge: true,

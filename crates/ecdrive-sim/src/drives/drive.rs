@@ -1484,7 +1484,12 @@ impl EmulatedDrive {
                 {
                     sw |= StatusWord::TARGET_REACHED.bits();
                 }
-                if self.pp.ack {
+                let held = if self.spec.pp_ack_while_moving {
+                    self.pp.target.is_some()
+                } else {
+                    self.pp.pending.is_some()
+                };
+                if self.pp.ack || held {
                     sw |= StatusWord::SET_POINT_ACKNOWLEDGE.bits();
                 }
                 if self.fe_flag {

@@ -94,6 +94,18 @@ pub fn emulated_with(
     serial: u32,
     quirks: Quirks,
 ) -> Result<Box<dyn Device>, DeviceError> {
+    emulated_stored(key, serial, quirks, &[])
+}
+
+/// [`emulated_with`], with parameters stored in the drive's non-volatile memory, in effect
+/// from power-on ([`EmulatedDrive::with_stored`]); an object the drive does not have is an
+/// error naming it.
+pub fn emulated_stored(
+    key: &str,
+    serial: u32,
+    quirks: Quirks,
+    stored: &[(crate::od::ObjectAddress, i64)],
+) -> Result<Box<dyn Device>, DeviceError> {
     let spec = spec_for(key).ok_or_else(|| DeviceError::Build {
         name: key.to_string(),
         reason: format!("ecdrive has no emulation of {key:?}"),
@@ -104,12 +116,22 @@ pub fn emulated_with(
             name: key.to_string(),
             reason,
         })?;
-    EmulatedDrive::new(spec, serial)
-        .map(|d| Box::new(d.with_quirks(quirks)) as Box<dyn Device>)
+    let mut d = EmulatedDrive::new(spec, serial)
         .map_err(|e| DeviceError::Build {
             name: key.to_string(),
             reason: e.to_string(),
-        })
+        })?
+        .with_quirks(quirks);
+    for &(address, value) in stored {
+        if d.od().dict().int(address).is_none() && d.od().dict().uint(address).is_none() {
+            return Err(DeviceError::Build {
+                name: key.to_string(),
+                reason: format!("the {} has no object {address} to store", spec.name),
+            });
+        }
+        d = d.with_stored(address, value);
+    }
+    Ok(Box::new(d))
 }
 
 /// Why the SII description of an emulated drive cannot be built.

@@ -252,6 +252,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     torque_slope: TorqueSlopeUnit::PermillePerSecond,
     torque_mode_quick_stop_immediate: true,
     halt_in_cyclic_modes: false,
+    pp_ack_while_moving: true,
     csp_start_edge: false,
     modes: ModeRules {
         selector: Some(a(0x2001, 0)),

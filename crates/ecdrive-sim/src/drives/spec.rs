@@ -471,6 +471,11 @@ pub struct DriveSpec {
     pub torque_mode_quick_stop_immediate: bool,
     /// Halt (controlword bit 8) acts in the cyclic modes.
     pub halt_in_cyclic_modes: bool,
+    /// In pp, statusword bit 12 stays 1 for as long as a positioning runs (MR-J4-TM
+    /// §5.4.6(3): "1: Positioning being executed"); otherwise it is the CiA 402 acknowledge,
+    /// 1 while the drive holds a set-point it has not started (BDHDE §5.7 "0 = New position
+    /// possible 1 = New target position accepted").
+    pub pp_ack_while_moving: bool,
     /// In csp the drive holds its position until controlword bit 4 goes 0→1 in Operation
     /// enabled, then follows the target (until it leaves Operation enabled or the mode).
     pub csp_start_edge: bool,

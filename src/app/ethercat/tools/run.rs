@@ -126,11 +126,26 @@ pub struct DriveRunReport {
     pub program: Vec<String>,
     /// Steps started (equals the program length when it finished).
     pub steps_done: usize,
+    /// The touch-probe latches, in order.
+    pub probe_latches: Vec<ProbeLatch>,
     /// Faults and errors the history records for this drive.
     pub errors: Vec<String>,
     /// Warnings the history records for this drive (what start-up accepted but the user should
     /// know: a read-only cycle time, a drive on the generic profile, a 0x60F4 not computed).
     pub warnings: Vec<String>,
+}
+
+/// A position a touch probe latched.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ProbeLatch {
+    /// Probe 1 or 2.
+    pub probe: u8,
+    /// `"rising"` or `"falling"`.
+    pub edge: &'static str,
+    /// The latched position, counts.
+    pub counts: i64,
+    /// The same in the user units, if the file gives units.
+    pub value: Option<f64>,
 }
 
 /// One device that was not driven (an I/O device) after a run.
@@ -675,7 +690,7 @@ pub fn run(
                     .unwrap_or_default(),
                 modes_run: cycle
                     .and_then(|c| c.modes_run.get(i))
-                    .map(|v| v.iter().map(|m| m.name().to_string()).collect())
+                    .map(|v| v.iter().map(|m| m.short_name().to_string()).collect())
                     .unwrap_or_default(),
                 max_following_error: max_fe,
                 max_following_error_drive: cycle
@@ -687,6 +702,19 @@ pub fn run(
                 max_following_error_units: units
                     .as_ref()
                     .map(|u| max_fe as f64 / u.counts_per_unit),
+                probe_latches: cycle
+                    .and_then(|c| c.probe_latches.get(i))
+                    .map(|v| {
+                        v.iter()
+                            .map(|&(probe, edge, counts)| ProbeLatch {
+                                probe,
+                                edge: edge.name(),
+                                counts,
+                                value: units.as_ref().map(|u| counts as f64 / u.counts_per_unit),
+                            })
+                            .collect()
+                    })
+                    .unwrap_or_default(),
                 units,
                 program: entry.map(|e| e.steps.clone()).unwrap_or_default(),
                 steps_done: steps_done

@@ -1,0 +1,308 @@
+//! Profile position, profile velocity, profile torque and the touch probe in a program, through
+//! the master, on both emulated EtherCAT drives, as `ecdrive run` runs them.
+//!
+//! The MR-J4-TM runs pp/pv/tq only with [Pr. PA01] = ___2 (MR-J4-TM manual §5.4.1 table: "___2:
+//! Profile mode" allows pp, pv, tq and hm, not csp/csv/cst), so it is emulated with 0x2001 = 2
+//! stored (`mr-j4-tm@0x2001=2`) and starts in pp; the BDHDE has every mode at once and mixes
+//! csp with them. What is checked comes from the recording (every cycle's actual position,
+//! velocity and torque as the drive reported them), the run report, and the machine the
+//! emulated drives sit on (its probe input 1 switches on at +1.3 rev,
+//! [`ecdrive::sim::machine::World`]), never from the master's own constants.
+
+use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunReport, run};
+use std::sync::atomic::AtomicBool;
+
+/// Counts per revolution: MR-J4-TM 4 194 304 (22-bit encoder), BDHDE 2^20.
+const MR_CPR: f64 = 4_194_304.0;
+const BD_CPR: f64 = 1_048_576.0;
+
+/// The run: the MR-J4-TM in profile mode, the BDHDE from csp through every profile mode back to
+/// csp. Each arms touch probe 1 on the rising edge and crosses the probe input on the way.
+const CONFIG: &str = r#"
+interface = "sim"
+cycle = "1ms"
+
+[sim]
+devices = ["mr-j4-tm@0x2001=2", "bdhde"]
+loss_detection = false
+
+[[drive]]
+position = 0
+mode = "pp"
+units = { name = "rev", counts_per_unit = 4194304 }
+program = [
+  { step = "touch_probe", probe = 1, edge = "rising" },
+  { step = "pp", to = [3, 4.5, 1], velocity = 5, acceleration = 50 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = -2, acceleration = 50, seconds = 0.5 },
+  { step = "mode", mode = "tq" },
+  { step = "tq", torque = 50, slope = 500, seconds = 0.2 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = 0, acceleration = 50, seconds = 0 },
+  { step = "mode", mode = "pp" },
+  { step = "pp", by = [0.5, 0.25], velocity = 5, acceleration = 50, immediate = true },
+]
+
+[[drive]]
+position = 1
+mode = "csp"
+units = { name = "rev", counts_per_unit = 1048576 }
+program = [
+  { step = "touch_probe", probe = 1, edge = "rising" },
+  { step = "move", to = 2, velocity = 2, acceleration = 20 },
+  { step = "mode", mode = "pp" },
+  { step = "pp", to = [3, 4.5, 1], velocity = 5, acceleration = 50 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = -2, acceleration = 50, seconds = 0.5 },
+  { step = "mode", mode = "tq" },
+  { step = "tq", torque = 50, slope = 500, seconds = 0.2 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = 0, acceleration = 50, seconds = 0 },
+  { step = "mode", mode = "csp" },
+  { step = "move", by = 1, velocity = 2, acceleration = 20 },
+]
+"#;
+
+/// One recorded cycle of one axis.
+#[derive(Debug, Clone, Copy)]
+struct Rec {
+    actual: i64,
+    velocity: i64,
+    torque: i64,
+    mode: i8,
+}
+
+fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').map(str::trim).collect();
+    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (axis, actual, vel, tq, mode) = (
+        col("axis"),
+        col("actual_counts"),
+        col("velocity_drive_units"),
+        col("torque_drive_units"),
+        col("mode"),
+    );
+    let mut out = vec![Vec::new(); axes];
+    for l in lines {
+        let f: Vec<&str> = l.split(',').map(str::trim).collect();
+        let a: usize = f[axis].parse().unwrap();
+        out[a].push(Rec {
+            actual: f[actual].parse().unwrap(),
+            velocity: f[vel].parse().unwrap(),
+            torque: f[tq].parse().unwrap(),
+            mode: f[mode].parse().unwrap(),
+        });
+    }
+    out
+}
+
+fn run_config(text: &str, name: &str) -> (RunReport, Vec<Vec<Rec>>) {
+    let dir = std::env::temp_dir().join(format!("ecdrive-profile-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = ecdrive::app::config::parse(text, "profile.toml").unwrap_or_else(|e| panic!("{e}"));
+    let file = dir.join("run.csv");
+    let opts = RunOptions {
+        record: Some(file.clone()),
+        ..RunOptions::default()
+    };
+    let stop = AtomicBool::new(false);
+    let r = run(&cfg, &opts, &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let rec = recording(&std::fs::read_to_string(&file).unwrap(), cfg.drives.len());
+    let _ = std::fs::remove_dir_all(&dir);
+    (r, rec)
+}
+
+/// The cycles of the `k`-th stretch (0-based) in mode `mode` (0x6061).
+fn stretch(rec: &[Rec], mode: i8, k: usize) -> Vec<Rec> {
+    let mut runs: Vec<Vec<Rec>> = Vec::new();
+    let mut prev = None;
+    for r in rec {
+        if r.mode == mode {
+            if prev != Some(mode) {
+                runs.push(Vec::new());
+            }
+            if let Some(last) = runs.last_mut() {
+                last.push(*r);
+            }
+        }
+        prev = Some(r.mode);
+    }
+    runs.get(k)
+        .cloned()
+        .unwrap_or_else(|| panic!("no stretch {k} in mode {mode}"))
+}
+
+#[test]
+fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
+    let (r, rec) = run_config(CONFIG, "all");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let cases = [("MR-J4-TM", MR_CPR, 0usize), ("BDHDE", BD_CPR, 1usize)];
+    for (name, cpr, a) in cases {
+        let d = &r.drives[a];
+        assert_eq!(d.name, name);
+        assert_eq!(d.steps_done, d.program.len(), "{name}: {:?}", d.errors);
+        assert!(d.errors.is_empty(), "{name}: {:?}", d.errors);
+        let rec = &rec[a];
+
+        // pp, a set of set-points (controlword bit 5 = 0): each target in turn. The drive
+        // stops at each one (BDHDE §5.7 "The movement is stopped at the current target
+        // position"; MR-J4-TM §5.4.6 (5) "After the current positioning operation is
+        // completed, the next positioning is started"); the motor passes within 1/10 000 rev
+        // of the intermediate ones (the motor's lag behind the drive's demand; the MR-J4-TM's
+        // own position window 0x6067 is 100 pulses, §7.3.12 (5)) and stands on the last.
+        let pp = stretch(rec, 1, 0);
+        let mut from = 0;
+        for (k, target_rev) in [3.0, 4.5, 1.0].into_iter().enumerate() {
+            let target = (target_rev * cpr).round() as i64;
+            let (at, closest) = pp[from..]
+                .iter()
+                .enumerate()
+                .map(|(i, x)| (from + i, (x.actual - target).abs()))
+                .min_by_key(|&(_, d)| d)
+                .unwrap();
+            assert!(
+                closest as f64 <= cpr / 10_000.0,
+                "{name}: pp target {k} ({target_rev} rev) missed by {closest} counts"
+            );
+            from = at;
+        }
+        let last = pp.last().unwrap();
+        assert!(
+            (last.actual - cpr as i64).abs() <= 1,
+            "{name}: pp ended at {} counts, not on its last target {}",
+            last.actual,
+            cpr
+        );
+
+        // pv: −2 rev/s for 0.5 s with equal ramps up and down travels −1 rev; the velocity the
+        // drive reports reaches −2 rev/s on the way.
+        let pv = stretch(rec, 3, 0);
+        let travel = (pv.last().unwrap().actual - pv.first().unwrap().actual) as f64 / cpr;
+        assert!(
+            (travel + 1.0).abs() < 0.01,
+            "{name}: pv travelled {travel} rev, not −1 rev"
+        );
+        let fastest = pv.iter().map(|x| x.velocity).min().unwrap();
+        // The drives' velocity units: MR-J4-TM 0.01 r/min (§7.3.10 (7)), BDHDE counts/s.
+        let want = if a == 0 { -12_000.0 } else { -2.0 * cpr };
+        assert!(
+            (fastest as f64 - want).abs() <= want.abs() * 0.01,
+            "{name}: pv peaked at {fastest}, the target is {want}"
+        );
+
+        // tq: the torque the drive reports reaches the target (50 in the drive's torque unit,
+        // ‰ of the rated torque on both) and goes back to 0.
+        let tq = stretch(rec, 4, 0);
+        let peak = tq.iter().map(|x| x.torque).max().unwrap();
+        assert!((45..=55).contains(&peak), "{name}: tq peaked at {peak}");
+        assert!(
+            tq.last().unwrap().torque.abs() <= 2,
+            "{name}: tq ended at {}",
+            tq.last().unwrap().torque
+        );
+
+        // The touch probe: the drive's latch of the probe input's rising edge, as the master
+        // reports it, within one count of where the machine has the edge (+1.3 rev).
+        let edge = ecdrive::sim::machine::World::default()
+            .probe1_rev
+            .unwrap()
+            .0;
+        let latches = &d.probe_latches;
+        assert_eq!(latches.len(), 1, "{name}: {latches:?}");
+        let l = &latches[0];
+        assert_eq!((l.probe, l.edge), (1, "rising"));
+        assert!(
+            (l.counts as f64 - edge * cpr).abs() <= 1.0,
+            "{name}: latched at {} counts, the edge is at {} counts",
+            l.counts,
+            edge * cpr
+        );
+        assert!((l.value.unwrap() - edge).abs() <= 1.0 / cpr);
+    }
+    // The MR-J4-TM's last pp: single set-points (bit 5 = 1), each relative to the last
+    // target and handed over once the one before is reached: +0.5 then +0.25 rev.
+    let pp = stretch(&rec[0], 1, 1);
+    let start = pp.first().unwrap().actual;
+    let end = pp.last().unwrap().actual;
+    assert!(
+        ((end - start) as f64 / MR_CPR - 0.75).abs() <= 2.0 / MR_CPR,
+        "MR-J4-TM: the relative pp moved {} counts",
+        end - start
+    );
+    let mid = (start as f64 + 0.5 * MR_CPR) as i64;
+    assert!(
+        pp.iter().any(|x| (x.actual - mid).abs() <= 100),
+        "MR-J4-TM: the relative pp did not stop at +0.5 rev"
+    );
+    // The modes as the drives displayed them, in order.
+    assert_eq!(r.drives[0].modes_run, ["pp", "pv", "tq", "pv", "pp"]);
+    assert_eq!(
+        r.drives[1].modes_run,
+        ["csp", "pp", "pv", "tq", "pv", "csp"]
+    );
+}
+
+/// Without [Pr. PA01] = ___2 the MR-J4-TM refuses the profile modes (§5.4.1): start-up reads
+/// 0x2001 and says so before anything is enabled, naming the parameter, what it allows and the
+/// setting that would do.
+#[test]
+fn the_mr_j4_tm_without_profile_mode_refuses_a_pp_program_by_name() {
+    let text = CONFIG.replace("mr-j4-tm@0x2001=2", "mr-j4-tm");
+    let cfg = ecdrive::app::config::parse(&text, "profile.toml").unwrap();
+    let stop = AtomicBool::new(false);
+    let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    for part in [
+        "drive 0 (MR-J4-TM)",
+        "the program runs pp",
+        "[Pr. PA01] Operation mode (0x2001:00) = 0x0000",
+        "allows hm, csp, csv, cst",
+        "\"___2: Profile mode\"",
+        "power-cycle",
+    ] {
+        assert!(e.contains(part), "{part:?} not in: {e}");
+    }
+    // One setting for pp and csp does not exist: the message says so.
+    let text = CONFIG.replace("mode = \"pp\"\nunits", "mode = \"csp\"\nunits").replace(
+        "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"pp\", to = [3",
+        "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"mode\", mode = \"pp\" },\n  { step = \"pp\", to = [3",
+    );
+    let cfg = ecdrive::app::config::parse(&text, "profile.toml").unwrap();
+    let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(e.contains("no one setting allows all of"), "{e}");
+}
+
+/// The touch probe's objects: the BDHDE's recommended mapping has one TxPDO of at most 8
+/// entries (its manual, chapter 7), so arming a probe gives the probe status and latch the
+/// places of inputs the cycle can do without; a mapping of the user's that lacks them is
+/// refused, naming the object and the direction.
+#[test]
+fn touch_probe_objects_are_chosen_or_required() {
+    let text = r#"
+interface = "sim"
+cycle = "1ms"
+[sim]
+devices = ["bdhde"]
+loss_detection = false
+[[drive]]
+position = 0
+mode = "csp"
+mapping = { rx = [{ pdo = 0x1600, entries = ["0x6040:00", "0x607A:00"] }], tx = [{ pdo = 0x1A00, entries = ["0x6041:00", "0x6064:00", "0x60B9:00"] }] }
+program = [
+  { step = "touch_probe", probe = 2, edge = "falling" },
+  { step = "move", by = 100000, velocity = 100000, acceleration = 1000000 },
+]
+"#;
+    let e = ecdrive::app::config::parse(text, "probe.toml")
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(e.contains("0x60B8:00"), "{e}");
+    assert!(e.contains("touch probe 2 (falling edge)"), "{e}");
+}
