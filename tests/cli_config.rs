@@ -229,10 +229,10 @@ fn wrong_types_and_values_name_the_key() {
         "1–99",
     );
     check(
-        &format!("{HEAD}[[drive]]\nposition = 0\nmode = \"pp\"\n"),
+        &format!("{HEAD}[[drive]]\nposition = 0\nmode = \"ip\"\n"),
         6,
         Some("drive[0].mode"),
-        "csp, csv and cst",
+        "csp, csv, cst, pp, pv and tq",
     );
     check("interface = \"eth0\"\ncycle = \"1ms\n", 2, None, "");
 }
@@ -349,11 +349,11 @@ fn programs_are_checked_against_mode_parameters_and_limits() {
     );
     check(
         &format!(
-            "{HEAD}[[drive]]\nposition = 0\nprogram = [{{ step = \"mode\", mode = \"pp\" }}]\n"
+            "{HEAD}[[drive]]\nposition = 0\nprogram = [{{ step = \"mode\", mode = \"ip\" }}]\n"
         ),
         6,
         Some("drive[0].program[0]"),
-        "csp, csv and cst",
+        "csp, csv, cst, pp, pv and tq",
     );
 }
 

@@ -81,13 +81,21 @@ fn every_sim_example_runs_to_completion() {
                 d.errors,
                 timeline()
             );
-            // The modes run are the start mode and the program's mode switches, in order.
+            // The modes run are the start mode and the program's mode switches, in order; a
+            // home step runs hm and comes back to the mode it left.
             let mut want = vec![setup.mode.name().to_string()];
+            let mut now = setup.mode.name();
             for s in &setup.program {
-                if let ecdrive::master::program::Step::Mode { mode } = s
-                    && want.last().map(String::as_str) != Some(mode.name())
-                {
-                    want.push(mode.name().to_string());
+                let next = match s {
+                    ecdrive::master::program::Step::Mode { mode } => vec![mode.name()],
+                    ecdrive::master::program::Step::Home { .. } => vec!["hm", now],
+                    _ => continue,
+                };
+                for m in next {
+                    if want.last().map(String::as_str) != Some(m) {
+                        want.push(m.to_string());
+                    }
+                    now = if m == "hm" { now } else { m };
                 }
             }
             assert_eq!(d.modes_run, want, "{what}");

@@ -198,6 +198,24 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
             profile: (load == Load::Generic).then_some(&GENERIC_TEST),
             program: if with_app {
                 Vec::new()
+            } else if load == Load::Generic {
+                // The generic test device maps the position set-point only: csp.
+                vec![
+                    Step::Move {
+                        target: Target::By(20_000.0),
+                        velocity: 100_000.0,
+                        acceleration: 1_000_000.0,
+                        jerk: None,
+                    },
+                    Step::Dwell { seconds: 0.05 },
+                    Step::Move {
+                        target: Target::By(-20_000.0),
+                        velocity: 100_000.0,
+                        acceleration: 1_000_000.0,
+                        jerk: None,
+                    },
+                    Step::Dwell { seconds: 0.2 },
+                ]
             } else {
                 vec![
                     Step::Move {

@@ -386,7 +386,15 @@ fn profile_modes() {
         assert_ne!(sw & 0x1000, 0, "{}: set-point acknowledge", p.name);
         assert_eq!(sw & 0x0400, 0, "{}: not reached yet", p.name);
         let sw = w.command(0, 0x000F);
-        assert_eq!(sw & 0x1000, 0, "{}: acknowledge follows bit 4", p.name);
+        if p.key == "mr-j4-tm" {
+            // The MR-J4-TM keeps bit 12 on while the positioning runs ("1: Positioning being
+            // executed", §5.4.6 (3)).
+            assert_ne!(sw & 0x1000, 0, "{}: positioning being executed", p.name);
+        } else {
+            // The BDHDE holds no second target: bit 12 follows bit 4 ("0 = New position
+            // possible", §5.7).
+            assert_eq!(sw & 0x1000, 0, "{}: acknowledge follows bit 4", p.name);
+        }
         let mut cycles = 0;
         while cyclic::sw(w.inputs(0)) & 0x0400 == 0 && cycles < 2000 {
             w.cycle();
@@ -396,6 +404,12 @@ fn profile_modes() {
         assert!((300..=500).contains(&cycles), "{}: {cycles} cycles", p.name);
         let err = cyclic::position(w.inputs(0)).wrapping_sub(target).abs();
         assert!(err <= 100, "{}: {err} counts from the target", p.name);
+        assert_eq!(
+            cyclic::sw(w.inputs(0)) & 0x1000,
+            0,
+            "{}: positioning completed (bit 12 off)",
+            p.name
+        );
         // pv: target velocity, target reached (bit 10), zero speed (bit 12).
         enable(&mut w, 3);
         cyclic::set_velocity(w.outputs_mut(0), (10.0 * vpr) as i32);

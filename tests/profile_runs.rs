@@ -16,52 +16,21 @@ use std::sync::atomic::AtomicBool;
 const MR_CPR: f64 = 4_194_304.0;
 const BD_CPR: f64 = 1_048_576.0;
 
-/// The run: the MR-J4-TM in profile mode, the BDHDE from csp through every profile mode back to
-/// csp. Each arms touch probe 1 on the rising edge and crosses the probe input on the way.
-const CONFIG: &str = r#"
-interface = "sim"
-cycle = "1ms"
-
-[sim]
-devices = ["mr-j4-tm@0x2001=2", "bdhde"]
-loss_detection = false
-
-[[drive]]
-position = 0
-mode = "pp"
-units = { name = "rev", counts_per_unit = 4194304 }
-program = [
-  { step = "touch_probe", probe = 1, edge = "rising" },
-  { step = "pp", to = [3, 4.5, 1], velocity = 5, acceleration = 50 },
-  { step = "mode", mode = "pv" },
-  { step = "pv", velocity = -2, acceleration = 50, seconds = 0.5 },
-  { step = "mode", mode = "tq" },
-  { step = "tq", torque = 50, slope = 500, seconds = 0.2 },
-  { step = "mode", mode = "pv" },
-  { step = "pv", velocity = 0, acceleration = 50, seconds = 0 },
-  { step = "mode", mode = "pp" },
-  { step = "pp", by = [0.5, 0.25], velocity = 5, acceleration = 50, immediate = true },
-]
-
-[[drive]]
-position = 1
-mode = "csp"
-units = { name = "rev", counts_per_unit = 1048576 }
-program = [
-  { step = "touch_probe", probe = 1, edge = "rising" },
-  { step = "move", to = 2, velocity = 2, acceleration = 20 },
-  { step = "mode", mode = "pp" },
-  { step = "pp", to = [3, 4.5, 1], velocity = 5, acceleration = 50 },
-  { step = "mode", mode = "pv" },
-  { step = "pv", velocity = -2, acceleration = 50, seconds = 0.5 },
-  { step = "mode", mode = "tq" },
-  { step = "tq", torque = 50, slope = 500, seconds = 0.2 },
-  { step = "mode", mode = "pv" },
-  { step = "pv", velocity = 0, acceleration = 50, seconds = 0 },
-  { step = "mode", mode = "csp" },
-  { step = "move", by = 1, velocity = 2, acceleration = 20 },
-]
-"#;
+/// `examples/profile_modes.toml` (the MR-J4-TM in profile mode, the BDHDE from csp through
+/// every profile mode back to csp; each arms touch probe 1 on the rising edge and crosses the
+/// probe input on the way), with the emulated drives' loss supervision off (a host stall on a
+/// loaded machine is not what this test is about).
+fn example() -> String {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/profile_modes.toml"
+    ))
+    .unwrap();
+    text.replace(
+        "devices = [\"mr-j4-tm@0x2001=2\", \"bdhde\"]",
+        "devices = [\"mr-j4-tm@0x2001=2\", \"bdhde\"]\nloss_detection = false",
+    )
+}
 
 /// One recorded cycle of one axis.
 #[derive(Debug, Clone, Copy)]
@@ -135,7 +104,7 @@ fn stretch(rec: &[Rec], mode: i8, k: usize) -> Vec<Rec> {
 
 #[test]
 fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
-    let (r, rec) = run_config(CONFIG, "all");
+    let (r, rec) = run_config(&example(), "all");
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
     let cases = [("MR-J4-TM", MR_CPR, 0usize), ("BDHDE", BD_CPR, 1usize)];
     for (name, cpr, a) in cases {
@@ -176,11 +145,13 @@ fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
         );
 
         // pv: −2 rev/s for 0.5 s with equal ramps up and down travels −1 rev; the velocity the
-        // drive reports reaches −2 rev/s on the way.
+        // drive reports reaches −2 rev/s on the way. The 0.5 s are the master's cycles with a
+        // reply, the drive runs on its own clock: a cycle lost on a loaded host adds 2 mrev,
+        // so the travel is checked to 5 %.
         let pv = stretch(rec, 3, 0);
         let travel = (pv.last().unwrap().actual - pv.first().unwrap().actual) as f64 / cpr;
         assert!(
-            (travel + 1.0).abs() < 0.01,
+            (travel + 1.0).abs() < 0.05,
             "{name}: pv travelled {travel} rev, not −1 rev"
         );
         let fastest = pv.iter().map(|x| x.velocity).min().unwrap();
@@ -248,7 +219,7 @@ fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
 /// setting that would do.
 #[test]
 fn the_mr_j4_tm_without_profile_mode_refuses_a_pp_program_by_name() {
-    let text = CONFIG.replace("mr-j4-tm@0x2001=2", "mr-j4-tm");
+    let text = example().replace("mr-j4-tm@0x2001=2", "mr-j4-tm");
     let cfg = ecdrive::app::config::parse(&text, "profile.toml").unwrap();
     let stop = AtomicBool::new(false);
     let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
@@ -266,7 +237,7 @@ fn the_mr_j4_tm_without_profile_mode_refuses_a_pp_program_by_name() {
         assert!(e.contains(part), "{part:?} not in: {e}");
     }
     // One setting for pp and csp does not exist: the message says so.
-    let text = CONFIG.replace("mode = \"pp\"\nunits", "mode = \"csp\"\nunits").replace(
+    let text = example().replace("\nmode = \"pp\"\n", "\nmode = \"csp\"\n").replace(
         "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"pp\", to = [3",
         "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"mode\", mode = \"pp\" },\n  { step = \"pp\", to = [3",
     );

@@ -233,6 +233,23 @@ impl Decoder {
         }
     }
 
+    /// A touch-probe latch in words, in the axis's units where it has them.
+    fn probe_text(&self, kind: &EventKind) -> String {
+        match *kind {
+            EventKind::ProbeLatched {
+                axis,
+                probe,
+                edge,
+                position,
+            } => format!(
+                "touch probe {probe} latched on the {} edge at {}",
+                edge.name(),
+                self.in_units(axis, position)
+            ),
+            _ => String::new(),
+        }
+    }
+
     fn name(&self, axis: u16) -> String {
         self.drive(axis)
             .map_or_else(|| format!("axis {axis}"), |d| d.to_string())
@@ -437,20 +454,9 @@ impl Decoder {
                 true,
                 crate::telemetry::event_text(&e.kind),
             ),
-            EventKind::ProbeLatched {
-                axis,
-                probe,
-                edge,
-                position,
-            } => (
-                self.drive(axis),
-                false,
-                format!(
-                    "touch probe {probe} latched on the {} edge at {}",
-                    edge.name(),
-                    self.in_units(axis, position)
-                ),
-            ),
+            EventKind::ProbeLatched { axis, .. } => {
+                (self.drive(axis), false, self.probe_text(&e.kind))
+            }
             EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
                 (self.drive(axis), app_error(&e.kind), app_text(&e.kind))
             }

@@ -465,6 +465,8 @@ enum Command {
         /// more devices. NAME+QUIRK[+QUIRK…] makes it behave like a device ecdrive did not
         /// write (see --list-devices). `esi:FILE` serves the device an ESI file describes
         /// (its identity, SII and dictionary) with the generic servo's behaviour.
+        /// NAME@OBJECT=VALUE stores a parameter in an emulated drive, in effect from power-on
+        /// (`mr-j4-tm@0x2001=2`: [Pr. PA01] profile mode).
         #[arg(long = "device", short = 'd', value_name = "NAME[:COUNT]")]
         devices: Vec<String>,
         /// SM watchdog reset value in units of 100 µs (0 disables it; default: the ESC reset

@@ -612,6 +612,11 @@ pub fn sim(
             println!("  {:30} {}", q.name(), q.describe());
         }
         println!();
+        println!(
+            "Stored parameters (emulated drives): DEVICE@OBJECT=VALUE[@…], in effect from \
+             power-on, e.g. mr-j4-tm@0x2001=2 ([Pr. PA01] = profile mode)"
+        );
+        println!();
         println!("CANopen drives (ecdrive sim --can BUS --node NAME[@ID]), default node-ID:");
         for (name, p, node) in EMULATED_NODES {
             println!(
