@@ -8,7 +8,9 @@ use ecdrive::cia402::State;
 use ecdrive::master::session::{Master, MasterConfig, SessionReport};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
-use ecdrive::master::{AppCycle, CycleApp, EntryError, RunMode, SetpointLimits, Streams};
+use ecdrive::master::{
+    AppCycle, CycleApp, DriveTask, EntryError, RunMode, SetpointLimits, Streams,
+};
 use ecdrive::od::ObjectAddress;
 use ecdrive::rt::RtSettings;
 use ecdrive::sim::drives::{EmulatedDrive, TargetSample, spec_for};
@@ -327,5 +329,134 @@ fn a_stream_is_consumed_one_per_cycle_and_an_underrun_is_reported() {
         missing as u64 <= d.stats().missed_outputs,
         "{missing} set-points never reached the drive; it missed outputs in {} cycles",
         d.stats().missed_outputs
+    );
+}
+
+/// Homing, a pp target and a pv velocity from the application ([`AppAxis::request_home`],
+/// [`AppAxis::request_pp`], `set_target` in pv) on the BDHDE, one after the other, each
+/// started when [`AppAxis::task`] (or the displayed mode) says the one before is done.
+#[derive(Default)]
+struct Sequence {
+    phase: u8,
+    /// The phase for the test thread (the cycle holds the application for the whole run).
+    shared: Arc<std::sync::atomic::AtomicU8>,
+    since: u64,
+    /// Position when homed, when the pp target was reached, and after the pv run.
+    homed_at: Option<i64>,
+    reached_at: Option<i64>,
+    pv_fastest: i32,
+    tasks: Vec<DriveTask>,
+}
+
+/// The pp target (counts) and the pv velocity (counts/s: 2 rev/s of the BDHDE's 2^20).
+const PP_TARGET: f64 = 300_000.0;
+const PV_VELOCITY: f64 = 2_097_152.0;
+
+impl CycleApp for Sequence {
+    fn cycle(&mut self, c: &mut AppCycle<'_>) {
+        let now = c.cycle();
+        let Some(a) = c.axis(1) else { return };
+        if !a.enabled() && self.phase < 6 {
+            return;
+        }
+        self.shared
+            .store(self.phase, std::sync::atomic::Ordering::Relaxed);
+        let task = a.task();
+        if self.tasks.last() != Some(&task) && self.tasks.len() < self.tasks.capacity() {
+            self.tasks.push(task);
+        }
+        match self.phase {
+            0 => {
+                a.request_home(35);
+                self.phase = 1;
+            }
+            1 if matches!(task, DriveTask::Homed { .. }) => {
+                self.homed_at = Some(a.position());
+                a.request_mode(RunMode::Pp);
+                self.phase = 2;
+            }
+            2 if a.mode() == Some(RunMode::Pp) => {
+                a.request_pp(PP_TARGET, false, true);
+                self.phase = 3;
+            }
+            3 if task == DriveTask::TargetReached => {
+                self.reached_at = Some(a.position());
+                a.request_mode(RunMode::Pv);
+                self.phase = 4;
+            }
+            4 if a.mode() == Some(RunMode::Pv) => {
+                self.since = now;
+                self.phase = 5;
+            }
+            5 => {
+                let on = now - self.since < 300;
+                a.set_target(if on { PV_VELOCITY } else { 0.0 });
+                self.pv_fastest = self.pv_fastest.max(a.velocity());
+                if !on && a.velocity() == 0 {
+                    self.phase = 6;
+                }
+            }
+            _ => {}
+        }
+    }
+}
+
+#[test]
+fn the_application_homes_moves_in_pp_and_runs_pv() {
+    let phase = Arc::new(std::sync::atomic::AtomicU8::new(0));
+    let app = Arc::new(Mutex::new(Sequence {
+        tasks: Vec::with_capacity(16),
+        shared: phase.clone(),
+        ..Sequence::default()
+    }));
+    let mut cfg = config(SetpointLimits::default());
+    cfg.app = Some(app.clone());
+    // Homing on the current position (CiA 402 method 35) needs no switch: 0x6098 by SDO.
+    // pp's profile velocity and accelerations (BDHDE: counts/s, counts/s²; 0x6081 is 0 at
+    // power-on, which would never move).
+    let a = ObjectAddress::new;
+    let v = ecdrive::od::Value::Uint;
+    cfg.startup.drives[1].sdos = vec![
+        (a(0x6098, 0), ecdrive::od::Value::Int(35)),
+        (a(0x6081, 0), v(2_000_000)),
+        (a(0x6083, 0), v(20_000_000)),
+        (a(0x6084, 0), v(20_000_000)),
+    ];
+    let mut m = Master::start(SegmentLink::new(segment()), cfg)
+        .unwrap_or_else(|f| panic!("start-up: {}", f.error));
+    m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    let done = m.wait_until("the sequence", T, |_| {
+        phase.load(std::sync::atomic::Ordering::Relaxed) >= 6
+    });
+    let (r, _) = m.stop(StopKind::Ramp);
+    if let Err(e) = done {
+        panic!("{e}: {:?}", app.lock().map(|a| a.tasks.clone()));
+    }
+    let r = r.unwrap();
+    assert!(r.shutdown_ok);
+    let a = app.lock().unwrap();
+    // Method 35 makes the current position the home: it reads 0 (0x607C = 0).
+    assert_eq!(a.homed_at, Some(0), "{:?}", a.tasks);
+    let reached = a.reached_at.unwrap();
+    assert!(
+        (reached - PP_TARGET as i64).abs() <= 1,
+        "pp reached {reached}, the target is {PP_TARGET}"
+    );
+    // The BDHDE's velocity unit is counts/s (0x606C).
+    assert!(
+        (f64::from(a.pv_fastest) - PV_VELOCITY).abs() <= PV_VELOCITY * 0.01,
+        "pv peaked at {}",
+        a.pv_fastest
+    );
+    assert_eq!(
+        a.tasks,
+        [
+            DriveTask::Idle,
+            DriveTask::Homing { method: 35 },
+            DriveTask::Homed { method: 35 },
+            DriveTask::Positioning { queued: 0 },
+            DriveTask::TargetReached,
+        ],
     );
 }

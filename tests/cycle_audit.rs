@@ -21,7 +21,7 @@ use ecdrive::cia402::State;
 use ecdrive::link::FrameLink;
 use ecdrive::link::netns::{VethPair, require_root};
 use ecdrive::master::cycle::CycleHooks;
-use ecdrive::master::program::{RunMode, Step, Target};
+use ecdrive::master::program::{ProbeEdge, RunMode, Step, Target};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
@@ -99,6 +99,8 @@ impl Audit {
 enum Load {
     Generic,
     Drives,
+    /// The drives in the profile modes: the MR-J4-TM with [Pr. PA01] = 2 stored.
+    Profile,
 }
 
 fn segment(load: Load) -> Segment {
@@ -115,6 +117,11 @@ fn segment(load: Load) -> Segment {
         ],
         Load::Drives => [
             ecdrive::sim::devices::by_name("mr-j4-tm", 0).unwrap(),
+            Box::new(IoDevice::new(2, 4).with_serial(900)),
+            ecdrive::sim::devices::by_name("bdhde", 2).unwrap(),
+        ],
+        Load::Profile => [
+            ecdrive::sim::devices::by_name("mr-j4-tm@0x2001=2", 0).unwrap(),
             Box::new(IoDevice::new(2, 4).with_serial(900)),
             ecdrive::sim::devices::by_name("bdhde", 2).unwrap(),
         ],
@@ -168,6 +175,59 @@ impl CycleApp for AuditApp {
     }
 }
 
+/// pp with a set of set-points and a touch probe armed, pv, tq, pv to rest, in counts (the
+/// profile objects by [`profile_objects`]).
+fn profile_program() -> Vec<Step> {
+    vec![
+        Step::TouchProbe {
+            probe: 1,
+            edge: ProbeEdge::Rising,
+        },
+        Step::Pp {
+            targets: vec![20_000.0, 0.0],
+            relative: false,
+            immediate: false,
+        },
+        Step::Mode { mode: RunMode::Pv },
+        Step::Pv {
+            velocity: 50_000.0,
+            seconds: 0.05,
+        },
+        Step::Mode { mode: RunMode::Tq },
+        Step::Tq {
+            torque: 20.0,
+            seconds: 0.05,
+            ramp: 0.0,
+        },
+        Step::Mode { mode: RunMode::Pv },
+        Step::Pv {
+            velocity: 0.0,
+            seconds: 0.0,
+        },
+        Step::Dwell { seconds: 0.2 },
+    ]
+}
+
+/// 0x6081/0x6083/0x6084 for the drive at `position`: the MR-J4-TM's 0.01 r/min and ms, the
+/// BDHDE's counts.
+fn profile_objects(position: u16) -> Vec<(ecdrive::od::ObjectAddress, ecdrive::od::Value)> {
+    let a = ecdrive::od::ObjectAddress::new;
+    let v = ecdrive::od::Value::Uint;
+    if position == 0 {
+        vec![
+            (a(0x6081, 0), v(100_000)),
+            (a(0x6083, 0), v(100)),
+            (a(0x6084, 0), v(100)),
+        ]
+    } else {
+        vec![
+            (a(0x6081, 0), v(2_000_000)),
+            (a(0x6083, 0), v(20_000_000)),
+            (a(0x6084, 0), v(20_000_000)),
+        ]
+    }
+}
+
 fn audit_run_with<L: FrameLink + Send + 'static>(
     link: L,
     load: Load,
@@ -198,6 +258,8 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
             profile: (load == Load::Generic).then_some(&GENERIC_TEST),
             program: if with_app {
                 Vec::new()
+            } else if load == Load::Profile {
+                profile_program()
             } else if load == Load::Generic {
                 // The generic test device maps the position set-point only: csp.
                 vec![
@@ -235,7 +297,14 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
             },
             ..DriveSetup::new(Selector::Position(p))
         });
+        if load == Load::Profile
+            && let Some(d) = cfg.startup.drives.last_mut()
+        {
+            d.mode = RunMode::Pp;
+            d.sdos = profile_objects(p);
+        }
     }
+    let steps = cfg.startup.drives.first().map_or(0, |d| d.program.len()) as u16;
     let mut m = Master::start(link, cfg).unwrap();
     assert_eq!((m.drives().len(), m.io().len()), (2, 1));
     m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
@@ -267,7 +336,7 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
         m.wait_until(
             "the programs and 300 cycles",
             Duration::from_secs(20),
-            |t| t.cycle.cycle > c0 + 300 && t.axes.iter().all(|a| a.program_step >= 4),
+            |t| t.cycle.cycle > c0 + 300 && t.axes.iter().all(|a| a.program_step >= steps),
         )
         .unwrap();
     }
@@ -322,6 +391,18 @@ fn steady_cycle_with_the_emulated_drives_and_emergency_polling() {
         Load::Drives,
         &[libc::SYS_clock_nanosleep, libc::SYS_futex],
         "in-process, MR-J4-TM and BDHDE, emergency polling",
+    );
+}
+
+/// The drives in the profile modes (pp with a set of set-points, pv, tq) with a touch probe
+/// armed: the handshake engines and the probe allocate nothing either.
+#[test]
+fn steady_cycle_in_the_profile_modes_allocates_nothing() {
+    audit_run(
+        SegmentLink::new(segment(Load::Profile)),
+        Load::Profile,
+        &[libc::SYS_clock_nanosleep, libc::SYS_futex],
+        "in-process, MR-J4-TM and BDHDE in pp, pv and tq",
     );
 }
 

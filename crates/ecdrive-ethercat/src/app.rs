@@ -83,6 +83,38 @@ impl SetpointLimits {
     }
 }
 
+/// A homing or a pp move the application started on an axis ([`AppAxis::request_home`],
+/// [`AppAxis::request_pp`]), as it stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum DriveTask {
+    /// Nothing started.
+    #[default]
+    Idle,
+    /// Homing with this method runs (hm, then back to the mode the axis was in).
+    Homing {
+        /// The method (0x6098).
+        method: i8,
+    },
+    /// The homing completed and the axis is back in its mode: its position is the home's.
+    Homed {
+        /// The method (0x6098).
+        method: i8,
+    },
+    /// The homing failed or was cut short (a failure stops the axes and is in the history,
+    /// as for a program's home step).
+    HomingFailed {
+        /// The method (0x6098).
+        method: i8,
+    },
+    /// pp targets are in flight or queued.
+    Positioning {
+        /// Targets waiting behind the one in flight.
+        queued: u8,
+    },
+    /// The drive reported the last pp target reached.
+    TargetReached,
+}
+
 /// Why a write to a mapped entry was refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 pub enum EntryError {
@@ -123,6 +155,9 @@ pub struct AppAxis {
     pub(crate) setpoint: Option<f64>,
     pub(crate) mode_request: Option<RunMode>,
     pub(crate) writes: Vec<(Field, u64)>,
+    pub(crate) home_request: Option<i8>,
+    pub(crate) pp_request: Option<crate::cia402::SetPoint>,
+    pub(crate) task: DriveTask,
 }
 
 impl AppAxis {
@@ -162,6 +197,9 @@ impl AppAxis {
             setpoint: None,
             mode_request: None,
             writes: Vec::with_capacity(free),
+            home_request: None,
+            pp_request: None,
+            task: DriveTask::Idle,
         }
     }
 
@@ -187,7 +225,7 @@ impl AppAxis {
     pub fn program_running(&self) -> bool {
         self.program_running
     }
-    /// The mode the drive displays (0x6061), if it is a cyclic one.
+    /// The mode the drive displays (0x6061), if a program or the application can run in it.
     pub fn mode(&self) -> Option<RunMode> {
         RunMode::from_code(self.tel.mode_display)
     }
@@ -268,11 +306,40 @@ impl AppAxis {
         Ok(())
     }
 
-    /// This cycle's set-point in the active mode (csp: position, counts; csv: velocity,
-    /// position units per second; cst: torque, the drive's unit). It is taken only in
-    /// Operation enabled with no program running, within the axis's [`SetpointLimits`].
+    /// This cycle's set-point in the active mode (csp: position, counts; csv and pv:
+    /// velocity, position units per second; cst and tq: torque, the drive's unit; in pv and tq
+    /// the drive ramps to it with its profile objects, and it stays until set again). It is
+    /// taken only in Operation enabled with no program running, within the axis's
+    /// [`SetpointLimits`]. In pp targets go through [`AppAxis::request_pp`].
     pub fn set_target(&mut self, value: f64) {
         self.setpoint = Some(value);
+    }
+
+    /// Home the axis: hm with the method the drive holds in 0x6098 (written at start-up: a
+    /// `sdos` value, or a program's home step), then back to the mode it was in, as a program's
+    /// `home` step does; `method` names it in reports. Taken in Operation enabled with no
+    /// program and no homing running; follow it with [`AppAxis::task`].
+    pub fn request_home(&mut self, method: i8) {
+        self.home_request = Some(method);
+    }
+
+    /// Hand a pp target (counts) to the drive with the new-set-point handshake: `relative`
+    /// (controlword bit 6) to the last target, `immediate` (bit 5 = 1) replacing the running
+    /// move, else queued behind it. Taken in pp, in Operation enabled with no program running;
+    /// follow it with [`AppAxis::task`].
+    pub fn request_pp(&mut self, target: f64, relative: bool, immediate: bool) {
+        self.pp_request = Some(crate::cia402::SetPoint {
+            target: target
+                .round()
+                .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32,
+            relative,
+            immediate,
+        });
+    }
+
+    /// Where the homing or pp move the application started stands.
+    pub fn task(&self) -> DriveTask {
+        self.task
     }
 
     /// Ask for a switch to `mode` (the engine switches without a jump).
@@ -285,6 +352,8 @@ impl AppAxis {
         self.setpoint = None;
         self.mode_request = None;
         self.writes.clear();
+        self.home_request = None;
+        self.pp_request = None;
     }
 }
 

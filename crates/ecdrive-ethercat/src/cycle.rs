@@ -14,7 +14,7 @@
 //! leaves OP: ramp (or quick stop), then disable. Ending the cycle hands the bus back to the
 //! session, which takes the drives to INIT.
 
-use super::app::{AppAxis, AppCycle, CycleApp, SetpointLimits};
+use super::app::{AppAxis, AppCycle, CycleApp, DriveTask, SetpointLimits};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
 use super::program::{ProbeEdge, RunMode, Runner, Step, Tick};
@@ -504,6 +504,11 @@ struct AxisRt {
     pp: cia402::ProfilePosition,
     pv: cia402::ProfileVelocity,
     tq: cia402::ProfileTorque,
+    /// The homing the application started (its method), what it asked stands as, and pp
+    /// targets of the application in flight (with cycles settled, as a pp step counts them).
+    home_by_app: Option<i8>,
+    app_task: DriveTask,
+    app_pp: Option<u32>,
     /// Touch probes 1 and 2.
     probes: [ProbeArm; 2],
     /// 0x60B9 and 0x60BA–0x60BD as read this cycle (0 where not mapped).
@@ -575,6 +580,9 @@ impl AxisRt {
             pp: cia402::ProfilePosition::default(),
             pv: cia402::ProfileVelocity::new(false),
             tq: cia402::ProfileTorque::new(),
+            home_by_app: None,
+            app_task: DriveTask::Idle,
+            app_pp: None,
             probes: [ProbeArm::Off; 2],
             probe_status: 0,
             probe_positions: [0; 4],
@@ -761,11 +769,32 @@ impl AxisRt {
                 why: "the application's mode switch was refused",
             });
         }
+        if let Some(sp) = self.app_home(i, app, st, enabled, ctx, ev) {
+            return Some(sp);
+        }
+        let free =
+            enabled && self.stopping == Stopping::No && self.program != ProgramState::Running;
+        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        if let Some(sp) = app.pp_request
+            && free
+            && mode == RunMode::Pp
+            && self.drive_run == DriveRun::Idle
+        {
+            self.pp.set_halt(false);
+            if self.pp.push(sp).is_ok() {
+                self.app_pp = Some(0);
+                self.app_task = DriveTask::Positioning { queued: 1 };
+            } else {
+                ev.emit(EventKind::CommandRefused {
+                    axis: i as u16,
+                    why: "the application's pp target was refused: the queue of targets is full",
+                });
+            }
+        }
         let v = app.setpoint?;
-        if !enabled || self.stopping != Stopping::No || self.program == ProgramState::Running {
+        if !free {
             return None;
         }
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
         match self
             .limits
             .check(mode, v, (self.hold.pos, self.hold.vel), ctx.dt)
@@ -788,8 +817,24 @@ impl AxisRt {
                         torque: v,
                         ..self.hold
                     },
-                    // The drive generates the motion in the profile modes.
-                    RunMode::Pp | RunMode::Pv | RunMode::Tq => return None,
+                    // The drive generates the motion in the profile modes: pv and tq take the
+                    // target and ramp to it; pp targets come through `request_pp`.
+                    RunMode::Pv => {
+                        self.pv.set_target(
+                            (v / self.velocity_unit)
+                                .round()
+                                .clamp(f64::from(i32::MIN), f64::from(i32::MAX))
+                                as i32,
+                        );
+                        return None;
+                    }
+                    RunMode::Tq => {
+                        self.tq.set_target(
+                            v.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16,
+                        );
+                        return None;
+                    }
+                    RunMode::Pp => return None,
                 };
                 self.hold = sp;
                 Some(sp)
@@ -805,6 +850,54 @@ impl AxisRt {
                 None
             }
         }
+    }
+
+    /// The homing the application asked for ([`AppAxis::request_home`]): started in
+    /// Operation enabled with no program or homing running, then run as a program's home step
+    /// is ([`AxisRt::home_step`]); while it runs the held set-point follows the actual one
+    /// (returned). Its end, or a stop that cut it short, is what [`AppAxis::task`] says.
+    fn app_home(
+        &mut self,
+        i: usize,
+        app: &AppAxis,
+        st: &AxisStatus,
+        enabled: bool,
+        ctx: &StepContext,
+        ev: &mut Emitter,
+    ) -> Option<Sample> {
+        let actual = self.actual();
+        let method = match (self.home_by_app, app.home_request) {
+            (Some(m), _) if self.home == HomeRun::Idle => {
+                // Cut short (a stop, a disable, a fault) since the last cycle.
+                self.home_by_app = None;
+                self.app_task = DriveTask::HomingFailed { method: m };
+                return None;
+            }
+            (Some(m), _) => m,
+            (None, Some(m))
+                if enabled
+                    && self.stopping == Stopping::No
+                    && self.program != ProgramState::Running
+                    && self.home == HomeRun::Idle =>
+            {
+                self.home_by_app = Some(m);
+                self.app_task = DriveTask::Homing { method: m };
+                m
+            }
+            _ => return None,
+        };
+        let was_back = self.home == HomeRun::Back;
+        self.home_step(i, method, st, actual, ctx, ev);
+        if self.home == HomeRun::Idle {
+            self.home_by_app = None;
+            self.app_task = if was_back {
+                DriveTask::Homed { method }
+            } else {
+                DriveTask::HomingFailed { method }
+            };
+        }
+        self.hold = actual;
+        Some(actual)
     }
 
     /// The set-point of a controlled stop (ramp to standstill, or waiting out a quick stop),
@@ -1023,7 +1116,9 @@ impl AxisRt {
             HomeRun::Back => {
                 if idle && st.active_mode.as_i8() == self.mode.code() {
                     self.home = HomeRun::Idle;
-                    self.runner.drive_done(actual);
+                    if self.home_by_app.is_none() {
+                        self.runner.drive_done(actual);
+                    }
                     self.hold = actual;
                 }
             }
@@ -1067,11 +1162,20 @@ impl AxisRt {
         let st = self.axis.status();
         let Some(mode) = RunMode::from_code(st.active_mode.as_i8()).filter(|m| !m.is_cyclic())
         else {
+            // Outside the profile modes their targets are 0: entering one starts from rest.
+            self.pv.set_target(0);
+            self.tq.set_target(0);
             return;
         };
         let stopping = self.stopping != Stopping::No;
         if stopping {
             self.abort_drive_run();
+            self.pv.set_target(0);
+            self.tq.set_target(0);
+            if self.app_pp.take().is_some() {
+                self.pp.clear();
+                self.pp.set_halt(true);
+            }
         }
         match (mode, self.drive_run) {
             (RunMode::Pp, DriveRun::Pp { .. }) => self.pp_step(i, sw, actual, ctx, ev),
@@ -1079,7 +1183,26 @@ impl AxisRt {
                 if stopping {
                     self.pp.set_halt(true);
                 }
-                let _ = self.pp.step(&mut self.axis, sw);
+                let s = self.pp.step(&mut self.axis, sw);
+                if s.aborted && self.app_pp.take().is_some() {
+                    self.app_task = DriveTask::Idle;
+                }
+                if let Some(settled) = self.app_pp {
+                    let settled = if s.queued == 0 && s.phase == cia402::PpPhase::Idle {
+                        settled.saturating_add(1)
+                    } else {
+                        0
+                    };
+                    self.app_pp = Some(settled);
+                    self.app_task = if s.target_reached && settled >= PP_SETTLE_CYCLES {
+                        self.app_pp = None;
+                        DriveTask::TargetReached
+                    } else {
+                        DriveTask::Positioning {
+                            queued: u8::try_from(s.queued).unwrap_or(u8::MAX),
+                        }
+                    };
+                }
             }
             (RunMode::Pv | RunMode::Tq, DriveRun::Profile { index, since }) => {
                 let since = since.or(st.streaming.then_some(ctx.tick));
@@ -1135,15 +1258,13 @@ impl AxisRt {
         }
     }
 
-    /// In pv or tq with no step running: velocity 0, torque 0.
+    /// In pv or tq with no step running: the target the application set, else 0.
     fn hold_profile(&mut self, mode: RunMode, sw: StatusWord) {
         match mode {
             RunMode::Pv => {
-                self.pv.set_target(0);
                 let _ = self.pv.step(&mut self.axis, sw);
             }
             RunMode::Tq => {
-                self.tq.set_target(0);
                 let _ = self.tq.step(&mut self.axis, sw);
             }
             _ => {}
@@ -2611,6 +2732,7 @@ fn refresh_view(view: &mut AppAxis, a: &AxisRt, in_op: bool, inputs: &[u8], outp
     view.tel.state = st.state;
     view.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
     view.program_running = a.program == ProgramState::Running;
+    view.task = a.app_task;
     let n = view.inputs.len().min(inputs.len());
     view.inputs[..n].copy_from_slice(&inputs[..n]);
     let n = view.outputs.len().min(outputs.len());

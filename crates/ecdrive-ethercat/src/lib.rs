@@ -32,11 +32,11 @@ mod stream;
 pub mod telemetry;
 mod wkc;
 
-pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
+pub use app::{AppAxis, AppCycle, CycleApp, DriveTask, EntryError, SetpointLimits};
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};
-pub use program::{RunMode, Step, Target};
+pub use program::{ProbeEdge, RunMode, Step, Target};
 pub use record::{CSV_HEADER, CycleSample, RecordTx, Recording, recording};
 pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
 pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};
