@@ -277,3 +277,52 @@ program = [
     assert!(e.contains("0x60B8:00"), "{e}");
     assert!(e.contains("touch probe 2 (falling edge)"), "{e}");
 }
+
+/// A probe armed again latches again: its function bits go 0 for one cycle so the drive clears
+/// what it stored (the emulated drive, like CiA 402 drives, latches once per arming in
+/// first-event mode). Probe 2 on the falling edge as well: the machine's input 2 is on from
+/// −1.6 to −1.2 rev, so moving down through it, the falling edge is at −1.6 rev.
+#[test]
+fn a_probe_armed_again_latches_again() {
+    let text = r#"
+interface = "sim"
+cycle = "1ms"
+[sim]
+devices = ["bdhde"]
+loss_detection = false
+[[drive]]
+position = 0
+mode = "csp"
+units = { name = "rev", counts_per_unit = 1048576 }
+program = [
+  { step = "touch_probe", probe = 1, edge = "rising" },
+  { step = "move", to = 2, velocity = 4, acceleration = 40 },
+  { step = "move", to = 0, velocity = 4, acceleration = 40 },
+  { step = "touch_probe", probe = 1, edge = "rising" },
+  { step = "touch_probe", probe = 2, edge = "falling" },
+  { step = "move", to = 2, velocity = 4, acceleration = 40 },
+  { step = "move", to = -2, velocity = 4, acceleration = 40 },
+]
+"#;
+    let (r, _) = run_config(text, "rearm");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let world = ecdrive::sim::machine::World::default();
+    let p1 = world.probe1_rev.unwrap().0 * BD_CPR;
+    let p2 = world.probe2_rev.unwrap().0 * BD_CPR;
+    let got: Vec<(u8, &str, i64)> = r.drives[0]
+        .probe_latches
+        .iter()
+        .map(|l| (l.probe, l.edge, l.counts))
+        .collect();
+    assert_eq!(got.len(), 3, "{got:?}");
+    for (k, (probe, edge, at)) in [(1, "rising", p1), (1, "rising", p1), (2, "falling", p2)]
+        .into_iter()
+        .enumerate()
+    {
+        assert_eq!((got[k].0, got[k].1), (probe, edge), "{got:?}");
+        assert!(
+            (got[k].2 as f64 - at).abs() <= 1.0,
+            "{got:?}: latch {k} not at {at}"
+        );
+    }
+}

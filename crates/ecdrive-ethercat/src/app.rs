@@ -57,7 +57,9 @@ impl SetpointLimits {
                 let vel = (v - prev.0) / dt;
                 (vel, (vel - prev.1) / dt)
             }
-            RunMode::Csv | RunMode::Pv => (v, (v - prev.1) / dt),
+            RunMode::Csv => (v, (v - prev.1) / dt),
+            // The drive ramps to a pv target with its own 0x6083/0x6084.
+            RunMode::Pv => (v, 0.0),
             // The drive generates the motion to a pp target.
             RunMode::Pp => return Ok((prev.1, 0.0)),
             RunMode::Cst | RunMode::Tq => {
@@ -156,7 +158,7 @@ pub struct AppAxis {
     pub(crate) mode_request: Option<RunMode>,
     pub(crate) writes: Vec<(Field, u64)>,
     pub(crate) home_request: Option<i8>,
-    pub(crate) pp_request: Option<crate::cia402::SetPoint>,
+    pub(crate) pp_request: Option<(f64, bool, bool)>,
     pub(crate) task: DriveTask,
 }
 
@@ -328,13 +330,7 @@ impl AppAxis {
     /// move, else queued behind it. Taken in pp, in Operation enabled with no program running;
     /// follow it with [`AppAxis::task`].
     pub fn request_pp(&mut self, target: f64, relative: bool, immediate: bool) {
-        self.pp_request = Some(crate::cia402::SetPoint {
-            target: target
-                .round()
-                .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32,
-            relative,
-            immediate,
-        });
+        self.pp_request = Some((target, relative, immediate));
     }
 
     /// Where the homing or pp move the application started stands.

@@ -351,6 +351,7 @@ enum DriveRun {
         given: usize,
         settled: u32,
         reached: bool,
+        since: u64,
     },
     /// pv or tq: the target went out at good cycle `since` (`None`: the axis is not yet
     /// taking it).
@@ -387,6 +388,10 @@ impl ProbeArm {
         (1 | sample) << base
     }
 }
+
+/// **\[REC\]** How long a pp step may take, and a pv step beyond its own time, before it
+/// counts as failed (the drive never reported its target reached): two minutes, as a homing.
+const DRIVE_STEP_TIMEOUT_S: f64 = 120.0;
 
 /// **\[REC\]** The longest a tq step waits, beyond twice its ramp down, for the drive to
 /// report the torque back near 0 (2 % of the step's torque).
@@ -775,13 +780,28 @@ impl AxisRt {
         let free =
             enabled && self.stopping == Stopping::No && self.program != ProgramState::Running;
         let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
-        if let Some(sp) = app.pp_request
+        if let Some((target, relative, immediate)) = app.pp_request
             && free
             && mode == RunMode::Pp
             && self.drive_run == DriveRun::Idle
         {
+            let sp = (target.is_finite() && target.abs() <= f64::from(i32::MAX)).then(|| {
+                cia402::SetPoint {
+                    target: target.round() as i32,
+                    relative,
+                    immediate,
+                }
+            });
             self.pp.set_halt(false);
-            if self.pp.push(sp).is_ok() {
+            if sp.is_none() {
+                ev.emit(EventKind::CommandRefused {
+                    axis: i as u16,
+                    why: "the application's pp target was refused: not a finite position \
+                          within ±2^31 counts",
+                });
+            } else if let Some(sp) = sp
+                && self.pp.push(sp).is_ok()
+            {
                 self.app_pp = Some(0);
                 self.app_task = DriveTask::Positioning { queued: 1 };
             } else {
@@ -904,9 +924,18 @@ impl AxisRt {
     /// or the one held.
     fn stop_setpoint(&mut self, st: &AxisStatus, enabled: bool, ctx: &StepContext) -> Sample {
         match self.stopping {
-            Stopping::Ramp { from, at, .. } => {
+            Stopping::Ramp { from, at, since } => {
                 let k = ctx.tick.saturating_sub(at) as f64 / ctx.stop_ramp_cycles as f64;
-                let sp = if k >= 1.0 || !enabled {
+                // In pp and pv the drive brakes on its own deceleration (halt, target 0),
+                // which may take longer than the master's ramp: disable once it stands still
+                // (`supervise_stop` still disables at the stop timeout).
+                let drive_brakes = RunMode::from_code(st.active_mode.as_i8())
+                    .is_some_and(|m| matches!(m, RunMode::Pp | RunMode::Pv));
+                let braking = enabled
+                    && drive_brakes
+                    && !st.standstill
+                    && ctx.cycle.saturating_sub(since) <= ctx.stop_timeout_cycles;
+                let sp = if (k >= 1.0 && !braking) || !enabled {
                     self.axis.request_disable();
                     self.stopping = Stopping::Disabling;
                     Sample {
@@ -1003,6 +1032,7 @@ impl AxisRt {
                                 given: 0,
                                 settled: 0,
                                 reached: false,
+                                since: ctx.tick,
                             }
                         }
                         _ => DriveRun::Profile { index, since: None },
@@ -1168,6 +1198,13 @@ impl AxisRt {
             return;
         };
         let stopping = self.stopping != Stopping::No;
+        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+        if !enabled {
+            // Nothing set before a disable, a quick stop or a fault comes back when the axis
+            // is enabled again.
+            self.pv.set_target(0);
+            self.tq.set_target(0);
+        }
         if stopping {
             self.abort_drive_run();
             self.pv.set_target(0);
@@ -1217,6 +1254,17 @@ impl AxisRt {
                             as i32;
                         self.pv.set_target(if on { v } else { 0 });
                         let s = self.pv.step(&mut self.axis, sw);
+                        if t > seconds + DRIVE_STEP_TIMEOUT_S {
+                            self.abort_drive_run();
+                            self.program = ProgramState::Idle;
+                            ev.emit(EventKind::CommandRefused {
+                                axis: i as u16,
+                                why: "the program stopped: the drive did not report velocity 0 \
+                                      reached within 2 minutes of the pv step's end",
+                            });
+                            self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+                            return;
+                        }
                         !on && s.streaming && s.target_reached
                     }
                     Some(&Step::Tq {
@@ -1287,6 +1335,7 @@ impl AxisRt {
             mut given,
             mut settled,
             reached,
+            since,
         } = self.drive_run
         else {
             return;
@@ -1314,8 +1363,20 @@ impl AxisRt {
             }
         }
         let s = self.pp.step(&mut self.axis, sw);
+        let timed_out = ctx.tick.saturating_sub(since) as f64 * ctx.dt > DRIVE_STEP_TIMEOUT_S;
+        if timed_out {
+            self.abort_drive_run();
+            self.program = ProgramState::Idle;
+            ev.emit(EventKind::CommandRefused {
+                axis: i as u16,
+                why: "the program stopped: the drive did not report its pp targets reached \
+                      within 2 minutes",
+            });
+            self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+            return;
+        }
         if s.error.is_some() {
-            self.drive_run = DriveRun::Idle;
+            self.abort_drive_run();
             self.program = ProgramState::Idle;
             ev.emit(EventKind::CommandRefused {
                 axis: i as u16,
@@ -1342,6 +1403,7 @@ impl AxisRt {
             given,
             settled,
             reached,
+            since,
         };
     }
 
@@ -1390,7 +1452,11 @@ impl AxisRt {
             if let Some(p) = self.probes.get_mut(k) {
                 *p = next;
             }
-            function |= next.function_bits(base);
+            // A probe being re-armed has its bits 0 for this cycle (the drive clears what it
+            // stored), then set from the next.
+            if !matches!(arm, ProbeArm::Rearm(_)) {
+                function |= next.function_bits(base);
+            }
         }
         if self.probes != [ProbeArm::Off; 2] {
             self.probe_function = Some(function);
@@ -1742,6 +1808,9 @@ impl AxisRt {
                 self.runner.restart();
                 self.requested_mode = None;
                 self.abort_home();
+                if self.probes != [ProbeArm::Off; 2] {
+                    self.probes = [ProbeArm::Off; 2];
+                }
                 self.program = ProgramState::Pending;
                 None
             }

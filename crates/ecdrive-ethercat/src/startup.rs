@@ -2022,8 +2022,14 @@ async fn configure_mailbox(
     };
     c.drain().await?;
     if let Some((sel, modes)) = &plan.mode_selector {
-        let raw = c.upload(sel.object, false).await?;
-        if let Err(why) = judge_mode_selector(sel, modes, &raw) {
+        let judged = match c.upload(sel.object, false).await {
+            Ok(raw) => judge_mode_selector(sel, modes, &raw),
+            Err(e) => Err(format!(
+                "reading {} ({}), which selects the modes the drive allows: {}",
+                sel.name, sel.object, e.kind
+            )),
+        };
+        if let Err(why) = judged {
             done.modes_refused = Some(why);
             return Ok(done);
         }
