@@ -224,3 +224,46 @@ fn a_home_step_after_a_move_goes_on_without_a_jump() {
         assert!(fe < 5.0, "{}: following error {fe}°", d.name);
     }
 }
+
+/// The home offset: on the BDHDE 0x607C is the position the home reads (CiA 402), written at
+/// start-up in its units; the MR-J4-TM sets it itself and refuses a written one (§7.3.13 (1)),
+/// which the configuration says before the run. Method 35 (the current position) on the BDHDE:
+/// right after the home the position reads the offset, in degrees.
+#[test]
+fn a_home_offset_is_where_the_home_reads_or_refused_by_the_manual() {
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
+                loss_detection = false\n\
+                [[drive]]\nposition = 0\nmode = \"csp\"\n\
+                units = { name = \"deg\", counts_per_unit = 2912.711111 }\nprogram = [\n\
+                { step = \"move\", by = 100, velocity = 360, acceleration = 3600 },\n\
+                { step = \"home\", method = 35, speed_switch = 90, speed_zero = 10, acceleration = 3600, offset = 30 },\n\
+                { step = \"dwell\", seconds = 0.05 },\n]\n";
+    let cfg = ecdrive::app::config::parse(text, "offset.toml").unwrap_or_else(|e| panic!("{e}"));
+    let dir = std::env::temp_dir().join(format!("ecdrive-home-offset-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("run.csv");
+    let opts = RunOptions {
+        record: Some(file.clone()),
+        ..RunOptions::default()
+    };
+    let stop = AtomicBool::new(false);
+    let r = run(&cfg, &opts, &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let pos = actual_positions(&std::fs::read_to_string(&file).unwrap(), 1);
+    let _ = std::fs::remove_dir_all(&dir);
+    // The last reading: standing at the home, which reads 30° (87 381 counts).
+    let last = *pos[0].last().unwrap();
+    assert!(
+        (last - (30.0f64 * 2912.711111).round() as i64).abs() <= 1,
+        "the home reads {last} counts"
+    );
+    let e = ecdrive::app::config::parse(
+        &text
+            .replace("\"bdhde\"", "\"mr-j4-tm\"")
+            .replace("method = 35", "method = 37"),
+        "offset.toml",
+    )
+    .expect_err("an offset on the MR-J4-TM")
+    .to_string();
+    assert!(e.contains("0x06090030") && e.contains("§7.3.13 (1)"), "{e}");
+}

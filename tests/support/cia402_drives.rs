@@ -55,4 +55,5 @@ pub const BLV_R: DriveCaps = DriveCaps {
     error_table: BLV_R_ERRORS,
     csp_start_edge: false,
     homing_failure: "",
+    home_offset_set_by_drive: None,
 };

@@ -1484,6 +1484,7 @@ fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
             speed_switch,
             speed_zero,
             acceleration,
+            ..
         } => {
             for (name, v) in [
                 ("speed_switch", speed_switch),
@@ -1713,34 +1714,35 @@ fn homing_writes(
     k: f64,
 ) -> Result<Vec<(ObjectAddress, Value)>, (usize, String)> {
     use crate::cia402::{AccelUnit, OperationMode};
-    let mut first: Option<(usize, i8, f64, f64, f64)> = None;
+    let mut first: Option<(usize, i8, f64, f64, f64, Option<f64>)> = None;
     for (n, s) in program.iter().enumerate() {
         let raw::Step::Home {
             method,
             speed_switch,
             speed_zero,
             acceleration,
+            offset,
         } = *s.get_ref()
         else {
             continue;
         };
         match first {
-            None => first = Some((n, method, speed_switch, speed_zero, acceleration)),
-            Some((_, m, a, b, c))
-                if (m, a, b, c) == (method, speed_switch, speed_zero, acceleration) => {}
+            None => first = Some((n, method, speed_switch, speed_zero, acceleration, offset)),
+            Some((_, m, a, b, c, o))
+                if (m, a, b, c, o) == (method, speed_switch, speed_zero, acceleration, offset) => {}
             Some((f, ..)) => {
                 return Err((
                     n,
                     format!(
-                        "this home step differs from program[{f}]'s: the homing method, speeds and \
-                         acceleration are written once at start-up, so every home step of a \
-                         drive must give the same"
+                        "this home step differs from program[{f}]'s: the homing method, speeds, \
+                         acceleration and offset are written once at start-up, so every home \
+                         step of a drive must give the same"
                     ),
                 ));
             }
         }
     }
-    let Some((n, method, v1, v2, acc)) = first else {
+    let Some((n, method, v1, v2, acc, offset)) = first else {
         return Ok(Vec::new());
     };
     let Some(p) = p else {
@@ -1813,12 +1815,27 @@ fn homing_writes(
         AccelUnit::PositionPerSecond2 => acc * k,
     };
     let a = ObjectAddress::new;
-    Ok(vec![
+    let mut out = vec![
         (a(0x6098, 0), Value::Int(i64::from(method))),
         (a(0x6099, 1), fits("speed_switch", "0x6099:01", speed(v1))?),
         (a(0x6099, 2), fits("speed_zero", "0x6099:02", speed(v2))?),
         (a(0x609A, 0), fits("acceleration", "0x609A", acc_value)?),
-    ])
+    ];
+    // The home offset (0x607C): the position the home then reads, in position units.
+    if let Some(o) = offset {
+        if let Some(why) = p.caps.home_offset_set_by_drive {
+            return Err((n, format!("the home step's offset cannot be given: {why}")));
+        }
+        let counts = (o * k).round();
+        if !(o.is_finite() && counts.abs() <= f64::from(i32::MAX)) {
+            return Err((
+                n,
+                format!("the home step's offset is {counts} counts: it must fit 0x607C (±2^31)"),
+            ));
+        }
+        out.push((a(0x607C, 0), Value::Int(counts as i64)));
+    }
+    Ok(out)
 }
 
 /// Check a step against the drive's limits (in user units).

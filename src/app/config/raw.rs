@@ -186,6 +186,8 @@ pub(super) enum Step {
         speed_switch: f64,
         speed_zero: f64,
         acceleration: f64,
+        #[serde(default)]
+        offset: Option<f64>,
     },
     Pp {
         #[serde(default)]

@@ -167,6 +167,9 @@ pub struct DriveCaps {
     /// How the drive's manual names a failed homing besides statusword bit 13 (a warning or an
     /// alarm), for messages; empty when it names none.
     pub homing_failure: &'static str,
+    /// The drive sets the home offset 0x607C itself and refuses a value written to it: why,
+    /// in the manual's words (`None`: 0x607C is the CiA 402 home offset the master writes).
+    pub home_offset_set_by_drive: Option<&'static str>,
 }
 
 impl DriveCaps {
@@ -185,6 +188,7 @@ impl DriveCaps {
         error_table: &[],
         csp_start_edge: false,
         homing_failure: "",
+        home_offset_set_by_drive: None,
     };
 
     /// Whether `mode` is a position mode on this drive: the standard ones, plus the listed

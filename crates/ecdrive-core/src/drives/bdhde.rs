@@ -393,6 +393,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     // Table 10-4: fault 0x6100 "Homing Error" (display HE, FLT 174); §10.2: the drive enters
     // Fault.
     homing_failure: "fault 0x6100 Homing Error (HE, FLT 174)",
+    home_offset_set_by_drive: None,
 };
 
 // ============================================================================================

@@ -195,6 +195,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     error_table: ERROR_TABLE,
     csp_start_edge: false,
     homing_failure: "",
+    home_offset_set_by_drive: None,
 };
 
 /// The closed-loop capability set: as [`CAPS`] plus tq.

@@ -439,6 +439,12 @@ pub const CAPS: DriveCaps = DriveCaps {
     // return incomplete warning], a warning (statusword bit 7, §5.3.1): the drive stays
     // enabled.
     homing_failure: "AL.90 Home position return incomplete warning",
+    // §7.3.13 (1): "No value can be written because Home offset (607Ch) is set automatically.
+    // Writing any value causes SDO Abort Code (0609 0030h …)".
+    home_offset_set_by_drive: Some(
+        "the MR-J4-TM sets its home offset 0x607C itself and refuses a written value (SDO abort \
+         0x06090030, manual §7.3.13 (1)); its home position shift comes from its own parameters",
+    ),
 };
 
 // ============================================================================================
