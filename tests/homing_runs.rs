@@ -10,34 +10,16 @@
 
 use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
 use std::sync::atomic::AtomicBool;
-
-/// The README's example, with the emulated drives' loss supervision off (a host stall on a
-/// loaded machine is not what this test is about).
-fn example() -> String {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/home_then_csp.toml"
-    ))
-    .unwrap();
-    text.replace(
-        "devices = [\"mr-j4-tm\", \"bdhde\"]",
-        "devices = [\"mr-j4-tm\", \"bdhde\"]\nloss_detection = false",
-    )
-}
+#[path = "support/runs.rs"]
+mod runs;
+use runs::{example_without_loss_detection, recording};
 
 /// Per axis, the recorded actual positions (counts) in cycle order.
 fn actual_positions(csv: &str, axes: usize) -> Vec<Vec<i64>> {
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').map(str::trim).collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let (axis, actual) = (col("axis"), col("actual_counts"));
-    let mut out = vec![Vec::new(); axes];
-    for l in lines {
-        let f: Vec<&str> = l.split(',').collect();
-        let a: usize = f[axis].trim().parse().unwrap();
-        out[a].push(f[actual].trim().parse().unwrap());
-    }
-    out
+    recording(csv, axes)
+        .into_iter()
+        .map(|a| a.iter().map(|r| r.actual).collect())
+        .collect()
 }
 
 /// `examples/home_then_csp.toml`: the MR-J4-TM homes with method 19 (the dog's front end, 2.5
@@ -47,8 +29,11 @@ fn actual_positions(csv: &str, axes: usize) -> Vec<Vec<i64>> {
 fn the_example_homes_each_drive_then_moves_from_its_home() {
     let dir = std::env::temp_dir().join(format!("ecdrive-home-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let cfg = ecdrive::app::config::parse(&example(), "home_then_csp.toml")
-        .unwrap_or_else(|e| panic!("{e}"));
+    let cfg = ecdrive::app::config::parse(
+        &example_without_loss_detection("home_then_csp.toml"),
+        "home_then_csp.toml",
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let file = dir.join("run.csv");
     let opts = RunOptions {
         record: Some(file.clone()),

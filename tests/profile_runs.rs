@@ -11,6 +11,9 @@
 
 use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunReport, run};
 use std::sync::atomic::AtomicBool;
+#[path = "support/runs.rs"]
+mod runs;
+use runs::{Rec, example_without_loss_detection, recording};
 
 /// Counts per revolution: MR-J4-TM 4 194 304 (22-bit encoder), BDHDE 2^20.
 const MR_CPR: f64 = 4_194_304.0;
@@ -18,52 +21,9 @@ const BD_CPR: f64 = 1_048_576.0;
 
 /// `examples/profile_modes.toml` (the MR-J4-TM in profile mode, the BDHDE from csp through
 /// every profile mode back to csp; each arms touch probe 1 on the rising edge and crosses the
-/// probe input on the way), with the emulated drives' loss supervision off (a host stall on a
-/// loaded machine is not what this test is about).
+/// probe input on the way), without loss supervision.
 fn example() -> String {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/examples/profile_modes.toml"
-    ))
-    .unwrap();
-    text.replace(
-        "devices = [\"mr-j4-tm@0x2001=2\", \"bdhde\"]",
-        "devices = [\"mr-j4-tm@0x2001=2\", \"bdhde\"]\nloss_detection = false",
-    )
-}
-
-/// One recorded cycle of one axis.
-#[derive(Debug, Clone, Copy)]
-struct Rec {
-    actual: i64,
-    velocity: i64,
-    torque: i64,
-    mode: i8,
-}
-
-fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
-    let mut lines = csv.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').map(str::trim).collect();
-    let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let (axis, actual, vel, tq, mode) = (
-        col("axis"),
-        col("actual_counts"),
-        col("velocity_drive_units"),
-        col("torque_drive_units"),
-        col("mode"),
-    );
-    let mut out = vec![Vec::new(); axes];
-    for l in lines {
-        let f: Vec<&str> = l.split(',').map(str::trim).collect();
-        let a: usize = f[axis].parse().unwrap();
-        out[a].push(Rec {
-            actual: f[actual].parse().unwrap(),
-            velocity: f[vel].parse().unwrap(),
-            torque: f[tq].parse().unwrap(),
-            mode: f[mode].parse().unwrap(),
-        });
-    }
-    out
+    example_without_loss_detection("profile_modes.toml")
 }
 
 fn run_config(text: &str, name: &str) -> (RunReport, Vec<Vec<Rec>>) {

@@ -840,18 +840,11 @@ impl AxisRt {
                     // The drive generates the motion in the profile modes: pv and tq take the
                     // target and ramp to it; pp targets come through `request_pp`.
                     RunMode::Pv => {
-                        self.pv.set_target(
-                            (v / self.velocity_unit)
-                                .round()
-                                .clamp(f64::from(i32::MIN), f64::from(i32::MAX))
-                                as i32,
-                        );
+                        self.pv.set_target(self.drive_velocity(v));
                         return None;
                     }
                     RunMode::Tq => {
-                        self.tq.set_target(
-                            v.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16,
-                        );
+                        self.tq.set_target(drive_torque(v));
                         return None;
                     }
                     RunMode::Pp => return None,
@@ -1248,10 +1241,7 @@ impl AxisRt {
                 let done = match self.runner.steps().get(index) {
                     Some(&Step::Pv { velocity, seconds }) if mode == RunMode::Pv => {
                         let on = since.is_none() || t < seconds;
-                        let v = (velocity / self.velocity_unit)
-                            .round()
-                            .clamp(f64::from(i32::MIN), f64::from(i32::MAX))
-                            as i32;
+                        let v = self.drive_velocity(velocity);
                         self.pv.set_target(if on { v } else { 0 });
                         let s = self.pv.step(&mut self.axis, sw);
                         if t > seconds + DRIVE_STEP_TIMEOUT_S {
@@ -1273,11 +1263,8 @@ impl AxisRt {
                         ramp,
                     }) if mode == RunMode::Tq => {
                         let on = since.is_none() || t < ramp + seconds;
-                        let q = torque
-                            .round()
-                            .clamp(f64::from(i16::MIN), f64::from(i16::MAX))
-                            as i16;
-                        self.tq.set_target(if on { q } else { 0 });
+                        self.tq
+                            .set_target(if on { drive_torque(torque) } else { 0 });
                         let s = self.tq.step(&mut self.axis, sw);
                         // Done once the ramp down has had its time and the drive reports the
                         // torque back near 0 (a drive whose slope unit differs from its
@@ -1463,6 +1450,14 @@ impl AxisRt {
         }
     }
 
+    /// A velocity in position units per second as the drive's velocity value (0x60FF),
+    /// rounded and held to its range.
+    fn drive_velocity(&self, v: f64) -> i32 {
+        (v / self.velocity_unit)
+            .round()
+            .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+    }
+
     /// The set-point into the engine, in the active mode.
     fn command(&mut self, sp: Sample, st: &AxisStatus) {
         let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
@@ -1471,14 +1466,8 @@ impl AxisRt {
             // The drive generates the motion; `profile_mode` gives it its targets.
             RunMode::Pp | RunMode::Pv | RunMode::Tq => Ok(()),
             RunMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
-            RunMode::Csv => self.axis.set_velocity(
-                (sp.vel / self.velocity_unit)
-                    .round()
-                    .clamp(i32::MIN as f64, i32::MAX as f64) as i32,
-            ),
-            RunMode::Cst => self
-                .axis
-                .set_torque(sp.torque.round().clamp(i16::MIN as f64, i16::MAX as f64) as i16),
+            RunMode::Csv => self.axis.set_velocity(self.drive_velocity(sp.vel)),
+            RunMode::Cst => self.axis.set_torque(drive_torque(sp.torque)),
         };
     }
 
@@ -1833,6 +1822,11 @@ impl AxisRt {
             _ => None,
         }
     }
+}
+
+/// A torque in the drive's unit as its torque value (0x6071), rounded and held to its range.
+fn drive_torque(t: f64) -> i16 {
+    t.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
 }
 
 /// The raw AL state (0x0130 low byte) ethercrab read for a device.

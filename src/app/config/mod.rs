@@ -1880,7 +1880,7 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
                 "/s²",
             )
         }
-        raw::Step::Torque { torque, .. } => match l.max_torque {
+        raw::Step::Torque { torque, .. } | raw::Step::Tq { torque, .. } => match l.max_torque {
             Some(lim) if torque.abs() > lim => Err(format!(
                 "torque {} exceeds the drive's limit of {lim}",
                 torque.abs()
@@ -1902,17 +1902,8 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
             acceleration,
             deceleration,
             ..
-        } => {
-            over("velocity", velocity, l.max_velocity, "/s")?;
-            over("acceleration", acceleration, l.max_acceleration, "/s²")?;
-            over(
-                "deceleration",
-                deceleration.unwrap_or(acceleration),
-                l.max_acceleration,
-                "/s²",
-            )
         }
-        raw::Step::Pv {
+        | raw::Step::Pv {
             velocity,
             acceleration,
             deceleration,
@@ -1927,13 +1918,6 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
                 "/s²",
             )
         }
-        raw::Step::Tq { torque, .. } => match l.max_torque {
-            Some(lim) if torque.abs() > lim => Err(format!(
-                "torque {} exceeds the drive's limit of {lim}",
-                torque.abs()
-            )),
-            _ => Ok(()),
-        },
         raw::Step::Mode { .. } | raw::Step::Dwell { .. } | raw::Step::TouchProbe { .. } => Ok(()),
     }
 }
