@@ -717,7 +717,11 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                     None,
                     format!("waiting for {what}"),
                     ErrorKind::Timeout,
-                    format!("not reached within {} ms", timeout.as_millis()),
+                    format!(
+                        "not reached within {} ms ({})",
+                        timeout.as_millis(),
+                        where_things_stand(self.telemetry.read())
+                    ),
                 ));
             }
             std::thread::sleep(Duration::from_millis(1));
@@ -1525,6 +1529,20 @@ fn describe_datagram(d: crate::wkc::DatagramWkc) -> String {
         ": logical datagram {} of {} (logical 0x{:08X}, {} bytes{devices}) came back with {}, expected {}",
         d.index, d.of, d.address, d.len, d.got, d.expected
     )
+}
+
+/// What a timed-out wait reports: the cycle's lost frames and every axis's state, with its
+/// error code when it has one, so a wait that failed because a drive faulted says so.
+fn where_things_stand(t: &Telemetry) -> String {
+    let mut out = format!("cycle {}, {} lost", t.cycle.cycle, t.cycle.lost);
+    for (i, a) in t.axes.iter().enumerate() {
+        let state = a.state.map_or("no state", |s| s.name());
+        out.push_str(&format!("; axis {i}: {state}"));
+        if a.error_code != 0 {
+            out.push_str(&format!(", error code 0x{:04X}", a.error_code));
+        }
+    }
+    out
 }
 
 #[cfg(test)]
