@@ -9,7 +9,8 @@ use ecdrive::master::session::{Master, MasterConfig, SessionReport};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
 use ecdrive::master::{
-    AppCycle, CycleApp, DriveTask, EntryError, RunMode, SetpointLimits, Streams,
+    AppCycle, CycleApp, DriveTask, EntryError, ProbeEdge, ProbeState, RunMode, SetpointLimits,
+    Streams,
 };
 use ecdrive::od::ObjectAddress;
 use ecdrive::rt::RtSettings;
@@ -458,5 +459,177 @@ fn the_application_homes_moves_in_pp_and_runs_pv() {
             DriveTask::Positioning { queued: 0 },
             DriveTask::TargetReached,
         ],
+    );
+}
+
+/// Arms touch probe 1 on both axes at the first enabled cycle, then moves each by `PROBE_STEP`
+/// counts a cycle up to 2 rev (BDHDE counts) and holds; records what `probe()` says.
+#[derive(Default)]
+struct ProbeSearch {
+    origin: [Option<i64>; 2],
+    steps: [i64; 2],
+    armed: [bool; 2],
+    states: [Vec<ProbeState>; 2],
+}
+
+const PROBE_STEP: i64 = 2000;
+
+impl CycleApp for ProbeSearch {
+    fn cycle(&mut self, c: &mut AppCycle<'_>) {
+        for (i, a) in c.axes().iter_mut().enumerate() {
+            if !a.enabled() {
+                continue;
+            }
+            let s = a.probe(1);
+            if self.states[i].last() != Some(&s) && self.states[i].len() < 16 {
+                self.states[i].push(s);
+            }
+            if !self.armed[i] {
+                a.arm_probe(1, ProbeEdge::Rising);
+                self.armed[i] = true;
+            }
+            let origin = *self.origin[i].get_or_insert(a.position());
+            self.steps[i] = (self.steps[i] + PROBE_STEP).min(2 * 1_048_576);
+            a.set_target((origin + self.steps[i]) as f64);
+        }
+    }
+}
+
+/// The application arms a touch probe and reads the latch: on the BDHDE, whose setup maps the
+/// probe (`DriveSetup::probes`), the latch is at the machine's edge (+1.3 rev,
+/// `ecdrive::sim::machine::World`) within one count; on the MR-J4-TM, mapped without the
+/// probe objects, the arming is refused by name and nothing latches.
+#[test]
+fn the_application_arms_a_touch_probe_and_reads_the_latch() {
+    let app = Arc::new(Mutex::new(ProbeSearch {
+        states: [Vec::with_capacity(16), Vec::with_capacity(16)],
+        ..ProbeSearch::default()
+    }));
+    let mut cfg = config(SetpointLimits::default());
+    cfg.app = Some(app.clone());
+    cfg.startup.drives[1].probes = vec![(1, ProbeEdge::Rising)];
+    let mut m = Master::start(SegmentLink::new(segment()), cfg)
+        .unwrap_or_else(|f| panic!("start-up: {}", f.error));
+    m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    // The cycle holds the application's lock while it runs: the telemetry says when.
+    let done = m.wait_until("the BDHDE's latch", T, |t| {
+        matches!(t.axes[1].probes[0], ProbeState::Latched { .. })
+    });
+    // The application sees it in the cycle after.
+    let c = m.telemetry().cycle.cycle;
+    let _ = m.wait_until("a cycle more", T, |t| t.cycle.cycle > c + 2);
+    let (r, _) = m.stop(StopKind::Ramp);
+    let a = app.lock().unwrap();
+    if let Err(e) = done {
+        panic!("{e}: {:?}", a.states);
+    }
+    let r = r.unwrap();
+    let edge = ecdrive::sim::machine::World::default()
+        .probe1_rev
+        .unwrap()
+        .0
+        * 1_048_576.0;
+    let Some(&ProbeState::Latched { edge: e, position }) = a.states[1].last() else {
+        panic!("{:?}", a.states[1]);
+    };
+    assert_eq!(e, ProbeEdge::Rising);
+    assert!(
+        (position as f64 - edge).abs() <= 1.0,
+        "latched at {position}, the edge is at {edge}"
+    );
+    assert_eq!(
+        a.states[1][..2],
+        [ProbeState::Off, ProbeState::Armed(ProbeEdge::Rising)],
+        "{:?}",
+        a.states[1]
+    );
+    // The MR-J4-TM: refused, named, never armed.
+    assert_eq!(a.states[0], [ProbeState::Off], "{:?}", a.states[0]);
+    let refused = r
+        .history
+        .iter()
+        .find(|h| h.text.contains("touch probe was refused"))
+        .unwrap_or_else(|| panic!("{:?}", r.history));
+    assert!(
+        refused.drive.as_ref().is_some_and(|d| d.position == 0) && refused.text.contains("0x60B8"),
+        "{refused:?}"
+    );
+}
+
+/// The same without a callback, from the supervisory thread: `Command::Home`,
+/// `Command::ArmProbe`, `Command::Pp`, followed in the telemetry (`task`, `probes`). The BDHDE
+/// homes on its current position (method 35: it reads 0), moves in pp to +2 rev and latches
+/// the machine's probe edge at +1.3 rev on the way, within one count.
+#[test]
+fn commands_home_arm_a_probe_and_move_in_pp() {
+    let mut cfg = config(SetpointLimits::default());
+    let a = ObjectAddress::new;
+    let v = ecdrive::od::Value::Uint;
+    cfg.startup.drives[1].sdos = vec![
+        (a(0x6098, 0), ecdrive::od::Value::Int(35)),
+        (a(0x6081, 0), v(2_000_000)),
+        (a(0x6083, 0), v(20_000_000)),
+        (a(0x6084, 0), v(20_000_000)),
+    ];
+    cfg.startup.drives[1].probes = vec![(1, ProbeEdge::Rising)];
+    let mut m = Master::start(SegmentLink::new(segment()), cfg)
+        .unwrap_or_else(|f| panic!("start-up: {}", f.error));
+    m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
+    m.command(Command::Enable(Axes::One(1))).unwrap();
+    m.wait_until("enabled", T, |t| {
+        t.axes[1].state == Some(State::OperationEnabled)
+    })
+    .unwrap();
+    m.command(Command::Home(Axes::One(1), 35)).unwrap();
+    m.wait_until("homed", T, |t| {
+        t.axes[1].task == DriveTask::Homed { method: 35 }
+    })
+    .unwrap();
+    assert_eq!(m.telemetry().axes[1].position_actual, 0);
+    m.command(Command::ArmProbe {
+        axis: 1,
+        probe: 1,
+        edge: ProbeEdge::Rising,
+    })
+    .unwrap();
+    m.wait_until("armed", T, |t| {
+        t.axes[1].probes[0] == ProbeState::Armed(ProbeEdge::Rising)
+    })
+    .unwrap();
+    m.command(Command::Mode(Axes::One(1), RunMode::Pp)).unwrap();
+    m.wait_until("pp", T, |t| t.axes[1].mode_display == 1)
+        .unwrap();
+    m.command(Command::Pp {
+        axis: 1,
+        target: 2.0 * 1_048_576.0,
+        relative: false,
+        immediate: false,
+    })
+    .unwrap();
+    m.wait_until("target reached", T, |t| {
+        t.axes[1].task == DriveTask::TargetReached
+    })
+    .unwrap();
+    let t = m.telemetry().axes[1];
+    let (r, _) = m.stop(StopKind::Ramp);
+    assert!(r.unwrap().shutdown_ok);
+    assert!(
+        (t.position_actual - 2 * 1_048_576).abs() <= 1,
+        "{}",
+        t.position_actual
+    );
+    let edge = ecdrive::sim::machine::World::default()
+        .probe1_rev
+        .unwrap()
+        .0
+        * 1_048_576.0;
+    let ProbeState::Latched { edge: e, position } = t.probes[0] else {
+        panic!("{:?}", t.probes);
+    };
+    assert_eq!(e, ProbeEdge::Rising);
+    assert!(
+        (position as f64 - edge).abs() <= 1.0,
+        "latched at {position}, the edge is at {edge}"
     );
 }

@@ -286,3 +286,94 @@ program = [
         );
     }
 }
+
+/// A search for a mark in csv: the probe armed, a ramp to 1 rev/s, a `probe_wait` that keeps
+/// that velocity until the latch, then a ramp to standstill. The wait ends at the latch, not at
+/// its 5 s: the axis stops within the ramp-down's distance (1²/(2·10) = 0.05 rev) plus a few
+/// cycles after the edge the machine puts at +1.3 rev, where 5 s at 1 rev/s would be +5 rev.
+/// The MR-J4-TM's wait, in csp after a move across the edge, finds its latch there already.
+/// `examples/probe_search.toml` as written, without loss supervision.
+#[test]
+fn a_probe_wait_searches_for_the_mark_and_ends_at_the_latch() {
+    let text = example_without_loss_detection("probe_search.toml");
+    let (r, rec) = run_config(&text, "search");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let edge = ecdrive::sim::machine::World::default()
+        .probe1_rev
+        .unwrap()
+        .0;
+    for (a, cpr) in [(0usize, MR_CPR), (1, BD_CPR)] {
+        let d = &r.drives[a];
+        assert_eq!(d.steps_done, d.program.len(), "{}: {:?}", d.name, d.errors);
+        let l = d.probe_latches.first().expect("a latch");
+        assert!(
+            (l.counts as f64 - edge * cpr).abs() <= 1.0,
+            "{}: latched at {} counts, the edge is at {} counts",
+            d.name,
+            l.counts,
+            edge * cpr
+        );
+    }
+    // The BDHDE stands where the search stopped it: past the edge by at most the ramp-down's
+    // 0.05 rev and 10 cycles at 1 rev/s.
+    let end = rec[1].last().unwrap().actual as f64 / BD_CPR;
+    assert!(
+        end > edge && end < edge + 0.05 + 0.01,
+        "BDHDE: stopped at {end} rev; the edge is at {edge} rev"
+    );
+    // The MR-J4-TM went back to 0 after its wait.
+    assert!(
+        rec[0].last().unwrap().actual.abs() <= 1,
+        "MR-J4-TM did not return"
+    );
+}
+
+/// A `probe_wait` without its latch ends the run after its time, naming the drive and the
+/// probe, with the axes disabled; a wait for a probe no step arms is refused by the
+/// configuration, naming the step.
+#[test]
+fn a_probe_wait_without_a_latch_stops_the_run_by_name() {
+    let text = r#"
+interface = "sim"
+cycle = "1ms"
+[sim]
+devices = ["bdhde"]
+loss_detection = false
+[[drive]]
+position = 0
+mode = "csp"
+units = { name = "rev", counts_per_unit = 1048576 }
+program = [
+  { step = "touch_probe", probe = 2, edge = "falling" },
+  { step = "move", to = 0.5, velocity = 4, acceleration = 40 },
+  { step = "probe_wait", probe = 2, seconds = 0.3 },
+  { step = "move", to = 0, velocity = 4, acceleration = 40 },
+]
+"#;
+    let (r, _) = run_config(text, "nolatch");
+    assert_eq!(r.outcome, Outcome::DriveFault, "{}", r.reason);
+    for want in ["BDHDE", "touch probe 2", "0.3 s"] {
+        assert!(r.reason.contains(want), "{want:?} not in {:?}", r.reason);
+    }
+    let d = &r.drives[0];
+    assert_eq!(d.steps_done, 2, "{:?}", d.errors);
+    assert!(d.probe_latches.is_empty());
+    assert_eq!(
+        d.states.last().map(String::as_str),
+        Some("Switch on disabled"),
+        "{:?}",
+        d.states
+    );
+
+    let unarmed = text.replace(
+        r#"{ step = "touch_probe", probe = 2, edge = "falling" },"#,
+        "",
+    );
+    let Err(e) = ecdrive::app::config::parse(&unarmed, "wait.toml") else {
+        panic!("a wait for an unarmed probe was taken");
+    };
+    let e = e.to_string();
+    for want in ["program[1]", "no earlier touch_probe step arms probe 2"] {
+        assert!(e.contains(want), "{want:?} not in {e}");
+    }
+}

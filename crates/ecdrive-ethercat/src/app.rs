@@ -15,7 +15,7 @@ use crate::cia402::State;
 use crate::od::ObjectAddress;
 use crate::pdo::{Direction, Field, Layout};
 
-use crate::program::RunMode;
+use crate::program::{ProbeEdge, RunMode};
 use crate::telemetry::AxisTelemetry;
 
 /// Application code called by the cycle thread once per cycle. It must not block, sleep,
@@ -85,9 +85,28 @@ impl SetpointLimits {
     }
 }
 
+/// A touch probe of an axis as the cycle drives it ([`AppAxis::arm_probe`], a program's
+/// `TouchProbe` step).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub enum ProbeState {
+    /// Not armed.
+    #[default]
+    Off,
+    /// Armed on this edge, no latch yet.
+    Armed(ProbeEdge),
+    /// Latched: the position the drive latched at the edge (counts, unwrapped like the
+    /// actual position). The drive keeps it until the probe is armed again.
+    Latched {
+        /// The edge.
+        edge: ProbeEdge,
+        /// The latched position (counts).
+        position: i64,
+    },
+}
+
 /// A homing or a pp move the application started on an axis ([`AppAxis::request_home`],
 /// [`AppAxis::request_pp`]), as it stands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub enum DriveTask {
     /// Nothing started.
     #[default]
@@ -159,7 +178,7 @@ pub struct AppAxis {
     pub(crate) writes: Vec<(Field, u64)>,
     pub(crate) home_request: Option<i8>,
     pub(crate) pp_request: Option<(f64, bool, bool)>,
-    pub(crate) task: DriveTask,
+    pub(crate) probe_request: Option<(u8, ProbeEdge)>,
 }
 
 impl AppAxis {
@@ -201,7 +220,7 @@ impl AppAxis {
             writes: Vec::with_capacity(free),
             home_request: None,
             pp_request: None,
-            task: DriveTask::Idle,
+            probe_request: None,
         }
     }
 
@@ -333,9 +352,28 @@ impl AppAxis {
         self.pp_request = Some((target, relative, immediate));
     }
 
+    /// Arm touch probe `probe` (1 or 2) on `edge` (0x60B8): the drive latches the position at
+    /// the next such edge of its probe input; armed again, it latches again. Taken in OP with
+    /// no program running, when the mapping carries 0x60B8, 0x60B9 and the probe's position
+    /// object (a [`crate::startup::DriveSetup`]'s `probes` maps them); else refused with an
+    /// event. Follow it with [`AppAxis::probe`].
+    pub fn arm_probe(&mut self, probe: u8, edge: ProbeEdge) {
+        self.probe_request = Some((probe, edge));
+    }
+
+    /// Touch probe `probe` (1 or 2): off, armed, or latched with its position; `Off` for
+    /// another number.
+    pub fn probe(&self, probe: u8) -> ProbeState {
+        self.tel
+            .probes
+            .get(usize::from(probe).wrapping_sub(1))
+            .copied()
+            .unwrap_or_default()
+    }
+
     /// Where the homing or pp move the application started stands.
     pub fn task(&self) -> DriveTask {
-        self.task
+        self.tel.task
     }
 
     /// Ask for a switch to `mode` (the engine switches without a jump).
@@ -350,6 +388,7 @@ impl AppAxis {
         self.writes.clear();
         self.home_request = None;
         self.pp_request = None;
+        self.probe_request = None;
     }
 }
 

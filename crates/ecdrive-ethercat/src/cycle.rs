@@ -14,7 +14,7 @@
 //! leaves OP: ramp (or quick stop), then disable. Ending the cycle hands the bus back to the
 //! session, which takes the drives to INIT.
 
-use super::app::{AppAxis, AppCycle, CycleApp, DriveTask, SetpointLimits};
+use super::app::{AppAxis, AppCycle, CycleApp, DriveTask, ProbeState, SetpointLimits};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
 use super::program::{ProbeEdge, RunMode, Runner, Step, Tick};
@@ -358,6 +358,27 @@ enum DriveRun {
     Profile { index: usize, since: Option<u64> },
 }
 
+/// What the application's callback ([`AppAxis`]) or commands asked of an axis in one cycle.
+#[derive(Debug, Clone, Copy, Default)]
+struct Requests {
+    setpoint: Option<f64>,
+    mode: Option<RunMode>,
+    home: Option<i8>,
+    pp: Option<(f64, bool, bool)>,
+    probe: Option<(u8, ProbeEdge)>,
+}
+
+impl Requests {
+    /// The callback's requests of this cycle, over what commands asked.
+    fn add(&mut self, app: &AppAxis) {
+        self.setpoint = app.setpoint.or(self.setpoint);
+        self.mode = app.mode_request.or(self.mode);
+        self.home = app.home_request.or(self.home);
+        self.pp = app.pp_request.or(self.pp);
+        self.probe = app.probe_request.or(self.probe);
+    }
+}
+
 /// One touch probe as the cycle drives it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum ProbeArm {
@@ -370,7 +391,7 @@ enum ProbeArm {
     /// set from an earlier latch is not this one).
     Armed { edge: ProbeEdge, clear: bool },
     /// Latched and reported; the drive keeps the value (first-event mode).
-    Latched(ProbeEdge),
+    Latched { edge: ProbeEdge, position: i64 },
 }
 
 impl ProbeArm {
@@ -379,7 +400,7 @@ impl ProbeArm {
     fn function_bits(self, base: u16) -> u16 {
         let edge = match self {
             Self::Off | Self::Rearm(_) => return 0,
-            Self::Armed { edge, .. } | Self::Latched(edge) => edge,
+            Self::Armed { edge, .. } | Self::Latched { edge, .. } => edge,
         };
         let sample = match edge {
             ProbeEdge::Rising => 1 << 4,
@@ -514,6 +535,9 @@ struct AxisRt {
     home_by_app: Option<i8>,
     app_task: DriveTask,
     app_pp: Option<u32>,
+    /// What commands ([`Command::Home`], [`Command::Pp`], [`Command::ArmProbe`]) asked of the
+    /// axis since the last cycle: taken as the application's requests are.
+    commanded: Requests,
     /// Touch probes 1 and 2.
     probes: [ProbeArm; 2],
     /// 0x60B9 and 0x60BA–0x60BD as read this cycle (0 where not mapped).
@@ -587,6 +611,7 @@ impl AxisRt {
             tq: cia402::ProfileTorque::new(),
             home_by_app: None,
             app_task: DriveTask::Idle,
+            commanded: Requests::default(),
             app_pp: None,
             probes: [ProbeArm::Off; 2],
             probe_status: 0,
@@ -721,10 +746,15 @@ impl AxisRt {
                 sp = s;
             }
         }
+        let mut req = std::mem::take(&mut self.commanded);
         if let Some(app) = app {
-            if let Some(s) = self.app_requests(i, app, &st, enabled, ctx, ev) {
-                sp = s;
-            }
+            req.add(app);
+        }
+        if let Some(s) = self.app_requests(i, &req, &st, enabled, ctx, ev) {
+            sp = s;
+        }
+        if let Some((probe, edge)) = req.probe {
+            self.app_probe(i, probe, edge, ev);
         }
         if enabled {
             self.command(sp, &st);
@@ -742,6 +772,14 @@ impl AxisRt {
         }
         self.profile_mode(i, fb.statusword, actual, ctx, ev);
         self.probe(i, ev);
+        self.tel.task = self.app_task;
+        for (t, p) in self.tel.probes.iter_mut().zip(self.probes) {
+            *t = match p {
+                ProbeArm::Off => ProbeState::Off,
+                ProbeArm::Rearm(edge) | ProbeArm::Armed { edge, .. } => ProbeState::Armed(edge),
+                ProbeArm::Latched { edge, position } => ProbeState::Latched { edge, position },
+            };
+        }
         let out = self.axis.step(&fb);
         self.engine_events(i, actual, ctx, ev);
         self.record_steps(&out, enabled, ctx.cycle);
@@ -755,13 +793,13 @@ impl AxisRt {
     fn app_requests(
         &mut self,
         i: usize,
-        app: &AppAxis,
+        app: &Requests,
         st: &AxisStatus,
         enabled: bool,
         ctx: &StepContext,
         ev: &mut Emitter,
     ) -> Option<Sample> {
-        if let Some(m) = app.mode_request
+        if let Some(m) = app.mode
             && st.active_mode.as_i8() != m.code()
             && st.mode_switch == ModeSwitchPhase::Idle
             && self
@@ -774,13 +812,13 @@ impl AxisRt {
                 why: "the application's mode switch was refused",
             });
         }
-        if let Some(sp) = self.app_home(i, app, st, enabled, ctx, ev) {
+        if let Some(sp) = self.app_home(i, app.home, st, enabled, ctx, ev) {
             return Some(sp);
         }
         let free =
             enabled && self.stopping == Stopping::No && self.program != ProgramState::Running;
         let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
-        if let Some((target, relative, immediate)) = app.pp_request
+        if let Some((target, relative, immediate)) = app.pp
             && free
             && mode == RunMode::Pp
             && self.drive_run == DriveRun::Idle
@@ -872,14 +910,14 @@ impl AxisRt {
     fn app_home(
         &mut self,
         i: usize,
-        app: &AppAxis,
+        request: Option<i8>,
         st: &AxisStatus,
         enabled: bool,
         ctx: &StepContext,
         ev: &mut Emitter,
     ) -> Option<Sample> {
         let actual = self.actual();
-        let method = match (self.home_by_app, app.home_request) {
+        let method = match (self.home_by_app, request) {
             (Some(m), _) if self.home == HomeRun::Idle => {
                 // Cut short (a stop, a disable, a fault) since the last cycle.
                 self.home_by_app = None;
@@ -1040,6 +1078,40 @@ impl AxisRt {
                 }
                 sp = Some(hold);
                 self.hold = hold;
+            }
+            Tick::ProbeWait {
+                probe,
+                setpoint,
+                expired,
+            } => {
+                sp = Some(setpoint);
+                self.hold = setpoint;
+                let latched = matches!(
+                    self.probes.get(usize::from(probe).saturating_sub(1)),
+                    Some(ProbeArm::Latched { .. })
+                );
+                if latched {
+                    self.runner.probe_latched();
+                } else if expired {
+                    self.program = ProgramState::Idle;
+                    let seconds = match self.runner.steps().get(self.runner.step_index()) {
+                        Some(&Step::ProbeWait { seconds, .. }) => seconds,
+                        _ => 0.0,
+                    };
+                    ev.emit(EventKind::ProbeNotLatched {
+                        axis: i as u16,
+                        probe,
+                        seconds,
+                    });
+                    ev.emit(EventKind::Stopping {
+                        reason: StopReason::ProbeNotLatched {
+                            axis: i as u16,
+                            probe,
+                        },
+                    });
+                    // This axis stops; the run then stops the others.
+                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
+                }
             }
             Tick::Home { method } => {
                 // Homing moves the drive on its own and redefines its position: the held
@@ -1394,6 +1466,34 @@ impl AxisRt {
         };
     }
 
+    /// The application arms a probe: taken with no program running and the probe's objects
+    /// mapped.
+    fn app_probe(&mut self, i: usize, probe: u8, edge: ProbeEdge, ev: &mut Emitter) {
+        let pf = &self.fields.probe;
+        let slot =
+            (usize::from(probe.clamp(1, 2)) - 1) * 2 + usize::from(edge == ProbeEdge::Falling);
+        let mapped = pf.function.is_some()
+            && pf.status.is_some()
+            && pf.positions.get(slot).is_some_and(Option::is_some);
+        let why = if !matches!(probe, 1 | 2) {
+            "the application's touch probe was refused: probes are 1 and 2"
+        } else if !mapped {
+            "the application's touch probe was refused: the mapping does not carry 0x60B8, \
+             0x60B9 and the probe's position object (map them with the drive's `probes`)"
+        } else if self.program == ProgramState::Running {
+            "the application's touch probe was refused: a program runs on the axis"
+        } else {
+            if let Some(p) = self.probes.get_mut(usize::from(probe) - 1) {
+                *p = ProbeArm::Rearm(edge);
+            }
+            return;
+        };
+        ev.emit(EventKind::CommandRefused {
+            axis: i as u16,
+            why,
+        });
+    }
+
     /// The touch probes: 0x60B8 from what is armed, and a latch in 0x60B9 reported with the
     /// position the drive latched (0x60BA–0x60BD), unwrapped like the actual position.
     fn probe(&mut self, i: usize, ev: &mut Emitter) {
@@ -1429,7 +1529,7 @@ impl AxisRt {
                             edge,
                             position,
                         });
-                        ProbeArm::Latched(edge)
+                        ProbeArm::Latched { edge, position }
                     } else {
                         arm
                     }
@@ -1806,6 +1906,23 @@ impl AxisRt {
             Command::HoldProgram(ax) if ax.includes(i) => {
                 self.program = ProgramState::Idle;
                 self.abort_home();
+                None
+            }
+            Command::Home(ax, method) if ax.includes(i) => {
+                self.commanded.home = Some(method);
+                None
+            }
+            Command::Pp {
+                axis,
+                target,
+                relative,
+                immediate,
+            } if axis as usize == i => {
+                self.commanded.pp = Some((target, relative, immediate));
+                None
+            }
+            Command::ArmProbe { axis, probe, edge } if axis as usize == i => {
+                self.commanded.probe = Some((probe, edge));
                 None
             }
             Command::Setpoint(axis, v) if axis as usize == i => {
@@ -2795,7 +2912,6 @@ fn refresh_view(view: &mut AppAxis, a: &AxisRt, in_op: bool, inputs: &[u8], outp
     view.tel.state = st.state;
     view.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
     view.program_running = a.program == ProgramState::Running;
-    view.task = a.app_task;
     let n = view.inputs.len().min(inputs.len());
     view.inputs[..n].copy_from_slice(&inputs[..n]);
     let n = view.outputs.len().min(outputs.len());

@@ -32,7 +32,7 @@ mod stream;
 pub mod telemetry;
 mod wkc;
 
-pub use app::{AppAxis, AppCycle, CycleApp, DriveTask, EntryError, SetpointLimits};
+pub use app::{AppAxis, AppCycle, CycleApp, DriveTask, EntryError, ProbeState, SetpointLimits};
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};

@@ -215,6 +215,16 @@ pub enum Step {
         /// The edge to latch on.
         edge: ProbeEdge,
     },
+    /// Wait until touch probe `probe` (armed by an earlier `TouchProbe` step) has latched,
+    /// keeping the motion the axis has: standing still after a move, the velocity after a ramp
+    /// (a search for the mark). Done at the latch; without one within `seconds` the program
+    /// stops the axes, naming the drive and the probe.
+    ProbeWait {
+        /// Probe 1 or 2.
+        probe: u8,
+        /// The longest wait (s).
+        seconds: f64,
+    },
 }
 
 /// A touch-probe edge.
@@ -269,6 +279,9 @@ impl Step {
             Self::TouchProbe { probe, edge } => {
                 format!("arm touch probe {probe} ({} edge)", edge.name())
             }
+            Self::ProbeWait { probe, seconds } => {
+                format!("wait for touch probe {probe} (at most {seconds} s)")
+            }
         }
     }
 
@@ -278,7 +291,8 @@ impl Step {
             Self::Mode { .. }
             | Self::Dwell { .. }
             | Self::Home { .. }
-            | Self::TouchProbe { .. } => true,
+            | Self::TouchProbe { .. }
+            | Self::ProbeWait { .. } => true,
             Self::Move { .. } | Self::Sine { .. } | Self::Ramp { .. } | Self::Jog { .. } => {
                 matches!(mode, RunMode::Csp | RunMode::Csv)
             }
@@ -335,16 +349,43 @@ pub enum ProgramError {
         /// The parameter problem.
         source: ProfileError,
     },
+    /// A `ProbeWait` step waits for a probe no earlier step arms.
+    #[error(
+        "step {index} (wait for touch probe {probe}): no earlier touch_probe step arms probe {probe}"
+    )]
+    ProbeNotArmed {
+        /// Step number (0-based).
+        index: usize,
+        /// The probe.
+        probe: u8,
+    },
 }
 
 /// Check that every step runs in the mode the program is in at that point. `start` is the mode
 /// the axis starts in.
 pub fn validate(steps: &[Step], start: RunMode) -> Result<(), ProgramError> {
     let mut mode = start;
+    let mut armed = [false; 2];
     for (index, s) in steps.iter().enumerate() {
         if let Step::Mode { mode: m } = s {
             mode = *m;
             continue;
+        }
+        match *s {
+            Step::TouchProbe { probe, .. } => {
+                if let Some(a) = armed.get_mut(usize::from(probe).wrapping_sub(1)) {
+                    *a = true;
+                }
+            }
+            Step::ProbeWait { probe, .. }
+                if !armed
+                    .get(usize::from(probe).wrapping_sub(1))
+                    .copied()
+                    .unwrap_or(true) =>
+            {
+                return Err(ProgramError::ProbeNotArmed { index, probe });
+            }
+            _ => {}
         }
         if !s.runs_in(mode) {
             return Err(ProgramError::WrongMode {
@@ -411,10 +452,28 @@ enum Planned {
         hold: Sample,
         seconds: f64,
     },
+    /// Waiting for a probe's latch: `from` carried on at its velocity, at most `seconds`.
+    ProbeWait {
+        from: Sample,
+        probe: u8,
+        seconds: f64,
+    },
     /// A mode switch, or a probe armed: nothing to sample.
     Mode,
     /// A step the drive runs (hm, pp, pv, tq).
     Drive,
+}
+
+/// A probe number: 1 or 2.
+fn check_probe(probe: u8) -> Result<(), ProfileError> {
+    if matches!(probe, 1 | 2) {
+        Ok(())
+    } else {
+        Err(ProfileError::NotFinite {
+            name: "probe (1 or 2)",
+            value: f64::from(probe),
+        })
+    }
 }
 
 fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
@@ -454,13 +513,21 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
             Planned::Drive
         }
         Step::TouchProbe { probe, .. } => {
-            if !matches!(probe, 1 | 2) {
-                return Err(ProfileError::NotFinite {
-                    name: "probe (1 or 2)",
-                    value: f64::from(probe),
-                });
-            }
+            check_probe(probe)?;
             Planned::Mode
+        }
+        Step::ProbeWait { probe, seconds } => {
+            check_probe(probe)?;
+            non_negative("seconds", seconds)?;
+            Planned::ProbeWait {
+                from: Sample {
+                    acc: 0.0,
+                    done: false,
+                    ..*from
+                },
+                probe,
+                seconds,
+            }
         }
         Step::Move {
             target,
@@ -577,6 +644,16 @@ pub enum Tick {
         /// The held set-point.
         hold: Sample,
     },
+    /// A `ProbeWait` step: stream `setpoint`; once probe `probe` has latched, call
+    /// [`Runner::probe_latched`]. `expired`: the step's time is up without the latch.
+    ProbeWait {
+        /// Probe 1 or 2.
+        probe: u8,
+        /// The set-point (the motion the axis had, carried on).
+        setpoint: Sample,
+        /// The wait's time is up.
+        expired: bool,
+    },
 }
 
 /// Runs a program on one axis. Built before the cycle starts; [`Runner::tick`] does not
@@ -686,6 +763,15 @@ impl Runner {
         }
     }
 
+    /// The probe a `ProbeWait` step waits for has latched: the next step starts from the
+    /// set-point the wait streamed last.
+    pub fn probe_latched(&mut self) {
+        if matches!(self.steps.get(self.index), Some(Step::ProbeWait { .. })) {
+            self.index += 1;
+            self.planned = None;
+        }
+    }
+
     /// The set-point at time `now` (seconds, any monotonic origin).
     pub fn tick(&mut self, now: f64) -> Tick {
         if self.entering && self.failed.is_none() && self.index < self.steps.len() {
@@ -761,6 +847,24 @@ impl Runner {
                 },
             };
             let t = (now - self.started_at).max(0.0);
+            if let Planned::ProbeWait {
+                from,
+                probe,
+                seconds,
+            } = planned
+            {
+                let setpoint = Sample {
+                    pos: from.pos + from.vel * t,
+                    ..from
+                };
+                self.step_t = t;
+                self.last = setpoint;
+                return Tick::ProbeWait {
+                    probe,
+                    setpoint,
+                    expired: t >= seconds,
+                };
+            }
             let s = match planned {
                 Planned::Move(m) => m.sample(t),
                 Planned::Sine(s) => s.sample(t),
@@ -781,7 +885,7 @@ impl Runner {
                     done: t >= seconds,
                     ..hold
                 },
-                Planned::Mode | Planned::Drive => Sample {
+                Planned::Mode | Planned::Drive | Planned::ProbeWait { .. } => Sample {
                     done: true,
                     ..self.last
                 },
@@ -855,7 +959,8 @@ mod tests {
                 Tick::SwitchMode(_)
                 | Tick::Home { .. }
                 | Tick::Drive { .. }
-                | Tick::Probe { .. } => continue,
+                | Tick::Probe { .. }
+                | Tick::ProbeWait { .. } => continue,
             };
             // The fastest step is the sine: 100 · 2π · 5 ≈ 3142 counts/s.
             let vmax = 2000.0f64.max(100.0 * 2.0 * std::f64::consts::PI * 5.0);
@@ -1041,5 +1146,83 @@ mod tests {
         }
         assert_eq!(last, Some(100.0), "by 100 from the home at 0");
         assert!(r.finished());
+    }
+
+    /// A probe wait carries the motion on (here 1000 counts/s after a ramp: the position
+    /// advancing 1 count a millisecond), says when its time is up, and ends at the latch.
+    #[test]
+    fn a_probe_wait_carries_the_motion_on_until_the_latch() {
+        let steps = vec![
+            Step::TouchProbe {
+                probe: 1,
+                edge: ProbeEdge::Rising,
+            },
+            Step::Ramp {
+                velocity: 1000.0,
+                acceleration: 1e6,
+                hold: 0.0,
+            },
+            Step::ProbeWait {
+                probe: 1,
+                seconds: 0.1,
+            },
+        ];
+        validate(&steps, RunMode::Csv).unwrap();
+        let mut r = Runner::new(steps, RunMode::Csv);
+        r.seed(Sample::default());
+        let mut waits = Vec::new();
+        for k in 0..300 {
+            match r.tick(f64::from(k) * 0.001) {
+                Tick::SwitchMode(_) => r.mode_switched(r.last),
+                Tick::ProbeWait {
+                    probe,
+                    setpoint,
+                    expired,
+                } => {
+                    assert_eq!(probe, 1);
+                    waits.push((setpoint, expired));
+                    if waits.len() == 200 {
+                        r.probe_latched();
+                    }
+                }
+                _ => {}
+            }
+        }
+        assert_eq!(waits.len(), 200);
+        assert!(r.finished());
+        for w in waits.windows(2) {
+            assert_eq!(w[1].0.vel, 1000.0);
+            assert!((w[1].0.pos - w[0].0.pos - 1.0).abs() < 1e-6, "{w:?}");
+        }
+        // The wait started at its first tick: up after 0.1 s, 101 ticks in.
+        let up = waits.iter().position(|w| w.1).unwrap();
+        assert!((100..=101).contains(&up), "{up}");
+    }
+
+    #[test]
+    fn a_probe_wait_needs_an_earlier_arming() {
+        let wait = Step::ProbeWait {
+            probe: 2,
+            seconds: 1.0,
+        };
+        let arm = |probe| Step::TouchProbe {
+            probe,
+            edge: ProbeEdge::Falling,
+        };
+        assert_eq!(
+            validate(&[arm(1), wait.clone()], RunMode::Csp),
+            Err(ProgramError::ProbeNotArmed { index: 1, probe: 2 })
+        );
+        assert!(validate(&[arm(2), wait.clone()], RunMode::Csp).is_ok());
+        assert!(matches!(
+            validate(
+                &[Step::ProbeWait {
+                    probe: 3,
+                    seconds: 1.0
+                }],
+                RunMode::Csp
+            ),
+            Err(ProgramError::Profile { .. })
+        ));
     }
 }

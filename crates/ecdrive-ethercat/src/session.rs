@@ -328,6 +328,9 @@ impl Decoder {
             }
             StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
             StopReason::HomingFailed { axis } => format!("homing of {} failed", self.name(axis)),
+            StopReason::ProbeNotLatched { axis, probe } => {
+                format!("touch probe {probe} of {} did not latch", self.name(axis))
+            }
         }
     }
 
@@ -449,7 +452,7 @@ impl Decoder {
             }
             EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
             EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
-            EventKind::HomingFailed { axis, .. } => (
+            EventKind::HomingFailed { axis, .. } | EventKind::ProbeNotLatched { axis, .. } => (
                 self.drive(axis),
                 true,
                 crate::telemetry::event_text(&e.kind),
@@ -546,7 +549,7 @@ fn history_kind(kind: &EventKind) -> HistoryKind {
         EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
         EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
         EventKind::HomingFailed { .. } => HistoryKind::Homing,
-        EventKind::ProbeLatched { .. } => HistoryKind::Probe,
+        EventKind::ProbeLatched { .. } | EventKind::ProbeNotLatched { .. } => HistoryKind::Probe,
         EventKind::SetpointLimit { .. } => HistoryKind::CommandRefused,
         EventKind::StreamUnderrun { .. } => HistoryKind::Warning,
         EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,

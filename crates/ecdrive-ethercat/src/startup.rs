@@ -94,6 +94,9 @@ pub struct DriveSetup {
     pub units: Option<UserUnits>,
     /// The set-point program.
     pub program: Vec<Step>,
+    /// Touch probes the application arms ([`crate::AppAxis::arm_probe`]): mapped at start-up
+    /// like a program's `TouchProbe` steps (0x60B8, 0x60B9 and the probe's position object).
+    pub probes: Vec<(u8, super::program::ProbeEdge)>,
 }
 
 impl DriveSetup {
@@ -109,6 +112,7 @@ impl DriveSetup {
             limits: crate::app::SetpointLimits::default(),
             units: None,
             program: Vec::new(),
+            probes: Vec::new(),
         }
     }
 }
@@ -597,8 +601,9 @@ pub fn discover<L: FrameLink>(
 pub enum Role {
     /// Driven through CiA 402 with this setup and profile.
     Drive {
-        /// The setup (from the configuration, or the profile's defaults).
-        setup: DriveSetup,
+        /// The setup (from the configuration, or the profile's defaults; boxed: the `Io` role
+        /// is small).
+        setup: Box<DriveSetup>,
         /// The profile.
         profile: &'static DriveProfile,
     },
@@ -771,7 +776,10 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                 }
             },
         };
-        out.push(Role::Drive { setup, profile });
+        out.push(Role::Drive {
+            setup: Box::new(setup),
+            profile,
+        });
     }
     Ok(out)
 }
@@ -875,7 +883,12 @@ fn mapping_for_program(
             ));
         }
     }
-    let probes = super::program::probes_used(&setup.program);
+    let mut probes = super::program::probes_used(&setup.program);
+    for &p in &setup.probes {
+        if !probes.contains(&p) {
+            probes.push(p);
+        }
+    }
     let mut need: Vec<(Direction, ObjectAddress)> = Vec::new();
     if !probes.is_empty() {
         need.push((Direction::Rx, PROBE_FUNCTION));

@@ -60,6 +60,34 @@ pub enum Command {
     HoldProgram(Axes),
     /// Stream one set-point in the axis's mode (position counts, velocity counts/s, torque).
     Setpoint(u16, f64),
+    /// Home with the method the drive holds in 0x6098 (start-up wrote it), then back to the
+    /// axis's mode, as [`crate::AppAxis::request_home`]; the method names it in reports.
+    /// Taken in Operation enabled with no program or homing running; the axis's telemetry
+    /// `task` says where it stands.
+    Home(Axes, i8),
+    /// Hand a pp target (counts) to the drive with the new-set-point handshake, as
+    /// [`crate::AppAxis::request_pp`]; taken in pp, in Operation enabled with no program
+    /// running. The axis's telemetry `task` says where it stands.
+    Pp {
+        /// Axis index.
+        axis: u16,
+        /// Target (counts).
+        target: f64,
+        /// Controlword bit 6: relative to the last target.
+        relative: bool,
+        /// Controlword bit 5: replace the running move (else queued behind it).
+        immediate: bool,
+    },
+    /// Arm a touch probe, as [`crate::AppAxis::arm_probe`]; the axis's telemetry `probes`
+    /// says whether it latched, and where.
+    ArmProbe {
+        /// Axis index.
+        axis: u16,
+        /// Probe 1 or 2.
+        probe: u8,
+        /// The edge.
+        edge: crate::program::ProbeEdge,
+    },
     /// Stop every axis in a controlled way, disable them, and end the cycle.
     Stop(StopKind),
     /// Re-start the segment: if the cycle runs, stop every axis in a controlled way and end
@@ -88,6 +116,21 @@ impl core::fmt::Display for Command {
             Command::RunProgram(a) => write!(f, "run the program of {a}"),
             Command::HoldProgram(a) => write!(f, "hold the program of {a}"),
             Command::Setpoint(a, v) => write!(f, "set-point {v} for axis {a}"),
+            Command::Home(a, m) => write!(f, "home {a} (method {m})"),
+            Command::Pp {
+                axis,
+                target,
+                relative,
+                ..
+            } => {
+                let how = if *relative { "by" } else { "to" };
+                write!(f, "pp {how} {target} for axis {axis}")
+            }
+            Command::ArmProbe { axis, probe, edge } => write!(
+                f,
+                "arm touch probe {probe} ({} edge) of axis {axis}",
+                edge.name()
+            ),
             Command::Stop(StopKind::Ramp) => f.write_str("stop (ramp)"),
             Command::Stop(StopKind::QuickStop) => f.write_str("stop (quick stop)"),
             Command::Restart => f.write_str("re-start"),
@@ -128,6 +171,13 @@ pub enum StopReason {
     HomingFailed {
         /// Axis index.
         axis: u16,
+    },
+    /// A program's `ProbeWait` step saw no latch in its time.
+    ProbeNotLatched {
+        /// Axis index.
+        axis: u16,
+        /// Probe 1 or 2.
+        probe: u8,
     },
 }
 
@@ -259,6 +309,15 @@ pub enum EventKind {
         /// The latched position (counts, unwrapped like the actual position).
         position: i64,
     },
+    /// A program's wait for a touch probe ended without the latch.
+    ProbeNotLatched {
+        /// Axis index.
+        axis: u16,
+        /// Probe 1 or 2.
+        probe: u8,
+        /// How long the program waited (s).
+        seconds: f64,
+    },
     /// A command could not be carried out.
     CommandRefused {
         /// Axis index.
@@ -353,6 +412,10 @@ pub struct AxisTelemetry {
     pub program_step: u16,
     /// Whether a program is running.
     pub program_running: bool,
+    /// The homing or pp move a command or the application started, as it stands.
+    pub task: crate::app::DriveTask,
+    /// Touch probes 1 and 2.
+    pub probes: [crate::app::ProbeState; 2],
 }
 
 /// Bus and timing figures in a snapshot.
@@ -468,6 +531,10 @@ pub fn event_text(kind: &EventKind) -> String {
             drive_says,
             ..
         } => homing_failure_text(method, outcome, drive_says),
+        EventKind::ProbeNotLatched { probe, seconds, .. } => format!(
+            "touch probe {probe} did not latch within the program's wait of {seconds} s: the \
+             program stopped"
+        ),
         _ => String::new(),
     }
 }

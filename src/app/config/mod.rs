@@ -1087,7 +1087,8 @@ fn drive(
     program::validate(&steps, mode).map_err(|e| {
         let n = match &e {
             program::ProgramError::WrongMode { index, .. }
-            | program::ProgramError::Profile { index, .. } => *index,
+            | program::ProgramError::Profile { index, .. }
+            | program::ProgramError::ProbeNotArmed { index, .. } => *index,
         };
         let span = r.program.get(n).map_or(d.span(), Spanned::span);
         cx.err(span, key(&format!("program[{n}]")), e.to_string())
@@ -1281,6 +1282,7 @@ fn drive(
             }),
             units: units.clone(),
             program: steps,
+            probes: Vec::new(),
         },
         DriveConfig {
             select,
@@ -1575,6 +1577,13 @@ fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
                 }
             },
         },
+        raw::Step::ProbeWait { probe, seconds } => {
+            if !matches!(probe, 1 | 2) {
+                return Err(format!("probe_wait: probe must be 1 or 2, not {probe}"));
+            }
+            positive_all("probe_wait", &[("seconds", seconds)])?;
+            Step::ProbeWait { probe, seconds }
+        }
     })
 }
 
@@ -1918,7 +1927,10 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
                 "/s²",
             )
         }
-        raw::Step::Mode { .. } | raw::Step::Dwell { .. } | raw::Step::TouchProbe { .. } => Ok(()),
+        raw::Step::Mode { .. }
+        | raw::Step::Dwell { .. }
+        | raw::Step::TouchProbe { .. }
+        | raw::Step::ProbeWait { .. } => Ok(()),
     }
 }
 
@@ -2000,6 +2012,9 @@ fn describe(s: &raw::Step, u: &str) -> String {
             torque, seconds, ..
         } => format!("tq {torque} for {seconds} s"),
         raw::Step::TouchProbe { probe, edge } => format!("arm touch probe {probe} ({edge} edge)"),
+        raw::Step::ProbeWait { probe, seconds } => {
+            format!("wait for touch probe {probe} (at most {seconds} s)")
+        }
     }
 }
 

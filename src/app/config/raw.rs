@@ -218,4 +218,8 @@ pub(super) enum Step {
         probe: u8,
         edge: String,
     },
+    ProbeWait {
+        probe: u8,
+        seconds: f64,
+    },
 }

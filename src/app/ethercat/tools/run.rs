@@ -622,6 +622,16 @@ pub fn run(
                 ended_by = entry(HistoryKind::Homing, pos)
                     .or_else(|| Some(format!("homing of {} failed", drive_name(axis))));
             }
+            (_, Some(StopReason::ProbeNotLatched { axis, probe })) => {
+                outcome = Outcome::DriveFault;
+                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
+                ended_by = entry(HistoryKind::Probe, pos).or_else(|| {
+                    Some(format!(
+                        "touch probe {probe} of {} did not latch",
+                        drive_name(axis)
+                    ))
+                });
+            }
             (CycleEnd::DriveLeftOp { device, .. }, _)
             | (_, Some(StopReason::DriveLeftOp { device })) => {
                 outcome = Outcome::DriveFault;
