@@ -549,7 +549,7 @@ fn the_application_arms_a_touch_probe_and_reads_the_latch() {
     let refused = r
         .history
         .iter()
-        .find(|h| h.text.contains("touch probe was refused"))
+        .find(|h| h.text.contains("touch probe refused"))
         .unwrap_or_else(|| panic!("{:?}", r.history));
     assert!(
         refused.drive.as_ref().is_some_and(|d| d.position == 0) && refused.text.contains("0x60B8"),
@@ -597,6 +597,20 @@ fn commands_home_arm_a_probe_and_move_in_pp() {
         t.axes[1].probes[0] == ProbeState::Armed(ProbeEdge::Rising)
     })
     .unwrap();
+    // A pp target outside pp, and a probe the setup does not map: refused, by name.
+    m.command(Command::Pp {
+        axis: 1,
+        target: 1000.0,
+        relative: false,
+        immediate: false,
+    })
+    .unwrap();
+    m.command(Command::ArmProbe {
+        axis: 1,
+        probe: 2,
+        edge: ProbeEdge::Falling,
+    })
+    .unwrap();
     m.command(Command::Mode(Axes::One(1), RunMode::Pp)).unwrap();
     m.wait_until("pp", T, |t| t.axes[1].mode_display == 1)
         .unwrap();
@@ -613,7 +627,20 @@ fn commands_home_arm_a_probe_and_move_in_pp() {
     .unwrap();
     let t = m.telemetry().axes[1];
     let (r, _) = m.stop(StopKind::Ramp);
-    assert!(r.unwrap().shutdown_ok);
+    let r = r.unwrap();
+    assert!(r.shutdown_ok);
+    for want in [
+        "pp target refused: the axis is not in pp",
+        "touch probe refused: the mapping does not carry 0x60B8",
+    ] {
+        assert!(
+            r.history
+                .iter()
+                .any(|h| h.text.contains(want) && h.drive.as_ref().is_some_and(|d| d.position == 1)),
+            "{want:?} not in {:?}",
+            r.history
+        );
+    }
     assert!(
         (t.position_actual - 2 * 1_048_576).abs() <= 1,
         "{}",

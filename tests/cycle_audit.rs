@@ -25,7 +25,7 @@ use ecdrive::master::program::{ProbeEdge, RunMode, Step, Target};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
-use ecdrive::master::{AppCycle, CycleApp, StreamProducer, Streams};
+use ecdrive::master::{AppCycle, CycleApp, ProbeState, StreamProducer, Streams};
 use ecdrive::od::ObjectAddress;
 use ecdrive::rt::audit::{
     self, AllocCounts, CountingAlloc, SyscallCounter, SyscallCounts, skip_or_fail,
@@ -169,6 +169,13 @@ impl CycleApp for AuditApp {
             && a.enabled()
         {
             let centre = *self.centre.get_or_insert(a.position());
+            // A touch probe armed and read every cycle (mapped by `DriveSetup::probes`).
+            if a.probe(1) == ProbeState::Off {
+                a.arm_probe(1, ProbeEdge::Rising);
+            }
+            self.seen = self
+                .seen
+                .wrapping_add(i64::from(matches!(a.probe(1), ProbeState::Armed(_))));
             self.seen = self.seen.wrapping_add(
                 a.velocity() as i64
                     + a.torque() as i64
@@ -304,6 +311,11 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
                     Step::Dwell { seconds: 0.2 },
                 ]
             },
+            probes: if with_app {
+                vec![(1, ProbeEdge::Rising)]
+            } else {
+                Vec::new()
+            },
             ..DriveSetup::new(Selector::Position(p))
         });
         if load == Load::Profile
@@ -327,6 +339,15 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
     })
     .unwrap();
     if let Some(p) = producer.as_mut() {
+        // Touch probes by command in the window: one mapped, one not (refused, an event).
+        for (probe, edge) in [(1, ProbeEdge::Rising), (2, ProbeEdge::Falling)] {
+            m.command(Command::ArmProbe {
+                axis: 1,
+                probe,
+                edge,
+            })
+            .unwrap();
+        }
         // Axis 1 from the stream: 600 set-points from where it stands, pushed as room frees.
         let origin = m.telemetry().axes[1].position_actual;
         let mut next = 1i64;
@@ -338,6 +359,18 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
         })
         .unwrap();
         assert!(p.consumed() > 100, "{what}: the stream was not consumed");
+        let probes = m
+            .telemetry()
+            .axes
+            .iter()
+            .map(|a| a.probes[0])
+            .collect::<Vec<_>>();
+        assert!(
+            probes
+                .iter()
+                .all(|p| *p == ProbeState::Armed(ProbeEdge::Rising)),
+            "{what}: the probes armed by the application and by command: {probes:?}"
+        );
         let r = recording.as_mut().expect("recording");
         assert!(r.drain(|_| {}) > 600, "{what}: nothing recorded");
     } else {

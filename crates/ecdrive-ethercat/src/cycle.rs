@@ -535,8 +535,8 @@ struct AxisRt {
     home_by_app: Option<i8>,
     app_task: DriveTask,
     app_pp: Option<u32>,
-    /// What commands ([`Command::Home`], [`Command::Pp`], [`Command::ArmProbe`]) asked of the
-    /// axis since the last cycle: taken as the application's requests are.
+    /// A homing a command ([`Command::Home`]) asked for since the last cycle: taken as the
+    /// application's request is (pp targets and probes of commands are taken at once).
     commanded: Requests,
     /// Touch probes 1 and 2.
     probes: [ProbeArm; 2],
@@ -753,8 +753,13 @@ impl AxisRt {
         if let Some(s) = self.app_requests(i, &req, &st, enabled, ctx, ev) {
             sp = s;
         }
-        if let Some((probe, edge)) = req.probe {
-            self.app_probe(i, probe, edge, ev);
+        if let Some((probe, edge)) = req.probe
+            && let Err(why) = self.arm_probe(probe, edge)
+        {
+            ev.emit(EventKind::CommandRefused {
+                axis: i as u16,
+                why,
+            });
         }
         if enabled {
             self.command(sp, &st);
@@ -819,35 +824,13 @@ impl AxisRt {
             enabled && self.stopping == Stopping::No && self.program != ProgramState::Running;
         let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
         if let Some((target, relative, immediate)) = app.pp
-            && free
-            && mode == RunMode::Pp
-            && self.drive_run == DriveRun::Idle
+            && let Err((report, why)) = self.take_pp(target, relative, immediate)
+            && report
         {
-            let sp = (target.is_finite() && target.abs() <= f64::from(i32::MAX)).then(|| {
-                cia402::SetPoint {
-                    target: target.round() as i32,
-                    relative,
-                    immediate,
-                }
+            ev.emit(EventKind::CommandRefused {
+                axis: i as u16,
+                why,
             });
-            self.pp.set_halt(false);
-            if sp.is_none() {
-                ev.emit(EventKind::CommandRefused {
-                    axis: i as u16,
-                    why: "the application's pp target was refused: not a finite position \
-                          within ±2^31 counts",
-                });
-            } else if let Some(sp) = sp
-                && self.pp.push(sp).is_ok()
-            {
-                self.app_pp = Some(0);
-                self.app_task = DriveTask::Positioning { queued: 1 };
-            } else {
-                ev.emit(EventKind::CommandRefused {
-                    axis: i as u16,
-                    why: "the application's pp target was refused: the queue of targets is full",
-                });
-            }
         }
         let v = app.setpoint?;
         if !free {
@@ -901,6 +884,47 @@ impl AxisRt {
                 None
             }
         }
+    }
+
+    /// A pp target of the application or a command, handed to the handshake engine: taken in
+    /// pp, in Operation enabled with no program, stop or pp step running. `Err((report, why))`
+    /// when not taken; `report` is false for "not now" (the callback may ask every cycle).
+    fn take_pp(
+        &mut self,
+        target: f64,
+        relative: bool,
+        immediate: bool,
+    ) -> Result<(), (bool, &'static str)> {
+        let st = self.axis.status();
+        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        if !enabled || self.stopping != Stopping::No {
+            return Err((false, "pp target refused: the axis is not enabled"));
+        }
+        if self.program == ProgramState::Running || self.drive_run != DriveRun::Idle {
+            return Err((false, "pp target refused: a program runs on the axis"));
+        }
+        if mode != RunMode::Pp {
+            return Err((false, "pp target refused: the axis is not in pp"));
+        }
+        if !(target.is_finite() && target.abs() <= f64::from(i32::MAX)) {
+            return Err((
+                true,
+                "pp target refused: not a finite position within ±2^31 counts",
+            ));
+        }
+        self.pp.set_halt(false);
+        let sp = cia402::SetPoint {
+            target: target.round() as i32,
+            relative,
+            immediate,
+        };
+        if self.pp.push(sp).is_err() {
+            return Err((true, "pp target refused: the queue of targets is full"));
+        }
+        self.app_pp = Some(0);
+        self.app_task = DriveTask::Positioning { queued: 1 };
+        Ok(())
     }
 
     /// The homing the application asked for ([`AppAxis::request_home`]): started in
@@ -1466,32 +1490,30 @@ impl AxisRt {
         };
     }
 
-    /// The application arms a probe: taken with no program running and the probe's objects
-    /// mapped.
-    fn app_probe(&mut self, i: usize, probe: u8, edge: ProbeEdge, ev: &mut Emitter) {
+    /// The application or a command arms a probe: taken with no program running and the
+    /// probe's objects mapped.
+    fn arm_probe(&mut self, probe: u8, edge: ProbeEdge) -> Result<(), &'static str> {
         let pf = &self.fields.probe;
         let slot =
             (usize::from(probe.clamp(1, 2)) - 1) * 2 + usize::from(edge == ProbeEdge::Falling);
         let mapped = pf.function.is_some()
             && pf.status.is_some()
             && pf.positions.get(slot).is_some_and(Option::is_some);
-        let why = if !matches!(probe, 1 | 2) {
-            "the application's touch probe was refused: probes are 1 and 2"
+        if !matches!(probe, 1 | 2) {
+            Err("touch probe refused: probes are 1 and 2")
         } else if !mapped {
-            "the application's touch probe was refused: the mapping does not carry 0x60B8, \
-             0x60B9 and the probe's position object (map them with the drive's `probes`)"
+            Err(
+                "touch probe refused: the mapping does not carry 0x60B8, 0x60B9 and the probe's \
+                 position object (map them with the drive's `probes`)",
+            )
         } else if self.program == ProgramState::Running {
-            "the application's touch probe was refused: a program runs on the axis"
+            Err("touch probe refused: a program runs on the axis")
         } else {
             if let Some(p) = self.probes.get_mut(usize::from(probe) - 1) {
                 *p = ProbeArm::Rearm(edge);
             }
-            return;
-        };
-        ev.emit(EventKind::CommandRefused {
-            axis: i as u16,
-            why,
-        });
+            Ok(())
+        }
     }
 
     /// The touch probes: 0x60B8 from what is armed, and a latch in 0x60B9 reported with the
@@ -1909,21 +1931,24 @@ impl AxisRt {
                 None
             }
             Command::Home(ax, method) if ax.includes(i) => {
-                self.commanded.home = Some(method);
-                None
+                let st = self.axis.status();
+                if st.state != Some(State::OperationEnabled) || self.stopping != Stopping::No {
+                    Some("home refused: the axis is not enabled")
+                } else if self.program == ProgramState::Running || self.home != HomeRun::Idle {
+                    Some("home refused: a program or a homing runs on the axis")
+                } else {
+                    self.commanded.home = Some(method);
+                    None
+                }
             }
             Command::Pp {
                 axis,
                 target,
                 relative,
                 immediate,
-            } if axis as usize == i => {
-                self.commanded.pp = Some((target, relative, immediate));
-                None
-            }
+            } if axis as usize == i => self.take_pp(target, relative, immediate).err().map(|e| e.1),
             Command::ArmProbe { axis, probe, edge } if axis as usize == i => {
-                self.commanded.probe = Some((probe, edge));
-                None
+                self.arm_probe(probe, edge).err()
             }
             Command::Setpoint(axis, v) if axis as usize == i => {
                 match self.mode {
