@@ -66,8 +66,13 @@ fn stretch(rec: &[Rec], mode: i8, k: usize) -> Vec<Rec> {
 fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
     let (r, rec) = run_config(&example(), "all");
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
-    let cases = [("MR-J4-TM", MR_CPR, 0usize), ("BDHDE", BD_CPR, 1usize)];
-    for (name, cpr, a) in cases {
+    // Per drive: its pp targets (rev), its pv velocity (rev/s) and time. The MR-J4-TM's pp
+    // targets stay within the ±999999 pulses its manual allows in pp (§7.3.12 (1)).
+    let cases = [
+        ("MR-J4-TM", MR_CPR, 0usize, [0.2, -0.1, 0.1], 2.0, 0.75),
+        ("BDHDE", BD_CPR, 1usize, [3.0, 4.5, 1.0], -2.0, 0.5),
+    ];
+    for (name, cpr, a, targets, pv_velocity, pv_seconds) in cases {
         let d = &r.drives[a];
         assert_eq!(d.name, name);
         assert_eq!(d.steps_done, d.program.len(), "{name}: {:?}", d.errors);
@@ -82,7 +87,7 @@ fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
         // own position window 0x6067 is 100 pulses, §7.3.12 (5)) and stands on the last.
         let pp = stretch(rec, 1, 0);
         let mut from = 0;
-        for (k, target_rev) in [3.0, 4.5, 1.0].into_iter().enumerate() {
+        for (k, target_rev) in targets.into_iter().enumerate() {
             let target = (target_rev * cpr).round() as i64;
             let (at, closest) = pp[from..]
                 .iter()
@@ -97,26 +102,36 @@ fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
             from = at;
         }
         let last = pp.last().unwrap();
+        let last_target = (targets[2] * cpr).round() as i64;
         assert!(
-            (last.actual - cpr as i64).abs() <= 1,
-            "{name}: pp ended at {} counts, not on its last target {}",
+            (last.actual - last_target).abs() <= 1,
+            "{name}: pp ended at {} counts, not on its last target {last_target}",
             last.actual,
-            cpr
         );
 
-        // pv: −2 rev/s for 0.5 s with equal ramps up and down travels −1 rev; the velocity the
-        // drive reports reaches −2 rev/s on the way. The 0.5 s are the master's cycles with a
+        // pv: v rev/s for t s with equal ramps up and down travels v·t rev (BDHDE −2 rev/s
+        // for 0.5 s: −1 rev; MR-J4-TM +2 rev/s for 0.75 s: +1.5 rev); the velocity the drive
+        // reports reaches v on the way. The 0.5 s are the master's cycles with a
         // reply, the drive runs on its own clock: a cycle lost on a loaded host adds 2 mrev,
         // so the travel is checked to 5 %.
         let pv = stretch(rec, 3, 0);
         let travel = (pv.last().unwrap().actual - pv.first().unwrap().actual) as f64 / cpr;
+        let want_travel = pv_velocity * pv_seconds;
         assert!(
-            (travel + 1.0).abs() < 0.05,
-            "{name}: pv travelled {travel} rev, not −1 rev"
+            (travel - want_travel).abs() < 0.05 * want_travel.abs(),
+            "{name}: pv travelled {travel} rev, not {want_travel} rev"
         );
-        let fastest = pv.iter().map(|x| x.velocity).min().unwrap();
+        let fastest = pv
+            .iter()
+            .map(|x| x.velocity)
+            .max_by_key(|v| v.abs())
+            .unwrap();
         // The drives' velocity units: MR-J4-TM 0.01 r/min (§7.3.10 (7)), BDHDE counts/s.
-        let want = if a == 0 { -12_000.0 } else { -2.0 * cpr };
+        let want = if a == 0 {
+            pv_velocity * 6000.0
+        } else {
+            pv_velocity * cpr
+        };
         assert!(
             (fastest as f64 - want).abs() <= want.abs() * 0.01,
             "{name}: pv peaked at {fastest}, the target is {want}"
@@ -152,19 +167,19 @@ fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
         assert!((l.value.unwrap() - edge).abs() <= 1.0 / cpr);
     }
     // The MR-J4-TM's last pp: single set-points (bit 5 = 1), each relative to the last
-    // target and handed over once the one before is reached: +0.5 then +0.25 rev.
+    // target and handed over once the one before is reached: +0.2 then +0.1 rev.
     let pp = stretch(&rec[0], 1, 1);
     let start = pp.first().unwrap().actual;
     let end = pp.last().unwrap().actual;
     assert!(
-        ((end - start) as f64 / MR_CPR - 0.75).abs() <= 2.0 / MR_CPR,
+        ((end - start) as f64 / MR_CPR - 0.3).abs() <= 2.0 / MR_CPR,
         "MR-J4-TM: the relative pp moved {} counts",
         end - start
     );
-    let mid = (start as f64 + 0.5 * MR_CPR) as i64;
+    let mid = (start as f64 + 0.2 * MR_CPR) as i64;
     assert!(
         pp.iter().any(|x| (x.actual - mid).abs() <= 100),
-        "MR-J4-TM: the relative pp did not stop at +0.5 rev"
+        "MR-J4-TM: the relative pp did not stop at +0.2 rev"
     );
     // The modes as the drives displayed them, in order.
     assert_eq!(r.drives[0].modes_run, ["pp", "pv", "tq", "pv", "pp"]);
@@ -198,8 +213,8 @@ fn the_mr_j4_tm_without_profile_mode_refuses_a_pp_program_by_name() {
     }
     // One setting for pp and csp does not exist: the message says so.
     let text = example().replace("\nmode = \"pp\"\n", "\nmode = \"csp\"\n").replace(
-        "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"pp\", to = [3",
-        "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"mode\", mode = \"pp\" },\n  { step = \"pp\", to = [3",
+        "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"pp\", to = [0.2",
+        "  { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n  { step = \"mode\", mode = \"pp\" },\n  { step = \"pp\", to = [0.2",
     );
     let cfg = ecdrive::app::config::parse(&text, "profile.toml").unwrap();
     let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
@@ -374,6 +389,68 @@ program = [
     };
     let e = e.to_string();
     for want in ["program[1]", "no earlier touch_probe step arms probe 2"] {
+        assert!(e.contains(want), "{want:?} not in {e}");
+    }
+}
+
+/// The MR-J4-TM takes −999999 to 999999 pos units in 0x607A in pp (manual §7.3.12 (1): "Profile
+/// position mode (pp) … FFF0BDC1h to 000F423Fh (-999999 to 999999)"); with one encoder pulse per
+/// pos unit that is ±0.238 rev. A target beyond it is refused before anything runs: by the
+/// configuration, naming the step, and by start-up for a program built in code.
+#[test]
+fn a_pp_target_beyond_the_mr_j4_tm_range_is_refused_before_the_run() {
+    let text = r#"
+interface = "sim"
+cycle = "1ms"
+[sim]
+devices = ["mr-j4-tm@0x2001=2"]
+[[drive]]
+position = 0
+mode = "pp"
+units = { name = "rev", counts_per_unit = 4194304 }
+program = [
+  { step = "pp", to = [0.2, 0.25], velocity = 5, acceleration = 50 },
+]
+"#;
+    let Err(e) = ecdrive::app::config::parse(text, "range.toml") else {
+        panic!("0.25 rev = 1048576 pulses was taken");
+    };
+    let e = e.to_string();
+    for want in [
+        "program[0]",
+        "0.25 rev (1048576 counts)",
+        "§7.3.12 (1)",
+        "999999",
+    ] {
+        assert!(e.contains(want), "{want:?} not in {e}");
+    }
+    // 0.2 rev = 838861 pulses is within.
+    assert!(ecdrive::app::config::parse(&text.replace("0.25", "0.2"), "range.toml").is_ok());
+
+    use ecdrive::master::program::Step;
+    use ecdrive::master::session::{Master, MasterConfig};
+    use ecdrive::master::startup::{DriveSetup, Selector};
+    let mut seg = ecdrive::sim::Segment::new(std::sync::Arc::new(ecdrive::sim::HostClock));
+    seg.push(
+        ecdrive::sim::devices::by_name("mr-j4-tm@0x2001=2", 0).unwrap(),
+        ecdrive::sim::EscConfig::default(),
+    )
+    .unwrap();
+    let mut cfg = MasterConfig::new(std::time::Duration::from_millis(1));
+    cfg.startup.drives.push(DriveSetup {
+        mode: ecdrive::master::RunMode::Pp,
+        program: vec![Step::Pp {
+            targets: vec![2_000_000.0],
+            relative: true,
+            immediate: false,
+        }],
+        ..DriveSetup::new(Selector::Position(0))
+    });
+    let Err(f) = Master::start(ecdrive::sim::transport::SegmentLink::new(seg), cfg) else {
+        panic!("a relative pp step of 2000000 pulses was taken");
+    };
+    let e = f.error.to_string();
+    for want in ["MR-J4-TM", "2000000 counts to 0x607A", "§7.3.12 (1)"] {
         assert!(e.contains(want), "{want:?} not in {e}");
     }
 }

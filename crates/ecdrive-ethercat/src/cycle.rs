@@ -913,6 +913,14 @@ impl AxisRt {
                 "pp target refused: not a finite position within ±2^31 counts",
             ));
         }
+        if let Some(range) = self.axis.caps().pp_target_range
+            && !range.contains(target.round() as i64)
+        {
+            return Err((
+                true,
+                "pp target refused: beyond the range the drive's manual gives for 0x607A in pp",
+            ));
+        }
         self.pp.set_halt(false);
         let sp = cia402::SetPoint {
             target: target.round() as i32,

@@ -422,6 +422,18 @@ pub fn modes_used(steps: &[Step], start: RunMode) -> Vec<i8> {
     out
 }
 
+/// The first value a pp step would write to 0x607A outside `range` (an absolute target, or a
+/// relative step's distance): (step index, value in counts).
+pub fn pp_target_beyond(steps: &[Step], range: crate::cia402::ValueRange) -> Option<(usize, f64)> {
+    steps.iter().enumerate().find_map(|(n, s)| match s {
+        Step::Pp { targets, .. } => targets
+            .iter()
+            .find(|t| !range.contains(t.round() as i64))
+            .map(|&t| (n, t)),
+        _ => None,
+    })
+}
+
 /// The touch probes a program arms: (probe, edge), each once, in order.
 pub fn probes_used(steps: &[Step]) -> Vec<(u8, ProbeEdge)> {
     let mut out = Vec::new();

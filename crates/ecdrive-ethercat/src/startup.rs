@@ -864,6 +864,17 @@ fn mapping_for_program(
     setup: &DriveSetup,
     profile: &'static DriveProfile,
 ) -> Result<Mapping, (&'static str, String)> {
+    if let Some(range) = profile.caps.pp_target_range
+        && let Some((n, t)) = super::program::pp_target_beyond(&setup.program, range)
+    {
+        return Err((
+            "checking the program",
+            format!(
+                "step {n} (pp) writes {t} counts to 0x607A, beyond what the drive takes: {}",
+                range.source
+            ),
+        ));
+    }
     let modes = super::program::modes_used(&setup.program, setup.mode);
     for &code in &modes {
         let mode = crate::cia402::OperationMode::from_i8(code);

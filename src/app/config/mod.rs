@@ -1094,6 +1094,25 @@ fn drive(
         cx.err(span, key(&format!("program[{n}]")), e.to_string())
     })?;
 
+    // pp targets within what the drive takes in 0x607A.
+    if let Some(range) = profile.and_then(|p| p.caps.pp_target_range)
+        && let Some((n, t)) = program::pp_target_beyond(&steps, range)
+    {
+        let span = r.program.get(n).map_or(d.span(), Spanned::span);
+        let user = match &units {
+            Some(u) => format!("{} {} ({t} counts)", t / k, u.name),
+            None => format!("{t} counts"),
+        };
+        return Err(cx.err(
+            span,
+            key(&format!("program[{n}]")),
+            format!(
+                "pp: {user} is beyond what the drive takes: {}; move in `by` steps within it, \
+                 or make the drive's position unit coarser and `units` with it",
+                range.source
+            ),
+        ));
+    }
     // The home steps' start-up writes.
     let homing = homing_writes(&r.program, profile, k).map_err(|(n, m)| {
         let span = r.program.get(n).map_or(d.span(), Spanned::span);

@@ -170,6 +170,28 @@ pub struct DriveCaps {
     /// The drive sets the home offset 0x607C itself and refuses a value written to it: why,
     /// in the manual's words (`None`: 0x607C is the CiA 402 home offset the master writes).
     pub home_offset_set_by_drive: Option<&'static str>,
+    /// The range of the target position 0x607A in pp where it is narrower than the object's
+    /// type (MR-J4-TM: ±999 999 pos units, §7.3.12 (1)); `None`: the type's range. A pp target
+    /// beyond it is refused before it reaches the drive.
+    pub pp_target_range: Option<ValueRange>,
+}
+
+/// The values a drive takes in an object, and where its manual says so.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct ValueRange {
+    /// Smallest value.
+    pub min: i64,
+    /// Largest value.
+    pub max: i64,
+    /// What the manual says, and where (for messages).
+    pub source: &'static str,
+}
+
+impl ValueRange {
+    /// Whether `v` is within the range.
+    pub const fn contains(&self, v: i64) -> bool {
+        self.min <= v && v <= self.max
+    }
 }
 
 impl DriveCaps {
@@ -189,6 +211,7 @@ impl DriveCaps {
         csp_start_edge: false,
         homing_failure: "",
         home_offset_set_by_drive: None,
+        pp_target_range: None,
     };
 
     /// Whether `mode` is a position mode on this drive: the standard ones, plus the listed

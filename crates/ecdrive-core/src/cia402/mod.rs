@@ -45,7 +45,7 @@ pub use axis::{
     ModeSwitchPhase, Output, Phase, StandstillConfig, StopRampConfig, axis_defaults,
 };
 pub use bits::{ControlWord, StatusWord};
-pub use caps::{DriveCaps, QuickStopEnd, QuickStopOption, StopRamp};
+pub use caps::{DriveCaps, QuickStopEnd, QuickStopOption, StopRamp, ValueRange};
 pub use command::Command;
 pub use drive_profile::Profile;
 pub use error_code::{

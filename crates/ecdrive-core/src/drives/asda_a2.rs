@@ -311,6 +311,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     csp_start_edge: false,
     homing_failure: "",
     home_offset_set_by_drive: None,
+    pp_target_range: None,
 };
 
 // ============================================================================================

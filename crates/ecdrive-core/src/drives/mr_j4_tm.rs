@@ -445,6 +445,16 @@ pub const CAPS: DriveCaps = DriveCaps {
         "the MR-J4-TM sets its home offset 0x607C itself and refuses a written value (SDO abort \
          0x06090030, manual §7.3.13 (1)); its home position shift comes from its own parameters",
     ),
+    // §7.3.12 (1), Target position (607Ah): "Profile position mode (pp) … _ 0 _ _ (mm), _ 1 _ _
+    // (inch), _ 3 _ _ (pulse): FFF0BDC1h to 000F423Fh (-999999 to 999999)" (degree: −360000 to
+    // 360000, narrower still; the check takes the wider).
+    pp_target_range: Some(crate::cia402::ValueRange {
+        min: -999_999,
+        max: 999_999,
+        source: "the MR-J4-TM takes −999999 to 999999 pos units in 0x607A in pp (manual \
+                 §7.3.12 (1)); a pos unit follows [Pr. PT01], [Pr. PT03] and the gear ratio 0x6091 \
+                 (§7.3.14)",
+    }),
 };
 
 // ============================================================================================
