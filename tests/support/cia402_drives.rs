@@ -56,4 +56,5 @@ pub const BLV_R: DriveCaps = DriveCaps {
     csp_start_edge: false,
     homing_failure: "",
     home_offset_set_by_drive: None,
+    pp_target_range: None,
 };
