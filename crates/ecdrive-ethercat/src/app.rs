@@ -16,7 +16,7 @@ use crate::od::ObjectAddress;
 use crate::pdo::{Direction, Field, Layout};
 
 use crate::program::{ProbeEdge, RunMode};
-use crate::telemetry::AxisTelemetry;
+use crate::telemetry::{AxisTelemetry, DriveTask, ProbeState};
 
 /// Application code called by the cycle thread once per cycle. It must not block, sleep,
 /// allocate or make syscalls: the cycle audit holds it to the same rules as the cycle.
@@ -83,57 +83,6 @@ impl SetpointLimits {
         }
         Ok((vel, acc))
     }
-}
-
-/// A touch probe of an axis as the cycle drives it ([`AppAxis::arm_probe`], a program's
-/// `TouchProbe` step).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-pub enum ProbeState {
-    /// Not armed.
-    #[default]
-    Off,
-    /// Armed on this edge, no latch yet.
-    Armed(ProbeEdge),
-    /// Latched: the position the drive latched at the edge (counts, unwrapped like the
-    /// actual position). The drive keeps it until the probe is armed again.
-    Latched {
-        /// The edge.
-        edge: ProbeEdge,
-        /// The latched position (counts).
-        position: i64,
-    },
-}
-
-/// A homing or a pp move the application started on an axis ([`AppAxis::request_home`],
-/// [`AppAxis::request_pp`]), as it stands.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
-pub enum DriveTask {
-    /// Nothing started.
-    #[default]
-    Idle,
-    /// Homing with this method runs (hm, then back to the mode the axis was in).
-    Homing {
-        /// The method (0x6098).
-        method: i8,
-    },
-    /// The homing completed and the axis is back in its mode: its position is the home's.
-    Homed {
-        /// The method (0x6098).
-        method: i8,
-    },
-    /// The homing failed or was cut short (a failure stops the axes and is in the history,
-    /// as for a program's home step).
-    HomingFailed {
-        /// The method (0x6098).
-        method: i8,
-    },
-    /// pp targets are in flight or queued.
-    Positioning {
-        /// Targets waiting behind the one in flight.
-        queued: u8,
-    },
-    /// The drive reported the last pp target reached.
-    TargetReached,
 }
 
 /// Why a write to a mapped entry was refused.

@@ -14,7 +14,7 @@
 //! leaves OP: ramp (or quick stop), then disable. Ending the cycle hands the bus back to the
 //! session, which takes the drives to INIT.
 
-use super::app::{AppAxis, AppCycle, CycleApp, DriveTask, ProbeState, SetpointLimits};
+use super::app::{AppAxis, AppCycle, CycleApp, SetpointLimits};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
 use super::program::{ProbeEdge, RunMode, Runner, Step, Tick};
@@ -22,8 +22,8 @@ use super::record::{CycleSample, RecordTx};
 use super::setpoint::Sample;
 use super::startup::{ConfiguredDrive, ConfiguredIo, DriveFields, Group};
 use super::telemetry::{
-    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, IO_TELEMETRY_BYTES, IoTelemetry,
-    Phase, StopKind, StopReason, Telemetry,
+    AxisTelemetry, Command, CycleTelemetry, DriveTask, Event, EventKind, IO_TELEMETRY_BYTES,
+    IoTelemetry, Phase, ProbeState, StopKind, StopReason, Telemetry,
 };
 use super::wkc::{DatagramWkc, WkcPlan};
 use crate::cia402::{

@@ -32,7 +32,7 @@ mod stream;
 pub mod telemetry;
 mod wkc;
 
-pub use app::{AppAxis, AppCycle, CycleApp, DriveTask, EntryError, ProbeState, SetpointLimits};
+pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};
@@ -42,6 +42,7 @@ pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailur
 pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};
 pub use stream::{StreamProducer, Streams};
 pub use telemetry::{
-    Axes, AxisTelemetry, Command, CycleTelemetry, Event, EventKind, StopKind, StopReason, Telemetry,
+    Axes, AxisTelemetry, Command, CycleTelemetry, DriveTask, Event, EventKind, ProbeState,
+    StopKind, StopReason, Telemetry,
 };
 pub use wkc::{DatagramWkc, WkcPlan};

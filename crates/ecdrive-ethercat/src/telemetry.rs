@@ -365,6 +365,57 @@ pub struct Event {
     pub kind: EventKind,
 }
 
+/// A touch probe of an axis as the cycle drives it ([`crate::AppAxis::arm_probe`], a program's
+/// `TouchProbe` step).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub enum ProbeState {
+    /// Not armed.
+    #[default]
+    Off,
+    /// Armed on this edge, no latch yet.
+    Armed(crate::program::ProbeEdge),
+    /// Latched: the position the drive latched at the edge (counts, unwrapped like the
+    /// actual position). The drive keeps it until the probe is armed again.
+    Latched {
+        /// The edge.
+        edge: crate::program::ProbeEdge,
+        /// The latched position (counts).
+        position: i64,
+    },
+}
+
+/// A homing or a pp move the application started on an axis ([`crate::AppAxis::request_home`],
+/// [`crate::AppAxis::request_pp`]), as it stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+pub enum DriveTask {
+    /// Nothing started.
+    #[default]
+    Idle,
+    /// Homing with this method runs (hm, then back to the mode the axis was in).
+    Homing {
+        /// The method (0x6098).
+        method: i8,
+    },
+    /// The homing completed and the axis is back in its mode: its position is the home's.
+    Homed {
+        /// The method (0x6098).
+        method: i8,
+    },
+    /// The homing failed or was cut short (a failure stops the axes and is in the history,
+    /// as for a program's home step).
+    HomingFailed {
+        /// The method (0x6098).
+        method: i8,
+    },
+    /// pp targets are in flight or queued.
+    Positioning {
+        /// Targets waiting behind the one in flight.
+        queued: u8,
+    },
+    /// The drive reported the last pp target reached.
+    TargetReached,
+}
+
 /// One axis in a snapshot.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
 pub struct AxisTelemetry {
@@ -413,9 +464,9 @@ pub struct AxisTelemetry {
     /// Whether a program is running.
     pub program_running: bool,
     /// The homing or pp move a command or the application started, as it stands.
-    pub task: crate::app::DriveTask,
+    pub task: DriveTask,
     /// Touch probes 1 and 2.
-    pub probes: [crate::app::ProbeState; 2],
+    pub probes: [ProbeState; 2],
 }
 
 /// Bus and timing figures in a snapshot.
