@@ -780,3 +780,33 @@ fn zero_speed_switch_from_turning_cst_brakes_in_csv() {
         "csp starts where the axis is"
     );
 }
+
+/// Leaving pp for csp, every frame from the first that names csp carries the actual position
+/// in 0x607A, not the pp target left there (a relative one, taken as a csp target, is a jump:
+/// found over veth, where the BDHDE moved 8595 counts toward a relative −15 mm target before
+/// the master's first csp set-point).
+#[test]
+fn entering_csp_from_pp_targets_the_actual_position() {
+    let pp = OperationMode::ProfilePosition;
+    let mut axis = Axis::new(GENERIC, config(&GENERIC, pp)).unwrap();
+    let mut fb = Feedback::new(StatusWord::from_raw(0x0237));
+    fb.mode_display = Some(pp);
+    fb.position = Some(5000);
+    fb.velocity = Some(0);
+    axis.request_enable().unwrap();
+    for _ in 0..5 {
+        axis.step(&fb);
+    }
+    axis.set_position(-1_572_864).unwrap();
+    assert_eq!(axis.step(&fb).target_position, -1_572_864);
+    axis.request_mode(CSP).unwrap();
+    for k in 0..3 {
+        let out = axis.step(&fb);
+        assert_eq!(out.mode, CSP);
+        assert_eq!(out.target_position, 5000, "frame {k} of the switch");
+    }
+    fb.mode_display = Some(CSP);
+    let out = axis.step(&fb);
+    assert_eq!(axis.status().active_mode, CSP);
+    assert_eq!(out.target_position, 5000, "the switch confirmed");
+}

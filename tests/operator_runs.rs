@@ -334,8 +334,24 @@ fn the_readmes_fault_example_is_what_run_prints() {
     // Fault, by timing); the rest is fixed.
     let (head, tail) = example.split_once("): error code").unwrap();
     let head = &head[..head.find("fault (").unwrap() + "fault (".len()];
-    let file = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/csp_move_sine.toml");
-    let r = sim.ecdrive(&["run", "-c", file]);
+    // The README's example as written, with more patience for late replies: on the loaded
+    // two-core CI machine 3 late replies in a row over veth once stopped the run as "bus lost"
+    // before the drive's alarm came; that is not what this test is about.
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/examples/csp_move_sine.toml"
+    ))
+    .unwrap();
+    let dir = std::env::temp_dir().join(format!("ecdrive-readme-fault-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("csp_move_sine.toml");
+    std::fs::write(
+        &file,
+        format!("{text}\n[supervision]\nlost_before_stop = 50\nlost_cycles = 50\n"),
+    )
+    .unwrap();
+    let r = sim.ecdrive(&["run", "-c", &file.to_string_lossy()]);
+    let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(r.code, Some(5), "{r:#?}");
     let line = stderr_line(&r);
     assert!(

@@ -454,3 +454,42 @@ program = [
         assert!(e.contains(want), "{want:?} not in {e}");
     }
 }
+
+/// A relative pp move, then csp: the switch makes no jump. Over veth the BDHDE moved 8595
+/// counts toward its relative pp target (−1.5 rev, taken as an absolute csp target) in the
+/// frames before the master's first csp set-point; the engine now sends the actual position
+/// from the first frame that names csp.
+#[test]
+fn csp_after_a_relative_pp_move_starts_where_the_axis_stands() {
+    let text = r#"
+interface = "sim"
+cycle = "1ms"
+[sim]
+devices = ["bdhde"]
+loss_detection = false
+[[drive]]
+position = 0
+mode = "csp"
+units = { name = "rev", counts_per_unit = 1048576 }
+program = [
+  { step = "mode", mode = "pp" },
+  { step = "pp", to = [0.5, 1.5], velocity = 5, acceleration = 50 },
+  { step = "pp", by = [-1.5], velocity = 5, acceleration = 50 },
+  { step = "mode", mode = "csp" },
+  { step = "dwell", seconds = 0.1 },
+]
+"#;
+    let (r, rec) = run_config(text, "ppcsp");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let csp = stretch(&rec[0], 8, 1);
+    let stand = csp.first().unwrap().actual;
+    assert!(
+        stand.abs() <= 1,
+        "pp by −1.5 rev from 1.5 rev ended at {stand}"
+    );
+    let worst = csp.iter().map(|x| (x.actual - stand).abs()).max().unwrap();
+    assert!(
+        worst <= 2,
+        "the axis moved {worst} counts after the switch to csp"
+    );
+}

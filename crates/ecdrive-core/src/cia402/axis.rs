@@ -853,6 +853,17 @@ impl Axis {
             self.progress = Some(step.progress);
         }
 
+        // Entering a cyclic position mode from another one: the drive follows 0x607A from the
+        // first frame that names the mode, so every frame until the switch is confirmed carries
+        // the actual position, not what the other mode left there (a pp target, which may be
+        // relative: taken as absolute it is a jump).
+        if self.commanded_mode != self.active_mode
+            && self.commanded_mode.is_cyclic()
+            && self.commanded_mode.set_point_kind() == Some(SetPointKind::Position)
+            && let Some(p) = fb.position
+        {
+            self.position = p;
+        }
         self.update_set_points(fb);
         let streaming = self.streaming();
         let oms = if streaming {
