@@ -402,6 +402,20 @@ impl CycleApp for Sequence {
     }
 }
 
+/// The BDHDE's start-up values for homing and pp: homing on the current position (CiA 402
+/// method 35) needs no switch, 0x6098 by SDO; pp's profile velocity and accelerations
+/// (counts/s, counts/s²; 0x6081 is 0 at power-on, which would never move).
+fn bdhde_home_and_pp() -> Vec<(ObjectAddress, ecdrive::od::Value)> {
+    let a = ObjectAddress::new;
+    let v = ecdrive::od::Value::Uint;
+    vec![
+        (a(0x6098, 0), ecdrive::od::Value::Int(35)),
+        (a(0x6081, 0), v(2_000_000)),
+        (a(0x6083, 0), v(20_000_000)),
+        (a(0x6084, 0), v(20_000_000)),
+    ]
+}
+
 #[test]
 fn the_application_homes_moves_in_pp_and_runs_pv() {
     let phase = Arc::new(std::sync::atomic::AtomicU8::new(0));
@@ -412,17 +426,7 @@ fn the_application_homes_moves_in_pp_and_runs_pv() {
     }));
     let mut cfg = config(SetpointLimits::default());
     cfg.app = Some(app.clone());
-    // Homing on the current position (CiA 402 method 35) needs no switch: 0x6098 by SDO.
-    // pp's profile velocity and accelerations (BDHDE: counts/s, counts/s²; 0x6081 is 0 at
-    // power-on, which would never move).
-    let a = ObjectAddress::new;
-    let v = ecdrive::od::Value::Uint;
-    cfg.startup.drives[1].sdos = vec![
-        (a(0x6098, 0), ecdrive::od::Value::Int(35)),
-        (a(0x6081, 0), v(2_000_000)),
-        (a(0x6083, 0), v(20_000_000)),
-        (a(0x6084, 0), v(20_000_000)),
-    ];
+    cfg.startup.drives[1].sdos = bdhde_home_and_pp();
     let mut m = Master::start(SegmentLink::new(segment()), cfg)
         .unwrap_or_else(|f| panic!("start-up: {}", f.error));
     m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
@@ -564,14 +568,7 @@ fn the_application_arms_a_touch_probe_and_reads_the_latch() {
 #[test]
 fn commands_home_arm_a_probe_and_move_in_pp() {
     let mut cfg = config(SetpointLimits::default());
-    let a = ObjectAddress::new;
-    let v = ecdrive::od::Value::Uint;
-    cfg.startup.drives[1].sdos = vec![
-        (a(0x6098, 0), ecdrive::od::Value::Int(35)),
-        (a(0x6081, 0), v(2_000_000)),
-        (a(0x6083, 0), v(20_000_000)),
-        (a(0x6084, 0), v(20_000_000)),
-    ];
+    cfg.startup.drives[1].sdos = bdhde_home_and_pp();
     cfg.startup.drives[1].probes = vec![(1, ProbeEdge::Rising)];
     let mut m = Master::start(SegmentLink::new(segment()), cfg)
         .unwrap_or_else(|f| panic!("start-up: {}", f.error));

@@ -8,18 +8,21 @@
 //! manuals' method definitions (MR-J4-TM §5.4.9 (4): 19 "dog front end"; 4 "first Z-phase after
 //! the dog front end").
 
-use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunReport, run};
 use std::sync::atomic::AtomicBool;
 #[path = "support/runs.rs"]
 mod runs;
-use runs::{example_without_loss_detection, recording};
+use runs::{example_without_loss_detection, run_recorded};
 
-/// Per axis, the recorded actual positions (counts) in cycle order.
-fn actual_positions(csv: &str, axes: usize) -> Vec<Vec<i64>> {
-    recording(csv, axes)
+/// Run `text` with a recording: the report and, per axis, the recorded actual positions
+/// (counts) in cycle order.
+fn run_positions(text: &str, name: &str) -> (RunReport, Vec<Vec<i64>>) {
+    let (r, rec) = run_recorded(text, name);
+    let pos = rec
         .into_iter()
-        .map(|a| a.iter().map(|r| r.actual).collect())
-        .collect()
+        .map(|a| a.iter().map(|x| x.actual).collect())
+        .collect();
+    (r, pos)
 }
 
 /// `examples/home_then_csp.toml`: the MR-J4-TM homes with method 19 (the dog's front end, 2.5
@@ -27,27 +30,16 @@ fn actual_positions(csv: &str, axes: usize) -> Vec<Vec<i64>> {
 /// reads 0 and the program's absolute moves count from there (90° and −45° after the sines).
 #[test]
 fn the_example_homes_each_drive_then_moves_from_its_home() {
-    let dir = std::env::temp_dir().join(format!("ecdrive-home-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let cfg = ecdrive::app::config::parse(
+    let (r, pos) = run_positions(
         &example_without_loss_detection("home_then_csp.toml"),
-        "home_then_csp.toml",
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    let file = dir.join("run.csv");
-    let opts = RunOptions {
-        record: Some(file.clone()),
-        ..RunOptions::default()
-    };
-    let stop = AtomicBool::new(false);
-    let r = run(&cfg, &opts, &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+        "home_then_csp",
+    );
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
     for d in &r.drives {
         assert_eq!(d.steps_done, 3, "{}: {:?}", d.name, d.errors);
     }
     let rec = r.record.as_ref().expect("a recording");
     assert_eq!(rec.dropped, 0, "the recording is complete");
-    let pos = actual_positions(&std::fs::read_to_string(&file).unwrap(), 2);
     // (counts per revolution, the home in revolutions, the last move's target in counts)
     let cases = [
         (4_194_304.0, 2.5, (90.0 * 11_650.844_444f64).round()),
@@ -86,7 +78,6 @@ fn the_example_homes_each_drive_then_moves_from_its_home() {
             "axis {a}: ended at {end} counts, the program's target is {last}"
         );
     }
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// A machine without a home switch (`+no-home-switch`): method 19 runs into the limit switch.
@@ -223,19 +214,8 @@ fn a_home_offset_is_where_the_home_reads_or_refused_by_the_manual() {
                 { step = \"move\", by = 100, velocity = 360, acceleration = 3600 },\n\
                 { step = \"home\", method = 35, speed_switch = 90, speed_zero = 10, acceleration = 3600, offset = 30 },\n\
                 { step = \"dwell\", seconds = 0.05 },\n]\n";
-    let cfg = ecdrive::app::config::parse(text, "offset.toml").unwrap_or_else(|e| panic!("{e}"));
-    let dir = std::env::temp_dir().join(format!("ecdrive-home-offset-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("run.csv");
-    let opts = RunOptions {
-        record: Some(file.clone()),
-        ..RunOptions::default()
-    };
-    let stop = AtomicBool::new(false);
-    let r = run(&cfg, &opts, &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let (r, pos) = run_positions(text, "home-offset");
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
-    let pos = actual_positions(&std::fs::read_to_string(&file).unwrap(), 1);
-    let _ = std::fs::remove_dir_all(&dir);
     // The last reading: standing at the home, which reads 30° (87 381 counts).
     let last = *pos[0].last().unwrap();
     assert!(

@@ -13,7 +13,7 @@ use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunReport, run};
 use std::sync::atomic::AtomicBool;
 #[path = "support/runs.rs"]
 mod runs;
-use runs::{Rec, example_without_loss_detection, recording};
+use runs::{Rec, example_without_loss_detection, run_recorded};
 
 /// Counts per revolution: MR-J4-TM 4 194 304 (22-bit encoder), BDHDE 2^20.
 const MR_CPR: f64 = 4_194_304.0;
@@ -27,19 +27,7 @@ fn example() -> String {
 }
 
 fn run_config(text: &str, name: &str) -> (RunReport, Vec<Vec<Rec>>) {
-    let dir = std::env::temp_dir().join(format!("ecdrive-profile-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let cfg = ecdrive::app::config::parse(text, "profile.toml").unwrap_or_else(|e| panic!("{e}"));
-    let file = dir.join("run.csv");
-    let opts = RunOptions {
-        record: Some(file.clone()),
-        ..RunOptions::default()
-    };
-    let stop = AtomicBool::new(false);
-    let r = run(&cfg, &opts, &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
-    let rec = recording(&std::fs::read_to_string(&file).unwrap(), cfg.drives.len());
-    let _ = std::fs::remove_dir_all(&dir);
-    (r, rec)
+    run_recorded(text, &format!("profile-{name}"))
 }
 
 /// The cycles of the `k`-th stretch (0-based) in mode `mode` (0x6061).

@@ -20,6 +20,29 @@ pub fn example_without_loss_detection(name: &str) -> String {
     out
 }
 
+/// Run configuration `text` in-process as `ecdrive run --record` does (`name` names its
+/// temporary folder); the report and, per axis, every recorded cycle.
+pub fn run_recorded(
+    text: &str,
+    name: &str,
+) -> (ecdrive::app::ethercat::tools::run::RunReport, Vec<Vec<Rec>>) {
+    use ecdrive::app::ethercat::tools::run::{RunOptions, run};
+    let dir = std::env::temp_dir().join(format!("ecdrive-runs-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cfg = ecdrive::app::config::parse(text, &format!("{name}.toml"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    let file = dir.join("run.csv");
+    let opts = RunOptions {
+        record: Some(file.clone()),
+        ..RunOptions::default()
+    };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r = run(&cfg, &opts, &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    let rec = recording(&std::fs::read_to_string(&file).unwrap(), cfg.drives.len());
+    let _ = std::fs::remove_dir_all(&dir);
+    (r, rec)
+}
+
 /// One recorded cycle of one axis (`run --record`).
 #[derive(Debug, Clone, Copy)]
 pub struct Rec {

@@ -358,7 +358,8 @@ enum DriveRun {
     Profile { index: usize, since: Option<u64> },
 }
 
-/// What the application's callback ([`AppAxis`]) or commands asked of an axis in one cycle.
+/// What the application's callback ([`AppAxis`]) asked of an axis in one cycle, with a
+/// homing a command asked for.
 #[derive(Debug, Clone, Copy, Default)]
 struct Requests {
     setpoint: Option<f64>,
@@ -369,13 +370,15 @@ struct Requests {
 }
 
 impl Requests {
-    /// The callback's requests of this cycle, over what commands asked.
-    fn add(&mut self, app: &AppAxis) {
-        self.setpoint = app.setpoint.or(self.setpoint);
-        self.mode = app.mode_request.or(self.mode);
-        self.home = app.home_request.or(self.home);
-        self.pp = app.pp_request.or(self.pp);
-        self.probe = app.probe_request.or(self.probe);
+    /// The callback's requests of this cycle.
+    fn of(app: &AppAxis) -> Self {
+        Self {
+            setpoint: app.setpoint,
+            mode: app.mode_request,
+            home: app.home_request,
+            pp: app.pp_request,
+            probe: app.probe_request,
+        }
     }
 }
 
@@ -537,7 +540,7 @@ struct AxisRt {
     app_pp: Option<u32>,
     /// A homing a command ([`Command::Home`]) asked for since the last cycle: taken as the
     /// application's request is (pp targets and probes of commands are taken at once).
-    commanded: Requests,
+    home_commanded: Option<i8>,
     /// Touch probes 1 and 2.
     probes: [ProbeArm; 2],
     /// 0x60B9 and 0x60BA–0x60BD as read this cycle (0 where not mapped).
@@ -611,7 +614,7 @@ impl AxisRt {
             tq: cia402::ProfileTorque::new(),
             home_by_app: None,
             app_task: DriveTask::Idle,
-            commanded: Requests::default(),
+            home_commanded: None,
             app_pp: None,
             probes: [ProbeArm::Off; 2],
             probe_status: 0,
@@ -746,10 +749,8 @@ impl AxisRt {
                 sp = s;
             }
         }
-        let mut req = std::mem::take(&mut self.commanded);
-        if let Some(app) = app {
-            req.add(app);
-        }
+        let mut req = app.map(Requests::of).unwrap_or_default();
+        req.home = req.home.or(self.home_commanded.take());
         if let Some(s) = self.app_requests(i, &req, &st, enabled, ctx, ev) {
             sp = s;
         }
@@ -1945,7 +1946,7 @@ impl AxisRt {
                 } else if self.program == ProgramState::Running || self.home != HomeRun::Idle {
                     Some("home refused: a program or a homing runs on the axis")
                 } else {
-                    self.commanded.home = Some(method);
+                    self.home_commanded = Some(method);
                     None
                 }
             }
