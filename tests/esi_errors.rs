@@ -2,6 +2,7 @@
 //! checks on small contradicting inputs.
 
 use ecdrive::esi::*;
+use ecdrive::esi::{DeviceChoice, Severity};
 
 /// A minimal file around one device body (the body starts on line 5).
 fn with_device(body: &str) -> String {
@@ -17,9 +18,15 @@ fn with_device(body: &str) -> String {
     )
 }
 
+/// The file's error, else the first device that cannot be read, else the first warning.
 fn err(text: &str) -> EsiError {
     match EsiFile::parse(text) {
-        Ok(_) => panic!("expected an error for:\n{text}"),
+        Ok(f) => f
+            .unreadable
+            .first()
+            .map(|u| u.error.clone())
+            .or_else(|| f.warnings.first().cloned())
+            .unwrap_or_else(|| panic!("expected an error for:\n{text}")),
         Err(e) => e,
     }
 }
@@ -179,7 +186,7 @@ fn unknown_keywords() {
     assert_eq!(
         e.message,
         "<Sm> 0 in <Device> \"D\" has type \"Mailbox\": expected MBoxOut, MBoxIn, Outputs or \
-         Inputs"
+         Inputs (read as Inputs, as its ControlByte 0x00 says)"
     );
     let e = err(&with_device(
         "<Mailbox><CoE><InitCmd><Transition>XY</Transition><Index>1</Index><Data>00</Data>\
@@ -276,7 +283,9 @@ fn errors_from_files_name_the_file() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("bad.xml");
     std::fs::write(&path, with_device("<RxPdo><Index>zz</Index></RxPdo>")).unwrap();
-    let e = EsiFile::from_path(&path).unwrap_err();
+    let f = EsiFile::from_path(&path).unwrap();
+    assert!(f.devices.is_empty());
+    let e = f.unreadable[0].error.clone();
     assert_eq!(e.path.as_deref(), Some(path.as_path()));
     assert_eq!(
         e.to_string(),
@@ -417,4 +426,221 @@ fn check_compares_pdos_with_the_dictionary() {
         );
     }
     assert_eq!(got.len(), want.len(), "{got:#?}");
+}
+
+// ---- what real vendor files get wrong, read as the masters people use read it --------------
+
+/// A dictionary of `objects` (and `types`) in the minimal device.
+fn with_dictionary(types: &str, objects: &str) -> String {
+    with_device(&format!(
+        "<Profile><Dictionary><DataTypes>{types}</DataTypes><Objects>{objects}</Objects>\
+         </Dictionary></Profile>"
+    ))
+}
+
+fn resolved(text: &str, index: u16) -> ecdrive::esi::ResolvedObject {
+    let f = EsiFile::parse(text).unwrap();
+    f.devices[0]
+        .dictionary()
+        .unwrap()
+        .resolve(index)
+        .unwrap()
+        .unwrap()
+}
+
+#[test]
+fn hex_limits_of_signed_types_are_bit_patterns() {
+    // STEPPERONLINE A6: <MinValue>#x80000000</MinValue> on DINT objects; #xFFFC on an INT.
+    let text = with_dictionary(
+        "",
+        "<Object><Index>#x607A</Index><Name>Target position</Name><Type>DINT</Type>\
+         <BitSize>32</BitSize><Info><MinValue>#x80000000</MinValue><MaxValue>#x7FFFFFFF\
+         </MaxValue></Info></Object>\
+         <Object><Index>#x605C</Index><Name>Disable operation option code</Name><Type>INT\
+         </Type><BitSize>16</BitSize><Info><MinValue>#xFFFC</MinValue><DefaultValue>-1\
+         </DefaultValue></Info></Object>",
+    );
+    let o = resolved(&text, 0x607A);
+    assert!(o.problems.is_empty(), "{:?}", o.problems);
+    assert_eq!(
+        o.entries[0].min,
+        Some(ecdrive::od::Value::Int(i64::from(i32::MIN)))
+    );
+    assert_eq!(
+        o.entries[0].max,
+        Some(ecdrive::od::Value::Int(i64::from(i32::MAX)))
+    );
+    let o = resolved(&text, 0x605C);
+    assert_eq!(o.entries[0].min, Some(ecdrive::od::Value::Int(-4)));
+    // Decimal out of range is still out of range, and said so, not taken.
+    let bad = text.replace("#x80000000", "4294967295");
+    let o = resolved(&bad, 0x607A);
+    assert_eq!(o.entries[0].min, None);
+    assert!(
+        o.problems[0].message.contains("out of range for INTEGER32"),
+        "{:?}",
+        o.problems
+    );
+    assert_eq!(EsiFile::parse(&bad).unwrap().check().len(), 1);
+}
+
+#[test]
+fn short_default_data_is_its_low_bytes_and_every_problem_is_listed() {
+    // Elmo Gold: <DefaultData>0000</DefaultData> on a UDINT; Bohign: 3 bytes for 0x1000.
+    let text = with_dictionary(
+        "",
+        "<Object><Index>#x2F45</Index><Name>Low voltage</Name><Type>UDINT</Type>\
+         <BitSize>32</BitSize><Info><DefaultData>0100</DefaultData></Info></Object>\
+         <Object><Index>#x1000</Index><Name>Device type</Name><Type>UDINT</Type>\
+         <BitSize>32</BitSize><Info><DefaultData>921004</DefaultData></Info></Object>\
+         <Object><Index>#x2000</Index><Name>Odd</Name><Type>UINT</Type>\
+         <BitSize>16</BitSize><Info><DefaultData>2</DefaultData></Info></Object>\
+         <Object><Index>#x2001</Index><Name>Long</Name><Type>UINT</Type>\
+         <BitSize>16</BitSize><Info><DefaultData>01020304</DefaultData></Info></Object>",
+    );
+    let f = EsiFile::parse(&text).unwrap();
+    assert_eq!(
+        resolved(&text, 0x2F45).entries[0].default,
+        Some(ecdrive::od::Value::Uint(1))
+    );
+    assert_eq!(
+        resolved(&text, 0x1000).entries[0].default,
+        Some(ecdrive::od::Value::Uint(0x04_1092))
+    );
+    // Not hex data (one digit), and data longer than the type with non-zero bytes past it:
+    // left out. All four listed at once, each at its line.
+    assert_eq!(resolved(&text, 0x2000).entries[0].default, None);
+    assert_eq!(resolved(&text, 0x2001).entries[0].default, None);
+    let issues = f.check();
+    assert_eq!(issues.len(), 4, "{issues:#?}");
+    assert!(
+        issues
+            .iter()
+            .all(|i| i.severity == Severity::Warning && i.position.line == 5)
+    );
+    // The dictionary a run uses still has every object.
+    let dict = ecdrive::esi::static_dictionary(&f.devices[0]).unwrap();
+    assert_eq!(dict.len(), 4);
+}
+
+#[test]
+fn byte_arrays_of_any_length_are_one_entry() {
+    // Ingenia EVS-NET: <Type>ARRAY [0..511] OF BYTE</Type> (512 elements).
+    let types = "<DataType><Name>ARRAY [0..511] OF BYTE</Name><BaseType>BYTE</BaseType>\
+                 <BitSize>4096</BitSize><ArrayInfo><LBound>0</LBound><Elements>512</Elements>\
+                 </ArrayInfo></DataType>\
+                 <DataType><Name>ARRAY [0..15] OF BYTE</Name><BaseType>BYTE</BaseType>\
+                 <BitSize>128</BitSize><ArrayInfo><LBound>0</LBound><Elements>16</Elements>\
+                 </ArrayInfo></DataType>\
+                 <DataType><Name>DT10F3</Name><BitSize>144</BitSize>\
+                 <SubItem><SubIdx>0</SubIdx><Name>Count</Name><Type>USINT</Type><BitSize>8\
+                 </BitSize><BitOffs>0</BitOffs></SubItem>\
+                 <SubItem><SubIdx>6</SubIdx><Name>Message 1</Name><Type>ARRAY [0..15] OF BYTE\
+                 </Type><BitSize>128</BitSize><BitOffs>16</BitOffs></SubItem></DataType>";
+    let text = with_dictionary(
+        types,
+        "<Object><Index>#x58B2</Index><Name>Buffer</Name><Type>ARRAY [0..511] OF BYTE</Type>\
+         <BitSize>4096</BitSize></Object>\
+         <Object><Index>#x10F3</Index><Name>Diagnosis</Name><Type>DT10F3</Type>\
+         <BitSize>144</BitSize></Object>",
+    );
+    let o = resolved(&text, 0x58B2);
+    assert_eq!(o.entries.len(), 1);
+    assert_eq!(
+        o.entries[0].data_type,
+        Some(ecdrive::od::DataType::OctetString)
+    );
+    assert_eq!(o.entries[0].bit_len, 4096);
+    let o = resolved(&text, 0x10F3);
+    assert_eq!(o.entries.iter().map(|e| e.sub).collect::<Vec<_>>(), [0, 6]);
+    assert_eq!(o.entries[1].bit_len, 128);
+    let f = EsiFile::parse(&text).unwrap();
+    assert!(f.check().is_empty(), "{:?}", f.check());
+    assert_eq!(
+        ecdrive::esi::static_dictionary(&f.devices[0])
+            .unwrap()
+            .len(),
+        2
+    );
+}
+
+#[test]
+fn several_devices_in_a_file_are_chosen_by_identity_never_silently() {
+    // Elmo: four devices, all <Type>Elmo Drive</Type>.
+    let dev = |pc: &str, rev: &str, name: &str| {
+        format!(
+            "<Device><Type ProductCode=\"{pc}\" RevisionNo=\"{rev}\">Elmo Drive</Type>\
+             <Name>{name}</Name></Device>"
+        )
+    };
+    let text = format!(
+        "<EtherCATInfo><Vendor><Id>#x9A</Id></Vendor><Descriptions><Devices>{}{}{}{}\
+         </Devices></Descriptions></EtherCATInfo>",
+        dev("#x00030924", "#x00010420", "Gold bootloader"),
+        dev("#x00030924", "#x00010421", "Gold drive"),
+        dev("#x00030925", "#x00010420", "Gold twin"),
+        dev("#x00030926", "#x00010420", "Gold plus"),
+    );
+    let f = EsiFile::parse(&text).unwrap();
+    let e = f.choose(&DeviceChoice::parse("Elmo Drive")).unwrap_err();
+    assert!(
+        e.starts_with("4 devices of the file fit \"Elmo Drive\""),
+        "{e}"
+    );
+    assert!(e.contains("\"Gold drive\" 0x00030924:0x00010421"), "{e}");
+    let e = f.choose(&DeviceChoice::parse("0x00030924")).unwrap_err();
+    assert!(e.starts_with("2 devices of the file fit 0x00030924"), "{e}");
+    assert_eq!(
+        f.choose(&DeviceChoice::parse("0x00030924:0x00010421")),
+        Ok(1)
+    );
+    assert_eq!(f.choose(&DeviceChoice::parse("0x30926")), Ok(3));
+    assert_eq!(f.choose(&DeviceChoice::parse("gold twin")), Ok(2));
+    assert!(f.choose(&DeviceChoice::Only).is_err());
+    let e = f.choose(&DeviceChoice::parse("0x1")).unwrap_err();
+    assert!(
+        e.starts_with("the file has no device 0x00000001; it has"),
+        "{e}"
+    );
+}
+
+#[test]
+fn deep_nesting_and_huge_files_are_one_line_of_error() {
+    let deep = format!(
+        "<EtherCATInfo>{}{}</EtherCATInfo>",
+        "<a>".repeat(20_000),
+        "</a>".repeat(20_000)
+    );
+    let e = err(&deep);
+    assert_eq!(e.kind, EsiErrorKind::Invalid);
+    assert!(e.message.contains("nest deeper than 256 levels"), "{e}");
+    assert_eq!(e.line(), 1);
+    // Comments, CDATA and quoted '>' do not count as nesting.
+    let fine = with_device(&format!(
+        "<!-- <a><b> -->{}<![CDATA[<x><y>]]><Name a=\"x/>y\">N</Name>",
+        "<Info>".repeat(100) + &"</Info>".repeat(100)
+    ));
+    assert!(EsiFile::parse(&fine).is_ok());
+    let huge = " ".repeat(ecdrive::esi::MAX_TEXT_BYTES + 1);
+    assert!(err(&huge).message.contains("are not read"));
+}
+
+#[test]
+fn a_device_that_cannot_be_read_leaves_the_others() {
+    let text = "<EtherCATInfo><Vendor><Id>2</Id></Vendor><Descriptions><Devices>\
+                <Device><Type ProductCode=\"#x1\">A</Type><RxPdo><Index>#x1600</Index>\
+                <Entry><Index>#x6040</Index><BitLen>x</BitLen></Entry></RxPdo></Device>\
+                <Device><Type ProductCode=\"#x2\">B</Type></Device>\
+                </Devices></Descriptions></EtherCATInfo>";
+    let f = EsiFile::parse(text).unwrap();
+    assert_eq!(f.devices.len(), 1);
+    assert_eq!(f.devices[0].type_.product_code, 2);
+    assert_eq!(f.unreadable[0].product_code, Some(1));
+    let e = f.choose(&DeviceChoice::parse("0x1")).unwrap_err();
+    assert!(
+        e.contains("cannot be used") && e.contains("BitLen \"x\""),
+        "{e}"
+    );
+    let issues = f.check();
+    assert_eq!(issues[0].severity, Severity::Error);
 }

@@ -292,6 +292,10 @@ pub fn split_name(name: &str) -> Result<(&str, Quirks), String> {
 /// profile modes); several are `@A=V@B=W`. Values are decimal or `0x` hex.
 pub fn stored_params(name: &str) -> Result<Vec<(crate::od::ObjectAddress, i64)>, String> {
     let mut out = Vec::new();
+    if name.starts_with("esi:") {
+        // `esi:FILE@0xPRODUCT[:0xREVISION]`: what follows `@` chooses the file's device.
+        return Ok(out);
+    }
     for p in name.split('@').skip(1) {
         let (obj, value) = p
             .split_once('=')

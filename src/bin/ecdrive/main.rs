@@ -464,7 +464,10 @@ enum Command {
         /// A device, in line order, optionally repeated (`mr-j4-tm:32`); repeat the option for
         /// more devices. NAME+QUIRK[+QUIRK…] makes it behave like a device ecdrive did not
         /// write (see --list-devices). `esi:FILE` serves the device an ESI file describes
-        /// (its identity, SII and dictionary) with the generic servo's behaviour.
+        /// (its identity, SII and dictionary, the PDO mapping its PDO list gives) with the
+        /// generic servo's behaviour, or as an I/O device whose inputs echo its outputs when
+        /// it has no CiA 402 device control; `esi:FILE@0xPRODUCT[:0xREVISION]` chooses one
+        /// device of a file that describes several.
         /// NAME@OBJECT=VALUE stores a parameter in an emulated drive, in effect from power-on
         /// (`mr-j4-tm@0x2001=2`: [Pr. PA01] profile mode).
         #[arg(long = "device", short = 'd', value_name = "NAME[:COUNT]")]
@@ -621,7 +624,8 @@ enum EsiOp {
     Profile {
         /// The ESI file.
         file: PathBuf,
-        /// The device's <Type> name in the file (when the file describes several).
+        /// The device, when the file describes several: its identity 0xPRODUCT[:0xREVISION],
+        /// or its <Type> or <Name> text (refused, listing them, when that fits several).
         #[arg(long, value_name = "TYPE")]
         device: Option<String>,
         /// Write to FILE instead of standard output (the ESI file is then named relative to

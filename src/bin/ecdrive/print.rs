@@ -571,17 +571,26 @@ fn esi_plan(p: &ecdrive::esi::DrivePlan) {
 
 pub fn esi_check(c: &EsiCheck) {
     if c.valid {
-        println!("{}: valid ({} device(s))", c.file, c.devices);
-        return;
+        match c.warnings {
+            0 => println!("{}: valid ({} device(s))", c.file, c.devices),
+            n => println!(
+                "{}: valid ({} device(s)), {n} warning(s): values read past, listed below",
+                c.file, c.devices
+            ),
+        }
     }
     for i in &c.issues {
+        let sev = match i.severity {
+            ecdrive::esi::Severity::Error => "error",
+            ecdrive::esi::Severity::Warning => "warning",
+        };
         if i.line > 0 {
             println!(
-                "{} line {}, column {}: {}",
+                "{} line {}, column {}: {sev}: {}",
                 c.file, i.line, i.column, i.message
             );
         } else {
-            println!("{}: {}", c.file, i.message);
+            println!("{}: {sev}: {}", c.file, i.message);
         }
     }
 }

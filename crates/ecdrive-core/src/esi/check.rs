@@ -7,13 +7,26 @@ use crate::od::{DataType, EntryAccess, Value};
 use crate::pdo::Direction;
 use core::fmt;
 
-/// One inconsistency found by [`EsiFile::check`] / [`Device::check`].
+/// One problem found by [`EsiFile::check`] / [`Device::check`].
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct CheckIssue {
     /// Where the offending element starts.
     pub position: Position,
-    /// What is inconsistent.
+    /// What is wrong.
     pub message: String,
+    /// Whether it stops a device from being used.
+    pub severity: Severity,
+}
+
+/// How much a [`CheckIssue`] matters.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Severity {
+    /// The device cannot be used: it could not be read.
+    Error,
+    /// Read past: a value left out or taken by a tolerance rule, or a contradiction between
+    /// parts of the file. What a run depends on is checked again where it is used.
+    Warning,
 }
 
 impl fmt::Display for CheckIssue {
@@ -27,11 +40,33 @@ impl EsiFile {
     /// group of the file, and 0x1018 defaults in the dictionary match the vendor ID, product
     /// code and revision.
     pub fn check(&self) -> Vec<CheckIssue> {
-        let mut out = Vec::new();
+        let mut out: Vec<CheckIssue> = self
+            .unreadable
+            .iter()
+            .map(|u| CheckIssue {
+                position: u.error.position,
+                message: format!(
+                    "device {:?} cannot be used: {}",
+                    if u.name.is_empty() {
+                        &u.type_text
+                    } else {
+                        &u.name
+                    },
+                    u.error.message
+                ),
+                severity: Severity::Error,
+            })
+            .chain(self.warnings.iter().map(|w| CheckIssue {
+                position: w.position,
+                message: w.message.clone(),
+                severity: Severity::Warning,
+            }))
+            .collect();
         for d in &self.devices {
             let issue = |msg: String| CheckIssue {
                 position: d.position,
                 message: format!("device {:?}: {msg}", d.name),
+                severity: Severity::Warning,
             };
             if let Some(g) = &d.group_type {
                 if self.group(g).is_none() {
@@ -76,6 +111,7 @@ impl Device {
             out.push(CheckIssue {
                 position,
                 message: format!("device {dev:?}: {msg}"),
+                severity: Severity::Warning,
             });
         };
 
@@ -84,7 +120,12 @@ impl Device {
                 .objects
                 .iter()
                 .filter_map(|o| match dict.resolve_object(o) {
-                    Ok(r) => Some(r),
+                    Ok(r) => {
+                        for p in &r.problems {
+                            issue(p.position, p.message.clone());
+                        }
+                        Some(r)
+                    }
                     Err(e) => {
                         issue(e.position, e.message);
                         None

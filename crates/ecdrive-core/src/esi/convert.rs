@@ -168,33 +168,79 @@ fn constant(v: &Option<crate::od::Value>) -> crate::od::ConstValue {
 /// The device's object dictionary as `'static` object descriptions, sorted by index: what a
 /// drive profile built from the file and an emulated device built from it both use. The
 /// descriptions are leaked: build them once per file and process (at start-up, never in a
-/// cycle). The error names the entry whose type is unknown or too long.
+/// cycle). Objects that cannot be resolved and entries of a type ecdrive does not know are
+/// left out (`esi check` names each): a run that needs one finds it missing and says so.
+/// Only a device without any dictionary is an error.
 pub fn static_dictionary(dev: &Device) -> Result<&'static [crate::od::ObjectDesc], String> {
     use crate::od::{EntryDesc, ObjectDesc};
     let dict = dev
         .dictionary()
         .ok_or_else(|| "the device has no object dictionary".to_string())?;
-    let resolved = dict.resolve_all().map_err(|e| e.to_string())?;
-    let mut objects = Vec::with_capacity(resolved.len());
-    for o in resolved {
-        let mut entries = Vec::with_capacity(o.entries.len());
+    let mut objects = Vec::with_capacity(dict.objects.len());
+    for o in dict
+        .objects
+        .iter()
+        .filter_map(|o| dict.resolve_object(o).ok())
+    {
+        if objects.iter().any(|x: &ObjectDesc| x.index == o.index) {
+            continue;
+        }
+        let mut entries: Vec<EntryDesc> = Vec::with_capacity(o.entries.len());
         for e in &o.entries {
-            let at = format!("0x{:04X}:{:02X}", o.index, e.sub);
-            let data_type = e
-                .data_type
-                .ok_or_else(|| format!("{at}: unknown data type {:?}", e.type_name))?;
-            let bit_len = u16::try_from(e.bit_len)
-                .map_err(|_| format!("{at}: bit length {} too large", e.bit_len))?;
+            // A sub-index described twice (an array whose elements start at 0 collides with
+            // its count): the first description holds.
+            if entries.iter().any(|x| x.sub == e.sub) {
+                continue;
+            }
+            let (Some(data_type), Ok(mut bit_len)) = (e.data_type, u16::try_from(e.bit_len)) else {
+                continue;
+            };
+            // A string's default may be longer than its BitSize says: strings have the
+            // length of their value.
+            if data_type.is_string() {
+                let n = match &e.default {
+                    Some(crate::od::Value::Str(s)) => s.len(),
+                    Some(crate::od::Value::Bytes(b)) => b.len(),
+                    _ => 0,
+                };
+                bit_len = bit_len.max(u16::try_from(n * 8).unwrap_or(u16::MAX));
+            }
+            // What the file's own PDOs map is mappable in their direction, whatever the
+            // entry's flags say (a file that marks nothing mappable maps 0x6040 in 0x1600).
+            let mut access = e.access;
+            for (dir, flag) in [
+                (Direction::Rx, crate::od::EntryAccess::RXPDO),
+                (Direction::Tx, crate::od::EntryAccess::TXPDO),
+            ] {
+                let mapped = dev.pdos(dir).iter().any(|p| {
+                    p.entries
+                        .iter()
+                        .any(|x| x.index == o.index && x.sub == e.sub && x.index != p.index)
+                });
+                if mapped {
+                    access |= flag;
+                }
+            }
             entries.push(EntryDesc {
                 sub: e.sub,
                 name: leak_str(&e.name),
                 data_type,
                 bit_len,
-                access: e.access,
+                access,
                 default: constant(&e.default),
                 min: constant(&e.min),
                 max: constant(&e.max),
             });
+        }
+        // An ARRAY or RECORD counts its entries in an UNSIGNED8 at sub-index 0; one that
+        // does not cannot be served (left out, as `esi check` says).
+        let counted = o.code == crate::od::ObjectCode::Var
+            || entries
+                .iter()
+                .find(|e| e.sub == 0)
+                .is_some_and(|e| e.data_type == crate::od::DataType::Unsigned8);
+        if entries.is_empty() || !counted {
+            continue;
         }
         objects.push(ObjectDesc {
             index: o.index,

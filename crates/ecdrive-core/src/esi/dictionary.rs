@@ -169,13 +169,50 @@ impl Dictionary {
         })
     }
 
+    /// Whether the data type named `name` is a byte (8-bit element) array: `ARRAY [0..n] OF
+    /// BYTE` and its kin, which ESI files use for byte strings of any length.
+    fn is_byte_array(&self, dt: &EsiDataType) -> bool {
+        dt.array.is_some()
+            && dt.sub_items.is_empty()
+            && dt.base_type.as_deref().is_some_and(|b| {
+                matches!(
+                    DataType::parse(b),
+                    Some(DataType::Byte | DataType::Unsigned8 | DataType::Integer8)
+                ) || self
+                    .data_type(b)
+                    .is_some_and(|t| t.bit_size == 8 && t.sub_items.is_empty())
+            })
+    }
+
+    /// The type name an entry is decoded with: the name itself when it is a base type, else
+    /// the `<BaseType>` of the file's `<DataType>` of that name (enumerations and aliases
+    /// such as `DT0800EN03` or `DINT_ALIAS`), followed up to a few levels.
+    pub fn base_type_name(&self, name: &str) -> String {
+        let mut n = name.to_string();
+        for _ in 0..8 {
+            if DataType::parse(&n).is_some() {
+                break;
+            }
+            match self
+                .data_type(&n)
+                .filter(|t| t.array.is_none() && t.sub_items.is_empty())
+                .and_then(|t| t.base_type.clone())
+            {
+                Some(b) => n = b,
+                None => break,
+            }
+        }
+        n
+    }
+
     /// Resolve the object `index` into entries with types, access and values.
     pub fn resolve(&self, index: u16) -> Option<Result<ResolvedObject, EsiError>> {
         self.object(index).map(|o| self.resolve_object(o))
     }
 
     /// Resolve every object, in file order. Stops at the first object that cannot be
-    /// resolved.
+    /// resolved (values that do not decode are not such a stop: see
+    /// [`ResolvedObject::problems`]).
     pub fn resolve_all(&self) -> Result<Vec<ResolvedObject>, EsiError> {
         self.objects
             .iter()
@@ -208,10 +245,31 @@ impl Dictionary {
                 let mut other = 0usize;
                 for si in &dt.sub_items {
                     let flags = si.flags.unwrap_or(obj_flags);
-                    match self
+                    let array = self
                         .data_type(&si.type_name)
-                        .and_then(|t| t.array.map(|a| (t, a)))
-                    {
+                        .and_then(|t| t.array.map(|a| (t, a)));
+                    // A byte array is one entry (a byte string) where it has a sub-index of
+                    // its own, or where its elements would not fit sub-indices.
+                    let byte_string = array.and_then(|(arr, info)| {
+                        let sub = si.sub_idx.or_else(|| {
+                            (info.elements > 255)
+                                .then(|| u8::try_from(info.lbound.max(1)).ok())
+                                .flatten()
+                        })?;
+                        self.is_byte_array(arr).then_some(sub)
+                    });
+                    if let Some(sub) = byte_string {
+                        other += usize::from(sub != 0);
+                        entries.push(RawEntry {
+                            sub,
+                            name: si.name.clone(),
+                            type_name: "OCTET_STRING".into(),
+                            bit_len: si.bit_size,
+                            flags,
+                        });
+                        continue;
+                    }
+                    match array {
                         Some((arr, info)) => {
                             let base = arr.base_type.as_deref().unwrap_or("");
                             let elem_bits = match self.data_type(base) {
@@ -275,6 +333,18 @@ impl Dictionary {
                     ObjectCode::Record
                 };
             }
+            Some(dt) if self.is_byte_array(dt) => entries.push(RawEntry {
+                // An object typed with a byte array is one byte string.
+                sub: 0,
+                name: obj.name.clone(),
+                type_name: "OCTET_STRING".into(),
+                bit_len: if obj.bit_size > 0 {
+                    obj.bit_size
+                } else {
+                    dt.bit_size
+                },
+                flags: obj_flags,
+            }),
             Some(dt) if dt.array.is_some() => {
                 // An object typed directly with an array type: elements plus a synthesised
                 // sub-index 0 holding the count.
@@ -323,8 +393,12 @@ impl Dictionary {
                 flags: obj_flags,
             }),
         }
+        for e in &mut entries {
+            e.type_name = self.base_type_name(&e.type_name);
+        }
 
         let mut out = Vec::with_capacity(entries.len());
+        let mut problems = Vec::new();
         let n_entries = entries.len();
         for (pos, e) in entries.into_iter().enumerate() {
             let info: Option<(&str, &ObjectInfo)> = if code == ObjectCode::Var {
@@ -343,12 +417,22 @@ impl Dictionary {
                     .map(|(n, i)| (n.as_str(), i))
             };
             let data_type = DataType::parse(&e.type_name);
-            let decode = |v: &Option<EsiValue>, what: &str| -> Result<Option<Value>, EsiError> {
-                match (v, data_type) {
-                    (Some(v), Some(dt)) => decode_value(v, dt).map(Some).map_err(|m| {
-                        err(format!("{what} of sub-index {} ({}): {m}", e.sub, e.name))
-                    }),
-                    _ => Ok(None),
+            // A value that does not decode is left out and noted; one taken by a tolerance
+            // rule (short data, a `#x` pattern) is kept and noted.
+            let mut decode = |v: &Option<EsiValue>, what: &str| -> Option<Value> {
+                let (v, dt) = (v.as_ref()?, data_type?);
+                let at =
+                    |m: String| err(format!("{what} of sub-index {} ({}): {m}", e.sub, e.name));
+                match decode_value(v, dt) {
+                    Ok((value, None)) => Some(value),
+                    Ok((value, Some(note))) => {
+                        problems.push(at(note));
+                        Some(value)
+                    }
+                    Err(m) => {
+                        problems.push(at(format!("{m} (left out)")));
+                        None
+                    }
                 }
             };
             let (name, default, min, max) = match info {
@@ -358,9 +442,9 @@ impl Dictionary {
                     } else {
                         e.name.clone()
                     },
-                    decode(&i.default, "default")?,
-                    decode(&i.min, "minimum")?,
-                    decode(&i.max, "maximum")?,
+                    decode(&i.default, "default"),
+                    decode(&i.min, "minimum"),
+                    decode(&i.max, "maximum"),
                 ),
                 None => (e.name.clone(), None, None, None),
             };
@@ -381,6 +465,7 @@ impl Dictionary {
             name: obj.name.clone(),
             code,
             entries: out,
+            problems,
         })
     }
 }
@@ -393,42 +478,102 @@ struct RawEntry {
     flags: Flags,
 }
 
-/// Decode an ESI value for an entry of type `dt`.
-fn decode_value(v: &EsiValue, dt: DataType) -> Result<Value, String> {
+/// Decode an ESI value for an entry of type `dt`, as the masters people use
+/// read vendor files: `#x…` text as the bit pattern of the type (`#x80000000` is an INTEGER32's
+/// minimum), data shorter than the type as its low bytes (zero-extended), data longer than the
+/// type when the bytes past it are zero. The note says which rule was used.
+fn decode_value(v: &EsiValue, dt: DataType) -> Result<(Value, Option<String>), String> {
     match v {
-        EsiValue::Data(bytes) => Value::decode(dt, bytes).map_err(|e| e.to_string()),
+        EsiValue::Data(bytes) => {
+            let want = dt.bit_len().map(|b| usize::from(b).div_ceil(8));
+            match want {
+                Some(n) if !dt.is_string() && bytes.len() < n && !bytes.is_empty() => {
+                    let mut padded = bytes.clone();
+                    padded.resize(n, 0);
+                    let value = Value::decode(dt, &padded).map_err(|e| e.to_string())?;
+                    Ok((
+                        value,
+                        Some(format!(
+                            "{dt} needs {n} bytes, got {}: read as {} zero-extended",
+                            bytes.len(),
+                            if bytes.len() == 1 {
+                                "that byte"
+                            } else {
+                                "those bytes"
+                            }
+                        )),
+                    ))
+                }
+                Some(n) if !dt.is_string() && bytes.len() > n => {
+                    if bytes
+                        .get(n..)
+                        .is_some_and(|rest| rest.iter().all(|&b| b == 0))
+                    {
+                        let value = Value::decode(dt, bytes.get(..n).unwrap_or_default())
+                            .map_err(|e| e.to_string())?;
+                        Ok((
+                            value,
+                            Some(format!(
+                                "{dt} needs {n} bytes, got {}: the zero bytes past it dropped",
+                                bytes.len()
+                            )),
+                        ))
+                    } else {
+                        Err(format!("{dt} needs {n} bytes, got {}", bytes.len()))
+                    }
+                }
+                _ => Ok((Value::decode(dt, bytes).map_err(|e| e.to_string())?, None)),
+            }
+        }
         EsiValue::String(s) => Ok(match dt {
-            DataType::OctetString | DataType::Domain => Value::Bytes(s.as_bytes().to_vec()),
-            _ if dt.is_string() => Value::Str(s.clone()),
+            DataType::OctetString | DataType::Domain => (Value::Bytes(s.as_bytes().to_vec()), None),
+            _ if dt.is_string() => (Value::Str(s.clone()), None),
             _ => return decode_value(&EsiValue::Value(s.clone()), dt),
         }),
         EsiValue::Value(s) => {
             if dt.is_string() {
                 return Ok(match dt {
                     DataType::OctetString | DataType::Domain => {
-                        Value::Bytes(num::parse_hex_bytes(s)?)
+                        (Value::Bytes(num::parse_hex_bytes(s)?), None)
                     }
-                    _ => Value::Str(s.clone()),
+                    _ => (Value::Str(s.clone()), None),
                 });
             }
             if dt.is_real() {
                 return s
                     .trim()
                     .parse::<f64>()
-                    .map(Value::Real)
-                    .or_else(|_| num::parse_int(s).map(|i| Value::Real(i as f64)))
+                    .map(|r| (Value::Real(r), None))
+                    .or_else(|_| num::parse_int(s).map(|i| (Value::Real(i as f64), None)))
                     .map_err(|_| format!("{s:?} is not a number"));
             }
             let i = num::parse_int(s).map_err(|m| format!("{s:?}: {m}"))?;
             let bits = u32::from(dt.bit_len().unwrap_or(64).min(64));
+            let full = if bits >= 64 {
+                u128::from(u64::MAX)
+            } else {
+                (1u128 << bits) - 1
+            };
+            let hex = {
+                let t = s.trim();
+                t.starts_with("#x")
+                    || t.starts_with("#X")
+                    || t.starts_with("0x")
+                    || t.starts_with("0X")
+            };
             if dt.is_signed() {
                 let (min, max) = (-(1i128 << (bits - 1)), (1i128 << (bits - 1)) - 1);
-                if i < min || i > max {
-                    return Err(format!("{s:?} is out of range for {dt}"));
+                if (min..=max).contains(&i) {
+                    return Ok((Value::Int(i as i64), None));
                 }
-                Ok(Value::Int(i as i64))
+                // `#x80000000` for an INTEGER32: the bit pattern of the type.
+                if hex && i > max && (i as u128) <= full {
+                    let shift = 128 - bits;
+                    let v = ((i as u128) << shift) as i128 >> shift;
+                    return Ok((Value::Int(v as i64), None));
+                }
+                Err(format!("{s:?} is out of range for {dt}"))
             } else {
-                let max = (1i128 << bits) - 1;
                 // Unsigned values may be written as the negative two's complement (-1 for
                 // 0xFFFF); accept that within the type's width.
                 let i = if i < 0 && i >= -(1i128 << (bits - 1)) {
@@ -436,10 +581,10 @@ fn decode_value(v: &EsiValue, dt: DataType) -> Result<Value, String> {
                 } else {
                     i
                 };
-                if i < 0 || i > max {
+                if i < 0 || i as u128 > full {
                     return Err(format!("{s:?} is out of range for {dt}"));
                 }
-                Ok(Value::Uint(i as u64))
+                Ok((Value::Uint(i as u64), None))
             }
         }
     }
@@ -456,6 +601,8 @@ pub struct ResolvedObject {
     pub code: ObjectCode,
     /// Entries in sub-index order as the data type lists them.
     pub entries: Vec<ResolvedEntry>,
+    /// Values that were left out or read by a tolerance rule, each naming the entry.
+    pub problems: Vec<EsiError>,
 }
 
 /// One entry of a [`ResolvedObject`].

@@ -32,10 +32,26 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!
-//! Numbers are read as ETG.2000 writes them: decimal, `#x` hex, and (tolerated) `0x` hex.
-//! Unknown elements are ignored, since vendors add their own; a missing element the schema
-//! requires or a value that is not allowed is an [`EsiError`] with line and column. Nothing in
-//! this module panics on any input.
+//! Numbers are read as ETG.2000 writes them: decimal, `#x` hex, and (tolerated) `0x` and
+//! `#x0x` hex. Unknown elements are ignored, since vendors add their own.
+//!
+//! Real vendor files get many things wrong, and a master must read them as the masters people
+//! use every day do. Reading is tolerant where the run does not depend on the value, and every
+//! problem is reported at once, each with line and column:
+//!
+//! - an error in what a device's process data or start-up depends on (a PDO entry, a
+//!   SyncManager, an `<InitCmd>`) makes that device unreadable ([`EsiFile::unreadable`], with
+//!   why); the file's other devices are read;
+//! - anything else that does not read (a default that is not hex data, an access keyword the
+//!   schema does not have, an object whose index does not read, a DC mode without
+//!   `AssignActivate`) is left out with a warning ([`EsiFile::warnings`]);
+//! - values are decoded as vendors mean them: `#x80000000` for an INTEGER32 is the bit
+//!   pattern (its minimum), `DefaultData` shorter than its type is its low bytes, byte arrays
+//!   (`ARRAY [0..511] OF BYTE`) are one byte-string entry, not 512 sub-indices
+//!   ([`ResolvedObject::problems`] notes each);
+//! - only malformed XML, a root that is not `<EtherCATInfo>`, a missing `<Vendor><Id>`, text
+//!   over [`MAX_TEXT_BYTES`] or elements nested deeper than [`MAX_DEPTH`] make the whole file
+//!   an [`EsiError`]. Nothing in this module panics on any input.
 
 mod check;
 mod convert;
@@ -46,7 +62,7 @@ mod model;
 mod num;
 mod parse;
 
-pub use check::CheckIssue;
+pub use check::{CheckIssue, Severity};
 pub use convert::{EsiConvertError, static_dictionary};
 pub use dictionary::{
     ArrayInfo, Category, Dictionary, EsiDataType, EsiObject, EsiSubItem, EsiValue, Flags,
@@ -58,11 +74,12 @@ pub use drive_plan::{
 };
 pub use error::{EsiError, EsiErrorKind, Position};
 pub use model::{
-    CoeDetails, CycleTimes, DcOpMode, DcSm, Device, DeviceType, Eeprom, EepromCategory, EsiFile,
-    EsiPdo, EsiPdoEntry, Fmmu, FmmuUsage, Group, InitCmd, LCID_ENGLISH, LocalizedText, Mailbox,
-    MailboxProtocols, OpMode, Profile, SmKind, SyncManager, Transition, Vendor, preferred_text,
+    CoeDetails, CycleTimes, DcOpMode, DcSm, Device, DeviceChoice, DeviceType, Eeprom,
+    EepromCategory, EsiFile, EsiPdo, EsiPdoEntry, Fmmu, FmmuUsage, Group, InitCmd, LCID_ENGLISH,
+    LocalizedText, Mailbox, MailboxProtocols, OpMode, Profile, SmKind, SyncManager, Transition,
+    UnreadableDevice, Vendor, preferred_text,
 };
-pub use parse::ECDRIVE_NAMESPACE;
+pub use parse::{ECDRIVE_NAMESPACE, MAX_DEPTH, MAX_TEXT_BYTES};
 
 use std::path::Path;
 
@@ -91,6 +108,13 @@ impl EsiFile {
             )
             .with_path(path)
         })?;
-        Self::parse_bytes(&bytes).map_err(|e| e.with_path(path))
+        let mut f = Self::parse_bytes(&bytes).map_err(|e| e.with_path(path))?;
+        for u in &mut f.unreadable {
+            u.error.path = Some(path.to_path_buf());
+        }
+        for w in &mut f.warnings {
+            w.path = Some(path.to_path_buf());
+        }
+        Ok(f)
     }
 }

@@ -38,8 +38,33 @@ pub struct EsiFile {
     pub vendor: Vendor,
     /// `<Descriptions><Groups>`, in file order.
     pub groups: Vec<Group>,
-    /// `<Descriptions><Devices>`, in file order.
+    /// `<Descriptions><Devices>`, in file order: those that could be read.
     pub devices: Vec<Device>,
+    /// The devices that could not be read (a PDO entry, SyncManager or `<InitCmd>` the
+    /// device's process data or start-up depends on does not read), with why.
+    pub unreadable: Vec<UnreadableDevice>,
+    /// Problems read past, in file order: a value left out (a default that is not hex data,
+    /// an access keyword the schema does not have, an object whose index does not read, …)
+    /// or taken as the tolerance rules say. They are warnings: what the run depends on is
+    /// checked again where it is used.
+    pub warnings: Vec<super::error::EsiError>,
+}
+
+/// A `<Device>` that could not be read: its identity as far as it reads, and why.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct UnreadableDevice {
+    /// Where the `<Device>` element starts.
+    pub position: Position,
+    /// The `<Type>` text.
+    pub type_text: String,
+    /// The preferred `<Name>`.
+    pub name: String,
+    /// `ProductCode`, if it reads.
+    pub product_code: Option<u32>,
+    /// `RevisionNo`, if it reads.
+    pub revision_no: Option<u32>,
+    /// Why the device could not be read.
+    pub error: super::error::EsiError,
 }
 
 impl EsiFile {
@@ -65,6 +90,78 @@ impl EsiFile {
                 }),
             None => self.devices_with_product(product_code).last(),
         }
+    }
+
+    /// Choose one device ([`DeviceChoice`]), as an index into [`Self::devices`]. Never a
+    /// silent first match: a choice that fits several devices is refused, listing them with
+    /// the identity that tells them apart; a device that matches but could not be read says
+    /// why.
+    pub fn choose(&self, choice: &DeviceChoice) -> Result<usize, String> {
+        let fits = |d: &Device| match choice {
+            DeviceChoice::Only => true,
+            DeviceChoice::Identity {
+                product_code,
+                revision,
+            } => {
+                d.type_.product_code == *product_code
+                    && revision.is_none_or(|r| d.type_.revision_no == Some(r))
+            }
+            DeviceChoice::Name(n) => {
+                d.type_.name_text.eq_ignore_ascii_case(n) || d.name.eq_ignore_ascii_case(n)
+            }
+        };
+        let hits: Vec<usize> = (0..self.devices.len())
+            .filter(|&i| self.devices.get(i).is_some_and(fits))
+            .collect();
+        let broken = self.unreadable.iter().find(|u| match choice {
+            DeviceChoice::Only => true,
+            DeviceChoice::Identity {
+                product_code,
+                revision,
+            } => {
+                u.product_code == Some(*product_code)
+                    && revision.is_none_or(|r| u.revision_no == Some(r))
+            }
+            DeviceChoice::Name(n) => {
+                u.type_text.eq_ignore_ascii_case(n) || u.name.eq_ignore_ascii_case(n)
+            }
+        });
+        match (hits.as_slice(), broken) {
+            ([i], None) => Ok(*i),
+            ([], Some(u)) => Err(format!(
+                "device {:?} of the file cannot be used: {}",
+                if u.name.is_empty() {
+                    &u.type_text
+                } else {
+                    &u.name
+                },
+                u.error
+            )),
+            ([], None) => Err(format!(
+                "the file has no device {choice}; it has {}",
+                self.device_list()
+            )),
+            _ => Err(format!(
+                "{} devices of the file fit {choice}: {}; choose one by identity \
+                 (0xPRODUCT:0xREVISION)",
+                hits.len() + usize::from(broken.is_some()),
+                self.device_list_of(&hits)
+            )),
+        }
+    }
+
+    /// Every device as `"name" 0xPRODUCT:0xREVISION`, comma-separated.
+    pub fn device_list(&self) -> String {
+        self.device_list_of(&(0..self.devices.len()).collect::<Vec<_>>())
+    }
+
+    fn device_list_of(&self, which: &[usize]) -> String {
+        which
+            .iter()
+            .filter_map(|&i| self.devices.get(i))
+            .map(|d| format!("{:?} {}", d.name, d.identity_text()))
+            .collect::<Vec<_>>()
+            .join(", ")
     }
 
     /// The group with this `<Type>`.
@@ -139,7 +236,71 @@ pub struct Device {
     pub profiles: Vec<Profile>,
 }
 
+/// Which device of an ESI file: [`EsiFile::choose`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum DeviceChoice {
+    /// The file's only device.
+    Only,
+    /// By identity, as a master reads it (0x1018:02, :03).
+    Identity {
+        /// `ProductCode`.
+        product_code: u32,
+        /// `RevisionNo`; `None`: any revision (refused when several fit).
+        revision: Option<u32>,
+    },
+    /// By `<Type>` text or `<Name>` (case-insensitive).
+    Name(String),
+}
+
+impl DeviceChoice {
+    /// Read `0xPRODUCT[:0xREVISION]` as an identity, anything else as a name.
+    pub fn parse(text: &str) -> Self {
+        let num = |t: &str| super::num::parse_u32_wrapping(t).ok();
+        let hexy = |t: &str| t.starts_with("0x") || t.starts_with("0X") || t.starts_with("#x");
+        let (p, r) = match text.split_once(':') {
+            Some((p, r)) => (p, Some(r)),
+            None => (text, None),
+        };
+        match (hexy(p).then(|| num(p)).flatten(), r.map(num)) {
+            (Some(product_code), None) => Self::Identity {
+                product_code,
+                revision: None,
+            },
+            (Some(product_code), Some(Some(rev))) => Self::Identity {
+                product_code,
+                revision: Some(rev),
+            },
+            _ => Self::Name(text.to_string()),
+        }
+    }
+}
+
+impl core::fmt::Display for DeviceChoice {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Only => f.write_str("(the only device)"),
+            Self::Identity {
+                product_code,
+                revision: None,
+            } => write!(f, "0x{product_code:08X}"),
+            Self::Identity {
+                product_code,
+                revision: Some(r),
+            } => write!(f, "0x{product_code:08X}:0x{r:08X}"),
+            Self::Name(n) => write!(f, "{n:?}"),
+        }
+    }
+}
+
 impl Device {
+    /// `0xPRODUCT:0xREVISION` (without the revision where the file gives none).
+    pub fn identity_text(&self) -> String {
+        match self.type_.revision_no {
+            Some(r) => format!("0x{:08X}:0x{r:08X}", self.type_.product_code),
+            None => format!("0x{:08X}", self.type_.product_code),
+        }
+    }
+
     /// The PDOs of one direction.
     pub fn pdos(&self, dir: Direction) -> &[EsiPdo] {
         match dir {

@@ -5,6 +5,14 @@ use std::num::IntErrorKind;
 /// Why a number could not be read. The text says why, for the error message.
 pub(crate) type NumResult<T> = Result<T, String>;
 
+/// The digits after a hex prefix (`#x`, `#X`, `0x`, `0X`).
+fn hex(t: &str) -> Option<&str> {
+    t.strip_prefix("#x")
+        .or_else(|| t.strip_prefix("#X"))
+        .or_else(|| t.strip_prefix("0x"))
+        .or_else(|| t.strip_prefix("0X"))
+}
+
 /// Parse an ESI number (ETG.2000 `HexDecValue`): decimal with an optional sign, `#x` hex, and
 /// (tolerated, not in the schema) `0x` hex. Surrounding white space is ignored.
 pub(crate) fn parse_int(text: &str) -> NumResult<i128> {
@@ -17,12 +25,8 @@ pub(crate) fn parse_int(text: &str) -> NumResult<i128> {
         Some(b'+') => (false, &t[1..]),
         _ => (false, t),
     };
-    let (radix, digits) = if let Some(h) = rest
-        .strip_prefix("#x")
-        .or_else(|| rest.strip_prefix("#X"))
-        .or_else(|| rest.strip_prefix("0x"))
-        .or_else(|| rest.strip_prefix("0X"))
-    {
+    // `#x0x6041` (both prefixes, as one generator writes them) is the same hex number.
+    let (radix, digits) = if let Some(h) = hex(rest).map(|h| hex(h).unwrap_or(h)) {
         (16, h)
     } else {
         (10, rest)
@@ -146,6 +150,7 @@ mod tests {
         assert_eq!(parse_int("#x0A1E"), Ok(0xA1E));
         assert_eq!(parse_int(" #X1c12 "), Ok(0x1C12));
         assert_eq!(parse_int("0x1600"), Ok(0x1600));
+        assert_eq!(parse_int("#x0x6041"), Ok(0x6041));
         assert_eq!(parse_int("-5"), Ok(-5));
         assert_eq!(parse_int("+5"), Ok(5));
         assert_eq!(parse_int("250000"), Ok(250_000));

@@ -14,6 +14,7 @@ use super::model::*;
 use super::num::{self, EsiInt};
 use crate::od::EntryAccess;
 use roxmltree::{Document, Node};
+use std::cell::RefCell;
 
 /// The XML namespace of this project's vendor-specific elements.
 pub const ECDRIVE_NAMESPACE: &str = "urn:ecdrive:esi";
@@ -22,9 +23,21 @@ type R<T> = Result<T, EsiError>;
 
 /// Parse ESI text.
 pub(crate) fn parse_str(text: &str) -> R<EsiFile> {
+    if text.len() > MAX_TEXT_BYTES {
+        return Err(EsiError::new(
+            EsiErrorKind::Invalid,
+            Position::default(),
+            format!(
+                "the file is {} MiB; ESI files of more than {} MiB are not read",
+                text.len() >> 20,
+                MAX_TEXT_BYTES >> 20
+            ),
+        ));
+    }
+    check_depth(text)?;
     let opts = roxmltree::ParsingOptions {
         allow_dtd: false,
-        ..Default::default()
+        nodes_limit: MAX_NODES,
     };
     let doc = Document::parse_with_options(text, opts).map_err(|e| {
         let p = e.pos();
@@ -34,7 +47,98 @@ pub(crate) fn parse_str(text: &str) -> R<EsiFile> {
             format!("malformed XML: {e}"),
         )
     })?;
-    P { doc: &doc }.file()
+    P {
+        doc: &doc,
+        warnings: RefCell::new(Vec::new()),
+    }
+    .file()
+}
+
+/// The largest ESI text read (the largest real files are a few MiB).
+pub const MAX_TEXT_BYTES: usize = 64 << 20;
+/// The deepest element nesting read (ESI files nest about a dozen levels).
+pub const MAX_DEPTH: usize = 256;
+/// The most XML nodes read.
+const MAX_NODES: u32 = 16_000_000;
+
+/// Refuse text whose elements nest deeper than [`MAX_DEPTH`], before the XML parser (and
+/// anything walking its tree) sees it: one line of error at the element that goes too deep.
+/// The scan follows XML's lexical rules only as far as nesting needs (comments, CDATA,
+/// processing instructions, declarations, quoted attribute values, empty-element tags); the
+/// XML parser judges the rest.
+fn check_depth(text: &str) -> R<()> {
+    let b = text.as_bytes();
+    let mut depth = 0usize;
+    let mut i = 0usize;
+    let find = |from: usize, pat: &[u8]| -> usize {
+        b.get(from..)
+            .and_then(|rest| rest.windows(pat.len()).position(|w| w == pat))
+            .map_or(b.len(), |p| from + p + pat.len())
+    };
+    while let Some(off) = b.get(i..).and_then(|r| r.iter().position(|&c| c == b'<')) {
+        let at = i + off;
+        let rest = b.get(at..).unwrap_or_default();
+        if rest.starts_with(b"<!--") {
+            i = find(at + 4, b"-->");
+        } else if rest.starts_with(b"<![CDATA[") {
+            i = find(at + 9, b"]]>");
+        } else if rest.starts_with(b"<?") {
+            i = find(at + 2, b"?>");
+        } else if rest.starts_with(b"<!") {
+            i = find(at + 2, b">");
+        } else if rest.starts_with(b"</") {
+            depth = depth.saturating_sub(1);
+            i = find(at + 2, b">");
+        } else {
+            // A start tag: to its '>' outside quotes; '/>' closes it at once.
+            let mut j = at + 1;
+            let mut quote: Option<u8> = None;
+            let mut empty = false;
+            while let Some(&c) = b.get(j) {
+                match quote {
+                    Some(q) if c == q => quote = None,
+                    Some(_) => {}
+                    None if c == b'"' || c == b'\'' => quote = Some(c),
+                    None if c == b'>' => {
+                        empty = j > at + 1 && b.get(j - 1) == Some(&b'/');
+                        break;
+                    }
+                    None => {}
+                }
+                j += 1;
+            }
+            if !empty {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    let line = b
+                        .get(..at)
+                        .unwrap_or_default()
+                        .iter()
+                        .filter(|&&c| c == b'\n')
+                        .count() as u32
+                        + 1;
+                    let line_start = b
+                        .get(..at)
+                        .unwrap_or_default()
+                        .iter()
+                        .rposition(|&c| c == b'\n')
+                        .map_or(0, |p| p + 1);
+                    let column =
+                        text.get(line_start..at).map_or(0, |s| s.chars().count()) as u32 + 1;
+                    return Err(EsiError::new(
+                        EsiErrorKind::Invalid,
+                        Position::new(line, column),
+                        format!(
+                            "elements nest deeper than {MAX_DEPTH} levels: not an ESI file \
+                             (ESI files nest about a dozen)"
+                        ),
+                    ));
+                }
+            }
+            i = j + 1;
+        }
+    }
+    Ok(())
 }
 
 /// Decode the bytes of an ESI file into text: UTF-8 (with or without BOM), UTF-16 with BOM,
@@ -133,6 +237,9 @@ fn declared_latin1(bytes: &[u8]) -> bool {
 
 struct P<'a, 'input> {
     doc: &'a Document<'input>,
+    /// Problems read past: the value is left out (or taken as the tolerance says) and the
+    /// reading goes on.
+    warnings: RefCell<Vec<EsiError>>,
 }
 
 fn children<'a, 'i>(node: Node<'a, 'i>, name: &'static str) -> impl Iterator<Item = Node<'a, 'i>> {
@@ -184,6 +291,22 @@ impl<'a, 'input> P<'a, 'input> {
             }
         }
         self.node_pos(node)
+    }
+
+    /// Note a problem read past.
+    fn warn(&self, e: EsiError) {
+        self.warnings.borrow_mut().push(e);
+    }
+
+    /// The value, or — noting the problem — `None`.
+    fn soft<T>(&self, r: R<T>) -> Option<T> {
+        match r {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.warn(e);
+                None
+            }
+        }
     }
 
     fn invalid(&self, pos: Position, msg: String) -> EsiError {
@@ -261,6 +384,11 @@ impl<'a, 'input> P<'a, 'input> {
         Ok(self.attr_bool(node, name, scope)?.unwrap_or(false))
     }
 
+    /// A flag attribute; a value that is not a boolean is noted and read as `false`.
+    fn soft_flag(&self, node: Node, name: &'static str, scope: &str) -> bool {
+        self.soft(self.flag(node, name, scope)).unwrap_or(false)
+    }
+
     fn hex_child(&self, node: Node, name: &'static str, scope: &str) -> R<Option<Vec<u8>>> {
         match child(node, name) {
             None => Ok(None),
@@ -312,14 +440,23 @@ impl<'a, 'input> P<'a, 'input> {
             }
         }
         let devs = self.req_child(desc, "Devices", "<Descriptions>")?;
-        let devices = children(devs, "Device")
-            .map(|d| self.device(d))
-            .collect::<R<Vec<_>>>()?;
+        let mut devices = Vec::new();
+        let mut unreadable = Vec::new();
+        for d in children(devs, "Device") {
+            match self.device(d) {
+                Ok(dev) => devices.push(dev),
+                Err(error) => unreadable.push(self.unreadable(d, error)),
+            }
+        }
+        let mut warnings = self.warnings.take();
+        warnings.sort_by_key(|w| w.position);
         Ok(EsiFile {
             version: root.attribute("Version").map(str::to_string),
             vendor,
             groups,
             devices,
+            unreadable,
+            warnings,
         })
     }
 
@@ -336,6 +473,25 @@ impl<'a, 'input> P<'a, 'input> {
             name: preferred_text(&names).to_string(),
             names,
         })
+    }
+
+    /// What can still be said of a device that could not be read: its identity, as far as it
+    /// reads, and why.
+    fn unreadable(&self, n: Node, error: EsiError) -> UnreadableDevice {
+        let t = child(n, "Type");
+        let ident = |attr: &str| {
+            t.and_then(|t| t.attribute(attr))
+                .and_then(|v| num::parse_u32_wrapping(v).ok())
+        };
+        let names = self.names(n, "Name", "<Device>").unwrap_or_default();
+        UnreadableDevice {
+            position: self.node_pos(n),
+            type_text: t.map(text_of).unwrap_or_default(),
+            name: preferred_text(&names).to_string(),
+            product_code: ident("ProductCode"),
+            revision_no: ident("RevisionNo"),
+            error,
+        }
     }
 
     fn device(&self, n: Node<'a, 'input>) -> R<Device> {
@@ -373,16 +529,27 @@ impl<'a, 'input> P<'a, 'input> {
                 "mboxstate" => FmmuUsage::SmStatus,
                 "" => FmmuUsage::Unused,
                 _ => {
-                    return Err(self.invalid(
+                    // ETG.2000's order: FMMU 0 outputs, 1 inputs, 2 the mailbox state.
+                    let (usage, read_as) = match fmmus.len() {
+                        0 => (FmmuUsage::Outputs, "Outputs, as FMMU 0 is"),
+                        1 => (FmmuUsage::Inputs, "Inputs, as FMMU 1 is"),
+                        2 => (FmmuUsage::SmStatus, "MBoxState, as FMMU 2 is"),
+                        _ => (FmmuUsage::Unused, "unused"),
+                    };
+                    self.warn(self.invalid(
                         self.text_pos(f),
-                        format!("{s} has usage {text:?}: expected Outputs, Inputs or MBoxState"),
+                        format!(
+                            "{s} has usage {text:?}: expected Outputs, Inputs or MBoxState \
+                             (read as {read_as})"
+                        ),
                     ));
+                    usage
                 }
             };
             fmmus.push(Fmmu {
                 usage,
-                sm: self.attr_num(f, "Sm", &s)?,
-                op_only: self.flag(f, "OpOnly", &s)?,
+                sm: self.soft(self.attr_num(f, "Sm", &s)).flatten(),
+                op_only: self.soft_flag(f, "OpOnly", &s),
             });
         }
 
@@ -403,13 +570,35 @@ impl<'a, 'input> P<'a, 'input> {
                 "inputs" => SmKind::Inputs,
                 "" => SmKind::Unused,
                 _ => {
-                    return Err(self.invalid(
+                    // What the ESC does with it is in its control byte (ETG.1000-4: bits
+                    // 0-1 mailbox or buffered, bits 2-3 the master reads or writes).
+                    let Some(cb) = self
+                        .soft(self.attr_num::<u8>(sm, "ControlByte", &s))
+                        .flatten()
+                    else {
+                        return Err(self.invalid(
+                            self.text_pos(sm),
+                            format!(
+                                "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
+                                 Inputs"
+                            ),
+                        ));
+                    };
+                    let kind = match (cb & 0x03 == 0x02, cb & 0x0C == 0x04) {
+                        (true, true) => SmKind::MBoxOut,
+                        (true, false) => SmKind::MBoxIn,
+                        (false, true) => SmKind::Outputs,
+                        (false, false) => SmKind::Inputs,
+                    };
+                    self.warn(self.invalid(
                         self.text_pos(sm),
                         format!(
                             "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
-                             Inputs"
+                             Inputs (read as {}, as its ControlByte 0x{cb:02X} says)",
+                            kind.name()
                         ),
                     ));
+                    kind
                 }
             };
             let start_address = self
@@ -427,33 +616,38 @@ impl<'a, 'input> P<'a, 'input> {
                     .attr_num(sm, "ControlByte", &s)?
                     .ok_or_else(|| self.missing(sm, format!("{s} has no ControlByte attribute")))?,
                 enable: self.attr_num::<u8>(sm, "Enable", &s)?.unwrap_or(0) != 0,
-                virtual_: self.flag(sm, "Virtual", &s)?,
-                op_only: self.flag(sm, "OpOnly", &s)?,
+                virtual_: self.soft_flag(sm, "Virtual", &s),
+                op_only: self.soft_flag(sm, "OpOnly", &s),
             });
         }
 
-        let rx_pdos = children(n, "RxPdo")
+        let mut rx_pdos = children(n, "RxPdo")
             .map(|p| self.pdo(p, "RxPdo"))
             .collect::<R<Vec<_>>>()?;
-        let tx_pdos = children(n, "TxPdo")
+        let mut tx_pdos = children(n, "TxPdo")
             .map(|p| self.pdo(p, "TxPdo"))
             .collect::<R<Vec<_>>>()?;
         let mailbox = child(n, "Mailbox")
             .map(|m| self.mailbox(m, &scope))
             .transpose()?;
+        // A DC mode that does not read is left out (the device keeps the others); the EEPROM
+        // data is only shown; profiles read entry by entry.
         let dc = match child(n, "Dc") {
             Some(dc) => children(dc, "OpMode")
-                .map(|m| self.op_mode(m, &scope))
-                .collect::<R<Vec<_>>>()?,
+                .filter_map(|m| self.soft(self.op_mode(m, &scope)))
+                .collect(),
             None => Vec::new(),
         };
-        let eeprom = child(n, "Eeprom")
-            .map(|e| self.eeprom(e, &scope))
-            .transpose()?;
-        let profiles = children(n, "Profile")
+        let eeprom = child(n, "Eeprom").and_then(|e| self.soft(self.eeprom(e, &scope)));
+        let profiles: Vec<Profile> = children(n, "Profile")
             .map(|p| self.profile(p, &scope))
-            .collect::<R<Vec<_>>>()?;
+            .collect();
 
+        if let Some(dict) = profiles.iter().find_map(|p| p.dictionary.as_ref()) {
+            for p in rx_pdos.iter_mut().chain(tx_pdos.iter_mut()) {
+                self.var_entries(p, dict);
+            }
+        }
         Ok(Device {
             position: self.node_pos(n),
             type_: DeviceType {
@@ -474,6 +668,31 @@ impl<'a, 'input> P<'a, 'input> {
             eeprom,
             profiles,
         })
+    }
+
+    /// A PDO entry naming sub-index n > 0 of an object the file's dictionary describes as a
+    /// simple variable (sub-index 0 only) maps that variable: read as sub-index 0, noted (one
+    /// vendor file maps `0x607A:04`, while its own 0x1600 defaults map `0x607A:00`).
+    fn var_entries(&self, p: &mut EsiPdo, dict: &Dictionary) {
+        for e in p.entries.iter_mut().filter(|e| e.sub != 0 && e.index != 0) {
+            let Some(o) = dict.object(e.index) else {
+                continue;
+            };
+            let var = dict
+                .data_type(&o.type_name)
+                .is_none_or(|t| t.sub_items.is_empty() && t.array.is_none());
+            if var {
+                self.warn(self.invalid(
+                    e.position,
+                    format!(
+                        "<Entry> in PDO 0x{:04X} maps 0x{:04X}:{:02X}, but the dictionary's \
+                         0x{:04X} {:?} has sub-index 0 only (read as 0x{:04X}:00)",
+                        p.index, e.index, e.sub, e.index, o.name, e.index
+                    ),
+                ));
+                e.sub = 0;
+            }
+        }
     }
 
     fn pdo(&self, n: Node, tag: &str) -> R<EsiPdo> {
@@ -504,9 +723,9 @@ impl<'a, 'input> P<'a, 'input> {
             index,
             name: preferred_text(&names).to_string(),
             sm: self.attr_num(n, "Sm", &scope)?,
-            fixed: self.flag(n, "Fixed", &scope)?,
-            mandatory: self.flag(n, "Mandatory", &scope)?,
-            virtual_: self.flag(n, "Virtual", &scope)?,
+            fixed: self.soft_flag(n, "Fixed", &scope),
+            mandatory: self.soft_flag(n, "Mandatory", &scope),
+            virtual_: self.soft_flag(n, "Virtual", &scope),
             excludes,
             entries,
         })
@@ -532,13 +751,16 @@ impl<'a, 'input> P<'a, 'input> {
         if let Some(c) = child(n, "CoE") {
             let s = format!("<CoE> in {dev}");
             coe = Some(CoeDetails {
-                sdo_info: self.flag(c, "SdoInfo", &s)?,
-                pdo_assign: self.flag(c, "PdoAssign", &s)?,
-                pdo_config: self.flag(c, "PdoConfig", &s)?,
-                pdo_upload: self.flag(c, "PdoUpload", &s)?,
-                complete_access: self.flag(c, "CompleteAccess", &s)?,
-                segmented_sdo: self.attr_bool(c, "SegmentedSdo", &s)?.unwrap_or(true),
-                diag_history: self.flag(c, "DiagHistory", &s)?,
+                sdo_info: self.soft_flag(c, "SdoInfo", &s),
+                pdo_assign: self.soft_flag(c, "PdoAssign", &s),
+                pdo_config: self.soft_flag(c, "PdoConfig", &s),
+                pdo_upload: self.soft_flag(c, "PdoUpload", &s),
+                complete_access: self.soft_flag(c, "CompleteAccess", &s),
+                segmented_sdo: self
+                    .soft(self.attr_bool(c, "SegmentedSdo", &s))
+                    .flatten()
+                    .unwrap_or(true),
+                diag_history: self.soft_flag(c, "DiagHistory", &s),
                 eds_file: c.attribute("EdsFile").map(str::to_string),
             });
             for ic in children(c, "InitCmd") {
@@ -580,7 +802,7 @@ impl<'a, 'input> P<'a, 'input> {
         }
         Ok(Mailbox {
             protocols,
-            data_link_layer: self.flag(n, "DataLinkLayer", &scope)?,
+            data_link_layer: self.soft_flag(n, "DataLinkLayer", &scope),
             coe,
             init_cmds,
         })
@@ -720,92 +942,110 @@ impl<'a, 'input> P<'a, 'input> {
         })
     }
 
-    fn profile(&self, n: Node, dev: &str) -> R<Profile> {
+    fn profile(&self, n: Node, dev: &str) -> Profile {
         let scope = format!("<Profile> in {dev}");
-        Ok(Profile {
-            profile_no: self.num_child(n, "ProfileNo", &scope)?,
-            add_info: self.num_child(n, "AddInfo", &scope)?,
-            channel: self.attr_num(n, "Channel", &scope)?,
-            dictionary: child(n, "Dictionary")
-                .map(|d| self.dictionary(d, dev))
-                .transpose()?,
-        })
+        // ETG.2000 places ProfileNo in <Profile> and, in newer files, in <ChannelInfo>.
+        let info = child(n, "ChannelInfo");
+        let num = |name: &'static str| {
+            self.soft(self.num_child(n, name, &scope))
+                .flatten()
+                .or_else(|| info.and_then(|i| self.soft(self.num_child(i, name, &scope)).flatten()))
+        };
+        Profile {
+            profile_no: num("ProfileNo"),
+            add_info: num("AddInfo"),
+            channel: self.soft(self.attr_num(n, "Channel", &scope)).flatten(),
+            dictionary: child(n, "Dictionary").map(|d| self.dictionary(d, dev)),
+        }
     }
 
-    fn dictionary(&self, n: Node, dev: &str) -> R<Dictionary> {
+    fn dictionary(&self, n: Node, dev: &str) -> Dictionary {
         let mut data_types = Vec::new();
         if let Some(dts) = child(n, "DataTypes") {
             for dt in children(dts, "DataType") {
-                let name = text_of(self.req_child(dt, "Name", &format!("<DataType> in {dev}"))?);
-                let scope = format!("<DataType> {name:?}");
-                let array = match child(dt, "ArrayInfo") {
-                    None => None,
-                    Some(a) => {
-                        let s = format!("<ArrayInfo> of {scope}");
-                        Some(ArrayInfo {
-                            lbound: self.req_num_child(a, "LBound", &s)?,
-                            elements: self.req_num_child(a, "Elements", &s)?,
-                        })
-                    }
-                };
-                let mut sub_items = Vec::new();
-                for si in children(dt, "SubItem") {
-                    let s = format!("<SubItem> of {scope}");
-                    sub_items.push(EsiSubItem {
-                        sub_idx: self.num_child(si, "SubIdx", &s)?,
-                        name: child(si, "Name").map(text_of).unwrap_or_default(),
-                        type_name: text_of(self.req_child(si, "Type", &s)?),
-                        bit_size: self.req_num_child(si, "BitSize", &s)?,
-                        bit_offs: self.num_child(si, "BitOffs", &s)?.unwrap_or(0),
-                        flags: child(si, "Flags").map(|f| self.flags(f, &s)).transpose()?,
-                    });
+                if let Some(t) = self.soft(self.data_type(dt, dev)) {
+                    data_types.push(t);
                 }
-                data_types.push(EsiDataType {
-                    position: self.node_pos(dt),
-                    base_type: child(dt, "BaseType").map(text_of),
-                    bit_size: self.req_num_child(dt, "BitSize", &scope)?,
-                    array,
-                    sub_items,
-                    name,
-                });
             }
         }
         let mut objects = Vec::new();
         if let Some(objs) = child(n, "Objects") {
             for o in children(objs, "Object") {
-                let index: u16 = self.req_num_child(o, "Index", &format!("<Object> in {dev}"))?;
-                let scope = format!("<Object> 0x{index:04X}");
-                let names = self.names(o, "Name", &scope)?;
-                objects.push(EsiObject {
-                    position: self.node_pos(o),
-                    index,
-                    name: preferred_text(&names).to_string(),
-                    type_name: text_of(self.req_child(o, "Type", &scope)?),
-                    bit_size: self.num_child(o, "BitSize", &scope)?.unwrap_or(0),
-                    info: match child(o, "Info") {
-                        Some(i) => self.info(i, &scope)?,
-                        None => ObjectInfo::default(),
-                    },
-                    flags: child(o, "Flags")
-                        .map(|f| self.flags(f, &scope))
-                        .transpose()?,
-                });
+                if let Some(o) = self.soft(self.object(o, dev)) {
+                    objects.push(o);
+                }
             }
         }
-        Ok(Dictionary {
+        Dictionary {
             data_types,
             objects,
+        }
+    }
+
+    /// One `<DataType>`; one that does not read is left out, noted.
+    fn data_type(&self, dt: Node, dev: &str) -> R<EsiDataType> {
+        let name = text_of(self.req_child(dt, "Name", &format!("<DataType> in {dev}"))?);
+        let scope = format!("<DataType> {name:?}");
+        let array = match child(dt, "ArrayInfo") {
+            None => None,
+            Some(a) => {
+                let s = format!("<ArrayInfo> of {scope}");
+                Some(ArrayInfo {
+                    lbound: self.req_num_child(a, "LBound", &s)?,
+                    elements: self.req_num_child(a, "Elements", &s)?,
+                })
+            }
+        };
+        let mut sub_items = Vec::new();
+        for si in children(dt, "SubItem") {
+            let s = format!("<SubItem> of {scope}");
+            sub_items.push(EsiSubItem {
+                sub_idx: self.num_child(si, "SubIdx", &s)?,
+                name: child(si, "Name").map(text_of).unwrap_or_default(),
+                type_name: text_of(self.req_child(si, "Type", &s)?),
+                bit_size: self.req_num_child(si, "BitSize", &s)?,
+                bit_offs: self.num_child(si, "BitOffs", &s)?.unwrap_or(0),
+                flags: child(si, "Flags").map(|f| self.flags(f, &s)),
+            });
+        }
+        Ok(EsiDataType {
+            position: self.node_pos(dt),
+            base_type: child(dt, "BaseType").map(text_of),
+            bit_size: self.req_num_child(dt, "BitSize", &scope)?,
+            array,
+            sub_items,
+            name,
         })
     }
 
-    fn info(&self, n: Node, scope: &str) -> R<ObjectInfo> {
-        let value = |data: &'static str, value: &'static str| -> R<Option<EsiValue>> {
-            if let Some(d) = self.hex_child(n, data, scope)? {
-                return Ok(Some(EsiValue::Data(d)));
+    /// One `<Object>`; one whose index, type or size does not read is left out, noted.
+    fn object(&self, o: Node, dev: &str) -> R<EsiObject> {
+        let index: u16 = self.req_num_child(o, "Index", &format!("<Object> in {dev}"))?;
+        let scope = format!("<Object> 0x{index:04X}");
+        let names = self.names(o, "Name", &scope)?;
+        Ok(EsiObject {
+            position: self.node_pos(o),
+            index,
+            name: preferred_text(&names).to_string(),
+            type_name: text_of(self.req_child(o, "Type", &scope)?),
+            bit_size: self.num_child(o, "BitSize", &scope)?.unwrap_or(0),
+            info: match child(o, "Info") {
+                Some(i) => self.info(i, &scope),
+                None => ObjectInfo::default(),
+            },
+            flags: child(o, "Flags").map(|f| self.flags(f, &scope)),
+        })
+    }
+
+    fn info(&self, n: Node, scope: &str) -> ObjectInfo {
+        // Data that is not hex is noted and left out (the object keeps its other values).
+        let value = |data: &'static str, value: &'static str| -> Option<EsiValue> {
+            if let Some(d) = self.soft(self.hex_child(n, data, scope)).flatten() {
+                return Some(EsiValue::Data(d));
             }
-            Ok(child(n, value).map(|v| EsiValue::Value(text_of(v))))
+            child(n, value).map(|v| EsiValue::Value(text_of(v)))
         };
-        let default = match value("DefaultData", "DefaultValue")? {
+        let default = match value("DefaultData", "DefaultValue") {
             Some(v) => Some(v),
             None => child(n, "DefaultString").map(|s| EsiValue::String(text_of(s))),
         };
@@ -814,71 +1054,26 @@ impl<'a, 'input> P<'a, 'input> {
             let name = child(si, "Name").map(text_of).unwrap_or_default();
             let s = format!("<SubItem> {name:?} of {scope}");
             let info = match child(si, "Info") {
-                Some(i) => self.info(i, &s)?,
+                Some(i) => self.info(i, &s),
                 None => ObjectInfo::default(),
             };
             sub_items.push((name, info));
         }
-        Ok(ObjectInfo {
+        ObjectInfo {
             default,
-            min: value("MinData", "MinValue")?,
-            max: value("MaxData", "MaxValue")?,
+            min: value("MinData", "MinValue"),
+            max: value("MaxData", "MaxValue"),
             unit: child(n, "Unit").map(text_of).filter(|u| !u.is_empty()),
             sub_items,
-        })
+        }
     }
 
-    fn flags(&self, n: Node, scope: &str) -> R<Flags> {
+    /// `<Flags>`: a value that is not one of the schema's is noted and read as absent.
+    fn flags(&self, n: Node, scope: &str) -> Flags {
         let s = format!("<Flags> of {scope}");
         let mut flags = Flags::default();
         if let Some(a) = child(n, "Access") {
-            let text = text_of(a);
-            let (read, write) = match text.to_ascii_lowercase().as_str() {
-                "ro" => (true, false),
-                "rw" => (true, true),
-                "wo" => (false, true),
-                _ => {
-                    return Err(self.invalid(
-                        self.text_pos(a),
-                        format!("{s} has Access {text:?}: expected ro, rw or wo"),
-                    ));
-                }
-            };
-            let states = |attr: &'static str| -> R<(bool, bool, bool)> {
-                let Some(at) = a.attributes().find(|x| x.name() == attr) else {
-                    return Ok((true, true, true));
-                };
-                let v = at.value().trim().to_ascii_lowercase();
-                let set = match v.as_str() {
-                    "preop" => (true, false, false),
-                    "safeop" => (false, true, false),
-                    "op" => (false, false, true),
-                    "preop_safeop" => (true, true, false),
-                    "preop_op" => (true, false, true),
-                    "safeop_op" => (false, true, true),
-                    _ => {
-                        return Err(self.invalid(
-                            self.pos(at.range_value().start),
-                            format!(
-                                "{s} has {attr}=\"{}\": expected PreOP, SafeOP, OP, \
-                                 PreOP_SafeOP, PreOP_OP or SafeOP_OP",
-                                at.value()
-                            ),
-                        ));
-                    }
-                };
-                Ok(set)
-            };
-            let (rp, rs, ro) = states("ReadRestrictions")?;
-            let (wp, ws, wo) = states("WriteRestrictions")?;
-            let mut acc = EntryAccess::empty();
-            acc.set(EntryAccess::READ_PREOP, read && rp);
-            acc.set(EntryAccess::READ_SAFEOP, read && rs);
-            acc.set(EntryAccess::READ_OP, read && ro);
-            acc.set(EntryAccess::WRITE_PREOP, write && wp);
-            acc.set(EntryAccess::WRITE_SAFEOP, write && ws);
-            acc.set(EntryAccess::WRITE_OP, write && wo);
-            flags.access = Some(acc);
+            flags.access = self.soft(self.access(a, &s));
         }
         if let Some(p) = child(n, "PdoMapping") {
             let text = text_of(p);
@@ -888,29 +1083,88 @@ impl<'a, 'input> P<'a, 'input> {
                 "RT" | "TR" => EntryAccess::RXPDO | EntryAccess::TXPDO,
                 "" => EntryAccess::empty(),
                 _ => {
-                    return Err(self.invalid(
+                    self.warn(self.invalid(
                         self.text_pos(p),
                         format!("{s} has PdoMapping {text:?}: expected R, T or RT"),
                     ));
+                    EntryAccess::empty()
                 }
             };
         }
         if let Some(c) = child(n, "Category") {
             let text = text_of(c);
-            flags.category = Some(match text.as_str() {
-                "m" | "M" => Category::Mandatory,
-                "o" | "O" => Category::Optional,
-                "c" | "C" => Category::Conditional,
+            flags.category = match text.as_str() {
+                "m" | "M" => Some(Category::Mandatory),
+                "o" | "O" => Some(Category::Optional),
+                "c" | "C" => Some(Category::Conditional),
                 _ => {
-                    return Err(self.invalid(
+                    self.warn(self.invalid(
                         self.text_pos(c),
                         format!("{s} has Category {text:?}: expected m, o or c"),
                     ));
+                    None
                 }
-            });
+            };
         }
-        flags.backup = self.num_child::<u8>(n, "Backup", &s)?.unwrap_or(0) != 0;
-        flags.setting = self.num_child::<u8>(n, "Setting", &s)?.unwrap_or(0) != 0;
-        Ok(flags)
+        let bit = |name: &'static str| {
+            self.soft(self.num_child::<u8>(n, name, &s))
+                .flatten()
+                .unwrap_or(0)
+                != 0
+        };
+        flags.backup = bit("Backup");
+        flags.setting = bit("Setting");
+        flags
+    }
+
+    /// `<Access>` with its restrictions.
+    fn access(&self, a: Node, s: &str) -> R<EntryAccess> {
+        let text = text_of(a);
+        let (read, write) = match text.to_ascii_lowercase().as_str() {
+            "ro" => (true, false),
+            "rw" => (true, true),
+            "wo" => (false, true),
+            _ => {
+                return Err(self.invalid(
+                    self.text_pos(a),
+                    format!("{s} has Access {text:?}: expected ro, rw or wo"),
+                ));
+            }
+        };
+        let states = |attr: &'static str| -> R<(bool, bool, bool)> {
+            let Some(at) = a.attributes().find(|x| x.name() == attr) else {
+                return Ok((true, true, true));
+            };
+            let v = at.value().trim().to_ascii_lowercase();
+            let set = match v.as_str() {
+                "preop" => (true, false, false),
+                "safeop" => (false, true, false),
+                "op" => (false, false, true),
+                "preop_safeop" => (true, true, false),
+                "preop_op" => (true, false, true),
+                "safeop_op" => (false, true, true),
+                _ => {
+                    return Err(self.invalid(
+                        self.pos(at.range_value().start),
+                        format!(
+                            "{s} has {attr}=\"{}\": expected PreOP, SafeOP, OP, \
+                                 PreOP_SafeOP, PreOP_OP or SafeOP_OP",
+                            at.value()
+                        ),
+                    ));
+                }
+            };
+            Ok(set)
+        };
+        let (rp, rs, ro) = states("ReadRestrictions")?;
+        let (wp, ws, wo) = states("WriteRestrictions")?;
+        let mut acc = EntryAccess::empty();
+        acc.set(EntryAccess::READ_PREOP, read && rp);
+        acc.set(EntryAccess::READ_SAFEOP, read && rs);
+        acc.set(EntryAccess::READ_OP, read && ro);
+        acc.set(EntryAccess::WRITE_PREOP, write && wp);
+        acc.set(EntryAccess::WRITE_SAFEOP, write && ws);
+        acc.set(EntryAccess::WRITE_OP, write && wo);
+        Ok(acc)
     }
 }

@@ -368,6 +368,13 @@ pub struct GenericCoeDevice {
     quirks: Quirks,
     /// The SII description and order code, when the device was built from an ESI file.
     esi: Option<(Box<DeviceDescription>, &'static str)>,
+    /// Whether the device runs CiA 402 device control (0x6040/0x6041); without it, an I/O
+    /// device whose inputs echo its outputs.
+    cia402: bool,
+    /// The process data of a device whose file describes it in a way no assignment object
+    /// can hold (PDO entries naming their own mapping object): the file's default PDOs,
+    /// fixed.
+    fixed: Option<Mapping>,
     /// What the device has seen.
     pub seen: CoeObservations,
 }
@@ -421,6 +428,8 @@ impl GenericCoeDevice {
             prev_cw: 0,
             quirks: Quirks::NONE,
             esi: None,
+            cia402: true,
+            fixed: None,
             seen: CoeObservations::default(),
         })
     }
@@ -436,15 +445,14 @@ impl GenericCoeDevice {
         dev: &crate::esi::Device,
         serial: u32,
     ) -> Result<Self, String> {
-        let dictionary = crate::esi::static_dictionary(dev)?;
-        for a in [0x6040u16, 0x6041] {
-            if !dictionary.iter().any(|o| o.index == a) {
-                return Err(format!(
-                    "{}: no 0x{a:04X} in its dictionary: not a CiA 402 drive",
-                    dev.type_.name_text
-                ));
-            }
-        }
+        let dictionary = super::esi_dictionary::emulated_dictionary(dev);
+        let has = |a: u16| dictionary.iter().any(|o| o.index == a);
+        let cia402 = has(0x6040) && has(0x6041);
+        let fixed = if has(0x1C12) || has(0x1C13) {
+            None
+        } else {
+            Some(dev.default_mapping().map_err(|e| e.to_string())?)
+        };
         let mut od = OdStore::new(dictionary).map_err(|e| e.to_string())?;
         let _ = od
             .dict_mut()
@@ -487,7 +495,18 @@ impl GenericCoeDevice {
                 String::leak(dev.type_.name_text.clone()),
             )),
             seen: CoeObservations::default(),
+            cia402,
+            fixed,
         })
+    }
+
+    /// The process data mapping in force: the assignment and mapping objects, or the file's
+    /// fixed default PDOs.
+    fn mapping(&self) -> Result<Mapping, ()> {
+        match &self.fixed {
+            Some(m) => Ok(m.clone()),
+            None => self.od.mapping().map_err(|_| ()),
+        }
     }
 
     /// What the device has, for [`Quirks::check_for`]: a CoE mailbox and CiA 402 device
@@ -754,7 +773,7 @@ impl Device for GenericCoeDevice {
     }
 
     fn process_data_sizes(&self) -> ProcessDataSizes {
-        match self.od.mapping() {
+        match self.mapping() {
             Ok(m) => ProcessDataSizes {
                 outputs: m.bytes(Direction::Rx),
                 inputs: m.bytes(Direction::Tx),
@@ -766,8 +785,7 @@ impl Device for GenericCoeDevice {
     fn request_state(&mut self, r: &StateRequest) -> Result<(), AlStatusCode> {
         match (r.from, r.to) {
             (AlState::PreOp, AlState::SafeOp) => {
-                self.od
-                    .mapping()
+                self.mapping()
                     .map_err(|_| AlStatusCode::INVALID_OUTPUT_MAPPING)?;
                 Ok(())
             }
@@ -794,7 +812,7 @@ impl Device for GenericCoeDevice {
     fn state_changed(&mut self, from: AlState, to: AlState, error: Option<AlStatusCode>) {
         self.seen.transitions.push((from, to, error));
         if to == AlState::SafeOp && from == AlState::PreOp {
-            if let Ok(m) = self.od.mapping() {
+            if let Ok(m) = self.mapping() {
                 self.rx = Self::layout(&m, Direction::Rx);
                 self.tx = Self::layout(&m, Direction::Tx);
             }
@@ -879,6 +897,20 @@ impl Device for GenericCoeDevice {
             if event.outputs_enabled && !event.outputs_fresh() {
                 self.seen.missed_in_op += 1;
             }
+        }
+        if !self.cia402 {
+            // An I/O device: its inputs echo its outputs (the first bytes of each), and count
+            // the cycles where it has no outputs, so that a master sees its data move.
+            if outputs.is_empty() {
+                if let Some(b) = inputs.first_mut() {
+                    *b = (self.seen.cycles & 0xFF) as u8;
+                }
+            } else if event.outputs_enabled {
+                for (i, o) in inputs.iter_mut().zip(outputs.iter()) {
+                    *i = *o;
+                }
+            }
+            return Ok(());
         }
         if event.outputs_enabled {
             for s in &self.rx {

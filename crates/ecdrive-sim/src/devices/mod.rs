@@ -14,6 +14,7 @@
 //! the emulated drives of the registry ([`super::drives`]) and the test devices here.
 
 mod echo;
+pub mod esi_dictionary;
 pub mod generic_coe;
 mod io;
 
@@ -126,16 +127,36 @@ pub fn by_name(name: &str, position: usize) -> Result<Box<dyn Device>, DeviceErr
             name: name.into(),
             reason,
         };
-        let file = crate::esi::EsiFile::from_path(path).map_err(|e| build(e.to_string()))?;
-        let dev = match file.devices.as_slice() {
-            [d] => d,
-            many => {
-                return Err(build(format!(
-                    "the file describes {} devices; one is needed",
-                    many.len()
-                )));
+        // `esi:PATH@0xPRODUCT[:0xREVISION]` chooses a device of a file that has several.
+        let (path, choice) = match name.rsplit_once('@') {
+            Some((_, sel)) if sel.starts_with("0x") || sel.starts_with("0X") => {
+                let path = path.rsplit_once('@').map_or(path, |(p, _)| p);
+                (path, crate::esi::DeviceChoice::parse(sel))
             }
+            _ => (path, crate::esi::DeviceChoice::Only),
         };
+        let file = crate::esi::EsiFile::from_path(path).map_err(|e| build(e.to_string()))?;
+        let dev = file
+            .choose(&choice)
+            .map_err(|e| {
+                build(
+                    if choice == crate::esi::DeviceChoice::Only && file.devices.len() > 1 {
+                        format!(
+                            "the file describes {} devices ({}): say which with \
+                         esi:FILE@0xPRODUCT[:0xREVISION]",
+                            file.devices.len(),
+                            file.device_list()
+                        )
+                    } else {
+                        e
+                    },
+                )
+            })
+            .and_then(|i| {
+                file.devices
+                    .get(i)
+                    .ok_or_else(|| build("device index out of range".into()))
+            })?;
         return GenericCoeDevice::from_esi(&file, dev, serial)
             .map_err(build)?
             .with_quirks(quirks)

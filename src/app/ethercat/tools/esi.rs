@@ -96,6 +96,8 @@ pub struct EsiIssue {
     pub column: u32,
     /// What is wrong.
     pub message: String,
+    /// `error` (the file, or a device of it, cannot be used) or `warning` (read past).
+    pub severity: crate::esi::Severity,
 }
 
 /// What `esi check` prints.
@@ -103,10 +105,12 @@ pub struct EsiIssue {
 pub struct EsiCheck {
     /// The file.
     pub file: String,
-    /// Whether the file parses and is consistent.
+    /// Whether the file parses and every device in it can be read (warnings allowed).
     pub valid: bool,
-    /// Devices found (0 when it does not parse).
+    /// Devices that can be used (0 when the file does not parse).
     pub devices: usize,
+    /// Warnings among the issues.
+    pub warnings: usize,
     /// The parse error or the inconsistencies, in file order.
     pub issues: Vec<EsiIssue>,
 }
@@ -121,28 +125,31 @@ fn protocols(m: Option<&crate::esi::Mailbox>) -> Vec<String> {
 pub fn profile(path: &Path, device: Option<&str>, output: Option<&Path>) -> Result<String, String> {
     let shown = path.display().to_string();
     let f = EsiFile::from_path(path).map_err(|e| format!("{shown}: {e}"))?;
-    let names: Vec<&str> = f
-        .devices
-        .iter()
-        .map(|d| d.type_.name_text.as_str())
-        .collect();
-    let dev = match device {
-        Some(n) => f
-            .devices
-            .iter()
-            .find(|d| d.type_.name_text == n)
-            .ok_or_else(|| format!("{shown} has no device {n:?} (it has {})", names.join(", ")))?,
-        None => match f.devices.as_slice() {
-            [d] => d,
-            _ => {
-                return Err(format!(
-                    "{shown} describes {} devices ({}): say which with --device",
-                    names.len(),
-                    names.join(", ")
-                ));
+    // By identity (`0xPRODUCT[:0xREVISION]`) or name; a choice that fits several devices
+    // is refused, listing them (never silently the first).
+    let choice = device.map_or(
+        crate::esi::DeviceChoice::Only,
+        crate::esi::DeviceChoice::parse,
+    );
+    let dev = f
+        .choose(&choice)
+        .map_err(|e| {
+            if choice == crate::esi::DeviceChoice::Only && f.devices.len() > 1 {
+                format!(
+                    "{shown} describes {} devices ({}): say which with --device \
+                     0xPRODUCT[:0xREVISION]",
+                    f.devices.len(),
+                    f.device_list()
+                )
+            } else {
+                format!("{shown}: {e}")
             }
-        },
-    };
+        })
+        .and_then(|i| {
+            f.devices
+                .get(i)
+                .ok_or_else(|| format!("{shown}: device index out of range"))
+        })?;
     let named = match output.and_then(Path::parent) {
         Some(dir) => {
             let abs = |p: &Path| std::fs::canonicalize(p).unwrap_or_else(|_| p.to_path_buf());
@@ -245,19 +252,26 @@ pub fn check(path: &Path) -> EsiCheck {
     let file = path.display().to_string();
     match EsiFile::from_path(path) {
         Ok(f) => {
-            let issues: Vec<EsiIssue> = f
+            let mut issues: Vec<EsiIssue> = f
                 .check()
                 .into_iter()
                 .map(|i| EsiIssue {
                     line: i.position.line,
                     column: i.position.column,
                     message: i.message,
+                    severity: i.severity,
                 })
                 .collect();
+            issues.sort_by_key(|i| (i.severity, i.line, i.column));
+            let warnings = issues
+                .iter()
+                .filter(|i| i.severity == crate::esi::Severity::Warning)
+                .count();
             EsiCheck {
                 file,
-                valid: issues.is_empty(),
+                valid: warnings == issues.len() && !f.devices.is_empty(),
                 devices: f.devices.len(),
+                warnings,
                 issues,
             }
         }
@@ -265,10 +279,12 @@ pub fn check(path: &Path) -> EsiCheck {
             file,
             valid: false,
             devices: 0,
+            warnings: 0,
             issues: vec![EsiIssue {
                 line: e.line(),
                 column: e.column(),
                 message: e.message,
+                severity: crate::esi::Severity::Error,
             }],
         },
     }
