@@ -650,22 +650,32 @@ fn esi_device(
                 ));
             }
             let newest = f.device(product_code, None).map(|d| d.position);
-            f.devices
-                .iter()
-                .position(|d| Some(d.position) == newest)
-                .ok_or_else(|| {
-                    cx.err(
-                        e.span(),
-                        key,
-                        format!(
-                            "ESI file {shown} has no device with product code \
-                             0x{product_code:08X}"
-                        ),
-                    )
-                })?
+            match f.devices.iter().position(|d| Some(d.position) == newest) {
+                Some(i) => i,
+                None => {
+                    // A device of that identity the file has but that cannot be read says
+                    // why; else there is none.
+                    let choice = crate::esi::DeviceChoice::Identity {
+                        product_code,
+                        revision: None,
+                    };
+                    let why = match f.choose(&choice) {
+                        Err(w) if w.contains("cannot be used") => w,
+                        _ => format!("has no device with product code 0x{product_code:08X}"),
+                    };
+                    return Err(cx.err(e.span(), key, format!("ESI file {shown}: {why}")));
+                }
+            }
         }
         _ => match f.devices.len() {
-            1 => 0,
+            1 if f.unreadable.is_empty() => 0,
+            0 | 1 if !f.unreadable.is_empty() => {
+                let why = f
+                    .choose(&crate::esi::DeviceChoice::Only)
+                    .err()
+                    .unwrap_or_default();
+                return Err(cx.err(e.span(), key, format!("ESI file {shown}: {why}")));
+            }
             n => {
                 let list: Vec<String> = f
                     .devices

@@ -492,6 +492,10 @@ pub fn esi_summary(s: &EsiSummary) {
 /// The "as ecdrive would drive it" part of `esi show`.
 fn esi_plan(p: &ecdrive::esi::DrivePlan) {
     use ecdrive::esi::MappingSource;
+    if let Some(why) = &p.not_a_drive {
+        println!("  From this file alone: {why}");
+        return;
+    }
     println!(
         "  From this file alone: cyclic modes {} ({})",
         p.modes.join(", "),

@@ -87,10 +87,15 @@ fn ranges(
     (out, most)
 }
 
+/// The most process data bytes the SyncManager takes: its `MaxSize`. `DefaultSize` is the size
+/// of the default mapping, not a limit (a file with an 11-byte default takes a 13-byte
+/// mapping its PDO rules allow); without a `MaxSize`, 1024 bytes \[REC\] (or the default
+/// size, if larger).
 fn sm_bytes(dev: &Device, kind: SmKind) -> u16 {
-    dev.sync_manager(kind)
-        .and_then(|s| s.max_size.or(s.default_size))
-        .unwrap_or(1024)
+    dev.sync_manager(kind).map_or(1024, |s| {
+        s.max_size
+            .unwrap_or_else(|| s.default_size.unwrap_or(0).max(1024))
+    })
 }
 
 /// `pdos` PDOs of at most `entries` entries each, as the limits' types hold them.

@@ -189,6 +189,10 @@ pub struct DrivePlan {
     pub cycle_time_writable: Option<bool>,
     /// The `<InitCmd>`s in file order.
     pub init_cmds: Vec<InitCmdPlan>,
+    /// Why the device is no CiA 402 drive ecdrive can run from this file, if it is not: no
+    /// 0x6040 and 0x6041 in its dictionary or PDOs (an I/O device, a coupler), or PDOs that
+    /// name their own mapping object.
+    pub not_a_drive: Option<String>,
 }
 
 fn transition_name(t: Transition) -> &'static str {
@@ -441,7 +445,36 @@ impl DrivePlan {
             .as_ref()
             .map(|m| m.init_cmds.iter().map(init_cmd_plan).collect())
             .unwrap_or_default();
+        let in_pdos = |index: u16| {
+            dev.rx_pdos
+                .iter()
+                .chain(dev.tx_pdos.iter())
+                .any(|p| p.entries.iter().any(|e| e.index == index))
+        };
+        let in_dict = |index: u16| dict.is_some_and(|d| d.object(index).is_some());
+        let self_mapped = dev.rx_pdos.iter().chain(dev.tx_pdos.iter()).find_map(|p| {
+            p.entries
+                .iter()
+                .find(|e| e.index == p.index)
+                .map(|e| (p, e))
+        });
+        let not_a_drive = if let Some((p, e)) = self_mapped {
+            Some(format!(
+                "PDO 0x{:04X} maps its own mapping object (0x{:04X}:{:02X} {:?}): the file does \
+                 not say which objects the device maps",
+                p.index, e.index, e.sub, e.name
+            ))
+        } else if !(in_dict(0x6040) || in_pdos(0x6040)) || !(in_dict(0x6041) || in_pdos(0x6041)) {
+            Some(
+                "no 0x6040 (controlword) and 0x6041 (statusword) in its dictionary or PDOs: \
+                 not a CiA 402 drive (an I/O device runs with its process data)"
+                    .to_string(),
+            )
+        } else {
+            None
+        };
         Self {
+            not_a_drive,
             vendor_id: file.vendor.id,
             product_code: dev.type_.product_code,
             revision: dev.type_.revision_no,
