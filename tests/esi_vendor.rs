@@ -492,7 +492,8 @@ fn latin1_and_utf8_copies_parse_the_same() {
 #[test]
 fn a_cycle_factor_the_sii_cannot_carry_is_refused_by_name() {
     // The SII's DC category holds the SYNC0/SYNC1 cycle factors as INT16 (ETG.2010), so the one
-    // DC mode type keeps them as i16 and the parser refuses a larger one where it stands.
+    // DC mode type keeps them as i16 and the parser leaves a mode with a larger one out, with a
+    // warning where it stands (the device keeps its other modes).
     let bytes = std::fs::read(PATH).unwrap();
     let text: String = bytes.iter().map(|&b| char::from(b)).collect();
     let text = text.replacen(
@@ -500,7 +501,16 @@ fn a_cycle_factor_the_sii_cannot_carry_is_refused_by_name() {
         r#"<CycleTimeSync0 Factor="40000">"#,
         1,
     );
-    let e = EsiFile::parse(&text).unwrap_err().to_string();
+    let f = EsiFile::parse(&text).unwrap();
+    let dev = f
+        .devices
+        .iter()
+        .find(|d| d.type_.name_text == "AC3102")
+        .unwrap();
+    assert!(dev.dc_op_mode("DcSyncInput").is_none());
+    assert!(dev.dc_op_mode("DcSync").is_some());
+    assert_eq!(f.warnings.len(), 1, "{:?}", f.warnings);
+    let e = f.warnings[0].to_string();
     assert!(e.contains("Factor") && e.contains("DcSyncInput"), "{e}");
     assert!(e.contains("16-bit"), "{e}");
     assert_eq!(e.lines().count(), 1, "{e}");
