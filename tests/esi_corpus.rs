@@ -72,11 +72,11 @@ const KNOWN: &[(&str, u32, &str, &str)] = &[
     ("Somanet_CiA402-multi.xml", 0x303, "op", "0x1c13"),
     ("Somanet_CiA402-multi.xml", 0x304, "op", "0x1c13"),
     ("Somanet_CiA402-multi.xml", 0x305, "op", "0x1c13"),
-    // A DC-only drive: OP needs SYNC0, which a bare state request does not start.
+    // A DC-only drive: OP needs SYNC0, which a bare state request does not start (the csp
+    // run starts it, and runs).
     ("STEPPERONLINE_A6_Servo_V0.04.xml", 0x715, "op", "0x0030"),
-    // The csp run stops on the SyncManager watchdog after the move (under investigation).
-    ("C5-E-2-21.xml", 0x4F, "csp", "0x001B"),
-    ("Somanet_CiA402-single.xml", 0x201, "csp", "0x001B"),
+    // A drive whose SII leaves the process-data SyncManager disabled (above).
+    ("Bohign_MS_ECAT_V2.4.10.xml", 0x1D00, "csp", "0x001D"),
 ];
 
 fn known(file: &str, product: u32, what: &str) -> Option<&'static str> {
@@ -91,14 +91,15 @@ struct Row {
     device: String,
     identity: String,
     warnings: usize,
-    cia402: bool,
+    cia402: Option<String>,
     op: Result<(), String>,
     csp: Option<Result<(), String>>,
 }
 
-fn is_cia402(d: &ecdrive::esi::Device) -> bool {
-    d.dictionary()
-        .is_some_and(|x| x.object(0x6040).is_some() && x.object(0x6041).is_some())
+/// Why the device is no CiA 402 drive ecdrive can run from its file (`esi show` says the
+/// same), or `None` for a drive.
+fn not_a_drive(f: &EsiFile, d: &ecdrive::esi::Device) -> Option<String> {
+    ecdrive::esi::DrivePlan::new(f, d).not_a_drive
 }
 
 /// `ecdrive states OP` on the emulated device, in-process.
@@ -127,9 +128,14 @@ fn reach_op(file: &Path, ident: &str) -> Result<(), String> {
 /// A csp move through `esi = FILE`, the drive chosen by identity, emulated from the same file.
 fn csp_move(file: &Path, vendor: u32, d: &ecdrive::esi::Device) -> Result<(), String> {
     use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    let revision = d
+        .type_
+        .revision_no
+        .map_or(String::new(), |r| format!(", revision = {r}"));
     let text = format!(
         "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"esi:{f}@{id}\"]\n\
-         [[drive]]\nidentity = {{ vendor_id = {vendor}, product_code = {p} }}\nesi = \"{f}\"\n\
+         [[drive]]\nidentity = {{ vendor_id = {vendor}, product_code = {p} }}\n\
+         esi = {{ file = \"{f}\", product = {p}{revision} }}\n\
          mode = \"csp\"\nprogram = [{{ step = \"move\", by = 20000, velocity = 100000, \
          acceleration = 1000000 }}]\n",
         f = file.display(),
@@ -175,8 +181,9 @@ fn every_vendor_file_and_device() {
             assert_eq!(f.devices.get(chosen).map(|x| x.position), Some(d.position));
             let pc = d.type_.product_code;
             let op = reach_op(&path, &ident);
-            let cia402 = is_cia402(d);
-            let csp = (cia402 && op.is_ok()).then(|| csp_move(&path, f.vendor.id, d));
+            let cia402 = not_a_drive(&f, d);
+            // `states OP` starts no SYNC0: a DC-only drive reaches OP in the run.
+            let csp = cia402.is_none().then(|| csp_move(&path, f.vendor.id, d));
             for (what, res) in [("op", Some(&op)), ("csp", csp.as_ref())] {
                 let Some(res) = res else { continue };
                 match (res, known(&name, pc, what)) {
@@ -209,7 +216,10 @@ fn every_vendor_file_and_device() {
 fn table(rows: &[Row]) -> String {
     let cell = |r: &Result<(), String>| match r {
         Ok(()) => "yes".to_string(),
-        Err(e) => format!("no: {}", e.replace('|', "/")),
+        Err(e) => format!(
+            "no: {}",
+            e.trim_start_matches("ecdrive states: ").replace('|', "/")
+        ),
     };
     let mut s = String::from(
         "| file | device | identity | file warnings | CiA 402 | reaches OP | csp move |\n\
@@ -222,10 +232,56 @@ fn table(rows: &[Row]) -> String {
             r.device.replace('|', "/"),
             r.identity,
             r.warnings,
-            if r.cia402 { "yes" } else { "no" },
+            r.cia402
+                .as_ref()
+                .map_or_else(|| "yes".to_string(), |w| format!("no: {w}")),
             cell(&r.op),
             r.csp.as_ref().map_or_else(|| "-".to_string(), cell),
         ));
     }
     s
+}
+
+/// One file, four stepper drives (Bohign): `esi = "FILE"` alone is refused on a real
+/// interface, listing the devices; on an emulated segment it takes the device the segment holds
+/// at the drive's position; `esi = { file, product }` chooses by identity.
+#[test]
+fn a_multi_device_file_chooses_by_identity() {
+    let Some(dir) = corpus() else { return };
+    let f = dir.join("bohign/Bohign_MS_ECAT_V2.4.10.xml");
+    let program = "mode = \"csp\"\nprogram = [{ step = \"move\", by = 1000, velocity = 100000, \
+                   acceleration = 1000000 }]\n";
+    let real = format!(
+        "interface = \"eth9\"\n[[drive]]\nposition = 0\nesi = \"{}\"\n{program}",
+        f.display()
+    );
+    let e = ecdrive::app::config::parse(&real, "multi.toml").unwrap_err();
+    assert!(e.message.contains("describes 4 devices"), "{e}");
+    assert!(e.message.contains("Bohigh CL57EC (0x00001B00)"), "{e}");
+    let sim = format!(
+        "interface = \"sim\"\n[sim]\ndevices = [\"esi:{f}@0x1B00\"]\n[[drive]]\nposition = 0\n\
+         esi = \"{f}\"\n{program}",
+        f = f.display()
+    );
+    let cfg = ecdrive::app::config::parse(&sim, "multi.toml").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        cfg.master.startup.drives[0].profile.map(|p| p.name),
+        Some("Bohigh CL57EC")
+    );
+    let table = format!(
+        "interface = \"eth9\"\n[[drive]]\nposition = 0\n\
+         esi = {{ file = \"{f}\", product = 0x2100 }}\n{program}",
+        f = f.display()
+    );
+    let cfg = ecdrive::app::config::parse(&table, "multi.toml").unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        cfg.master.startup.drives[0].profile.map(|p| p.name),
+        Some("Bohigh DM860EC")
+    );
+    let none = table.replace("0x2100", "0x2101");
+    let e = ecdrive::app::config::parse(&none, "multi.toml").unwrap_err();
+    assert!(
+        e.message.contains("the file has no device 0x00002101"),
+        "{e}"
+    );
 }

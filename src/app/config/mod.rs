@@ -626,6 +626,7 @@ fn esi_device(
     cx: &Ctx<'_>,
     e: &Spanned<String>,
     select: Selector,
+    choice: Option<&crate::esi::DeviceChoice>,
     key: &str,
 ) -> Result<(crate::esi::EsiFile, usize, String), ConfigError> {
     let dir = Path::new(cx.file).parent().unwrap_or(Path::new(""));
@@ -633,6 +634,27 @@ fn esi_device(
     let shown = path.display().to_string();
     let f = crate::esi::EsiFile::from_path(&path)
         .map_err(|x| cx.err(e.span(), key, format!("ESI file {shown}: {x}")))?;
+    if let Some(c) = choice {
+        // `esi = { file, product, revision }`: that device, or why not; an identity selector
+        // must agree with it.
+        let i = f
+            .choose(c)
+            .map_err(|x| cx.err(e.span(), key, format!("ESI file {shown}: {x}")))?;
+        if let (Selector::Identity { product_code, .. }, Some(d)) = (select, f.devices.get(i))
+            && d.type_.product_code != product_code
+        {
+            return Err(cx.err(
+                e.span(),
+                key,
+                format!(
+                    "ESI file {shown}: the device chosen ({}) is not the product code \
+                     0x{product_code:08X} the drive's identity names",
+                    d.identity_text()
+                ),
+            ));
+        }
+        return Ok((f, i, shown));
+    }
     let index = match select {
         Selector::Identity {
             vendor_id,
@@ -847,7 +869,27 @@ fn drive(
              profile or esi",
         ));
     }
-    let profile = match (&r.esi, &r.profile) {
+    // `esi = "FILE"` or `esi = { file = "FILE", product = …, revision = … }`. A plain file
+    // on an emulated segment takes the device the segment holds at the drive's position
+    // (`esi:FILE@0xPRODUCT:0xREVISION`).
+    let esi_choice = r
+        .esi
+        .as_ref()
+        .and_then(|e| e.get_ref().choice())
+        .or_else(|| {
+            let Selector::Position(p) = select else {
+                return None;
+            };
+            let name = sim?.get(usize::from(p))?;
+            let (_, sel) = name.strip_prefix("esi:")?.rsplit_once('@')?;
+            (sel.starts_with("0x") || sel.starts_with("0X"))
+                .then(|| crate::esi::DeviceChoice::parse(sel))
+        });
+    let esi: Option<Spanned<String>> = r
+        .esi
+        .as_ref()
+        .map(|e| Spanned::new(e.span(), e.get_ref().file().to_string()));
+    let profile = match (&esi, &r.profile) {
         // A built-in profile refined by the drive's ESI file: its InitCmds and the objects
         // its dictionary adds.
         (Some(e), Some(p)) => {
@@ -859,7 +901,7 @@ fn drive(
                     product_code: base.bus.identity.product_code,
                 },
             };
-            let (f, dev, shown) = esi_device(cx, e, sel, &key("esi"))?;
+            let (f, dev, shown) = esi_device(cx, e, sel, esi_choice.as_ref(), &key("esi"))?;
             let refined = f
                 .devices
                 .get(dev)
@@ -885,7 +927,7 @@ fn drive(
             Some(profile_file::load(&dir.join(&f))?)
         }
         (Some(e), None) => {
-            let (f, dev, shown) = esi_device(cx, e, select, &key("esi"))?;
+            let (f, dev, shown) = esi_device(cx, e, select, esi_choice.as_ref(), &key("esi"))?;
             let p = f
                 .devices
                 .get(dev)
@@ -1200,7 +1242,7 @@ fn drive(
             }
             Some(mapping)
         }
-        None => match (&esi_source, &r.esi) {
+        None => match (&esi_source, &esi) {
             (Some((f, dev)), Some(e)) => {
                 Some(esi_mapping(cx, &key("esi"), e, f, *dev, &modes, notes)?)
             }

@@ -73,6 +73,47 @@ pub(super) struct Identity {
     pub product_code: u32,
 }
 
+/// `esi = "FILE"`, or `esi = { file = "FILE", product = 0x…, revision = 0x… }` to choose one
+/// device of a file that describes several.
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+pub(super) enum EsiRef {
+    /// The file.
+    File(String),
+    /// The file and the device's identity.
+    Device {
+        /// The file.
+        file: String,
+        /// Its `ProductCode`.
+        product: u32,
+        /// Its `RevisionNo` (any, when only one device has the product code).
+        #[serde(default)]
+        revision: Option<u32>,
+    },
+}
+
+impl EsiRef {
+    /// The file.
+    pub fn file(&self) -> &str {
+        match self {
+            Self::File(f) | Self::Device { file: f, .. } => f,
+        }
+    }
+
+    /// The device it names, if it names one.
+    pub fn choice(&self) -> Option<crate::esi::DeviceChoice> {
+        match self {
+            Self::File(_) => None,
+            Self::Device {
+                product, revision, ..
+            } => Some(crate::esi::DeviceChoice::Identity {
+                product_code: *product,
+                revision: *revision,
+            }),
+        }
+    }
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct Drive {
@@ -85,7 +126,7 @@ pub(super) struct Drive {
     #[serde(default)]
     pub profile: Option<Spanned<String>>,
     #[serde(default)]
-    pub esi: Option<Spanned<String>>,
+    pub esi: Option<Spanned<EsiRef>>,
     #[serde(default)]
     pub profile_file: Option<Spanned<String>>,
     #[serde(default)]

@@ -470,6 +470,12 @@ impl DrivePlan {
                  not a CiA 402 drive (an I/O device runs with its process data)"
                     .to_string(),
             )
+        } else if dict.is_none() {
+            Some(
+                "the file has no object dictionary (<Profile><Dictionary>): a drive is run from \
+                 its file's dictionary (types, access, modes)"
+                    .to_string(),
+            )
         } else {
             None
         };

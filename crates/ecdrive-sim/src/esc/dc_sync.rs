@@ -174,7 +174,14 @@ impl Esc {
                 if let Some(c) = self.mem.get_mut(0x0442) {
                     *c = c.saturating_add(1);
                 }
-                if self.state == AlState::Op {
+                // The firmware watches the process-data watchdog only where the outputs'
+                // SyncManager triggers it (control byte bit 6; Beckhoff's slave stack code
+                // monitors it only then): a device whose ESI leaves the bit off (ControlByte
+                // 0x24) runs without it, as the hardware counter still shows.
+                let triggered = self
+                    .sm_out_pd
+                    .is_some_and(|n| self.byte(Self::sm_base(n) + 4) & 0x40 != 0);
+                if self.state == AlState::Op && triggered {
                     self.local_error(AlState::SafeOp, AlStatusCode::SM_WATCHDOG, dev);
                 }
             }
