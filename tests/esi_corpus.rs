@@ -47,12 +47,6 @@ fn files(dir: &Path) -> Vec<PathBuf> {
 /// Devices that do not reach OP or run csp yet, by file name and product code, with the
 /// reason a run gives (a part of it). Each is a known gap, named in the docs' table.
 const KNOWN: &[(&str, u32, &str, &str)] = &[
-    // The SII marks the process-data SyncManager disabled (ESI `Enable="0"`), and
-    // ethercrab 0.7.1 enables an SM only where the SII does: the device refuses SAFE-OP.
-    ("Beckhoff_EK11xx.xml", 0x044D_2C52, "op", "0x001E"),
-    ("Bohign_MS_ECAT_V2.4.10.xml", 0x1D00, "op", "0x001D"),
-    ("Weidmueller_UR20_FBC.xml", 0x4F91_1C30, "op", "0x001D"),
-    ("Orbita3d.xml", 0x1, "op", "0x001D"),
     // Process data in the ESC's digital-I/O registers (SMs at 0x0F00..0x0F03) and on several
     // output SyncManagers: the emulated ESC serves one output and one input SM above 0x1000.
     ("iTegva_E7x_Series.xml", 0x100, "op", "0x001D"),
@@ -75,8 +69,6 @@ const KNOWN: &[(&str, u32, &str, &str)] = &[
     // A DC-only drive: OP needs SYNC0, which a bare state request does not start (the csp
     // run starts it, and runs).
     ("STEPPERONLINE_A6_Servo_V0.04.xml", 0x715, "op", "0x0030"),
-    // A drive whose SII leaves the process-data SyncManager disabled (above).
-    ("Bohign_MS_ECAT_V2.4.10.xml", 0x1D00, "csp", "0x001D"),
 ];
 
 fn known(file: &str, product: u32, what: &str) -> Option<&'static str> {
@@ -232,9 +224,11 @@ fn table(rows: &[Row]) -> String {
             r.device.replace('|', "/"),
             r.identity,
             r.warnings,
-            r.cia402
-                .as_ref()
-                .map_or_else(|| "yes".to_string(), |w| format!("no: {w}")),
+            match &r.cia402 {
+                None => "yes".to_string(),
+                Some(w) if w.starts_with("no 0x6040") => "no (I/O)".to_string(),
+                Some(w) => format!("no: {w}"),
+            },
             cell(&r.op),
             r.csp.as_ref().map_or_else(|| "-".to_string(), cell),
         ));

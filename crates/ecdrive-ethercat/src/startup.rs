@@ -1626,6 +1626,7 @@ pub fn configure<L: FrameLink>(
         });
     }
 
+    enable_process_data_sms(bus, &devices, &mut warnings)?;
     times.image_ms = ms_since(t_image);
     times.frames.image = sent(bus) - f_image;
     let group = to_safe_op(bus, group, &mut drives, cfg, &mut times)?;
@@ -2207,6 +2208,54 @@ fn build_image<L: FrameLink>(
         }
         Err(e) => Err(exec_error(culprit().as_ref(), e)),
     }
+}
+
+/// Process-data SyncManagers that carry data but are left off. ETG.2000's `<Sm Enable>` is the
+/// SyncManager's default activation, which vendor files set to 0 on the SyncManager of an
+/// optional input (Beckhoff's EK1101 ID switch) or on every process-data SyncManager (a
+/// stepper drive, a fieldbus coupler); configuration tools enable an SM when PDOs are assigned
+/// to it. ethercrab 0.7.1 enables an SM only where the SII does, and the device then refuses
+/// SAFE-OP (0x001D/0x001E, invalid output/input configuration). Here, before SAFE-OP is
+/// requested, every buffered SyncManager with a length and its activation bit clear is
+/// enabled (0x0806 bit 0), and the start-up says so for the device.
+pub fn enable_process_data_sms<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    devices: &[DeviceInfo],
+    warnings: &mut Vec<(DriveRef, String)>,
+) -> Result<(), MasterError> {
+    const SMS: usize = 8;
+    for d in devices {
+        let drive = d.drive_ref();
+        let regs: [u8; 8 * SMS] = bus
+            .block_on(
+                &|| "reading the SyncManagers (0x0800)".into(),
+                T_STEP,
+                |md| Command::fprd(d.address, 0x0800).receive::<[u8; 8 * SMS]>(md),
+            )
+            .map_err(|e| exec_error(Some(&drive), e))?
+            .map_err(|e| bus_error(Some(&drive), "reading the SyncManagers (0x0800)", e))?;
+        for (n, sm) in regs.chunks_exact(8).enumerate() {
+            let (len, ctl, act) = (u16::from_le_bytes([sm[2], sm[3]]), sm[4], sm[6]);
+            if len == 0 || ctl & 0x03 != 0x00 || act & 0x01 != 0 {
+                continue;
+            }
+            let reg = 0x0806 + 8 * n as u16;
+            bus.block_on(&|| format!("enabling SM{n} (0x{reg:04X})"), T_STEP, |md| {
+                Command::fpwr(d.address, reg).send(md, act | 0x01)
+            })
+            .map_err(|e| exec_error(Some(&drive), e))?
+            .map_err(|e| bus_error(Some(&drive), &format!("enabling SM{n} (0x{reg:04X})"), e))?;
+            warnings.push((
+                drive.clone(),
+                format!(
+                    "its SII leaves SM{n} off (the ESI's Enable=\"0\") though {len} bytes of \
+                     process data are assigned to it: enabled before SAFE-OP, as configuration \
+                     tools do"
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Resolve each drive's fields and check its image size against its mapping.

@@ -375,6 +375,8 @@ pub struct GenericCoeDevice {
     /// can hold (PDO entries naming their own mapping object): the file's default PDOs,
     /// fixed.
     fixed: Option<Mapping>,
+    /// The file's default PDOs, for a device whose mapping objects do not read as one.
+    file_default: Option<Mapping>,
     /// What the device has seen.
     pub seen: CoeObservations,
 }
@@ -430,6 +432,7 @@ impl GenericCoeDevice {
             esi: None,
             cia402: true,
             fixed: None,
+            file_default: None,
             seen: CoeObservations::default(),
         })
     }
@@ -497,6 +500,7 @@ impl GenericCoeDevice {
             seen: CoeObservations::default(),
             cia402,
             fixed,
+            file_default: dev.default_mapping().ok(),
         })
     }
 
@@ -507,6 +511,11 @@ impl GenericCoeDevice {
             Some(m) => Ok(m.clone()),
             None => self.od.mapping().map_err(|_| ()),
         }
+        .or_else(|()| {
+            // A file whose PDOs sit outside CiA 301's index ranges (TxPDOs at 0x1700): the
+            // objects cannot be read as a mapping, the firmware still has its PDOs.
+            self.file_default.clone().ok_or(())
+        })
     }
 
     /// What the device has, for [`Quirks::check_for`]: a CoE mailbox and CiA 402 device

@@ -346,6 +346,8 @@ fn request<L: FrameLink>(
                     )
                     .map_err(|e| exec_error(None, e))?
                     .map_err(|e| bus_error(None, "building the process image (PRE-OP)", e))?;
+                // As the run's start-up does: process-data SMs the SII leaves off, enabled.
+                startup::enable_process_data_sms(bus, &found.devices, &mut Vec::new())?;
                 let cycle = opts.cycle;
                 let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
                     bus.block_on(&|| "exchanging process data".into(), T_STEP, |md| {
