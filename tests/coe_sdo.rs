@@ -516,18 +516,18 @@ fn complete_access_is_refused_when_the_device_has_none() {
     let mut rig = Rig::with(config, 128, 128);
     assert_eq!(
         rig.send(&hex("0A 00 00 00 00 13  00 20  50 12 1C 00  00 00 00 00")),
-        Some(abort_reply(1, 0x1C12, 0, 0x0601_0004))
+        Some(abort_reply(1, 0x1C12, 0, 0x0601_0000))
     );
     assert_eq!(
         rig.send(&hex(
             "10 00 00 00 00 23  00 20  31 12 1C 00  06 00 00 00  02 00 00 16 01 16"
         )),
-        Some(abort_reply(2, 0x1C12, 0, 0x0601_0004))
+        Some(abort_reply(2, 0x1C12, 0, 0x0601_0000))
     );
     // Expedited CA download too.
     assert_eq!(
         rig.send(&hex("0A 00 00 00 00 33  00 20  33 12 1C 00  00 00 00 00")),
-        Some(abort_reply(3, 0x1C12, 0, 0x0601_0004))
+        Some(abort_reply(3, 0x1C12, 0, 0x0601_0000))
     );
     // Single-entry access still works.
     assert_eq!(

@@ -187,3 +187,32 @@ fn a_cycle_time_the_drive_does_not_accept_is_refused() {
         "drive 0 (generic test device): checking the cycle time: 300 µs is not a cycle time the generic test device accepts (250–10000 µs in 250 µs steps)"
     );
 }
+
+/// Outputs count from SAFE-OP on (ETG.1020: the master checks that the slave updates inputs
+/// and outputs before switching it to OP): a device whose stack takes its outputs only in OP
+/// (`outputs-only-in-op`) is named before OP is requested, with the working counter expected
+/// and seen; the same segment without it runs.
+#[test]
+fn a_device_that_takes_no_outputs_in_safe_op_is_named_before_op() {
+    use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    let config = |second: &str| {
+        format!(
+            "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\", \"{second}\"]\n\
+             [[drive]]\nposition = 0\nmode = \"csp\"\nprogram = [{{ step = \"move\", by = 0.05, \
+             velocity = 1, acceleration = 10 }}]\n[[drive]]\nposition = 1\nmode = \"csp\"\n\
+             program = [{{ step = \"move\", by = 0.5, velocity = 10, acceleration = 100 }}]\n"
+        )
+    };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let cfg = ecdrive::app::config::parse(&config("bdhde+outputs-only-in-op"), "q.toml").unwrap();
+    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap();
+    assert_eq!(r.outcome, Outcome::Refused, "{}", r.reason);
+    assert!(
+        r.reason.starts_with("drive 1 (BDHDE): in SAFE-OP its process data is not taken: working counter 4, expected 6"),
+        "{}",
+        r.reason
+    );
+    let cfg = ecdrive::app::config::parse(&config("bdhde"), "q.toml").unwrap();
+    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap();
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+}

@@ -646,10 +646,15 @@ fn lrw_working_counter_by_state() {
     // PREOP: SMs deactivated by the PDI, nothing counts.
     p.bwr(0x0120, &[2, 0]).unwrap();
     assert_eq!(lrw(&mut p, [1, 2, 3, 4]).wkc, 0);
-    // SAFE-OP: inputs only.
+    // SAFE-OP: inputs and outputs count, as slave stacks enable the output SM with SAFE-OP
+    // ("the master can check if the slave could update inputs and outputs before switching
+    // the slave to OP", ETG.1020); the application does not act on the outputs yet.
     p.bwr(0x0120, &[4, 0]).unwrap();
     assert_eq!(p.brd(0x0130, 2).unwrap().data, vec![4, 0]);
-    assert_eq!(lrw(&mut p, [1, 2, 3, 4]).wkc, 2);
+    assert_eq!(lrw(&mut p, [9, 9, 9, 9]).wkc, 6);
+    assert_eq!(p.segment.slave(1).unwrap().esc.outputs(), &[9, 9]);
+    let r = lrw(&mut p, [1, 2, 3, 4]);
+    assert_eq!(&r.data[0x12..0x14], &[0, 0], "no echo before OP");
     // OP: inputs and outputs.
     p.bwr(0x0120, &[8, 0]).unwrap();
     let r = lrw(&mut p, [1, 2, 3, 4]);

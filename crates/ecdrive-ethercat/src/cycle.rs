@@ -2051,6 +2051,13 @@ struct Counts {
     late_total: u64,
     /// Replies with a wrong working counter.
     wkc_wrong_total: u64,
+    /// In SAFE-OP, before OP is requested: consecutive replies with the right working counter
+    /// (OP is requested after enough of them) and with a wrong one (start-up fails after
+    /// [`CycleSettings::wkc_errors_before_stop`]).
+    safeop_wkc_good: u32,
+    safeop_wkc_bad: u32,
+    /// The last wrong SAFE-OP reply: (got, expected, its first wrong datagram).
+    safeop_wkc_last: Option<(u16, u16, Option<DatagramWkc>)>,
     /// The pump's counters when the run began.
     pump_at_start: crate::io::PumpStats,
 }
@@ -2463,6 +2470,22 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
         let (expected, datagram) = self.expected_wkc();
         self.counts.last_wkc_expected = expected;
+        if self.op == OpState::SafeOp && !self.ending() {
+            // SAFE-OP before OP: slave stacks take outputs from SAFE-OP on (ETG.1020), so the
+            // working counter must be whole here too: a device whose outputs (or inputs) are
+            // not taken is named before OP is requested.
+            let c = &mut self.counts;
+            if wkc == expected && datagram.is_none() {
+                c.safeop_wkc_good = c.safeop_wkc_good.saturating_add(1);
+                c.safeop_wkc_bad = 0;
+            } else {
+                c.safeop_wkc_good = 0;
+                c.safeop_wkc_bad = c.safeop_wkc_bad.saturating_add(1);
+                c.safeop_wkc_last = Some((wkc, expected, datagram));
+                c.wkc_wrong_total += 1;
+            }
+            return;
+        }
         if !self.all_op() || self.ending() {
             return;
         }
@@ -2553,13 +2576,43 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 
     /// OP: request it once the drives have had [`CycleSettings::safeop_cycles`] cycles of
     /// valid outputs with SYNC0 running (by the reference clock's time; or, should it never
-    /// answer, after the OP timeout, and the drives decide), then wait for it.
+    /// answer, after the OP timeout, and the drives decide), each of the last of them with the
+    /// whole working counter, then wait for it. A working counter wrong in SAFE-OP for
+    /// [`CycleSettings::wkc_errors_before_stop`] cycles in a row ends the start-up, naming the
+    /// device whose outputs are not taken.
     fn request_op(&mut self) -> Option<CycleEnd> {
         let cycle = self.clock.cycle;
         let synchronised = self.clock.dc_time >= self.k.op_not_before_dc
             || cycle * self.k.cycle_ns > self.settings.op_timeout.as_nanos() as u64;
+        if self.op == OpState::SafeOp
+            && self.counts.safeop_wkc_bad >= self.settings.wkc_errors_before_stop.max(1)
+            && let Some((got, expected, datagram)) = self.counts.safeop_wkc_last
+        {
+            let (lo, hi) = datagram
+                .and_then(|d| d.devices)
+                .unwrap_or((0, self.addresses.len().saturating_sub(1) as u16));
+            let device = (lo..=hi)
+                .find(|&p| self.outputs_deactivated(p))
+                .unwrap_or(lo);
+            let al_state = self
+                .al_states
+                .get(usize::from(device))
+                .copied()
+                .unwrap_or(4);
+            self.ev.emit(EventKind::OutputsNotTaken {
+                device,
+                got,
+                expected,
+                datagram,
+            });
+            return Some(CycleEnd::OpFailed { device, al_state });
+        }
         match self.op {
-            OpState::SafeOp if cycle >= u64::from(self.settings.safeop_cycles) && synchronised => {
+            OpState::SafeOp
+                if cycle >= u64::from(self.settings.safeop_cycles)
+                    && self.counts.safeop_wkc_good >= self.settings.safeop_cycles
+                    && synchronised =>
+            {
                 self.request_al_state(0x0008);
                 self.op = OpState::Requested { at: cycle };
             }
@@ -2579,6 +2632,27 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             _ => {}
         }
         None
+    }
+
+    /// Whether the device at `position` has an output SyncManager its PDI keeps deactivated
+    /// (0x0807 bit 0 of a buffered SM the master writes, with a length): the device that does
+    /// not take its outputs. Read once, when start-up fails on it (not in the steady cycle).
+    fn outputs_deactivated(&mut self, position: u16) -> bool {
+        let Some(&addr) = self.addresses.get(usize::from(position)) else {
+            return false;
+        };
+        let fut = pin!(EcCommand::fprd(addr, 0x0800).receive::<[u8; 64]>(self.md));
+        let Ok(Ok(regs)) = exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns) else {
+            return false;
+        };
+        regs.chunks_exact(8).any(|sm| {
+            let (len, ctl, pdi) = (u16::from_le_bytes([sm[0x2], sm[0x3]]), sm[4], sm[7]);
+            len > 0
+                && ctl & 0x03 == 0
+                && (ctl >> 2) & 0x03 == 0x01
+                && sm[6] & 1 != 0
+                && pdi & 1 != 0
+        })
     }
 
     /// Write `state` to every device's AL control register, each within half a cycle.

@@ -367,6 +367,21 @@ impl Decoder {
                     }
                 ),
             ),
+            EventKind::OutputsNotTaken {
+                device,
+                got,
+                expected,
+                datagram,
+            } => (
+                self.device(device),
+                true,
+                format!(
+                    "in SAFE-OP its process data is not taken: working counter {got}, expected \
+                     {expected}{}; OP was not requested (slave stacks take outputs from SAFE-OP \
+                     on, ETG.1020)",
+                    datagram.map(describe_datagram).unwrap_or_default()
+                ),
+            ),
             EventKind::AlState { device, state } => (
                 self.device(device),
                 state != 8 && state & 0x10 != 0,
@@ -542,7 +557,9 @@ fn history_kind(kind: &EventKind) -> HistoryKind {
             cia402::Event::WarningChanged(_) => HistoryKind::Warning,
             _ => HistoryKind::Info,
         },
-        EventKind::WorkingCounter { .. } => HistoryKind::WorkingCounter,
+        EventKind::WorkingCounter { .. } | EventKind::OutputsNotTaken { .. } => {
+            HistoryKind::WorkingCounter
+        }
         EventKind::FrameLost { .. } | EventKind::FramesResumed { .. } => HistoryKind::FrameLost,
         EventKind::SegmentLost { .. } | EventKind::SegmentGone { .. } => HistoryKind::SegmentLost,
         EventKind::FollowingError { .. } => HistoryKind::FollowingError,

@@ -2244,7 +2244,7 @@ pub fn enable_process_data_sms<L: FrameLink>(
                 Command::fpwr(d.address, reg).send(md, act | 0x01)
             })
             .map_err(|e| exec_error(Some(&drive), e))?
-            .map_err(|e| bus_error(Some(&drive), &format!("enabling SM{n} (0x{reg:04X})"), e))?;
+            .map_err(|e| bus_error(Some(&drive), format!("enabling SM{n} (0x{reg:04X})"), e))?;
             warnings.push((
                 drive.clone(),
                 format!(

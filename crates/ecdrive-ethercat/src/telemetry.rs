@@ -213,6 +213,18 @@ pub enum EventKind {
         /// devices it covers (`None` when the reply's datagrams were not recorded).
         datagram: Option<crate::wkc::DatagramWkc>,
     },
+    /// In SAFE-OP, before OP was requested, the working counter stayed wrong: a device does
+    /// not take its outputs (or give its inputs); OP is not requested.
+    OutputsNotTaken {
+        /// Position of the first device of the first wrong datagram.
+        device: u16,
+        /// Received.
+        got: u16,
+        /// Expected.
+        expected: u16,
+        /// The first logical datagram that came back wrong, with the devices it covers.
+        datagram: Option<crate::wkc::DatagramWkc>,
+    },
     /// A device's AL state changed.
     AlState {
         /// Its position on the segment.

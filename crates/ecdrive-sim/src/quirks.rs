@@ -21,12 +21,13 @@
 //! | `no-sdo-info` | SDO information requests get the mailbox error "service not supported"; the SII no longer advertises it | small slave stacks |
 //! | `sdo-info-bad-entry` | the entry description of 0x1018:02 is answered by an SDO information error with code 0x00000000 | a foreign slave seen in the field |
 //! | `sdo-info-short-entry` | the entry description of 0x1018:03 is cut after its value-info byte (no data type, bit length, access) | the same |
-//! | `no-complete-access` | complete access is refused (abort 0x06010004) although the SII advertises it | devices with an optimistic EEPROM |
+//! | `no-complete-access` | complete access is refused (abort 0x06010000, as a stack without it answers) although the SII advertises it | devices with an optimistic EEPROM |
 //! | `odd-abort` | SDO aborts come as CoE service 2 (SDO request) with reserved bits set in the command byte (0x9F) | stacks that reuse the request path for aborts |
 //! | `stale-inputs-until-op` | below OP the input image is not updated: it keeps what it held (zeros after power-on) | slaves that serve inputs only in OP |
 //! | `outputs-in-safeop` | the outputs are applied already in SAFE-OP (the CiA 402 state machine follows the controlword there) | slaves that do not treat SAFE-OP outputs as safe state |
 //! | `following-error-zero` | 0x60F4 can be mapped but always reads 0 | drives that do not compute it in every mode |
 //! | `interpolation-index-read-only` | 0x60C2:02 (interpolation time index) is read-only at its power-on value | the BDHDE as its object table prints it |
+//! | `outputs-only-in-op` | the output SyncManager is enabled with OP only: in SAFE-OP the outputs are not taken and do not count in the working counter | a stack that starts its output handler with OP (what this emulator did until KickCAT showed it) |
 //! | `op-needs-sync0` | SAFE-OP → OP is refused with AL status code 0x002D (no sync) while SYNC0 is activated but has not yet fired | slave stacks that check for SYNC0 events before OP; the MR-J4-TM manual §1.4.2 (7) has DC synchronisation established in SAFE-OP before OP |
 
 use core::fmt;
@@ -62,6 +63,8 @@ pub enum Quirk {
     OpNeedsSync0,
     /// The machine around the motor has no home switch.
     NoHomeSwitch,
+    /// The output SM is enabled with OP only.
+    OutputsOnlyInOp,
 }
 
 /// The entry whose description [`Quirk::SdoInfoBadEntry`] breaks: every CoE device has it.
@@ -98,7 +101,7 @@ pub struct Capabilities {
 
 impl Quirk {
     /// Every quirk, in the order of the table above.
-    pub const ALL: [Quirk; 14] = [
+    pub const ALL: [Quirk; 15] = [
         Quirk::NoStateSkipping,
         Quirk::CycleTimeReadOnly,
         Quirk::SyncObjectsAbsent,
@@ -113,6 +116,7 @@ impl Quirk {
         Quirk::InterpolationIndexReadOnly,
         Quirk::OpNeedsSync0,
         Quirk::NoHomeSwitch,
+        Quirk::OutputsOnlyInOp,
     ];
 
     /// The name after `+` in a device name.
@@ -132,6 +136,7 @@ impl Quirk {
             Quirk::InterpolationIndexReadOnly => "interpolation-index-read-only",
             Quirk::OpNeedsSync0 => "op-needs-sync0",
             Quirk::NoHomeSwitch => "no-home-switch",
+            Quirk::OutputsOnlyInOp => "outputs-only-in-op",
         }
     }
 
@@ -159,6 +164,9 @@ impl Quirk {
                 "0x60C2:02 (interpolation time index) read-only at its power-on value"
             }
             Quirk::OpNeedsSync0 => "SAFE-OP → OP refused (0x002D, no sync) until SYNC0 has fired",
+            Quirk::OutputsOnlyInOp => {
+                "the output SyncManager enabled with OP only: outputs not taken in SAFE-OP"
+            }
             Quirk::NoHomeSwitch => {
                 "no home switch on the emulated machine: homing on it runs into a limit switch \
                  and fails as the drive reports it"
@@ -169,9 +177,10 @@ impl Quirk {
     /// What the device needs for the quirk to mean something.
     pub const fn needs(self) -> Needs {
         match self {
-            Quirk::StaleInputsUntilOp | Quirk::OutputsInSafeOp | Quirk::OpNeedsSync0 => {
-                Needs::ProcessData
-            }
+            Quirk::StaleInputsUntilOp
+            | Quirk::OutputsInSafeOp
+            | Quirk::OpNeedsSync0
+            | Quirk::OutputsOnlyInOp => Needs::ProcessData,
             Quirk::NoStateSkipping | Quirk::NoHomeSwitch => Needs::Cia402,
             Quirk::FollowingErrorZero => Needs::FollowingError,
             _ => Needs::Coe,

@@ -65,8 +65,13 @@ pub const DEFAULT_EMERGENCY_QUEUE_LEN: usize = 16;
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CoeConfig {
     /// SDO complete access (SII General "CoE details" bit 5). Without it a complete-access
-    /// request is aborted with 0x06010004.
+    /// request is aborted with 0x06010000 ("unsupported access to an object"), as slave stacks
+    /// without complete access answer; 0x06010004 is for a device that has complete access,
+    /// asked for an object of variable length.
     pub complete_access: bool,
+    /// The abort code of a complete-access request to a device without complete access
+    /// (0x06010000 by default; a device's manual may name another).
+    pub complete_access_refusal: SdoAbortCode,
     /// SDO information service. Without it SDO information requests get the mailbox error
     /// "service not supported".
     pub sdo_info: bool,
@@ -87,6 +92,7 @@ impl Default for CoeConfig {
     fn default() -> Self {
         Self {
             complete_access: true,
+            complete_access_refusal: SdoAbortCode::UNSUPPORTED_ACCESS,
             sdo_info: true,
             emergency_queue_len: DEFAULT_EMERGENCY_QUEUE_LEN,
             max_object_size: DEFAULT_MAX_OBJECT_SIZE,
@@ -557,7 +563,7 @@ impl CoeServer {
         // A new initiate ends any transfer in progress, as on a device with one SDO channel.
         self.transfer = Transfer::Idle;
         if complete_access && !self.complete_access() {
-            return self.abort(index, sub, SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED, reply);
+            return self.abort(index, sub, self.config.complete_access_refusal, reply);
         }
         self.data.clear();
         self.data.resize(self.config.max_object_size, 0);
@@ -674,7 +680,7 @@ impl CoeServer {
         reply: &mut [u8],
     ) -> Option<usize> {
         if complete_access && !self.complete_access() {
-            return self.abort(index, sub, SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED, reply);
+            return self.abort(index, sub, self.config.complete_access_refusal, reply);
         }
         let written = if complete_access {
             od.write_complete(index, sub, state, data)
@@ -717,7 +723,7 @@ impl CoeServer {
         }
         // Segmented: refuse early what cannot succeed.
         if complete_access && !self.complete_access() {
-            return self.abort(index, sub, SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED, reply);
+            return self.abort(index, sub, self.config.complete_access_refusal, reply);
         }
         let exists = if complete_access {
             od.object(index).map(|_| ()).ok_or(SdoAbortCode::NO_OBJECT)

@@ -296,6 +296,10 @@ pub static SPEC: DriveSpec = DriveSpec {
     abort_codes: REC_ABORT_CODES,
     // The manual names a BOOT state (LED "very fast flashing") but no file access.
     foe: None,
+    // Table 10-2 lists "0601 0004h The object cannot be accessed via complete access" (and
+    // 0601 0000h "Unsupported access to an object"): the first is the one that names complete
+    // access.
+    complete_access_refusal: SdoAbortCode::COMPLETE_ACCESS_UNSUPPORTED,
 };
 
 // ============================================================================================

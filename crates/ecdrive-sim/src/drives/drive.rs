@@ -331,6 +331,7 @@ impl EmulatedDrive {
         let od = build_store(spec)?;
         let coe = CoeServer::new(CoeConfig {
             complete_access: spec.model().is_ok_and(|m| m.complete_access),
+            complete_access_refusal: spec.complete_access_refusal,
             sdo_info: esi_sdo_info(spec),
             ..CoeConfig::default()
         });
@@ -759,6 +760,7 @@ impl EmulatedDrive {
         self.quirks = quirks;
         self.coe = CoeServer::new(CoeConfig {
             complete_access: self.spec.model().is_ok_and(|m| m.complete_access),
+            complete_access_refusal: self.spec.complete_access_refusal,
             sdo_info: esi_sdo_info(self.spec),
             quirks,
             ..CoeConfig::default()

@@ -340,6 +340,9 @@ pub static SPEC: DriveSpec = DriveSpec {
     sync_cycle_mismatch: REC_SYNC_CYCLE_MISMATCH,
     abort_codes: REC_ABORT_CODES,
     foe: Some(REC_FOE),
+    // §4.1: no complete access; the manual lists no abort codes: what a slave stack without
+    // complete access answers, "unsupported access to an object".
+    complete_access_refusal: SdoAbortCode::UNSUPPORTED_ACCESS,
 };
 
 // ============================================================================================

@@ -504,6 +504,8 @@ pub struct DriveSpec {
     /// image written completely takes effect at the next BOOT → INIT (revision 0x1018:03 and
     /// software version 0x100A).
     pub foe: Option<crate::foe::FoeSpec>,
+    /// The abort code of a complete-access request (the drive has none).
+    pub complete_access_refusal: SdoAbortCode,
 }
 
 /// How a drive reports a homing that fails: a search that runs into a limit switch without

@@ -180,6 +180,7 @@ impl Esc {
         dev: &mut dyn Device,
     ) {
         self.set_al_status(to, error);
+        self.outputs_only_in_op = dev.quirks().has(Quirk::OutputsOnlyInOp);
         self.update_pdi_deactivation();
         if from != to || error.is_some() {
             dev.state_changed(from, to, error);

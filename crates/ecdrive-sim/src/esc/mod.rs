@@ -214,6 +214,9 @@ pub struct Esc {
     boot_mbx: Option<MbxLayout>,
     sm_out_pd: Option<u8>,
     sm_in_pd: Option<u8>,
+    /// The device's stack enables its output SM with OP only
+    /// ([`crate::quirks::Quirk::OutputsOnlyInOp`]).
+    outputs_only_in_op: bool,
     sms: Vec<SmView>,
     fmmus: Vec<crate::ec::register::FmmuConfig>,
     mailbox: MailboxRt,
@@ -275,6 +278,7 @@ impl Esc {
             boot_mbx,
             sm_out_pd: desc.sm_index(SmType::Outputs),
             sm_in_pd: desc.sm_index(SmType::Inputs),
+            outputs_only_in_op: false,
             sms: Vec::with_capacity(MAX_SM),
             fmmus: Vec::with_capacity(MAX_FMMU),
             mailbox: MailboxRt::default(),

@@ -61,7 +61,13 @@ impl Esc {
     }
 
     /// Set PDI-deactivate bits of the device's SMs according to the AL state: mailbox SMs are
-    /// usable from PRE-OP (or BOOT), the input SM from SAFE-OP and the output SM in OP only.
+    /// usable from PRE-OP (or BOOT), the process-data SMs from SAFE-OP on. Slave stacks start
+    /// the output channel with the input handler at PRE-OP → SAFE-OP, so that "the master can
+    /// check if the slave could update inputs and outputs before switching the slave to OP"
+    /// (ETG.1020; SOES enables SM2 in that step too): in SAFE-OP the outputs are taken (and
+    /// counted in the working counter) but not acted on (the MR-J4-TM manual §1.4.1: "Though
+    /// the PDO communication also can be performed, all operations (commands) such as servo
+    /// motor drive are invalid").
     pub(super) fn update_pdi_deactivation(&mut self) {
         let st = self.state;
         let mbx_on = self.mailbox.running;
@@ -83,7 +89,12 @@ impl Esc {
             set(self, n, matches!(st, AlState::SafeOp | AlState::Op));
         }
         if let Some(n) = self.sm_out_pd {
-            set(self, n, st == AlState::Op);
+            let on = if self.outputs_only_in_op {
+                st == AlState::Op
+            } else {
+                matches!(st, AlState::SafeOp | AlState::Op)
+            };
+            set(self, n, on);
         }
         self.rebuild_sms();
     }

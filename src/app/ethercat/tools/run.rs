@@ -639,7 +639,10 @@ pub fn run(
             }
             (CycleEnd::OpFailed { device, .. }, _) => {
                 outcome = Outcome::Refused;
-                ended_by = entry(HistoryKind::AlState, Some(device));
+                // A working counter that stayed wrong in SAFE-OP says which device does not
+                // take its process data; else the AL state that was not OP.
+                ended_by = entry(HistoryKind::WorkingCounter, Some(device))
+                    .or_else(|| entry(HistoryKind::AlState, Some(device)));
             }
             _ => {}
         }
