@@ -292,3 +292,29 @@ fn version_names_ecdrive_ethercrab_and_the_profiles() {
     assert!(v["commit"].as_str().is_some_and(|c| !c.is_empty()));
     assert!(v["features"].is_array());
 }
+
+/// An SDO download the drive refuses for a reason its manual gives says the manual's reason:
+/// the MR-J4-TM refuses one to an object mapped in its RxPDO (§4.2, abort 0x06010006), as
+/// KickCAT's DS402 sequence (0x6060 by SDO in PRE-OP) meets it.
+#[test]
+fn a_refusal_the_manual_explains_says_so() {
+    // Exit 4: a drive refused.
+    let e = ecdrive(&[
+        "download",
+        "-i",
+        "sim:mr-j4-tm",
+        "-p",
+        "0",
+        "0x6060:00",
+        "8",
+    ])
+    .fails(
+        4,
+        &[
+            "SDO abort 0x06010006",
+            "manual §4.2",
+            "write it through the PDO, or remap in PRE-OP without it first",
+        ],
+    );
+    assert_eq!(e.lines().count(), 1, "{e}");
+}

@@ -170,6 +170,9 @@ pub struct DriveCaps {
     /// The drive sets the home offset 0x607C itself and refuses a value written to it: why,
     /// in the manual's words (`None`: 0x607C is the CiA 402 home offset the master writes).
     pub home_offset_set_by_drive: Option<&'static str>,
+    /// The drive refuses an SDO download to an object mapped in its RxPDO (abort 0x06010006):
+    /// the manual's words, for the message (`None`: the manual does not say so).
+    pub sdo_refused_while_rx_mapped: Option<&'static str>,
     /// The range of the target position 0x607A in pp where it is narrower than the object's
     /// type (MR-J4-TM: ±999 999 pos units, §7.3.12 (1)); `None`: the type's range. A pp target
     /// beyond it is refused before it reaches the drive.
@@ -211,6 +214,7 @@ impl DriveCaps {
         csp_start_edge: false,
         homing_failure: "",
         home_offset_set_by_drive: None,
+        sdo_refused_while_rx_mapped: None,
         pp_target_range: None,
     };
 

@@ -394,6 +394,7 @@ pub const CAPS: DriveCaps = DriveCaps {
     // Fault.
     homing_failure: "fault 0x6100 Homing Error (HE, FLT 174)",
     home_offset_set_by_drive: None,
+    sdo_refused_while_rx_mapped: None,
     pp_target_range: None,
 };
 

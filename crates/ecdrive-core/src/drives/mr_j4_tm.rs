@@ -445,6 +445,13 @@ pub const CAPS: DriveCaps = DriveCaps {
         "the MR-J4-TM sets its home offset 0x607C itself and refuses a written value (SDO abort \
          0x06090030, manual §7.3.13 (1)); its home position shift comes from its own parameters",
     ),
+    // §4.2 SDO Abort Code: "0601 0006h Object mapped to RxPDO, SDO download blocked. SDO
+    // Download is executed to an object mapped to RxPDO."
+    sdo_refused_while_rx_mapped: Some(
+        "the MR-J4-TM refuses an SDO download to an object mapped in its RxPDO (manual §4.2: \
+         \"SDO Download is executed to an object mapped to RxPDO\"): write it through the PDO, \
+         or remap in PRE-OP without it first",
+    ),
     // §7.3.12 (1), Target position (607Ah): "Profile position mode (pp) … _ 0 _ _ (mm), _ 1 _ _
     // (inch), _ 3 _ _ (pulse): FFF0BDC1h to 000F423Fh (-999999 to 999999)" (degree: −360000 to
     // 360000, narrower still; the check takes the wider).

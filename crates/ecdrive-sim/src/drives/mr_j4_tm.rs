@@ -121,6 +121,9 @@ static MODE_VALUES: &[u64] = &[0, 1, 3, 4, 6, 8, 9, 10, 0x9C, 0x9B, 0x99];
 
 /// The drive's write rules (see the module documentation).
 pub const WRITE_RULES: &[WriteRule] = &[
+    // §4.2 SDO Abort Code: "0601 0006h Object mapped to RxPDO, SDO download blocked. SDO
+    // Download is executed to an object mapped to RxPDO." (KickCAT's DS402 sequence writes
+    // 0x6060 by SDO in PRE-OP: refused while 0x6060 is mapped, as the manual says.)
     WriteRule::RefuseMappedRx(SdoAbortCode::MAPPED_TO_RXPDO),
     WriteRule::Allowed {
         address: a(0x1C32, 1),

@@ -312,7 +312,18 @@ pub fn download<L: FrameLink>(
     bus.with_coe(d.address, drive.clone(), false, T_SDO, async move |c| {
         c.download(addr, &sent, false).await
     })
-    .map_err(coe_error)?;
+    .map_err(|e| {
+        // A refusal the drive's manual explains: say so, with its words.
+        let why = crate::drives::by_identity(d.vendor_id, d.product_code)
+            .and_then(|p| p.caps.sdo_refused_while_rx_mapped);
+        let mut err = coe_error(e);
+        if let (ErrorKind::Sdo(code), Some(why)) = (&err.kind, why)
+            && *code == crate::od::SdoAbortCode::MAPPED_TO_RXPDO
+        {
+            err.reason = format!("{}: {why}", err.reason);
+        }
+        err
+    })?;
     Ok(sdo_value(&d, &drive, addr, dt, source, name, &v, &bytes))
 }
 
