@@ -2058,6 +2058,9 @@ struct Counts {
     safeop_wkc_bad: u32,
     /// The last wrong SAFE-OP reply: (got, expected, its first wrong datagram).
     safeop_wkc_last: Option<(u16, u16, Option<DatagramWkc>)>,
+    /// An I/O device takes its outputs in OP only: SAFE-OP's working counter is not judged
+    /// further.
+    safeop_wkc_tolerated: bool,
     /// The pump's counters when the run began.
     pump_at_start: crate::io::PumpStats,
 }
@@ -2475,7 +2478,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             // working counter must be whole here too: a device whose outputs (or inputs) are
             // not taken is named before OP is requested.
             let c = &mut self.counts;
-            if wkc == expected && datagram.is_none() {
+            if (wkc == expected && datagram.is_none()) || c.safeop_wkc_tolerated {
                 c.safeop_wkc_good = c.safeop_wkc_good.saturating_add(1);
                 c.safeop_wkc_bad = 0;
             } else {
@@ -2599,13 +2602,21 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 .get(usize::from(device))
                 .copied()
                 .unwrap_or(4);
+            // An I/O device may enable its outputs in OP only by design (an ESI's OpOnly
+            // SyncManager or FMMU): said, and OP requested; a drive must take them.
+            let io = self.others.iter().any(|o| o.info.position == device);
             self.ev.emit(EventKind::OutputsNotTaken {
                 device,
                 got,
                 expected,
                 datagram,
+                io,
             });
-            return Some(CycleEnd::OpFailed { device, al_state });
+            if !io {
+                return Some(CycleEnd::OpFailed { device, al_state });
+            }
+            self.counts.safeop_wkc_tolerated = true;
+            self.counts.safeop_wkc_bad = 0;
         }
         match self.op {
             OpState::SafeOp

@@ -349,39 +349,14 @@ impl Decoder {
                 let (error, text) = self.axis_event(axis, event);
                 (self.drive(axis), error, text)
             }
-            EventKind::WorkingCounter {
-                got,
-                expected,
-                missing,
-                datagram,
-            } => (
+            EventKind::WorkingCounter { missing, .. } => (
                 missing.and_then(|m| self.device(m)),
                 true,
-                format!(
-                    "working counter {got}, expected {expected}{}{}",
-                    datagram.map(describe_datagram).unwrap_or_default(),
-                    if missing.is_some() {
-                        " (this device did not answer)"
-                    } else {
-                        ""
-                    }
-                ),
+                wkc_text(&e.kind),
             ),
-            EventKind::OutputsNotTaken {
-                device,
-                got,
-                expected,
-                datagram,
-            } => (
-                self.device(device),
-                true,
-                format!(
-                    "in SAFE-OP its process data is not taken: working counter {got}, expected \
-                     {expected}{}; OP was not requested (slave stacks take outputs from SAFE-OP \
-                     on, ETG.1020)",
-                    datagram.map(describe_datagram).unwrap_or_default()
-                ),
-            ),
+            EventKind::OutputsNotTaken { device, io, .. } => {
+                (self.device(device), !io, wkc_text(&e.kind))
+            }
             EventKind::AlState { device, state } => (
                 self.device(device),
                 state != 8 && state & 0x10 != 0,
@@ -1539,6 +1514,44 @@ fn session_pause(idle: Duration, poll: Option<Duration>, next_poll_ns: u64) -> D
 
 /// ": LRW 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) 18, expected 20" for a
 /// working-counter event: which datagram of the reply was wrong and whom it covers.
+/// What a working-counter event says: the count, the datagram, and what follows.
+fn wkc_text(kind: &EventKind) -> String {
+    match *kind {
+        EventKind::WorkingCounter {
+            got,
+            expected,
+            missing,
+            datagram,
+        } => format!(
+            "working counter {got}, expected {expected}{}{}",
+            datagram.map(describe_datagram).unwrap_or_default(),
+            if missing.is_some() {
+                " (this device did not answer)"
+            } else {
+                ""
+            }
+        ),
+        EventKind::OutputsNotTaken {
+            got,
+            expected,
+            datagram,
+            io,
+            ..
+        } => format!(
+            "in SAFE-OP its process data is not taken: working counter {got}, expected \
+             {expected}{}; {}",
+            datagram.map(describe_datagram).unwrap_or_default(),
+            if io {
+                "an I/O device may take its outputs in OP only (an OpOnly SyncManager or FMMU in \
+                 its ESI): OP requested"
+            } else {
+                "OP was not requested (slave stacks take outputs from SAFE-OP on, ETG.1020)"
+            }
+        ),
+        _ => String::new(),
+    }
+}
+
 fn describe_datagram(d: crate::wkc::DatagramWkc) -> String {
     let devices = match d.devices {
         Some((lo, hi)) if lo == hi => format!(", device {lo}"),

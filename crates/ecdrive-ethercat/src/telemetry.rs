@@ -224,6 +224,9 @@ pub enum EventKind {
         expected: u16,
         /// The first logical datagram that came back wrong, with the devices it covers.
         datagram: Option<crate::wkc::DatagramWkc>,
+        /// The device is an I/O device (its outputs may be OP-only by design: a warning, OP
+        /// is requested); else a drive, and start-up fails.
+        io: bool,
     },
     /// A device's AL state changed.
     AlState {
