@@ -18,14 +18,14 @@
 
 mod support {
     pub mod oracle;
+    pub mod python_master;
 }
 
-use ecdrive::link::netns::{VethPair, require_root};
-use ecdrive::sim::transport::RawServer;
+use ecdrive::link::netns::require_root;
 use ecdrive::sim::{EscConfig, HostClock, Segment};
-use std::process::Command;
 use std::sync::Arc;
 use support::oracle::oracle as identity;
+use support::python_master;
 
 const SCRIPT: &str = r#"
 import json, struct, sys, time
@@ -155,20 +155,13 @@ else:
 print(json.dumps(out))
 "#;
 
-fn kickcat_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import kickcat"])
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 /// Run the script against `drive` emulated over a veth pair; the script's JSON and the AL
 /// status code the emulated device holds at the end.
 fn run(drive: &str, mode: &str) -> Option<(serde_json::Value, u16)> {
     if !require_root("sim_kickcat") {
         return None;
     }
-    if !kickcat_available() {
+    if !python_master::importable("kickcat") {
         if std::env::var_os("ECDRIVE_REQUIRE_KICKCAT").is_some() {
             panic!("kickcat is not importable and ECDRIVE_REQUIRE_KICKCAT is set");
         }
@@ -177,7 +170,6 @@ fn run(drive: &str, mode: &str) -> Option<(serde_json::Value, u16)> {
         );
         return None;
     }
-    let veth = VethPair::create().expect("veth pair");
     let mut seg = Segment::new(Arc::new(HostClock));
     let dev = ecdrive::sim::devices::by_name(drive, 0).expect("emulated drive");
     seg.push(
@@ -193,32 +185,8 @@ fn run(drive: &str, mode: &str) -> Option<(serde_json::Value, u16)> {
         .iter()
         .map(|((i, s), _)| serde_json::json!([i, s]))
         .collect();
-    let server =
-        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), seg).expect("server");
-    let output = Command::new("python3")
-        .args([
-            "-c",
-            SCRIPT,
-            veth.host(),
-            mode,
-            &serde_json::Value::Array(reads).to_string(),
-        ])
-        .output()
-        .expect("run python3");
-    let (seg, result) = server.stop();
-    result.expect("server ran without I/O errors");
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        output.status.success(),
-        "kickcat failed:\n{stderr}\n{stdout}"
-    );
-    let json = stdout
-        .lines()
-        .rev()
-        .find(|l| l.starts_with('{'))
-        .unwrap_or_default();
-    let v: serde_json::Value = serde_json::from_str(json).expect("JSON from kickcat");
+    let reads = serde_json::Value::Array(reads).to_string();
+    let (seg, v) = python_master::run("kickcat", seg, SCRIPT, &[mode, &reads]);
     eprintln!("{drive}: {v}");
     for (k, (_, value)) in identity(base).iter().enumerate() {
         let hex = v["reads"][k].as_str().unwrap();

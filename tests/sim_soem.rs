@@ -9,15 +9,15 @@
 
 mod support {
     pub mod oracle;
+    pub mod python_master;
 }
 
-use ecdrive::link::netns::{VethPair, require_root};
+use ecdrive::link::netns::require_root;
 use ecdrive::sim::devices::{GenericCoeDevice, IoDevice};
-use ecdrive::sim::transport::RawServer;
 use ecdrive::sim::{EscConfig, HostClock, Segment};
-use std::process::Command;
 use std::sync::Arc;
 use support::oracle::oracle;
+use support::python_master;
 
 /// What both scripts start with: the interface from argv[1], generous SOEM timeouts (µs: a
 /// loaded CI machine stalls for milliseconds), an opened master `m` and the output `out`.
@@ -172,26 +172,18 @@ fn assert_safeop_wkc(v: &serde_json::Value, expected: i64) {
     );
 }
 
-fn pysoem_available() -> bool {
-    Command::new("python3")
-        .args(["-c", "import pysoem"])
-        .status()
-        .is_ok_and(|s| s.success())
-}
-
 #[test]
 fn soem_brings_devices_to_op() {
     if !require_root("sim_soem::soem_brings_devices_to_op") {
         return;
     }
-    if !pysoem_available() {
+    if !python_master::importable("pysoem") {
         if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
             panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
         }
         ecdrive::rt::audit::announce_skip("SKIPPED (needs pysoem: pip install pysoem): sim_soem");
         return;
     }
-    let veth = VethPair::create().expect("veth pair");
     let mut seg = Segment::new(Arc::new(HostClock));
     let cfg = EscConfig {
         sm_watchdog: 0,
@@ -203,21 +195,7 @@ fn soem_brings_devices_to_op() {
         .unwrap();
     seg.push(Box::new(IoDevice::new(2, 4).with_serial(13)), cfg)
         .unwrap();
-    let server =
-        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), seg).expect("server");
-    let output = Command::new("python3")
-        .args(["-c", SCRIPT, veth.host()])
-        .output()
-        .expect("run python3");
-    let (seg, result) = server.stop();
-    result.expect("server ran without I/O errors");
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        output.status.success(),
-        "pysoem failed:\n{stderr}\n{stdout}"
-    );
-    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON from pysoem");
+    let (seg, v) = python_master::run("pysoem", seg, SCRIPT, &[]);
 
     assert_eq!(v["count"], 3);
     assert_eq!(v["slaves"][0]["name"], "ecdrive generic CoE device");
@@ -320,7 +298,7 @@ fn soem_runs_the_emulated_drives() {
     if !require_root("sim_soem::soem_runs_the_emulated_drives") {
         return;
     }
-    if !pysoem_available() {
+    if !python_master::importable("pysoem") {
         if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
             panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
         }
@@ -328,7 +306,6 @@ fn soem_runs_the_emulated_drives() {
         return;
     }
     let drives = ["mr-j4-tm", "bdhde"];
-    let veth = VethPair::create().expect("veth pair");
     let mut seg = Segment::new(Arc::new(HostClock));
     for (i, d) in drives.iter().enumerate() {
         let dev = ecdrive::sim::devices::by_name(d, i).expect("emulated drive");
@@ -351,26 +328,8 @@ fn soem_runs_the_emulated_drives() {
             want.push((pos, i, s, v));
         }
     }
-    let server =
-        RawServer::spawn(veth.open_peer_socket().expect("peer socket"), seg).expect("server");
-    let output = Command::new("python3")
-        .args([
-            "-c",
-            DRIVES_SCRIPT,
-            veth.host(),
-            &serde_json::Value::Array(reads).to_string(),
-        ])
-        .output()
-        .expect("run python3");
-    let (_, result) = server.stop();
-    result.expect("server ran without I/O errors");
-    let stdout = String::from_utf8_lossy(&output.stdout);
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(
-        output.status.success(),
-        "pysoem failed:\n{stderr}\n{stdout}"
-    );
-    let v: serde_json::Value = serde_json::from_str(stdout.trim()).expect("JSON from pysoem");
+    let reads = serde_json::Value::Array(reads).to_string();
+    let (_, v) = python_master::run("pysoem", seg, DRIVES_SCRIPT, &[&reads]);
     eprintln!("{v}");
     assert_eq!(v["count"], 2);
     for (k, (pos, i, s, value)) in want.iter().enumerate() {
