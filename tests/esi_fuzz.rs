@@ -196,3 +196,32 @@ fn the_unmutated_files_parse() {
         EsiFile::from_path(f).unwrap_or_else(|e| panic!("{e}"));
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// Nesting of any depth and attributes of any length: a file or one line of error, never
+    /// a stack overflow or a panic; past the depth bound always the same error.
+    #[test]
+    fn deep_nesting_and_long_attributes_are_bounded(depth in 0usize..2_000, long in 0usize..20_000) {
+        let text = format!(
+            "<EtherCATInfo><Vendor><Id>1</Id></Vendor><Descriptions><Devices><Device>\
+             <Type ProductCode=\"#x{}\">D</Type><Name a=\"{}\">N</Name>{}{}</Device></Devices>\
+             </Descriptions></EtherCATInfo>",
+            "1".repeat(long % 40 + 1),
+            "v".repeat(long),
+            "<x>".repeat(depth),
+            "</x>".repeat(depth),
+        );
+        match EsiFile::parse(&text) {
+            Ok(f) => prop_assert!(depth + 4 <= ecdrive::esi::MAX_DEPTH, "{} devices", f.devices.len()),
+            Err(e) => {
+                prop_assert_eq!(e.to_string().lines().count(), 1);
+                if depth + 5 > ecdrive::esi::MAX_DEPTH {
+                    prop_assert!(e.message.contains("nest deeper"), "{}", e);
+                }
+            }
+        }
+        exercise(text.as_bytes());
+    }
+}

@@ -304,7 +304,10 @@ pub fn esi(data: &[u8]) {
     for i in f.check() {
         let _ = i.to_string();
     }
+    let _ = f.choose(&ecdrive::esi::DeviceChoice::Only);
     for d in &f.devices {
+        let _ = ecdrive::esi::DrivePlan::new(&f, d);
+        let _ = f.choose(&ecdrive::esi::DeviceChoice::parse(&d.identity_text()));
         let _ = d.default_mapping();
         let rx: Vec<u16> = d.rx_pdos.iter().map(|p| p.index).collect();
         let tx: Vec<u16> = d.tx_pdos.iter().map(|p| p.index).collect();
