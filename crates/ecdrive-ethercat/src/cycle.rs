@@ -2656,13 +2656,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let Ok(Ok(regs)) = exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns) else {
             return false;
         };
-        regs.chunks_exact(8).any(|sm| {
-            let (len, ctl, pdi) = (u16::from_le_bytes([sm[0x2], sm[0x3]]), sm[4], sm[7]);
-            len > 0
-                && ctl & 0x03 == 0
-                && (ctl >> 2) & 0x03 == 0x01
-                && sm[6] & 1 != 0
-                && pdi & 1 != 0
+        super::startup::process_data_sms(&regs).any(|(_, sm)| {
+            (sm.control >> 2) & 0x03 == 0x01 && sm.activation & 1 != 0 && sm.pdi_control & 1 != 0
         })
     }
 

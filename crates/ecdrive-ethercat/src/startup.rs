@@ -2210,6 +2210,32 @@ fn build_image<L: FrameLink>(
     }
 }
 
+/// One SyncManager channel as its registers (0x0800 + 8n) read.
+pub(crate) struct SmChannel {
+    /// Length (bytes 2–3).
+    pub len: u16,
+    /// Control (byte 4): bits 2–3 the direction, 01 the master writes.
+    pub control: u8,
+    /// Activation (byte 6): bit 0 enabled.
+    pub activation: u8,
+    /// PDI control (byte 7): bit 0 deactivated by the device.
+    pub pdi_control: u8,
+}
+
+/// The buffered (process-data) SyncManagers with a length among the registers read from
+/// 0x0800, with their numbers.
+pub(crate) fn process_data_sms(regs: &[u8]) -> impl Iterator<Item = (usize, SmChannel)> + '_ {
+    regs.chunks_exact(8).enumerate().filter_map(|(n, sm)| {
+        let ch = SmChannel {
+            len: u16::from_le_bytes([sm[2], sm[3]]),
+            control: sm[4],
+            activation: sm[6],
+            pdi_control: sm[7],
+        };
+        (ch.len > 0 && ch.control & 0x03 == 0x00).then_some((n, ch))
+    })
+}
+
 /// Process-data SyncManagers that carry data but are left off. ETG.2000's `<Sm Enable>` is the
 /// SyncManager's default activation, which vendor files set to 0 on the SyncManager of an
 /// optional input (Beckhoff's EK1101 ID switch) or on every process-data SyncManager (a
@@ -2234,9 +2260,9 @@ pub fn enable_process_data_sms<L: FrameLink>(
             )
             .map_err(|e| exec_error(Some(&drive), e))?
             .map_err(|e| bus_error(Some(&drive), "reading the SyncManagers (0x0800)", e))?;
-        for (n, sm) in regs.chunks_exact(8).enumerate() {
-            let (len, ctl, act) = (u16::from_le_bytes([sm[2], sm[3]]), sm[4], sm[6]);
-            if len == 0 || ctl & 0x03 != 0x00 || act & 0x01 != 0 {
+        for (n, sm) in process_data_sms(&regs) {
+            let (len, act) = (sm.len, sm.activation);
+            if act & 0x01 != 0 {
                 continue;
             }
             let reg = 0x0806 + 8 * n as u16;
