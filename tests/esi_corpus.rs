@@ -46,30 +46,7 @@ fn files(dir: &Path) -> Vec<PathBuf> {
 
 /// Devices that do not reach OP or run csp yet, by file name and product code, with the
 /// reason a run gives (a part of it). Each is a known gap, named in the docs' table.
-const KNOWN: &[(&str, u32, &str, &str)] = &[
-    // Process data in the ESC's digital-I/O registers (SMs at 0x0F00..0x0F03) and on several
-    // output SyncManagers: the emulated ESC serves one output and one input SM above 0x1000.
-    ("iTegva_E7x_Series.xml", 0x100, "op", "0x001D"),
-    ("iTegva_E7x_Series.xml", 0x101, "op", "0x001D"),
-    ("iTegva_E7x_Series.xml", 0x200, "op", "0x001D"),
-    ("iTegva_E7x_Series.xml", 0x201, "op", "0x001D"),
-    ("iTegva_E7x_Series.xml", 0x400, "op", "0x001D"),
-    ("iTegva_E7x_Series.xml", 0x401, "op", "0x001D"),
-    ("SMC EX260-SECx_V11.xml", 0x0100_0001, "op", "0x001D"),
-    ("SMC EX260-SECx_V11.xml", 0x0100_0002, "op", "0x001D"),
-    ("SMC EX260-SECx_V11.xml", 0x0100_0003, "op", "0x001D"),
-    ("SMC EX260-SECx_V11.xml", 0x0100_0004, "op", "0x001D"),
-    // PDO entries that name their own mapping object (0x1600:01 "Controlword"): the file
-    // does not say which objects the device maps, and it has no 0x1C12/0x1C13.
-    ("Somanet_CiA402-multi.xml", 0x201, "op", "0x1c13"),
-    ("Somanet_CiA402-multi.xml", 0x302, "op", "0x1c13"),
-    ("Somanet_CiA402-multi.xml", 0x303, "op", "0x1c13"),
-    ("Somanet_CiA402-multi.xml", 0x304, "op", "0x1c13"),
-    ("Somanet_CiA402-multi.xml", 0x305, "op", "0x1c13"),
-    // A DC-only drive: OP needs SYNC0, which a bare state request does not start (the csp
-    // run starts it, and runs).
-    ("STEPPERONLINE_A6_Servo_V0.04.xml", 0x715, "op", "0x0030"),
-];
+const KNOWN: &[(&str, u32, &str, &str)] = &[];
 
 fn known(file: &str, product: u32, what: &str) -> Option<&'static str> {
     KNOWN
@@ -94,15 +71,17 @@ fn not_a_drive(f: &EsiFile, d: &ecdrive::esi::Device) -> Option<String> {
     ecdrive::esi::DrivePlan::new(f, d).not_a_drive
 }
 
-/// `ecdrive states OP` on the emulated device, in-process.
-fn reach_op(file: &Path, ident: &str) -> Result<(), String> {
+/// `ecdrive states OP` on the emulated device, in-process; for a drive with `--esi FILE`, so
+/// that a drive that needs DC SYNC0 gets it.
+fn reach_op(file: &Path, ident: &str, drive: bool) -> Result<(), String> {
+    let sim = format!("sim:esi:{}@{ident}", file.display());
+    let mut args = vec!["states", "-i", &sim, "OP"];
+    let esi = file.display().to_string();
+    if drive {
+        args.extend(["--esi", &esi]);
+    }
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_ecdrive"))
-        .args([
-            "states",
-            "-i",
-            &format!("sim:esi:{}@{ident}", file.display()),
-            "OP",
-        ])
+        .args(&args)
         .output()
         .map_err(|e| e.to_string())?;
     let text = format!(
@@ -172,9 +151,8 @@ fn every_vendor_file_and_device() {
                 .unwrap_or_else(|e| panic!("{name} {ident}: {e}"));
             assert_eq!(f.devices.get(chosen).map(|x| x.position), Some(d.position));
             let pc = d.type_.product_code;
-            let op = reach_op(&path, &ident);
             let cia402 = not_a_drive(&f, d);
-            // `states OP` starts no SYNC0: a DC-only drive reaches OP in the run.
+            let op = reach_op(&path, &ident, cia402.is_none());
             let csp = cia402.is_none().then(|| csp_move(&path, f.vendor.id, d));
             for (what, res) in [("op", Some(&op)), ("csp", csp.as_ref())] {
                 let Some(res) = res else { continue };
@@ -236,9 +214,10 @@ fn table(rows: &[Row]) -> String {
     s
 }
 
-/// One file, four stepper drives (Bohign): `esi = "FILE"` alone is refused on a real
-/// interface, listing the devices; on an emulated segment it takes the device the segment holds
-/// at the drive's position; `esi = { file, product }` chooses by identity.
+/// One file, four stepper drives (Bohign): `esi = "FILE"` alone takes, on a real interface,
+/// the device the segment reports at the drive's position (start-up reads its identity); on an
+/// emulated segment the device the segment holds there; `esi = { file, product }` chooses by
+/// identity.
 #[test]
 fn a_multi_device_file_chooses_by_identity() {
     let Some(dir) = corpus() else { return };
@@ -249,9 +228,45 @@ fn a_multi_device_file_chooses_by_identity() {
         "interface = \"eth9\"\n[[drive]]\nposition = 0\nesi = \"{}\"\n{program}",
         f.display()
     );
-    let e = ecdrive::app::config::parse(&real, "multi.toml").unwrap_err();
-    assert!(e.message.contains("describes 4 devices"), "{e}");
-    assert!(e.message.contains("Bohigh CL57EC (0x00001B00)"), "{e}");
+    // On a real interface the file does not say which device is at position 0: start-up
+    // takes the one the device reports, as one run shows (the same configuration, the segment
+    // given as `run -i` does); a device the file does not describe is refused, listing them.
+    let mut cfg =
+        ecdrive::app::config::parse(&real, "multi.toml").unwrap_or_else(|e| panic!("{e}"));
+    let choices: Vec<&str> = cfg.master.startup.drives[0]
+        .esi_choices
+        .iter()
+        .map(|p| p.name)
+        .collect();
+    assert_eq!(
+        choices,
+        [
+            "Bohigh DM556EC",
+            "Bohigh DM860EC",
+            "Bohigh CL57EC",
+            "Bohigh CL86EC"
+        ]
+    );
+    assert!(
+        cfg.notes
+            .iter()
+            .any(|n| n.contains("describes 4 devices; start-up takes the one")),
+        "{:?}",
+        cfg.notes
+    );
+    use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    cfg.target = format!("sim:esi:{}@0x1D00", f.display()).parse().unwrap();
+    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap();
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    assert_eq!(r.drives[0].name, "Bohigh CL86EC");
+    cfg.target = "sim:mr-j4-tm".parse().unwrap();
+    let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("product 0x00000201, revision 0x00020002; the drive's ESI file describes"),
+        "{e}"
+    );
     let sim = format!(
         "interface = \"sim\"\n[sim]\ndevices = [\"esi:{f}@0x1B00\"]\n[[drive]]\nposition = 0\n\
          esi = \"{f}\"\n{program}",
@@ -278,4 +293,121 @@ fn a_multi_device_file_chooses_by_identity() {
         e.message.contains("the file has no device 0x00002101"),
         "{e}"
     );
+}
+
+/// Process data where devices without a microcontroller keep it (ETG.2000 files of digital
+/// I/O modules): output SyncManagers of one byte each on the ESC's digital output register
+/// (0x0F00–0x0F03), several per direction, inputs in RAM. Set up as a master does from the SII
+/// (an FMMU per SM), the bytes written reach the device in SM order and, echoed by the
+/// emulated module, come back in its inputs; the 4-output module takes all four bytes.
+#[test]
+fn outputs_on_the_digital_output_register_and_several_sms() {
+    use ecdrive::ec::Command;
+    use ecdrive::sim::probe::Probe;
+    use ecdrive::sim::{EscConfig, ManualClock, Segment, SegmentConfig};
+    use std::sync::Arc;
+    let Some(dir) = corpus() else { return };
+    let serve = |name: String| {
+        let clock = ManualClock::new(1_000_000_000);
+        let mut seg = Segment::with_config(Arc::new(clock.clone()), SegmentConfig::default());
+        let dev = ecdrive::sim::devices::by_name(&name, 0).unwrap_or_else(|e| panic!("{e}"));
+        seg.push(dev, EscConfig::default()).unwrap();
+        let mut p = Probe::new(seg);
+        p.assign_addresses(0x1000).unwrap();
+        p
+    };
+    // (SM n: start, length, control) and an FMMU per SM: logical n, physical the SM's start.
+    let setup = |p: &mut Probe, sms: &[(u16, u16, u8)]| {
+        let mut logical = 0u32;
+        for (n, &(start, len, ctl)) in sms.iter().enumerate() {
+            let (s, l) = (start.to_le_bytes(), len.to_le_bytes());
+            let sm = [s[0], s[1], l[0], l[1], ctl, 0, 1, 0];
+            assert_eq!(p.fpwr(0x1000, 0x0800 + 8 * n as u16, &sm).unwrap().wkc, 1);
+            let mut f = [0u8; 16];
+            f[0..4].copy_from_slice(&logical.to_le_bytes());
+            f[4..6].copy_from_slice(&len.to_le_bytes());
+            f[7] = 7;
+            f[8..10].copy_from_slice(&s);
+            f[11] = if ctl & 0x04 != 0 { 2 } else { 1 };
+            f[12] = 1;
+            assert_eq!(p.fpwr(0x1000, 0x0600 + 16 * n as u16, &f).unwrap().wkc, 1);
+            logical += u32::from(len);
+        }
+        for (state, name) in [(2u16, "PREOP"), (4, "SAFEOP"), (8, "OP")] {
+            assert_eq!(
+                p.request_state(0x1000, state).unwrap(),
+                (state, 0),
+                "{name}"
+            );
+        }
+    };
+    // E7.820.001: 16 relay outputs on SM0 (0x0F02) and SM1 (0x0F03), 16 inputs at 0x1000.
+    let itegva = dir.join("itegva/iTegva_E7x_Series.xml");
+    let mut p = serve(format!("esi:{}@0x100", itegva.display()));
+    setup(
+        &mut p,
+        &[(0x0F02, 1, 0x44), (0x0F03, 1, 0x44), (0x1000, 2, 0x00)],
+    );
+    let mut last = Vec::new();
+    for _ in 0..2 {
+        let r = p.logical(Command::Lrw, 0, &[0xA5, 0x3C, 0, 0]).unwrap();
+        // One device, read and written: 1 + 2.
+        assert_eq!(r.wkc, 3);
+        last = r.data;
+    }
+    assert_eq!(p.segment.slave(0).unwrap().esc.outputs(), &[0xA5, 0x3C]);
+    assert_eq!(&last[2..4], &[0xA5, 0x3C], "the inputs echo the outputs");
+    // EX260-SEC1: 32 valve outputs on four one-byte SMs, 0x0F00..0x0F03, one FMMU in the file.
+    let smc = dir.join("smc/SMC EX260-SECx_V11.xml");
+    let mut p = serve(format!("esi:{}@0x01000001", smc.display()));
+    let sms: Vec<(u16, u16, u8)> = (0..4).map(|n| (0x0F00 + n, 1, 0x44)).collect();
+    setup(&mut p, &sms);
+    let r = p.logical(Command::Lwr, 0, &[1, 2, 3, 4]).unwrap();
+    assert_eq!(r.wkc, 1);
+    assert_eq!(p.segment.slave(0).unwrap().esc.outputs(), &[1, 2, 3, 4]);
+}
+
+/// `run --esi FILE|DIR` (a drive found by identity among the profiles of vendor files) and
+/// `esi = FILE` (the drive's own file) choose the same PDOs for a program: those the file's
+/// PDOs offer for the program's modes, the smallest that holds them, never the all-modes
+/// mapping for a csp program. Every CiA 402 drive of the corpus, each cyclic mode it has.
+#[test]
+fn esi_dir_and_esi_file_choose_the_same_pdos() {
+    use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
+    let Some(dir) = corpus() else { return };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let mut checked = 0;
+    for path in files(&dir) {
+        let f = EsiFile::from_path(&path).unwrap();
+        for d in f.devices.iter() {
+            let plan = ecdrive::esi::DrivePlan::new(&f, d);
+            if plan.not_a_drive.is_some() {
+                continue;
+            }
+            for mode in plan.modes.iter() {
+                let sim = format!("esi:{}@{}", path.display(), d.identity_text());
+                let head = format!(
+                    "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"{sim}\"]\n\
+                     [[drive]]\nposition = 0\nmode = \"{mode}\"\n\
+                     program = [{{ step = \"dwell\", seconds = 0.01 }}]\n"
+                );
+                let own = format!("{head}esi = \"{}\"\n", path.display());
+                let pdos = |text: &str, esi: bool| {
+                    let mut cfg = ecdrive::app::config::parse(text, "pdos.toml")
+                        .unwrap_or_else(|e| panic!("{sim} {mode}: {e}"));
+                    if esi {
+                        let (p, _) = ecdrive::drives::esi_profile::load_path(&path).unwrap();
+                        cfg.master.startup.esi_profiles = p;
+                    }
+                    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
+                        .unwrap_or_else(|e| panic!("{sim} {mode}: {e}"));
+                    assert_eq!(r.outcome, Outcome::Completed, "{sim} {mode}: {}", r.reason);
+                    r.drives[0].pdos.clone()
+                };
+                assert_eq!(pdos(&own, false), pdos(&head, true), "{sim} {mode}");
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked >= 8, "{checked}");
 }

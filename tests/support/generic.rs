@@ -66,6 +66,7 @@ pub static GENERIC_TEST: DriveProfile = DriveProfile {
         },
         default_mapping: Mapping::fixed(RX, TX),
         cyclic_mapping: Mapping::fixed(RX, TX),
+        mode_mappings: &[],
         required_objects: &[],
         startup: &[],
         init_cmds: &[],

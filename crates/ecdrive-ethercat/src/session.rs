@@ -107,6 +107,9 @@ pub struct DriveSummary {
     pub profile: &'static str,
     /// Output and input image sizes.
     pub image_bytes: (usize, usize),
+    /// The PDOs assigned (mapping object indices), RxPDOs and TxPDOs: the mapping start-up
+    /// chose and wrote (or found fixed).
+    pub pdos: (Vec<u16>, Vec<u16>),
     /// Start mode.
     pub mode: &'static str,
 }
@@ -826,6 +829,10 @@ impl Persist {
                 info: d.info.clone(),
                 profile: d.profile.name,
                 image_bytes: (d.layout.bytes(Direction::Rx), d.layout.bytes(Direction::Tx)),
+                pdos: (
+                    d.mapping.rx.iter().map(|p| p.index).collect(),
+                    d.mapping.tx.iter().map(|p| p.index).collect(),
+                ),
                 mode: d.setup.mode.name(),
             })
             .collect();

@@ -97,6 +97,10 @@ pub struct DriveSetup {
     /// Touch probes the application arms ([`crate::AppAxis::arm_probe`]): mapped at start-up
     /// like a program's `TouchProbe` steps (0x60B8, 0x60B9 and the probe's position object).
     pub probes: Vec<(u8, super::program::ProbeEdge)>,
+    /// The drive's ESI file describes several devices and the configuration does not say
+    /// which (`esi = "FILE"` with a position or an alias): the profile of each of them, and
+    /// start-up takes the one whose identity the device reports (the same revision first).
+    pub esi_choices: Vec<&'static DriveProfile>,
 }
 
 impl DriveSetup {
@@ -113,6 +117,7 @@ impl DriveSetup {
             units: None,
             program: Vec::new(),
             probes: Vec::new(),
+            esi_choices: Vec::new(),
         }
     }
 }
@@ -164,7 +169,7 @@ impl Default for DcSettings {
 
 /// The profile of `d` among profiles built from ESI files: the same identity and revision,
 /// else the same identity.
-fn esi_profile_for(
+pub fn esi_profile_for(
     profiles: &[&'static DriveProfile],
     d: &DeviceInfo,
 ) -> Option<&'static DriveProfile> {
@@ -726,6 +731,9 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                 }
                 p
             }
+            // The drive's own ESI file, when it names one: nothing else may stand in for it.
+            None if !setup.esi_choices.is_empty() => esi_profile_for(&setup.esi_choices, d)
+                .ok_or_else(|| esi_choice_error(&dref, d, &setup.esi_choices))?,
             None => match crate::drives::by_identity(d.vendor_id, d.product_code)
                 .or_else(|| esi_profile_for(&cfg.esi_profiles, d))
             {
@@ -758,20 +766,7 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                     ));
                 }
                 None => {
-                    let why = if !d.coe {
-                        "no mailbox".to_string()
-                    } else if d.declares_cia402() {
-                        "a CiA 402 device ecdrive has no profile for (allow_generic = true runs \
-                         it with the generic CiA 402 profile)"
-                            .to_string()
-                    } else {
-                        format!(
-                            "not a CiA 402 drive (device type {})",
-                            d.device_type
-                                .map_or("unreadable".into(), |t| format!("0x{t:08X}"))
-                        )
-                    };
-                    out.push(Role::Io { why });
+                    out.push(Role::Io { why: io_reason(d) });
                     continue;
                 }
             },
@@ -782,6 +777,53 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
         });
     }
     Ok(out)
+}
+
+/// Why a device no profile matches is an I/O device, in words.
+fn io_reason(d: &DeviceInfo) -> String {
+    if !d.coe {
+        "no mailbox".to_string()
+    } else if d.declares_cia402() {
+        "a CiA 402 device ecdrive has no profile for (allow_generic = true runs it with the \
+         generic CiA 402 profile)"
+            .to_string()
+    } else {
+        format!(
+            "not a CiA 402 drive (device type {})",
+            d.device_type
+                .map_or("unreadable".into(), |t| format!("0x{t:08X}"))
+        )
+    }
+}
+
+/// The device at a drive's position is none of those its ESI file describes.
+fn esi_choice_error(
+    dref: &DriveRef,
+    d: &DeviceInfo,
+    choices: &[&'static DriveProfile],
+) -> MasterError {
+    let list: Vec<String> = choices
+        .iter()
+        .map(|p| {
+            format!(
+                "{} (product 0x{:08X}, revision 0x{:08X})",
+                p.name, p.identity.product_code, p.revision
+            )
+        })
+        .collect();
+    MasterError::new(
+        Some(dref),
+        "matching the drive's ESI file",
+        ErrorKind::Config,
+        format!(
+            "the device there is vendor 0x{:08X}, product 0x{:08X}, revision 0x{:08X}; the \
+             drive's ESI file describes {}",
+            d.vendor_id,
+            d.product_code,
+            d.revision,
+            list.join(", ")
+        ),
+    )
 }
 
 /// Check every drive's configuration against its profile before anything is written.
@@ -910,12 +952,17 @@ fn mapping_for_program(
     }
     let mapping = match &setup.mapping {
         Some(m) => m.clone(),
-        None => with_objects(&profile.cyclic_mapping, &need, profile).map_err(|e| {
-            (
-                "choosing the PDO mapping",
-                format!("the touch probe needs {e}"),
-            )
-        })?,
+        None => {
+            let base = profile
+                .mapping_for_modes(&modes)
+                .map_err(|e| ("choosing the PDO mapping", e.to_string()))?;
+            with_objects(base, &need, profile).map_err(|e| {
+                (
+                    "choosing the PDO mapping",
+                    format!("the touch probe needs {e}"),
+                )
+            })?
+        }
     };
     for (dir, addr, what) in [
         (Direction::Rx, CW, "the controlword 0x6040"),

@@ -719,6 +719,57 @@ fn esi_device(
     Ok((f, index, shown))
 }
 
+/// `esi = "FILE"` on a file of several devices, the drive selected by position or alias: the
+/// profile of every drive the file describes, for start-up to take the one whose identity the
+/// device reports ([`crate::master::DriveSetup::esi_choices`]), with a note saying so. `None`
+/// for a file of one device (the usual path chooses it).
+fn esi_choices_for(
+    cx: &Ctx<'_>,
+    e: &Spanned<String>,
+    select: Selector,
+    key: &str,
+    notes: &mut Vec<String>,
+) -> Result<Option<Vec<&'static DriveProfile>>, ConfigError> {
+    let dir = Path::new(cx.file).parent().unwrap_or(Path::new(""));
+    let path = dir.join(e.get_ref());
+    let shown = path.display().to_string();
+    let f = crate::esi::EsiFile::from_path(&path)
+        .map_err(|x| cx.err(e.span(), key, format!("ESI file {shown}: {x}")))?;
+    if f.devices.len() < 2 {
+        return Ok(None);
+    }
+    let mut profiles = Vec::new();
+    let mut why = Vec::new();
+    for d in &f.devices {
+        match crate::drives::esi_profile::from_esi(&f, d, &shown) {
+            Ok(p) => profiles.push(p),
+            Err(x) => why.push(format!("{}: {}", d.identity_text(), x.reason)),
+        }
+    }
+    if profiles.is_empty() {
+        return Err(cx.err(
+            e.span(),
+            key,
+            format!(
+                "ESI file {shown} describes {} devices and none is a drive ecdrive can run: {}",
+                f.devices.len(),
+                why.join("; ")
+            ),
+        ));
+    }
+    notes.push(format!(
+        "{key}: {shown} describes {} devices; start-up takes the one the device at {select} \
+         reports ({})",
+        f.devices.len(),
+        profiles
+            .iter()
+            .map(|p| format!("{} 0x{:08X}", p.name, p.identity.product_code))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
+    Ok(Some(profiles))
+}
+
 /// The mapping for `modes` chosen from the drive's ESI file ([`crate::esi::mapping_for`]), with
 /// a note saying which PDOs; a drive whose PDOs cannot carry the modes is refused here, naming
 /// what is missing.
@@ -861,6 +912,7 @@ fn drive(
     };
     // The profile, if it can be known now.
     let mut esi_source: Option<(crate::esi::EsiFile, usize)> = None;
+    let mut esi_choices = Vec::new();
     if let (Some(f), true) = (&r.profile_file, r.esi.is_some() || r.profile.is_some()) {
         return Err(cx.err(
             f.span(),
@@ -925,6 +977,14 @@ fn drive(
                 .map_or_else(String::new, |f| f.get_ref().clone());
             let dir = Path::new(cx.file).parent().unwrap_or(Path::new(""));
             Some(profile_file::load(&dir.join(&f))?)
+        }
+        (Some(e), None)
+            if esi_choice.is_none()
+                && !matches!(select, Selector::Identity { .. })
+                && let Some(c) = esi_choices_for(cx, e, select, &key("esi"), notes)? =>
+        {
+            esi_choices = c;
+            None
         }
         (Some(e), None) => {
             let (f, dev, shown) = esi_device(cx, e, select, esi_choice.as_ref(), &key("esi"))?;
@@ -1354,6 +1414,7 @@ fn drive(
             units: units.clone(),
             program: steps,
             probes: Vec::new(),
+            esi_choices,
         },
         DriveConfig {
             select,

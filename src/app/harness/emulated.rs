@@ -67,6 +67,7 @@ pub static GENERIC_COE_PROFILE: DriveProfile = DriveProfile {
         },
         default_mapping: Mapping::fixed(RX, TX),
         cyclic_mapping: Mapping::fixed(RX, TX),
+        mode_mappings: &[],
         required_objects: &[],
         startup: &[],
         init_cmds: &[],

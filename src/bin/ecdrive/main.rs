@@ -255,6 +255,11 @@ enum Command {
         /// Cycle time of the process data for SAFEOP and OP, µs.
         #[arg(long, value_name = "US", default_value_t = 1000)]
         cycle_us: u32,
+        /// A vendor ESI file, or a folder of them (*.xml): a drive no built-in profile matches
+        /// is configured from its file, found by identity, as `run` does it (its PDO mapping,
+        /// DC SYNC0 for a drive that needs it).
+        #[arg(long, value_name = "FILE|DIR")]
+        esi: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
     },
@@ -416,10 +421,11 @@ enum Command {
         /// Draw the recording as a scope into this SVG when the run ends (needs --record).
         #[arg(long, value_name = "OUT.svg", requires = "record")]
         plot: Option<PathBuf>,
-        /// A folder of vendor ESI files (*.xml): a drive no built-in profile matches gets the
-        /// profile its ESI file gives, found by identity (files and devices that cannot be used
-        /// are listed as warnings).
-        #[arg(long, value_name = "DIR")]
+        /// A vendor ESI file, or a folder of them (*.xml): a drive no built-in profile matches
+        /// gets the profile its ESI file gives, found by identity, and runs its program with
+        /// the PDOs `esi = FILE` would choose (files and devices that cannot be used are listed
+        /// as warnings).
+        #[arg(long, value_name = "FILE|DIR")]
         esi: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
@@ -1269,11 +1275,41 @@ fn dispatch(cli: Cli) -> ExitCode {
             position,
             state,
             cycle_us,
+            esi,
             json,
         } => {
             let mut opts = tools::StatesOptions::new(state);
             opts.position = position;
             opts.cycle = Duration::from_micros(u64::from(cycle_us));
+            if let Some(path) = &esi {
+                match ecdrive::drives::esi_profile::load_path(path) {
+                    Ok((profiles, skipped)) if !profiles.is_empty() => {
+                        for s in skipped {
+                            eprintln!("ecdrive states: warning: --esi: {s}");
+                        }
+                        opts.esi_profiles = profiles;
+                    }
+                    Ok((_, skipped)) => {
+                        let why = if skipped.is_empty() {
+                            "no ESI file (*.xml) there".to_string()
+                        } else {
+                            format!("no drive in it: {}", skipped.join("; "))
+                        };
+                        return fail_with(
+                            "states",
+                            &format!("--esi {}: {why}", path.display()),
+                            exit::USAGE,
+                        );
+                    }
+                    Err(e) => {
+                        return fail_with(
+                            "states",
+                            &format!("--esi {}: {e}", path.display()),
+                            exit::USAGE,
+                        );
+                    }
+                }
+            }
             match session("states", &bus.interface, move |b| {
                 tools::states_timed(b, &opts)
             }) {
@@ -1310,6 +1346,9 @@ fn dispatch(cli: Cli) -> ExitCode {
                                     ))
                                     .unwrap_or_default()
                             );
+                            if let Some(h) = &c.hint {
+                                eprintln!("ecdrive states: {h}");
+                            }
                         }
                     }
                     code

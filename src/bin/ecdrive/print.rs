@@ -685,6 +685,19 @@ pub fn run_report(r: &RunReport) {
             "Drive {} {} ({}, vendor 0x{:08X} product 0x{:08X}), start mode {}",
             d.position, d.name, d.device.name, d.device.vendor_id, d.device.product_code, d.mode
         );
+        let list = |v: &[u16]| {
+            v.iter()
+                .map(|i| format!("0x{i:04X}"))
+                .collect::<Vec<_>>()
+                .join("+")
+        };
+        println!(
+            "  Process data:        RxPDO {} ({} bytes), TxPDO {} ({} bytes)",
+            list(&d.pdos.0),
+            d.image_bytes.0,
+            list(&d.pdos.1),
+            d.image_bytes.1
+        );
         println!("  States:              {}", d.states.join(" → "));
         println!(
             "  Modes run:           {}",

@@ -20,7 +20,7 @@ pub fn run(
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
     if let Some(dir) = esi {
-        match ecdrive::drives::esi_profile::load_dir(dir) {
+        match ecdrive::drives::esi_profile::load_path(dir) {
             Ok((profiles, skipped)) if !profiles.is_empty() => {
                 for s in skipped {
                     cfg.warnings.push(format!("--esi: {s}"));

@@ -489,6 +489,7 @@ pub static PROFILE: DriveProfile = DriveProfile {
         pdo_limits: PDO_LIMITS,
         default_mapping: DEFAULT_MAPPING,
         cyclic_mapping: CYCLIC_MAPPING,
+        mode_mappings: &[],
         required_objects: REQUIRED_OBJECTS,
         startup: STARTUP,
         init_cmds: &[],

@@ -167,6 +167,31 @@ pub fn units_from(dict: &[ObjectDesc]) -> crate::cia402::Units {
     }
 }
 
+/// The mapping of each set of cyclic modes (bit 0 csp, bit 1 csv, bit 2 cst), as
+/// [`crate::esi::mapping_for`] chooses it: the choice `esi = FILE` makes, so that a profile
+/// found by `--esi DIR` runs a program with the same PDOs.
+fn mode_mappings(dev: &Device) -> Vec<Result<Mapping, &'static str>> {
+    (0..8usize)
+        .map(|set| {
+            let refs: Vec<crate::esi::CyclicModeRef> = crate::esi::CYCLIC_MODES
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| set & (1 << i) != 0)
+                .map(|(_, m)| *m)
+                .collect();
+            let m = crate::esi::mapping_for(dev, &refs);
+            m.mapping.ok_or_else(|| {
+                let why: Vec<String> = [m.rx.err(), m.tx.err()].into_iter().flatten().collect();
+                leak(&format!(
+                    "the drive's PDOs cannot carry {}: {}",
+                    m.modes.join("+"),
+                    why.join("; ")
+                ))
+            })
+        })
+        .collect()
+}
+
 /// Build the profile of `dev` from `file` (named `source` in errors and in the profile's key,
 /// `esi:ORDER`).
 pub fn from_esi(
@@ -299,6 +324,7 @@ pub fn from_esi(
             pdo_limits,
             default_mapping,
             cyclic_mapping: cyclic,
+            mode_mappings: Vec::leak(mode_mappings(dev)),
             required_objects: super::generic::REQUIRED_OBJECTS,
             startup: &[],
             init_cmds: Vec::leak(init_cmds),
@@ -437,23 +463,43 @@ pub fn load_dir(
     let mut profiles = Vec::new();
     let mut skipped = Vec::new();
     for path in files {
-        let shown = path.display().to_string();
-        let file = match EsiFile::from_path(&path) {
-            Ok(f) => f,
-            Err(e) => {
-                skipped.push(format!("{shown}: {e}"));
-                continue;
-            }
-        };
-        for dev in &file.devices {
-            if !dev.has_coe() {
-                continue;
-            }
-            match from_esi(&file, dev, &shown) {
-                Ok(p) => profiles.push(p),
-                Err(e) => skipped.push(e.to_string()),
-            }
-        }
+        load_file(&path, &mut profiles, &mut skipped);
     }
     Ok((profiles, skipped))
+}
+
+/// [`load_dir`] for a folder, the same for one file (`--esi FILE|DIR`).
+pub fn load_path(
+    path: &std::path::Path,
+) -> Result<(Vec<&'static DriveProfile>, Vec<String>), std::io::Error> {
+    if std::fs::metadata(path)?.is_dir() {
+        return load_dir(path);
+    }
+    let (mut profiles, mut skipped) = (Vec::new(), Vec::new());
+    load_file(path, &mut profiles, &mut skipped);
+    Ok((profiles, skipped))
+}
+
+fn load_file(
+    path: &std::path::Path,
+    profiles: &mut Vec<&'static DriveProfile>,
+    skipped: &mut Vec<String>,
+) {
+    let shown = path.display().to_string();
+    let file = match EsiFile::from_path(path) {
+        Ok(f) => f,
+        Err(e) => {
+            skipped.push(format!("{shown}: {e}"));
+            return;
+        }
+    };
+    for dev in &file.devices {
+        if !dev.has_coe() {
+            continue;
+        }
+        match from_esi(&file, dev, &shown) {
+            Ok(p) => profiles.push(p),
+            Err(e) => skipped.push(e.to_string()),
+        }
+    }
 }

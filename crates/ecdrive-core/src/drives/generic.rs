@@ -213,6 +213,7 @@ pub static GENERIC_CIA402: DriveProfile = DriveProfile {
         pdo_limits: PDO_LIMITS,
         default_mapping: DEFAULT_MAPPING,
         cyclic_mapping: CYCLIC_MAPPING,
+        mode_mappings: &[],
         required_objects: REQUIRED_OBJECTS,
         startup: &[],
         init_cmds: &[],

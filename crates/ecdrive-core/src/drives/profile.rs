@@ -232,6 +232,13 @@ pub struct EtherCat {
     pub default_mapping: Mapping,
     /// Recommended mapping for csp/csv/cst.
     pub cyclic_mapping: Mapping,
+    /// For a profile built from an ESI file: the mapping for each set of cyclic modes a
+    /// program uses, chosen from the file's PDOs as `esi = FILE` chooses it
+    /// ([`crate::esi::mapping_for`]: the smallest that holds the modes), or why the PDOs cannot
+    /// carry them; indexed by the set (bit 0 csp, bit 1 csv, bit 2 cst). Empty for the built-in
+    /// profiles, which run [`cyclic_mapping`](Self::cyclic_mapping). See
+    /// [`mapping_for_modes`](Self::mapping_for_modes).
+    pub mode_mappings: &'static [Result<Mapping, &'static str>],
     /// Objects each mode needs mapped.
     pub required_objects: &'static [RequiredObjects],
     /// SDOs written in PRE-OP for a safe start.
@@ -286,6 +293,28 @@ pub struct ModeGroup {
     pub name: &'static str,
     /// The 0x6060 values it allows.
     pub modes: &'static [i8],
+}
+
+impl EtherCat {
+    /// The mapping to run a program with the modes `codes` (0x6060 values; modes other than
+    /// csp, csv and cst count as none): [`mode_mappings`](Self::mode_mappings) where the
+    /// profile has them, else [`cyclic_mapping`](Self::cyclic_mapping).
+    pub fn mapping_for_modes(&self, codes: &[i8]) -> Result<&Mapping, &'static str> {
+        if self.mode_mappings.is_empty() {
+            return Ok(&self.cyclic_mapping);
+        }
+        let set = codes.iter().fold(0usize, |s, c| match c {
+            8 => s | 1,
+            9 => s | 2,
+            10 => s | 4,
+            _ => s,
+        });
+        match self.mode_mappings.get(set) {
+            Some(Ok(m)) => Ok(m),
+            Some(Err(e)) => Err(e),
+            None => Ok(&self.cyclic_mapping),
+        }
+    }
 }
 
 impl ModeSelector {

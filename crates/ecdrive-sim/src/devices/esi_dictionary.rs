@@ -15,7 +15,11 @@
 //!   lacks is added; writable in PRE-OP when the file allows PDO configuration and the PDO is
 //!   not `Fixed`);
 //! - 0x1C12/0x1C13 take the default-assigned PDOs (writable in PRE-OP when the file allows
-//!   PDO assignment), with room for every PDO of the direction;
+//!   PDO assignment), with room for every PDO of the direction, also where the file's
+//!   dictionary lacks them: a file's `<Dictionary>` is an optional replica of the firmware's,
+//!   and CoE slave stacks (SOES, Beckhoff's slave stack code) keep an assignment object for
+//!   each process-data SyncManager, which masters read (SOEM, ethercrab, TwinCAT with
+//!   `PdoUpload`);
 //! - every object a PDO maps exists with that entry, mappable in the PDO's direction (added
 //!   with the PDO entry's data type where the dictionary lacks it).
 
@@ -200,17 +204,19 @@ pub fn emulated_dictionary(dev: &Device) -> &'static [ObjectDesc] {
     for dir in [Direction::Rx, Direction::Tx] {
         let pdos: Vec<&EsiPdo> = dev.pdos(dir).iter().filter(|p| !p.virtual_).collect();
         for p in &pdos {
-            for e in p.entries.iter().filter(|e| !e.is_padding()) {
+            // An entry naming its own PDO's mapping object (a file maps 0x1600:01 in RxPDO
+            // 0x1600) names no data object: the mapping object stays a list (below), and the
+            // device's process data is the file's PDO as written.
+            for e in p
+                .entries
+                .iter()
+                .filter(|e| !e.is_padding() && e.index != p.index)
+            {
                 let t = entry_type(e.data_type(), e.bit_len);
                 ensure_entry(&mut objs, e.index, e.sub, e.bit_len, t, dir, &e.name);
             }
         }
         for p in &pdos {
-            // A PDO naming itself (a file maps 0x1600:01 in RxPDO 0x1600) keeps the entries
-            // added above; its mapping object is then the data, not a list.
-            if p.entries.iter().any(|e| e.index == p.index) {
-                continue;
-            }
             let values = mapping_value(p);
             let cap = objs
                 .iter()
@@ -235,14 +241,6 @@ pub fn emulated_dictionary(dev: &Device) -> &'static [ObjectDesc] {
             .filter(|p| p.is_default())
             .map(|p| u64::from(p.index))
             .collect();
-        if pdos
-            .iter()
-            .any(|p| p.entries.iter().any(|e| e.index == p.index))
-        {
-            // The mapping objects are data here: no assignment list can name them.
-            objs.retain(|o| o.index != index);
-            continue;
-        }
         list_object(
             &mut objs,
             index,

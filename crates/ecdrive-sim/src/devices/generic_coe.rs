@@ -274,6 +274,12 @@ const POSITION: ObjectAddress = ObjectAddress::new(0x6064, 0);
 const VELOCITY: ObjectAddress = ObjectAddress::new(0x606C, 0);
 const TARGET_POSITION: ObjectAddress = ObjectAddress::new(0x607A, 0);
 const TARGET_VELOCITY: ObjectAddress = ObjectAddress::new(0x60FF, 0);
+const TARGET_TORQUE: ObjectAddress = ObjectAddress::new(0x6071, 0);
+const TORQUE: ObjectAddress = ObjectAddress::new(0x6077, 0);
+/// The generic servo's load in cst: rated torque (1000 ‰) accelerates it by this many
+/// counts/s² (a made-up load, not a drive fact: the emulation of a file's drive follows its
+/// torque set-point so that a master sees cst work).
+const CST_COUNTS_PER_S2_AT_RATED: i64 = 1_000_000;
 const SYNC_TYPE: ObjectAddress = ObjectAddress::new(0x1C32, 1);
 const CYCLE_TIME: ObjectAddress = ObjectAddress::new(0x1C32, 2);
 const MISSED: ObjectAddress = ObjectAddress::new(0x1C32, 11);
@@ -650,6 +656,21 @@ impl GenericCoeDevice {
                     let _ = self.od.dict_mut().set_int(POSITION, i64::from(p as i32));
                     let _ = self.od.dict_mut().set_int(VELOCITY, i64::from(v));
                 }
+                10 => {
+                    let t = i64::from(self.i32(TARGET_TORQUE).clamp(-32768, 32767));
+                    let dt = if event.cycle_time_ns > 0 {
+                        i64::from(event.cycle_time_ns)
+                    } else {
+                        1_000_000
+                    };
+                    let v0 = i64::from(self.i32(VELOCITY));
+                    let v = (v0 + t * CST_COUNTS_PER_S2_AT_RATED / 1000 * dt / 1_000_000_000)
+                        .clamp(i64::from(i32::MIN), i64::from(i32::MAX));
+                    let p = i64::from(self.i32(POSITION)) + v * dt / 1_000_000_000;
+                    let _ = self.od.dict_mut().set_int(POSITION, i64::from(p as i32));
+                    let _ = self.od.dict_mut().set_int(VELOCITY, v);
+                    let _ = self.od.dict_mut().set_int(TORQUE, t);
+                }
                 _ => {
                     // Unsupported mode: a real drive faults.
                     power = PowerState::Fault;
@@ -657,6 +678,7 @@ impl GenericCoeDevice {
             }
         } else {
             let _ = self.od.dict_mut().set_int(VELOCITY, 0);
+            let _ = self.od.dict_mut().set_int(TORQUE, 0);
         }
         self.power = power;
         let _ = self

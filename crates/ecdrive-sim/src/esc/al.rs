@@ -26,29 +26,28 @@ impl Esc {
         self.put_u16(0x0134, error.map(|c| c.0).unwrap_or(0));
     }
 
-    /// Check a process-data SM against the expected size. `None` if fine.
-    pub(super) fn pd_config_ok(&self, sm: Option<u8>, expected: usize, ecat_writes: bool) -> bool {
-        let Some(n) = sm else {
-            return expected == 0;
-        };
-        if n >= self.cfg.sm_count {
-            return expected == 0;
+    /// Check the process-data SMs of one direction against the expected size: every enabled
+    /// one buffered, in the right direction and in place, their lengths adding up.
+    pub(super) fn pd_config_ok(&self, set: SmSet, expected: usize, ecat_writes: bool) -> bool {
+        let mut total = 0usize;
+        for n in set.iter().filter(|&n| n < self.cfg.sm_count) {
+            let b = Self::sm_base(n);
+            let len = usize::from(self.get_u16(b + 2));
+            if self.byte(b + 6) & 0x01 == 0 || len == 0 {
+                continue;
+            }
+            let start = usize::from(self.get_u16(b));
+            let ctl = self.byte(b + 4);
+            let dir_ok = (ctl >> 2) & 0x03 == if ecat_writes { 1 } else { 0 };
+            if ctl & 0x03 != 0x00
+                || !dir_ok
+                || !self.pd_sm_in_place(start, start + len, ecat_writes)
+            {
+                return false;
+            }
+            total += len;
         }
-        let b = Self::sm_base(n);
-        let enabled = self.byte(b + 6) & 0x01 != 0;
-        if expected == 0 {
-            return !enabled || self.get_u16(b + 2) == 0;
-        }
-        let start = usize::from(self.get_u16(b));
-        let len = usize::from(self.get_u16(b + 2));
-        let ctl = self.byte(b + 4);
-        let dir_ok = (ctl >> 2) & 0x03 == if ecat_writes { 1 } else { 0 };
-        enabled
-            && len == expected
-            && ctl & 0x03 == 0x00
-            && dir_ok
-            && start >= REG_SPACE
-            && start + len <= self.mem.len()
+        total == expected
     }
 
     pub(super) fn check_process_data(&self, dev: &dyn Device) -> Result<(), AlStatusCode> {

@@ -180,7 +180,8 @@ impl Esc {
                 // 0x24) runs without it, as the hardware counter still shows.
                 let triggered = self
                     .sm_out_pd
-                    .is_some_and(|n| self.byte(Self::sm_base(n) + 4) & 0x40 != 0);
+                    .iter()
+                    .any(|n| self.byte(Self::sm_base(n) + 4) & 0x40 != 0);
                 if self.state == AlState::Op && triggered {
                     self.local_error(AlState::SafeOp, AlStatusCode::SM_WATCHDOG, dev);
                 }
@@ -224,12 +225,17 @@ impl Esc {
             outputs_enabled: self.state == AlState::Op
                 || (self.state == AlState::SafeOp && quirks.has(Quirk::OutputsInSafeOp)),
         };
-        let range = self.pd_sm_range(self.sm_in_pd);
+        let (mut ranges, mut len) = (0usize, 0usize);
+        let mut single = None;
+        for (s, e) in self.pd_ranges(self.sm_in_pd) {
+            ranges += 1;
+            len += e - s;
+            single = Some((s, e));
+        }
         let outputs = core::mem::take(&mut self.pd.outputs);
         let r = if self.state != AlState::Op && quirks.has(Quirk::StaleInputsUntilOp) {
             // The device runs, but its inputs do not reach the image before OP.
             let mut scratch = core::mem::take(&mut self.pd.scratch);
-            let len = range.map_or(0, |(s, e)| e - s);
             if scratch.len() < len {
                 // Sized once, at the first cycle below OP.
                 scratch.resize(len, 0);
@@ -237,8 +243,30 @@ impl Esc {
             let r = dev.sync(&ev, &outputs, scratch.get_mut(..len).unwrap_or(&mut []));
             self.pd.scratch = scratch;
             r
+        } else if ranges > 1 {
+            // Several input SMs: the device writes one image, scattered into them.
+            let mut image = core::mem::take(&mut self.pd.in_image);
+            if image.len() != len {
+                // Sized once, when the SMs are set up.
+                image.resize(len, 0);
+            }
+            let r = dev.sync(&ev, &outputs, &mut image);
+            let mut runs = [(0usize, 0usize); MAX_SM];
+            for (run, r) in runs.iter_mut().zip(self.pd_ranges(self.sm_in_pd)) {
+                *run = r;
+            }
+            let mut at = 0;
+            for &(s, e) in runs.iter().take(ranges) {
+                if let (Some(dst), Some(src)) = (self.mem.get_mut(s..e), image.get(at..at + e - s))
+                {
+                    dst.copy_from_slice(src);
+                }
+                at += e - s;
+            }
+            self.pd.in_image = image;
+            r
         } else {
-            let inputs: &mut [u8] = match range {
+            let inputs: &mut [u8] = match single {
                 Some((s, e)) => self.mem.get_mut(s..e).unwrap_or(&mut []),
                 None => &mut [],
             };

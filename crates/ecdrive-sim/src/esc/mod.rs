@@ -40,6 +40,37 @@ pub const MAX_SM: usize = 16;
 /// Maximum number of FMMUs an ESC can have.
 pub const MAX_FMMU: usize = 16;
 
+/// The ESC's digital output register, "Digital I/O Output Data" (0x0F00:0x0F03, ET1100): a
+/// device without a microcontroller (digital I/O mode) has its output SyncManagers here, one
+/// byte each, so that the FMMU writes straight into the output pins.
+pub const DIGITAL_OUT: core::ops::Range<usize> = 0x0F00..0x0F04;
+
+/// A set of SyncManager numbers (bit n: SM n): the process-data SMs of one direction. A
+/// device may have several (four one-byte output SMs on the digital output register).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct SmSet(u16);
+
+impl SmSet {
+    /// Every SM of `kind` in the description.
+    fn of(desc: &DeviceDescription, kind: SmType) -> Self {
+        Self(
+            desc.sync_managers
+                .iter()
+                .enumerate()
+                .filter(|(i, s)| s.kind == kind && *i < MAX_SM)
+                .fold(0, |m, (i, _)| m | 1 << i),
+        )
+    }
+
+    fn contains(self, n: u8) -> bool {
+        n < 16 && self.0 & (1 << n) != 0
+    }
+
+    fn iter(self) -> impl Iterator<Item = u8> {
+        (0..16u8).filter(move |&n| self.contains(n))
+    }
+}
+
 /// Distributed-clock support of an ESC (register 0x0008 bits 2 and 3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DcSupport {
@@ -200,6 +231,9 @@ struct ProcessRt {
     frame_cycles: u64,
     /// Where a device with [`Quirk::StaleInputsUntilOp`] writes its inputs below OP.
     scratch: Vec<u8>,
+    /// The inputs of a device with several input SMs, gathered: the device writes them here
+    /// and they are scattered into the SMs (sized once).
+    in_image: Vec<u8>,
 }
 
 /// One emulated ESC.
@@ -212,8 +246,8 @@ pub struct Esc {
     state: AlState,
     mbx: Option<MbxLayout>,
     boot_mbx: Option<MbxLayout>,
-    sm_out_pd: Option<u8>,
-    sm_in_pd: Option<u8>,
+    sm_out_pd: SmSet,
+    sm_in_pd: SmSet,
     /// The device's stack enables its output SM with OP only
     /// ([`crate::quirks::Quirk::OutputsOnlyInOp`]).
     outputs_only_in_op: bool,
@@ -276,8 +310,8 @@ impl Esc {
             state: AlState::Init,
             mbx,
             boot_mbx,
-            sm_out_pd: desc.sm_index(SmType::Outputs),
-            sm_in_pd: desc.sm_index(SmType::Inputs),
+            sm_out_pd: SmSet::of(desc, SmType::Outputs),
+            sm_in_pd: SmSet::of(desc, SmType::Inputs),
             outputs_only_in_op: false,
             sms: Vec::with_capacity(MAX_SM),
             fmmus: Vec::with_capacity(MAX_FMMU),
@@ -507,16 +541,20 @@ impl Esc {
         self.dc.sync
     }
 
-    /// The latched output image (SM2 content as last completed by the master).
+    /// The latched output image (the output SMs' content as last completed by the master,
+    /// in SM order).
     pub fn outputs(&self) -> &[u8] {
         &self.pd.outputs
     }
 
-    /// The input image (SM3 buffer), if SM3 is enabled.
+    /// The input image (the input SM's buffer, or the input SMs' in SM order), empty while no
+    /// input SM is enabled.
     pub fn inputs(&self) -> &[u8] {
-        match self.pd_sm_range(self.sm_in_pd) {
-            Some((s, e)) => self.mem.get(s..e).unwrap_or(&[]),
-            None => &[],
+        let mut ranges = self.pd_ranges(self.sm_in_pd);
+        match (ranges.next(), ranges.next()) {
+            (Some((s, e)), None) => self.mem.get(s..e).unwrap_or(&[]),
+            (Some(_), Some(_)) => &self.pd.in_image,
+            _ => &[],
         }
     }
 
@@ -583,7 +621,16 @@ impl Esc {
         if a < REG_SPACE {
             let end = b.min(REG_SPACE);
             let (reg_part, rest) = out.split_at_mut(end - a);
-            ok |= self.reg_read(a, reg_part, or, hop);
+            let mut lo = a;
+            while lo < end {
+                let (hi, sm) = self.next_register_run(lo, end);
+                let part = reg_part.get_mut(lo - a..hi - a).unwrap_or(&mut []);
+                ok |= match sm {
+                    Some(_) => self.ram_read(lo, part, or),
+                    None => self.reg_read(lo, part, or, hop),
+                };
+                lo = hi;
+            }
             if !rest.is_empty() {
                 ok |= self.ram_read(REG_SPACE, rest, or);
             }
@@ -602,7 +649,16 @@ impl Esc {
         if a < REG_SPACE {
             let end = b.min(REG_SPACE);
             let (reg_part, rest) = data.split_at(end - a);
-            ok |= self.reg_write(a, reg_part, hop, dev);
+            let mut lo = a;
+            while lo < end {
+                let (hi, sm) = self.next_register_run(lo, end);
+                let part = reg_part.get(lo - a..hi - a).unwrap_or(&[]);
+                ok |= match sm {
+                    Some(_) => self.ram_write(lo, part, hop),
+                    None => self.reg_write(lo, part, hop, dev),
+                };
+                lo = hi;
+            }
             if !rest.is_empty() {
                 ok |= self.ram_write(REG_SPACE, rest, hop);
             }
@@ -852,7 +908,7 @@ impl Esc {
                                 self.pending |= pending::MBX_WRITTEN;
                             } else {
                                 self.buffer_done(sm.idx);
-                                if Some(sm.idx) == self.sm_out_pd {
+                                if self.sm_out_pd.contains(sm.idx) {
                                     self.outputs_completed(sm, hop);
                                 }
                                 self.pending |= pending::PD_ACCESS;

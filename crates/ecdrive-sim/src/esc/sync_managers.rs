@@ -44,20 +44,49 @@ impl Esc {
         self.set_bits(Self::sm_base(n) + 5, 0x08, full);
     }
 
-    /// (start, end) of an enabled process-data SM.
-    pub(super) fn pd_sm_range(&self, sm: Option<u8>) -> Option<(usize, usize)> {
-        let n = sm?;
-        if !self.sm_enabled(n) {
-            return None;
+    /// Where a process-data SM may lie: in process RAM, or (outputs) on the digital output
+    /// register.
+    pub(super) fn pd_sm_in_place(&self, start: usize, end: usize, ecat_writes: bool) -> bool {
+        (start >= REG_SPACE && end <= self.mem.len())
+            || (ecat_writes && DIGITAL_OUT.contains(&start) && end <= DIGITAL_OUT.end)
+    }
+
+    /// (start, end) of each enabled process-data SM of `set`, in SM order.
+    pub(super) fn pd_ranges(&self, set: SmSet) -> impl Iterator<Item = (usize, usize)> + '_ {
+        self.pd_sms(set).map(|(_, s, e)| (s, e))
+    }
+
+    /// (number, start, end) of each enabled process-data SM of `set`, in SM order.
+    pub(super) fn pd_sms(&self, set: SmSet) -> impl Iterator<Item = (u8, usize, usize)> + '_ {
+        set.iter().filter_map(move |n| {
+            if n >= self.cfg.sm_count || !self.sm_enabled(n) {
+                return None;
+            }
+            let b = Self::sm_base(n);
+            let start = usize::from(self.get_u16(b));
+            let len = usize::from(self.get_u16(b + 2));
+            let end = start.checked_add(len)?;
+            let writes = (self.byte(b + 4) >> 2) & 0x03 == 0x01;
+            (len > 0 && self.pd_sm_in_place(start, end, writes)).then_some((n, start, end))
+        })
+    }
+
+    /// The run of register space starting at `pos` (before `b`, at most [`REG_SPACE`]) that an
+    /// enabled SM on the digital output register covers, or that none does: its end and the
+    /// SM. Accesses to the first go through the SM, like RAM; an SM elsewhere in register
+    /// space guards nothing (the registers stay registers).
+    pub(super) fn next_register_run(&self, pos: usize, b: usize) -> (usize, Option<SmView>) {
+        let mut next_start = b;
+        let on_register = |s: &&SmView| DIGITAL_OUT.contains(&s.start) && s.end <= DIGITAL_OUT.end;
+        for sm in self.sms.iter().filter(on_register) {
+            if sm.start <= pos && pos < sm.end {
+                return (sm.end.min(b), Some(*sm));
+            }
+            if sm.start > pos && sm.start < next_start {
+                next_start = sm.start;
+            }
         }
-        let b = Self::sm_base(n);
-        let start = usize::from(self.get_u16(b));
-        let len = usize::from(self.get_u16(b + 2));
-        let end = start.checked_add(len)?;
-        if end > self.mem.len() || start < REG_SPACE {
-            return None;
-        }
-        Some((start, end))
+        (next_start, None)
     }
 
     /// Set PDI-deactivate bits of the device's SMs according to the AL state: mailbox SMs are
@@ -85,15 +114,15 @@ impl Esc {
             set(self, m.sm_out, mbx_on);
             set(self, m.sm_in, mbx_on);
         }
-        if let Some(n) = self.sm_in_pd {
+        for n in self.sm_in_pd.iter() {
             set(self, n, matches!(st, AlState::SafeOp | AlState::Op));
         }
-        if let Some(n) = self.sm_out_pd {
-            let on = if self.outputs_only_in_op {
-                st == AlState::Op
-            } else {
-                matches!(st, AlState::SafeOp | AlState::Op)
-            };
+        let on = if self.outputs_only_in_op {
+            st == AlState::Op
+        } else {
+            matches!(st, AlState::SafeOp | AlState::Op)
+        };
+        for n in self.sm_out_pd.iter() {
             set(self, n, on);
         }
         self.rebuild_sms();
@@ -124,13 +153,36 @@ impl Esc {
         }
     }
 
-    pub(super) fn outputs_completed(&mut self, sm: SmView, hop: Hop) {
-        let len = sm.end - sm.start;
-        if self.pd.outputs.len() != len {
-            self.pd.outputs.resize(len, 0);
+    /// The size of the output image and where in it `sm`'s bytes go, and whether `sm` is the
+    /// last output SM (so that its completion completes the image).
+    fn output_place(&self, sm: SmView) -> (usize, usize, bool) {
+        let (mut total, mut offset, mut last) = (0, 0, true);
+        for (n, s, e) in self.pd_sms(self.sm_out_pd) {
+            if n < sm.idx {
+                offset += e - s;
+            } else if n > sm.idx {
+                last = false;
+            }
+            total += e - s;
         }
-        if let Some(src) = self.mem.get(sm.start..sm.end) {
-            self.pd.outputs.copy_from_slice(src);
+        (total, offset, last)
+    }
+
+    pub(super) fn outputs_completed(&mut self, sm: SmView, hop: Hop) {
+        let (total, offset, last) = self.output_place(sm);
+        if self.pd.outputs.len() != total {
+            self.pd.outputs.resize(total, 0);
+        }
+        if let (Some(src), Some(dst)) = (
+            self.mem.get(sm.start..sm.end),
+            self.pd
+                .outputs
+                .get_mut(offset..offset + (sm.end - sm.start)),
+        ) {
+            dst.copy_from_slice(src);
+        }
+        if !last {
+            return;
         }
         self.pd.outputs_received = self.pd.outputs_received.saturating_add(1);
         let t = if self.cfg.dc.supported() {
@@ -179,8 +231,8 @@ impl Esc {
                     }
                     dev.mailbox_reset();
                 }
-                if Some(n) == self.sm_out_pd && new & 0x01 != 0 {
-                    let len = usize::from(self.get_u16(base + 2));
+                if self.sm_out_pd.contains(n) && new & 0x01 != 0 {
+                    let len: usize = self.pd_ranges(self.sm_out_pd).map(|(s, e)| e - s).sum();
                     self.pd.outputs.clear();
                     self.pd.outputs.resize(len, 0);
                 }

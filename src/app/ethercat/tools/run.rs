@@ -107,6 +107,11 @@ pub struct DriveRunReport {
     pub device: DeviceInfo,
     /// Start mode.
     pub mode: String,
+    /// The PDOs it ran with (RxPDOs, TxPDOs: mapping object indices) and the bytes of
+    /// process data each way (outputs, inputs).
+    pub pdos: (Vec<u16>, Vec<u16>),
+    /// Output and input process data, bytes.
+    pub image_bytes: (usize, usize),
     /// CiA 402 states it went through, in order.
     pub states: Vec<String>,
     /// Modes it ran set-points in, in order.
@@ -697,6 +702,8 @@ pub fn run(
                 name: s.profile.to_string(),
                 device: s.info.clone(),
                 mode: s.mode.to_string(),
+                pdos: s.pdos.clone(),
+                image_bytes: s.image_bytes,
                 states: cycle
                     .and_then(|c| c.states.get(i))
                     .map(|v| v.iter().map(|s| s.to_string()).collect())

@@ -22,7 +22,7 @@ use serde::Serialize;
 use std::time::Duration;
 
 /// What to request.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct StatesOptions {
     /// One device, or every device.
     pub position: Option<u16>,
@@ -32,6 +32,9 @@ pub struct StatesOptions {
     pub cycle: Duration,
     /// How long a device may take to reach the state.
     pub timeout: Duration,
+    /// Profiles from vendor ESI files (`--esi`): a device no built-in profile matches is
+    /// configured from its own, as `run` does.
+    pub esi_profiles: Vec<&'static crate::drives::DriveProfile>,
 }
 
 impl StatesOptions {
@@ -42,6 +45,7 @@ impl StatesOptions {
             target,
             cycle: Duration::from_millis(1),
             timeout: Duration::from_secs(10),
+            esi_profiles: Vec::new(),
         }
     }
 }
@@ -63,6 +67,9 @@ pub struct StateChange {
     pub al_status_code: Option<u16>,
     /// Its meaning.
     pub code_text: Option<String>,
+    /// What to do about a refusal, where ecdrive knows (`None` otherwise).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hint: Option<String>,
 }
 
 fn write_control<L: FrameLink>(
@@ -127,6 +134,7 @@ fn drive_to<L: FrameLink>(
                         al_status_code: (!ok && refused).then_some(code.0),
                         code_text: (!ok && refused)
                             .then(|| code.text().unwrap_or("unknown AL status code").to_string()),
+                        hint: None,
                     });
                 }
             }
@@ -207,6 +215,7 @@ fn finish(pending: Vec<Pending>, target: AlState) -> Vec<StateChange> {
                 ok: false,
                 al_status_code: None,
                 code_text: None,
+                hint: None,
             })
         })
         .collect()
@@ -293,12 +302,13 @@ fn request<L: FrameLink>(
             }
         }
         AlState::SafeOp | AlState::Op => {
-            let all_known = found
-                .devices
-                .iter()
-                .all(|d| crate::drives::by_identity(d.vendor_id, d.product_code).is_some());
+            let all_known = found.devices.iter().all(|d| {
+                crate::drives::by_identity(d.vendor_id, d.product_code).is_some()
+                    || startup::esi_profile_for(&opts.esi_profiles, d).is_some()
+            });
             if all_known {
-                let cfg = StartupConfig::new(opts.cycle);
+                let mut cfg = StartupConfig::new(opts.cycle);
+                cfg.esi_profiles = opts.esi_profiles.clone();
                 let plan = startup::plan(&found.devices, &cfg)?;
                 let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
                 let mut times = started.times;
@@ -376,8 +386,29 @@ fn request<L: FrameLink>(
                     }
                 }
                 drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
+                // Configured from its SII alone, a device that needs DC SYNC0 refuses: say how
+                // to give it what it needs.
+                for p in &mut pending {
+                    if let Some(d) = p
+                        .done
+                        .as_mut()
+                        .filter(|d| d.al_status_code.is_some_and(|c| DC_REFUSALS.contains(&c)))
+                    {
+                        d.hint = Some(
+                            "the device wants DC SYNC0, which `states` sets up only for a drive \
+                             it has a profile for: give the device's ESI file with --esi FILE \
+                             (or a folder of them) and it is configured as `run` would"
+                                .to_string(),
+                        );
+                    }
+                }
             }
         }
     }
     Ok(finish(pending, target))
 }
+
+/// AL status codes of a device that wants distributed clocks configured (ETG.1000.6 Table
+/// 11): 0x002C fatal sync error, 0x002D no sync error, 0x0030 invalid DC SYNC configuration,
+/// 0x0035 invalid sync cycle time.
+const DC_REFUSALS: [u16; 4] = [0x002C, 0x002D, 0x0030, 0x0035];
