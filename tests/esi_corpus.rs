@@ -17,19 +17,12 @@
 use ecdrive::esi::{DeviceChoice, EsiFile, Severity};
 use std::path::{Path, PathBuf};
 
-/// The corpus folder: `ECDRIVE_ESI_CORPUS`, else `../shared/esi-corpus` beside the checkout.
+mod support {
+    pub mod corpus;
+}
+
 fn corpus() -> Option<PathBuf> {
-    let dir = std::env::var_os("ECDRIVE_ESI_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/esi-corpus"));
-    if dir.join("MANIFEST.tsv").is_file() {
-        Some(dir)
-    } else if std::env::var_os("ECDRIVE_CI").is_some() {
-        panic!("the ESI corpus is not at {}", dir.display());
-    } else {
-        eprintln!("skipped: no ESI corpus at {}", dir.display());
-        None
-    }
+    support::corpus::dir()
 }
 
 /// The corpus files, from the manifest (first column), in its order.
