@@ -46,6 +46,8 @@ pub fn run_recorded(
 /// One recorded cycle of one axis (`run --record`).
 #[derive(Debug, Clone, Copy)]
 pub struct Rec {
+    /// Demand position, counts.
+    pub demand: i64,
     /// Actual position, counts.
     pub actual: i64,
     /// Actual velocity, the drive's unit.
@@ -66,8 +68,9 @@ pub fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
         .map(str::trim)
         .collect();
     let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
-    let (axis, actual, vel, tq, mode) = (
+    let (axis, demand, actual, vel, tq, mode) = (
         col("axis"),
+        col("demand_counts"),
         col("actual_counts"),
         col("velocity_drive_units"),
         col("torque_drive_units"),
@@ -78,6 +81,7 @@ pub fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         let a: usize = f[axis].parse().unwrap();
         out[a].push(Rec {
+            demand: f[demand].parse().unwrap(),
             actual: f[actual].parse().unwrap(),
             velocity: f[vel].parse().unwrap(),
             torque: f[tq].parse().unwrap(),

@@ -1652,6 +1652,10 @@ impl AxisRt {
                             axis: i as u16,
                             why: "the program stopped: its mode switch failed",
                         });
+                        // The axis does not stay enabled in the mode it was leaving (turning,
+                        // perhaps, with nobody to stop it): a controlled stop, as for a program
+                        // that cannot start.
+                        self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
                     }
                 }
                 cia402::Event::Fault { .. } if !ctx.ending => {

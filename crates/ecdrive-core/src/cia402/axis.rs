@@ -35,8 +35,11 @@
 //! # Mode switching
 //!
 //! [`Axis::request_mode`] checks the mode against [`DriveCaps::supported_modes`] (0x6502). Then:
-//! 1. If [`DriveCaps::position_mode_switch_needs_zero_speed`] and the old or the new mode is a
-//!    position mode ([`DriveCaps::is_position_mode`]), the engine first **brings the axis to standstill** (phase
+//! 1. If the new mode is a position mode ([`DriveCaps::is_position_mode`]), the old one is not
+//!    and the axis turns (a position mode starts from the actual position: entered at speed it
+//!    would stop the axis within a cycle, at whatever torque the drive has), or if
+//!    [`DriveCaps::position_mode_switch_needs_zero_speed`] and the old or the new mode is a
+//!    position mode, the engine first **brings the axis to standstill** (phase
 //!    [`ModeSwitchPhase::Stopping`]): in csp it ramps the per-cycle position increment down to 0,
 //!    in csv it ramps the target velocity to 0, in cst/cstca the target torque to 0, each in
 //!    [`StopRampConfig::cycles`] cycles (linear); in every other mode it sets Halt (bit 8) so the
@@ -45,8 +48,9 @@
 //!    then does it write 0x6060.
 //!
 //!    A torque set-point of 0 only lets the motor coast, so an axis that turns in a torque
-//!    mode (cst, cstca, tq) is first switched to a velocity mode the drive supports (csv from a
-//!    cyclic mode, pv from tq; no zero-speed rule applies between those) and ramped to 0 there.
+//!    mode (cst, cstca, tq) is first switched to a velocity mode the drive supports (csv when
+//!    the torque mode or the new mode is cyclic, pv between profile modes; no zero-speed rule
+//!    applies between those) and ramped to 0 there.
 //!    The phase reads [`ModeSwitchPhase::Stopping`] throughout, and the switch's `from` is that
 //!    velocity mode from then on. A drive with no such mode gets the torque ramp and coasts.
 //! 2. It writes the new mode to 0x6060 ([`ModeSwitchPhase::Requested`]). Until 0x6061 shows the
@@ -281,8 +285,8 @@ pub struct ModeSwitchError {
 fn failure_text(r: &ModeSwitchFailure) -> &'static str {
     match r {
         ModeSwitchFailure::NoStandstill => {
-            "the axis did not reach zero speed, which the drive requires to switch to or from a \
-             position mode"
+            "the axis did not reach zero speed, which a switch into a position mode needs (and \
+             some drives require to switch to or from one)"
         }
         ModeSwitchFailure::NotConfirmed { .. } => {
             "0x6061 (modes of operation display) never showed the requested mode"
@@ -679,10 +683,20 @@ impl Axis {
         if mode == self.active_mode {
             return Ok(());
         }
-        let needs_stop = self.caps.position_mode_switch_needs_zero_speed
-            && (self.caps.is_position_mode(mode) || self.caps.is_position_mode(self.active_mode));
+        // A position mode starts from the actual position: entered while the axis turns, it
+        // would stop the axis within a cycle at whatever torque the drive has. So every drive,
+        // not only one that requires zero speed for the switch, is brought to standstill first.
+        let turning_into_position = self.caps.is_position_mode(mode)
+            && !self.caps.is_position_mode(self.active_mode)
+            && self.state == Some(State::OperationEnabled)
+            && !self.fault
+            && !self.standstill;
+        let needs_stop = turning_into_position
+            || (self.caps.position_mode_switch_needs_zero_speed
+                && (self.caps.is_position_mode(mode)
+                    || self.caps.is_position_mode(self.active_mode)));
         if needs_stop {
-            if let Some(via) = self.braking_mode() {
+            if let Some(via) = self.braking_mode(mode) {
                 self.commanded_mode = via;
                 self.switch = ModeSwitch::Braking {
                     via,
@@ -716,10 +730,13 @@ impl Axis {
     }
 
     /// The velocity mode to brake in when the axis turns in a torque mode and must reach zero
-    /// speed: a torque set-point of 0 only lets the motor coast, so the engine switches to csv
-    /// (from a cyclic torque mode) or pv (from tq) and ramps the velocity to 0 there. `None`
-    /// when the axis is not turning, not enabled, or the drive has no such mode.
-    fn braking_mode(&self) -> Option<OperationMode> {
+    /// speed before `to`: a torque set-point of 0 only lets the motor coast, so the engine
+    /// switches to a velocity mode and ramps the velocity to 0 there: csv (the master sets the
+    /// deceleration cycle by cycle) when the torque mode or `to` is cyclic, pv (the drive
+    /// decelerates by its own 0x6084) between profile modes, which a drive may not mix with
+    /// cyclic ones (the MR-J4-TM's [Pr. PA01]); the other one if the drive lacks it. `None` when
+    /// the axis is not turning, not enabled, or the drive has neither.
+    fn braking_mode(&self, to: OperationMode) -> Option<OperationMode> {
         if self.active_mode.set_point_kind() != Some(SetPointKind::Torque)
             || self.standstill
             || self.state != Some(State::OperationEnabled)
@@ -727,12 +744,20 @@ impl Axis {
         {
             return None;
         }
-        let via = if self.active_mode.is_cyclic() {
-            OperationMode::CyclicSyncVelocity
+        let (first, second) = if self.active_mode.is_cyclic() || to.is_cyclic() {
+            (
+                OperationMode::CyclicSyncVelocity,
+                OperationMode::ProfileVelocity,
+            )
         } else {
-            OperationMode::ProfileVelocity
+            (
+                OperationMode::ProfileVelocity,
+                OperationMode::CyclicSyncVelocity,
+            )
         };
-        (self.caps.supported_modes.contains(via) && !self.caps.is_position_mode(via)).then_some(via)
+        [first, second].into_iter().find(|&via| {
+            self.caps.supported_modes.contains(via) && !self.caps.is_position_mode(via)
+        })
     }
 
     /// Target position (0x607A) for pp, ip, csp.

@@ -1,0 +1,178 @@
+//! A switch out of a torque or velocity mode into a position mode never slams the axis, on
+//! either drive: the engine brakes to standstill first (in a velocity mode, the master setting
+//! the deceleration) whether or not the drive itself requires zero speed for the switch (the
+//! MR-J4-TM does, the BDHDE does not). Before, the BDHDE entered csp at speed: csp holds the
+//! actual position, the drive stopped the axis within cycles at its full torque (±3000 ‰) with a
+//! following error of 178 091 counts.
+//!
+//! A property over both drives, the torque or velocity mode, the set-point and how long it
+//! runs (so any speed at the switch, including none): the recorded torque stays below the
+//! rated torque from the switch on, and once the drive reports the position mode the demand
+//! position never leaves the actual one (no jump). Reproducible: proptest's seed is printed on
+//! failure, kept in `tests/mode_switch_safety.proptest-regressions`, replayed first;
+//! `PROPTEST_CASES` sets the number of cases (default 6).
+
+mod support {
+    pub mod runs;
+}
+
+use proptest::prelude::*;
+use proptest::test_runner::{Config, FileFailurePersistence, TestCaseError};
+
+/// One at a time: every case runs its own cycle thread.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The drive's torque unit is per mille of the rated torque on both drives: the braking stays
+/// below the rated torque; the slam reached the drive's limit.
+const RATED: i64 = 1000;
+/// How far demand may be from actual in the position mode, in revolutions: the drive's own
+/// zero-speed rule lets it switch while still creeping (the MR-J4-TM: below [Pr. PC07], 50
+/// r/min by default), never the slam (0.14 rev on the BDHDE).
+const NO_JUMP_REV: f64 = 0.01;
+
+#[derive(Debug, Clone, Copy)]
+enum From {
+    /// cst with a torque step (‰), held for the seconds.
+    Cst,
+    /// Profile torque (BDHDE: the MR-J4-TM's profile modes exclude csp).
+    Tq,
+    /// csv with a velocity ramp (counts/s), held.
+    Csv,
+}
+
+fn program(drive: &str, from: From, amount: f64, seconds: f64) -> String {
+    let (mode, step) = match from {
+        From::Cst => (
+            "cst",
+            format!("{{ step = \"torque\", torque = {amount}, hold = {seconds} }}"),
+        ),
+        From::Tq => (
+            "tq",
+            format!("{{ step = \"tq\", torque = {amount}, seconds = {seconds} }}"),
+        ),
+        From::Csv => (
+            "csv",
+            format!(
+                "{{ step = \"ramp\", velocity = {}, acceleration = {}, hold = {seconds} }}",
+                amount * 100_000.0,
+                amount * 1_000_000.0
+            ),
+        ),
+    };
+    format!(
+        "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"{drive}\"]\n\
+         loss_detection = false\n[[drive]]\nposition = 0\nmode = \"{mode}\"\n\
+         program = [{step}, {{ step = \"mode\", mode = \"csp\" }}, \
+         {{ step = \"dwell\", seconds = 0.1 }}]\n"
+    )
+}
+
+fn check(drive: &str, from: From, amount: f64, seconds: f64) -> Result<(), TestCaseError> {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let text = program(drive, from, amount, seconds);
+    let (r, rec) = support::runs::run_recorded(&text, "mode-switch");
+    prop_assert_eq!(
+        r.outcome,
+        ecdrive::app::ethercat::tools::run::Outcome::Completed,
+        "{}: {}",
+        text,
+        r.reason
+    );
+    let cycles = &rec[0];
+    let per_rev = ecdrive::drives::by_key(drive)
+        .expect("profile")
+        .units
+        .position_per_rev;
+    let no_jump = (NO_JUMP_REV * per_rev) as i64;
+    // From the last cycle of the torque or velocity mode on.
+    let from_code = match from {
+        From::Cst => 10,
+        From::Tq => 4,
+        From::Csv => 9,
+    };
+    let start = cycles
+        .iter()
+        .rposition(|c| c.mode == from_code)
+        .unwrap_or(0);
+    let top = cycles[..=start].iter().map(|c| c.velocity.abs()).max();
+    for (k, c) in cycles.iter().enumerate().skip(start) {
+        prop_assert!(
+            c.torque.abs() < RATED,
+            "{drive} {from:?} {amount} for {seconds} s (speed up to {top:?}): cycle {k} after \
+             the switch began has torque {} ‰",
+            c.torque
+        );
+        if c.mode == 8 {
+            prop_assert!(
+                (c.demand - c.actual).abs() <= no_jump,
+                "{drive} {from:?} {amount} for {seconds} s (speed up to {top:?}): in csp, \
+                 demand {} and actual {} (cycle {k})",
+                c.demand,
+                c.actual
+            );
+        }
+    }
+    prop_assert!(cycles.iter().any(|c| c.mode == 8), "csp never reported");
+    Ok(())
+}
+
+fn case() -> impl Strategy<Value = (&'static str, From, f64, f64)> {
+    (
+        prop_oneof![Just("mr-j4-tm"), Just("bdhde")],
+        prop_oneof![Just(From::Cst), Just(From::Tq), Just(From::Csv)],
+        20.0f64..150.0,
+        0.0f64..0.3,
+    )
+        .prop_map(|(d, f, a, s)| {
+            // The MR-J4-TM's profile modes exclude the cyclic ones ([Pr. PA01]).
+            let f = match (d, f) {
+                ("mr-j4-tm", From::Tq) => From::Cst,
+                (_, f) => f,
+            };
+            (d, f, a.round(), (s * 100.0).round() / 100.0)
+        })
+}
+
+proptest! {
+    #![proptest_config(Config {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(6),
+        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
+            "tests/mode_switch_safety.proptest-regressions",
+        ))),
+        ..Config::default()
+    })]
+    #[test]
+    fn switching_into_a_position_mode_never_slams_the_axis((drive, from, amount, seconds) in case()) {
+        check(drive, from, amount, seconds)?;
+    }
+}
+
+/// The case the issue reported: the BDHDE at 54 million counts/s after 0.2 s of 100 ‰ in tq,
+/// then csp.
+#[test]
+fn the_bdhde_brakes_before_csp() {
+    check("bdhde", From::Tq, 100.0, 0.2).unwrap();
+    check("bdhde", From::Cst, 100.0, 0.2).unwrap();
+}
+
+/// A mode switch a program asks for that fails (here the BDHDE braking in pv by its own
+/// profile deceleration, too slow for the switch's time limit) stops the program and the axis:
+/// a controlled stop and disable, the run ends with the reason. Before, the axis stayed enabled
+/// in pv, turning, and the run never ended.
+#[test]
+fn a_failed_switch_mid_program_stops_the_axis() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let text = program("bdhde", From::Tq, 100.0, 0.2).replace("mode = \"csp\"", "mode = \"pp\"");
+    let (r, _) = support::runs::run_recorded(&text, "mode-switch-fails");
+    assert_ne!(
+        r.outcome,
+        ecdrive::app::ethercat::tools::run::Outcome::Completed
+    );
+    assert!(r.reason.contains("mode switch failed"), "{}", r.reason);
+    assert_eq!(
+        r.drives[0].states.last().map(String::as_str),
+        Some("Switch on disabled"),
+        "{:?}",
+        r.drives[0].states
+    );
+}
