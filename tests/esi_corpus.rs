@@ -358,6 +358,31 @@ fn outputs_on_the_digital_output_register_and_several_sms() {
     let r = p.logical(Command::Lwr, 0, &[1, 2, 3, 4]).unwrap();
     assert_eq!(r.wkc, 1);
     assert_eq!(p.segment.slave(0).unwrap().esc.outputs(), &[1, 2, 3, 4]);
+
+    // An output SM in one-buffer mode (ControlByte 0x46, an SMC EX250 file's) is process data
+    // too (before: SAFE-OP refused with 0x001D). A file of that shape, written here.
+    let file = std::env::temp_dir().join(format!("ecdrive-one-buffer-{}.xml", std::process::id()));
+    std::fs::write(
+        &file,
+        "<EtherCATInfo><Vendor><Id>276</Id><Name>V</Name></Vendor><Descriptions><Devices>\
+         <Device><Type ProductCode=\"#x10\" RevisionNo=\"0\">OneBuffer</Type>\
+         <Sm StartAddress=\"#x0f00\" ControlByte=\"#x46\" Enable=\"9\">Outputs</Sm>\
+         <Sm StartAddress=\"#x1000\" ControlByte=\"#x0\" Enable=\"1\">Inputs</Sm>\
+         <RxPdo Fixed=\"1\" Sm=\"0\"><Index>#x1600</Index><Name>O</Name><Entry><Index>#x7000</Index>\
+         <SubIndex>1</SubIndex><BitLen>16</BitLen><Name>o</Name><DataType>UINT</DataType></Entry></RxPdo>\
+         <TxPdo Fixed=\"1\" Sm=\"1\"><Index>#x1A00</Index><Name>I</Name><Entry><Index>#x6000</Index>\
+         <SubIndex>1</SubIndex><BitLen>16</BitLen><Name>i</Name><DataType>UINT</DataType></Entry></TxPdo>\
+         </Device></Devices></Descriptions></EtherCATInfo>",
+    )
+    .unwrap();
+    let mut p = serve(format!("esi:{}", file.display()));
+    setup(&mut p, &[(0x0F00, 2, 0x46), (0x1000, 2, 0x00)]);
+    let _ = std::fs::remove_file(&file);
+    for _ in 0..2 {
+        last = p.logical(Command::Lrw, 0, &[7, 8, 0, 0]).unwrap().data;
+    }
+    assert_eq!(p.segment.slave(0).unwrap().esc.outputs(), &[7, 8]);
+    assert_eq!(&last[2..4], &[7, 8]);
 }
 
 /// `run --esi FILE|DIR` (a drive found by identity among the profiles of vendor files) and
@@ -389,8 +414,9 @@ fn esi_dir_and_esi_file_choose_the_same_pdos() {
                     let mut cfg = ecdrive::app::config::parse(text, "pdos.toml")
                         .unwrap_or_else(|e| panic!("{sim} {mode}: {e}"));
                     if esi {
-                        let (p, _) = ecdrive::drives::esi_profile::load_path(&path).unwrap();
-                        cfg.master.startup.esi_profiles = p;
+                        let l = ecdrive::drives::esi_profile::load_path(&path).unwrap();
+                        cfg.master.startup.esi_profiles = l.profiles;
+                        cfg.master.startup.esi_not_drives = l.not_drives;
                     }
                     let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {})
                         .unwrap_or_else(|e| panic!("{sim} {mode}: {e}"));

@@ -644,3 +644,184 @@ fn a_device_that_cannot_be_read_leaves_the_others() {
     let issues = f.check();
     assert_eq!(issues[0].severity, Severity::Error);
 }
+
+// ---- rules found by trying vendor files the project had not seen -----------------------------
+
+/// A VAR object of the minimal dictionary.
+fn var(index: &str, name: &str, ty: &str, bits: u16, default: Option<&str>) -> String {
+    format!(
+        "<Object><Index>{index}</Index><Name>{name}</Name><Type>{ty}</Type>\
+         <BitSize>{bits}</BitSize><Info>{}</Info><Flags><Access>rw</Access></Flags></Object>",
+        default.map_or(String::new(), |d| format!(
+            "<DefaultValue>{d}</DefaultValue>"
+        ))
+    )
+}
+
+/// A CoE drive: controlword, statusword, modes of operation, 0x6502 as given, and `pdos`.
+fn drive_with(m6502: Option<&str>, with_6060: bool, pdos: &str) -> String {
+    let mut objects = var("#x6040", "Controlword", "UINT", 16, None)
+        + &var("#x6041", "Statusword", "UINT", 16, None)
+        + &var("#x607A", "Target position", "DINT", 32, None)
+        + &var("#x6064", "Position actual value", "DINT", 32, None);
+    if with_6060 {
+        objects += &var("#x6060", "Modes of operation", "SINT", 8, None);
+    }
+    if let Some(d) = m6502 {
+        objects += &var("#x6502", "Supported drive modes", "UDINT", 32, Some(d));
+    }
+    with_device(&format!(
+        "<Sm StartAddress=\"#x1000\" ControlByte=\"#x26\" Enable=\"1\">MBoxOut</Sm>\
+         <Sm StartAddress=\"#x1080\" ControlByte=\"#x22\" Enable=\"1\">MBoxIn</Sm>\
+         <Sm StartAddress=\"#x1100\" ControlByte=\"#x64\" Enable=\"1\">Outputs</Sm>\
+         <Sm StartAddress=\"#x1180\" ControlByte=\"#x20\" Enable=\"1\">Inputs</Sm>\
+         {pdos}\
+         <Mailbox><CoE SdoInfo=\"1\"/></Mailbox>\
+         <Profile><Dictionary><DataTypes>\
+         <DataType><Name>UINT</Name><BitSize>16</BitSize></DataType>\
+         <DataType><Name>DINT</Name><BitSize>32</BitSize></DataType>\
+         <DataType><Name>SINT</Name><BitSize>8</BitSize></DataType>\
+         <DataType><Name>UDINT</Name><BitSize>32</BitSize></DataType>\
+         </DataTypes><Objects>{objects}</Objects></Dictionary></Profile>"
+    ))
+}
+
+const CSP_PDOS: &str = "<RxPdo Fixed=\"1\" Sm=\"2\"><Index>#x1600</Index><Name>R</Name>\
+     <Entry><Index>#x6040</Index><SubIndex>0</SubIndex><BitLen>16</BitLen><Name>cw</Name><DataType>UINT</DataType></Entry>\
+     <Entry><Index>#x607A</Index><SubIndex>0</SubIndex><BitLen>32</BitLen><Name>tp</Name><DataType>DINT</DataType></Entry>\
+     </RxPdo>\
+     <TxPdo Fixed=\"1\" Sm=\"3\"><Index>#x1A00</Index><Name>T</Name>\
+     <Entry><Index>#x6041</Index><SubIndex>0</SubIndex><BitLen>16</BitLen><Name>sw</Name><DataType>UINT</DataType></Entry>\
+     <Entry><Index>#x6064</Index><SubIndex>0</SubIndex><BitLen>32</BitLen><Name>pa</Name><DataType>DINT</DataType></Entry>\
+     <Entry><Index>#x60FD</Index><SubIndex>0</SubIndex><BitLen>32</BitLen><Name>Digital inputs</Name><DataType>UDINT</DataType></Entry>\
+     </TxPdo>";
+
+/// Inovance's IS620N file gives 0x6502 a default of 0 (a placeholder its firmware fills): no
+/// mode is known from it, as without a default, instead of "supports nothing" and a profile
+/// refused with an empty reason.
+#[test]
+fn a_zero_supported_modes_default_is_no_information() {
+    let f = EsiFile::parse(&drive_with(Some("#x0"), true, CSP_PDOS)).unwrap();
+    let plan = DrivePlan::new(&f, &f.devices[0]);
+    assert!(!plan.modes_from_0x6502);
+    assert!(plan.modes.contains(&"csp"), "{:?}", plan.modes);
+    assert!(ecdrive::drives::esi_profile::from_esi(&f, &f.devices[0], "f.xml").is_ok());
+    // A default without any cyclic mode (pp and pv only) says so.
+    let f = EsiFile::parse(&drive_with(Some("#x5"), true, CSP_PDOS)).unwrap();
+    let e = ecdrive::drives::esi_profile::from_esi(&f, &f.devices[0], "f.xml").unwrap_err();
+    assert!(e.reason.contains("lists none of csp, csv and cst"), "{e}");
+}
+
+/// An Elmo boot device maps 0x60FD in its fixed TxPDO, which its dictionary lacks: the PDO
+/// entry describes it, the profile has it mappable (before: "0x60FD:00 does not exist in the
+/// dictionary" at start-up). Without 0x6060 the device is no drive to run (a boot loader),
+/// `esi show` and the profile agree, and `--esi` never gives it the profile of the drive that
+/// shares its product code.
+#[test]
+fn a_pdo_mapped_object_the_dictionary_lacks_and_a_device_without_0x6060() {
+    let f = EsiFile::parse(&drive_with(None, true, CSP_PDOS)).unwrap();
+    let p = ecdrive::drives::esi_profile::from_esi(&f, &f.devices[0], "f.xml").unwrap();
+    let di = p
+        .dictionary
+        .iter()
+        .find(|o| o.index == 0x60FD)
+        .expect("0x60FD");
+    assert!(
+        di.entries[0]
+            .access
+            .contains(ecdrive::od::EntryAccess::TXPDO)
+    );
+    assert_eq!(di.entries[0].bit_len, 32);
+
+    let f = EsiFile::parse(&drive_with(None, false, CSP_PDOS)).unwrap();
+    let why = DrivePlan::new(&f, &f.devices[0])
+        .not_a_drive
+        .expect("no drive");
+    assert!(why.contains("no 0x6060"), "{why}");
+    let e = ecdrive::drives::esi_profile::from_esi(&f, &f.devices[0], "f.xml").unwrap_err();
+    assert!(e.reason.contains("no 0x6060"), "{e}");
+
+    // A folder with the boot loader (revision 1) and the drive (revision 2) of one product.
+    let dir = std::env::temp_dir().join(format!("ecdrive-boot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let boot = drive_with(None, false, CSP_PDOS);
+    let both = boot.replace(
+        "</Device>\n",
+        &format!(
+            "</Device>\n{}",
+            &drive_with(None, true, CSP_PDOS)
+                .split("<Device>")
+                .nth(1)
+                .unwrap()
+                .split("</Devices>")
+                .next()
+                .unwrap()
+                .replace("RevisionNo=\"1\"", "RevisionNo=\"2\"")
+                .replace("<Device>", "")
+        )
+        .replacen("<Type", "<Device><Type", 1),
+    );
+    std::fs::write(dir.join("both.xml"), &both).unwrap();
+    let l = ecdrive::drives::esi_profile::load_dir(&dir).unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(l.profiles.len(), 1, "{:?}", l.skipped);
+    assert_eq!(l.profiles[0].revision, 2);
+    assert_eq!(l.not_drives, vec![(2, 0x10, 1)]);
+    let boot_device = ecdrive::master::startup::DeviceInfo {
+        position: 0,
+        address: 0x1000,
+        alias: 0,
+        name: "D".into(),
+        vendor_id: 2,
+        product_code: 0x10,
+        revision: 1,
+        serial: 0,
+        dc: true,
+        profile: None,
+        coe: true,
+        device_type: None,
+        found: None,
+    };
+    assert!(
+        ecdrive::master::startup::esi_profile_for(&l.profiles, &l.not_drives, &boot_device)
+            .is_none()
+    );
+    let unknown_revision = ecdrive::master::startup::DeviceInfo {
+        revision: 3,
+        ..boot_device.clone()
+    };
+    assert!(
+        ecdrive::master::startup::esi_profile_for(&l.profiles, &l.not_drives, &unknown_revision)
+            .is_some()
+    );
+}
+
+/// An SMC EX250 file labels its input SM `Outputs`, with ControlByte 0x00 (the master reads)
+/// and its TxPDO assigned to it: read as Inputs, noted; a label that only one of the two
+/// contradicts stays.
+#[test]
+fn an_sm_labelled_against_its_control_byte_and_pdos() {
+    let body = "<Sm StartAddress=\"#x0f00\" ControlByte=\"#x46\" Enable=\"9\">Outputs</Sm>\
+        <Sm StartAddress=\"#x1000\" ControlByte=\"#x0\" Enable=\"1\">Outputs</Sm>\
+        <RxPdo Fixed=\"1\" Sm=\"0\"><Index>#x1600</Index><Name>O</Name>\
+        <Entry><Index>#x7000</Index><SubIndex>1</SubIndex><BitLen>8</BitLen><Name>b</Name><DataType>USINT</DataType></Entry></RxPdo>\
+        <TxPdo Fixed=\"1\" Sm=\"1\"><Index>#x1A00</Index><Name>I</Name>\
+        <Entry><Index>#x6000</Index><SubIndex>1</SubIndex><BitLen>8</BitLen><Name>b</Name><DataType>USINT</DataType></Entry></TxPdo>";
+    let f = EsiFile::parse(&with_device(body)).unwrap();
+    let kinds: Vec<&str> = f.devices[0]
+        .sync_managers
+        .iter()
+        .map(|s| s.kind.name())
+        .collect();
+    assert_eq!(kinds, ["Outputs", "Inputs"]);
+    assert!(
+        f.warnings
+            .iter()
+            .any(|w| w.to_string().contains("read as Inputs")),
+        "{:?}",
+        f.warnings
+    );
+    // Without the TxPDO on it, the label stays.
+    let f = EsiFile::parse(&with_device(&body.replace("Sm=\"1\"", "Sm=\"5\""))).unwrap();
+    assert_eq!(f.devices[0].sync_managers[1].kind.name(), "Outputs");
+}

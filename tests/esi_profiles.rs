@@ -645,8 +645,8 @@ fn a_vendor_file_over_veth() {
 /// folder's terminals (Acme_Terminals.xml) are listed as not usable, and do not stop the run.
 #[test]
 fn a_folder_of_vendor_files_is_searched_by_identity() {
-    let (profiles, skipped) =
-        ecdrive::drives::esi_profile::load_dir(std::path::Path::new(&path(""))).unwrap();
+    let loaded = ecdrive::drives::esi_profile::load_dir(std::path::Path::new(&path(""))).unwrap();
+    let (profiles, skipped) = (loaded.profiles, loaded.skipped);
     let mut keys: Vec<&str> = profiles.iter().map(|p| p.bus.key).collect();
     keys.sort_unstable();
     assert_eq!(keys, ["esi:KS2", "esi:ND40", "esi:TX7"]);

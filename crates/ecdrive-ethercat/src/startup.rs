@@ -168,9 +168,11 @@ impl Default for DcSettings {
 }
 
 /// The profile of `d` among profiles built from ESI files: the same identity and revision,
-/// else the same identity.
+/// else the same identity unless the files describe `d`'s revision as no drive (`not_drives`:
+/// vendor, product, revision).
 pub fn esi_profile_for(
     profiles: &[&'static DriveProfile],
+    not_drives: &[(u32, u32, u32)],
     d: &DeviceInfo,
 ) -> Option<&'static DriveProfile> {
     let same = |p: &&&'static DriveProfile| p.identity.matches(d.vendor_id, d.product_code);
@@ -178,7 +180,13 @@ pub fn esi_profile_for(
         .iter()
         .filter(same)
         .find(|p| p.revision == d.revision)
-        .or_else(|| profiles.iter().find(same))
+        .or_else(|| {
+            if not_drives.contains(&(d.vendor_id, d.product_code, d.revision)) {
+                None
+            } else {
+                profiles.iter().find(same)
+            }
+        })
         .copied()
 }
 
@@ -199,6 +207,9 @@ pub struct StartupConfig {
     /// [`crate::drives::esi_profile::load_dir`]): a device no built-in profile matches is
     /// matched against these by identity (the same revision first, then any).
     pub esi_profiles: Vec<&'static DriveProfile>,
+    /// The devices the same ESI files describe that are no drives (vendor, product,
+    /// revision): never given a drive profile of another revision.
+    pub esi_not_drives: Vec<(u32, u32, u32)>,
 }
 
 impl StartupConfig {
@@ -210,6 +221,7 @@ impl StartupConfig {
             drives: Vec::new(),
             allow_generic: false,
             esi_profiles: Vec::new(),
+            esi_not_drives: Vec::new(),
         }
     }
 }
@@ -732,10 +744,10 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                 p
             }
             // The drive's own ESI file, when it names one: nothing else may stand in for it.
-            None if !setup.esi_choices.is_empty() => esi_profile_for(&setup.esi_choices, d)
+            None if !setup.esi_choices.is_empty() => esi_profile_for(&setup.esi_choices, &[], d)
                 .ok_or_else(|| esi_choice_error(&dref, d, &setup.esi_choices))?,
             None => match crate::drives::by_identity(d.vendor_id, d.product_code)
-                .or_else(|| esi_profile_for(&cfg.esi_profiles, d))
+                .or_else(|| esi_profile_for(&cfg.esi_profiles, &cfg.esi_not_drives, d))
             {
                 Some(p) => p,
                 None if cfg.allow_generic && d.declares_cia402() => generic,

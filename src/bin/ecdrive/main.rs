@@ -1283,13 +1283,15 @@ fn dispatch(cli: Cli) -> ExitCode {
             opts.cycle = Duration::from_micros(u64::from(cycle_us));
             if let Some(path) = &esi {
                 match ecdrive::drives::esi_profile::load_path(path) {
-                    Ok((profiles, skipped)) if !profiles.is_empty() => {
-                        for s in skipped {
+                    Ok(l) if !l.profiles.is_empty() => {
+                        for s in l.skipped {
                             eprintln!("ecdrive states: warning: --esi: {s}");
                         }
-                        opts.esi_profiles = profiles;
+                        opts.esi_profiles = l.profiles;
+                        opts.esi_not_drives = l.not_drives;
                     }
-                    Ok((_, skipped)) => {
+                    Ok(l) => {
+                        let skipped = l.skipped;
                         let why = if skipped.is_empty() {
                             "no ESI file (*.xml) there".to_string()
                         } else {

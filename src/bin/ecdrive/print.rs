@@ -502,7 +502,7 @@ fn esi_plan(p: &ecdrive::esi::DrivePlan) {
         if p.modes_from_0x6502 {
             "0x6502"
         } else {
-            "assumed: the file has no 0x6502 default"
+            "assumed: the file gives no 0x6502 default, or 0"
         }
     );
     let side = |r: &Result<ecdrive::esi::DirectionChoice, String>| match r {

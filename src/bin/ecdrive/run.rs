@@ -21,7 +21,9 @@ pub fn run(
     };
     if let Some(dir) = esi {
         match ecdrive::drives::esi_profile::load_path(dir) {
-            Ok((profiles, skipped)) if !profiles.is_empty() => {
+            Ok(l) if !l.profiles.is_empty() => {
+                let (profiles, skipped) = (l.profiles, l.skipped);
+                cfg.master.startup.esi_not_drives = l.not_drives;
                 for s in skipped {
                     cfg.warnings.push(format!("--esi: {s}"));
                 }
@@ -33,7 +35,8 @@ pub fn run(
                 }
                 cfg.master.startup.esi_profiles = profiles;
             }
-            Ok((_, skipped)) => {
+            Ok(l) => {
+                let skipped = l.skipped;
                 let why = if skipped.is_empty() {
                     "no ESI file (*.xml) there".to_string()
                 } else {

@@ -216,6 +216,10 @@ pub fn from_esi(
         )));
     }
     let plan = DrivePlan::new(file, dev);
+    // What `esi show` says stops a device from running as a drive stops its profile too.
+    if let Some(why) = &plan.not_a_drive {
+        return Err(err(why.clone()));
+    }
     let mut modes = 0u32;
     for m in &plan.modes {
         modes |= match *m {
@@ -248,6 +252,13 @@ pub fn from_esi(
                     )
                 })
                 .collect();
+            if why.is_empty() {
+                return err(
+                    "its 0x6502 (supported drive modes) default lists none of csp, csv and cst: \
+                     ecdrive runs a drive in a cyclic mode"
+                        .into(),
+                );
+            }
             err(format!(
                 "no cyclic mode can be mapped ({})",
                 why.join(" | ")
@@ -447,59 +458,72 @@ pub fn find_in(
         .map(|d| from_esi(file, d, source))
 }
 
-/// Every drive profile the ESI files in `dir` (`*.xml`, in name order) give: one per device
-/// with a CoE mailbox whose PDOs can carry a cyclic mode. What cannot be used is listed in the
-/// second vector, one line each naming the file (and for a file that does not parse, the line
-/// and column): a folder of vendor files holds terminals and couplers too.
-pub fn load_dir(
-    dir: &std::path::Path,
-) -> Result<(Vec<&'static DriveProfile>, Vec<String>), std::io::Error> {
+/// What a folder (or a file) of ESI files gives: see [`load_dir`].
+#[derive(Debug, Clone, Default)]
+pub struct Loaded {
+    /// One profile per device with a CoE mailbox that is a CiA 402 drive ecdrive can run.
+    pub profiles: Vec<&'static DriveProfile>,
+    /// What cannot be used, one line each naming the file (and for a file that does not
+    /// parse, the line and column): a folder of vendor files holds terminals and couplers too.
+    pub skipped: Vec<String>,
+    /// The identities (vendor, product, revision) of the devices the files describe that are
+    /// no drive: a device of one of them is never matched to a drive profile of another
+    /// revision of the same product (Elmo's boot loader shares its product code with the
+    /// drive).
+    pub not_drives: Vec<(u32, u32, u32)>,
+}
+
+/// Every drive profile the ESI files in `dir` (`*.xml`, in name order) give, what cannot be
+/// used, and the devices that are no drives ([`Loaded`]).
+pub fn load_dir(dir: &std::path::Path) -> Result<Loaded, std::io::Error> {
     let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(dir)?
         .filter_map(Result::ok)
         .map(|e| e.path())
         .filter(|p| p.extension().is_some_and(|x| x.eq_ignore_ascii_case("xml")))
         .collect();
     files.sort();
-    let mut profiles = Vec::new();
-    let mut skipped = Vec::new();
+    let mut out = Loaded::default();
     for path in files {
-        load_file(&path, &mut profiles, &mut skipped);
+        load_file(&path, &mut out);
     }
-    Ok((profiles, skipped))
+    Ok(out)
 }
 
 /// [`load_dir`] for a folder, the same for one file (`--esi FILE|DIR`).
-pub fn load_path(
-    path: &std::path::Path,
-) -> Result<(Vec<&'static DriveProfile>, Vec<String>), std::io::Error> {
+pub fn load_path(path: &std::path::Path) -> Result<Loaded, std::io::Error> {
     if std::fs::metadata(path)?.is_dir() {
         return load_dir(path);
     }
-    let (mut profiles, mut skipped) = (Vec::new(), Vec::new());
-    load_file(path, &mut profiles, &mut skipped);
-    Ok((profiles, skipped))
+    let mut out = Loaded::default();
+    load_file(path, &mut out);
+    Ok(out)
 }
 
-fn load_file(
-    path: &std::path::Path,
-    profiles: &mut Vec<&'static DriveProfile>,
-    skipped: &mut Vec<String>,
-) {
+fn load_file(path: &std::path::Path, out: &mut Loaded) {
     let shown = path.display().to_string();
     let file = match EsiFile::from_path(path) {
         Ok(f) => f,
         Err(e) => {
-            skipped.push(format!("{shown}: {e}"));
+            out.skipped.push(format!("{shown}: {e}"));
             return;
         }
     };
     for dev in &file.devices {
+        let identity = (
+            file.vendor.id,
+            dev.type_.product_code,
+            dev.type_.revision_no.unwrap_or(0),
+        );
         if !dev.has_coe() {
+            out.not_drives.push(identity);
             continue;
         }
         match from_esi(&file, dev, &shown) {
-            Ok(p) => profiles.push(p),
-            Err(e) => skipped.push(e.to_string()),
+            Ok(p) => out.profiles.push(p),
+            Err(e) => {
+                out.not_drives.push(identity);
+                out.skipped.push(e.to_string());
+            }
         }
     }
 }

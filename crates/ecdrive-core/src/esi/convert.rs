@@ -249,6 +249,89 @@ pub fn static_dictionary(dev: &Device) -> Result<&'static [crate::od::ObjectDesc
             entries: Vec::leak(entries),
         });
     }
+    add_pdo_mapped(dev, &mut objects);
     objects.sort_by_key(|o| o.index);
     Ok(Vec::leak(objects))
+}
+
+/// The data type of a PDO entry: its `<DataType>` where ecdrive knows it and it has the
+/// entry's size, else an unsigned integer (or a byte string) of the entry's size.
+pub fn pdo_entry_type(name: Option<crate::od::DataType>, bits: u16) -> crate::od::DataType {
+    use crate::od::DataType;
+    match name {
+        Some(t) if t.bit_len() == Some(bits) => t,
+        _ => match bits {
+            1 => DataType::Boolean,
+            8 => DataType::Unsigned8,
+            16 => DataType::Unsigned16,
+            24 => DataType::Unsigned24,
+            32 => DataType::Unsigned32,
+            64 => DataType::Unsigned64,
+            b if b < 8 => DataType::Unsigned8,
+            _ => DataType::OctetString,
+        },
+    }
+}
+
+/// Objects the file's own PDOs map that its dictionary lacks (an Elmo boot device maps 0x60FD
+/// in a fixed TxPDO that its nine-object dictionary does not describe): the PDO entry is the
+/// file's description of them, so they are added with its data type and size, mappable in the
+/// PDO's direction (`esi check` names each). The device has them, or its fixed PDO would not
+/// work.
+fn add_pdo_mapped(dev: &Device, objects: &mut Vec<crate::od::ObjectDesc>) {
+    use crate::od::{EntryAccess, EntryDesc, ObjectCode, ObjectDesc};
+    for (dir, flag, access) in [
+        (Direction::Rx, EntryAccess::RXPDO, EntryAccess::RW),
+        (Direction::Tx, EntryAccess::TXPDO, EntryAccess::RO),
+    ] {
+        for p in dev.pdos(dir).iter().filter(|p| !p.virtual_) {
+            for e in p
+                .entries
+                .iter()
+                .filter(|e| !e.is_padding() && e.index != p.index)
+            {
+                let entry = EntryDesc {
+                    sub: e.sub,
+                    name: leak_str(&e.name),
+                    data_type: pdo_entry_type(e.data_type(), e.bit_len),
+                    bit_len: e.bit_len,
+                    access: access.union(flag),
+                    default: crate::od::ConstValue::None,
+                    min: crate::od::ConstValue::None,
+                    max: crate::od::ConstValue::None,
+                };
+                match objects.iter_mut().find(|o| o.index == e.index) {
+                    Some(o) if o.entries.iter().any(|x| x.sub == e.sub) => {}
+                    // A variable mapped by sub-index: the variable holds.
+                    Some(o) if o.code == ObjectCode::Var => {}
+                    Some(o) => {
+                        let mut entries = o.entries.to_vec();
+                        entries.push(entry);
+                        entries.sort_by_key(|x| x.sub);
+                        o.entries = Vec::leak(entries);
+                    }
+                    None => {
+                        let (code, entries) = if e.sub == 0 {
+                            (ObjectCode::Var, vec![entry])
+                        } else {
+                            let count = EntryDesc::new(
+                                0,
+                                "Number of entries",
+                                crate::od::DataType::Unsigned8,
+                                EntryAccess::RO,
+                            )
+                            .default(crate::od::ConstValue::Uint(u64::from(e.sub)));
+                            (ObjectCode::Record, vec![count, entry])
+                        };
+                        objects.push(ObjectDesc {
+                            index: e.index,
+                            name: entry.name,
+                            code,
+                            entries: Vec::leak(entries),
+                        });
+                    }
+                }
+            }
+        }
+    }
 }

@@ -405,7 +405,11 @@ impl DrivePlan {
             .and_then(Result::ok)
             .and_then(|o| o.entry(0).and_then(|e| e.default.clone()))
             .and_then(|v| v.as_i128())
-            .and_then(|v| u64::try_from(v).ok());
+            .and_then(|v| u64::try_from(v).ok())
+            // A default of 0 is a placeholder (Inovance's IS620N file: the firmware fills the
+            // object in; its sister SV660N file has 0x3AD): no mode is known from it, as
+            // without a default.
+            .filter(|&v| v != 0);
         let modes: Vec<CyclicModeRef> = match supported {
             Some(bits) => CYCLIC_MODES
                 .iter()
@@ -474,6 +478,16 @@ impl DrivePlan {
             Some(
                 "the file has no object dictionary (<Profile><Dictionary>): a drive is run from \
                  its file's dictionary (types, access, modes)"
+                    .to_string(),
+            )
+        } else if !(in_dict(0x6060) || in_pdos(0x6060)) {
+            // A firmware loader (Elmo's "GCON Boot" devices have nine objects, 0x6040 and
+            // 0x6041 among them) is no drive to run; neither is a device whose mode cannot be
+            // set.
+            Some(
+                "no 0x6060 (modes of operation) in its dictionary or PDOs: the mode of operation \
+                 cannot be set, so ecdrive does not run it as a drive (an I/O device runs with its \
+                 process data)"
                     .to_string(),
             )
         } else {

@@ -63,7 +63,7 @@ mod num;
 mod parse;
 
 pub use check::{CheckIssue, Severity};
-pub use convert::{EsiConvertError, static_dictionary};
+pub use convert::{EsiConvertError, pdo_entry_type, static_dictionary};
 pub use dictionary::{
     ArrayInfo, Category, Dictionary, EsiDataType, EsiObject, EsiSubItem, EsiValue, Flags,
     ObjectDiff, ObjectInfo, ResolvedEntry, ResolvedObject,

@@ -638,6 +638,7 @@ impl<'a, 'input> P<'a, 'input> {
                 .collect(),
             None => Vec::new(),
         };
+        self.sm_directions(&mut sync_managers, &rx_pdos, &tx_pdos, &scope);
         let eeprom = child(n, "Eeprom").and_then(|e| self.soft(self.eeprom(e, &scope)));
         let profiles: Vec<Profile> = children(n, "Profile")
             .map(|p| self.profile(p, &scope))
@@ -668,6 +669,38 @@ impl<'a, 'input> P<'a, 'input> {
             eeprom,
             profiles,
         })
+    }
+
+    /// A process-data SM whose type contradicts both its ControlByte's direction and the PDOs
+    /// assigned to it (an SMC EX250 file labels its input SM `Outputs`, with ControlByte 0x00,
+    /// the master reads, and its TxPDO on it): the ESC does what the control byte says and the
+    /// device sends what the PDOs say, so it is read as the other direction, noted.
+    fn sm_directions(&self, sms: &mut [SyncManager], rx: &[EsiPdo], tx: &[EsiPdo], scope: &str) {
+        for sm in sms.iter_mut() {
+            if sm.control_byte & 0x03 != 0x00 {
+                continue;
+            }
+            let master_writes = sm.control_byte & 0x0C == 0x04;
+            let on = |pdos: &[EsiPdo]| pdos.iter().any(|p| p.sm == Some(sm.index));
+            let other = match sm.kind {
+                SmKind::Outputs if !master_writes && on(tx) && !on(rx) => SmKind::Inputs,
+                SmKind::Inputs if master_writes && on(rx) && !on(tx) => SmKind::Outputs,
+                _ => continue,
+            };
+            self.warn(self.invalid(
+                sm.position,
+                format!(
+                    "<Sm> {} in {scope} has type {}, but its ControlByte 0x{:02X} and the PDOs \
+                     assigned to it say {} (read as {})",
+                    sm.index,
+                    sm.kind.name(),
+                    sm.control_byte,
+                    other.name(),
+                    other.name()
+                ),
+            ));
+            sm.kind = other;
+        }
     }
 
     /// A PDO entry naming sub-index n > 0 of an object the file's dictionary describes as a

@@ -31,23 +31,7 @@ fn leak(s: String) -> &'static str {
     String::leak(s)
 }
 
-/// The data type of a PDO entry: its `<DataType>` where ecdrive knows it and it has the
-/// entry's size, else an unsigned integer (or a byte string) of the entry's size.
-fn entry_type(name: Option<DataType>, bits: u16) -> DataType {
-    match name {
-        Some(t) if t.bit_len() == Some(bits) => t,
-        _ => match bits {
-            1 => DataType::Boolean,
-            8 => DataType::Unsigned8,
-            16 => DataType::Unsigned16,
-            24 => DataType::Unsigned24,
-            32 => DataType::Unsigned32,
-            64 => DataType::Unsigned64,
-            b if b < 8 => DataType::Unsigned8,
-            _ => DataType::OctetString,
-        },
-    }
-}
+use crate::esi::pdo_entry_type as entry_type;
 
 fn mapped_access(dir: Direction) -> EntryAccess {
     match dir {

@@ -27,7 +27,8 @@ impl Esc {
     }
 
     /// Check the process-data SMs of one direction against the expected size: every enabled
-    /// one buffered, in the right direction and in place, their lengths adding up.
+    /// one in three- or one-buffer mode, in the right direction and in place, their lengths
+    /// adding up.
     pub(super) fn pd_config_ok(&self, set: SmSet, expected: usize, ecat_writes: bool) -> bool {
         let mut total = 0usize;
         for n in set.iter().filter(|&n| n < self.cfg.sm_count) {
@@ -39,10 +40,9 @@ impl Esc {
             let start = usize::from(self.get_u16(b));
             let ctl = self.byte(b + 4);
             let dir_ok = (ctl >> 2) & 0x03 == if ecat_writes { 1 } else { 0 };
-            if ctl & 0x03 != 0x00
-                || !dir_ok
-                || !self.pd_sm_in_place(start, start + len, ecat_writes)
-            {
+            // Three-buffer or one-buffer mode (ETG.1000.4: both serve process data).
+            let mode_ok = matches!(ctl & 0x03, 0x00 | 0x02);
+            if !mode_ok || !dir_ok || !self.pd_sm_in_place(start, start + len, ecat_writes) {
                 return false;
             }
             total += len;

@@ -21,7 +21,12 @@ impl Esc {
                 idx: n,
                 start,
                 end: (start + len).min(ram_end.max(start)),
-                mailbox: ctl & 0x03 == 0x02,
+                // One-buffer ("mailbox") mode on a process-data SM (an SMC EX250's outputs on
+                // the digital output register, ControlByte 0x46) is process data all the same:
+                // its PDI takes each buffer at once.
+                mailbox: ctl & 0x03 == 0x02
+                    && !self.sm_out_pd.contains(n)
+                    && !self.sm_in_pd.contains(n),
                 ecat_writes: (ctl >> 2) & 0x03 == 0x01,
                 usable: self.byte(b + 7) & 0x01 == 0,
             });

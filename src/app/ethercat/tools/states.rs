@@ -35,6 +35,8 @@ pub struct StatesOptions {
     /// Profiles from vendor ESI files (`--esi`): a device no built-in profile matches is
     /// configured from its own, as `run` does.
     pub esi_profiles: Vec<&'static crate::drives::DriveProfile>,
+    /// The devices the same files describe that are no drives (vendor, product, revision).
+    pub esi_not_drives: Vec<(u32, u32, u32)>,
 }
 
 impl StatesOptions {
@@ -46,6 +48,7 @@ impl StatesOptions {
             cycle: Duration::from_millis(1),
             timeout: Duration::from_secs(10),
             esi_profiles: Vec::new(),
+            esi_not_drives: Vec::new(),
         }
     }
 }
@@ -304,11 +307,13 @@ fn request<L: FrameLink>(
         AlState::SafeOp | AlState::Op => {
             let all_known = found.devices.iter().all(|d| {
                 crate::drives::by_identity(d.vendor_id, d.product_code).is_some()
-                    || startup::esi_profile_for(&opts.esi_profiles, d).is_some()
+                    || startup::esi_profile_for(&opts.esi_profiles, &opts.esi_not_drives, d)
+                        .is_some()
             });
             if all_known {
                 let mut cfg = StartupConfig::new(opts.cycle);
                 cfg.esi_profiles = opts.esi_profiles.clone();
+                cfg.esi_not_drives = opts.esi_not_drives.clone();
                 let plan = startup::plan(&found.devices, &cfg)?;
                 let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
                 let mut times = started.times;
