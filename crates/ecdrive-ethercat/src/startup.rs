@@ -976,6 +976,18 @@ fn mapping_for_program(
             })?
         }
     };
+    if let Some((dir, e)) = mapped_twice(&mapping) {
+        return Err((
+            "checking the PDO mapping",
+            format!(
+                "0x{:04X}:{:02X} is mapped twice in the {}: each object once (two values for \
+                 one object in a cycle leave the drive to pick one)",
+                e.index,
+                e.sub,
+                dir.name()
+            ),
+        ));
+    }
     for (dir, addr, what) in [
         (Direction::Rx, CW, "the controlword 0x6040"),
         (Direction::Tx, SW, "the statusword 0x6041"),
@@ -1021,6 +1033,26 @@ fn mapping_for_program(
         }
     }
     Ok(mapping)
+}
+
+/// The first object a mapping maps twice in one direction, if any.
+fn mapped_twice(m: &Mapping) -> Option<(Direction, pdo::PdoEntry)> {
+    for (dir, pdos) in [(Direction::Rx, &m.rx), (Direction::Tx, &m.tx)] {
+        let all: Vec<&pdo::PdoEntry> = pdos
+            .iter()
+            .flat_map(|p| p.entries.iter())
+            .filter(|e| e.index != 0)
+            .collect();
+        for (i, e) in all.iter().enumerate() {
+            if all[..i]
+                .iter()
+                .any(|x| x.index == e.index && x.sub == e.sub)
+            {
+                return Some((dir, **e));
+            }
+        }
+    }
+    None
 }
 
 /// `base` with the objects of `need` it lacks added: in the last PDO of their direction while

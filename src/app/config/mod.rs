@@ -1433,6 +1433,7 @@ fn build_mapping(
 ) -> Result<Mapping, ConfigError> {
     let dict = profile.map(|p| Dictionary::new(p.dictionary));
     let mut dirs: [Vec<Pdo>; 2] = [Vec::new(), Vec::new()];
+    let mut seen: Vec<((usize, u16, u8), usize, usize)> = Vec::new();
     for (d, (name, list)) in [("rx", &m.get_ref().rx), ("tx", &m.get_ref().tx)]
         .into_iter()
         .enumerate()
@@ -1528,6 +1529,34 @@ fn build_mapping(
                     }
                     _ => return Err(bad()),
                 };
+                // An object mapped twice in one direction: in the RxPDOs the drive would take
+                // two values for it in one cycle (the BDHDE took the second controlword, 0, and
+                // never enabled), in the TxPDOs it is a wasted copy. Each object once.
+                if entry.index != 0 {
+                    let earlier = seen
+                        .iter()
+                        .find(|(x, ..)| *x == (d, entry.index, entry.sub));
+                    if let Some((_, epi, eei)) = earlier {
+                        let dir = if d == 0 { "RxPDOs" } else { "TxPDOs" };
+                        return Err(cx.err(
+                            e.span(),
+                            k.clone(),
+                            format!(
+                                "0x{:04X}:{:02X} is mapped twice in the {dir} (also \
+                                 mapping.{name}[{epi}].entries[{eei}]){}",
+                                entry.index,
+                                entry.sub,
+                                if d == 0 {
+                                    ": the drive would get two values for one object in every \
+                                     cycle"
+                                } else {
+                                    ": map each object once"
+                                }
+                            ),
+                        ));
+                    }
+                    seen.push(((d, entry.index, entry.sub), pi, ei));
+                }
                 entries.push(entry);
             }
             if let Some(slot) = dirs.get_mut(d) {

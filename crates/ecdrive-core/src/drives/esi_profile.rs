@@ -43,10 +43,18 @@ impl EsiProfileError {
     pub fn new(source: &str, dev: &Device, reason: String) -> Self {
         Self {
             file: source.to_string(),
-            device: format!(
-                "{} (product 0x{:08X})",
-                dev.type_.name_text, dev.type_.product_code
-            ),
+            // The revision too: one file may describe a product at several revisions (a
+            // boot loader and the drive) under one name.
+            device: match dev.type_.revision_no {
+                Some(r) => format!(
+                    "{} (product 0x{:08X}, revision 0x{r:08X})",
+                    dev.type_.name_text, dev.type_.product_code
+                ),
+                None => format!(
+                    "{} (product 0x{:08X})",
+                    dev.type_.name_text, dev.type_.product_code
+                ),
+            },
             reason,
         }
     }

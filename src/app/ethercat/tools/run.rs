@@ -451,9 +451,39 @@ pub fn run(
             }
             if !m.is_running() || wait.elapsed() > opts.enable_timeout {
                 outcome = Outcome::Refused;
+                // Which drive stays where, with what it shows and what usually causes it.
+                let stuck: Vec<String> = t
+                    .axes
+                    .iter()
+                    .take(n_axes)
+                    .enumerate()
+                    .filter(|(_, a)| a.state != Some(State::OperationEnabled))
+                    .map(|(i, a)| {
+                        let drive = m
+                            .drives()
+                            .get(i)
+                            .map_or_else(|| format!("axis {i}"), |d| d.drive.to_string());
+                        let cause = if a.statusword & 0x0200 == 0 {
+                            crate::cia402::StallCause::RemoteOff
+                        } else if a.statusword & 0x0010 == 0 {
+                            crate::cia402::StallCause::NoMainVoltage
+                        } else {
+                            crate::cia402::StallCause::NoResponse
+                        };
+                        format!(
+                            "{drive} stays in {} (statusword 0x{:04X}, controlword 0x{:04X}): \
+                             {cause}",
+                            a.state
+                                .map_or("an unknown state".to_string(), |s| s.to_string()),
+                            a.statusword,
+                            a.controlword
+                        )
+                    })
+                    .collect();
                 reason = format!(
-                    "not every axis reached Operation enabled within {} s",
-                    opts.enable_timeout.as_secs()
+                    "not every axis reached Operation enabled within {} s: {}",
+                    opts.enable_timeout.as_secs(),
+                    stuck.join("; ")
                 );
                 break;
             }
