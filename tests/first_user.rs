@@ -1,6 +1,10 @@
 //! What a careful first user tripped over (issue 34), each a regression test: the file or the
 //! run as the user wrote it, and what ecdrive must say or do.
 
+mod support {
+    pub mod corpus;
+}
+
 use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
@@ -71,4 +75,65 @@ fn an_enable_that_does_not_finish_says_where_each_drive_stands() {
     assert!(r.reason.contains("statusword 0x"), "{}", r.reason);
     assert!(r.reason.contains("controlword 0x"), "{}", r.reason);
     assert!(r.reason.contains("usual causes"), "{}", r.reason);
+}
+
+/// `[sim] devices = ["esi:PATH"]` was taken from the working directory, `[[drive]] esi` from
+/// the configuration file: the same file failed when run from elsewhere. Both are relative to
+/// the file now, and a file in `[sim]` that cannot serve (here truncated) is named when the
+/// configuration is read, not when the segment starts.
+#[test]
+fn esi_paths_are_relative_to_the_configuration_file() {
+    let dir = std::env::temp_dir().join(format!("ecdrive-paths-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("esi")).unwrap();
+    let nd40 =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/esi/Nordwind_ND40.xml");
+    std::fs::copy(&nd40, dir.join("esi/ND40.xml")).unwrap();
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"esi:esi/ND40.xml\"]\n\
+        [[drive]]\nposition = 0\nesi = \"esi/ND40.xml\"\n\
+        program = [{ step = \"move\", by = 1000, velocity = 100000, acceleration = 1000000 }]\n";
+    std::fs::write(dir.join("run.toml"), text).unwrap();
+    // Read by its path, from a working directory where esi/ND40.xml does not exist.
+    let cfg = ecdrive::app::config::load(&dir.join("run.toml")).unwrap_or_else(|e| panic!("{e}"));
+    let stop = AtomicBool::new(false);
+    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap();
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+
+    let whole = std::fs::read_to_string(&nd40).unwrap();
+    std::fs::write(dir.join("esi/ND40.xml"), &whole[..whole.len() / 2]).unwrap();
+    let e = ecdrive::app::config::load(&dir.join("run.toml")).unwrap_err();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(e.key.as_deref(), Some("sim.devices[0]"), "{e}");
+    assert!(e.message.contains("ND40.xml"), "{e}");
+}
+
+/// With a profile built from a vendor file that leaves the touch probe out (the Synapticon
+/// file's dictionary has no 0x60B8), mapping 0x60B8 was "not known (only the standard CiA 402
+/// objects are)". The standard CiA 402 objects have their standard size and mapping whatever
+/// the file omits; the drive itself says at start-up whether it has them.
+#[test]
+fn standard_objects_a_vendor_file_omits_are_known() {
+    let Some(dir) = support::corpus::dir() else {
+        return;
+    };
+    let f = dir.join("synapticon/Somanet_CiA402-single.xml");
+    let text = format!(
+        "interface = \"eth9\"\n[[drive]]\nposition = 0\nesi = \"{}\"\nmode = \"csp\"\n\
+         mapping = {{ rx = [{{ pdo = 0x1600, entries = [\"0x6040:00\", \"0x607A:00\", \
+         \"0x60B8:00\"] }}], tx = [{{ pdo = 0x1A00, entries = [\"0x6041:00\", \"0x6064:00\", \
+         \"0x60B9:00\", \"0x60BA:00\", \"0x60FD:00\"] }}] }}\n",
+        f.display()
+    );
+    let cfg = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+    let m = cfg.master.startup.drives[0].mapping.as_ref().unwrap();
+    let bits: Vec<(u16, u8)> = m.tx[0].entries.iter().map(|e| (e.index, e.bits)).collect();
+    assert_eq!(
+        bits,
+        [
+            (0x6041, 16),
+            (0x6064, 32),
+            (0x60B9, 16),
+            (0x60BA, 32),
+            (0x60FD, 32)
+        ]
+    );
 }

@@ -375,12 +375,14 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
             if s.devices.is_empty() {
                 return Err(cx.err(sim.span(), "sim.devices", "name at least one device"));
             }
+            let mut names: Vec<String> = Vec::with_capacity(s.devices.len());
             for (i, d) in s.devices.iter().enumerate() {
                 if let Err(e) = crate::sim::devices::check_name(d.get_ref()) {
                     return Err(cx.err(d.span(), format!("sim.devices[{i}]"), e.to_string()));
                 }
+                let name = sim_esi_name(&cx, d, &format!("sim.devices[{i}]"))?;
+                names.push(name);
             }
-            let names: Vec<String> = s.devices.iter().map(|d| d.get_ref().clone()).collect();
             (Target::Sim(names.clone()), Some(names))
         }
         ("sim", None) => {
@@ -717,6 +719,45 @@ fn esi_device(
         },
     };
     Ok((f, index, shown))
+}
+
+/// An emulated device from an ESI file (`esi:PATH[@0xPRODUCT[:0xREVISION]]`): its path taken
+/// relative to the configuration file, as `[[drive]] esi` is (the same file then runs from any
+/// working directory), and the file read now, so that a file that cannot serve is named here
+/// rather than when the segment starts. Other names as written.
+fn sim_esi_name(cx: &Ctx<'_>, d: &Spanned<String>, key: &str) -> Result<String, ConfigError> {
+    let name = d.get_ref();
+    let Some(rest) = name.strip_prefix("esi:") else {
+        return Ok(name.clone());
+    };
+    let (path, sel) = match rest.rsplit_once('@') {
+        Some((p, sel)) if sel.starts_with("0x") || sel.starts_with("0X") => (p, Some(sel)),
+        _ => (rest, None),
+    };
+    let dir = Path::new(cx.file).parent().unwrap_or(Path::new(""));
+    let full = dir.join(path);
+    let f = crate::esi::EsiFile::from_path(&full)
+        .map_err(|x| cx.err(d.span(), key, format!("ESI file {}: {x}", full.display())))?;
+    let choice = sel.map_or(
+        crate::esi::DeviceChoice::Only,
+        crate::esi::DeviceChoice::parse,
+    );
+    if let Err(why) = f.choose(&choice) {
+        let why = if choice == crate::esi::DeviceChoice::Only && f.devices.len() > 1 {
+            format!(
+                "the file describes {} devices ({}): say which with esi:FILE@0xPRODUCT[:0xREVISION]",
+                f.devices.len(),
+                f.device_list()
+            )
+        } else {
+            why
+        };
+        return Err(cx.err(d.span(), key, format!("ESI file {}: {why}", full.display())));
+    }
+    Ok(match sel {
+        Some(sel) => format!("esi:{}@{sel}", full.display()),
+        None => format!("esi:{}", full.display()),
+    })
 }
 
 /// `esi = "FILE"` on a file of several devices, the drive selected by position or alias: the
@@ -1459,11 +1500,24 @@ fn build_mapping(
                         // standard sizes.
                         let standard =
                             Dictionary::new(crate::drives::generic::GENERIC_CIA402.dictionary);
+                        let standard_entry = || {
+                            crate::drives::generic::standard_object(a.index)
+                                .and_then(|o| o.entries.iter().find(|en| en.sub == a.sub))
+                                .map(|en| en.bit_len)
+                        };
                         let bits = dict
                             .as_ref()
                             .unwrap_or(&standard)
                             .entry(a)
                             .map(|en| en.bit_len)
+                            .or_else(|| {
+                                // A profile built from a vendor file: a standard object its
+                                // dictionary leaves out has the standard size.
+                                match profile {
+                                    Some(p) if !p.bus.key.starts_with("esi:") => None,
+                                    _ => standard_entry(),
+                                }
+                            })
                             .ok_or_else(|| {
                                 cx.err(
                                     e.span(),

@@ -175,6 +175,26 @@ pub fn units_from(dict: &[ObjectDesc]) -> crate::cia402::Units {
     }
 }
 
+/// The file's dictionary with the standard CiA 402 objects it leaves out
+/// ([`super::generic::STANDARD_EXTRA`]), as CiA 402 describes them: vendor files are often
+/// partial, and a user who maps the touch probe (0x60B8) of a drive whose file omits it should
+/// meet the drive's answer at start-up (an SDO abort naming the object, if the drive lacks
+/// it), not a refusal of the file.
+fn with_standard_objects(dict: &'static [ObjectDesc]) -> &'static [ObjectDesc] {
+    let missing: Vec<ObjectDesc> = super::generic::STANDARD_EXTRA
+        .iter()
+        .filter(|o| !dict.iter().any(|d| d.index == o.index))
+        .cloned()
+        .collect();
+    if missing.is_empty() {
+        return dict;
+    }
+    let mut all = dict.to_vec();
+    all.extend(missing);
+    all.sort_by_key(|o| o.index);
+    Vec::leak(all)
+}
+
 /// The mapping of each set of cyclic modes (bit 0 csp, bit 1 csv, bit 2 cst), as
 /// [`crate::esi::mapping_for`] chooses it: the choice `esi = FILE` makes, so that a profile
 /// found by `--esi DIR` runs a program with the same PDOs.
@@ -223,6 +243,7 @@ pub fn from_esi(
             missing.0, missing.1
         )));
     }
+    let dictionary = with_standard_objects(dictionary);
     let plan = DrivePlan::new(file, dev);
     // What `esi show` says stops a device from running as a drive stops its profile too.
     if let Some(why) = &plan.not_a_drive {

@@ -171,6 +171,99 @@ pub static DICTIONARY: &[ObjectDesc] = &[
     var!(0x6502, "Supported drive modes", U32, RO),
 ];
 
+/// The other standard CiA 402 objects a drive may have, with their types and PDO mapping as
+/// CiA 402-2 (IEC 61800-7-201) defines them: where a vendor file's dictionary leaves one out
+/// (files are often partial: "this profile section is optional"), a profile built from it takes
+/// the standard description ([`standard_object`]), and the drive itself says at start-up if it
+/// does not have the object (an SDO abort naming it).
+pub static STANDARD_EXTRA: &[ObjectDesc] = &[
+    var!(0x6062, "Position demand value", I32, RO_TX),
+    var!(0x6063, "Position actual internal value", I32, RO_TX),
+    var!(0x6067, "Position window", U32, RW),
+    var!(0x6068, "Position window time", U16, RW),
+    var!(0x606B, "Velocity demand value", I32, RO_TX),
+    var!(0x606D, "Velocity window", U16, RW),
+    var!(0x606E, "Velocity window time", U16, RW),
+    var!(0x606F, "Velocity threshold", U16, RW),
+    var!(0x6070, "Velocity threshold time", U16, RW),
+    var!(0x6072, "Max torque", U16, RW_RX),
+    var!(0x6073, "Max current", U16, RW),
+    var!(0x6074, "Torque demand", I16, RO_TX),
+    var!(0x6075, "Motor rated current", U32, RW),
+    var!(0x6076, "Motor rated torque", U32, RW),
+    var!(0x6078, "Current actual value", I16, RO_TX),
+    var!(0x6079, "DC link circuit voltage", U32, RO_TX),
+    var!(0x607C, "Home offset", I32, RW),
+    ObjectDesc {
+        index: 0x607D,
+        name: "Software position limit",
+        code: ObjectCode::Array,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Min position limit", I32, RW),
+            EntryDesc::new(2, "Max position limit", I32, RW),
+        ],
+    },
+    var!(0x6080, "Max motor speed", U32, RW_RX),
+    var!(0x6081, "Profile velocity", U32, RW_RX),
+    var!(0x6083, "Profile acceleration", U32, RW_RX),
+    var!(0x6084, "Profile deceleration", U32, RW_RX),
+    var!(0x6086, "Motion profile type", I16, RW),
+    var!(0x6087, "Torque slope", U32, RW_RX),
+    var!(0x6098, "Homing method", I8, RW_RX),
+    ObjectDesc {
+        index: 0x6099,
+        name: "Homing speeds",
+        code: ObjectCode::Array,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Speed during search for switch", U32, RW_RX),
+            EntryDesc::new(2, "Speed during search for zero", U32, RW_RX),
+        ],
+    },
+    var!(0x609A, "Homing acceleration", U32, RW_RX),
+    var!(0x60B0, "Position offset", I32, RW_RX),
+    var!(0x60B8, "Touch probe function", U16, RW_RX),
+    var!(0x60B9, "Touch probe status", U16, RO_TX),
+    var!(0x60BA, "Touch probe 1 positive edge", I32, RO_TX),
+    var!(0x60BB, "Touch probe 1 negative edge", I32, RO_TX),
+    var!(0x60BC, "Touch probe 2 positive edge", I32, RO_TX),
+    var!(0x60BD, "Touch probe 2 negative edge", I32, RO_TX),
+    ObjectDesc {
+        index: 0x60C2,
+        name: "Interpolation time period",
+        code: ObjectCode::Record,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Interpolation time period value", U8, RW),
+            EntryDesc::new(2, "Interpolation time index", I8, RW),
+        ],
+    },
+    var!(0x60E0, "Positive torque limit value", U16, RW_RX),
+    var!(0x60E1, "Negative torque limit value", U16, RW_RX),
+    var!(0x60FC, "Position demand internal value", I32, RO_TX),
+    var!(0x60FD, "Digital inputs", U32, RO_TX),
+    ObjectDesc {
+        index: 0x60FE,
+        name: "Digital outputs",
+        code: ObjectCode::Array,
+        entries: &[
+            EntryDesc::new(0, "Number of entries", U8, RO),
+            EntryDesc::new(1, "Physical outputs", U32, RW_RX),
+            EntryDesc::new(2, "Bit mask", U32, RW),
+        ],
+    },
+];
+
+/// The standard description of a CiA 402 (or CiA 301) object: [`DICTIONARY`], then
+/// [`STANDARD_EXTRA`].
+pub fn standard_object(index: u16) -> Option<&'static ObjectDesc> {
+    DICTIONARY
+        .iter()
+        .chain(STANDARD_EXTRA.iter())
+        .find(|o| o.index == index)
+}
+
 /// ETG.1020 synchronisation: 0x1C32:01 (2 = DC SYNC0, 0 = free run) and the cycle in 0x1C32:02.
 pub const SYNC: SyncSpec = SyncSpec {
     free_run: true,
