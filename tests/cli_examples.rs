@@ -186,13 +186,14 @@ fn profile_checks_name_the_line_and_the_limit() {
         "drive[0].mapping",
         "2 RxPDOs are assigned to SM2 (0x1C12); the MR-J4-TM allows at most 1 per direction",
     );
-    // More than 64 bytes in one direction.
-    let many: Vec<String> = std::iter::repeat_n("\"0x607A:00\"", 17)
+    // More than 64 bytes in one direction (a copy in the TxPDOs only costs bytes; in the
+    // RxPDOs each object once).
+    let many: Vec<String> = std::iter::repeat_n("\"0x6064:00\"", 17)
         .map(String::from)
         .collect();
     check(
         &mr_j4(&format!(
-            "[drive.mapping]\nrx = [{{ pdo = 0x1600, entries = [\"0x6040:00\", {}] }}]\ntx = [{{ pdo = 0x1A00, entries = [\"0x6041:00\"] }}]\n",
+            "[drive.mapping]\nrx = [{{ pdo = 0x1600, entries = [\"0x6040:00\", \"0x607A:00\"] }}]\ntx = [{{ pdo = 0x1A00, entries = [\"0x6041:00\", {}] }}]\n",
             many.join(", ")
         )),
         6,

@@ -171,7 +171,12 @@ fn mapping(
             Direction::Rx,
             {
                 let mut v = vec![A(0x6040, 0)];
-                v.extend(modes.iter().map(|m| setpoint(*m)));
+                // Each object once in the RxPDOs (pp and csp share 0x607A).
+                for a in modes.iter().map(|m| setpoint(*m)) {
+                    if !v.contains(&a) {
+                        v.push(a);
+                    }
+                }
                 if modes.len() > 1 {
                     v.push(A(0x6060, 0));
                 }

@@ -136,11 +136,11 @@ fn a_mapping_over_the_limit_is_refused_before_anything_is_written() {
             PdoEntry::new(0x607A, 0, 32),
             PdoEntry::new(0x60FF, 0, 32),
             PdoEntry::new(0x6060, 0, 8),
-            PdoEntry::new(0x6040, 0, 16),
-            PdoEntry::new(0x607A, 0, 32),
-            PdoEntry::new(0x60FF, 0, 32),
-            PdoEntry::new(0x6060, 0, 8),
-            PdoEntry::new(0x6040, 0, 16),
+            PdoEntry::padding(8),
+            PdoEntry::padding(8),
+            PdoEntry::padding(8),
+            PdoEntry::padding(8),
+            PdoEntry::padding(8),
         ],
     )];
     let mut cfg = config(1);

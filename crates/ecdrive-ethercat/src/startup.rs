@@ -1035,9 +1035,10 @@ fn mapping_for_program(
     Ok(mapping)
 }
 
-/// The first object a mapping maps twice in one direction, if any.
+/// The first object a mapping maps twice in the RxPDOs, if any (\[REC\]: two values for one
+/// object in a cycle leave the drive to pick one; a copy in the TxPDOs only costs bytes).
 fn mapped_twice(m: &Mapping) -> Option<(Direction, pdo::PdoEntry)> {
-    for (dir, pdos) in [(Direction::Rx, &m.rx), (Direction::Tx, &m.tx)] {
+    for (dir, pdos) in [(Direction::Rx, &m.rx)] {
         let all: Vec<&pdo::PdoEntry> = pdos
             .iter()
             .flat_map(|p| p.entries.iter())

@@ -1583,29 +1583,23 @@ fn build_mapping(
                     }
                     _ => return Err(bad()),
                 };
-                // An object mapped twice in one direction: in the RxPDOs the drive would take
-                // two values for it in one cycle (the BDHDE took the second controlword, 0, and
-                // never enabled), in the TxPDOs it is a wasted copy. Each object once.
-                if entry.index != 0 {
+                // An object mapped twice in the RxPDOs: the drive would take two values for it
+                // in one cycle (the BDHDE took the second controlword, 0, and never enabled).
+                // [REC] each object once there (a copy in the TxPDOs only costs bytes).
+                if entry.index != 0 && d == 0 {
                     let earlier = seen
                         .iter()
                         .find(|(x, ..)| *x == (d, entry.index, entry.sub));
                     if let Some((_, epi, eei)) = earlier {
-                        let dir = if d == 0 { "RxPDOs" } else { "TxPDOs" };
+                        let dir = "RxPDOs";
                         return Err(cx.err(
                             e.span(),
                             k.clone(),
                             format!(
                                 "0x{:04X}:{:02X} is mapped twice in the {dir} (also \
-                                 mapping.{name}[{epi}].entries[{eei}]){}",
-                                entry.index,
-                                entry.sub,
-                                if d == 0 {
-                                    ": the drive would get two values for one object in every \
-                                     cycle"
-                                } else {
-                                    ": map each object once"
-                                }
+                                 mapping.{name}[{epi}].entries[{eei}]): the drive would get two \
+                                 values for one object in every cycle",
+                                entry.index, entry.sub
                             ),
                         ));
                     }
