@@ -137,3 +137,26 @@ fn standard_objects_a_vendor_file_omits_are_known() {
         ]
     );
 }
+
+/// The software slave's warnings (a stored value a drive does not accept, an interface that
+/// went down, an ESI the SII cannot be made from, …) were `tracing` events with no subscriber
+/// anywhere: nobody saw them. The binary prints them on stderr (`--log`, `RUST_LOG`).
+#[test]
+fn a_software_slave_warning_reaches_stderr() {
+    let ecdrive = |extra: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_ecdrive"))
+            .args(["slaves", "-i", "sim:mr-j4-tm@0x6065=-1"])
+            .args(extra)
+            .env_remove("RUST_LOG")
+            .output()
+            .unwrap();
+        assert!(out.status.success());
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let err = ecdrive(&[]);
+    assert!(err.contains("stored value not accepted"), "{err}");
+    assert!(err.contains("0x6065:00"), "{err}");
+    assert!(err.contains("MR-J4-TM"), "{err}");
+    let quiet = ecdrive(&["--log", "error"]);
+    assert!(!quiet.contains("stored value not accepted"), "{quiet}");
+}

@@ -64,8 +64,35 @@ struct Cli {
     /// the writer could not keep up with are counted, never waited for.
     #[arg(long, global = true, value_name = "FILE")]
     pcap: Option<PathBuf>,
+    /// Which diagnostics go to stderr besides the command's own output: error, warn (the
+    /// default: what the software slave and the harness have to say, such as a value a device
+    /// did not accept or an interface that went down), info, debug or trace; `RUST_LOG` (same
+    /// syntax, per module too) wins when set.
+    #[arg(long, global = true, value_name = "LEVEL", default_value = "warn")]
+    log: String,
     #[command(subcommand)]
     command: Command,
+}
+
+/// Diagnostics (`tracing` events of the library: the software slave, the harness) to stderr,
+/// one line each, at `--log` or `RUST_LOG`. The library leaves this choice to the
+/// application; without it these events reach nobody.
+fn install_log(level: &str) -> Result<(), String> {
+    use tracing_subscriber::EnvFilter;
+    let filter = match std::env::var("RUST_LOG") {
+        Ok(v) if !v.trim().is_empty() => {
+            EnvFilter::try_new(v.trim()).map_err(|e| format!("RUST_LOG={v:?}: {e}"))?
+        }
+        _ => EnvFilter::try_new(level).map_err(|e| format!("--log {level:?}: {e}"))?,
+    };
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .without_time()
+        .with_ansi(false)
+        .try_init()
+        .map_err(|e| e.to_string())
 }
 
 /// `--pcap`, for the commands' sessions.
@@ -1054,6 +1081,10 @@ fn main() -> ExitCode {
             };
         }
     };
+    if let Err(e) = install_log(&cli.log) {
+        eprintln!("ecdrive: {e} (see --help)");
+        return ExitCode::from(exit::USAGE);
+    }
     match std::panic::catch_unwind(move || dispatch(cli)) {
         Ok(code) => code,
         Err(_) => ExitCode::from(exit::INTERNAL),
