@@ -160,3 +160,40 @@ fn a_software_slave_warning_reaches_stderr() {
     let quiet = ecdrive(&["--log", "error"]);
     assert!(!quiet.contains("stored value not accepted"), "{quiet}");
 }
+
+/// Exit codes, one rule: what the file or the arguments get wrong is 2, what a drive reports
+/// or refuses is 4. The MR-J4-TM's [Pr. PA01] read at start-up (profile modes not selected)
+/// exited 2, though it is the drive's setting that refuses the program.
+#[test]
+fn a_drive_side_refusal_at_start_up_exits_4_and_a_file_error_2() {
+    let dir = std::env::temp_dir().join(format!("ecdrive-exit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let run_file = |name: &str, text: &str| {
+        let f = dir.join(name);
+        std::fs::write(&f, text).unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_ecdrive"))
+            .args(["run", "-c"])
+            .arg(&f)
+            .output()
+            .unwrap();
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).to_string(),
+        )
+    };
+    let (code, err) = run_file(
+        "pa01.toml",
+        "interface = \"sim\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n[[drive]]\nposition = 0\n\
+         mode = \"pp\"\nprogram = [{ step = \"dwell\", seconds = 0.01 }]\n",
+    );
+    assert_eq!(code, Some(4), "{err}");
+    assert!(err.contains("[Pr. PA01]"), "{err}");
+    let (code, err) = run_file(
+        "twice.toml",
+        "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\n\
+         mapping = { rx = [{ pdo = 0x1600, entries = [\"0x6040:00\", \"0x607A:00\", \
+         \"0x6040:00\"] }], tx = [{ pdo = 0x1A00, entries = [\"0x6041:00\"] }] }\n",
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(code, Some(2), "{err}");
+}

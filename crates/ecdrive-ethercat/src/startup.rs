@@ -2210,10 +2210,12 @@ fn judge_drive(
         e
     })?;
     if let Some(why) = modes_refused {
+        // What the drive reports (its mode setting) refuses the program: the drive's refusal
+        // (exit 4), not an error of the file (exit 2).
         return Err(MasterError::new(
             Some(drive),
             "checking the modes of operation",
-            ErrorKind::Config,
+            ErrorKind::Refused,
             why,
         ));
     }
@@ -2400,10 +2402,11 @@ fn resolve_drives<L: FrameLink>(
         let (ni, no) = (io.inputs().len(), io.outputs().len());
         drop(io);
         if ni != layout.bytes(Direction::Tx) || no != layout.bytes(Direction::Rx) {
+            // The drive's own account of its process data disagrees: a drive-side refusal.
             return Err(MasterError::new(
                 Some(&drive),
                 "checking the process image",
-                ErrorKind::Config,
+                ErrorKind::Refused,
                 format!(
                     "the drive reports {no} output and {ni} input bytes, the configured mapping \
                      needs {} and {}",
