@@ -197,3 +197,23 @@ fn a_drive_side_refusal_at_start_up_exits_4_and_a_file_error_2() {
     let _ = std::fs::remove_dir_all(&dir);
     assert_eq!(code, Some(2), "{err}");
 }
+
+/// `--check` and the run let through what they could say at once: a negative duration was
+/// "unknown time unit"; two `[[drive]]` entries selecting one device (a position and an
+/// identity) ended in "no device matches".
+#[test]
+fn a_negative_duration_and_two_entries_for_one_device_are_named() {
+    let e = parse("interface = \"sim\"\nduration = \"-5s\"\n[sim]\ndevices = [\"bdhde\"]\n")
+        .unwrap_err();
+    assert!(e.message.contains("is negative"), "{e}");
+    let text = "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\n\
+        [[drive]]\nidentity = { vendor_id = 0x2E1, product_code = 0xBE2EB }\n";
+    let cfg = parse(text).unwrap_or_else(|e| panic!("{e}"));
+    let stop = AtomicBool::new(false);
+    let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("which an earlier [[drive]] entry already selects"),
+        "{e}"
+    );
+}

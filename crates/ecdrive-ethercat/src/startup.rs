@@ -655,17 +655,25 @@ impl Role {
 pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
     let mut chosen: Vec<Option<DriveSetup>> = vec![None; devices.len()];
     for setup in &cfg.drives {
-        let pos = devices.iter().position(|d| {
-            chosen[d.position as usize].is_none()
-                && match setup.select {
-                    Selector::Position(p) => d.position == p,
-                    Selector::Alias(a) => d.alias == a && a != 0,
-                    Selector::Identity {
-                        vendor_id,
-                        product_code,
-                    } => d.vendor_id == vendor_id && d.product_code == product_code,
-                }
-        });
+        let pos = devices
+            .iter()
+            .position(|d| chosen[d.position as usize].is_none() && selects(setup.select, d));
+        if pos.is_none()
+            && let Some(taken) = devices.iter().find(|d| selects(setup.select, d))
+        {
+            // The device is there, but another entry took it (a position and an identity that
+            // select the same drive).
+            return Err(MasterError::new(
+                None,
+                "matching the configuration to the segment",
+                ErrorKind::Config,
+                format!(
+                    "{} selects device {} ({}), which an earlier [[drive]] entry already \
+                     selects: one entry per device",
+                    setup.select, taken.position, taken.name
+                ),
+            ));
+        }
         let Some(pos) = pos else {
             return Err(MasterError::new(
                 None,
@@ -789,6 +797,18 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
         });
     }
     Ok(out)
+}
+
+/// Whether `sel` selects device `d`.
+fn selects(sel: Selector, d: &DeviceInfo) -> bool {
+    match sel {
+        Selector::Position(p) => d.position == p,
+        Selector::Alias(a) => d.alias == a && a != 0,
+        Selector::Identity {
+            vendor_id,
+            product_code,
+        } => d.vendor_id == vendor_id && d.product_code == product_code,
+    }
 }
 
 /// Why a device no profile matches is an I/O device, in words.

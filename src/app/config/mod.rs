@@ -160,6 +160,11 @@ impl core::fmt::Debug for RunConfig {
 /// `min` or `h` (`250us`, `1 ms`, `0.5ms`, `10s`, `2min`, `1h`).
 pub fn parse_duration(text: &str) -> Result<Duration, String> {
     let t = text.trim();
+    if t.starts_with('-') {
+        return Err(format!(
+            "{text:?} is negative: a time is 0 or more (write e.g. \"5s\")"
+        ));
+    }
     let split = t
         .find(|c: char| !(c.is_ascii_digit() || c == '.'))
         .unwrap_or(t.len());
