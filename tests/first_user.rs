@@ -217,3 +217,20 @@ fn a_negative_duration_and_two_entries_for_one_device_are_named() {
         "{e}"
     );
 }
+
+/// A homing method the BDHDE does not take (37; its manual: 0x6098 "Range -192 to 35", §5.8 "1
+/// to 35") passed `--check` and failed at run time with the drive's homing error. It is named
+/// when the configuration is read, as the MR-J4-TM's 0x60E3 list already was.
+#[test]
+fn a_homing_method_beyond_the_drives_range_is_named_by_check() {
+    let text = "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\n\
+        program = [{ step = \"home\", method = 37, speed_switch = 1000, speed_zero = 100, \
+        acceleration = 10000 }]\n";
+    let e = parse(text).unwrap_err();
+    assert!(
+        e.message
+            .contains("homing method 37 is outside what the BDHDE takes in 0x6098 (– to 35)"),
+        "{e}"
+    );
+    assert!(parse(&text.replace("method = 37", "method = 35")).is_ok());
+}

@@ -1995,6 +1995,29 @@ fn homing_writes(
                 .collect()
         })
         .unwrap_or_default();
+    // The range the drive's dictionary gives 0x6098 (the BDHDE's manual: at most 35).
+    if let Some(e) = p
+        .dictionary
+        .iter()
+        .find(|o| o.index == 0x6098)
+        .and_then(|o| o.entries.iter().find(|e| e.sub == 0))
+    {
+        let m = i128::from(method);
+        let below = e.min.as_i128().is_some_and(|lo| m < lo);
+        let above = e.max.as_i128().is_some_and(|hi| m > hi);
+        if below || above {
+            let bound = |v: Option<i128>| v.map_or("–".to_string(), |v| v.to_string());
+            return Err((
+                n,
+                format!(
+                    "homing method {method} is outside what the {} takes in 0x6098 ({} to {})",
+                    p.name,
+                    bound(e.min.as_i128()),
+                    bound(e.max.as_i128())
+                ),
+            ));
+        }
+    }
     if !listed.is_empty() && !listed.contains(&i64::from(method)) {
         let l: Vec<String> = listed.iter().map(i64::to_string).collect();
         return Err((

@@ -722,7 +722,11 @@ pub static DICTIONARY: &[ObjectDesc] = &[
         index: 0x6098,
         name: "Homing Method",
         code: ObjectCode::Var,
-        entries: &[EntryDesc::new(0, "Homing Method", I8, RW).default(i(1))],
+        // Range "-192 to 35" (manual line 6265; §5.8: "1 to 35"): the maximum all readings
+        // share; no lower bound (Integer8 cannot hold -192, manual_facts obj.6098).
+        entries: &[EntryDesc::new(0, "Homing Method", I8, RW)
+            .default(i(1))
+            .range(ConstValue::None, i(35))],
     },
     ObjectDesc {
         index: 0x6099,
