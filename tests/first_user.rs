@@ -234,3 +234,15 @@ fn a_homing_method_beyond_the_drives_range_is_named_by_check() {
     );
     assert!(parse(&text.replace("method = 37", "method = 35")).is_ok());
 }
+
+/// A sine at half the cycle rate (500 Hz at 1 ms) "completed" with nothing moved: it is
+/// refused when the configuration is read, naming the limit.
+#[test]
+fn a_sine_beyond_half_the_cycle_rate_is_refused() {
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\n\
+        position = 0\nprogram = [{ step = \"sine\", amplitude = 1000, frequency = 500, \
+        periods = 3 }]\n";
+    let e = parse(text).unwrap_err();
+    assert!(e.message.contains("half the cycle rate (500 Hz)"), "{e}");
+    assert!(parse(&text.replace("frequency = 500", "frequency = 20")).is_ok());
+}

@@ -1236,6 +1236,24 @@ fn drive(
             check_limits(s.get_ref(), l.get_ref(), &uname)
                 .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
         }
+        // A sine at or above half the cycle rate is sampled at the same phase every cycle (or
+        // between two), so the axis does not follow it at all: 500 Hz at 1 ms "completed" with
+        // nothing moved.
+        if let raw::Step::Sine { frequency, .. } = *s.get_ref() {
+            let nyquist = 0.5 / cycle.as_secs_f64();
+            if frequency >= nyquist {
+                return Err(cx.err(
+                    s.span(),
+                    key(&format!("program[{n}]")),
+                    format!(
+                        "a sine of {frequency} Hz at a {} µs cycle is sampled at or beyond half \
+                         the cycle rate ({nyquist} Hz): the axis would not follow it; lower the \
+                         frequency well below that",
+                        cycle.as_micros()
+                    ),
+                ));
+            }
+        }
         described.push(describe(s.get_ref(), &uname));
         steps.push(step);
     }
