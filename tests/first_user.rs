@@ -246,3 +246,10 @@ fn a_sine_beyond_half_the_cycle_rate_is_refused() {
     assert!(e.message.contains("half the cycle rate (500 Hz)"), "{e}");
     assert!(parse(&text.replace("frequency = 500", "frequency = 20")).is_ok());
 }
+
+/// `interface = "vbus:…"` (a CANopen virtual bus) on an EtherCAT run is named as such.
+#[test]
+fn a_canopen_bus_as_an_ethercat_interface_is_named() {
+    let e = parse("interface = \"vbus:/tmp/bus.sock\"\n").unwrap_err();
+    assert!(e.message.contains("is a CANopen bus"), "{e}");
+}

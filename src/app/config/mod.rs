@@ -405,6 +405,16 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
                 format!("a [sim] table only goes with interface = \"sim\", not {name:?}"),
             ));
         }
+        (name, None) if name.starts_with("vbus:") || name == "virtual" => {
+            return Err(cx.err(
+                f.interface.span(),
+                "interface",
+                format!(
+                    "{name:?} is a CANopen bus (the commands take it with --can); an EtherCAT run needs a \
+                     network interface or \"sim\""
+                ),
+            ));
+        }
         (name, None) => (Target::Interface(name.to_string()), None),
     };
     let mut sim = SimSettings::default();
