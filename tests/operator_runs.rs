@@ -359,3 +359,42 @@ fn the_readmes_fault_example_is_what_run_prints() {
         "{line:?} is not the README's {example:?}"
     );
 }
+
+/// Several drives in Fault before a run (here both, by their alarms at start): the refusal names
+/// every one with its fault, once, and the command that clears them all (before: only the
+/// first drive).
+#[test]
+fn a_run_refused_for_faults_names_every_faulted_drive_once() {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let Some(sim) = SimOnVeth::start_with(
+        "a_run_refused_for_faults_names_every_faulted_drive_once",
+        &["mr-j4-tm", "bdhde"],
+        &[
+            "--no-loss-detection",
+            "--alarm",
+            "0:AL.52@0s",
+            "--alarm",
+            "1:J3@0s",
+        ],
+    ) else {
+        return;
+    };
+    let dir = Dir::new("two-faults");
+    let f = dir.file(
+        "two.toml",
+        "interface = \"unused\"\n[[drive]]\nposition = 0\nprofile = \"mr-j4-tm\"\n\
+         [[drive]]\nposition = 1\nprofile = \"bdhde\"\n",
+    );
+    let r = sim.ecdrive(&["run", "-c", &f]);
+    assert_eq!(r.code, Some(4), "{r:#?}");
+    let line = stderr_line(&r);
+    assert!(
+        line.contains("2 drives are in Fault from before this run")
+            && line.contains("drive 0 (MR-J4-TM) (")
+            && line.contains("AL.52")
+            && line.contains("drive 1 (BDHDE) (")
+            && line.contains(&format!("ecdrive reset -i {}`", sim.host())),
+        "{line}"
+    );
+    assert_eq!(line.matches("drive 0 (MR-J4-TM)").count(), 1, "{line}");
+}

@@ -391,14 +391,24 @@ pub fn run(
         );
         if cfg.reset_faults {
             resets = super::reset::clear_faults(&mut m, None, Duration::from_secs(2))?;
-            if let Some(d) = resets.iter().find(|d| d.cleared == Some(false)) {
+            let stuck: Vec<String> = resets
+                .iter()
+                .filter(|d| d.cleared == Some(false))
+                .map(|d| {
+                    format!(
+                        "drive {} ({}): {}",
+                        d.position,
+                        d.drive,
+                        d.fault.as_deref().unwrap_or("the fault")
+                    )
+                })
+                .collect();
+            if !stuck.is_empty() {
                 outcome = Outcome::Refused;
                 reason = format!(
-                    "drive {} ({}): {} did not clear on reset: its cause is still present, or \
-                     the drive needs a power cycle",
-                    d.position,
-                    d.drive,
-                    d.fault.as_deref().unwrap_or("the fault")
+                    "{} did not clear on reset: its cause is still present, or the drive needs \
+                     a power cycle",
+                    stuck.join("; ")
                 );
             }
         } else {
@@ -406,27 +416,43 @@ pub fn run(
                 t.axes.iter().all(|a| a.state.is_some())
             })?;
             let t = m.telemetry().clone();
-            if let Some((i, _)) = t
+            // Every drive in Fault, each once (after a cable pull, several are).
+            let faulted: Vec<usize> = t
                 .axes
                 .iter()
                 .enumerate()
                 .take(n_axes)
-                .find(|(_, a)| is_fault(a.state))
-            {
-                let fault = super::reset::latched(&mut m, i);
-                let d = &m.drives()[i];
+                .filter(|(_, a)| is_fault(a.state))
+                .map(|(i, _)| i)
+                .collect();
+            if !faulted.is_empty() {
+                let interface = match &cfg.target {
+                    Target::Interface(i) => i.clone(),
+                    Target::Sim(_) => cfg.target.to_string(),
+                };
+                let mut each = Vec::with_capacity(faulted.len());
+                for &i in &faulted {
+                    let fault = super::reset::latched(&mut m, i);
+                    let d = &m.drives()[i];
+                    each.push(format!("{} ({fault})", d.drive));
+                }
                 outcome = Outcome::Refused;
                 faulted_before = true;
-                reason = format!(
-                    "{} is in Fault from before this run ({fault}); clear it with `ecdrive reset \
-                     -i {} -p {}`, or set reset_faults = true in the file",
-                    d.drive,
-                    match &cfg.target {
-                        Target::Interface(i) => i.clone(),
-                        Target::Sim(_) => cfg.target.to_string(),
-                    },
-                    d.info.position
-                );
+                reason = if let [i] = faulted[..] {
+                    format!(
+                        "{} is in Fault from before this run; clear it with `ecdrive reset -i \
+                         {interface} -p {}`, or set reset_faults = true in the file",
+                        each.join(""),
+                        m.drives()[i].info.position
+                    )
+                } else {
+                    format!(
+                        "{} drives are in Fault from before this run: {}; clear them with \
+                         `ecdrive reset -i {interface}`, or set reset_faults = true in the file",
+                        faulted.len(),
+                        each.join(", ")
+                    )
+                };
             }
         }
     }
