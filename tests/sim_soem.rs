@@ -13,7 +13,6 @@ mod support {
     pub mod python_master;
 }
 
-use ecdrive::link::netns::require_root;
 use ecdrive::sim::devices::{GenericCoeDevice, IoDevice};
 use ecdrive::sim::{EscConfig, HostClock, Segment};
 use std::sync::Arc;
@@ -54,11 +53,16 @@ def config_init(expected):
 
 
 def dc_sync0_to_op():
-    """DC with SYNC0 at 1 ms, SAFE-OP, then OP with process data flowing while requesting it,
-    as SOEM applications do; the states reached go to out["safeop"] and out["op"]."""
+    """DC with SYNC0 at 1 ms, then `safeop_then_op()`."""
     m.config_dc()
     for s in m.slaves:
         s.dc_sync(True, 1_000_000)
+    safeop_then_op()
+
+
+def safeop_then_op():
+    """SAFE-OP, then OP with process data flowing while requesting it, as SOEM applications
+    do; the states reached go to out["safeop"] and out["op"]."""
     out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
     # SAFE-OP: process data with every output zero, the working counter recorded (outputs
     # count from SAFE-OP on, ETG.1020).
@@ -175,14 +179,11 @@ fn assert_safeop_wkc(v: &serde_json::Value, expected: i64) {
 
 #[test]
 fn soem_brings_devices_to_op() {
-    if !require_root("sim_soem::soem_brings_devices_to_op") {
-        return;
-    }
-    if !python_master::importable("pysoem") {
-        if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
-            panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
-        }
-        ecdrive::rt::audit::announce_skip("SKIPPED (needs pysoem: pip install pysoem): sim_soem");
+    if !python_master::ready(
+        "sim_soem::soem_brings_devices_to_op",
+        "pysoem",
+        "ECDRIVE_REQUIRE_PYSOEM",
+    ) {
         return;
     }
     let mut seg = Segment::new(Arc::new(HostClock));
@@ -296,14 +297,11 @@ print(json.dumps(out))
 /// SOEM's expected working counter, INIT.
 #[test]
 fn soem_runs_the_emulated_drives() {
-    if !require_root("sim_soem::soem_runs_the_emulated_drives") {
-        return;
-    }
-    if !python_master::importable("pysoem") {
-        if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
-            panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
-        }
-        ecdrive::rt::audit::announce_skip("SKIPPED (needs pysoem: pip install pysoem): sim_soem");
+    if !python_master::ready(
+        "sim_soem::soem_runs_the_emulated_drives",
+        "pysoem",
+        "ECDRIVE_REQUIRE_PYSOEM",
+    ) {
         return;
     }
     let drives = ["mr-j4-tm", "bdhde"];
@@ -385,24 +383,7 @@ try:
     out["iomap"] = m.config_map()
     out["sizes"] = [[len(s.output), len(s.input)] for s in m.slaves]
     out["expected_wkc"] = m.expected_wkc
-    out["safeop"] = m.state_check(pysoem.SAFEOP_STATE, 2_000_000)
-    safeop_wkcs = []
-    for _ in range(200):
-        m.send_processdata()
-        safeop_wkcs.append(m.receive_processdata(200_000))
-        time.sleep(0.001)
-    out["safeop_wkcs"] = safeop_wkcs
-    m.state = pysoem.OP_STATE
-    m.write_state()
-    op = False
-    for _ in range(2000):
-        m.send_processdata()
-        m.receive_processdata(200_000)
-        if m.state_check(pysoem.OP_STATE, 1_000) == pysoem.OP_STATE:
-            op = True
-            break
-        time.sleep(0.001)
-    out["op"] = op
+    safeop_then_op()
     wkcs = []
     echo = None
     for cycle in range(1000):
@@ -434,14 +415,11 @@ print(json.dumps(out))
 /// echoes the outputs SOEM wrote.
 #[test]
 fn soem_runs_devices_from_vendor_files() {
-    if !require_root("sim_soem::soem_runs_devices_from_vendor_files") {
-        return;
-    }
-    if !python_master::importable("pysoem") {
-        if std::env::var_os("ECDRIVE_REQUIRE_PYSOEM").is_some() {
-            panic!("pysoem is not importable and ECDRIVE_REQUIRE_PYSOEM is set");
-        }
-        ecdrive::rt::audit::announce_skip("SKIPPED (needs pysoem: pip install pysoem): sim_soem");
+    if !python_master::ready(
+        "sim_soem::soem_runs_devices_from_vendor_files",
+        "pysoem",
+        "ECDRIVE_REQUIRE_PYSOEM",
+    ) {
         return;
     }
     let Some(dir) = support::corpus::dir() else {

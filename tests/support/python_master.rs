@@ -16,6 +16,26 @@ pub fn importable(module: &str) -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// Whether test `test` can drive a segment with the Python package `module` (the master
+/// `who`): root (for veth) and the package importable. Without the package it prints a loud
+/// SKIPPED line, unless `require_env` is set, which makes it fail instead.
+#[allow(dead_code)] // sim_kickcat names its own pinned install
+pub fn ready(test: &str, module: &str, require_env: &str) -> bool {
+    if !ecdrive::link::netns::require_root(test) {
+        return false;
+    }
+    if importable(module) {
+        return true;
+    }
+    if std::env::var_os(require_env).is_some() {
+        panic!("{module} is not importable and {require_env} is set");
+    }
+    ecdrive::rt::audit::announce_skip(&format!(
+        "SKIPPED (needs {module}: pip install {module}): {test}"
+    ));
+    false
+}
+
 /// Serve `seg` on a new veth pair, run `script` with the host end's name and `args`, and
 /// return the segment and the script's JSON. Fails the test when the script fails (`who`
 /// names the master in the message) or prints no JSON.

@@ -1058,22 +1058,19 @@ fn mapping_for_program(
 /// The first object a mapping maps twice in the RxPDOs, if any (\[REC\]: two values for one
 /// object in a cycle leave the drive to pick one; a copy in the TxPDOs only costs bytes).
 fn mapped_twice(m: &Mapping) -> Option<(Direction, pdo::PdoEntry)> {
-    for (dir, pdos) in [(Direction::Rx, &m.rx)] {
-        let all: Vec<&pdo::PdoEntry> = pdos
-            .iter()
+    let all: Vec<&pdo::PdoEntry> =
+        m.rx.iter()
             .flat_map(|p| p.entries.iter())
             .filter(|e| e.index != 0)
             .collect();
-        for (i, e) in all.iter().enumerate() {
-            if all[..i]
+    all.iter()
+        .enumerate()
+        .find(|(i, e)| {
+            all[..*i]
                 .iter()
                 .any(|x| x.index == e.index && x.sub == e.sub)
-            {
-                return Some((dir, **e));
-            }
-        }
-    }
-    None
+        })
+        .map(|(_, e)| (Direction::Rx, **e))
 }
 
 /// `base` with the objects of `need` it lacks added: in the last PDO of their direction while

@@ -832,6 +832,31 @@ fn plot_file(
     }
 }
 
+/// `--esi FILE|DIR` of `run` and `states`: the drive profiles its files give, or the one-line
+/// error (exit 2) when there are none.
+pub fn load_esi(
+    cmd: &str,
+    path: &std::path::Path,
+) -> Result<ecdrive::drives::esi_profile::Loaded, ExitCode> {
+    let shown = path.display();
+    match ecdrive::drives::esi_profile::load_path(path) {
+        Ok(l) if !l.profiles.is_empty() => Ok(l),
+        Ok(l) => {
+            let why = if l.skipped.is_empty() {
+                "no ESI file (*.xml) there".to_string()
+            } else {
+                format!("no drive in its ESI files: {}", l.skipped.join("; "))
+            };
+            Err(fail_with(
+                cmd,
+                &format!("--esi {shown}: {why}"),
+                exit::USAGE,
+            ))
+        }
+        Err(e) => Err(fail_with(cmd, &format!("--esi {shown}: {e}"), exit::USAGE)),
+    }
+}
+
 pub fn fail_with(cmd: &str, msg: &str, code: u8) -> ExitCode {
     eprintln!("ecdrive {cmd}: {}", one_line(msg));
     ExitCode::from(code)
@@ -1313,35 +1338,15 @@ fn dispatch(cli: Cli) -> ExitCode {
             opts.position = position;
             opts.cycle = Duration::from_micros(u64::from(cycle_us));
             if let Some(path) = &esi {
-                match ecdrive::drives::esi_profile::load_path(path) {
-                    Ok(l) if !l.profiles.is_empty() => {
-                        for s in l.skipped {
-                            eprintln!("ecdrive states: warning: --esi: {s}");
-                        }
-                        opts.esi_profiles = l.profiles;
-                        opts.esi_not_drives = l.not_drives;
-                    }
-                    Ok(l) => {
-                        let skipped = l.skipped;
-                        let why = if skipped.is_empty() {
-                            "no ESI file (*.xml) there".to_string()
-                        } else {
-                            format!("no drive in it: {}", skipped.join("; "))
-                        };
-                        return fail_with(
-                            "states",
-                            &format!("--esi {}: {why}", path.display()),
-                            exit::USAGE,
-                        );
-                    }
-                    Err(e) => {
-                        return fail_with(
-                            "states",
-                            &format!("--esi {}: {e}", path.display()),
-                            exit::USAGE,
-                        );
-                    }
+                let l = match load_esi("states", path) {
+                    Ok(l) => l,
+                    Err(code) => return code,
+                };
+                for s in l.skipped {
+                    eprintln!("ecdrive states: warning: --esi: {s}");
                 }
+                opts.esi_profiles = l.profiles;
+                opts.esi_not_drives = l.not_drives;
             }
             match session("states", &bus.interface, move |b| {
                 tools::states_timed(b, &opts)

@@ -20,38 +20,21 @@ pub fn run(
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
     if let Some(dir) = esi {
-        match ecdrive::drives::esi_profile::load_path(dir) {
-            Ok(l) if !l.profiles.is_empty() => {
-                let (profiles, skipped) = (l.profiles, l.skipped);
-                cfg.master.startup.esi_not_drives = l.not_drives;
-                for s in skipped {
-                    cfg.warnings.push(format!("--esi: {s}"));
-                }
-                for p in &profiles {
-                    cfg.notes.push(format!(
-                        "--esi: {} (vendor 0x{:08X} product 0x{:08X} revision 0x{:08X})",
-                        p.name, p.identity.vendor_id, p.identity.product_code, p.revision
-                    ));
-                }
-                cfg.master.startup.esi_profiles = profiles;
-            }
-            Ok(l) => {
-                let skipped = l.skipped;
-                let why = if skipped.is_empty() {
-                    "no ESI file (*.xml) there".to_string()
-                } else {
-                    format!("no drive in its ESI files: {}", skipped.join("; "))
-                };
-                return fail_with(
-                    "run",
-                    &format!("--esi {}: {why}", dir.display()),
-                    exit::USAGE,
-                );
-            }
-            Err(e) => {
-                return fail_with("run", &format!("--esi {}: {e}", dir.display()), exit::USAGE);
-            }
+        let l = match crate::load_esi("run", dir) {
+            Ok(l) => l,
+            Err(code) => return code,
+        };
+        for s in l.skipped {
+            cfg.warnings.push(format!("--esi: {s}"));
         }
+        for p in &l.profiles {
+            cfg.notes.push(format!(
+                "--esi: {} (vendor 0x{:08X} product 0x{:08X} revision 0x{:08X})",
+                p.name, p.identity.vendor_id, p.identity.product_code, p.revision
+            ));
+        }
+        cfg.master.startup.esi_profiles = l.profiles;
+        cfg.master.startup.esi_not_drives = l.not_drives;
     }
     if let Some(i) = interface {
         match i.parse() {
