@@ -8,12 +8,11 @@
 //! ```
 
 use ecdrive::link::{FrameLink, RawSocket};
-use ecdrive::master::{CSV_HEADER, recording};
+use ecdrive::master::{CsvWriter, SampleScale, recording};
 use ecdrive::sim::transport::SegmentLink;
 use ecdrive::{
     Axes, Command, DriveSetup, Master, MasterConfig, Selector, State, Step, StopKind, Target,
 };
-use std::io::Write;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
@@ -38,23 +37,27 @@ fn run<L: FrameLink + Send + 'static>(
     // Half a second of samples in flight: 1 kHz × 2 axes × 0.5 s.
     let (tx, mut rx) = recording(1000);
     cfg.record = Some(Arc::new(Mutex::new(tx)));
-    let mut file = std::io::BufWriter::new(std::fs::File::create(out)?);
-    writeln!(file, "{CSV_HEADER}")?;
+    let mut csv = CsvWriter::new(std::io::BufWriter::new(std::fs::File::create(out)?))?;
     let done = Arc::new(AtomicBool::new(false));
     let stop = done.clone();
+    // The drives' units, for the CSV's physical columns, once the master has started.
+    let (drives_tx, drives_rx) = std::sync::mpsc::channel::<Vec<SampleScale>>();
     let writer = std::thread::spawn(move || -> std::io::Result<(u64, u64)> {
-        let (mut t0, mut lines) = (None, 0u64);
         loop {
             let last = stop.load(Ordering::Acquire);
-            lines += rx.drain_csv(&mut file, &mut t0)?;
+            if let Ok(scales) = drives_rx.try_recv() {
+                csv.set_drives(scales)?;
+            }
+            csv.drain(&mut rx)?;
             if last {
-                file.flush()?;
+                let (_, lines) = csv.finish()?;
                 return Ok((lines, rx.dropped()));
             }
             std::thread::sleep(Duration::from_millis(20));
         }
     });
     let mut m = Master::start(link, cfg).map_err(|f| f.error)?;
+    drives_tx.send(SampleScale::of_drives(m.drives()))?;
     m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)?;
     m.command(Command::Enable(Axes::All))?;
     m.wait_until("enabled", Duration::from_secs(10), |t| {

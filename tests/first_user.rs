@@ -253,3 +253,97 @@ fn a_canopen_bus_as_an_ethercat_interface_is_named() {
     let e = parse("interface = \"vbus:/tmp/bus.sock\"\n").unwrap_err();
     assert!(e.message.contains("is a CANopen bus"), "{e}");
 }
+
+/// The library's report of a run gives each drive's largest following error (the CLI's
+/// summary had it, `SessionReport` only per axis index inside the cycle's report), in the
+/// drive's units where the configuration gives them.
+#[test]
+fn the_librarys_report_has_each_drives_largest_following_error() {
+    use ecdrive::{Axes, Command, State, StopKind};
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\", \"bdhde\"]\n\
+        [[drive]]\nposition = 0\nmode = \"csp\"\n\
+        units = { name = \"deg\", counts_per_unit = 11650.844444 }\n\
+        program = [{ step = \"move\", by = 90, velocity = 720, acceleration = 7200 }]\n\
+        [[drive]]\nposition = 1\nmode = \"csp\"\n\
+        program = [{ step = \"move\", by = 100000, velocity = 400000, acceleration = 4000000 }]\n";
+    let cfg = parse(text).unwrap_or_else(|e| panic!("{e}"));
+    let link = cfg
+        .target
+        .open_with(&cfg.sim)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut m = ecdrive::Master::start(link, cfg.master.clone())
+        .map_err(|f| f.error)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let wait = Duration::from_secs(20);
+    m.wait_until("OP", wait, |t| t.cycle.all_op).unwrap();
+    m.command(Command::Enable(Axes::All)).unwrap();
+    m.wait_until("enabled", wait, |t| {
+        t.axes
+            .iter()
+            .all(|a| a.state == Some(State::OperationEnabled))
+    })
+    .unwrap();
+    m.command(Command::RunProgram(Axes::All)).unwrap();
+    m.wait_until("the moves", wait, |t| {
+        t.axes
+            .iter()
+            .all(|a| !a.program_running && a.program_step >= 1)
+    })
+    .unwrap();
+    let (report, _link) = m.stop(StopKind::Ramp);
+    let report = report.expect("a report");
+    let per_axis = report
+        .cycle
+        .as_ref()
+        .expect("the cycle ran")
+        .max_following_error
+        .clone();
+    let outcomes = report.drive_outcomes();
+    assert_eq!(outcomes.len(), 2);
+    for (i, o) in outcomes.iter().enumerate() {
+        assert_eq!(usize::from(o.drive.position), i);
+        assert!(o.max_following_error > 0, "{o:?}");
+        assert_eq!(o.max_following_error, per_axis[i]);
+        assert!(
+            o.modes_run
+                .contains(&ecdrive::cia402::OperationMode::CyclicSyncPosition)
+        );
+    }
+    assert_eq!(
+        outcomes[0].max_following_error_units,
+        Some(outcomes[0].max_following_error as f64 / 11650.844444)
+    );
+    assert_eq!(outcomes[1].max_following_error_units, None);
+}
+
+/// 300 rev/s on the MR-J4-TM passed `--check` and the start-up, then the drive stopped with an
+/// alarm within 50 ms. The motor's maximum speed is the drive's (0x6080, r/min, motor
+/// dependent: no file can know it), so start-up reads it and refuses a program beyond it before
+/// anything moves (exit 4), naming the step; a program within it runs.
+#[test]
+fn a_program_faster_than_the_motor_is_refused_at_start_up() {
+    let text = |rev_s: f64| {
+        format!(
+            "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n\
+             [[drive]]\nposition = 0\nmode = \"csv\"\n\
+             units = {{ name = \"rev\", counts_per_unit = 4194304 }}\n\
+             program = [{{ step = \"ramp\", velocity = {rev_s}, acceleration = 3000, hold = 0.01 }},\
+             {{ step = \"ramp\", velocity = 0, acceleration = 3000 }}]\n"
+        )
+    };
+    let stop = AtomicBool::new(false);
+    let cfg = parse(&text(300.0)).unwrap_or_else(|e| panic!("{e}"));
+    let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_err();
+    assert_eq!(e.kind, ecdrive::master::ErrorKind::Refused, "{e}");
+    let msg = e.to_string();
+    for part in [
+        "drive 0 (MR-J4-TM)",
+        "program[0] commands 18000 r/min",
+        "0x6080 = 6000 r/min",
+    ] {
+        assert!(msg.contains(part), "{part:?} in {msg}");
+    }
+    let cfg = parse(&text(90.0)).unwrap_or_else(|e| panic!("{e}"));
+    let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+}

@@ -397,4 +397,16 @@ fn a_run_refused_for_faults_names_every_faulted_drive_once() {
         "{line}"
     );
     assert_eq!(line.matches("drive 0 (MR-J4-TM)").count(), 1, "{line}");
+    // Each drive's report says each error once (the state machine's "in Fault while heading
+    // for …" came twice or three times per drive).
+    let errors: Vec<&str> = r
+        .stdout
+        .lines()
+        .filter(|l| l.trim_start().starts_with("Error:"))
+        .collect();
+    assert!(!errors.is_empty(), "{}", r.stdout);
+    assert!(
+        errors.windows(2).all(|w| w[0] != w[1]),
+        "an error line repeated: {errors:#?}"
+    );
 }

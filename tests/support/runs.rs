@@ -46,8 +46,8 @@ pub fn run_recorded(
 /// One recorded cycle of one axis (`run --record`).
 #[derive(Debug, Clone, Copy)]
 pub struct Rec {
-    /// Demand position, counts.
-    pub demand: i64,
+    /// Demand position, counts (csp only).
+    pub demand: Option<i64>,
     /// Actual position, counts.
     pub actual: i64,
     /// Actual velocity, the drive's unit.
@@ -81,7 +81,7 @@ pub fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         let a: usize = f[axis].parse().unwrap();
         out[a].push(Rec {
-            demand: f[demand].parse().unwrap(),
+            demand: (!f[demand].is_empty()).then(|| f[demand].parse().unwrap()),
             actual: f[actual].parse().unwrap(),
             velocity: f[vel].parse().unwrap(),
             torque: f[tq].parse().unwrap(),

@@ -555,6 +555,9 @@ struct AxisRt {
     fe_limit: Option<u32>,
     /// 0x60F4 was seen other than 0 while the axis moved in csp.
     fe_drive_alive: bool,
+    /// The master judged the following error in this cycle's step (energised in csp): the
+    /// recording shows it only then. Cleared once recorded.
+    fe_judged: bool,
     /// Cycles of motion in csp with 0x60F4 at 0 while it was never seen otherwise.
     fe_drive_zero_cycles: u32,
     stopping: Stopping,
@@ -625,6 +628,7 @@ impl AxisRt {
             requested_mode: None,
             fe_limit: d.setup.following_error_limit,
             fe_drive_alive: false,
+            fe_judged: false,
             fe_drive_zero_cycles: 0,
             stopping: Stopping::No,
             pos_raw: 0,
@@ -1780,7 +1784,9 @@ impl AxisRt {
         let moving = self.last_demand.is_some_and(|l| l != demand);
         self.last_demand = (!homing).then_some(demand);
         // The master's following error only while csp runs (in hm the drive moves on its own).
-        if energised && self.mode == RunMode::Csp && out.mode.as_i8() == RunMode::Csp.code() {
+        self.fe_judged =
+            energised && self.mode == RunMode::Csp && out.mode.as_i8() == RunMode::Csp.code();
+        if self.fe_judged {
             self.judge_following_error(i, moving, ctx.cycle, ev);
         }
         let t = &mut self.tel;
@@ -2834,23 +2840,31 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             u32::try_from(c.latency).unwrap_or(u32::MAX),
             u32::try_from(c.t_ex_done.saturating_sub(c.t_ex)).unwrap_or(u32::MAX),
         );
-        for (i, a) in self.axes.iter().enumerate() {
+        for (i, a) in self.axes.iter_mut().enumerate() {
             let t = &a.tel;
-            r.push(CycleSample {
-                cycle: c.cycle,
-                time_ns: c.woke,
-                wake_latency_ns: latency,
-                exchange_ns: exchange,
-                wkc: self.counts.last_wkc,
-                axis: i as u16,
-                demand: t.position_demand,
-                actual: t.position_actual,
-                velocity: t.velocity_actual,
-                torque: t.torque_actual,
-                following_error: t.following_error,
-                statusword: t.statusword,
-                mode: t.mode_display,
-            });
+            r.push(
+                CycleSample {
+                    cycle: c.cycle,
+                    time_ns: c.woke,
+                    wake_latency_ns: latency,
+                    exchange_ns: exchange,
+                    wkc: self.counts.last_wkc,
+                    axis: i as u16,
+                    mode_sent: t.mode,
+                    demand: Some(t.position_demand),
+                    actual: t.position_actual,
+                    velocity_demand: Some(t.velocity_demand),
+                    velocity: t.velocity_actual,
+                    torque_demand: Some(t.torque_demand),
+                    torque: t.torque_actual,
+                    following_error: a.fe_judged.then_some(t.following_error),
+                    statusword: t.statusword,
+                    mode: t.mode_display,
+                    probes: t.probes,
+                }
+                .defined(),
+            );
+            a.fe_judged = false;
         }
     }
 

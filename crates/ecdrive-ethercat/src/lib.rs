@@ -37,8 +37,8 @@ pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryKind, HistoryLog};
 pub use program::{ProbeEdge, RunMode, Step, Target};
-pub use record::{CSV_HEADER, CycleSample, RecordTx, Recording, recording};
-pub use session::{DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
+pub use record::{CSV_HEADER, CsvWriter, CycleSample, RecordTx, Recording, SampleScale, recording};
+pub use session::{DriveOutcome, DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
 pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};
 pub use stream::{StreamProducer, Streams};
 pub use telemetry::{

@@ -422,6 +422,39 @@ pub fn modes_used(steps: &[Step], start: RunMode) -> Vec<i8> {
     out
 }
 
+/// The fastest speed a program commands (counts/s) and its step index, started in `start`: a
+/// move's or jog's velocity, a ramp's or pv step's, a sine's peak (A·2πf in csp, A in csv).
+/// pp steps run at the profile velocity the drive limits itself (0x607F); homing at 0x6099.
+pub fn fastest_step(steps: &[Step], start: RunMode) -> Option<(usize, f64)> {
+    let mut mode = start;
+    let mut fastest: Option<(usize, f64)> = None;
+    for (n, s) in steps.iter().enumerate() {
+        let v = match s {
+            Step::Mode { mode: m } => {
+                mode = *m;
+                continue;
+            }
+            Step::Move { velocity, .. }
+            | Step::Ramp { velocity, .. }
+            | Step::Jog { velocity, .. }
+            | Step::Pv { velocity, .. } => velocity.abs(),
+            Step::Sine {
+                amplitude,
+                frequency,
+                ..
+            } => match mode {
+                RunMode::Csv => amplitude.abs(),
+                _ => (amplitude * 2.0 * std::f64::consts::PI * frequency).abs(),
+            },
+            _ => continue,
+        };
+        if fastest.is_none_or(|(_, f)| v > f) {
+            fastest = Some((n, v));
+        }
+    }
+    fastest
+}
+
 /// The first value a pp step would write to 0x607A outside `range` (an absolute target, or a
 /// relative step's distance): (step index, value in counts).
 pub fn pp_target_beyond(steps: &[Step], range: crate::cia402::ValueRange) -> Option<(usize, f64)> {

@@ -5,7 +5,11 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-/// One axis in one cycle.
+/// One axis in one cycle. Columns that have no meaning in the cycle's mode are `None` (empty in
+/// the CSV): the position demand outside csp, the velocity demand outside csv and pv,
+/// the torque demand outside cst and tq, the following error wherever the master does not judge
+/// it (anything but csp while energised) — so the CSV's largest |following error| is the run
+/// summary's in every mode.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct CycleSample {
     /// The cycle number.
@@ -20,21 +24,94 @@ pub struct CycleSample {
     pub wkc: u16,
     /// The axis (configuration order).
     pub axis: u16,
-    /// Position demand, counts.
-    pub demand: i64,
+    /// The mode of operation the master sent (0x6060).
+    pub mode_sent: i8,
+    /// Position demand, counts (csp).
+    pub demand: Option<i64>,
     /// Actual position, counts (unwrapped).
     pub actual: i64,
+    /// Velocity demand (0x60FF), the drive's unit (csv, pv).
+    pub velocity_demand: Option<i32>,
     /// Actual velocity, the drive's unit (0x606C).
     pub velocity: i32,
+    /// Torque demand (0x6071), the drive's unit (cst, tq).
+    pub torque_demand: Option<i16>,
     /// Actual torque, the drive's unit (0x6077).
     pub torque: i16,
     /// Following error as the master computes it (demand − actual, matched by SYNC0 pulse),
-    /// counts.
-    pub following_error: i64,
+    /// counts, in the cycles it judges it.
+    pub following_error: Option<i64>,
     /// Statusword.
     pub statusword: u16,
     /// Mode of operation display (0x6061).
     pub mode: i8,
+    /// Touch probes 1 and 2.
+    pub probes: [crate::telemetry::ProbeState; 2],
+}
+
+impl CycleSample {
+    /// Whether the mode sent is one of `codes`.
+    fn sent_in(&self, codes: &[i8]) -> bool {
+        codes.contains(&self.mode_sent)
+    }
+
+    /// The columns that have a meaning in the mode sent, the others `None` (the cycle fills
+    /// every field; this is the one place that decides which are shown).
+    pub(crate) fn defined(mut self) -> Self {
+        // 0x6060 codes: pp 1, pv 3, tq 4, csp 8, csv 9, cst 10. In pp 0x607A is a target
+        // (relative, with controlword bit 6), not a demand the axis follows.
+        if !self.sent_in(&[8]) {
+            self.demand = None;
+        }
+        if !self.sent_in(&[3, 9]) {
+            self.velocity_demand = None;
+        }
+        if !self.sent_in(&[4, 10]) {
+            self.torque_demand = None;
+        }
+        self
+    }
+}
+
+/// How one axis's samples are written in physical units: where it sits, which drive it is, its
+/// user units (if the run has them) and the drive's units of velocity and torque.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SampleScale {
+    /// Position on the segment.
+    pub position: u16,
+    /// The drive's name (profile name).
+    pub drive: String,
+    /// The position unit the converted columns are in ("count", "deg", "mm").
+    pub unit: String,
+    /// Counts per such unit.
+    pub counts_per_unit: f64,
+    /// One unit of 0x60FF/0x606C, counts per second.
+    pub velocity_counts_per_s: f64,
+    /// One unit of 0x6071/0x6077, per mille of rated torque.
+    pub torque_per_mille: f64,
+}
+
+impl SampleScale {
+    /// The scales of a running master's drives, by axis.
+    pub fn of_drives(drives: &[crate::DriveSummary]) -> Vec<Self> {
+        drives
+            .iter()
+            .map(|d| {
+                let (unit, counts_per_unit) = match &d.user_units {
+                    Some(u) if u.counts_per_unit > 0.0 => (u.name.clone(), u.counts_per_unit),
+                    _ => ("count".to_string(), 1.0),
+                };
+                Self {
+                    position: d.drive.position,
+                    drive: d.drive.name.replace(',', ";"),
+                    unit,
+                    counts_per_unit,
+                    velocity_counts_per_s: d.units.velocity_position_per_s(),
+                    torque_per_mille: d.units.torque_per_mille,
+                }
+            })
+            .collect()
+    }
 }
 
 /// The cycle's end of a recording.
@@ -68,22 +145,6 @@ impl Recording {
         }
         n
     }
-    /// Write every sample waiting to `out` as CSV lines; `t0_ns` is the time of the first
-    /// sample ever written (set by the first call). Lines written.
-    pub fn drain_csv(
-        &mut self,
-        out: &mut dyn std::io::Write,
-        t0_ns: &mut Option<u64>,
-    ) -> std::io::Result<u64> {
-        let mut n = 0;
-        while let Ok(s) = self.rx.pop() {
-            let t0 = *t0_ns.get_or_insert(s.time_ns);
-            s.write_csv(out, t0)?;
-            n += 1;
-        }
-        Ok(n)
-    }
-
     /// Samples the cycle had to drop because the ring was full.
     pub fn dropped(&self) -> u64 {
         self.dropped.load(Ordering::Relaxed)
@@ -104,29 +165,173 @@ pub fn recording(capacity: usize) -> (RecordTx, Recording) {
     )
 }
 
-/// The CSV header of [`CycleSample::write_csv`]: every column with its unit.
-pub const CSV_HEADER: &str = "cycle,time_s,axis,demand_counts,actual_counts,velocity_drive_units,torque_drive_units,following_error_counts,statusword_hex,mode,wake_latency_us,exchange_us,wkc";
+/// The CSV header of [`CsvWriter`]: every column with its unit. Raw values first (counts and
+/// the drive's units, as on the wire), then the same in physical units: position, demand and
+/// following error in `unit` (the run's user unit, else counts), velocities in `unit`/s,
+/// torques in % of the rated torque. A column without meaning in the cycle's mode is empty
+/// ([`CycleSample`]); `probe1`/`probe2` (in `unit`) and `probe1_counts`/`probe2_counts` hold a
+/// touch probe's latched position from the cycle it latched until it is armed again.
+pub const CSV_HEADER: &str = "cycle,time_s,axis,position,drive,mode,mode_sent,statusword_hex,\
+demand_counts,actual_counts,following_error_counts,velocity_demand_drive_units,\
+velocity_drive_units,torque_demand_drive_units,torque_drive_units,unit,demand,actual,\
+following_error,velocity_demand_per_s,velocity_per_s,torque_demand_percent,torque_percent,\
+probe1,probe2,probe1_counts,probe2_counts,wake_latency_us,exchange_us,wkc";
+
+/// `Some(v)` as the value, `None` as nothing.
+struct Cell<T>(Option<T>);
+
+impl<T: std::fmt::Display> std::fmt::Display for Cell<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.0 {
+            Some(v) => v.fmt(f),
+            None => Ok(()),
+        }
+    }
+}
+
+/// A value in physical units with enough digits for a count ("12.5", "0.000123").
+struct Phys(Option<f64>);
+
+impl std::fmt::Display for Phys {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self.0 {
+            Some(v) if v.is_finite() => write!(f, "{}", (v * 1e6).round() / 1e6),
+            _ => Ok(()),
+        }
+    }
+}
 
 impl CycleSample {
     /// Write this sample as one CSV line ([`CSV_HEADER`]'s columns), `t0_ns` the time of the
-    /// recording's first cycle.
-    pub fn write_csv(&self, out: &mut dyn std::io::Write, t0_ns: u64) -> std::io::Result<()> {
+    /// recording's first cycle, `scale` the axis's units (`None`: the physical columns empty).
+    pub fn write_csv(
+        &self,
+        out: &mut dyn std::io::Write,
+        t0_ns: u64,
+        scale: Option<&SampleScale>,
+    ) -> std::io::Result<()> {
+        use crate::telemetry::ProbeState;
+        let pos = |c: Option<i64>| Phys(scale.zip(c).map(|(s, c)| c as f64 / s.counts_per_unit));
+        let vel = |v: Option<i32>| {
+            Phys(
+                scale
+                    .zip(v)
+                    .map(|(s, v)| f64::from(v) * s.velocity_counts_per_s / s.counts_per_unit),
+            )
+        };
+        let tq = |t: Option<i16>| {
+            Phys(
+                scale
+                    .zip(t)
+                    .map(|(s, t)| f64::from(t) * s.torque_per_mille / 10.0),
+            )
+        };
+        let probe = |p: &ProbeState| match p {
+            ProbeState::Latched { position, .. } => Some(*position),
+            _ => None,
+        };
         writeln!(
             out,
-            "{},{:.6},{},{},{},{},{},{},{:04X},{},{:.1},{:.1},{}",
+            "{},{:.6},{},{},{},{},{},{:04X},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:.1},{:.1},{}",
             self.cycle,
             self.time_ns.saturating_sub(t0_ns) as f64 / 1e9,
             self.axis,
-            self.demand,
-            self.actual,
-            self.velocity,
-            self.torque,
-            self.following_error,
-            self.statusword,
+            Cell(scale.map(|s| s.position)),
+            Cell(scale.map(|s| s.drive.as_str())),
             self.mode,
+            self.mode_sent,
+            self.statusword,
+            Cell(self.demand),
+            self.actual,
+            Cell(self.following_error),
+            Cell(self.velocity_demand),
+            self.velocity,
+            Cell(self.torque_demand),
+            self.torque,
+            Cell(scale.map(|s| s.unit.as_str())),
+            pos(self.demand),
+            pos(Some(self.actual)),
+            pos(self.following_error),
+            vel(self.velocity_demand),
+            vel(Some(self.velocity)),
+            tq(self.torque_demand),
+            tq(Some(self.torque)),
+            pos(probe(&self.probes[0])),
+            pos(probe(&self.probes[1])),
+            Cell(probe(&self.probes[0])),
+            Cell(probe(&self.probes[1])),
             f64::from(self.wake_latency_ns) / 1e3,
             f64::from(self.exchange_ns) / 1e3,
             self.wkc
         )
+    }
+}
+
+/// Writes a [`Recording`] as CSV ([`CSV_HEADER`]) from a thread that is not real-time. The
+/// physical columns need the drives' units, known once the master has started
+/// ([`CsvWriter::set_drives`]); samples drained before that wait in memory.
+pub struct CsvWriter<W: std::io::Write> {
+    out: W,
+    t0: Option<u64>,
+    scales: Option<Vec<SampleScale>>,
+    pending: Vec<CycleSample>,
+    lines: u64,
+}
+
+impl<W: std::io::Write> CsvWriter<W> {
+    /// Write the header to `out`.
+    pub fn new(mut out: W) -> std::io::Result<Self> {
+        writeln!(out, "{CSV_HEADER}")?;
+        Ok(Self {
+            out,
+            t0: None,
+            scales: None,
+            pending: Vec::new(),
+            lines: 0,
+        })
+    }
+
+    /// The drives' units, by axis ([`SampleScale::of_drives`]); what waited is written.
+    pub fn set_drives(&mut self, scales: Vec<SampleScale>) -> std::io::Result<()> {
+        self.scales = Some(scales);
+        let pending = std::mem::take(&mut self.pending);
+        for s in &pending {
+            self.line(s)?;
+        }
+        Ok(())
+    }
+
+    fn line(&mut self, s: &CycleSample) -> std::io::Result<()> {
+        let t0 = *self.t0.get_or_insert(s.time_ns);
+        let scale = self
+            .scales
+            .as_ref()
+            .and_then(|v| v.get(usize::from(s.axis)));
+        s.write_csv(&mut self.out, t0, scale)?;
+        self.lines += 1;
+        Ok(())
+    }
+
+    /// Drain every sample waiting in `rec` (written, or held until the drives are known).
+    pub fn drain(&mut self, rec: &mut Recording) -> std::io::Result<()> {
+        while let Ok(s) = rec.rx.pop() {
+            if self.scales.is_some() {
+                self.line(&s)?;
+            } else {
+                self.pending.push(s);
+            }
+        }
+        Ok(())
+    }
+
+    /// Write what is held (without physical units if the drives never became known), flush;
+    /// the output and the lines written.
+    pub fn finish(mut self) -> std::io::Result<(W, u64)> {
+        let pending = std::mem::take(&mut self.pending);
+        for s in &pending {
+            self.line(s)?;
+        }
+        self.out.flush()?;
+        Ok((self.out, self.lines))
     }
 }

@@ -97,7 +97,7 @@ impl MasterConfig {
 }
 
 /// One drive of a running master.
-#[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct DriveSummary {
     /// How messages name it.
     pub drive: DriveRef,
@@ -112,6 +112,11 @@ pub struct DriveSummary {
     pub pdos: (Vec<u16>, Vec<u16>),
     /// Start mode.
     pub mode: &'static str,
+    /// The units of its CiA 402 objects (its profile's).
+    #[serde(skip)]
+    pub units: ecdrive_core::cia402::Units,
+    /// The user's units, where the configuration gives them.
+    pub user_units: Option<startup::UserUnits>,
 }
 
 /// One device of a running master that is not driven (an I/O device): in OP with its own PDO
@@ -151,6 +156,68 @@ pub struct SessionReport {
     pub shutdown_ok: bool,
     /// Re-starts that brought the drives back to OP.
     pub restarts: u32,
+}
+
+/// One drive's part of a run, from the cycle's report (what the CLI's summary shows per drive):
+/// [`SessionReport::drive_outcomes`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriveOutcome {
+    /// Which drive.
+    pub drive: DriveRef,
+    /// Largest |following error| while energised in csp, counts, as the master computes it
+    /// (demand − actual with the cycle's transport delay); the limit uses it.
+    pub max_following_error: i64,
+    /// The same in the drive's user units, where the configuration gives them.
+    pub max_following_error_units: Option<f64>,
+    /// Largest |0x60F4| the drive reported meanwhile (`None`: not mapped).
+    pub max_following_error_drive: Option<i64>,
+    /// 0x60F4 stayed 0 while the axis moved: the drive does not compute it (not trusted).
+    pub following_error_drive_stuck: bool,
+    /// CiA 402 states it went through, in order.
+    pub states: Vec<cia402::State>,
+    /// Modes it ran set-points in, in order.
+    pub modes_run: Vec<cia402::OperationMode>,
+    /// Touch-probe latches, in order: (probe, edge, position in counts).
+    pub probe_latches: Vec<(u8, crate::program::ProbeEdge, i64)>,
+}
+
+impl SessionReport {
+    /// Per drive (in the order of [`SessionReport::drives`]), what the run did: the largest
+    /// following errors, the states and modes, the probe latches. Empty figures when the
+    /// cycle never ran.
+    pub fn drive_outcomes(&self) -> Vec<DriveOutcome> {
+        let c = self.cycle.as_ref();
+        self.drives
+            .iter()
+            .enumerate()
+            .map(|(i, d)| {
+                let max_fe = c
+                    .and_then(|c| c.max_following_error.get(i).copied())
+                    .unwrap_or(0);
+                DriveOutcome {
+                    drive: d.drive.clone(),
+                    max_following_error: max_fe,
+                    max_following_error_units: d
+                        .user_units
+                        .as_ref()
+                        .map(|u| max_fe as f64 / u.counts_per_unit),
+                    max_following_error_drive: c
+                        .and_then(|c| c.max_following_error_drive.get(i).copied())
+                        .flatten(),
+                    following_error_drive_stuck: c
+                        .and_then(|c| c.following_error_drive_stuck.get(i).copied())
+                        .unwrap_or(false),
+                    states: c.and_then(|c| c.states.get(i).cloned()).unwrap_or_default(),
+                    modes_run: c
+                        .and_then(|c| c.modes_run.get(i).cloned())
+                        .unwrap_or_default(),
+                    probe_latches: c
+                        .and_then(|c| c.probe_latches.get(i).cloned())
+                        .unwrap_or_default(),
+                }
+            })
+            .collect()
+    }
 }
 
 /// A failed start: the error, and the link back.
@@ -834,6 +901,8 @@ impl Persist {
                     d.mapping.tx.iter().map(|p| p.index).collect(),
                 ),
                 mode: d.setup.mode.name(),
+                units: d.profile.units,
+                user_units: d.setup.units.clone(),
             })
             .collect();
         let io: Vec<IoSummary> = started

@@ -1781,6 +1781,9 @@ struct DriveWrites {
     init_so: Vec<&'static InitCommand>,
     /// The profile's mode selector and the modes the program uses: read and judged first.
     mode_selector: Option<(ModeSelector, Vec<i8>)>,
+    /// The program's fastest step: (step index, motor revolutions per second), judged against
+    /// the motor's maximum speed 0x6080 the drive reports.
+    fastest: Option<(usize, f64)>,
 }
 
 impl DriveWrites {
@@ -1805,6 +1808,8 @@ impl DriveWrites {
             mode_selector: profile
                 .mode_selector
                 .map(|m| (m, super::program::modes_used(&setup.program, setup.mode))),
+            fastest: super::program::fastest_step(&setup.program, setup.mode)
+                .map(|(n, counts_per_s)| (n, counts_per_s / profile.units.position_per_rev)),
         };
         w.plan_init_cmds(drive, setup, profile)?;
         if remap {
@@ -1999,9 +2004,30 @@ struct MailboxDone {
     held: Vec<HeldValue>,
     /// The InitCmd that failed (after its retries) and why; nothing after it was written.
     init_failed: Option<(&'static InitCommand, CoeError)>,
-    /// The mode selector's value does not allow the program's modes: why (nothing was
-    /// written).
-    modes_refused: Option<String>,
+    /// The mode selector's value does not allow the program's modes, or the program is faster
+    /// than the motor: why (nothing was written).
+    modes_refused: Option<(&'static str, String)>,
+}
+
+/// Whether the program's fastest step is within the motor's maximum speed 0x6080 as the drive
+/// reports it (r/min in both manuals: MR-J4-TM "Max motor speed (6080h) … Operation cannot be
+/// performed at a speed exceeding the speed set with this object. Unit: [r/min]"; BDHDE
+/// "6080h – Motor Maximum Speed … Units rpm"). 0 or an object the drive does not have says
+/// nothing.
+fn judge_max_speed((step, rev_s): (usize, f64), raw: &[u8]) -> Result<(), String> {
+    let mut b = [0u8; 4];
+    for (d, s) in b.iter_mut().zip(raw) {
+        *d = *s;
+    }
+    let max_rpm = u32::from_le_bytes(b);
+    if max_rpm == 0 || rev_s * 60.0 <= f64::from(max_rpm) {
+        return Ok(());
+    }
+    Err(format!(
+        "program[{step}] commands {:.0} r/min ({rev_s:.1} rev/s), beyond the motor's maximum          speed 0x6080 = {max_rpm} r/min ({:.1} rev/s) that the drive reports: the drive cannot          run it (lower the step's velocity)",
+        rev_s * 60.0,
+        f64::from(max_rpm) / 60.0
+    ))
 }
 
 /// Whether the mode selector's value allows every mode the program uses; `Err` says which
@@ -2164,9 +2190,19 @@ async fn configure_mailbox(
             )),
         };
         if let Err(why) = judged {
-            done.modes_refused = Some(why);
+            done.modes_refused = Some(("checking the modes of operation", why));
             return Ok(done);
         }
+    }
+    if let Some(fastest) = plan.fastest
+        && let Ok(raw) = c.upload(ObjectAddress::new(0x6080, 0), false).await
+        && let Err(why) = judge_max_speed(fastest, &raw)
+    {
+        done.modes_refused = Some((
+            "checking the program against the motor's maximum speed",
+            why,
+        ));
+        return Ok(done);
     }
     for (addr, bytes, _why) in pdo_writes {
         c.download(*addr, bytes, false).await?;
@@ -2226,15 +2262,10 @@ fn judge_drive(
         }
         e
     })?;
-    if let Some(why) = modes_refused {
-        // What the drive reports (its mode setting) refuses the program: the drive's refusal
-        // (exit 4), not an error of the file (exit 2).
-        return Err(MasterError::new(
-            Some(drive),
-            "checking the modes of operation",
-            ErrorKind::Refused,
-            why,
-        ));
+    if let Some((step, why)) = modes_refused {
+        // What the drive reports (its mode setting, its motor's maximum speed) refuses the
+        // program: the drive's refusal (exit 4), not an error of the file (exit 2).
+        return Err(MasterError::new(Some(drive), step, ErrorKind::Refused, why));
     }
     if let Some((ic, e)) = init_failed {
         return Err(init_cmd_error(drive, ic, &e));

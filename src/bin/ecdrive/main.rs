@@ -440,8 +440,10 @@ enum Command {
         #[arg(long)]
         check: bool,
         /// Record every cycle into this CSV file: one line per axis and cycle with a reply
-        /// (demand, actual, velocity, torque, following error, statusword, mode, wake-up
-        /// latency, exchange time, working counter; the header names the units). Written off
+        /// (demand, actual, velocity, torque, following error, statusword, mode, probes,
+        /// wake-up latency, exchange time, working counter, in counts and drive units and again
+        /// in the run's units; the header names the columns, a column without meaning in the
+        /// cycle's mode is empty). Written off
         /// the cycle thread; samples it could not keep up with are counted, never waited for.
         #[arg(long, value_name = "FILE")]
         record: Option<PathBuf>,
@@ -457,9 +459,10 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
-    /// Draw a recording of `ecdrive run --record FILE` as a scope (SVG): per axis, demand and
-    /// actual position, following error, velocity and torque against time, the mode of
-    /// operation as bands behind the position, cycles with a fault as red marks.
+    /// Draw a recording of `ecdrive run --record FILE` as a scope (SVG): per drive (by position
+    /// and name), position, following error, velocity and torque against time, demand and
+    /// actual with a legend, in the run's units (the recording carries them); the mode of
+    /// operation as bands, faults as red bands, touch-probe latches as marks.
     #[command(
         after_help = "Example:\n  ecdrive run -c examples/csp_move_sine.toml --record run.csv\n  ecdrive plot run.csv -o run.svg"
     )]
@@ -469,10 +472,6 @@ enum Command {
         /// The SVG to write.
         #[arg(short, long, value_name = "OUT.svg")]
         output: PathBuf,
-        /// The run's configuration: position and following error in its drives' units
-        /// (drives selected by position).
-        #[arg(short, long, value_name = "FILE")]
-        config: Option<PathBuf>,
     },
     /// Emulate a line of EtherCAT devices on a network interface until Ctrl-C (needs root or
     /// CAP_NET_RAW). Any master on the other end of the wire sees real slaves. With --can:
@@ -807,21 +806,12 @@ pub fn fail(cmd: &str, e: &MasterError) -> ExitCode {
 
 /// Print a message as one line and return `code`.
 /// `ecdrive plot`: read a recording, draw it.
-fn plot_file(
-    file: &std::path::Path,
-    out: &std::path::Path,
-    config: Option<&std::path::Path>,
-) -> ExitCode {
+fn plot_file(file: &std::path::Path, out: &std::path::Path) -> ExitCode {
     use ecdrive::app::plot;
-    let units = match config.map(ecdrive::app::config::load) {
-        Some(Ok(c)) => plot::units_of(&c),
-        Some(Err(e)) => return fail_with("plot", &e.to_string(), exit::USAGE),
-        None => Vec::new(),
-    };
-    match plot::read(file).and_then(|r| plot::draw(&r, out, &units).map(|()| r)) {
+    match plot::read(file).and_then(|r| plot::draw(&r, out).map(|()| r)) {
         Ok(r) => {
             eprintln!(
-                "ecdrive plot: {} axis(es), {} panels, to {}",
+                "ecdrive plot: {} drive(s), {} panels, to {}",
                 r.axes.len(),
                 r.axes.len() * plot::PANELS.len(),
                 out.display()
@@ -1637,7 +1627,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             );
             match (&record, &plot) {
                 (Some(r), Some(p)) if !check => {
-                    let drawn = plot_file(r, p, Some(&config));
+                    let drawn = plot_file(r, p);
                     if drawn == ExitCode::SUCCESS {
                         code
                     } else {
@@ -1647,11 +1637,7 @@ fn dispatch(cli: Cli) -> ExitCode {
                 _ => code,
             }
         }
-        Command::Plot {
-            file,
-            output,
-            config,
-        } => plot_file(&file, &output, config.as_deref()),
+        Command::Plot { file, output } => plot_file(&file, &output),
         Command::Version { json } => {
             let v = ecdrive::app::version::Version::this_build();
             if json.json {

@@ -304,6 +304,9 @@ pub fn run(
             return Err(f.error);
         }
     };
+    if let Some(w) = &writer {
+        w.drives_known(m.drives());
+    }
     // Which file entry each axis is.
     let mut used = vec![false; cfg.drives.len()];
     let entries: Vec<Option<usize>> = m
@@ -740,6 +743,7 @@ pub fn run(
         }
         _ => {}
     }
+    let outcomes = report.drive_outcomes();
     let drives = summaries
         .iter()
         .enumerate()
@@ -750,9 +754,8 @@ pub fn run(
                 .flatten()
                 .and_then(|e| cfg.drives.get(e));
             let units = entry.and_then(|e| e.units.clone());
-            let max_fe = cycle
-                .and_then(|c| c.max_following_error.get(i).copied())
-                .unwrap_or(0);
+            let o = outcomes.get(i);
+            let max_fe = o.map_or(0, |o| o.max_following_error);
             DriveRunReport {
                 position: s.info.position,
                 name: s.profile.to_string(),
@@ -760,28 +763,27 @@ pub fn run(
                 mode: s.mode.to_string(),
                 pdos: s.pdos.clone(),
                 image_bytes: s.image_bytes,
-                states: cycle
-                    .and_then(|c| c.states.get(i))
-                    .map(|v| v.iter().map(|s| s.to_string()).collect())
+                states: o
+                    .map(|o| o.states.iter().map(|s| s.to_string()).collect())
                     .unwrap_or_default(),
-                modes_run: cycle
-                    .and_then(|c| c.modes_run.get(i))
-                    .map(|v| v.iter().map(|m| m.short_name().to_string()).collect())
+                modes_run: o
+                    .map(|o| {
+                        o.modes_run
+                            .iter()
+                            .map(|m| m.short_name().to_string())
+                            .collect()
+                    })
                     .unwrap_or_default(),
                 max_following_error: max_fe,
-                max_following_error_drive: cycle
-                    .and_then(|c| c.max_following_error_drive.get(i).copied())
-                    .flatten(),
-                following_error_drive_stuck: cycle
-                    .and_then(|c| c.following_error_drive_stuck.get(i).copied())
-                    .unwrap_or(false),
+                max_following_error_drive: o.and_then(|o| o.max_following_error_drive),
+                following_error_drive_stuck: o.is_some_and(|o| o.following_error_drive_stuck),
                 max_following_error_units: units
                     .as_ref()
                     .map(|u| max_fe as f64 / u.counts_per_unit),
-                probe_latches: cycle
-                    .and_then(|c| c.probe_latches.get(i))
-                    .map(|v| {
-                        v.iter()
+                probe_latches: o
+                    .map(|o| {
+                        o.probe_latches
+                            .iter()
                             .map(|&(probe, edge, counts)| ProbeLatch {
                                 probe,
                                 edge: edge.name(),
@@ -798,29 +800,31 @@ pub fn run(
                     .copied()
                     .unwrap_or(0)
                     .min(programs.get(i).copied().unwrap_or(0)),
-                errors: report
-                    .history
-                    .iter()
-                    .filter(|h| {
-                        h.error
-                            && h.drive
-                                .as_ref()
-                                .is_some_and(|d| d.position == s.info.position)
-                    })
-                    .map(|h| h.text.clone())
-                    .collect(),
-                warnings: report
-                    .history
-                    .iter()
-                    .filter(|h| {
-                        h.kind == crate::master::HistoryKind::Warning
-                            && !h.error
-                            && h.drive
-                                .as_ref()
-                                .is_some_and(|d| d.position == s.info.position)
-                    })
-                    .map(|h| h.text.trim_start_matches("warning: ").to_string())
-                    .collect(),
+                errors: once_each(
+                    report
+                        .history
+                        .iter()
+                        .filter(|h| {
+                            h.error
+                                && h.drive
+                                    .as_ref()
+                                    .is_some_and(|d| d.position == s.info.position)
+                        })
+                        .map(|h| h.text.clone()),
+                ),
+                warnings: once_each(
+                    report
+                        .history
+                        .iter()
+                        .filter(|h| {
+                            h.kind == crate::master::HistoryKind::Warning
+                                && !h.error
+                                && h.drive
+                                    .as_ref()
+                                    .is_some_and(|d| d.position == s.info.position)
+                        })
+                        .map(|h| h.text.trim_start_matches("warning: ").to_string()),
+                ),
             }
         })
         .collect();
@@ -854,10 +858,27 @@ pub fn run(
     })
 }
 
+/// Each text once, in the order of its first appearance, with how often it came when more
+/// than once ("… (3 times)"): a drive's report says every fault once (the history keeps each).
+fn once_each(texts: impl Iterator<Item = String>) -> Vec<String> {
+    let mut seen: Vec<(String, usize)> = Vec::new();
+    for t in texts {
+        match seen.iter_mut().find(|(s, _)| *s == t) {
+            Some((_, n)) => *n += 1,
+            None => seen.push((t, 1)),
+        }
+    }
+    seen.into_iter()
+        .map(|(t, n)| if n > 1 { format!("{t} ({n} times)") } else { t })
+        .collect()
+}
+
 /// The thread that drains the cycle's recording into the CSV file.
 struct RecordWriter {
     path: std::path::PathBuf,
     done: std::sync::Arc<AtomicBool>,
+    /// The drives' units, sent once the master has started.
+    drives: std::sync::mpsc::Sender<Vec<crate::master::SampleScale>>,
     thread: Option<std::thread::JoinHandle<std::io::Result<(u64, u64)>>>,
 }
 
@@ -892,30 +913,40 @@ impl RecordWriter {
         cfg.record = Some(std::sync::Arc::new(std::sync::Mutex::new(tx)));
         let done = std::sync::Arc::new(AtomicBool::new(false));
         let stop = done.clone();
+        let (drives, drives_rx) = std::sync::mpsc::channel();
         let thread = std::thread::Builder::new()
             .name("ecdrive-record".into())
             .spawn(move || {
-                use std::io::Write;
-                let mut out = std::io::BufWriter::new(file);
-                writeln!(out, "{}", crate::master::CSV_HEADER)?;
-                let (mut t0, mut lines) = (None, 0u64);
+                let mut w = crate::master::CsvWriter::new(std::io::BufWriter::new(file))?;
                 loop {
                     let last = stop.load(std::sync::atomic::Ordering::Acquire);
-                    lines += rx.drain_csv(&mut out, &mut t0)?;
+                    if let Ok(scales) = drives_rx.try_recv() {
+                        w.set_drives(scales)?;
+                    }
+                    w.drain(&mut rx)?;
                     if last {
                         break;
                     }
                     std::thread::sleep(Duration::from_millis(20));
                 }
-                out.flush()?;
+                let (_, lines) = w.finish()?;
                 Ok((lines, rx.dropped()))
             })
             .map_err(fail)?;
         Ok(Self {
             path: path.to_path_buf(),
             done,
+            drives,
             thread: Some(thread),
         })
+    }
+
+    /// The drives of the started master: their units for the CSV's physical columns.
+    fn drives_known(&self, drives: &[crate::master::DriveSummary]) {
+        // A writer that has ended (an I/O error) reports it when finished.
+        let _ = self
+            .drives
+            .send(crate::master::SampleScale::of_drives(drives));
     }
 
     /// Drain what is left (the cycle has ended), close the file.
