@@ -516,7 +516,12 @@ fn a_mixed_segment_runs_the_drives_and_exchanges_the_io() {
             .all(|a| a.state == Some(ecdrive::cia402::State::OperationEnabled))
     })
     .unwrap();
-    std::thread::sleep(Duration::from_millis(100));
+    // A hundred cycles in OP, enabled (counted, not timed): the master's mailbox polling runs.
+    let c0 = m.telemetry().cycle.cycle;
+    m.wait_until("100 cycles", Duration::from_secs(10), |t| {
+        t.cycle.cycle >= c0 + 100
+    })
+    .unwrap();
     let (report, _) = m.stop(StopKind::Ramp);
     let report = report.unwrap();
     assert!(report.shutdown_ok);

@@ -370,12 +370,13 @@ fn a_user_mapping_runs_and_an_invalid_one_is_refused_before_anything_is_written(
         !t.axes[0].program_running && t.axes[0].program_step == 1
     })
     .unwrap();
-    std::thread::sleep(Duration::from_millis(50));
+    // The motor settles after the demand has: wait for it to stand at the target (an
+    // event, not a time).
+    let settled = m.wait_until("settled at the target", Duration::from_secs(10), |t| {
+        ((t.axes[0].position_actual - p0) as f64 - 0.25 * rev).abs() < rev * 1e-3
+    });
     let moved = m.telemetry().axes[0].position_actual - p0;
-    assert!(
-        (moved as f64 - 0.25 * rev).abs() < rev * 1e-3,
-        "moved {moved}"
-    );
+    assert!(settled.is_ok(), "moved {moved}, not 0.25 rev");
     let (r, link) = m.stop(StopKind::Ramp);
     let errs = errors(&r.unwrap());
     assert!(errs.is_empty(), "{errs:#?}");

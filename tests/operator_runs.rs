@@ -138,16 +138,35 @@ fn sigterm_stops_a_run_in_a_controlled_way() {
             "[supervision]\nlost_before_stop = 1000\nlost_cycles = 1000\n",
         ),
     );
+    let csv = dir.file("run.csv", "");
     let child = Command::new(ECDRIVE)
-        .args(["run", "-i", sim.host(), "-c", &f, "--json"])
+        .args(["run", "-i", sim.host(), "-c", &f, "--json", "--record", &csv])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    // Until the jog runs: the drives report it on the wire (their statusword), so wait for
-    // the sim's counters to pass start-up, then signal.
-    std::thread::sleep(Duration::from_secs(3));
+    // Until the jog runs (an event, not a time): the recording shows both drives' statusword
+    // in Operation enabled; then signal.
+    let enabled = |text: &str, axis: &str| {
+        text.lines().any(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            f.get(2) == Some(&axis)
+                && f.get(7)
+                    .and_then(|sw| u16::from_str_radix(sw, 16).ok())
+                    .is_some_and(|sw| sw & 0x6F == 0x27)
+        })
+    };
+    let mut polls = 0;
+    loop {
+        let text = std::fs::read_to_string(&csv).unwrap_or_default();
+        if enabled(&text, "0") && enabled(&text, "1") {
+            break;
+        }
+        polls += 1;
+        assert!(polls < 6000, "the jog never ran (no Operation enabled recorded)");
+        std::thread::sleep(Duration::from_millis(10));
+    }
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
     nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM).unwrap();
     let out = child.wait_with_output().unwrap();

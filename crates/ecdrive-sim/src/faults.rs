@@ -140,7 +140,7 @@ pub enum LinkFault {
     /// slaves). Counted in `SegmentStats::dropped`.
     DropFraction(f32),
     /// Drop exactly the next `n` frames (on the leg set with [`LinkFault::DropOn`]), in
-    /// addition to [`LinkFault::DropFraction`]. Replaces a previous count.
+    /// addition to [`LinkFault::DropFraction`]. Added to what a previous one has left.
     DropNext(u32),
     /// Where frames dropped by [`LinkFault::DropFraction`] and [`LinkFault::DropNext`] are
     /// lost.
@@ -302,7 +302,8 @@ impl LinkState {
     pub(super) fn apply(&mut self, f: LinkFault) {
         match f {
             LinkFault::DropFraction(p) => self.drop_threshold = threshold(p),
-            LinkFault::DropNext(n) => self.drop_next = n,
+            // Added to what is still to be dropped: two injections drop both counts.
+            LinkFault::DropNext(n) => self.drop_next = self.drop_next.saturating_add(n),
             LinkFault::DropOn(leg) => self.drop_leg = leg,
             LinkFault::Delay { fraction, delay_ns } => {
                 self.delay_threshold = threshold(fraction);

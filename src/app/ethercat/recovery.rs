@@ -102,8 +102,12 @@ impl Recovery {
     /// What to do now, given the latest telemetry of a cycle that runs in OP and whether
     /// every axis is in Operation enabled.
     pub fn next(&mut self, t: &Telemetry, all_enabled: bool) -> Action {
+        self.next_at(Instant::now(), t, all_enabled)
+    }
+
+    /// [`Recovery::next`] at the instant `now` (the tests' clock).
+    fn next_at(&mut self, now: Instant, t: &Telemetry, all_enabled: bool) -> Action {
         self.reset_at.resize(t.axes.len(), None);
-        let now = Instant::now();
         let mut reset = Vec::new();
         let mut unhandled = None;
         for (i, a) in t.axes.iter().enumerate() {
@@ -306,6 +310,22 @@ mod tests {
         }
     }
 
+    /// The tests' clock: time passes only when a test says so.
+    struct Clock {
+        now: Instant,
+    }
+
+    impl Clock {
+        fn new() -> Self {
+            Self {
+                now: Instant::now(),
+            }
+        }
+        fn advance(&mut self, ms: u64) {
+            self.now += Duration::from_millis(ms);
+        }
+    }
+
     fn quick() -> Recovery {
         Recovery {
             settle: Duration::ZERO,
@@ -321,42 +341,45 @@ mod tests {
 
     #[test]
     fn one_reset_per_faulted_axis_and_episode_then_enable_then_run() {
+        let c = Clock::new();
         let mut r = quick();
         let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
+        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0]));
         // Still in Fault within the retry time: the master pulses bit 7; no second request.
-        assert_eq!(r.next(&faulted, false), Action::None);
+        assert_eq!(r.next_at(c.now, &faulted, false), Action::None);
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
-        assert_eq!(r.next(&idle, false), Action::Enable);
-        assert_eq!(r.next(&idle, false), Action::None);
+        assert_eq!(r.next_at(c.now, &idle, false), Action::Enable);
+        assert_eq!(r.next_at(c.now, &idle, false), Action::None);
         let enabled = telemetry(&[(OE, false), (OE, false)]);
-        assert_eq!(r.next(&enabled, true), Action::RunProgram);
+        assert_eq!(r.next_at(c.now, &enabled, true), Action::RunProgram);
         // A new fault is a new episode: a new reset.
         let both = telemetry(&[(State::Fault, true), (State::Fault, true)]);
-        assert_eq!(r.next(&both, false), Action::FaultReset(vec![0, 1]));
+        assert_eq!(r.next_at(c.now, &both, false), Action::FaultReset(vec![0, 1]));
     }
 
     #[test]
     fn a_fault_during_the_enable_cancels_it_and_recovery_starts_again() {
+        let mut c = Clock::new();
         let mut r = quick();
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
-        assert_eq!(r.next(&idle, false), Action::Enable);
+        assert_eq!(r.next_at(c.now, &idle, false), Action::Enable);
         let faulted = telemetry(&[(State::Fault, true), (State::Fault, true)]);
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0, 1]));
-        std::thread::sleep(Duration::from_millis(10));
-        assert_eq!(r.next(&idle, false), Action::Enable);
+        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0, 1]));
+        c.advance(10);
+        assert_eq!(r.next_at(c.now, &idle, false), Action::Enable);
     }
 
     #[test]
     fn a_fault_that_stays_and_an_enable_that_never_comes_are_unhandled() {
+        let mut c = Clock::new();
         let mut r = quick();
         let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        std::thread::sleep(Duration::from_millis(20));
+        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0]));
+        c.advance(20);
         // Still shown after the retry time: asked again.
-        assert_eq!(r.next(&faulted, false), Action::FaultReset(vec![0]));
-        std::thread::sleep(Duration::from_millis(20));
-        let Action::Unhandled(what, again) = r.next(&faulted, false) else {
+        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0]));
+        c.advance(20);
+        let Action::Unhandled(what, again) = r.next_at(c.now, &faulted, false) else {
             panic!("a fault that stays must be reported");
         };
         assert!(what.contains("axis 0") && what.contains("0xFF86"), "{what}");
@@ -364,9 +387,9 @@ mod tests {
 
         let mut r = quick();
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
-        assert_eq!(r.next(&idle, false), Action::Enable);
-        std::thread::sleep(Duration::from_millis(40));
-        let Action::Unhandled(what, _) = r.next(&idle, false) else {
+        assert_eq!(r.next_at(c.now, &idle, false), Action::Enable);
+        c.advance(40);
+        let Action::Unhandled(what, _) = r.next_at(c.now, &idle, false) else {
             panic!("an enable that never comes must be reported");
         };
         assert!(what.contains("not enabled"), "{what}");
@@ -374,8 +397,9 @@ mod tests {
 
     #[test]
     fn energised_axes_are_left_to_stop_first() {
+        let c = Clock::new();
         let mut r = quick();
         let stopping = telemetry(&[(State::QuickStopActive, false), (SOD, false)]);
-        assert_eq!(r.next(&stopping, false), Action::None);
+        assert_eq!(r.next_at(c.now, &stopping, false), Action::None);
     }
 }
