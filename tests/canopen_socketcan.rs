@@ -1,6 +1,8 @@
 //! The SocketCAN transport on real interfaces — wherever this machine has one (an interface
-//! whose `/sys/class/net/*/type` is 280). Without one the test says so loudly and passes: no CI
-//! machine has a CAN interface, and the transport is still compiled and its error path tested.
+//! whose `/sys/class/net/*/type` is 280). The CI machine's kernel has no CAN, so the test is
+//! ignored (the summary counts it as ignored, never as passed); run it where there is an
+//! interface with `cargo test --release --test canopen_socketcan -- --ignored`, and there it
+//! fails if it finds none.
 //!
 //! On a virtual interface (vcan: no backing device) two sockets exchange data and remote frames.
 //! On a real adapter nothing is transmitted (it may be wired to a machine) unless
@@ -10,14 +12,15 @@ use ecdrive::canopen::can_socket::{SocketCanTransport, can_interfaces, is_virtua
 use ecdrive::canopen::{CanFrame, CanTransport};
 
 #[test]
+#[ignore = "needs a CAN interface (SocketCAN); the CI kernel has no CAN: run with --ignored where \
+            one exists"]
 fn socketcan_transport_on_every_can_interface() {
     let ifs = can_interfaces();
-    if ifs.is_empty() {
-        let msg = "SKIPPED: no CAN interface on this machine (no /sys/class/net/*/type == 280); \
-                   the SocketCAN transport is built but not exercised";
-        ecdrive::rt::audit::announce_skip(msg);
-        return;
-    }
+    assert!(
+        !ifs.is_empty(),
+        "no CAN interface on this machine (no /sys/class/net/*/type == 280): the SocketCAN \
+         transport cannot be exercised here"
+    );
     let tx_allowed = std::env::var("ECDRIVE_CAN_TX_TEST").is_ok_and(|v| v == "1");
     for ifname in ifs {
         let mut a = SocketCanTransport::open(&ifname).unwrap();

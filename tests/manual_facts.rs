@@ -1017,7 +1017,14 @@ fn the_facts_are_many_unique_and_quote_their_manual() {
         let Some(text) = manual_text(&file.manual) else {
             // The manuals are not part of the checkout (they are the vendors' text): the
             // quotes are checked where they are at hand (next to the checkout, or
-            // ECDRIVE_MANUALS), and said to be unchecked otherwise.
+            // ECDRIVE_MANUALS), and said to be unchecked otherwise — but never in CI, where
+            // an unchecked quote would pass as checked.
+            assert!(
+                std::env::var_os("ECDRIVE_CI").is_none(),
+                "{d}: the manual {} is not at hand (../shared/manuals or ECDRIVE_MANUALS): \
+                 under ECDRIVE_CI the quotes must be checked",
+                file.manual
+            );
             eprintln!(
                 "SKIP quote check for {d}: {} not found (set ECDRIVE_MANUALS)",
                 file.manual

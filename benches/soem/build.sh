@@ -3,14 +3,15 @@
 #
 #   benches/soem/build.sh [OUT_DIR]        (default: target/soem)
 #
-# SOEM's sources come from the pysoem 1.1.13 source distribution on PyPI (SOEM 1.4, checksum
-# verified); nothing of SOEM is kept in this repository. Never part of CI: the harness reports
-# why SOEM is absent when the program is missing. On failure: one line on stderr, exit 1.
+# SOEM's sources come from the pysoem 1.1.13 source distribution (SOEM 1.4), fetched by the
+# package tool itself (`pip download --no-binary :all:`, from whatever index pip is configured
+# with) and checked against its sha256; nothing of SOEM is kept in this repository. Never part
+# of CI: the harness reports why SOEM is absent when the program is missing. On failure: one
+# line on stderr, exit 1.
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 root="$(cd "$here/../.." && pwd)"
 out="${1:-$root/target/soem}"
-url="https://files.pythonhosted.org/packages/76/32/69116eb84c8f11a64561080a1401187a904afcaee4d7bd4e9717b0a21d4e/pysoem-1.1.13.tar.gz"
 sha="4be98d8531e492f2ee5d21f6ef51e51493a10ee1322ed22e909c91a8bcfff950"
 no() { echo "soem_cycle not built: $*" >&2; exit 1; }
 
@@ -23,10 +24,18 @@ fi
 command -v gcc >/dev/null || no "gcc is not installed"
 tarball="$out/pysoem-1.1.13.tar.gz"
 if ! echo "$sha  $tarball" | sha256sum -c --status 2>/dev/null; then
-  command -v curl >/dev/null || no "curl is not installed"
-  curl -fsSL --max-time 120 -o "$tarball.part" "$url" || no "downloading $url failed"
-  echo "$sha  $tarball.part" | sha256sum -c --status || no "checksum mismatch for $url"
-  mv "$tarball.part" "$tarball"
+  command -v python3 >/dev/null || no "python3 (for pip download) is not installed"
+  rm -rf "$out/dl" && mkdir -p "$out/dl"
+  python3 -m pip download --quiet --disable-pip-version-check --no-deps --no-binary :all: \
+    --no-build-isolation -d "$out/dl" pysoem==1.1.13 >/dev/null 2>&1 ||
+    python3 -m pip download --quiet --disable-pip-version-check --no-deps --no-binary :all: \
+      -d "$out/dl" pysoem==1.1.13 >/dev/null 2>&1 ||
+    no "pip download pysoem==1.1.13 (source distribution) failed"
+  got="$out/dl/pysoem-1.1.13.tar.gz"
+  [ -f "$got" ] || no "pip download gave no pysoem-1.1.13.tar.gz"
+  echo "$sha  $got" | sha256sum -c --status || no "checksum mismatch for pysoem-1.1.13.tar.gz"
+  mv "$got" "$tarball"
+  rm -rf "$out/dl"
 fi
 src="$out/src"
 rm -rf "$src" && mkdir -p "$src"
