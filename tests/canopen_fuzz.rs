@@ -101,6 +101,7 @@ impl CanTransport for Noisy {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
     #[test]
     fn parsers_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..24)) {
         let _ = SdoRequest::parse(&bytes);

@@ -579,7 +579,7 @@ fn arb_action() -> impl Strategy<Value = Action> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 500, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 500, rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
 
     /// `step` never panics on any feedback and never energises a drive whose statusword shows a
     /// fault.

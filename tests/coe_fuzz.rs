@@ -130,7 +130,7 @@ fn answers_correctly(server: &mut CoeServer, od: &mut OdStore) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 512, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 512, rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
 
     #[test]
     fn random_mailboxes_never_panic_and_the_server_recovers(
@@ -194,6 +194,7 @@ fn sdo_request() -> impl Strategy<Value = (u8, u16, u8, bool, bool, bool, u32, V
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
     #[test]
     fn sdo_requests_round_trip((kind, index, sub, ca, t, last, code, data) in sdo_request()) {
         let exp = &data[..data.len().clamp(1, 4).min(data.len())];
@@ -279,7 +280,7 @@ fn pdo_write() -> impl Strategy<Value = (u16, u8, Vec<u8>, bool)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
 
     /// Whatever the master writes, the PDO configuration stays readable and every mapped entry
     /// is padding or an object mappable in its direction with the right size.
@@ -351,6 +352,7 @@ fn exchange(
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
     /// Segmentation both ways through any mailbox size: a download split with the client
     /// helpers arrives whole, and an upload reassembled the way ethercrab and SOEM do it returns
     /// the stored value.

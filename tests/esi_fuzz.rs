@@ -172,6 +172,7 @@ fn apply(bytes: &mut Vec<u8>, m: &Mutation) {
 
 // 256 cases each by default; set PROPTEST_CASES for a longer run.
 proptest! {
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
     #[test]
     fn mutated_files_never_panic(
         file in 0..FILES.len(),
@@ -198,7 +199,7 @@ fn the_unmutated_files_parse() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(ProptestConfig { cases: 64, rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
 
     /// Nesting of any depth and attributes of any length: a file or one line of error, never
     /// a stack overflow or a panic; past the depth bound always the same error.

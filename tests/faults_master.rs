@@ -844,20 +844,10 @@ fn circular_mean_ns(h: &hdrhistogram::Histogram<u64>, cycle: f64) -> f64 {
     y.atan2(x) / std::f64::consts::TAU * cycle
 }
 
-/// Drift compensation, shown by the drifting slave itself: 80 ppm fast for 2000 cycles (160 µs
-/// of drift without compensation), and its system-time difference (0x092C, recorded by the
-/// emulated slave controller after each of the master's compensation writes in OP) stays
-/// within 10 µs. A master that did no drift compensation leaves no such writes (the count
-/// below would be 0) and a difference growing by 80 ns per cycle.
-///
-/// The frames' arrival after SYNC0 as each drive saw it: both drives see the same frames, so
-/// whatever the host's timing, the two statistics differ only by how far apart the drives'
-/// SYNC0 pulses are. With compensation their mean phases agree within 10 µs (0.5 µs seen);
-/// without (the loop input ignored in OP, tried once by hand) they were 41 µs apart, the
-/// drifting drive's pulses walking away from the reference's. Not a timed
-/// assertion: the host's jitter is the same in both.
-#[test]
-fn drift_compensation_keeps_the_drifting_clock_within_10_us() {
+/// What a drifting slave sees of the master's drift compensation over 2000 cycles of a move:
+/// the compensation writes it got in OP, the largest system-time difference (0x092C) after
+/// them, and how far its SYNC0 pulses sit from the reference drive's on average (ns).
+fn drift_seen(compensation: bool) -> (u64, u64, f64) {
     let _one = serial();
     let mut seg = tolerant_drives_segment();
     assert!(seg.apply(&Fault::Slave {
@@ -869,11 +859,9 @@ fn drift_compensation_keeps_the_drifting_clock_within_10_us() {
             s.esc.enable_timing_stats();
         }
     }
-    let mut m = moving(
-        config(3.0, RestartPolicy::Never),
-        SegmentLink::new(seg),
-        "in-process",
-    );
+    let mut cfg = config(3.0, RestartPolicy::Never);
+    cfg.cycle.drift_compensation = compensation;
+    let mut m = moving(cfg, SegmentLink::new(seg), "in-process");
     let c0 = m.telemetry().cycle.cycle;
     wait(&mut m, "2000 cycles of drift", |t| {
         t.cycle.cycle > c0 + 2000
@@ -887,8 +875,6 @@ fn drift_compensation_keeps_the_drifting_clock_within_10_us() {
         .expect("timing statistics of the drifting slave");
     let n = stats.dc_difference.len();
     let max = stats.dc_difference.max();
-    assert!(n >= 1000, "{n} drift-compensation writes seen in OP");
-    assert!(max <= 10_000, "0x092C up to {max} ns over {n} writes");
     let reference = seg
         .slave(0)
         .and_then(|s| s.esc.timing_stats())
@@ -903,8 +889,43 @@ fn drift_compensation_keeps_the_drifting_clock_within_10_us() {
     let cycle = 1_000_000.0;
     let offset = circular_mean_ns(a1, cycle) - circular_mean_ns(a0, cycle);
     let offset = (offset + cycle / 2.0).rem_euclid(cycle) - cycle / 2.0;
+    (n, max, offset)
+}
+
+/// Drift compensation, shown by the drifting slave itself: 80 ppm fast for 2000 cycles (160 µs
+/// of drift without compensation), and its system-time difference (0x092C, recorded by the
+/// emulated slave controller after each of the master's compensation writes in OP) stays
+/// within 10 µs.
+///
+/// The frames' arrival after SYNC0 as each drive saw it: both drives see the same frames, so
+/// whatever the host's timing, the two statistics differ only by how far apart the drives'
+/// SYNC0 pulses are. With compensation their mean phases agree within 10 µs. Not a timed
+/// assertion: the host's jitter is the same in both. `without_drift_compensation_the_drifting_clock_walks_away`
+/// shows that the same checks fail when the master does not compensate.
+#[test]
+fn drift_compensation_keeps_the_drifting_clock_within_10_us() {
+    let (n, max, offset) = drift_seen(true);
+    assert!(n >= 1000, "{n} drift-compensation writes seen in OP");
+    assert!(max <= 10_000, "0x092C up to {max} ns over {n} writes");
     assert!(
         offset.abs() <= 10_000.0,
         "the drifting drive's SYNC0 is {offset:.0} ns away from the reference's on average"
+    );
+}
+
+/// The teeth of the test above, on the master's side: the same run with the master's drift
+/// compensation off (`CycleSettings::drift_compensation`; the emulated slave unchanged) gives
+/// the slave no compensation write, and its SYNC0 pulses walk away from the reference's — the
+/// average over the run is far beyond 10 µs (80 ppm over 2000 cycles: 160 µs at the end).
+#[test]
+fn without_drift_compensation_the_drifting_clock_walks_away() {
+    let (n, _, offset) = drift_seen(false);
+    assert_eq!(
+        n, 0,
+        "compensation writes seen although the master sent none"
+    );
+    assert!(
+        offset.abs() > 20_000.0,
+        "the drifting drive's SYNC0 is only {offset:.0} ns away on average without compensation"
     );
 }

@@ -157,7 +157,7 @@ fn templates() -> Vec<Vec<u8>> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 256, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 256, rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
 
     #[test]
     fn random_foe_mailboxes_never_panic_and_the_drive_recovers(

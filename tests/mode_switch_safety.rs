@@ -10,7 +10,8 @@
 //! rated torque from the switch on, and once the drive reports the position mode the demand
 //! position never leaves the actual one (no jump). Reproducible: proptest's seed is printed on
 //! failure, kept in `tests/mode_switch_safety.proptest-regressions`, replayed first;
-//! `PROPTEST_CASES` sets the number of cases (default 6).
+//! `PROPTEST_CASES` sets the number of cases (default 12); the seed is printed on every run and
+//! `ECDRIVE_SEED=N` replays it.
 
 mod support {
     pub mod runs;
@@ -135,7 +136,8 @@ fn case() -> impl Strategy<Value = (&'static str, From, f64, f64)> {
 
 proptest! {
     #![proptest_config(Config {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(6),
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(12),
+        rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())),
         failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
             "tests/mode_switch_safety.proptest-regressions",
         ))),

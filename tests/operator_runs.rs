@@ -140,7 +140,16 @@ fn sigterm_stops_a_run_in_a_controlled_way() {
     );
     let csv = dir.file("run.csv", "");
     let child = Command::new(ECDRIVE)
-        .args(["run", "-i", sim.host(), "-c", &f, "--json", "--record", &csv])
+        .args([
+            "run",
+            "-i",
+            sim.host(),
+            "-c",
+            &f,
+            "--json",
+            "--record",
+            &csv,
+        ])
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -164,7 +173,10 @@ fn sigterm_stops_a_run_in_a_controlled_way() {
             break;
         }
         polls += 1;
-        assert!(polls < 6000, "the jog never ran (no Operation enabled recorded)");
+        assert!(
+            polls < 6000,
+            "the jog never ran (no Operation enabled recorded)"
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);

@@ -49,7 +49,7 @@ fn in_bounds_case() -> impl Strategy<Value = (Vec<u8>, usize, u8, bool, i128)> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(ProptestConfig { cases: 2000, rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
 
     #[test]
     fn write_then_read_round_trips_and_leaves_neighbours(

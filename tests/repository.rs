@@ -49,5 +49,9 @@ fn no_package_host_or_download_url_in_the_repository() {
             }
         }
     }
-    assert!(found.is_empty(), "package hosts or download URLs:\n{}", found.join("\n"));
+    assert!(
+        found.is_empty(),
+        "package hosts or download URLs:\n{}",
+        found.join("\n")
+    );
 }

@@ -140,6 +140,7 @@ fn datagram() -> impl Strategy<Value = (u8, u32, Vec<u8>)> {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
     #[test]
     fn random_bytes_never_panic(bytes in prop::collection::vec(any::<u8>(), 0..200), ecat in any::<bool>()) {
         let (mut p, _) = fresh_probe();
@@ -217,6 +218,7 @@ fn garbage_between_good_frames_does_not_change_answers() {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
     /// Random mailbox content written into the CoE device's SM0: the CoE server behind the
     /// ESC never panics, and a valid SDO upload still gets its answer afterwards.
     #[test]

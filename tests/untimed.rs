@@ -47,9 +47,11 @@ fn is_assert(code: &str) -> bool {
 }
 
 fn waits(code: &str) -> bool {
-    ["wait", "loop", "while ", "for ", "recv", "join(", "poll", ".drain("]
-        .iter()
-        .any(|w| code.contains(w))
+    [
+        "wait", "loop", "while ", "for ", "recv", "join(", "poll", ".drain(",
+    ]
+    .iter()
+    .any(|w| code.contains(w))
 }
 
 fn is_loop_header(code: &str) -> bool {
@@ -156,8 +158,7 @@ fn scan(file: &str, text: &str, skip: usize) -> Vec<Finding> {
                     k += 1;
                     stmt.push_str(code(lines[k]));
                 }
-                if stmt.contains("elapsed()") && !guards.iter().any(|g| stmt.contains(g.as_str()))
-                {
+                if stmt.contains("elapsed()") && !guards.iter().any(|g| stmt.contains(g.as_str())) {
                     found.push((file.to_string(), i + 1, "elapsed time asserted"));
                 }
             }
@@ -218,7 +219,11 @@ fn no_test_sleeps_then_asserts_or_asserts_on_elapsed_time() {
         let Some(skip) = test_part(f, &text) else {
             continue;
         };
-        let rel = f.strip_prefix(root).unwrap_or(f).to_string_lossy().to_string();
+        let rel = f
+            .strip_prefix(root)
+            .unwrap_or(f)
+            .to_string_lossy()
+            .to_string();
         found.extend(scan(&rel, &text, skip));
     }
     assert!(files.len() > 100, "{} files read", files.len());

@@ -95,6 +95,11 @@ pub struct CycleSettings {
     /// request. The jitter harness measures steady state; start-up cycles (extra frames for
     /// the OP request) would blur it. Off by default: every cycle is recorded.
     pub steady_timing_only: bool,
+    /// Distribute the reference clock's time to the other clocks every cycle (the FRMW of
+    /// `tx_rx_dc`): the drift compensation that keeps the SYNC0 pulses of all drives together.
+    /// On by default; off only to show what it does (the frame then reads the reference
+    /// clock without writing the others, `tests/faults_master.rs`).
+    pub drift_compensation: bool,
 }
 
 impl CycleSettings {
@@ -113,6 +118,7 @@ impl CycleSettings {
             stop_timeout: Duration::from_secs(3),
             reply_budget: 0.8,
             steady_timing_only: false,
+            drift_compensation: true,
         }
     }
 }
@@ -2221,6 +2227,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         // configuration, and the whole-image value is the better check.
         let wkc_plan = (!plan.is_empty() && plan.whole() == wkc_whole).then_some(plan);
         pump.record_logical(wkc_plan.is_some());
+        pump.set_drift_compensation(settings.drift_compensation);
         let cycles = |d: Duration| d.as_nanos() as u64 / cycle_ns;
         let pump_at_start = pump.stats();
         Self {
@@ -2972,6 +2979,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     /// snapshot: the input buffer of the triple buffer holds an older one), and report.
     fn finish(self, end: CycleEnd, rt: RtReport) -> CycleReport {
         self.pump.record_logical(false);
+        self.pump.set_drift_compensation(true);
         let t = self.telemetry.input_buffer_mut();
         t.cycle = CycleTelemetry {
             phase: Phase::Stopping,

@@ -220,6 +220,39 @@ pub struct Pump<'sto, L: FrameLink> {
     link_error: Option<String>,
     tap: MailboxTap,
     logical: LogicalRecord,
+    /// `false`: the distribution of the reference clock's time (FRMW to 0x0910) is sent as a
+    /// plain read of it (FPRD), so no other clock is corrected; the reply is handed back as
+    /// the FRMW ethercrab sent ([`Pump::set_drift_compensation`]).
+    drift_writes: bool,
+    /// The frame as sent when the pump rewrites it.
+    scratch: Box<[u8; MAX_FRAME]>,
+}
+
+/// Datagram commands: FPRD (configured-address read) and FRMW (configured-address read,
+/// multiple write), ETG.1000.4 table 14.
+const FPRD: u8 = 4;
+const FRMW: u8 = 14;
+/// The system time register the reference clock's time is distributed to (ETG.1000.4).
+const SYSTEM_TIME: u16 = 0x0910;
+
+/// Rewrite, in the EtherCAT frame `frame` (Ethernet header included), every datagram with
+/// command `from` to address `SYSTEM_TIME` into command `to`. Returns how many.
+fn rewrite_system_time(frame: &mut [u8], from: u8, to: u8) -> usize {
+    let mut at = 14 + 2;
+    let mut n = 0;
+    while let Some(h) = frame.get_mut(at..at + 10) {
+        let len = usize::from(u16::from_le_bytes([h[6], h[7]]) & 0x07FF);
+        let more = h[7] & 0x80 != 0;
+        if h[0] == from && u16::from_le_bytes([h[4], h[5]]) == SYSTEM_TIME {
+            h[0] = to;
+            n += 1;
+        }
+        if !more {
+            break;
+        }
+        at += 10 + len + 2;
+    }
+    n
 }
 
 impl<'sto, L: FrameLink> Pump<'sto, L> {
@@ -238,7 +271,18 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             link_error: None,
             tap: MailboxTap::default(),
             logical: LogicalRecord::default(),
+            drift_writes: true,
+            scratch: Box::new([0u8; MAX_FRAME]),
         }
+    }
+
+    /// Whether the reference clock's time is distributed to the other clocks (on by
+    /// default: that is the drift compensation of every cycle). Off, the FRMW ethercrab sends
+    /// goes out as an FPRD of the same register, the clocks drift apart, and the reply is
+    /// handed back as the FRMW — the switch that shows what compensation does
+    /// ([`crate::CycleSettings::drift_compensation`]).
+    pub fn set_drift_compensation(&mut self, on: bool) {
+        self.drift_writes = on;
     }
 
     /// The FMMU blocks every device was sent while the tap was on, by (station address, FMMU
@@ -352,9 +396,20 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             let link = &mut self.link;
             let copies = &mut self.copies;
             let tap = &mut self.tap;
+            let scratch = &mut self.scratch;
+            let rewrite = !self.drift_writes;
             let mut record = None;
             let mut err = None;
-            let res = frame.send_blocking(|bytes| {
+            let res = frame.send_blocking(|sent| {
+                // Without drift compensation, the time distribution as a plain read.
+                let bytes: &[u8] = match scratch.get_mut(..sent.len()) {
+                    Some(buf) if rewrite => {
+                        buf.copy_from_slice(sent);
+                        rewrite_system_time(buf, FRMW, FPRD);
+                        buf
+                    }
+                    _ => sent,
+                };
                 if let Err(e) = link.send(bytes) {
                     err = Some(e);
                     return Err(ethercrab::error::Error::SendFrame);
@@ -421,6 +476,12 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     }
 
     fn accept(&mut self, len: usize) -> bool {
+        if !self.drift_writes
+            && let Some(f) = self.rx_buf.get_mut(..len)
+        {
+            // Handed back as the FRMW ethercrab sent.
+            rewrite_system_time(f, FPRD, FRMW);
+        }
         let Some(frame) = self.rx_buf.get(..len) else {
             self.stats.rejected += 1;
             return false;

@@ -643,6 +643,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(ecdrive_core::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
         #[test]
         fn random_double_s_moves_respect_limits(
             start in -1e6f64..1e6, dist in -1e6f64..1e6,

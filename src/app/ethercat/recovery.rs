@@ -344,7 +344,10 @@ mod tests {
         let c = Clock::new();
         let mut r = quick();
         let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
-        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0]));
+        assert_eq!(
+            r.next_at(c.now, &faulted, false),
+            Action::FaultReset(vec![0])
+        );
         // Still in Fault within the retry time: the master pulses bit 7; no second request.
         assert_eq!(r.next_at(c.now, &faulted, false), Action::None);
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
@@ -354,7 +357,10 @@ mod tests {
         assert_eq!(r.next_at(c.now, &enabled, true), Action::RunProgram);
         // A new fault is a new episode: a new reset.
         let both = telemetry(&[(State::Fault, true), (State::Fault, true)]);
-        assert_eq!(r.next_at(c.now, &both, false), Action::FaultReset(vec![0, 1]));
+        assert_eq!(
+            r.next_at(c.now, &both, false),
+            Action::FaultReset(vec![0, 1])
+        );
     }
 
     #[test]
@@ -364,7 +370,10 @@ mod tests {
         let idle = telemetry(&[(SOD, false), (SOD, false)]);
         assert_eq!(r.next_at(c.now, &idle, false), Action::Enable);
         let faulted = telemetry(&[(State::Fault, true), (State::Fault, true)]);
-        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0, 1]));
+        assert_eq!(
+            r.next_at(c.now, &faulted, false),
+            Action::FaultReset(vec![0, 1])
+        );
         c.advance(10);
         assert_eq!(r.next_at(c.now, &idle, false), Action::Enable);
     }
@@ -374,10 +383,16 @@ mod tests {
         let mut c = Clock::new();
         let mut r = quick();
         let faulted = telemetry(&[(State::Fault, true), (SOD, false)]);
-        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0]));
+        assert_eq!(
+            r.next_at(c.now, &faulted, false),
+            Action::FaultReset(vec![0])
+        );
         c.advance(20);
         // Still shown after the retry time: asked again.
-        assert_eq!(r.next_at(c.now, &faulted, false), Action::FaultReset(vec![0]));
+        assert_eq!(
+            r.next_at(c.now, &faulted, false),
+            Action::FaultReset(vec![0])
+        );
         c.advance(20);
         let Action::Unhandled(what, again) = r.next_at(c.now, &faulted, false) else {
             panic!("a fault that stays must be reported");

@@ -26,7 +26,9 @@
 //!   mapped, no fault); without a new set-point the last one is held;
 //! * every other field, and every field while not in Operation enabled, **tracks the actual
 //!   value**: position = actual position, velocity = actual velocity if its magnitude exceeds the
-//!   standstill threshold else 0, torque = actual torque (0 if not mapped). So enabling, and
+//!   standstill threshold else 0, torque = actual torque in Operation enabled (0 if not
+//!   mapped) and 0 in every other state (the torque a drive reports in Quick stop active or
+//!   Fault reaction active is its own braking, not a value to go on with). So enabling, and
 //!   starting a new mode, begins exactly where the axis is: no jump.
 //!
 //! Set-points given when they cannot apply are refused with an [`AxisError`] (not streaming, or a
@@ -1101,7 +1103,11 @@ impl Axis {
                 }
             }
             ModeSwitch::Stopping { to, cycles, .. } => {
-                if self.standstill {
+                // The engine's own ramp must have ended too: a drive's zero-speed flag may
+                // already show at a speed it calls zero (the MR-J4-TM's S_ZSP below
+                // [Pr. PC07], 50 r/min by default) while the set-point still brakes, and a
+                // position mode entered then stops the rest within a cycle.
+                if self.standstill && self.ramp_done() {
                     self.commanded_mode = to;
                     self.switch = ModeSwitch::Requested {
                         from: self.active_mode,
@@ -1134,6 +1140,17 @@ impl Axis {
                     *c = cycles.saturating_add(1);
                 }
             }
+        }
+    }
+
+    /// Whether the Stopping phase's ramp has brought the commanded value of the active mode
+    /// to zero.
+    fn ramp_done(&self) -> bool {
+        match self.active_mode.set_point_kind() {
+            Some(SetPointKind::Velocity) => self.velocity == 0,
+            Some(SetPointKind::Torque) => self.torque == 0,
+            Some(SetPointKind::Position) => self.position_delta == 0,
+            None => true,
         }
     }
 
@@ -1174,8 +1191,15 @@ impl Axis {
                 let t = toward_zero(i64::from(self.torque), u64::from(torque_step));
                 self.torque = i16::try_from(t).unwrap_or(0);
             }
-        } else {
+        } else if enabled {
             self.torque = fb.torque.unwrap_or(0);
+        } else {
+            // Outside Operation enabled the torque the drive reports is its own (the braking
+            // of a quick stop or a fault reaction): a set-point taken from it would drive the
+            // motor on the way back to Operation enabled (transition 16 leaves Quick stop
+            // active straight into it). A de-energised motor has none, so 0 is what enabling
+            // starts from.
+            self.torque = 0;
         }
 
         self.position_delta = self.position.wrapping_sub(self.last_position_out);

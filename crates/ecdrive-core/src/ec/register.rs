@@ -294,6 +294,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(crate::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
         #[test]
         fn fmmu_parse_emit_round_trip(
             ls in any::<u32>(), len in any::<u16>(), sb in 0u8..8, eb in 0u8..8,

@@ -1579,7 +1579,7 @@ mod tests {
         }
 
         proptest! {
-            #![proptest_config(ProptestConfig::with_cases(256))]
+            #![proptest_config(ProptestConfig { cases: 256, rng_seed: proptest::test_runner::RngSeed::Fixed(crate::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
             /// Every description `build` accepts comes back from `parse` unchanged.
             #[test]
             fn parse_is_the_inverse_of_build(d in description()) {

@@ -207,6 +207,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(ProptestConfig { rng_seed: proptest::test_runner::RngSeed::Fixed(crate::rt::audit::test_seed(file!())), ..ProptestConfig::default() })]
         /// Whatever the value's length, the first part and the capacity: the sender's segments,
         /// fed to a receiver, rebuild the value, the last flag on exactly the final one, each
         /// acknowledgement accepted and a repeated one refused.

@@ -270,6 +270,26 @@ pub fn announce_skip(line: &str) {
     let _ = writeln!(std::io::stderr().lock(), "\n*** {line} ***");
 }
 
+/// The seed of a test's generated cases: `ECDRIVE_SEED` (or `PROPTEST_RNG_SEED`) when set,
+/// else a fresh one — written to stderr past the test harness's capture, so that every run,
+/// passing or failing, says how to replay it (`ECDRIVE_SEED=N cargo test …`).
+pub fn test_seed(test: &str) -> u64 {
+    use std::hash::BuildHasher;
+    use std::io::Write;
+    let from_env = ["ECDRIVE_SEED", "PROPTEST_RNG_SEED"]
+        .iter()
+        .find_map(|v| std::env::var(v).ok()?.trim().parse::<u64>().ok());
+    let seed = from_env.unwrap_or_else(|| {
+        std::collections::hash_map::RandomState::new()
+            .hash_one((std::process::id(), std::time::SystemTime::now()))
+    });
+    let _ = writeln!(
+        std::io::stderr().lock(),
+        "{test}: generated cases from seed {seed} (replay: ECDRIVE_SEED={seed})"
+    );
+    seed
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
