@@ -191,7 +191,25 @@ pub const WRITE_RULES: &[WriteRule] = &[
         values: &[0],
         code: SdoAbortCode::VALUE_RANGE,
     },
+    // 0x60C2:01: at most 64 in either reading of the manual (object table 4–64, §2.4 FBITPRD
+    // 1–64); from 1, so that the set-up example's standard form (1 × 10^−3 s) is taken.
+    WriteRule::Allowed {
+        address: a(0x60C2, 1),
+        values: &INTERPOLATION_PERIODS,
+        code: SdoAbortCode::VALUE_RANGE,
+    },
 ];
+
+/// 0x60C2:01 values the emulated drive takes: 1 to 64.
+const INTERPOLATION_PERIODS: [u64; 64] = {
+    let mut v = [0u64; 64];
+    let mut i = 0;
+    while i < 64 {
+        v[i] = i as u64 + 1;
+        i += 1;
+    }
+    v
+};
 
 /// The emulated BDHDE.
 pub static SPEC: DriveSpec = DriveSpec {
@@ -211,6 +229,7 @@ pub static SPEC: DriveSpec = DriveSpec {
     },
     cycle_counter: None,
     alarms: ALARMS,
+    alarm_detail_prefix: Some("FLT"),
     reporting: ErrorReporting {
         current_alarm: None,
         history_newest: None,
@@ -411,12 +430,17 @@ pub const REC_HOMING_METHODS: &[i8] = &[
     29, 30, 33, 34, 35,
 ];
 
-/// \[REC\] The BDHDE's SDO abort codes (Table 10-2) have no "object cannot be mapped" and no
-/// "PDO length exceeded" (0x06040041/0x06040042); the emulated drive answers a mapping entry
+/// \[REC\] The BDHDE's SDO abort codes (Table 10-2) have no "object cannot be mapped", no
+/// "PDO length exceeded" (0x06040041/0x06040042) and no length refinements (0x06070012/13);
+/// the emulated drive answers a wrong length with the listed 0x06070010 and a mapping entry
 /// naming an object that cannot be mapped with the listed "Invalid value for parameter"
 /// 0x06090030, and a mapping or assignment beyond the PDO budget with "Value of parameter
 /// written too high" 0x06090031.
 pub const REC_ABORT_CODES: &[(SdoAbortCode, SdoAbortCode)] = &[
     (SdoAbortCode::NOT_MAPPABLE, SdoAbortCode::VALUE_RANGE),
     (SdoAbortCode::PDO_TOO_LONG, SdoAbortCode::VALUE_TOO_HIGH),
+    // Table 10-2 lists only "Data type does not match, length of service parameter does not
+    // match" 0x06070010 for a wrong length, not the "too high"/"too low" refinements.
+    (SdoAbortCode::LENGTH_TOO_HIGH, SdoAbortCode::LENGTH_MISMATCH),
+    (SdoAbortCode::LENGTH_TOO_LOW, SdoAbortCode::LENGTH_MISMATCH),
 ];

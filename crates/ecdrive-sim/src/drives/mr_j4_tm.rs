@@ -211,6 +211,7 @@ pub static SPEC: DriveSpec = DriveSpec {
         echo: Some(a(0x2D24, 0)),
     }),
     alarms: ALARMS,
+    alarm_detail_prefix: None,
     reporting: ErrorReporting {
         current_alarm: Some(a(0x2A41, 0)),
         history_newest: Some(a(0x2A00, 1)),

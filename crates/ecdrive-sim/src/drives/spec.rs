@@ -440,6 +440,9 @@ pub struct DriveSpec {
     pub cycle_counter: Option<CycleCounterSpec>,
     /// The alarms the emulator can raise.
     pub alarms: &'static [AlarmDef],
+    /// The name the manual also gives an alarm by its detail value, as "`PREFIX` detail"
+    /// (BDHDE: "FLT 87" for J3), which [`DriveSpec::alarm`] accepts too.
+    pub alarm_detail_prefix: Option<&'static str>,
     /// How alarms are reported.
     pub reporting: ErrorReporting,
     /// Write rules of the object store.
@@ -555,7 +558,11 @@ impl DriveSpec {
 
     /// The alarm with this id.
     pub fn alarm(&self, id: &str) -> Option<&'static AlarmDef> {
-        self.alarms.iter().find(|a| a.id.eq_ignore_ascii_case(id))
+        let by_detail = self.alarm_detail_prefix.and_then(|p| {
+            let n: u32 = id.strip_prefix(p)?.trim().parse().ok()?;
+            self.alarms.iter().find(|a| a.detail == n)
+        });
+        by_detail.or_else(|| self.alarms.iter().find(|a| a.id.eq_ignore_ascii_case(id)))
     }
 }
 
