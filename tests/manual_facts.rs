@@ -15,10 +15,25 @@
 //! - `quick_stop_option`: the profile's codes, and each code written to 0x605A over SDO;
 //! - `cycle_times`: the profile's cycle times, and over SDO each one written to 0x1C32:02
 //!   where the drive takes its cycle there;
-//! - `pdo_limits`, `alarm`: the profile's tables.
+//! - `pdo_limits`: the profile's tables; over the bus, the most entries the manual allows
+//!   written into the first RxPDO and TxPDO, and one more refused with a listed abort code;
+//! - `alarm`: the profile's tables; each alarm raised in an emulated EtherCAT drive, its 0x603F
+//!   read in the process data;
+//! - `transition`: the profile's capabilities in the core's CiA 402 state machine react to each
+//!   controlword as the manual says; the emulated CANopen drives over SDO, the EtherCAT drives
+//!   by process data in OP driven by SOEM (`tests/sim_soem.rs`);
+//! - `abort_code`: provoked on the emulated drives (a missing object and sub-index, a write to
+//!   a read-only object, too long and too short a value, a value past each range, whose ends
+//!   must be taken): each answer a code the manual lists for that cause;
+//! - `unit`: the conversions the master does, restated per fact (`unit_claim`), against the
+//!   profile's units; and through a run: 1 rev/s for 0.5 s in user units of one revolution
+//!   moves an emulated EtherCAT drive half a revolution in the manual's units.
 //!
-//! Entries the manual lists and a side does not have are printed as coverage gaps, not failures:
-//! a failure is a contradiction of the manual.
+//! A contradiction fails unless `tests/manual_facts/open.toml` lists it with its reason; so
+//! does a gap — a fact a side cannot be checked against — unless a `[[gap]]` class there
+//! explains it. Entries that no longer match anything fail too: the lists only shrink.
+//! `a_changed_profile_value_fails_the_oracle` and `a_wrong_value_in_an_emulated_drive_fails_the_oracle`
+//! show that a wrong value on either side is caught.
 
 use ecdrive::app::canopen::tools as cantools;
 use ecdrive::app::ethercat::tools::{self, Target};
@@ -74,6 +89,8 @@ struct Fact {
     emcy: Option<String>,
     from: Option<String>,
     to: Option<String>,
+    quantity: Option<String>,
+    value: Option<String>,
     controlword: Option<String>,
     exists: Option<bool>,
 }
@@ -1013,8 +1030,7 @@ fn device_reaction(config: ecdrive::cia402::device::DeviceConfig, from: State, c
     let mut inputs = DeviceInputs::new(ControlWord::from_bits_retain(cw));
     inputs.motion_stopped = false;
     d.step(&inputs);
-    if d.state() == State::SwitchedOn && from == State::ReadyToSwitchOn && cw & 0x000F == 0x000F
-    {
+    if d.state() == State::SwitchedOn && from == State::ReadyToSwitchOn && cw & 0x000F == 0x000F {
         d.step(&inputs);
     }
     d.state()
@@ -1031,7 +1047,10 @@ fn check_transitions_profile(drive: &str, facts: &[Fact], gaps: &mut Vec<String>
     let mut bad = Vec::new();
     for f in facts.iter().filter(|f| f.kind == "transition") {
         let Some((from, to, cw, exists)) = transition(f) else {
-            gaps.push(format!("{drive}: transition fact not understood ({})", f.id));
+            gaps.push(format!(
+                "{drive}: transition fact not understood ({})",
+                f.id
+            ));
             continue;
         };
         let got = device_reaction(config, from, cw);
@@ -1174,14 +1193,17 @@ fn check_alarms_emulated(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) ->
             continue;
         }
         let mut cfg = ecdrive::master::MasterConfig::new(std::time::Duration::from_millis(1));
-        cfg.startup
-            .drives
-            .push(ecdrive::master::DriveSetup::new(ecdrive::master::Selector::Position(0)));
+        cfg.startup.drives.push(ecdrive::master::DriveSetup::new(
+            ecdrive::master::Selector::Position(0),
+        ));
         let link = ecdrive::sim::transport::SegmentLink::new(seg);
         let mut m = match ecdrive::master::Master::start(link, cfg) {
             Ok(m) => m,
             Err(e) => {
-                bad.push(format!("{drive} (emulated) [{}]: start-up: {}", f.id, e.error));
+                bad.push(format!(
+                    "{drive} (emulated) [{}]: start-up: {}",
+                    f.id, e.error
+                ));
                 continue;
             }
         };
@@ -1246,7 +1268,12 @@ fn check_aborts(
         match r {
             Sdo::Abort(c) => {
                 provoked.push(c);
-                let named: Vec<u32> = p.codes.iter().copied().filter(|c| listed.contains(c)).collect();
+                let named: Vec<u32> = p
+                    .codes
+                    .iter()
+                    .copied()
+                    .filter(|c| listed.contains(c))
+                    .collect();
                 if named.is_empty() {
                     gaps.push(format!(
                         "{drive}: the manual lists no abort code for {} (answered 0x{c:08X})",
@@ -1264,40 +1291,57 @@ fn check_aborts(
                 "{drive} (emulated) [{id}]: {} ({on}) was accepted",
                 p.what
             )),
-            Sdo::Failed(e) => bad.push(format!("{drive} (emulated) [{id}]: {} ({on}): {e}", p.what)),
+            Sdo::Failed(e) => {
+                bad.push(format!("{drive} (emulated) [{id}]: {} ({on}): {e}", p.what))
+            }
         }
     };
     let a = ObjectAddress::new;
     judge(
-        &Provocation { what: "an object that does not exist", codes: &[0x0602_0000] },
+        &Provocation {
+            what: "an object that does not exist",
+            codes: &[0x0602_0000],
+        },
         a(0x5FFF, 0),
         port.upload(a(0x5FFF, 0)),
         &mut bad,
         gaps,
     );
     judge(
-        &Provocation { what: "a sub-index that does not exist", codes: &[0x0609_0011] },
+        &Provocation {
+            what: "a sub-index that does not exist",
+            codes: &[0x0609_0011],
+        },
         a(0x1018, 0x7F),
         port.upload(a(0x1018, 0x7F)),
         &mut bad,
         gaps,
     );
     judge(
-        &Provocation { what: "a write to a read-only object", codes: &[0x0601_0002] },
+        &Provocation {
+            what: "a write to a read-only object",
+            codes: &[0x0601_0002],
+        },
         a(0x1018, 1),
         port.download(a(0x1018, 1), &[0, 0, 0, 0]),
         &mut bad,
         gaps,
     );
     judge(
-        &Provocation { what: "a value too long", codes: &[0x0607_0012, 0x0607_0010] },
+        &Provocation {
+            what: "a value too long",
+            codes: &[0x0607_0012, 0x0607_0010],
+        },
         a(0x6040, 0),
         port.download(a(0x6040, 0), &[0, 0, 0, 0]),
         &mut bad,
         gaps,
     );
     judge(
-        &Provocation { what: "a value too short", codes: &[0x0607_0013, 0x0607_0010] },
+        &Provocation {
+            what: "a value too short",
+            codes: &[0x0607_0013, 0x0607_0010],
+        },
         a(0x6040, 0),
         port.download(a(0x6040, 0), &[0]),
         &mut bad,
@@ -1363,14 +1407,15 @@ fn check_aborts(
                     "{drive} (emulated) [{}]: {obj} refused its {end} {v} with 0x{c:08X} ({})",
                     f.id, f.source
                 )),
-                Sdo::Failed(e) => bad.push(format!(
-                    "{drive} (emulated) [{}]: {obj} = {v}: {e}",
-                    f.id
-                )),
+                Sdo::Failed(e) => {
+                    bad.push(format!("{drive} (emulated) [{}]: {obj} = {v}: {e}", f.id))
+                }
             }
         }
-        for (past, v, applies) in [("above", max + 1, max < tmax), ("below", min - 1, min > tmin)]
-        {
+        for (past, v, applies) in [
+            ("above", max + 1, max < tmax),
+            ("below", min - 1, min > tmin),
+        ] {
             if !applies {
                 continue;
             }
@@ -1385,10 +1430,10 @@ fn check_aborts(
         }
     }
     if range_codes.is_empty() {
-        gaps.push(format!("{drive}: the manual lists no abort code for a value out of range"));
-    } else if !beyond.is_empty()
-        && cantools::EMULATED_NODES.iter().any(|(n, _, _)| *n == drive)
-    {
+        gaps.push(format!(
+            "{drive}: the manual lists no abort code for a value out of range"
+        ));
+    } else if !beyond.is_empty() && cantools::EMULATED_NODES.iter().any(|(n, _, _)| *n == drive) {
         // One finding for the emulated CANopen nodes, whose dictionary is the master's
         // profile's (no ranges of their own).
         bad.push(format!(
@@ -1413,6 +1458,215 @@ fn check_aborts(
                 "{drive}: listed abort code 0x{c:08X} is not provoked by these requests"
             ));
         }
+    }
+    bad
+}
+
+// ---------------------------------------------------------------------------------------------
+// Units
+
+/// What a unit fact says, restated for the machine (each entry is the fact's `value` as the
+/// manual words it; the fact id names it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum UnitClaim {
+    /// 0x60FF/0x606C in r/min × this.
+    VelocityRpm(f64),
+    /// 0x60FF/0x606C in position units per second.
+    VelocityPositionPerS,
+    /// 0x6081 in position units per second.
+    ProfileVelocityPositionPerS,
+    /// Position units per motor revolution (with the default scaling).
+    PositionPerRev(f64),
+    /// 0x6071/0x6077: this many ‰ of the rated torque per unit.
+    TorquePerMille(f64),
+    /// 0x6087 in ‰ (of the rated torque) per second.
+    TorqueSlopePerMillePerS,
+    /// 0x6087 as a time to the rated torque.
+    TorqueSlopeMsToRated,
+    /// 0x6087 in mN·m per second (an absolute torque rate).
+    TorqueSlopeMnmPerS,
+    /// 0x6083/0x6084 as a time from 0 to a speed.
+    AccelMsTo,
+    /// 0x6083/0x6084 in (r/min)/s.
+    AccelRpmPerS,
+    /// 0x6083/0x6084 in position units per second².
+    AccelPositionPerS2,
+}
+
+/// The unit facts restated ([`UnitClaim`]), by drive and fact id; a unit fact not here is a
+/// gap (a unit of an object the master does not convert, or one it cannot be compared with).
+fn unit_claim(drive: &str, id: &str) -> Option<UnitClaim> {
+    use UnitClaim::*;
+    Some(match (drive, id) {
+        ("mr-j4-tm", "unit.encoder_resolution") => PositionPerRev(4_194_304.0),
+        ("mr-j4-tm", "unit.velocity") => VelocityRpm(0.01),
+        ("mr-j4-tm", "unit.torque") => TorquePerMille(1.0),
+        ("mr-j4-tm", "unit.torque_slope") => TorqueSlopePerMillePerS,
+        ("mr-j4-tm", "unit.acceleration") => AccelMsTo,
+        ("bdhde", "unit.velocity") => VelocityPositionPerS,
+        ("bdhde", "unit.acceleration") => AccelPositionPerS2,
+        ("bdhde", "unit.torque") | ("bdhde", "unit.target_torque") => TorquePerMille(1.0),
+        ("bdhde", "unit.torque_slope") => TorqueSlopeMnmPerS,
+        ("blv-r", "unit.velocity") => VelocityRpm(1.0),
+        ("blv-r", "unit.acceleration") => AccelRpmPerS,
+        ("blv-r", "unit.torque") => TorquePerMille(1.0),
+        ("blv-r", "unit.torque_slope") => TorqueSlopePerMillePerS,
+        ("blv-r", "unit.encoder_resolution") => PositionPerRev(36_000.0),
+        ("asda-a2", "unit.velocity") => VelocityRpm(0.1),
+        ("asda-a2", "unit.profile_velocity") => ProfileVelocityPositionPerS,
+        ("asda-a2", "unit.acceleration") => AccelMsTo,
+        ("asda-a2", "unit.torque") => TorquePerMille(1.0),
+        ("asda-a2", "unit.torque_slope") => TorqueSlopeMsToRated,
+        ("lexium-mdrive", "unit.position_per_rev") => PositionPerRev(51_200.0),
+        ("lexium-mdrive", "unit.velocity_actual") => VelocityPositionPerS,
+        ("lexium-mdrive", "unit.acceleration") => AccelPositionPerS2,
+        ("lexium-mdrive", "unit.torque") => TorquePerMille(1.0),
+        ("lexium-mdrive", "unit.torque_slope") => TorqueSlopePerMillePerS,
+        _ => return None,
+    })
+}
+
+/// The profile side of the unit facts: the profile's units ([`ecdrive::cia402::Units`]), with
+/// which the configuration's user units and every program value are converted.
+fn check_units_profile(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) -> Vec<String> {
+    use UnitClaim::*;
+    use ecdrive::cia402::{AccelUnit, TorqueSlopeUnit, VelocityUnit};
+    let units = match drives::by_key(drive) {
+        Some(p) => p.units,
+        None => match cantools::EMULATED_NODES
+            .iter()
+            .find(|(n, _, _)| *n == drive)
+        {
+            Some((_, p, _)) => p.units,
+            None => return Vec::new(),
+        },
+    };
+    let mut bad = Vec::new();
+    for f in facts.iter().filter(|f| f.kind == "unit") {
+        let Some(claim) = unit_claim(drive, &f.id) else {
+            gaps.push(format!(
+                "{drive}: unit fact not restated for a comparison ({})",
+                f.id
+            ));
+            continue;
+        };
+        let prof = units.profile;
+        let ok = match claim {
+            VelocityRpm(k) => units.velocity == VelocityUnit::RevPerMinute { scale: k },
+            VelocityPositionPerS => units.velocity == VelocityUnit::PositionPerSecond,
+            ProfileVelocityPositionPerS => {
+                prof.is_some_and(|p| p.profile_velocity == VelocityUnit::PositionPerSecond)
+            }
+            PositionPerRev(n) => units.position_per_rev == n,
+            TorquePerMille(k) => units.torque_per_mille == k,
+            TorqueSlopePerMillePerS => {
+                prof.is_some_and(|p| p.torque_slope == TorqueSlopeUnit::PerMillePerSecond)
+            }
+            TorqueSlopeMsToRated => {
+                prof.is_some_and(|p| p.torque_slope == TorqueSlopeUnit::MillisecondsToRated)
+            }
+            // No profile unit is an absolute torque rate.
+            TorqueSlopeMnmPerS => false,
+            AccelMsTo => {
+                prof.is_some_and(|p| matches!(p.acceleration, AccelUnit::MillisecondsTo { .. }))
+            }
+            AccelRpmPerS => prof.is_some_and(|p| p.acceleration == AccelUnit::RpmPerSecond),
+            AccelPositionPerS2 => {
+                prof.is_some_and(|p| p.acceleration == AccelUnit::PositionPerSecond2)
+            }
+        };
+        if !ok {
+            bad.push(format!(
+                "{drive} (profile) [{}]: the manual's {} is {:?}; the profile's units are \
+                 {units:?} ({})",
+                f.id,
+                f.quantity.as_deref().unwrap_or("unit"),
+                f.value,
+                f.source
+            ));
+        }
+    }
+    bad
+}
+
+/// The emulated side of the position and velocity unit facts, through the configuration's
+/// conversions and the bus: an EtherCAT drive runs 1 rev/s in csv for 0.5 s, in user units of
+/// one revolution made from the manual's position units per revolution; its actual position
+/// moves half a revolution in the manual's units — which holds only if the master's velocity
+/// unit and the emulated drive's are both the manual's.
+fn check_units_emulated(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) -> Vec<String> {
+    let mut bad = Vec::new();
+    if drives::by_key(drive).is_none() {
+        gaps.push(format!(
+            "{drive}: units of a CANopen drive through a run (CANopen runs from a file: issue 36)"
+        ));
+        return bad;
+    }
+    // The manual's position units per revolution; the BDHDE's are the start-up scaling (2^20
+    // per revolution) of its factor group (unit.position), the profile's, which the facts do
+    // not fix.
+    let per_rev = facts.iter().find_map(|f| match unit_claim(drive, &f.id) {
+        Some(UnitClaim::PositionPerRev(n)) => Some((n, f.id.clone())),
+        _ => None,
+    });
+    let Some((per_rev, id)) =
+        per_rev.or_else(|| (drive == "bdhde").then(|| (1_048_576.0, "unit.velocity".to_string())))
+    else {
+        gaps.push(format!(
+            "{drive}: no position units per revolution in the facts"
+        ));
+        return bad;
+    };
+    let text = format!(
+        "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"{drive}\"]\n\
+         loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csv\"\n\
+         units = {{ name = \"rev\", counts_per_unit = {per_rev} }}\n\
+         program = [{{ step = \"ramp\", velocity = 1, acceleration = 100, hold = 0.5 }}, \
+         {{ step = \"ramp\", velocity = 0, acceleration = 100 }}]\n"
+    );
+    let cfg = ecdrive::app::config::parse(&text, "units.toml").unwrap_or_else(|e| panic!("{e}"));
+    let link = cfg
+        .target
+        .open_with(&cfg.sim)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let moved = (|| -> Result<f64, String> {
+        use ecdrive::master::{Axes, Command, StopKind};
+        let mut m = ecdrive::master::Master::start(link, cfg.master.clone())
+            .map_err(|f| f.error.to_string())?;
+        let guard = std::time::Duration::from_secs(20);
+        let e = |e: ecdrive::master::MasterError| e.to_string();
+        m.wait_until("OP", guard, |t| t.cycle.all_op).map_err(e)?;
+        m.command(Command::Enable(Axes::All)).map_err(e)?;
+        m.wait_until("enabled", guard, |t| {
+            t.axes
+                .iter()
+                .all(|a| a.state == Some(State::OperationEnabled))
+        })
+        .map_err(e)?;
+        let p0 = m.telemetry().axes[0].position_actual;
+        m.command(Command::RunProgram(Axes::All)).map_err(e)?;
+        m.wait_until("the program", guard, |t| {
+            t.axes
+                .iter()
+                .all(|a| !a.program_running && a.program_step >= 1)
+        })
+        .map_err(e)?;
+        // Standing still again: the actual velocity back at 0.
+        m.wait_until("standstill", guard, |t| t.axes[0].velocity_actual == 0)
+            .map_err(e)?;
+        let p1 = m.telemetry().axes[0].position_actual;
+        let _ = m.stop(StopKind::Ramp);
+        Ok((p1 - p0) as f64 / per_rev)
+    })();
+    // 0.5 s at 1 rev/s, and the two ramps at 100 rev/s² (0.005 rev each).
+    let want = 0.51;
+    match moved {
+        Ok(moved) if (moved - want).abs() > 0.01 => bad.push(format!(
+            "{drive} (emulated) [{id}]: 1 rev/s for 0.5 s moved {moved:.4} rev (the manual's \
+             {per_rev} units per revolution), not {want}"
+        )),
+        Ok(_) => {}
+        Err(e) => bad.push(format!("{drive} (emulated) [{id}]: the run: {e}")),
     }
     bad
 }
@@ -1640,6 +1894,9 @@ fn the_profiles_agree_with_the_manuals() {
         for b in check_transitions_profile(d, &file.fact, &mut g) {
             found.push((d.to_string(), fact_id(&b), b));
         }
+        for b in check_units_profile(d, &file.fact, &mut g) {
+            found.push((d.to_string(), fact_id(&b), b));
+        }
         gaps.extend(g.into_iter().map(|t| (d.to_string(), t)));
     }
     judge("profile", &found);
@@ -1664,6 +1921,9 @@ fn the_emulated_drives_agree_with_the_manuals_over_the_bus() {
             found.push((d.to_string(), fact_id(&b), b));
         }
         for b in check_alarms_emulated(d, &file.fact, &mut g) {
+            found.push((d.to_string(), fact_id(&b), b));
+        }
+        for b in check_units_emulated(d, &file.fact, &mut g) {
             found.push((d.to_string(), fact_id(&b), b));
         }
         gaps.extend(g.into_iter().map(|t| (d.to_string(), t)));
@@ -1842,6 +2102,114 @@ fn remap_errors_abort_with_codes_the_manual_lists() {
                     assert!(
                         listed.contains(&code),
                         "{d}: {what} aborted 0x{code:08X}, which its manual does not list ({e})"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The emulated side of the PDO limits (`pdo_limits` facts), through the bus as a remap writes
+/// them in PRE-OP: the first RxPDO and TxPDO take the manual's most entries (from the objects
+/// it marks mappable, smallest first, within its byte limit), and one entry more is refused
+/// with an abort code the manual lists.
+#[test]
+fn the_emulated_drives_keep_the_manuals_pdo_limits() {
+    for d in ["mr-j4-tm", "bdhde"] {
+        let file = load(d);
+        let listed: Vec<u32> = file
+            .fact
+            .iter()
+            .filter(|f| f.kind == "abort_code")
+            .filter_map(|f| f.code.as_deref())
+            .filter_map(|c| number(&toml::Value::String(c.into())))
+            .map(|c| c as u32)
+            .collect();
+        let limit = |k: &str| {
+            file.fact
+                .iter()
+                .filter(|f| f.kind == "pdo_limits")
+                .find_map(|f| match k {
+                    "rx" => f.max_rx_entries,
+                    "tx" => f.max_tx_entries,
+                    "rx_bytes" => f.max_rx_bytes,
+                    _ => f.max_tx_bytes,
+                })
+        };
+        for (dir, pdo, sm, access) in [
+            ("rx", 0x1600u16, 0x1C12u16, "rw"),
+            ("tx", 0x1A00, 0x1C13, "ro"),
+        ] {
+            let max = limit(dir).unwrap_or_else(|| panic!("{d}: no {dir} entry limit")) as usize;
+            let bytes = limit(&format!("{dir}_bytes")).map(|b| b as usize);
+            // The manual's mappable objects of this direction, smallest first.
+            let mut objs: Vec<(u16, u8, u8)> = file
+                .fact
+                .iter()
+                .filter(|f| f.kind == "object" && f.pdo_mappable == Some(true))
+                .filter(|f| f.access.as_deref() == Some(access))
+                .filter_map(|f| {
+                    let a = address(f.object.as_deref()?)?;
+                    let bits = data_type(f.data_type.as_deref()?)?.bit_len()?;
+                    (bits <= 32).then_some((a.index, a.sub, bits as u8))
+                })
+                .collect();
+            objs.sort_by_key(|o| o.2);
+            // `max` entries, cycling through those of at most 16 bits (within the byte limit:
+            // the MR-J4-TM's 32 entries in 64 bytes).
+            objs.retain(|o| o.2 <= 16);
+            let entries: Vec<(u16, u8, u8)> = (0..max).map(|i| objs[i % objs.len()]).collect();
+            let total: usize = entries.iter().map(|e| usize::from(e.2)).sum::<usize>() / 8;
+            assert!(bytes.is_none_or(|b| total <= b), "{d}: {total} bytes");
+            let target = Target::Sim(vec![d.to_string()]);
+            let (full, over) = tools::session(&target, move |bus| {
+                let mut w = |a: ObjectAddress, raw: Vec<u8>| -> Result<(), String> {
+                    let hex: String = raw.iter().map(|b| format!("{b:02x}")).collect();
+                    tools::download(bus, 0, a, &hex, Some(DataType::OctetString))
+                        .map(|_| ())
+                        .map_err(|e| e.to_string())
+                };
+                w(ObjectAddress::new(sm, 0), vec![0]).map_err(|e| {
+                    ecdrive::master::MasterError::new(
+                        None,
+                        "unassign",
+                        ecdrive::master::ErrorKind::Config,
+                        e,
+                    )
+                })?;
+                let _ = w(ObjectAddress::new(pdo, 0), vec![0]);
+                let mut full = Ok(());
+                for (k, (i, s, b)) in entries.iter().enumerate() {
+                    let v = (u32::from(*i) << 16) | (u32::from(*s) << 8) | u32::from(*b);
+                    if let Err(e) = w(
+                        ObjectAddress::new(pdo, k as u8 + 1),
+                        v.to_le_bytes().to_vec(),
+                    ) {
+                        full = Err(format!("entry {}: {e}", k + 1));
+                        break;
+                    }
+                }
+                if full.is_ok() {
+                    full = w(ObjectAddress::new(pdo, 0), vec![max as u8]);
+                }
+                let _ = w(ObjectAddress::new(pdo, 0), vec![0]);
+                let over = w(ObjectAddress::new(pdo, 0), vec![max as u8 + 1]);
+                Ok((full, over))
+            })
+            .unwrap_or_else(|e| panic!("{d}: {e}"));
+            assert!(
+                full.is_ok(),
+                "{d}: {max} entries in 0x{pdo:04X} (the manual's limit) refused: {full:?}"
+            );
+            match over {
+                Ok(()) => panic!("{d}: {} entries in 0x{pdo:04X} accepted", max + 1),
+                Err(e) => {
+                    let code = abort_in(&e).unwrap_or_else(|| panic!("{d}: {e}"));
+                    assert!(
+                        listed.contains(&code),
+                        "{d}: {} entries in 0x{pdo:04X} aborted 0x{code:08X}, which the manual \
+                         does not list ({e})",
+                        max + 1
                     );
                 }
             }

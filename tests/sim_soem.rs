@@ -16,7 +16,7 @@ mod support {
 use ecdrive::sim::devices::{GenericCoeDevice, IoDevice};
 use ecdrive::sim::{EscConfig, HostClock, Segment};
 use std::sync::Arc;
-use support::oracle::oracle;
+use support::oracle::{oracle, transitions};
 use support::python_master;
 
 /// What both scripts start with: the interface from argv[1], generous SOEM timeouts (µs: a
@@ -472,4 +472,207 @@ fn soem_runs_devices_from_vendor_files() {
     let valves = seg.slave(1).expect("SMC").esc.outputs();
     assert_eq!(valves.get(..3), Some(&[1u8, 2, 3][..]), "{v}");
     assert_eq!(v["init"], 1);
+}
+
+const TRANSITIONS_SCRIPT: &str = concat!(
+    prelude!(),
+    r#"
+cases = json.loads(sys.argv[2])   # [[position, [controlwords to the start state], controlword], ...]
+STATES = [
+    (0x4F, 0x40, "Switch on disabled"),
+    (0x6F, 0x21, "Ready to switch on"),
+    (0x6F, 0x23, "Switched on"),
+    (0x6F, 0x27, "Operation enabled"),
+    (0x6F, 0x07, "Quick stop active"),
+    (0x4F, 0x0F, "Fault reaction active"),
+    (0x4F, 0x08, "Fault"),
+    (0x4F, 0x00, "Not ready to switch on"),
+]
+
+
+def state_of(sw):
+    for mask, value, name in STATES:
+        if sw & mask == value:
+            return name
+    return "?"
+
+
+cw_out = [0, 0]
+
+
+def cycle():
+    """One cycle: every drive gets its controlword and its actual position as target (no
+    motion); the states of both."""
+    for k, s in enumerate(m.slaves):
+        actual = struct.unpack("<i", s.input[2:6])[0] if len(s.input) >= 6 else 0
+        s.output = struct.pack("<Hi", cw_out[k], actual)
+    m.send_processdata()
+    m.receive_processdata(200_000)
+    time.sleep(0.001)
+    return [state_of(struct.unpack("<H", s.input[0:2])[0]) for s in m.slaves]
+
+
+try:
+    out["count"] = config_init(2)
+
+    def remap(pos):
+        s = m.slaves[pos]
+        s.sdo_write(0x1C12, 0, bytes([0]))
+        s.sdo_write(0x1C13, 0, bytes([0]))
+        s.sdo_write(0x1600, 0, bytes([0]))
+        s.sdo_write(0x1600, 1, struct.pack("<I", 0x60400010))
+        s.sdo_write(0x1600, 2, struct.pack("<I", 0x607A0020))
+        s.sdo_write(0x1600, 0, bytes([2]))
+        s.sdo_write(0x1A00, 0, bytes([0]))
+        s.sdo_write(0x1A00, 1, struct.pack("<I", 0x60410010))
+        s.sdo_write(0x1A00, 2, struct.pack("<I", 0x60640020))
+        s.sdo_write(0x1A00, 0, bytes([2]))
+        s.sdo_write(0x1C12, 1, struct.pack("<H", 0x1600))
+        s.sdo_write(0x1C12, 0, bytes([1]))
+        s.sdo_write(0x1C13, 1, struct.pack("<H", 0x1A00))
+        s.sdo_write(0x1C13, 0, bytes([1]))
+
+    for s in m.slaves:
+        s.config_func = remap
+    m.config_map()
+    dc_sync0_to_op()
+    results = []
+    for pos, path, cw in cases:
+        # Back to Switch on disabled, every drive.
+        cw_out[0] = cw_out[1] = 0
+        for _ in range(100):
+            states = cycle()
+        reached = states[pos] == "Switch on disabled"
+        # The way to the start state: each controlword until the state changes.
+        for c in path:
+            before = states[pos]
+            cw_out[pos] = c
+            for _ in range(200):
+                states = cycle()
+                if states[pos] != before:
+                    break
+        start = states[pos]
+        # The fact's controlword: every state seen in the next 100 cycles.
+        cw_out[pos] = cw
+        seen = []
+        for _ in range(100):
+            st = cycle()[pos]
+            if not seen or seen[-1] != st:
+                seen.append(st)
+        results.append({"reached": reached, "start": start, "seen": seen})
+    out["results"] = results
+    out["al"] = [s.state for s in m.slaves] if m.read_state() else []
+    m.state = pysoem.INIT_STATE
+    m.write_state()
+finally:
+    m.close()
+print(json.dumps(out))
+"#
+);
+
+/// The emulated side of the manuals' state-machine transitions, driven by an independent
+/// master: SOEM takes both emulated EtherCAT drives to OP (the controlword acts only there, by
+/// process data) and, for each transition fact of their manuals (`tests/manual_facts`), brings
+/// the drive to the fact's start state by the standard commands, sends the fact's controlword
+/// and records every state the statusword shows. A transition the manual says exists must show
+/// its end state; one it says does not, must not. A start state the commands cannot set up on
+/// an idle motor (Fault; Quick stop active, which an idle motor leaves at once) is named, and
+/// at least ten facts per drive are checked.
+#[test]
+fn soem_drives_the_transitions_the_manuals_list() {
+    if !python_master::ready(
+        "sim_soem::soem_drives_the_transitions_the_manuals_list",
+        "pysoem",
+        "ECDRIVE_REQUIRE_PYSOEM",
+    ) {
+        return;
+    }
+    let drives = ["mr-j4-tm", "bdhde"];
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (i, d) in drives.iter().enumerate() {
+        let dev = ecdrive::sim::devices::by_name(d, i).expect("emulated drive");
+        seg.push(
+            dev,
+            EscConfig {
+                sm_watchdog: 0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+    let path = |from: &str| -> Option<Vec<u16>> {
+        Some(match from {
+            "Switch on disabled" => vec![],
+            "Ready to switch on" => vec![0x06],
+            "Switched on" => vec![0x06, 0x07],
+            "Operation enabled" => vec![0x06, 0x07, 0x0F],
+            "Quick stop active" => vec![0x06, 0x07, 0x0F, 0x02],
+            _ => return None,
+        })
+    };
+    let mut cases = Vec::new();
+    let mut facts = Vec::new();
+    let mut unset = Vec::new();
+    for (pos, d) in drives.iter().enumerate() {
+        for (id, from, to, cw, exists) in transitions(d) {
+            match path(&from) {
+                Some(p) => {
+                    cases.push(serde_json::json!([pos, p, cw]));
+                    facts.push((*d, id, from, to, cw, exists));
+                }
+                None => unset.push(format!("{d} [{id}]: {from} is not set up by controlword")),
+            }
+        }
+    }
+    let arg = serde_json::Value::Array(cases).to_string();
+    let (_, v) = python_master::run("pysoem", seg, TRANSITIONS_SCRIPT, &[&arg]);
+    assert_eq!(v["count"], 2, "{v}");
+    let results = v["results"].as_array().expect("results");
+    assert_eq!(results.len(), facts.len());
+    let mut wrong = Vec::new();
+    let mut checked = std::collections::BTreeMap::new();
+    for ((d, id, from, to, cw, exists), r) in facts.iter().zip(results) {
+        let start = r["start"].as_str().unwrap_or("?");
+        let seen: Vec<&str> = r["seen"]
+            .as_array()
+            .map(|a| a.iter().filter_map(|x| x.as_str()).collect())
+            .unwrap_or_default();
+        if r["reached"] != true || start != from {
+            // An idle motor leaves Quick stop active at once (quick-stop codes ending in
+            // Switch on disabled): that start cannot be held.
+            unset.push(format!("{d} [{id}]: {from} not set up (reached {start})"));
+            continue;
+        }
+        // The transition the controlword caused: the first state after the start state.
+        let first = seen.iter().copied().find(|s| *s != from.as_str());
+        let sod = Some("Switch on disabled");
+        if first == sod
+            && to != "Switch on disabled"
+            && (from == "Quick stop active" || to == "Quick stop active")
+        {
+            // Quick stop active on an idle motor lasts no cycle (quick-stop codes ending in
+            // Switch on disabled): the transition into or out of it cannot be seen.
+            unset.push(format!(
+                "{d} [{id}]: Quick stop active not held by an idle motor"
+            ));
+            continue;
+        }
+        *checked.entry(*d).or_insert(0) += 1;
+        if (first == Some(to.as_str())) != *exists {
+            wrong.push(format!(
+                "{d} [{id}]: {from} with controlword 0x{cw:04X} showed {seen:?}; the manual says \
+                 it {} go to {to}",
+                if *exists { "does" } else { "does not" }
+            ));
+        }
+    }
+    eprintln!("not set up: {unset:#?}");
+    assert!(wrong.is_empty(), "{wrong:#?}");
+    for d in drives {
+        let n = checked.get(d).copied().unwrap_or(0);
+        assert!(
+            n >= 10,
+            "{d}: only {n} transition facts checked; not set up: {unset:#?}"
+        );
+    }
 }

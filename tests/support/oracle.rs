@@ -44,3 +44,35 @@ pub fn oracle(drive: &str) -> Vec<((u16, u8), u64)> {
     }
     out
 }
+
+/// The transition facts of a drive's manual: (id, from, to, controlword, exists), the states
+/// by their CiA 402 names ("Switch on disabled"), as written in `tests/manual_facts`.
+#[allow(dead_code)]
+pub fn transitions(drive: &str) -> Vec<(String, String, String, u16, bool)> {
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(format!("tests/manual_facts/{drive}.toml"));
+    let v: toml::Value = toml::from_str(&std::fs::read_to_string(p).unwrap()).unwrap();
+    let name = |s: &str| {
+        let n = s.to_ascii_lowercase().replace('_', " ");
+        let mut c = n.chars();
+        c.next()
+            .map(|f| f.to_ascii_uppercase().to_string() + c.as_str())
+            .unwrap_or_default()
+    };
+    let mut out = Vec::new();
+    for f in v["fact"].as_array().unwrap() {
+        if f.get("kind").and_then(|k| k.as_str()) != Some("transition") {
+            continue;
+        }
+        let s = |k: &str| f.get(k).and_then(|x| x.as_str()).unwrap_or("").to_string();
+        let cw = u16::from_str_radix(s("controlword").trim_start_matches("0x"), 16).unwrap();
+        out.push((
+            s("id"),
+            name(&s("from")),
+            name(&s("to")),
+            cw,
+            f.get("exists").and_then(|x| x.as_bool()).unwrap_or(true),
+        ));
+    }
+    out
+}
