@@ -57,6 +57,35 @@ def table(reports):
     return "\n".join(out)
 
 
+def drives_table(reports):
+    """At the drives: per cycle time and master, each emulated ESC's frame arrival after SYNC0
+    (p50) and its largest DC system-time difference (0x092C), median [min–max] over the
+    repetitions, from the repetitions' own summaries."""
+    out = [
+        "| cycle | run | drive | frame arrival after SYNC0 p50 (µs) | DC difference max (ns) |",
+        "|---|---|---|---|---|",
+    ]
+    for c, r in reports:
+        for name in RUNS:
+            per_drive = {}
+            for rep in r["repetitions"]:
+                run = rep.get(name)
+                if not run:
+                    continue
+                for d in run.get("drives") or []:
+                    e = per_drive.setdefault(d["position"], ([], []))
+                    if d.get("arrival_after_sync0"):
+                        e[0].append(d["arrival_after_sync0"]["p50"])
+                    if d.get("dc_difference"):
+                        e[1].append(d["dc_difference"]["max"])
+            for pos, (arr, dc) in sorted(per_drive.items()):
+                sp = lambda v, scale, digits: spread(
+                    {"values": v, "median": sorted(v)[len(v) // 2], "min": min(v), "max": max(v)}
+                    if v else None, scale, digits)
+                out.append(f"| {c} µs | {name} | {pos} | {sp(arr, 1e-3, 1)} | {sp(dc, 1, 0)} |")
+    return "\n".join(out)
+
+
 def main():
     d = sys.argv[1]
     commit_file = os.path.join(d, "commit.txt")
@@ -95,6 +124,10 @@ def main():
         )
         print(table(reports))
         print()
+        if key == "veth":
+            print("At the drives (the emulated slave controllers' own records):\n")
+            print(drives_table(reports))
+            print()
 
 
 main()
