@@ -16,6 +16,7 @@
 //! before. `a_sleep_then_an_assert_is_found` shows that the check finds what it is meant to.
 
 #[path = "support/source_scan.rs"]
+#[allow(dead_code)] // this test reads files, not module paths
 mod source_scan;
 
 use std::path::{Path, PathBuf};
