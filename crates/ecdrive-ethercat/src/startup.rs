@@ -1808,7 +1808,10 @@ impl DriveWrites {
             mode_selector: profile
                 .mode_selector
                 .map(|m| (m, super::program::modes_used(&setup.program, setup.mode))),
+            // Only where the profile knows its position units per motor revolution (a profile
+            // from an ESI file without a factor group or encoder resolution has 1: unknown).
             fastest: super::program::fastest_step(&setup.program, setup.mode)
+                .filter(|_| profile.units.position_per_rev > 1.0)
                 .map(|(n, counts_per_s)| (n, counts_per_s / profile.units.position_per_rev)),
         };
         w.plan_init_cmds(drive, setup, profile)?;
@@ -2024,7 +2027,9 @@ fn judge_max_speed((step, rev_s): (usize, f64), raw: &[u8]) -> Result<(), String
         return Ok(());
     }
     Err(format!(
-        "program[{step}] commands {:.0} r/min ({rev_s:.1} rev/s), beyond the motor's maximum          speed 0x6080 = {max_rpm} r/min ({:.1} rev/s) that the drive reports: the drive cannot          run it (lower the step's velocity)",
+        "program[{step}] commands {:.0} r/min ({rev_s:.1} rev/s), beyond the motor's maximum \
+         speed 0x6080 = {max_rpm} r/min ({:.1} rev/s) that the drive reports: the drive cannot \
+         run it (lower the step's velocity)",
         rev_s * 60.0,
         f64::from(max_rpm) / 60.0
     ))
