@@ -192,20 +192,22 @@ pub const WRITE_RULES: &[WriteRule] = &[
         code: SdoAbortCode::VALUE_RANGE,
     },
     // 0x60C2:01: at most 64 in either reading of the manual (object table 4–64, §2.4 FBITPRD
-    // 1–64); from 1, so that the set-up example's standard form (1 × 10^−3 s) is taken.
+    // 1–64; the set-up example's standard form 1 × 10^−3 s is taken): above it "Value of
+    // parameter written too high"; 0 passes this rule to the dictionary's minimum of 1
+    // ("too low").
     WriteRule::Allowed {
         address: a(0x60C2, 1),
         values: &INTERPOLATION_PERIODS,
-        code: SdoAbortCode::VALUE_RANGE,
+        code: SdoAbortCode::VALUE_TOO_HIGH,
     },
 ];
 
-/// 0x60C2:01 values the emulated drive takes: 1 to 64.
-const INTERPOLATION_PERIODS: [u64; 64] = {
-    let mut v = [0u64; 64];
+/// 0x60C2:01 values this rule lets through to the dictionary's range: 0 to 64.
+const INTERPOLATION_PERIODS: [u64; 65] = {
+    let mut v = [0u64; 65];
     let mut i = 0;
-    while i < 64 {
-        v[i] = i as u64 + 1;
+    while i < 65 {
+        v[i] = i as u64;
         i += 1;
     }
     v
