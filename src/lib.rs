@@ -25,7 +25,7 @@
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
-pub use ecdrive_core::{can, cia402, drives, ec, esi, link, od, pdo, rt};
+pub use ecdrive_core::{can, cia402, drives, ec, eds, esi, link, od, pdo, rt};
 pub use ecdrive_sim as sim;
 
 // The façade: what an application driving EtherCAT drives uses, from one path (the README's

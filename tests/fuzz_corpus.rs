@@ -59,6 +59,11 @@ fn esi_corpus_replays_clean() {
 }
 
 #[test]
+fn eds_corpus_replays_clean() {
+    replay("eds", checks::eds);
+}
+
+#[test]
 fn config_corpus_replays_clean() {
     replay("config", checks::config);
 }

@@ -21,10 +21,11 @@ mod source_scan;
 use std::path::Path;
 
 const CORE: &[&str] = &[
-    "ec", "od", "pdo", "cia402", "esi", "drives", "link", "rt", "can",
+    "ec", "od", "pdo", "cia402", "esi", "eds", "drives", "link", "rt", "can",
 ];
 const ALL: &[&str] = &[
-    "ec", "od", "pdo", "cia402", "esi", "drives", "link", "rt", "can", "sim", "master", "canopen",
+    "ec", "od", "pdo", "cia402", "esi", "eds", "drives", "link", "rt", "can", "sim", "master",
+    "canopen",
     "app",
 ];
 

@@ -363,3 +363,29 @@ pub fn config(data: &[u8]) {
         }
     }
 }
+
+/// The EDS/DCF reader (`eds::EdsFile::parse`) and what is derived from a file: an error says
+/// what is wrong; a file read has at least one object, every warning says something, and the
+/// lookups the master uses (identity, modes, mappable objects, values for every node-ID) run.
+pub fn eds(data: &[u8]) {
+    let f = match ecdrive::eds::EdsFile::parse(data) {
+        Ok(f) => f,
+        Err(e) => {
+            assert!(!e.to_string().is_empty(), "an EDS error says what is wrong");
+            return;
+        }
+    };
+    assert!(!f.objects.is_empty(), "a file read has an object");
+    for w in &f.warnings {
+        assert!(!w.to_string().is_empty(), "a warning says what");
+    }
+    let _ = (f.is_cia402(), f.supported_modes(), f.mappable(true), f.mappable(false));
+    for o in f.objects.values() {
+        for e in o.entries.values() {
+            for node in [0u8, 1, 127, 255] {
+                let _ = (e.default.resolve(node), e.parameter_value.resolve(node));
+            }
+            let _ = e.bit_len();
+        }
+    }
+}

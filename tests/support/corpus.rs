@@ -18,3 +18,37 @@ pub fn dir() -> Option<PathBuf> {
         None
     }
 }
+
+/// The corpus of real vendor EDS/DCF files: `ECDRIVE_EDS_CORPUS`, else `../shared/eds-corpus`
+/// beside the checkout. Missing: a failure under `ECDRIVE_CI`, else `None` with a loud line.
+#[allow(dead_code)]
+pub fn eds_dir() -> Option<PathBuf> {
+    let dir = std::env::var_os("ECDRIVE_EDS_CORPUS")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/eds-corpus"));
+    if dir.join("MANIFEST.tsv").is_file() {
+        Some(dir)
+    } else if std::env::var_os("ECDRIVE_CI").is_some() {
+        panic!("the EDS corpus is not at {}", dir.display());
+    } else {
+        eprintln!("skipped: no EDS corpus at {}", dir.display());
+        None
+    }
+}
+
+/// The rows of a corpus's `MANIFEST.tsv` as column name → value.
+#[allow(dead_code)]
+pub fn manifest(dir: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
+    let text = std::fs::read_to_string(dir.join("MANIFEST.tsv")).expect("MANIFEST.tsv");
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or_default()
+        .split('\t')
+        .map(String::from)
+        .collect();
+    lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| header.iter().cloned().zip(l.split('\t').map(String::from)).collect())
+        .collect()
+}

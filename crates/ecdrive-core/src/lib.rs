@@ -21,6 +21,7 @@ pub mod can;
 pub mod cia402;
 pub mod drives;
 pub mod ec;
+pub mod eds;
 pub mod esi;
 pub mod link;
 pub mod od;

@@ -1,4 +1,5 @@
 //! The CANopen applications: the demo and the tools behind `ecdrive … --can`.
 
 pub mod demo;
+pub mod eds;
 pub mod tools;

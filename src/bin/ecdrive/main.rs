@@ -419,6 +419,14 @@ enum Command {
         #[command(subcommand)]
         op: EsiOp,
     },
+    /// Show what the reader takes from a CANopen device's EDS or DCF file (CiA 306).
+    #[command(
+        after_help = "Example:\n  ecdrive eds show BLVD-KRD_CANopen_V400.eds\n  ecdrive eds show drive.dcf --json"
+    )]
+    Eds {
+        #[command(subcommand)]
+        op: EdsOp,
+    },
     /// A cyclic run from a configuration file: OP, enable, each drive's set-point program,
     /// controlled stop, summary. Progress on a terminal; quiet when piped.
     #[command(
@@ -638,6 +646,19 @@ enum RegOp {
         /// VALUE is hex bytes, written as given, the first byte to ADDR.
         #[arg(long)]
         bytes: bool,
+    },
+}
+
+#[derive(Subcommand, Clone)]
+enum EdsOp {
+    /// Identity, PDO counts, bit rates, the CiA 402 modes 6502h declares and for each the
+    /// objects its cyclic exchange needs (in a PDO, or not mappable), the mappable objects, and
+    /// every warning with its line.
+    Show {
+        /// The EDS or DCF file.
+        file: PathBuf,
+        #[command(flatten)]
+        json: Json,
     },
 }
 
@@ -1556,6 +1577,16 @@ fn dispatch(cli: Cli) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        Command::Eds {
+            op: EdsOp::Show { file, json },
+        } => match ecdrive::app::canopen::eds::show(&file) {
+            Ok(s) if json.json => print_json("eds", &s),
+            Ok(s) => {
+                print::eds_summary(&s);
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail_with("eds", &e, exit::USAGE),
+        },
         Command::Esi { op } => match op {
             EsiOp::Show { file, json } => match tools::esi::show(&file) {
                 Ok(s) if json.json => print_json("esi", &s),

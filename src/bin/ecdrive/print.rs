@@ -419,6 +419,58 @@ pub fn sii(d: &SiiDump, i: &SiiInfo) {
     }
 }
 
+pub fn eds_summary(s: &ecdrive::app::canopen::eds::EdsSummary) {
+    let hex = |v: Option<u32>| v.map_or_else(|| "-".to_string(), |v| format!("0x{v:08X}"));
+    println!(
+        "{}: {:?} {:?}, vendor {} product {} revision {}{}",
+        s.file,
+        s.vendor,
+        s.product,
+        hex(s.vendor_number),
+        hex(s.product_number),
+        hex(s.revision_number),
+        if s.dcf { " (DCF)" } else { "" }
+    );
+    println!(
+        "  Device type (1000h): {}{}",
+        hex(s.device_type),
+        if s.cia402 { ", a CiA 402 drive" } else { ", not a CiA 402 drive" }
+    );
+    let n = |v: Option<u16>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
+    println!(
+        "  PDOs: {} RPDO, {} TPDO; mappable objects: {} into an RPDO, {} into a TPDO",
+        n(s.pdos.0),
+        n(s.pdos.1),
+        s.mappable.0,
+        s.mappable.1
+    );
+    let rates: Vec<String> = s.baud_rates.iter().map(|r| format!("{r}k")).collect();
+    println!(
+        "  Bit rates: {}; {} objects",
+        if rates.is_empty() { "-".into() } else { rates.join(", ") },
+        s.objects
+    );
+    println!(
+        "  Modes (6502h): {}",
+        if s.modes.is_empty() { "none declared".into() } else { s.modes.join(", ") }
+    );
+    for p in &s.plans {
+        let side = |v: &[(String, bool)]| {
+            v.iter()
+                .map(|(o, m)| if *m { o.clone() } else { format!("{o} (not mappable)") })
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        println!("    {:4} out {}; in {}", p.mode, side(&p.rx), side(&p.tx));
+    }
+    if !s.warnings.is_empty() {
+        println!("  {} warning(s):", s.warnings.len());
+        for w in &s.warnings {
+            println!("    {w}");
+        }
+    }
+}
+
 pub fn esi_summary(s: &EsiSummary) {
     println!(
         "{}: vendor 0x{:08X} {:?}{}",
