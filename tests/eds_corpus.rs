@@ -48,7 +48,11 @@ fn every_vendor_file_reads_with_its_identity() {
             );
         }
         if row["has_6040"] == "yes" && row["has_6041"] == "yes" {
-            assert!(f.is_cia402(), "{}: not a CiA 402 drive to the reader", row["path"]);
+            assert!(
+                f.is_cia402(),
+                "{}: not a CiA 402 drive to the reader",
+                row["path"]
+            );
             assert!(
                 !f.mappable(true).is_empty() && !f.mappable(false).is_empty(),
                 "{}: nothing mappable",
@@ -99,7 +103,9 @@ fn the_project_drives_files_give_their_identity_and_modes() {
         assert!(f.is_cia402());
         // The RPDO COB-IDs are node-ID formulas: node 5's first RPDO listens at 0x205.
         assert_eq!(
-            f.entry(0x1400, 1).and_then(|e| e.default.resolve(5)).map(|v| v & 0x7FF),
+            f.entry(0x1400, 1)
+                .and_then(|e| e.default.resolve(5))
+                .map(|v| v & 0x7FF),
             Some(0x205),
             "{:?}",
             f.entry(0x1400, 1)

@@ -25,8 +25,7 @@ const CORE: &[&str] = &[
 ];
 const ALL: &[&str] = &[
     "ec", "od", "pdo", "cia402", "esi", "eds", "drives", "link", "rt", "can", "sim", "master",
-    "canopen",
-    "app",
+    "canopen", "app",
 ];
 
 /// What the file at `rel` (relative to `src/`) may reach, or `None` for an application.

@@ -379,7 +379,12 @@ pub fn eds(data: &[u8]) {
     for w in &f.warnings {
         assert!(!w.to_string().is_empty(), "a warning says what");
     }
-    let _ = (f.is_cia402(), f.supported_modes(), f.mappable(true), f.mappable(false));
+    let _ = (
+        f.is_cia402(),
+        f.supported_modes(),
+        f.mappable(true),
+        f.mappable(false),
+    );
     for o in f.objects.values() {
         for e in o.entries.values() {
             for node in [0u8, 1, 127, 255] {

@@ -1,10 +1,12 @@
-//! The corpus of real vendor ESI files beside the checkout (`../shared/esi-corpus`, listed in
+//! The corpora of real vendor ESI and EDS files beside the checkout (`../shared/esi-corpus`,
+//! `../shared/eds-corpus`, each listed in
 //! its `MANIFEST.tsv`), read from there, never copied into the repository.
 
 use std::path::{Path, PathBuf};
 
 /// The corpus folder: `ECDRIVE_ESI_CORPUS`, else `../shared/esi-corpus` beside the checkout.
 /// Missing: a failure under `ECDRIVE_CI`, else `None` with a loud line.
+#[allow(dead_code)] // each test file uses the corpus it needs
 pub fn dir() -> Option<PathBuf> {
     let dir = std::env::var_os("ECDRIVE_ESI_CORPUS")
         .map(PathBuf::from)
@@ -49,6 +51,12 @@ pub fn manifest(dir: &Path) -> Vec<std::collections::BTreeMap<String, String>> {
         .collect();
     lines
         .filter(|l| !l.trim().is_empty())
-        .map(|l| header.iter().cloned().zip(l.split('\t').map(String::from)).collect())
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split('\t').map(String::from))
+                .collect()
+        })
         .collect()
 }

@@ -72,7 +72,8 @@ pub fn show(path: &std::path::Path) -> Result<EdsSummary, String> {
     let f = EdsFile::parse(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     let rx = f.mappable(true);
     let tx = f.mappable(false);
-    let in_pdo = |list: &[(u16, u8, u16)], index: u16| list.iter().any(|(i, s, _)| *i == index && *s == 0);
+    let in_pdo =
+        |list: &[(u16, u8, u16)], index: u16| list.iter().any(|(i, s, _)| *i == index && *s == 0);
     let raw_modes = f.supported_modes().unwrap_or(0);
     let modes: Vec<&'static str> = MODES
         .iter()
@@ -113,12 +114,10 @@ pub fn show(path: &std::path::Path) -> Result<EdsSummary, String> {
         product: f.device.product_name.clone(),
         product_number: f.device.product_number,
         revision_number: f.device.revision_number,
-        device_type: f
-            .entry(0x1000, 0)
-            .and_then(|e| match e.default {
-                EdsValue::Int(v) => u32::try_from(v & 0xFFFF_FFFF).ok(),
-                _ => None,
-            }),
+        device_type: f.entry(0x1000, 0).and_then(|e| match e.default {
+            EdsValue::Int(v) => u32::try_from(v & 0xFFFF_FFFF).ok(),
+            _ => None,
+        }),
         cia402: f.is_cia402(),
         modes,
         pdos: (f.device.rx_pdos, f.device.tx_pdos),

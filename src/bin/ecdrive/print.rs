@@ -434,7 +434,11 @@ pub fn eds_summary(s: &ecdrive::app::canopen::eds::EdsSummary) {
     println!(
         "  Device type (1000h): {}{}",
         hex(s.device_type),
-        if s.cia402 { ", a CiA 402 drive" } else { ", not a CiA 402 drive" }
+        if s.cia402 {
+            ", a CiA 402 drive"
+        } else {
+            ", not a CiA 402 drive"
+        }
     );
     let n = |v: Option<u16>| v.map_or_else(|| "-".to_string(), |v| v.to_string());
     println!(
@@ -447,17 +451,31 @@ pub fn eds_summary(s: &ecdrive::app::canopen::eds::EdsSummary) {
     let rates: Vec<String> = s.baud_rates.iter().map(|r| format!("{r}k")).collect();
     println!(
         "  Bit rates: {}; {} objects",
-        if rates.is_empty() { "-".into() } else { rates.join(", ") },
+        if rates.is_empty() {
+            "-".into()
+        } else {
+            rates.join(", ")
+        },
         s.objects
     );
     println!(
         "  Modes (6502h): {}",
-        if s.modes.is_empty() { "none declared".into() } else { s.modes.join(", ") }
+        if s.modes.is_empty() {
+            "none declared".into()
+        } else {
+            s.modes.join(", ")
+        }
     );
     for p in &s.plans {
         let side = |v: &[(String, bool)]| {
             v.iter()
-                .map(|(o, m)| if *m { o.clone() } else { format!("{o} (not mappable)") })
+                .map(|(o, m)| {
+                    if *m {
+                        o.clone()
+                    } else {
+                        format!("{o} (not mappable)")
+                    }
+                })
                 .collect::<Vec<_>>()
                 .join(", ")
         };

@@ -470,14 +470,20 @@ enum SectionName {
 }
 
 fn section_name(s: &str) -> Option<SectionName> {
-    let hex4 = |t: &str| (t.len() == 4).then(|| u16::from_str_radix(t, 16).ok()).flatten();
+    let hex4 = |t: &str| {
+        (t.len() == 4)
+            .then(|| u16::from_str_radix(t, 16).ok())
+            .flatten()
+    };
     if let Some(i) = hex4(s) {
         return Some(SectionName::Object(i));
     }
     let (idx, rest) = s.split_at_checked(4)?;
     let index = hex4(idx)?;
     if let Some(sub) = rest.strip_prefix("sub") {
-        return u8::from_str_radix(sub, 16).ok().map(|s| SectionName::Sub(index, s));
+        return u8::from_str_radix(sub, 16)
+            .ok()
+            .map(|s| SectionName::Sub(index, s));
     }
     match rest {
         "value" => Some(SectionName::Value(index)),
@@ -500,7 +506,10 @@ fn access_of(s: &str) -> Option<Access> {
 
 /// An entry from a section (an object's own for a VAR, or a `sub` section).
 fn entry_of(sec: &Section<'_>, sub: u8, warnings: &mut Vec<EdsWarning>) -> EdsEntry {
-    let name = sec.get("parametername").map(|(v, _)| v.to_string()).unwrap_or_default();
+    let name = sec
+        .get("parametername")
+        .map(|(v, _)| v.to_string())
+        .unwrap_or_default();
     let data_type_code = match sec.get("datatype") {
         Some((v, line)) => match number(v).and_then(|n| u16::try_from(n).ok()) {
             Some(c) => Some(c),
@@ -613,7 +622,9 @@ impl EdsFile {
             match sec.name.as_str() {
                 "fileinfo" => {
                     for l in &sec.lines {
-                        file.file_info.entry(l.key.clone()).or_insert_with(|| l.value.to_string());
+                        file.file_info
+                            .entry(l.key.clone())
+                            .or_insert_with(|| l.value.to_string());
                     }
                 }
                 "deviceinfo" => file.device = device_info(sec, &mut warnings),
@@ -679,21 +690,19 @@ impl EdsFile {
                 name => match section_name(name) {
                     Some(SectionName::Object(index)) => {
                         let kind = match sec.get("objecttype") {
-                            Some((v, line)) => {
-                                match number(v).and_then(ObjectKind::from_code) {
-                                    Some(k) => k,
-                                    None => {
-                                        warnings.push(EdsWarning {
-                                            line,
-                                            what: format!(
-                                                "ObjectType {v:?} of {index:04X}h is not one \
+                            Some((v, line)) => match number(v).and_then(ObjectKind::from_code) {
+                                Some(k) => k,
+                                None => {
+                                    warnings.push(EdsWarning {
+                                        line,
+                                        what: format!(
+                                            "ObjectType {v:?} of {index:04X}h is not one \
                                                  of CiA 301's: read as VAR"
-                                            ),
-                                        });
-                                        ObjectKind::Var
-                                    }
+                                        ),
+                                    });
+                                    ObjectKind::Var
                                 }
-                            }
+                            },
                             None => ObjectKind::Var,
                         };
                         let mut obj = EdsObject {
@@ -749,7 +758,10 @@ impl EdsFile {
                 }
                 None => warnings.push(EdsWarning {
                     line: sec.line,
-                    what: format!("[{}] has no object section [{index:04X}]: left out", sec.name),
+                    what: format!(
+                        "[{}] has no object section [{index:04X}]: left out",
+                        sec.name
+                    ),
                 }),
             }
         }
@@ -790,12 +802,17 @@ impl EdsFile {
             if !o.listed && !listed.is_empty() {
                 warnings.push(EdsWarning {
                     line: o.line,
-                    what: format!("{:04X}h has a section but no object list names it: taken", o.index),
+                    what: format!(
+                        "{:04X}h has a section but no object list names it: taken",
+                        o.index
+                    ),
                 });
             }
             if let Some(n) = o.sub_number {
                 let have = o.entries.len();
-                if matches!(o.kind, ObjectKind::Array | ObjectKind::Record) && usize::from(n) != have {
+                if matches!(o.kind, ObjectKind::Array | ObjectKind::Record)
+                    && usize::from(n) != have
+                {
                     warnings.push(EdsWarning {
                         line: o.line,
                         what: format!(
@@ -817,6 +834,8 @@ impl EdsFile {
                 what: "no object section ([1000], [6040], …): not an EDS file".into(),
             });
         }
+        // In the file's order (a stable sort: one line's warnings as they came).
+        warnings.sort_by_key(|w| w.line);
         file.warnings = warnings;
         Ok(file)
     }
@@ -971,7 +990,12 @@ mod tests {
     #[test]
     fn node_id_formulas_in_their_spellings() {
         let mut w = Vec::new();
-        for s in ["$NODEID+0x180", "$NodeID + 0x180", "$NODEID +0x180", "0x180+$NODEID"] {
+        for s in [
+            "$NODEID+0x180",
+            "$NodeID + 0x180",
+            "$NODEID +0x180",
+            "0x180+$NODEID",
+        ] {
             assert_eq!(
                 value(s, None, 1, &mut w),
                 EdsValue::NodeId { offset: 0x180 },
@@ -1008,7 +1032,11 @@ mod tests {
         // Both objects of the duplicate list key are taken, with a warning each for the key
         // and the comment.
         assert!(f.objects[&0x2000].listed && o.listed);
-        assert!(f.warnings.iter().any(|w| w.what.contains("list key 1 again")));
+        assert!(
+            f.warnings
+                .iter()
+                .any(|w| w.what.contains("list key 1 again"))
+        );
         assert!(f.warnings.iter().any(|w| w.what.contains("comment")));
     }
 
@@ -1019,8 +1047,8 @@ mod tests {
         let big = vec![b'a'; MAX_FILE_BYTES + 1];
         assert!(EdsFile::parse(&big).is_err());
         // Latin-1 bytes are read, with a warning.
-        let f = EdsFile::parse(b"[1000]\nParameterName=Ger\x94t\nDataType=7\nAccessType=ro\n")
-            .unwrap();
+        let f =
+            EdsFile::parse(b"[1000]\nParameterName=Ger\x94t\nDataType=7\nAccessType=ro\n").unwrap();
         assert_eq!(f.objects[&0x1000].name, "Ger\u{94}t");
         assert_eq!(f.warnings.len(), 1);
     }
