@@ -15,6 +15,7 @@
 //!             [MandatoryObjects]\nSupportedObjects=1\n1=0x1000\n\
 //!             [1000]\nParameterName=Device type\nObjectType=0x7\nDataType=0x0007\n\
 //!             AccessType=ro\nDefaultValue=0x00020192\nPDOMapping=0\n\
+//!             [1400]\nParameterName=RPDO 1\nObjectType=0x9\nSubNumber=1\n\
 //!             [1400sub1]\nParameterName=COB-ID\nDataType=0x0007\nAccessType=rw\n\
 //!             DefaultValue=$NODEID+0x200\n";
 //! let eds = EdsFile::parse(text.as_bytes())?;
