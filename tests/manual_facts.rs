@@ -1233,6 +1233,17 @@ fn check_alarms_emulated(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) ->
     bad
 }
 
+/// The SDO abort codes a drive's manual lists (`abort_code` facts).
+fn listed_aborts(facts: &[Fact]) -> Vec<u32> {
+    facts
+        .iter()
+        .filter(|f| f.kind == "abort_code")
+        .filter_map(|f| f.code.as_deref())
+        .filter_map(|c| number(&toml::Value::String(c.into())))
+        .map(|c| c as u32)
+        .collect()
+}
+
 /// The request that provokes an abort, and the codes that name its cause.
 struct Provocation {
     what: &'static str,
@@ -1251,13 +1262,7 @@ fn check_aborts(
     gaps: &mut Vec<String>,
 ) -> Vec<String> {
     let mut bad = Vec::new();
-    let listed: Vec<u32> = facts
-        .iter()
-        .filter(|f| f.kind == "abort_code")
-        .filter_map(|f| f.code.as_deref())
-        .filter_map(|c| number(&toml::Value::String(c.into())))
-        .map(|c| c as u32)
-        .collect();
+    let listed = listed_aborts(facts);
     let mut provoked: Vec<u32> = Vec::new();
     let mut judge = |p: &Provocation,
                      on: ObjectAddress,
@@ -2038,14 +2043,7 @@ fn a_wrong_value_in_an_emulated_drive_fails_the_oracle() {
 fn remap_errors_abort_with_codes_the_manual_lists() {
     for d in ["mr-j4-tm", "bdhde"] {
         let file = load(d);
-        let listed: Vec<u32> = file
-            .fact
-            .iter()
-            .filter(|f| f.kind == "abort_code")
-            .filter_map(|f| f.code.as_deref())
-            .filter_map(|c| number(&toml::Value::String(c.into())))
-            .map(|c| c as u32)
-            .collect();
+        let listed = listed_aborts(&file.fact);
         assert!(listed.len() >= 10, "{d}: {listed:?}");
         let target = Target::Sim(vec![d.to_string()]);
         let results = tools::session(&target, |bus| {
@@ -2117,14 +2115,7 @@ fn remap_errors_abort_with_codes_the_manual_lists() {
 fn the_emulated_drives_keep_the_manuals_pdo_limits() {
     for d in ["mr-j4-tm", "bdhde"] {
         let file = load(d);
-        let listed: Vec<u32> = file
-            .fact
-            .iter()
-            .filter(|f| f.kind == "abort_code")
-            .filter_map(|f| f.code.as_deref())
-            .filter_map(|c| number(&toml::Value::String(c.into())))
-            .map(|c| c as u32)
-            .collect();
+        let listed = listed_aborts(&file.fact);
         let limit = |k: &str| {
             file.fact
                 .iter()

@@ -231,6 +231,24 @@ fn soem_brings_devices_to_op() {
     }
 }
 
+/// The emulated drives `names`, in line order, with the SM watchdog off (an independent
+/// master's Python loop stalls on a loaded machine).
+fn drives_segment(names: &[&str]) -> Segment {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (i, d) in names.iter().enumerate() {
+        let dev = ecdrive::sim::devices::by_name(d, i).expect("emulated drive");
+        seg.push(
+            dev,
+            EscConfig {
+                sm_watchdog: 0,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+    }
+    seg
+}
+
 const DRIVES_SCRIPT: &str = concat!(
     prelude!(),
     r#"
@@ -305,18 +323,7 @@ fn soem_runs_the_emulated_drives() {
         return;
     }
     let drives = ["mr-j4-tm", "bdhde"];
-    let mut seg = Segment::new(Arc::new(HostClock));
-    for (i, d) in drives.iter().enumerate() {
-        let dev = ecdrive::sim::devices::by_name(d, i).expect("emulated drive");
-        seg.push(
-            dev,
-            EscConfig {
-                sm_watchdog: 0,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-    }
+    let seg = drives_segment(&drives);
     let mut reads = Vec::new();
     let mut want = Vec::new();
     for (pos, d) in drives.iter().enumerate() {
@@ -588,18 +595,7 @@ fn soem_drives_the_transitions_the_manuals_list() {
         return;
     }
     let drives = ["mr-j4-tm", "bdhde"];
-    let mut seg = Segment::new(Arc::new(HostClock));
-    for (i, d) in drives.iter().enumerate() {
-        let dev = ecdrive::sim::devices::by_name(d, i).expect("emulated drive");
-        seg.push(
-            dev,
-            EscConfig {
-                sm_watchdog: 0,
-                ..Default::default()
-            },
-        )
-        .unwrap();
-    }
+    let seg = drives_segment(&drives);
     let path = |from: &str| -> Option<Vec<u16>> {
         Some(match from {
             "Switch on disabled" => vec![],

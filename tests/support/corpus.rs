@@ -4,38 +4,34 @@
 
 use std::path::{Path, PathBuf};
 
-/// The corpus folder: `ECDRIVE_ESI_CORPUS`, else `../shared/esi-corpus` beside the checkout.
-/// Missing: a failure under `ECDRIVE_CI`, else `None` with a loud line.
-#[allow(dead_code)] // each test file uses the corpus it needs
-pub fn dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("ECDRIVE_ESI_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/esi-corpus"));
+/// A corpus folder: the variable `var`, else `../shared/FOLDER` beside the checkout. Missing:
+/// a failure under `ECDRIVE_CI`, else `None` with a loud line.
+fn corpus(var: &str, folder: &str) -> Option<PathBuf> {
+    let dir = std::env::var_os(var).map(PathBuf::from).unwrap_or_else(|| {
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../shared")
+            .join(folder)
+    });
     if dir.join("MANIFEST.tsv").is_file() {
         Some(dir)
     } else if std::env::var_os("ECDRIVE_CI").is_some() {
-        panic!("the ESI corpus is not at {}", dir.display());
+        panic!("the corpus {folder} is not at {}", dir.display());
     } else {
-        eprintln!("skipped: no ESI corpus at {}", dir.display());
+        eprintln!("skipped: no corpus {folder} at {}", dir.display());
         None
     }
 }
 
-/// The corpus of real vendor EDS/DCF files: `ECDRIVE_EDS_CORPUS`, else `../shared/eds-corpus`
-/// beside the checkout. Missing: a failure under `ECDRIVE_CI`, else `None` with a loud line.
+/// The ESI corpus: `ECDRIVE_ESI_CORPUS`, else `../shared/esi-corpus`.
+#[allow(dead_code)] // each test file uses the corpus it needs
+pub fn dir() -> Option<PathBuf> {
+    corpus("ECDRIVE_ESI_CORPUS", "esi-corpus")
+}
+
+/// The corpus of real vendor EDS/DCF files: `ECDRIVE_EDS_CORPUS`, else `../shared/eds-corpus`.
 #[allow(dead_code)]
 pub fn eds_dir() -> Option<PathBuf> {
-    let dir = std::env::var_os("ECDRIVE_EDS_CORPUS")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/eds-corpus"));
-    if dir.join("MANIFEST.tsv").is_file() {
-        Some(dir)
-    } else if std::env::var_os("ECDRIVE_CI").is_some() {
-        panic!("the EDS corpus is not at {}", dir.display());
-    } else {
-        eprintln!("skipped: no EDS corpus at {}", dir.display());
-        None
-    }
+    corpus("ECDRIVE_EDS_CORPUS", "eds-corpus")
 }
 
 /// The rows of a corpus's `MANIFEST.tsv` as column name → value.
