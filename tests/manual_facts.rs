@@ -1595,10 +1595,13 @@ fn check_units_profile(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) -> V
 }
 
 /// The emulated side of the position and velocity unit facts, through the configuration's
-/// conversions and the bus: an EtherCAT drive runs 1 rev/s in csv for 0.5 s, in user units of
-/// one revolution made from the manual's position units per revolution; its actual position
-/// moves half a revolution in the manual's units — which holds only if the master's velocity
-/// unit and the emulated drive's are both the manual's.
+/// conversions and the bus: an EtherCAT drive runs 1 rev/s in csv, in user units of one
+/// revolution made from the manual's position units per revolution; while it holds that
+/// velocity its actual position advances one revolution in the manual's units per second of
+/// the bus's clock (DC time, read with the position in the same telemetry snapshot, 300
+/// cycles apart) — which holds only if the master's velocity unit and the emulated drive's are
+/// both the manual's. No wall-clock time enters: a loaded machine's late cycles move the drive
+/// for longer and the DC time with it.
 fn check_units_emulated(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) -> Vec<String> {
     let mut bad = Vec::new();
     if drives::by_key(drive).is_none() {
@@ -1626,7 +1629,7 @@ fn check_units_emulated(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) -> 
         "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"{drive}\"]\n\
          loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csv\"\n\
          units = {{ name = \"rev\", counts_per_unit = {per_rev} }}\n\
-         program = [{{ step = \"ramp\", velocity = 1, acceleration = 100, hold = 0.5 }}, \
+         program = [{{ step = \"ramp\", velocity = 1, acceleration = 100, hold = 30 }}, \
          {{ step = \"ramp\", velocity = 0, acceleration = 100 }}]\n"
     );
     let cfg = ecdrive::app::config::parse(&text, "units.toml").unwrap_or_else(|e| panic!("{e}"));
@@ -1648,27 +1651,36 @@ fn check_units_emulated(drive: &str, facts: &[Fact], gaps: &mut Vec<String>) -> 
                 .all(|a| a.state == Some(State::OperationEnabled))
         })
         .map_err(e)?;
-        let p0 = m.telemetry().axes[0].position_actual;
         m.command(Command::RunProgram(Axes::All)).map_err(e)?;
-        m.wait_until("the program", guard, |t| {
-            t.axes
-                .iter()
-                .all(|a| !a.program_running && a.program_step >= 1)
+        // Past the ramp up (10 ms at 100 rev/s²) and the drive's answer to it.
+        let start = m.telemetry().cycle.cycle;
+        m.wait_until("the ramp up", guard, |t| t.cycle.cycle >= start + 100)
+            .map_err(e)?;
+        let a = m.telemetry().clone();
+        let from = a.cycle.cycle;
+        m.wait_until("300 cycles at 1 rev/s", guard, |t| {
+            t.cycle.cycle >= from + 300
         })
         .map_err(e)?;
-        // Standing still again: the actual velocity back at 0.
-        m.wait_until("standstill", guard, |t| t.axes[0].velocity_actual == 0)
-            .map_err(e)?;
-        let p1 = m.telemetry().axes[0].position_actual;
+        let b = m.telemetry().clone();
         let _ = m.stop(StopKind::Ramp);
-        Ok((p1 - p0) as f64 / per_rev)
+        let holding = |t: &ecdrive::master::Telemetry| {
+            t.axes[0].program_running && t.axes[0].program_step == 0
+        };
+        if !(holding(&a) && holding(&b)) {
+            return Err("the program did not hold 1 rev/s over the measurement".into());
+        }
+        let revs = (b.axes[0].position_actual - a.axes[0].position_actual) as f64 / per_rev;
+        let seconds = b.cycle.dc_time.saturating_sub(a.cycle.dc_time) as f64 * 1e-9;
+        Ok(revs / seconds)
     })();
-    // 0.5 s at 1 rev/s, and the two ramps at 100 rev/s² (0.005 rev each).
-    let want = 0.51;
+    // 1 rev/s; the position and the DC time of a snapshot may be one cycle apart (1 ms of
+    // 300): 1 %.
+    let want = 1.0;
     match moved {
         Ok(moved) if (moved - want).abs() > 0.01 => bad.push(format!(
-            "{drive} (emulated) [{id}]: 1 rev/s for 0.5 s moved {moved:.4} rev (the manual's \
-             {per_rev} units per revolution), not {want}"
+            "{drive} (emulated) [{id}]: at 1 rev/s the position advanced {moved:.4} rev per \
+             second of DC time (the manual's {per_rev} units per revolution), not {want}"
         )),
         Ok(_) => {}
         Err(e) => bad.push(format!("{drive} (emulated) [{id}]: the run: {e}")),

@@ -695,7 +695,10 @@ fn soem_drives_the_transitions_the_manuals_list() {
         }
     }
     eprintln!("not set up: {unset:#?}");
-    eprintln!("faults reset between cases ([position, 0x603F]): {}", v["faults"]);
+    eprintln!(
+        "faults reset between cases ([position, 0x603F]): {}",
+        v["faults"]
+    );
     assert!(wrong.is_empty(), "{wrong:#?}");
     for d in drives {
         let n = checked.get(d).copied().unwrap_or(0);

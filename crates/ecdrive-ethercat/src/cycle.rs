@@ -4,8 +4,9 @@
 //! Per cycle: sleep until the instant (`clock_nanosleep`, absolute), exchange the process data
 //! (`tx_rx_dc`, pumped inline by [`exec::exchange`]: the frame I/O is this thread's own), check
 //! the working counter and every drive's AL state, read each drive's inputs through its
-//! resolved fields, take commands, run the set-point program, step the [`cia402::Axis`], write
-//! the outputs, publish telemetry and events. After start-up nothing here allocates, locks
+//! resolved fields, take commands, step each axis of the motion runtime
+//! ([`ecdrive_motion::MotionAxis`]: the program, homing, the profile modes, the probes, the
+//! stops and the CiA 402 engine), write the outputs, publish telemetry and events. After start-up nothing here allocates, locks
 //! anything another thread takes, or makes a syscall other than the frame I/O and the sleep —
 //! `tests/cycle_audit.rs` proves it with a counting allocator and per-thread syscall counters.
 //!
@@ -14,49 +15,29 @@
 //! leaves OP: ramp (or quick stop), then disable. Ending the cycle hands the bus back to the
 //! session, which takes the drives to INIT.
 
-use super::app::{AppAxis, AppCycle, CycleApp, SetpointLimits};
+use super::app::{AppAxis, AppCycle, CycleApp};
 use super::exec::{self, ExchangeError};
 use super::io::{FrameLink, Pump};
-use super::program::{ProbeEdge, RunMode, Runner, Step, Tick};
+use super::program::ProbeEdge;
 use super::record::{CycleSample, RecordTx};
-use super::setpoint::Sample;
 use super::startup::{ConfiguredDrive, ConfiguredIo, DriveFields, Group};
 use super::telemetry::{
-    AxisTelemetry, Command, CycleTelemetry, DriveTask, Event, EventKind, IO_TELEMETRY_BYTES,
-    IoTelemetry, Phase, ProbeState, StopKind, StopReason, Telemetry,
+    AxisTelemetry, Command, CycleTelemetry, Event, EventKind, IO_TELEMETRY_BYTES, IoTelemetry,
+    Phase, StopKind, StopReason, Telemetry,
 };
 use super::wkc::{DatagramWkc, WkcPlan};
-use crate::cia402::{
-    self, Axis, AxisConfig, AxisStatus, Feedback, ModeSwitchPhase, OperationMode, Output, State,
-    StatusWord,
-};
+use crate::cia402::{Feedback, OperationMode, Output, State};
 use crate::ec::register;
 use crate::pdo;
 use crate::rt::{LatencyHistogram, RtReport, RtSettings, monotonic_ns, sleep_until_ns};
+use ecdrive_motion::{
+    AxisSetup, EventSink, Inputs, MotionAxis, ProbeObjects, Requests, StepContext,
+};
+pub use ecdrive_motion::{DRIVE_FE_STUCK_CYCLES, FEEDBACK_PULSES, SetpointSteps};
 use ethercrab::subdevice_group::{HasDc, SafeOp};
 use ethercrab::{Command as EcCommand, MainDevice, SubDeviceState};
 use std::pin::pin;
 use std::time::Duration;
-
-/// How the master matches a position actual value with the demand it answers, by SYNC0 pulse.
-/// SYNC0 fires at whole multiples of the cycle in DC system time (ethercrab rounds the first
-/// pulse so), so the frame that passed the reference clock at DC time `t` came after pulse
-/// `t / cycle`. The demand a frame carries is taken by the drives at the next pulse; the
-/// position a frame reads was sampled at the last pulse and answers the demand taken at the
-/// pulse before. So the position read by a frame after pulse `s` answers the demand carried by
-/// the frame after pulse `s − 2`: on time, that is the demand computed three cycles earlier
-/// (computed after the exchange of cycle k, carried by the frame of cycle k+1, taken at pulse
-/// k+2, reported at pulse k+3). A frame late enough to cross a pulse changes that count by one;
-/// matching by pulse keeps the error free of it. A drive whose position loop adds its own
-/// delay shows it as a constant part of the error at constant speed.
-pub const FEEDBACK_PULSES: u64 = 2;
-
-/// Demands remembered per axis, with the pulse after which their frame passed.
-const CARRIED: usize = 4;
-
-/// Cycles of motion in csp (the position demand changed) with a master-side following error
-/// other than 0, after which a 0x60F4 that never left 0 is flagged ([`EventKind::DriveFollowingErrorStuck`]).
-pub const DRIVE_FE_STUCK_CYCLES: u32 = 500;
 
 /// Settings of the cycle.
 #[derive(Debug, Clone, PartialEq)]
@@ -288,153 +269,6 @@ pub struct FrameStats {
     pub seconds: f64,
 }
 
-/// Largest cycle-to-cycle changes of the set-points sent to one axis while it was enabled.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct SetpointSteps {
-    /// Target position (0x607A), position units, while in csp.
-    pub position: i64,
-    /// Target velocity (0x60FF), drive velocity units, while in csv.
-    pub velocity: i64,
-    /// Target torque (0x6071), drive torque units, while in cst.
-    pub torque: i64,
-    /// Cycle numbers at which each maximum happened (position, velocity, torque).
-    pub at_cycle: [u64; 3],
-}
-
-/// Controlled-stop progress of one axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Stopping {
-    No,
-    /// Ramping the set-point to standstill from this sample, started at this good cycle
-    /// (the ramp's clock, like the program's, runs on cycles with a reply) and at this cycle
-    /// (for the timeout).
-    Ramp {
-        from: Sample,
-        at: u64,
-        since: u64,
-    },
-    /// Quick stop requested at this cycle.
-    Quick {
-        at: u64,
-    },
-    /// Disable requested.
-    Disabling,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ProgramState {
-    Idle,
-    Pending,
-    Running,
-}
-
-/// **\[REC\]** How long a program's home step may take before it counts as failed: two
-/// minutes (a search over a long axis at creep speed), whatever the cycle time.
-const HOMING_TIMEOUT: Duration = Duration::from_secs(120);
-
-/// Where a program's `home` step is.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum HomeRun {
-    /// No home step running.
-    Idle,
-    /// hm requested; waiting for the drive to confirm it.
-    ToHm,
-    /// Homing (controlword bit 4 through [`cia402::Homing`]).
-    Running { method: i8 },
-    /// Homed; back to the program's mode requested.
-    Back,
-}
-
-/// A pp, pv or tq step the drive runs (the step is the runner's step `index`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum DriveRun {
-    /// None running.
-    Idle,
-    /// pp: `given` targets handed to the handshake engine; `settled` cycles with nothing in
-    /// flight; `reached` the drive reported the targets given so far reached.
-    Pp {
-        index: usize,
-        given: usize,
-        settled: u32,
-        reached: bool,
-        since: u64,
-    },
-    /// pv or tq: the target went out at good cycle `since` (`None`: the axis is not yet
-    /// taking it).
-    Profile { index: usize, since: Option<u64> },
-}
-
-/// What the application's callback ([`AppAxis`]) asked of an axis in one cycle, with a
-/// homing a command asked for.
-#[derive(Debug, Clone, Copy, Default)]
-struct Requests {
-    setpoint: Option<f64>,
-    mode: Option<RunMode>,
-    home: Option<i8>,
-    pp: Option<(f64, bool, bool)>,
-    probe: Option<(u8, ProbeEdge)>,
-}
-
-impl Requests {
-    /// The callback's requests of this cycle.
-    fn of(app: &AppAxis) -> Self {
-        Self {
-            setpoint: app.setpoint,
-            mode: app.mode_request,
-            home: app.home_request,
-            pp: app.pp_request,
-            probe: app.probe_request,
-        }
-    }
-}
-
-/// One touch probe as the cycle drives it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum ProbeArm {
-    /// Not armed.
-    Off,
-    /// The probe's function bits go 0 for one cycle (a drive latches again only after its
-    /// sample bit was cleared), then it is armed.
-    Rearm(ProbeEdge),
-    /// Armed on `edge`; `clear` once the drive's stored bit was seen 0 since (a bit still
-    /// set from an earlier latch is not this one).
-    Armed { edge: ProbeEdge, clear: bool },
-    /// Latched and reported; the drive keeps the value (first-event mode).
-    Latched { edge: ProbeEdge, position: i64 },
-}
-
-impl ProbeArm {
-    /// This probe's bits of 0x60B8 (`base` 0 for probe 1, 8 for probe 2): enable, first event,
-    /// the probe input, the edge's sample bit.
-    fn function_bits(self, base: u16) -> u16 {
-        let edge = match self {
-            Self::Off | Self::Rearm(_) => return 0,
-            Self::Armed { edge, .. } | Self::Latched { edge, .. } => edge,
-        };
-        let sample = match edge {
-            ProbeEdge::Rising => 1 << 4,
-            ProbeEdge::Falling => 1 << 5,
-        };
-        (1 | sample) << base
-    }
-}
-
-/// **\[REC\]** How long a pp step may take, and a pv step beyond its own time, before it
-/// counts as failed (the drive never reported its target reached): two minutes, as a homing.
-const DRIVE_STEP_TIMEOUT_S: f64 = 120.0;
-
-/// **\[REC\]** The longest a tq step waits, beyond twice its ramp down, for the drive to
-/// report the torque back near 0 (2 % of the step's torque).
-const TQ_SETTLE_MAX_S: f64 = 1.0;
-
-/// Touch-probe latches a run keeps per axis (more are still reported as events).
-const PROBE_LATCHES: usize = 16;
-
-/// **\[REC\]** Cycles with nothing in flight and statusword bit 10 set before a pp target
-/// counts as reached: the round trip of the last handshake (as [`cia402::profile_velocity`]'s
-/// settling).
-const PP_SETTLE_CYCLES: u32 = 3;
-
 /// Where the drives stand on the way to OP.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum OpState {
@@ -485,7 +319,7 @@ struct Emitter<'a> {
     first_stop: Option<StopReason>,
 }
 
-impl Emitter<'_> {
+impl EventSink for Emitter<'_> {
     fn emit(&mut self, kind: EventKind) {
         if let EventKind::Stopping { reason } = kind
             && self.first_stop.is_none()
@@ -500,160 +334,44 @@ impl Emitter<'_> {
     }
 }
 
-/// What every axis's step of one cycle shares.
-#[derive(Debug, Clone, Copy)]
-struct StepContext {
-    /// The cycle number.
-    cycle: u64,
-    /// Cycles with a reply so far: the clock of the programs and the stop ramps.
-    tick: u64,
-    /// The cycle time in seconds.
-    dt: f64,
-    /// The SYNC0 pulse the frame of this cycle came after (see [`FEEDBACK_PULSES`]).
-    pulse: u64,
-    /// The run is stopping.
-    ending: bool,
-    /// Whether any axis was energised or running a program as of the last cycle.
-    any_energised_before: bool,
-    stop_ramp_cycles: u64,
-    stop_timeout_cycles: u64,
-}
-
-/// One axis in the cycle: its engine, its place in the process image, its program and what
-/// the cycle remembers of it.
+/// One drive on the segment: its place in the process image, what the bus side remembers of
+/// it, and its axis of the motion runtime.
 struct AxisRt {
     /// Position on the segment (index in the group).
     sub: usize,
-    axis: Axis,
     fields: DriveFields,
-    velocity_unit: f64,
-    runner: Runner,
-    program: ProgramState,
-    /// The home step's homing engine and where the step is.
-    homing: cia402::Homing,
-    home: HomeRun,
-    /// How the drive's manual names a failed homing ([`cia402::DriveCaps::homing_failure`]).
-    homing_failure: &'static str,
-    /// The pp/pv/tq step the drive runs, and the engines of those modes.
-    drive_run: DriveRun,
-    pp: cia402::ProfilePosition,
-    pv: cia402::ProfileVelocity,
-    tq: cia402::ProfileTorque,
-    /// The homing the application started (its method), what it asked stands as, and pp
-    /// targets of the application in flight (with cycles settled, as a pp step counts them).
-    home_by_app: Option<i8>,
-    app_task: DriveTask,
-    app_pp: Option<u32>,
-    /// A homing a command ([`Command::Home`]) asked for since the last cycle: taken as the
-    /// application's request is (pp targets and probes of commands are taken at once).
-    home_commanded: Option<i8>,
-    /// Touch probes 1 and 2.
-    probes: [ProbeArm; 2],
-    /// 0x60B9 and 0x60BA–0x60BD as read this cycle (0 where not mapped).
-    probe_status: u16,
-    probe_positions: [i32; 4],
-    /// 0x60B8 to write (once a probe was armed).
-    probe_function: Option<u16>,
-    /// Set-point held when no program runs (position/velocity/torque by mode).
-    hold: Sample,
-    mode: RunMode,
-    requested_mode: Option<RunMode>,
-    fe_limit: Option<u32>,
-    /// 0x60F4 was seen other than 0 while the axis moved in csp.
-    fe_drive_alive: bool,
-    /// The master judged the following error in this cycle's step (energised in csp): the
-    /// recording shows it only then. Cleared once recorded.
-    fe_judged: bool,
-    /// Cycles of motion in csp with 0x60F4 at 0 while it was never seen otherwise.
-    fe_drive_zero_cycles: u32,
-    stopping: Stopping,
-    pos_raw: i32,
-    pos: i64,
-    pos_valid: bool,
-    /// (pulse, demand carried) of the last frames with a reply, see [`FEEDBACK_PULSES`].
-    carried: [(u64, i64); CARRIED],
-    carried_next: usize,
-    /// The demand computed in the last cycle: the next frame carries it.
-    last_demand: Option<i64>,
     counter: u8,
     al_state: u8,
-    tel: AxisTelemetry,
-    last_state: Option<State>,
-    states: Vec<State>,
-    modes_run: Vec<OperationMode>,
-    /// The touch-probe latches of the run (at most [`PROBE_LATCHES`] kept).
-    latches: Vec<(u8, ProbeEdge, i64)>,
-    steps: SetpointSteps,
-    last_out: Option<(i32, i32, i16)>,
     /// This cycle's inputs, read before the application runs.
     fb: Option<Feedback>,
-    /// What the application's set-points must keep.
-    limits: SetpointLimits,
+    m: MotionAxis,
 }
 
 impl AxisRt {
     /// The axis of drive `d` (set-up: allocations allowed), or `None` if its engine cannot be
     /// built.
     fn new(d: &ConfiguredDrive, cycle: Duration) -> Option<Self> {
-        let caps = d.profile.caps;
-        let initial = OperationMode::from_i8(d.setup.mode.code());
-        let axis = Axis::new(caps, AxisConfig::for_cycle_time(&caps, cycle, initial))
-            .or_else(|_| {
-                let csp = OperationMode::CyclicSyncPosition;
-                Axis::new(caps, AxisConfig::for_cycle_time(&caps, cycle, csp))
-            })
-            .ok()?;
+        let pf = &d.fields.probe;
+        let setup = AxisSetup {
+            caps: d.profile.caps,
+            velocity_unit: d.profile.units.velocity_position_per_s(),
+            program: d.setup.program.clone(),
+            mode: d.setup.mode,
+            following_error_limit: d.setup.following_error_limit,
+            limits: d.setup.limits,
+            probe_objects: ProbeObjects {
+                function: pf.function.is_some(),
+                status: pf.status.is_some(),
+                positions: pf.positions.map(|p| p.is_some()),
+            },
+        };
         Some(Self {
             sub: usize::from(d.info.position),
-            axis,
             fields: d.fields.clone(),
-            velocity_unit: d.profile.units.velocity_position_per_s(),
-            runner: Runner::new(d.setup.program.clone(), d.setup.mode),
-            program: ProgramState::Idle,
-            homing: cia402::Homing::new(cia402::HomingConfig {
-                timeout_cycles: u32::try_from(HOMING_TIMEOUT.as_nanos() / cycle.as_nanos().max(1))
-                    .unwrap_or(u32::MAX),
-                ..cia402::HomingConfig::default()
-            }),
-            home: HomeRun::Idle,
-            homing_failure: caps.homing_failure,
-            drive_run: DriveRun::Idle,
-            pp: cia402::ProfilePosition::default(),
-            pv: cia402::ProfileVelocity::new(false),
-            tq: cia402::ProfileTorque::new(),
-            home_by_app: None,
-            app_task: DriveTask::Idle,
-            home_commanded: None,
-            app_pp: None,
-            probes: [ProbeArm::Off; 2],
-            probe_status: 0,
-            probe_positions: [0; 4],
-            probe_function: None,
-            hold: Sample::default(),
-            mode: d.setup.mode,
-            requested_mode: None,
-            fe_limit: d.setup.following_error_limit,
-            fe_drive_alive: false,
-            fe_judged: false,
-            fe_drive_zero_cycles: 0,
-            stopping: Stopping::No,
-            pos_raw: 0,
-            pos: 0,
-            pos_valid: false,
-            carried: [(u64::MAX, 0); CARRIED],
-            carried_next: 0,
-            last_demand: None,
             counter: 0,
             al_state: 0,
-            tel: AxisTelemetry::default(),
-            last_state: None,
-            states: Vec::with_capacity(64),
-            modes_run: Vec::with_capacity(8),
-            latches: Vec::with_capacity(PROBE_LATCHES),
-            steps: SetpointSteps::default(),
-            last_out: None,
             fb: None,
-            limits: d.setup.limits,
+            m: MotionAxis::new(&setup, cycle)?,
         })
     }
 
@@ -683,1317 +401,45 @@ impl AxisRt {
     fn below_op(&mut self, out: &mut [u8]) {
         self.fields.axis.write_disable_voltage(out);
         self.count(out);
-        self.tel.state = None;
-        self.tel.al_state = self.al_state;
+        self.m.below_op();
+        self.m.telemetry_mut().al_state = self.al_state;
     }
 
-    /// Read this cycle's inputs (the frame just exchanged carried the demand of the last
-    /// cycle): the feedback for the engine, the unwrapped position and the telemetry.
+    /// Read this cycle's inputs from the process image into the motion axis.
     fn read_inputs(&mut self, inputs: &[u8], pulse: u64) -> Feedback {
-        if let Some(d) = self.last_demand {
-            self.carried[self.carried_next] = (pulse, d);
-            self.carried_next = (self.carried_next + 1) % CARRIED;
-        }
         let pf = &self.fields.probe;
-        self.probe_status = pdo::axis::read(pf.status, inputs).unwrap_or(0) as u16;
-        for (v, f) in self.probe_positions.iter_mut().zip(pf.positions) {
-            *v = pdo::axis::read(f, inputs).unwrap_or(0) as i32;
-        }
         let b = &self.fields.axis;
-        let fb = b.feedback(inputs);
-        if let Some(p) = fb.position {
-            if self.pos_valid {
-                self.pos += i64::from(p.wrapping_sub(self.pos_raw));
-            } else {
-                self.pos = i64::from(p);
-                self.pos_valid = true;
-            }
-            self.pos_raw = p;
-        }
-        let t = &mut self.tel;
-        t.statusword = fb.statusword.raw();
-        t.position_actual = self.pos;
-        t.velocity_actual = fb.velocity.unwrap_or(0);
-        t.torque_actual = fb.torque.unwrap_or(0);
-        t.mode_display = fb.mode_display.map_or(0, OperationMode::as_i8);
-        t.error_code = fb.error_code.map_or(0, |e| e.0);
-        t.following_error_drive = b.following_error(inputs);
-        fb
-    }
-
-    /// The actual values as a set-point sample.
-    fn actual(&self) -> Sample {
-        Sample {
-            pos: self.pos as f64,
-            vel: self.tel.velocity_actual as f64 * self.velocity_unit,
-            acc: 0.0,
-            torque: f64::from(self.tel.torque_actual),
-            done: false,
-        }
-    }
-
-    /// One cycle with a reply in OP: inputs → program and stop ramp → engine → outputs, with
-    /// the engine's events, the set-point statistics, the following error and the telemetry.
-    fn step(
-        &mut self,
-        i: usize,
-        fb: Feedback,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-        app: Option<&AppAxis>,
-    ) -> Output {
-        let actual = self.actual();
-        let st = self.axis.status();
-        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-        if self.program == ProgramState::Pending && enabled {
-            self.runner.seed(actual);
-            self.program = ProgramState::Running;
-            ev.emit(EventKind::ProgramStep {
-                axis: i as u16,
-                step: self.runner.step_index() as u16,
-            });
-        }
-        let mut sp = self.stop_setpoint(&st, enabled, ctx);
-        if self.stopping == Stopping::No && self.program == ProgramState::Running && enabled {
-            if let Some(s) = self.program_setpoint(i, &st, actual, ctx, ev) {
-                sp = s;
-            }
-        }
-        let mut req = app.map(Requests::of).unwrap_or_default();
-        req.home = req.home.or(self.home_commanded.take());
-        if let Some(s) = self.app_requests(i, &req, &st, enabled, ctx, ev) {
-            sp = s;
-        }
-        if let Some((probe, edge)) = req.probe
-            && let Err(why) = self.arm_probe(probe, edge)
-        {
-            ev.emit(EventKind::CommandRefused {
-                axis: i as u16,
-                why,
-            });
-        }
-        if enabled {
-            self.command(sp, &st);
-            let m = st.active_mode;
-            if self.modes_run.last() != Some(&m) && self.modes_run.len() < self.modes_run.capacity()
-            {
-                self.modes_run.push(m);
-            }
-        } else if self.stopping == Stopping::No {
-            // Not enabled: track the actual values so enabling starts without a jump.
-            self.hold = actual;
-        }
-        if matches!(self.home, HomeRun::Running { .. }) {
-            self.homing.step(&mut self.axis, fb.statusword);
-        }
-        self.profile_mode(i, fb.statusword, actual, ctx, ev);
-        self.probe(i, ev);
-        self.tel.task = self.app_task;
-        for (t, p) in self.tel.probes.iter_mut().zip(self.probes) {
-            *t = match p {
-                ProbeArm::Off => ProbeState::Off,
-                ProbeArm::Rearm(edge) | ProbeArm::Armed { edge, .. } => ProbeState::Armed(edge),
-                ProbeArm::Latched { edge, position } => ProbeState::Latched { edge, position },
-            };
-        }
-        let out = self.axis.step(&fb);
-        self.engine_events(i, actual, ctx, ev);
-        self.record_steps(&out, enabled, ctx.cycle);
-        self.follow(i, &out, ctx, ev);
-        out
-    }
-
-    /// What the application asked of the axis this cycle: a mode switch (through the engine),
-    /// and a set-point, taken in Operation enabled with no program running and within the
-    /// limits; a set-point beyond them stops the axis with a ramp and names the limit.
-    fn app_requests(
-        &mut self,
-        i: usize,
-        app: &Requests,
-        st: &AxisStatus,
-        enabled: bool,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-    ) -> Option<Sample> {
-        if let Some(m) = app.mode
-            && st.active_mode.as_i8() != m.code()
-            && st.mode_switch == ModeSwitchPhase::Idle
-            && self
-                .axis
-                .request_mode(OperationMode::from_i8(m.code()))
-                .is_err()
-        {
-            ev.emit(EventKind::CommandRefused {
-                axis: i as u16,
-                why: "the application's mode switch was refused",
-            });
-        }
-        if let Some(sp) = self.app_home(i, app.home, st, enabled, ctx, ev) {
-            return Some(sp);
-        }
-        let free =
-            enabled && self.stopping == Stopping::No && self.program != ProgramState::Running;
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
-        if let Some((target, relative, immediate)) = app.pp
-            && let Err((report, why)) = self.take_pp(target, relative, immediate)
-            && report
-        {
-            ev.emit(EventKind::CommandRefused {
-                axis: i as u16,
-                why,
-            });
-        }
-        let v = app.setpoint?;
-        if !free {
-            return None;
-        }
-        match self
-            .limits
-            .check(mode, v, (self.hold.pos, self.hold.vel), ctx.dt)
-        {
-            Ok((vel, acc)) => {
-                let sp = match mode {
-                    RunMode::Csp => Sample {
-                        pos: v,
-                        vel,
-                        acc,
-                        ..self.hold
-                    },
-                    RunMode::Csv => Sample {
-                        pos: self.hold.pos + v * ctx.dt,
-                        vel: v,
-                        acc,
-                        ..self.hold
-                    },
-                    RunMode::Cst => Sample {
-                        torque: v,
-                        ..self.hold
-                    },
-                    // The drive generates the motion in the profile modes: pv and tq take the
-                    // target and ramp to it; pp targets come through `request_pp`.
-                    RunMode::Pv => {
-                        self.pv.set_target(self.drive_velocity(v));
-                        return None;
-                    }
-                    RunMode::Tq => {
-                        self.tq.set_target(drive_torque(v));
-                        return None;
-                    }
-                    RunMode::Pp => return None,
-                };
-                self.hold = sp;
-                Some(sp)
-            }
-            Err((limit, value, max)) => {
-                ev.emit(EventKind::SetpointLimit {
-                    axis: i as u16,
-                    limit,
-                    value,
-                    max,
-                });
-                self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                None
-            }
-        }
-    }
-
-    /// A pp target of the application or a command, handed to the handshake engine: taken in
-    /// pp, in Operation enabled with no program, stop or pp step running. `Err((report, why))`
-    /// when not taken; `report` is false for "not now" (the callback may ask every cycle).
-    fn take_pp(
-        &mut self,
-        target: f64,
-        relative: bool,
-        immediate: bool,
-    ) -> Result<(), (bool, &'static str)> {
-        let st = self.axis.status();
-        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
-        if !enabled || self.stopping != Stopping::No {
-            return Err((false, "pp target refused: the axis is not enabled"));
-        }
-        if self.program == ProgramState::Running || self.drive_run != DriveRun::Idle {
-            return Err((false, "pp target refused: a program runs on the axis"));
-        }
-        if mode != RunMode::Pp {
-            return Err((false, "pp target refused: the axis is not in pp"));
-        }
-        if !(target.is_finite() && target.abs() <= f64::from(i32::MAX)) {
-            return Err((
-                true,
-                "pp target refused: not a finite position within ±2^31 counts",
-            ));
-        }
-        if let Some(range) = self.axis.caps().pp_target_range
-            && !range.contains(target.round() as i64)
-        {
-            return Err((
-                true,
-                "pp target refused: beyond the range the drive's manual gives for 0x607A in pp",
-            ));
-        }
-        self.pp.set_halt(false);
-        let sp = cia402::SetPoint {
-            target: target.round() as i32,
-            relative,
-            immediate,
+        let read = Inputs {
+            feedback: b.feedback(inputs),
+            probe_status: pdo::axis::read(pf.status, inputs).unwrap_or(0) as u16,
+            probe_positions: pf
+                .positions
+                .map(|f| pdo::axis::read(f, inputs).unwrap_or(0) as i32),
+            following_error_drive: b.following_error(inputs),
         };
-        if self.pp.push(sp).is_err() {
-            return Err((true, "pp target refused: the queue of targets is full"));
-        }
-        self.app_pp = Some(0);
-        self.app_task = DriveTask::Positioning { queued: 1 };
-        Ok(())
-    }
-
-    /// The homing the application asked for ([`AppAxis::request_home`]): started in
-    /// Operation enabled with no program or homing running, then run as a program's home step
-    /// is ([`AxisRt::home_step`]); while it runs the held set-point follows the actual one
-    /// (returned). Its end, or a stop that cut it short, is what [`AppAxis::task`] says.
-    fn app_home(
-        &mut self,
-        i: usize,
-        request: Option<i8>,
-        st: &AxisStatus,
-        enabled: bool,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-    ) -> Option<Sample> {
-        let actual = self.actual();
-        let method = match (self.home_by_app, request) {
-            (Some(m), _) if self.home == HomeRun::Idle => {
-                // Cut short (a stop, a disable, a fault) since the last cycle.
-                self.home_by_app = None;
-                self.app_task = DriveTask::HomingFailed { method: m };
-                return None;
-            }
-            (Some(m), _) => m,
-            (None, Some(m))
-                if enabled
-                    && self.stopping == Stopping::No
-                    && self.program != ProgramState::Running
-                    && self.home == HomeRun::Idle =>
-            {
-                self.home_by_app = Some(m);
-                self.app_task = DriveTask::Homing { method: m };
-                m
-            }
-            _ => return None,
-        };
-        let was_back = self.home == HomeRun::Back;
-        self.home_step(i, method, st, actual, ctx, ev);
-        if self.home == HomeRun::Idle {
-            self.home_by_app = None;
-            self.app_task = if was_back {
-                DriveTask::Homed { method }
-            } else {
-                DriveTask::HomingFailed { method }
-            };
-        }
-        self.hold = actual;
-        Some(actual)
-    }
-
-    /// The set-point of a controlled stop (ramp to standstill, or waiting out a quick stop),
-    /// or the one held.
-    fn stop_setpoint(&mut self, st: &AxisStatus, enabled: bool, ctx: &StepContext) -> Sample {
-        match self.stopping {
-            Stopping::Ramp { from, at, since } => {
-                let k = ctx.tick.saturating_sub(at) as f64 / ctx.stop_ramp_cycles as f64;
-                // In pp and pv the drive brakes on its own deceleration (halt, target 0),
-                // which may take longer than the master's ramp: disable once it stands still
-                // (`supervise_stop` still disables at the stop timeout).
-                let drive_brakes = RunMode::from_code(st.active_mode.as_i8())
-                    .is_some_and(|m| matches!(m, RunMode::Pp | RunMode::Pv));
-                let braking = enabled
-                    && drive_brakes
-                    && !st.standstill
-                    && ctx.cycle.saturating_sub(since) <= ctx.stop_timeout_cycles;
-                let sp = if (k >= 1.0 && !braking) || !enabled {
-                    self.axis.request_disable();
-                    self.stopping = Stopping::Disabling;
-                    Sample {
-                        vel: 0.0,
-                        torque: 0.0,
-                        ..from
-                    }
-                } else {
-                    // Linear velocity (and torque) ramp to zero; position integrates.
-                    let t = ctx.tick.saturating_sub(at) as f64 * ctx.dt;
-                    let total = ctx.stop_ramp_cycles as f64 * ctx.dt;
-                    Sample {
-                        pos: from.pos + from.vel * (t - t * t / (2.0 * total)),
-                        vel: from.vel * (1.0 - k),
-                        acc: 0.0,
-                        torque: from.torque * (1.0 - k),
-                        done: false,
-                    }
-                };
-                self.hold = sp;
-                sp
-            }
-            Stopping::Quick { at } => {
-                // Disable once the quick stop has run: the drive left Quick stop active
-                // (option codes ending in Switch on disabled), or stands still in it.
-                let in_qs = st.state == Some(State::QuickStopActive);
-                let done = ctx.cycle - at > 2 && (!in_qs || st.standstill);
-                if done || ctx.cycle - at > ctx.stop_timeout_cycles {
-                    self.axis.request_disable();
-                    self.stopping = Stopping::Disabling;
-                }
-                self.hold
-            }
-            Stopping::Disabling | Stopping::No => self.hold,
-        }
-    }
-
-    /// One tick of the running program: its set-point (`None`: hold), a mode switch it asks
-    /// for, or its end.
-    fn program_setpoint(
-        &mut self,
-        i: usize,
-        st: &AxisStatus,
-        actual: Sample,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-    ) -> Option<Sample> {
-        let mut sp = None;
-        match self.runner.tick(ctx.tick as f64 * ctx.dt) {
-            Tick::Setpoint(s) => {
-                sp = Some(s);
-                self.hold = s;
-            }
-            Tick::SwitchMode(m) => {
-                let idle = st.mode_switch == ModeSwitchPhase::Idle;
-                if idle && st.active_mode.as_i8() == m.code() {
-                    // Already in that mode (a run begins by asking for its start mode): no
-                    // switch, no event; go on at once.
-                    self.requested_mode = None;
-                    self.runner.mode_switched(actual);
-                } else if idle {
-                    // Nothing under way (also when an earlier request of this run was cut
-                    // short): ask for it.
-                    self.requested_mode = Some(m);
-                    if self
-                        .axis
-                        .request_mode(OperationMode::from_i8(m.code()))
-                        .is_err()
-                    {
-                        self.requested_mode = None;
-                        ev.emit(EventKind::CommandRefused {
-                            axis: i as u16,
-                            why: "the program's mode switch was refused",
-                        });
-                        self.program = ProgramState::Idle;
-                    }
-                }
-                // Else a switch is under way: its ModeSwitched event (or the next look at the
-                // active mode) lets the program go on.
-            }
-            Tick::Finished(s) => {
-                sp = Some(s);
-                self.hold = s;
-                self.program = ProgramState::Idle;
-                ev.emit(EventKind::ProgramDone { axis: i as u16 });
-            }
-            Tick::Drive { index } => {
-                if self.drive_run == DriveRun::Idle {
-                    self.drive_run = match self.runner.steps().get(index) {
-                        Some(Step::Pp { .. }) => {
-                            self.pp.set_halt(false);
-                            DriveRun::Pp {
-                                index,
-                                given: 0,
-                                settled: 0,
-                                reached: false,
-                                since: ctx.tick,
-                            }
-                        }
-                        _ => DriveRun::Profile { index, since: None },
-                    };
-                }
-                self.hold = actual;
-                sp = Some(actual);
-            }
-            Tick::Probe { probe, edge, hold } => {
-                if let Some(p) = self.probes.get_mut(usize::from(probe).saturating_sub(1)) {
-                    *p = ProbeArm::Rearm(edge);
-                }
-                sp = Some(hold);
-                self.hold = hold;
-            }
-            Tick::ProbeWait {
-                probe,
-                setpoint,
-                expired,
-            } => {
-                sp = Some(setpoint);
-                self.hold = setpoint;
-                let latched = matches!(
-                    self.probes.get(usize::from(probe).saturating_sub(1)),
-                    Some(ProbeArm::Latched { .. })
-                );
-                if latched {
-                    self.runner.probe_latched();
-                } else if expired {
-                    self.program = ProgramState::Idle;
-                    let seconds = match self.runner.steps().get(self.runner.step_index()) {
-                        Some(&Step::ProbeWait { seconds, .. }) => seconds,
-                        _ => 0.0,
-                    };
-                    ev.emit(EventKind::ProbeNotLatched {
-                        axis: i as u16,
-                        probe,
-                        seconds,
-                    });
-                    ev.emit(EventKind::Stopping {
-                        reason: StopReason::ProbeNotLatched {
-                            axis: i as u16,
-                            probe,
-                        },
-                    });
-                    // This axis stops; the run then stops the others.
-                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                }
-            }
-            Tick::Home { method } => {
-                // Homing moves the drive on its own and redefines its position: the held
-                // set-point follows the actual one, so nothing from before the home is ever
-                // commanded after it.
-                self.home_step(i, method, st, actual, ctx, ev);
-                self.hold = actual;
-                sp = Some(actual);
-            }
-        }
-        let idx = self.runner.step_index() as u16;
-        if idx != self.tel.program_step {
-            ev.emit(EventKind::ProgramStep {
-                axis: i as u16,
-                step: idx,
-            });
-        }
-        sp
-    }
-
-    /// One cycle of a `home` step: hm requested (the engine handles the zero-speed rule), the
-    /// homing run once the drive is in hm, then back to the program's mode; the program goes on
-    /// from the position homing defined. A homing error (or a run that times out or is cut
-    /// short) stops the axes, naming the drive's own report.
-    fn home_step(
-        &mut self,
-        i: usize,
-        method: i8,
-        st: &AxisStatus,
-        actual: Sample,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-    ) {
-        let idle = st.mode_switch == ModeSwitchPhase::Idle;
-        match self.home {
-            HomeRun::Idle => {
-                self.home = HomeRun::ToHm;
-                if let Err(e) = self.axis.request_mode(OperationMode::Homing) {
-                    self.home = HomeRun::Idle;
-                    self.program = ProgramState::Idle;
-                    ev.emit(EventKind::CommandRefused {
-                        axis: i as u16,
-                        why: match e {
-                            cia402::AxisError::ModeNotSupported { .. } => {
-                                "the program's home step was refused: the drive has no homing mode"
-                            }
-                            cia402::AxisError::ModeSwitchInProgress { .. } => {
-                                "the program's home step was refused: another mode switch was under way"
-                            }
-                            _ => "the program's home step was refused by the axis",
-                        },
-                    });
-                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                }
-            }
-            HomeRun::ToHm => {
-                if idle && st.active_mode == OperationMode::Homing && st.streaming {
-                    self.homing.start();
-                    self.home = HomeRun::Running { method };
-                }
-            }
-            HomeRun::Running { method } => match self.homing.outcome() {
-                None => {}
-                Some(cia402::HomingOutcome::Completed) => {
-                    self.home = HomeRun::Back;
-                    self.requested_mode = None;
-                    if self
-                        .axis
-                        .request_mode(OperationMode::from_i8(self.mode.code()))
-                        .is_err()
-                    {
-                        self.home = HomeRun::Idle;
-                        self.program = ProgramState::Idle;
-                        ev.emit(EventKind::CommandRefused {
-                            axis: i as u16,
-                            why: "the program stopped: the switch back from homing failed",
-                        });
-                        self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                    }
-                }
-                Some(outcome) => {
-                    self.home = HomeRun::Idle;
-                    self.program = ProgramState::Idle;
-                    ev.emit(EventKind::HomingFailed {
-                        axis: i as u16,
-                        method,
-                        outcome,
-                        drive_says: self.homing_failure,
-                    });
-                    ev.emit(EventKind::Stopping {
-                        reason: StopReason::HomingFailed { axis: i as u16 },
-                    });
-                    // This axis stops; the run then stops the others.
-                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                }
-            },
-            HomeRun::Back => {
-                if idle && st.active_mode.as_i8() == self.mode.code() {
-                    self.home = HomeRun::Idle;
-                    if self.home_by_app.is_none() {
-                        self.runner.drive_done(actual);
-                    }
-                    self.hold = actual;
-                }
-            }
-        }
-    }
-
-    /// Leave a home step: controlword bit 4 drops (homing interrupted), nothing stays armed
-    /// for a later run of the program.
-    fn abort_home(&mut self) {
-        if self.home != HomeRun::Idle {
-            self.homing.stop();
-            self.axis.set_mode_bits(cia402::ControlWord::empty());
-            self.home = HomeRun::Idle;
-        }
-        self.abort_drive_run();
-    }
-
-    /// Leave a pp/pv/tq step: the queue of pp targets is dropped and the move halted
-    /// (controlword bit 8, the drive's own deceleration); pv and tq go to target 0.
-    fn abort_drive_run(&mut self) {
-        if self.drive_run != DriveRun::Idle {
-            self.pp.clear();
-            self.pp.set_halt(true);
-            self.pv.set_target(0);
-            self.tq.set_target(0);
-            self.drive_run = DriveRun::Idle;
-        }
-    }
-
-    /// One cycle in a profile mode (pp, pv, tq): the running step's targets through the mode's
-    /// engine (the new-set-point handshake in pp), the step's end, and, with no step running,
-    /// what the axis holds (pp: the last target; pv: velocity 0; tq: torque 0).
-    fn profile_mode(
-        &mut self,
-        i: usize,
-        sw: StatusWord,
-        actual: Sample,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-    ) {
-        let st = self.axis.status();
-        let Some(mode) = RunMode::from_code(st.active_mode.as_i8()).filter(|m| !m.is_cyclic())
-        else {
-            // Outside the profile modes their targets are 0: entering one starts from rest.
-            self.pv.set_target(0);
-            self.tq.set_target(0);
-            return;
-        };
-        let stopping = self.stopping != Stopping::No;
-        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-        if !enabled {
-            // Nothing set before a disable, a quick stop or a fault comes back when the axis
-            // is enabled again.
-            self.pv.set_target(0);
-            self.tq.set_target(0);
-        }
-        if stopping {
-            self.abort_drive_run();
-            self.pv.set_target(0);
-            self.tq.set_target(0);
-            if self.app_pp.take().is_some() {
-                self.pp.clear();
-                self.pp.set_halt(true);
-            }
-        }
-        match (mode, self.drive_run) {
-            (RunMode::Pp, DriveRun::Pp { .. }) => self.pp_step(i, sw, actual, ctx, ev),
-            (RunMode::Pp, _) => {
-                if stopping {
-                    self.pp.set_halt(true);
-                }
-                let s = self.pp.step(&mut self.axis, sw);
-                if s.aborted && self.app_pp.take().is_some() {
-                    self.app_task = DriveTask::Idle;
-                }
-                if let Some(settled) = self.app_pp {
-                    let settled = if s.queued == 0 && s.phase == cia402::PpPhase::Idle {
-                        settled.saturating_add(1)
-                    } else {
-                        0
-                    };
-                    self.app_pp = Some(settled);
-                    self.app_task = if s.target_reached && settled >= PP_SETTLE_CYCLES {
-                        self.app_pp = None;
-                        DriveTask::TargetReached
-                    } else {
-                        DriveTask::Positioning {
-                            queued: u8::try_from(s.queued).unwrap_or(u8::MAX),
-                        }
-                    };
-                }
-            }
-            (RunMode::Pv | RunMode::Tq, DriveRun::Profile { index, since }) => {
-                let since = since.or(st.streaming.then_some(ctx.tick));
-                self.drive_run = DriveRun::Profile { index, since };
-                let t = since.map_or(0.0, |s| ctx.tick.saturating_sub(s) as f64 * ctx.dt);
-                let done = match self.runner.steps().get(index) {
-                    Some(&Step::Pv { velocity, seconds }) if mode == RunMode::Pv => {
-                        let on = since.is_none() || t < seconds;
-                        let v = self.drive_velocity(velocity);
-                        self.pv.set_target(if on { v } else { 0 });
-                        let s = self.pv.step(&mut self.axis, sw);
-                        if t > seconds + DRIVE_STEP_TIMEOUT_S {
-                            self.abort_drive_run();
-                            self.program = ProgramState::Idle;
-                            ev.emit(EventKind::CommandRefused {
-                                axis: i as u16,
-                                why: "the program stopped: the drive did not report velocity 0 \
-                                      reached within 2 minutes of the pv step's end",
-                            });
-                            self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                            return;
-                        }
-                        !on && s.streaming && s.target_reached
-                    }
-                    Some(&Step::Tq {
-                        torque,
-                        seconds,
-                        ramp,
-                    }) if mode == RunMode::Tq => {
-                        let on = since.is_none() || t < ramp + seconds;
-                        self.tq
-                            .set_target(if on { drive_torque(torque) } else { 0 });
-                        let s = self.tq.step(&mut self.axis, sw);
-                        // Done once the ramp down has had its time and the drive reports the
-                        // torque back near 0 (a drive whose slope unit differs from its
-                        // profile's takes longer), or, without that, after twice the time.
-                        let settle = f64::from(cia402::profile_velocity::SETTLE_CYCLES) * ctx.dt;
-                        let down = t >= 2.0 * ramp + seconds + settle;
-                        let near_zero = f64::from(self.tel.torque_actual).abs()
-                            <= (torque.abs() / 50.0).max(1.0);
-                        !on && s.streaming
-                            && down
-                            && (near_zero || t >= 4.0 * ramp + seconds + TQ_SETTLE_MAX_S)
-                    }
-                    _ => {
-                        // Not this mode's step (a mode switch under way): hold.
-                        self.hold_profile(mode, sw);
-                        false
-                    }
-                };
-                if done {
-                    self.drive_run = DriveRun::Idle;
-                    self.runner.drive_done(actual);
-                    self.hold = actual;
-                }
-            }
-            _ => self.hold_profile(mode, sw),
-        }
-    }
-
-    /// In pv or tq with no step running: the target the application set, else 0.
-    fn hold_profile(&mut self, mode: RunMode, sw: StatusWord) {
-        match mode {
-            RunMode::Pv => {
-                let _ = self.pv.step(&mut self.axis, sw);
-            }
-            RunMode::Tq => {
-                let _ = self.tq.step(&mut self.axis, sw);
-            }
-            _ => {}
-        }
-    }
-
-    /// One cycle of a pp step: targets into the handshake engine (a set of set-points: as the
-    /// engine's queue takes them; single set-points: each once the last is reached), the
-    /// handshake, and the step's end once the drive reports the last target reached.
-    fn pp_step(
-        &mut self,
-        i: usize,
-        sw: StatusWord,
-        actual: Sample,
-        ctx: &StepContext,
-        ev: &mut Emitter,
-    ) {
-        let DriveRun::Pp {
-            index,
-            mut given,
-            mut settled,
-            reached,
-            since,
-        } = self.drive_run
-        else {
-            return;
-        };
-        let Some(Step::Pp {
-            targets,
-            relative,
-            immediate,
-        }) = self.runner.steps().get(index)
-        else {
-            self.drive_run = DriveRun::Idle;
-            return;
-        };
-        let (relative, immediate, n) = (*relative, *immediate, targets.len());
-        if let Some(&t) = targets.get(given)
-            && (!immediate || given == 0 || reached)
-        {
-            let sp = cia402::SetPoint {
-                target: t.round().clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32,
-                relative,
-                immediate,
-            };
-            if self.pp.push(sp).is_ok() {
-                given += 1;
-            }
-        }
-        let s = self.pp.step(&mut self.axis, sw);
-        let timed_out = ctx.tick.saturating_sub(since) as f64 * ctx.dt > DRIVE_STEP_TIMEOUT_S;
-        if timed_out {
-            self.abort_drive_run();
-            self.program = ProgramState::Idle;
-            ev.emit(EventKind::CommandRefused {
-                axis: i as u16,
-                why: "the program stopped: the drive did not report its pp targets reached \
-                      within 2 minutes",
-            });
-            self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-            return;
-        }
-        if s.error.is_some() {
-            self.abort_drive_run();
-            self.program = ProgramState::Idle;
-            ev.emit(EventKind::CommandRefused {
-                axis: i as u16,
-                why: "the program stopped: the drive did not acknowledge a pp target \
-                      (statusword bit 12 stayed 0 after controlword bit 4 rose)",
-            });
-            self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-            return;
-        }
-        settled = if s.queued == 0 && s.phase == cia402::PpPhase::Idle {
-            settled.saturating_add(1)
-        } else {
-            0
-        };
-        let reached = s.target_reached && settled >= PP_SETTLE_CYCLES;
-        if given == n && reached {
-            self.drive_run = DriveRun::Idle;
-            self.runner.drive_done(actual);
-            self.hold = actual;
-            return;
-        }
-        self.drive_run = DriveRun::Pp {
-            index,
-            given,
-            settled,
-            reached,
-            since,
-        };
-    }
-
-    /// The application or a command arms a probe: taken with no program running and the
-    /// probe's objects mapped.
-    fn arm_probe(&mut self, probe: u8, edge: ProbeEdge) -> Result<(), &'static str> {
-        let pf = &self.fields.probe;
-        let slot =
-            (usize::from(probe.clamp(1, 2)) - 1) * 2 + usize::from(edge == ProbeEdge::Falling);
-        let mapped = pf.function.is_some()
-            && pf.status.is_some()
-            && pf.positions.get(slot).is_some_and(Option::is_some);
-        if !matches!(probe, 1 | 2) {
-            Err("touch probe refused: probes are 1 and 2")
-        } else if !mapped {
-            Err(
-                "touch probe refused: the mapping does not carry 0x60B8, 0x60B9 and the probe's \
-                 position object (map them with the drive's `probes`)",
-            )
-        } else if self.program == ProgramState::Running {
-            Err("touch probe refused: a program runs on the axis")
-        } else {
-            if let Some(p) = self.probes.get_mut(usize::from(probe) - 1) {
-                *p = ProbeArm::Rearm(edge);
-            }
-            Ok(())
-        }
-    }
-
-    /// The touch probes: 0x60B8 from what is armed, and a latch in 0x60B9 reported with the
-    /// position the drive latched (0x60BA–0x60BD), unwrapped like the actual position.
-    fn probe(&mut self, i: usize, ev: &mut Emitter) {
-        let status = self.probe_status;
-        let mut function = 0u16;
-        for (k, base) in [(0usize, 0u16), (1, 8)] {
-            let Some(arm) = self.probes.get(k).copied() else {
-                continue;
-            };
-            let next = match arm {
-                ProbeArm::Rearm(edge) => ProbeArm::Armed { edge, clear: false },
-                ProbeArm::Armed { edge, clear } => {
-                    let stored = base
-                        + match edge {
-                            ProbeEdge::Rising => 1,
-                            ProbeEdge::Falling => 2,
-                        };
-                    let enabled = status >> base & 1 != 0;
-                    let set = status >> stored & 1 != 0;
-                    if enabled && !set {
-                        ProbeArm::Armed { edge, clear: true }
-                    } else if enabled && set && clear {
-                        let probe = k as u8 + 1;
-                        let slot = usize::from(k as u8 * 2 + u8::from(edge == ProbeEdge::Falling));
-                        let raw = self.probe_positions.get(slot).copied().unwrap_or(0);
-                        let position = self.pos + i64::from(raw.wrapping_sub(self.pos_raw));
-                        if self.latches.len() < self.latches.capacity() {
-                            self.latches.push((probe, edge, position));
-                        }
-                        ev.emit(EventKind::ProbeLatched {
-                            axis: i as u16,
-                            probe,
-                            edge,
-                            position,
-                        });
-                        ProbeArm::Latched { edge, position }
-                    } else {
-                        arm
-                    }
-                }
-                other => other,
-            };
-            if let Some(p) = self.probes.get_mut(k) {
-                *p = next;
-            }
-            // A probe being re-armed has its bits 0 for this cycle (the drive clears what it
-            // stored), then set from the next.
-            if !matches!(arm, ProbeArm::Rearm(_)) {
-                function |= next.function_bits(base);
-            }
-        }
-        if self.probes != [ProbeArm::Off; 2] {
-            self.probe_function = Some(function);
-        }
-    }
-
-    /// A velocity in position units per second as the drive's velocity value (0x60FF),
-    /// rounded and held to its range.
-    fn drive_velocity(&self, v: f64) -> i32 {
-        (v / self.velocity_unit)
-            .round()
-            .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
-    }
-
-    /// The set-point into the engine, in the active mode.
-    fn command(&mut self, sp: Sample, st: &AxisStatus) {
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
-        self.mode = mode;
-        let _ = match mode {
-            // The drive generates the motion; `profile_mode` gives it its targets.
-            RunMode::Pp | RunMode::Pv | RunMode::Tq => Ok(()),
-            RunMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
-            RunMode::Csv => self.axis.set_velocity(self.drive_velocity(sp.vel)),
-            RunMode::Cst => self.axis.set_torque(drive_torque(sp.torque)),
-        };
-    }
-
-    /// The engine's events of this step: mode switches the program waits for, faults.
-    fn engine_events(&mut self, i: usize, actual: Sample, ctx: &StepContext, ev: &mut Emitter) {
-        while let Some(e) = self.axis.poll_event() {
-            match e {
-                cia402::Event::ModeSwitched { to, .. } => {
-                    if let Some(m) = RunMode::from_code(to.as_i8()) {
-                        self.mode = m;
-                        if self.requested_mode == Some(m) {
-                            self.requested_mode = None;
-                            self.runner.mode_switched(actual);
-                        }
-                    }
-                }
-                cia402::Event::ModeSwitchFailed(f)
-                    if matches!(self.home, HomeRun::ToHm | HomeRun::Back) =>
-                {
-                    // The switch into or out of hm failed: the home step cannot go on.
-                    self.home = HomeRun::Idle;
-                    self.program = ProgramState::Idle;
-                    if f.reason != cia402::ModeSwitchFailure::Fault {
-                        ev.emit(EventKind::CommandRefused {
-                            axis: i as u16,
-                            why: "the program stopped: the switch into or out of homing mode failed",
-                        });
-                        self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                    }
-                }
-                cia402::Event::ModeSwitchFailed(f)
-                    if self.program == ProgramState::Pending
-                        && f.reason != cia402::ModeSwitchFailure::Fault =>
-                {
-                    // The drive never took the mode the program starts in: the program cannot
-                    // start, and the axis does not stay enabled waiting for it.
-                    self.program = ProgramState::Idle;
-                    ev.emit(EventKind::CommandRefused {
-                        axis: i as u16,
-                        why: "the program could not start: the drive did not take its start mode",
-                    });
-                    self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                }
-                cia402::Event::ModeSwitchFailed(f) if self.requested_mode.is_some() => {
-                    // The program asked for this switch and cannot go on without it. A fault
-                    // cut it short: the fault itself is what gets reported.
-                    self.requested_mode = None;
-                    self.program = ProgramState::Idle;
-                    if f.reason != cia402::ModeSwitchFailure::Fault {
-                        ev.emit(EventKind::CommandRefused {
-                            axis: i as u16,
-                            why: "the program stopped: its mode switch failed",
-                        });
-                        // The axis does not stay enabled in the mode it was leaving (turning,
-                        // perhaps, with nobody to stop it): a controlled stop, as for a program
-                        // that cannot start.
-                        self.begin_stop(StopKind::Ramp, ctx.tick, ctx.cycle);
-                    }
-                }
-                cia402::Event::Fault { .. } if !ctx.ending => {
-                    self.program = ProgramState::Idle;
-                    if let HomeRun::Running { method } = self.home {
-                        // A drive that faults on a homing error (the BDHDE's 0x6100): the home
-                        // step's account first, the fault after it.
-                        ev.emit(EventKind::HomingFailed {
-                            axis: i as u16,
-                            method,
-                            outcome: self
-                                .homing
-                                .outcome()
-                                .unwrap_or(cia402::HomingOutcome::Aborted),
-                            drive_says: self.homing_failure,
-                        });
-                    }
-                    self.abort_home();
-                    ev.emit(EventKind::Axis {
-                        axis: i as u16,
-                        event: e,
-                    });
-                    // The other axes are stopped after the per-axis steps. A fault while
-                    // nothing was energised (latched before the run) stops nothing.
-                    if ctx.any_energised_before {
-                        ev.emit(EventKind::Stopping {
-                            reason: StopReason::DriveFault { axis: i as u16 },
-                        });
-                    }
-                    continue;
-                }
-                _ => {}
-            }
-            ev.emit(EventKind::Axis {
-                axis: i as u16,
-                event: e,
-            });
-        }
+        self.m.read(&read, pulse)
     }
 
     /// The engine's outputs into the process image, and the cycle counter.
     fn write_outputs(&mut self, out: &Output, image: &mut [u8]) {
         self.fields.axis.write(out, image);
-        if let Some(f) = self.probe_function {
+        if let Some(f) = self.m.probe_function() {
             pdo::axis::write(self.fields.probe.function, image, i64::from(f));
         }
         self.count(image);
-    }
-
-    /// Set-point steps while enabled, in the mode the drive runs (confirmed by 0x6061): the
-    /// other targets only track the actual values.
-    fn record_steps(&mut self, out: &Output, enabled: bool, cycle: u64) {
-        let running = self.axis.status();
-        if !(enabled && running.streaming) {
-            self.last_out = None;
-            return;
-        }
-        if let Some((p, v, t)) = self.last_out {
-            let s = &mut self.steps;
-            let step = match RunMode::from_code(running.active_mode.as_i8()) {
-                Some(RunMode::Csp) => Some((
-                    i64::from(out.target_position.wrapping_sub(p)).abs(),
-                    &mut s.position,
-                    0,
-                )),
-                Some(RunMode::Csv) => Some((
-                    (i64::from(out.target_velocity) - i64::from(v)).abs(),
-                    &mut s.velocity,
-                    1,
-                )),
-                Some(RunMode::Cst) => Some((
-                    (i64::from(out.target_torque) - i64::from(t)).abs(),
-                    &mut s.torque,
-                    2,
-                )),
-                _ => None,
-            };
-            if let Some((d, max, at)) = step
-                && d > *max
-            {
-                *max = d;
-                s.at_cycle[at] = cycle;
-            }
-        }
-        self.last_out = Some((out.target_position, out.target_velocity, out.target_torque));
-    }
-
-    /// The master's following error (the actual value of this exchange against the demand it
-    /// answers, [`FEEDBACK_PULSES`]), the drive's 0x60F4 judged against it, the following
-    /// error limit, and the rest of the telemetry.
-    fn follow(&mut self, i: usize, out: &Output, ctx: &StepContext, ev: &mut Emitter) {
-        let demand = if self.pos_valid {
-            self.pos + i64::from(out.target_position.wrapping_sub(self.pos_raw))
-        } else {
-            i64::from(out.target_position)
-        };
-        let state = StatusWord::from_raw(self.tel.statusword).state();
-        let energised = state.is_some_and(State::is_energised);
-        // In hm, pp, pv and tq the drive moves on its own (and in hm its position jumps at the
-        // home): there is no demand to follow, and none from before may be judged against the
-        // positions after.
-        let homing = !RunMode::from_code(out.mode.as_i8()).is_some_and(RunMode::is_cyclic);
-        if homing {
-            self.carried = [(u64::MAX, 0); CARRIED];
-            self.tel.following_error = 0;
-        }
-        // Without the demand (lost frames just before) the last value stands. The newest
-        // demand whose frame passed by pulse s − 2 (two frames after one pulse: the later
-        // one's demand is what the drive took).
-        if let Some(s) = ctx.pulse.checked_sub(FEEDBACK_PULSES).filter(|_| !homing) {
-            let newest_first = (1..=CARRIED).map(|k| (self.carried_next + CARRIED - k) % CARRIED);
-            for k in newest_first {
-                if let Some(&(p, d)) = self.carried.get(k)
-                    && p != u64::MAX
-                    && p <= s
-                {
-                    self.tel.following_error = d - self.pos;
-                    break;
-                }
-            }
-        }
-        let moving = self.last_demand.is_some_and(|l| l != demand);
-        self.last_demand = (!homing).then_some(demand);
-        // The master's following error only while csp runs (in hm the drive moves on its own).
-        self.fe_judged =
-            energised && self.mode == RunMode::Csp && out.mode.as_i8() == RunMode::Csp.code();
-        if self.fe_judged {
-            self.judge_following_error(i, moving, ctx.cycle, ev);
-        }
-        let t = &mut self.tel;
-        t.controlword = out.controlword.raw();
-        t.mode = out.mode.as_i8();
-        t.position_demand = demand;
-        t.velocity_demand = out.target_velocity;
-        t.torque_demand = out.target_torque;
-        t.state = state;
-        t.al_state = self.al_state;
-        t.program_step = self.runner.step_index() as u16;
-        t.program_running = self.program == ProgramState::Running;
-        if state != self.last_state {
-            self.last_state = state;
-            if let Some(s) = state
-                && self.states.last() != Some(&s)
-                && self.states.len() < self.states.capacity()
-            {
-                self.states.push(s);
-            }
-        }
-    }
-
-    /// Energised in csp: the largest following errors, a 0x60F4 that never leaves 0, and the
-    /// following error limit (a quick stop).
-    fn judge_following_error(&mut self, i: usize, moving: bool, cycle: u64, ev: &mut Emitter) {
-        let fe = self.tel.following_error.abs();
-        if fe > self.tel.max_following_error {
-            self.tel.max_following_error = fe;
-        }
-        if let Some(d) = self.tel.following_error_drive {
-            self.tel.max_following_error_drive = self.tel.max_following_error_drive.max(d.abs());
-            // 0x60F4 that never leaves 0 while the axis follows a moving set-point is not
-            // computed by the drive: flag it once, never trust it.
-            if d != 0 {
-                self.fe_drive_alive = true;
-            } else if moving
-                && fe > 0
-                && !self.fe_drive_alive
-                && !self.tel.following_error_drive_stuck
-            {
-                self.fe_drive_zero_cycles += 1;
-                if self.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
-                    self.tel.following_error_drive_stuck = true;
-                    ev.emit(EventKind::DriveFollowingErrorStuck {
-                        axis: i as u16,
-                        cycles: self.fe_drive_zero_cycles,
-                        master: self.tel.max_following_error,
-                    });
-                }
-            }
-        }
-        if let Some(limit) = self.fe_limit
-            && fe > i64::from(limit)
-            && self.stopping == Stopping::No
-        {
-            ev.emit(EventKind::FollowingError {
-                axis: i as u16,
-                value: fe,
-                limit,
-            });
-            ev.emit(EventKind::Stopping {
-                reason: StopReason::FollowingError { axis: i as u16 },
-            });
-            self.stopping = Stopping::Quick { at: cycle };
-            self.axis.request_quick_stop();
-        }
-    }
-
-    /// Begin a controlled stop at good cycle `tick` (the ramp's clock) and cycle `cycle` (the
-    /// timeout's).
-    fn begin_stop(&mut self, kind: StopKind, tick: u64, cycle: u64) {
-        self.program = ProgramState::Idle;
-        self.abort_home();
-        let st = self.axis.status();
-        if !st.state.is_some_and(State::is_energised) {
-            self.axis.request_disable();
-            self.stopping = Stopping::Disabling;
-            return;
-        }
-        self.stopping = match kind {
-            StopKind::Ramp => Stopping::Ramp {
-                from: self.hold,
-                at: tick,
-                since: cycle,
-            },
-            StopKind::QuickStop => {
-                self.axis.request_quick_stop();
-                Stopping::Quick { at: cycle }
-            }
-        };
-    }
-
-    /// A controlled stop that takes too long: disable regardless. A disabled axis is no longer
-    /// stopping (unless the run ends).
-    fn supervise_stop(&mut self, cycle: u64, stop_timeout_cycles: u64, ending: bool) {
-        if let Stopping::Ramp { since: at, .. } | Stopping::Quick { at } = self.stopping
-            && cycle - at > stop_timeout_cycles
-        {
-            self.axis.request_disable();
-            self.stopping = Stopping::Disabling;
-        }
-        if self.stopping == Stopping::Disabling
-            && !self.axis.status().state.is_some_and(State::is_energised)
-            && !ending
-        {
-            self.stopping = Stopping::No;
-        }
-    }
-
-    /// Apply a command to this axis (number `i`); `Some(reason)` if it was refused.
-    fn apply(&mut self, cmd: &Command, i: usize) -> Option<&'static str> {
-        match *cmd {
-            Command::Enable(ax) if ax.includes(i) => {
-                self.stopping = Stopping::No;
-                self.axis
-                    .request_enable()
-                    .err()
-                    .map(|_| "enable refused (fault present?)")
-            }
-            Command::Disable(ax) if ax.includes(i) => {
-                self.program = ProgramState::Idle;
-                self.abort_home();
-                self.axis.request_disable();
-                None
-            }
-            Command::QuickStop(ax) if ax.includes(i) => {
-                self.program = ProgramState::Idle;
-                self.abort_home();
-                self.axis.request_quick_stop();
-                None
-            }
-            Command::FaultReset(ax) if ax.includes(i) => {
-                if self.axis.request_fault_reset() {
-                    None
-                } else {
-                    Some("fault reset ignored: the drive shows no fault")
-                }
-            }
-            Command::Mode(ax, m) if ax.includes(i) => self
-                .axis
-                .request_mode(OperationMode::from_i8(m.code()))
-                .err()
-                .map(|_| "mode switch refused"),
-            Command::RunProgram(ax) if ax.includes(i) => {
-                if self.runner.steps().is_empty() {
-                    return Some("the axis has no program");
-                }
-                self.runner.restart();
-                self.requested_mode = None;
-                self.abort_home();
-                if self.probes != [ProbeArm::Off; 2] {
-                    self.probes = [ProbeArm::Off; 2];
-                }
-                self.program = ProgramState::Pending;
-                None
-            }
-            Command::HoldProgram(ax) if ax.includes(i) => {
-                self.program = ProgramState::Idle;
-                self.abort_home();
-                None
-            }
-            Command::Home(ax, method) if ax.includes(i) => {
-                let st = self.axis.status();
-                if st.state != Some(State::OperationEnabled) || self.stopping != Stopping::No {
-                    Some("home refused: the axis is not enabled")
-                } else if self.program == ProgramState::Running || self.home != HomeRun::Idle {
-                    Some("home refused: a program or a homing runs on the axis")
-                } else {
-                    self.home_commanded = Some(method);
-                    None
-                }
-            }
-            Command::Pp {
-                axis,
-                target,
-                relative,
-                immediate,
-            } if axis as usize == i => self.take_pp(target, relative, immediate).err().map(|e| e.1),
-            Command::ArmProbe { axis, probe, edge } if axis as usize == i => {
-                self.arm_probe(probe, edge).err()
-            }
-            Command::Setpoint(axis, v) if axis as usize == i => {
-                match self.mode {
-                    RunMode::Csp => self.hold.pos = v,
-                    RunMode::Csv => self.hold.vel = v,
-                    RunMode::Cst => self.hold.torque = v,
-                    RunMode::Pp | RunMode::Pv | RunMode::Tq => {
-                        return Some("a set-point command needs csp, csv or cst");
-                    }
-                }
-                None
-            }
-            _ => None,
-        }
+        self.m.telemetry_mut().al_state = self.al_state;
     }
 }
 
-/// A torque in the drive's unit as its torque value (0x6071), rounded and held to its range.
-fn drive_torque(t: f64) -> i16 {
-    t.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
+/// What the application's callback ([`AppAxis`]) asked of an axis in one cycle.
+fn requests_of(app: &AppAxis) -> Requests {
+    Requests {
+        setpoint: app.setpoint,
+        mode: app.mode_request,
+        home: app.home_request,
+        pp: app.pp_request,
+        probe: app.probe_request,
+    }
 }
 
 /// The raw AL state (0x0130 low byte) ethercrab read for a device.
@@ -2470,7 +916,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             });
             self.begin_ending();
             for a in self.axes.iter_mut() {
-                a.begin_stop(StopKind::Ramp, tick, cycle);
+                a.m.begin_stop(StopKind::Ramp, tick, cycle);
             }
         }
         if !self.all_op() && scan.every_op && !self.al_states.is_empty() {
@@ -2526,7 +972,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 reason: StopReason::WorkingCounter,
             });
             for a in self.axes.iter_mut() {
-                a.begin_stop(StopKind::Ramp, tick, cycle);
+                a.m.begin_stop(StopKind::Ramp, tick, cycle);
             }
         }
     }
@@ -2581,8 +1027,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 
     /// Begin a ramp stop of every axis not already stopping.
     fn stop_moving_axes(&mut self, tick: u64, cycle: u64) {
-        for a in self.axes.iter_mut().filter(|a| a.stopping == Stopping::No) {
-            a.begin_stop(StopKind::Ramp, tick, cycle);
+        for a in self.axes.iter_mut().filter(|a| !a.m.stopping()) {
+            a.m.begin_stop(StopKind::Ramp, tick, cycle);
         }
     }
 
@@ -2694,7 +1140,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 Command::Restart => self.stop(StopKind::Ramp, true),
                 other => {
                     for (i, a) in self.axes.iter_mut().enumerate() {
-                        if let Some(why) = a.apply(&other, i) {
+                        if let Some(why) = a.m.apply(&other, i) {
                             self.ev.emit(EventKind::CommandRefused {
                                 axis: i as u16,
                                 why,
@@ -2726,10 +1172,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 // Asked again to stop, in a hurry: the axes still on their ramp make a quick
                 // stop instead (and are disabled after it, as always).
                 for a in self.axes.iter_mut() {
-                    if matches!(a.stopping, Stopping::Ramp { .. }) {
-                        a.axis.request_quick_stop();
-                        a.stopping = Stopping::Quick { at: cycle };
-                    }
+                    a.m.hurry_stop(cycle);
                 }
             }
             return;
@@ -2744,7 +1187,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.ev.emit(EventKind::Stopping { reason });
         let tick = self.clock.tick;
         for a in self.axes.iter_mut() {
-            a.begin_stop(kind, tick, cycle);
+            a.m.begin_stop(kind, tick, cycle);
         }
     }
 
@@ -2758,9 +1201,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             dt: self.k.dt,
             pulse: self.clock.dc_time / self.k.cycle_ns,
             ending: self.ending(),
-            any_energised_before: self.axes.iter().any(|a| {
-                a.program != ProgramState::Idle || a.tel.state.is_some_and(State::is_energised)
-            }),
+            any_energised_before: self.axes.iter().any(|a| a.m.busy()),
             stop_ramp_cycles: self.k.stop_ramp_cycles,
             stop_timeout_cycles: self.k.stop_timeout_cycles,
         };
@@ -2806,7 +1247,12 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 continue;
             }
             let Some(fb) = a.fb.take() else { continue };
-            let out = a.step(i, fb, &ctx, &mut self.ev, with_app.then_some(view));
+            let req = if with_app {
+                requests_of(view)
+            } else {
+                Requests::default()
+            };
+            let out = a.m.step(i, fb, &ctx, &mut self.ev, req);
             let mut io = sd.io_raw_mut();
             a.write_outputs(&out, io.outputs());
             for &(f, raw) in &view.writes {
@@ -2820,19 +1266,16 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     fn supervise_axes(&mut self) {
         let (tick, cycle) = (self.clock.tick, self.clock.cycle);
         let ending = self.ending();
-        if !ending && self.axes.iter().any(|a| a.axis.status().fault) {
+        if !ending && self.axes.iter().any(|a| a.m.status().fault) {
             for a in self.axes.iter_mut() {
-                let st = a.axis.status();
-                if !st.fault
-                    && a.stopping == Stopping::No
-                    && st.state == Some(State::OperationEnabled)
-                {
-                    a.begin_stop(StopKind::Ramp, tick, cycle);
+                let st = a.m.status();
+                if !st.fault && !a.m.stopping() && st.state == Some(State::OperationEnabled) {
+                    a.m.begin_stop(StopKind::Ramp, tick, cycle);
                 }
             }
         }
         for a in self.axes.iter_mut() {
-            a.supervise_stop(cycle, self.k.stop_timeout_cycles, ending);
+            a.m.supervise_stop(cycle, self.k.stop_timeout_cycles, ending);
         }
     }
 
@@ -2848,7 +1291,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             u32::try_from(c.t_ex_done.saturating_sub(c.t_ex)).unwrap_or(u32::MAX),
         );
         for (i, a) in self.axes.iter_mut().enumerate() {
-            let t = &a.tel;
+            let judged = a.m.take_fe_judged();
+            let t = a.m.telemetry();
             r.push(
                 CycleSample {
                     cycle: c.cycle,
@@ -2864,14 +1308,13 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     velocity: t.velocity_actual,
                     torque_demand: Some(t.torque_demand),
                     torque: t.torque_actual,
-                    following_error: a.fe_judged.then_some(t.following_error),
+                    following_error: judged.then_some(t.following_error),
                     statusword: t.statusword,
                     mode: t.mode_display,
                     probes: t.probes,
                 }
                 .defined(),
             );
-            a.fe_judged = false;
         }
     }
 
@@ -2899,7 +1342,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         };
         self.last_telemetry = t.cycle;
         for (slot, a) in t.axes.iter_mut().zip(self.axes.iter()) {
-            *slot = a.tel;
+            *slot = *a.m.telemetry();
         }
         // Every field of every slot each time: the triple buffer hands out three buffers in
         // turn.
@@ -2934,12 +1377,10 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         // SAFE-OP sends no valid inputs and takes no outputs (its own state machine has
         // disabled it): its last statusword says nothing, so it does not hold the end up.
         let any_energised = self.axes.iter().any(|a| {
-            matches!(a.al_state & 0x0F, 4 | 8) && a.tel.state.is_some_and(State::is_energised)
+            matches!(a.al_state & 0x0F, 4 | 8)
+                && a.m.telemetry().state.is_some_and(State::is_energised)
         });
-        let stopping = self
-            .axes
-            .iter()
-            .any(|a| matches!(a.stopping, Stopping::Ramp { .. } | Stopping::Quick { .. }));
+        let stopping = self.axes.iter().any(|a| a.m.braking());
         if any_energised || stopping {
             return None;
         }
@@ -2986,7 +1427,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             ..self.last_telemetry
         };
         for (slot, a) in t.axes.iter_mut().zip(self.axes.iter()) {
-            *slot = a.tel;
+            *slot = *a.m.telemetry();
         }
         self.telemetry.publish();
         if let Some(h) = self.hooks
@@ -3003,24 +1444,27 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             timing: self.timing,
             rt,
             first_stop: self.ev.first_stop,
-            max_following_error: axes.iter().map(|a| a.tel.max_following_error).collect(),
+            max_following_error: axes
+                .iter()
+                .map(|a| a.m.telemetry().max_following_error)
+                .collect(),
             max_following_error_drive: axes
                 .iter()
                 .map(|a| {
                     a.fields
                         .axis
                         .following_error
-                        .map(|_| a.tel.max_following_error_drive)
+                        .map(|_| a.m.telemetry().max_following_error_drive)
                 })
                 .collect(),
             following_error_drive_stuck: axes
                 .iter()
-                .map(|a| a.tel.following_error_drive_stuck)
+                .map(|a| a.m.telemetry().following_error_drive_stuck)
                 .collect(),
-            modes_run: axes.iter().map(|a| a.modes_run.clone()).collect(),
-            probe_latches: axes.iter().map(|a| a.latches.clone()).collect(),
-            max_setpoint_step: axes.iter().map(|a| a.steps).collect(),
-            states: axes.iter().map(|a| a.states.clone()).collect(),
+            modes_run: axes.iter().map(|a| a.m.modes_run().to_vec()).collect(),
+            probe_latches: axes.iter().map(|a| a.m.latches().to_vec()).collect(),
+            max_setpoint_step: axes.iter().map(|a| a.m.setpoint_steps()).collect(),
+            states: axes.iter().map(|a| a.m.states().to_vec()).collect(),
             frames: {
                 let (now, then) = (self.pump.stats(), self.counts.pump_at_start);
                 FrameStats {
@@ -3047,11 +1491,11 @@ fn refresh_view(view: &mut AppAxis, a: &AxisRt, in_op: bool, inputs: &[u8], outp
         view.enabled = false;
         return;
     }
-    view.tel = a.tel;
-    let st = a.axis.status();
+    view.tel = *a.m.telemetry();
+    let st = a.m.status();
     view.tel.state = st.state;
     view.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-    view.program_running = a.program == ProgramState::Running;
+    view.program_running = a.m.program_running();
     let n = view.inputs.len().min(inputs.len());
     view.inputs[..n].copy_from_slice(&inputs[..n]);
     let n = view.outputs.len().min(outputs.len());

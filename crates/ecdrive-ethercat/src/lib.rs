@@ -14,6 +14,9 @@
 
 // The core layers this crate builds on, under the paths the modules use.
 pub(crate) use ecdrive_core::{cia402, drives, ec, link, od, pdo, rt};
+// The motion runtime this master runs per axis (shared with the CANopen master), under the
+// paths the applications know.
+pub use ecdrive_motion::{program, setpoint, telemetry};
 
 mod app;
 pub mod bus;
@@ -23,13 +26,11 @@ pub mod error;
 pub mod exec;
 mod history;
 pub mod io;
-pub mod program;
 mod record;
 pub mod session;
-pub mod setpoint;
 pub mod startup;
 mod stream;
-pub mod telemetry;
+
 mod wkc;
 
 pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};

@@ -142,7 +142,14 @@ pub fn run(
         .name("jitter-ethercrab".into())
         .stack_size(STACK)
         .spawn(move || {
-            let md = MainDevice::new(pdu_loop, Timeouts::default(), MainDeviceConfig::default());
+            // ethercrab's 30 ms PDU timeout is shorter than a loaded machine may keep the
+            // in-process segment's thread from running (other cycles at SCHED_FIFO); the
+            // harness's links lose no frame, so a longer wait measures the same cycles.
+            let timeouts = Timeouts {
+                pdu: Duration::from_millis(500),
+                ..Timeouts::default()
+            };
+            let md = MainDevice::new(pdu_loop, timeouts, MainDeviceConfig::default());
             let r = async_io::block_on(measure(&md, &s, io_clock));
             // SAFETY: every group built on `md` was dropped inside `measure` and no frame is in
             // flight (each exchange was awaited to completion or timed out); the storage is

@@ -10,9 +10,11 @@ pub mod frame;
 pub mod mailbox;
 pub mod register;
 pub mod sii;
+pub mod wkc;
 
 pub use al::{AlState, AlStatus, AlStatusCode};
 pub use command::Command;
+pub use wkc::DatagramWkc;
 
 /// The EtherType of EtherCAT frames.
 pub const ETHERTYPE: u16 = 0x88A4;

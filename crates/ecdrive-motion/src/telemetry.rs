@@ -61,12 +61,12 @@ pub enum Command {
     /// Stream one set-point in the axis's mode (position counts, velocity counts/s, torque).
     Setpoint(u16, f64),
     /// Home with the method the drive holds in 0x6098 (start-up wrote it), then back to the
-    /// axis's mode, as [`crate::AppAxis::request_home`]; the method names it in reports.
+    /// axis's mode, as `AppAxis::request_home`; the method names it in reports.
     /// Taken in Operation enabled with no program or homing running; the axis's telemetry
     /// `task` says where it stands.
     Home(Axes, i8),
     /// Hand a pp target (counts) to the drive with the new-set-point handshake, as
-    /// [`crate::AppAxis::request_pp`]; taken in pp, in Operation enabled with no program
+    /// `AppAxis::request_pp`; taken in pp, in Operation enabled with no program
     /// running. The axis's telemetry `task` says where it stands.
     Pp {
         /// Axis index.
@@ -78,7 +78,7 @@ pub enum Command {
         /// Controlword bit 5: replace the running move (else queued behind it).
         immediate: bool,
     },
-    /// Arm a touch probe, as [`crate::AppAxis::arm_probe`]; the axis's telemetry `probes`
+    /// Arm a touch probe, as `AppAxis::arm_probe`; the axis's telemetry `probes`
     /// says whether it latched, and where.
     ArmProbe {
         /// Axis index.
@@ -211,7 +211,7 @@ pub enum EventKind {
         missing: Option<u16>,
         /// The first logical datagram of the reply whose working counter was wrong, with the
         /// devices it covers (`None` when the reply's datagrams were not recorded).
-        datagram: Option<crate::wkc::DatagramWkc>,
+        datagram: Option<ecdrive_core::ec::DatagramWkc>,
     },
     /// In SAFE-OP, before OP was requested, the working counter stayed wrong: a device does
     /// not take its outputs (or give its inputs); OP is not requested.
@@ -223,7 +223,7 @@ pub enum EventKind {
         /// Expected.
         expected: u16,
         /// The first logical datagram that came back wrong, with the devices it covers.
-        datagram: Option<crate::wkc::DatagramWkc>,
+        datagram: Option<ecdrive_core::ec::DatagramWkc>,
         /// The device is an I/O device (its outputs may be OP-only by design: a warning, OP
         /// is requested); else a drive, and start-up fails.
         io: bool,
@@ -245,7 +245,7 @@ pub enum EventKind {
         /// The AL status code (0x0134); `None` if reading it failed.
         code: Option<u16>,
     },
-    /// No reply within the cycle's budget ([`super::cycle::CycleSettings::reply_budget`]; a
+    /// No reply within the cycle's budget (the master's `CycleSettings::reply_budget`; a
     /// reply that comes later is discarded): every axis held its set-point (the outputs were sent again
     /// unchanged, the program clock stood still).
     FrameLost {
@@ -258,12 +258,12 @@ pub enum EventKind {
         lost: u32,
     },
     /// The segment stopped answering (cable pull, power loss): detected after
-    /// [`super::cycle::CycleSettings::segment_lost_after`] cycles without a reply.
+    /// the master's `CycleSettings::segment_lost_after` cycles without a reply.
     SegmentLost {
         /// Consecutive lost cycles.
         cycles: u32,
     },
-    /// The segment stayed silent for [`super::cycle::CycleSettings::segment_gone_after`]: the
+    /// The segment stayed silent for the master's `CycleSettings::segment_gone_after`: the
     /// cycle ends (the drives' own watchdogs have disabled them); a re-start brings them back.
     SegmentGone {
         /// Consecutive lost cycles.
@@ -380,7 +380,7 @@ pub struct Event {
     pub kind: EventKind,
 }
 
-/// A touch probe of an axis as the cycle drives it ([`crate::AppAxis::arm_probe`], a program's
+/// A touch probe of an axis as the cycle drives it (`AppAxis::arm_probe`, a program's
 /// `TouchProbe` step).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub enum ProbeState {
@@ -399,8 +399,8 @@ pub enum ProbeState {
     },
 }
 
-/// A homing or a pp move the application started on an axis ([`crate::AppAxis::request_home`],
-/// [`crate::AppAxis::request_pp`]), as it stands.
+/// A homing or a pp move the application started on an axis (`AppAxis::request_home`,
+/// `AppAxis::request_pp`), as it stands.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
 pub enum DriveTask {
     /// Nothing started.

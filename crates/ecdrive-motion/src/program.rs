@@ -522,7 +522,16 @@ fn check_probe(probe: u8) -> Result<(), ProfileError> {
 }
 
 fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
-    Ok(match *step {
+    match plan_waiting(step, from)? {
+        Some(p) => Ok(p),
+        None => plan_setpoints(step, from),
+    }
+}
+
+/// The plan of a step that hands the motion to the drive or waits (mode, home, pp, pv, tq,
+/// probes); `None` for a step whose set-points the master generates.
+fn plan_waiting(step: &Step, from: &Sample) -> Result<Option<Planned>, ProfileError> {
+    Ok(Some(match *step {
         Step::Mode { .. } => Planned::Mode,
         Step::Home { .. } => Planned::Drive,
         Step::Pp { ref targets, .. } => {
@@ -574,6 +583,21 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
                 seconds,
             }
         }
+        _ => return Ok(None),
+    }))
+}
+
+/// The plan of a step whose set-points the master generates (move, sine, ramp, jog, torque,
+/// dwell).
+fn plan_setpoints(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
+    Ok(match *step {
+        Step::Mode { .. }
+        | Step::Home { .. }
+        | Step::Pp { .. }
+        | Step::Pv { .. }
+        | Step::Tq { .. }
+        | Step::TouchProbe { .. }
+        | Step::ProbeWait { .. } => unreachable_plan()?,
         Step::Move {
             target,
             velocity,
@@ -640,6 +664,14 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
                 seconds,
             }
         }
+    })
+}
+
+/// A step [`plan_waiting`] plans never reaches [`plan_setpoints`].
+fn unreachable_plan() -> Result<Planned, ProfileError> {
+    Err(ProfileError::NotFinite {
+        name: "a step planned twice",
+        value: f64::NAN,
     })
 }
 
@@ -817,6 +849,75 @@ impl Runner {
         }
     }
 
+    /// A touch-probe step: the probe armed (the program goes on) or, for a probe other than
+    /// 1 and 2, the program failed (`None`).
+    fn arm(&mut self, probe: u8, edge: ProbeEdge) -> Option<Tick> {
+        if !matches!(probe, 1 | 2) {
+            self.failed = Some((
+                self.index,
+                ProfileError::NotFinite {
+                    name: "probe (1 or 2)",
+                    value: f64::from(probe),
+                },
+            ));
+            return None;
+        }
+        self.index += 1;
+        self.planned = None;
+        Some(Tick::Probe {
+            probe,
+            edge,
+            hold: Sample {
+                done: false,
+                ..self.last
+            },
+        })
+    }
+
+    /// A wait for a touch probe, `t` seconds into it: the motion it started from goes on.
+    fn wait_for_probe(&mut self, from: Sample, probe: u8, seconds: f64, t: f64) -> Tick {
+        let setpoint = Sample {
+            pos: from.pos + from.vel * t,
+            ..from
+        };
+        self.step_t = t;
+        self.last = setpoint;
+        Tick::ProbeWait {
+            probe,
+            setpoint,
+            expired: t >= seconds,
+        }
+    }
+
+    /// The set-point of the planned step `t` seconds after it began.
+    fn sample(&mut self, planned: Planned, t: f64) -> Sample {
+        match planned {
+            Planned::Move(m) => m.sample(t),
+            Planned::Sine(s) => s.sample(t),
+            Planned::Ramp(r) => r.sample(t),
+            Planned::Jog { mut jog, until } => {
+                if t >= until {
+                    jog.set_target(0.0);
+                }
+                let s = jog.advance(t - self.step_t);
+                self.planned = Some(Planned::Jog { jog, until });
+                Sample {
+                    done: s.done && t >= until,
+                    ..s
+                }
+            }
+            Planned::Torque(ts) => ts.sample(t),
+            Planned::Dwell { hold, seconds } => Sample {
+                done: t >= seconds,
+                ..hold
+            },
+            Planned::Mode | Planned::Drive | Planned::ProbeWait { .. } => Sample {
+                done: true,
+                ..self.last
+            },
+        }
+    }
+
     /// The set-point at time `now` (seconds, any monotonic origin).
     pub fn tick(&mut self, now: f64) -> Tick {
         if self.entering && self.failed.is_none() && self.index < self.steps.len() {
@@ -838,29 +939,10 @@ impl Runner {
             }
             match step {
                 Step::Home { method } => return Tick::Home { method: *method },
-                Step::TouchProbe { probe, edge } => {
-                    if !matches!(probe, 1 | 2) {
-                        self.failed = Some((
-                            self.index,
-                            ProfileError::NotFinite {
-                                name: "probe (1 or 2)",
-                                value: f64::from(*probe),
-                            },
-                        ));
-                        continue;
-                    }
-                    let (probe, edge) = (*probe, *edge);
-                    self.index += 1;
-                    self.planned = None;
-                    return Tick::Probe {
-                        probe,
-                        edge,
-                        hold: Sample {
-                            done: false,
-                            ..self.last
-                        },
-                    };
-                }
+                &Step::TouchProbe { probe, edge } => match self.arm(probe, edge) {
+                    Some(t) => return t,
+                    None => continue,
+                },
                 s if s.run_by_drive() => {
                     // Checked once, when the step starts.
                     if self.planned.is_none() {
@@ -898,43 +980,9 @@ impl Runner {
                 seconds,
             } = planned
             {
-                let setpoint = Sample {
-                    pos: from.pos + from.vel * t,
-                    ..from
-                };
-                self.step_t = t;
-                self.last = setpoint;
-                return Tick::ProbeWait {
-                    probe,
-                    setpoint,
-                    expired: t >= seconds,
-                };
+                return self.wait_for_probe(from, probe, seconds, t);
             }
-            let s = match planned {
-                Planned::Move(m) => m.sample(t),
-                Planned::Sine(s) => s.sample(t),
-                Planned::Ramp(r) => r.sample(t),
-                Planned::Jog { mut jog, until } => {
-                    if t >= until {
-                        jog.set_target(0.0);
-                    }
-                    let s = jog.advance(t - self.step_t);
-                    self.planned = Some(Planned::Jog { jog, until });
-                    Sample {
-                        done: s.done && t >= until,
-                        ..s
-                    }
-                }
-                Planned::Torque(ts) => ts.sample(t),
-                Planned::Dwell { hold, seconds } => Sample {
-                    done: t >= seconds,
-                    ..hold
-                },
-                Planned::Mode | Planned::Drive | Planned::ProbeWait { .. } => Sample {
-                    done: true,
-                    ..self.last
-                },
-            };
+            let s = self.sample(planned, t);
             self.step_t = t;
             self.last = Sample { done: false, ..s };
             if s.done && self.index + 1 < self.steps.len() {

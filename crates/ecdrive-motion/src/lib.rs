@@ -1,0 +1,30 @@
+//! # ecdrive-motion
+//!
+//! The motion runtime both masters share: what an axis does once its drive is in Operation
+//! enabled, independent of the bus that carries it. Per axis one I/O-free step per cycle
+//! ([`MotionAxis::step`]): the drive's feedback and the application's requests in, the CiA 402
+//! engine's output and the run's events out. It holds the programs and their set-point
+//! generation ([`program`], [`setpoint`]), homing, the profile modes pp/pv/tq, the touch
+//! probes, controlled stops, following-error supervision and the limits of the application's
+//! set-points; the events and telemetry it reports are the vocabulary both masters publish
+//! ([`telemetry`]).
+//!
+//! Built on `ecdrive-core` only: the masters read their bus into a
+//! [`Feedback`](ecdrive_core::cia402::Feedback), call the step and write its
+//! [`Output`](ecdrive_core::cia402::Output) back. Nothing here allocates or blocks per cycle.
+#![warn(missing_docs)]
+
+pub(crate) use ecdrive_core::cia402;
+
+mod axis;
+mod limits;
+pub mod program;
+pub mod setpoint;
+pub mod telemetry;
+
+pub use axis::{
+    AxisSetup, DRIVE_FE_STUCK_CYCLES, EventSink, FEEDBACK_PULSES, Inputs, MotionAxis, ProbeObjects,
+    Requests, SetpointSteps, StepContext,
+};
+pub use limits::SetpointLimits;
+pub use program::{ProbeEdge, RunMode, Step, Target};
