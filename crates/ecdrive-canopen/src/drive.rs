@@ -190,6 +190,14 @@ impl CanDrive {
         out
     }
 
+    /// Write outputs computed elsewhere (the motion runtime's step,
+    /// [`crate::motion::MotionSession`]) into the output image, as [`CanDrive::step`] writes
+    /// its own. Allocation-free.
+    pub fn write_output(&mut self, out: &Output) {
+        self.binding.write(out, &mut self.rx);
+        self.last_output = Some(*out);
+    }
+
     /// The outputs of the last [`CanDrive::step`].
     pub const fn last_output(&self) -> Option<Output> {
         self.last_output

@@ -17,6 +17,7 @@ pub mod can_socket;
 pub mod drive;
 pub mod error;
 pub mod master;
+pub mod motion;
 pub mod pdo_plan;
 pub mod unix_bus;
 
@@ -26,5 +27,6 @@ pub use drive::CanDrive;
 pub use error::{CanError, CanErrorKind, NodeRef};
 pub use frame::{CanFrame, FrameError, NodeId, Service};
 pub use master::{DriveSetup, Master, MasterConfig, MasterEvent, Supervision};
+pub use motion::MotionSession;
 pub use pdo_plan::PdoPlan;
 pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};

@@ -57,7 +57,11 @@ impl<T: CanTransport> Master<T> {
                 continue;
             }
             let node = d.node();
-            let wants = d.axis().status().target == Target::OperationEnabled;
+            // The axis wants the drive enabled: the drive's own engine (enable, the demo) or
+            // the outputs sent (a motion session steps another engine): enable voltage set.
+            let wants = d.axis().status().target == Target::OperationEnabled
+                || d.last_output()
+                    .is_some_and(|o| o.controlword.raw() & 0x0002 != 0);
             let off = !d.statusword().contains(StatusWord::REMOTE);
             let was = self.slot(node).is_some_and(|s| s.remote_off);
             let event = if off && wants && !was {

@@ -1,0 +1,204 @@
+//! The three CANopen drives on the motion runtime the EtherCAT master runs too
+//! (`ecdrive::canopen::MotionSession`): one program per drive — home, a pp move, pv, and tq
+//! where the drive's firmware has it — run through the same `MotionAxis` step as an EtherCAT
+//! axis, over the in-process virtual bus against the emulated nodes. What the program reached
+//! is read from the emulated node itself (its reported position, velocity and torque), not
+//! from the master's telemetry. Simulated time: no wall clock enters.
+
+use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
+use ecdrive::canopen::motion::{MotionSession, axis_setup};
+use ecdrive::canopen::profile::CanDriveProfile;
+use ecdrive::cia402::{OperationMode, State};
+use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
+use ecdrive::master::{Axes, Command, EventKind, RunMode, Step};
+use ecdrive::od::{ObjectAddress, Value};
+use ecdrive::sim::canopen::{EmulatedNode, SimBus};
+
+/// What one drive's program showed, read from the emulated node at each step's end.
+#[derive(Debug, Default)]
+struct Seen {
+    /// Position when each step ended (step index → position).
+    at_step_end: Vec<(u16, i32)>,
+    /// Largest |velocity| (position units/s) during the pv step and |torque| (‰) during the
+    /// tq step.
+    max_velocity: f64,
+    max_torque: f64,
+    faults: Vec<String>,
+    refused: Vec<&'static str>,
+    done: bool,
+}
+
+/// The program's pv and tq steps (home, pp, mode, pv, mode, tq, mode).
+const PV_STEP: u16 = 3;
+const TQ_STEP: u16 = 5;
+
+fn run(node: u8, p: &'static CanDriveProfile) -> (Seen, f64, f64) {
+    let mut bus = SimBus::new();
+    bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+    let mut m = Master::new(bus, MasterConfig::default());
+    let mut setup = DriveSetup::new(p);
+    setup.settings = ecdrive::app::canopen::demo::motion_settings(p, 10.0, 100.0);
+    let method = ecdrive::app::canopen::demo::demo_homing_method(p);
+    setup
+        .settings
+        .push((ObjectAddress::new(0x6098, 0), Value::Int(method.into())));
+    m.configure_drive(node, setup).expect("configure");
+    m.start(node).expect("NMT start");
+    let u = &p.units;
+    let rev = u.position_per_rev;
+    // 5 rev/s in pv; 30 % torque in tq (the drives' torque unit is ‰).
+    let velocity = 5.0 * rev;
+    let torque = 300.0;
+    let mut program = vec![
+        Step::Home { method },
+        Step::Pp {
+            targets: vec![rev, rev / 2.0],
+            relative: false,
+            immediate: false,
+        },
+        Step::Mode { mode: RunMode::Pv },
+        Step::Pv {
+            velocity,
+            seconds: 0.2,
+        },
+    ];
+    if p.supports(OperationMode::ProfileTorque) {
+        program.push(Step::Mode { mode: RunMode::Tq });
+        program.push(Step::Tq {
+            torque,
+            seconds: 0.2,
+            ramp: 0.0,
+        });
+    }
+    program.push(Step::Mode { mode: RunMode::Pp });
+    let mut s =
+        MotionSession::new(m, &[(node, axis_setup(p, program, RunMode::Pp))]).expect("session");
+    s.command(Command::Enable(Axes::All));
+    s.command(Command::RunProgram(Axes::All));
+    let mut seen = Seen::default();
+    let mut step = 0u16;
+    for _ in 0..200_000 {
+        s.cycle().expect("cycle");
+        let n = s.master().transport().node(node).expect("node");
+        let t = s.telemetry(0).expect("axis 0");
+        match t.program_step {
+            PV_STEP => seen.max_velocity = seen.max_velocity.max(n.velocity_units_per_s().abs()),
+            TQ_STEP => seen.max_torque = seen.max_torque.max(n.torque().abs()),
+            _ => {}
+        }
+        if t.program_step != step {
+            seen.at_step_end.push((step, n.position()));
+            step = t.program_step;
+        }
+        for e in s.take_events() {
+            match e.kind {
+                EventKind::ProgramDone { .. } => seen.done = true,
+                EventKind::CommandRefused { why, .. } => seen.refused.push(why),
+                EventKind::Axis {
+                    event: ecdrive::cia402::Event::Fault { .. },
+                    ..
+                } => seen.faults.push(format!("{e:?}")),
+                EventKind::HomingFailed { .. } => seen.faults.push(format!("{e:?}")),
+                _ => {}
+            }
+        }
+        if seen.done || !seen.faults.is_empty() || !seen.refused.is_empty() {
+            break;
+        }
+    }
+    // Disable through the runtime, then the node must show it.
+    s.command(Command::Disable(Axes::All));
+    for _ in 0..2_000 {
+        s.cycle().expect("cycle");
+        if s.master().transport().node(node).expect("node").state() == State::SwitchOnDisabled {
+            break;
+        }
+    }
+    assert_eq!(
+        s.master().transport().node(node).expect("node").state(),
+        State::SwitchOnDisabled,
+        "{}: the runtime's disable reached the drive",
+        p.name
+    );
+    (seen, velocity, torque)
+}
+
+#[test]
+fn each_canopen_drive_runs_a_program_on_the_motion_runtime() {
+    let drives: [(u8, &'static CanDriveProfile); 3] = [
+        (blv_r::EMU_NODE_ID, &blv_r::PROFILE),
+        (0x7F, &asda_a2::PROFILE),
+        (0x41, &lexium_mdrive::PROFILE),
+    ];
+    for (node, p) in drives {
+        let (seen, velocity, torque) = run(node, p);
+        let name = p.name;
+        eprintln!("{name}: {seen:?}");
+        assert!(seen.faults.is_empty(), "{name}: {:?}", seen.faults);
+        assert!(seen.refused.is_empty(), "{name}: {:?}", seen.refused);
+        assert!(seen.done, "{name}: the program did not finish: {seen:?}");
+        let rev = p.units.position_per_rev;
+        let end = |i: u16| {
+            seen.at_step_end
+                .iter()
+                .find(|(s, _)| *s == i)
+                .map(|(_, p)| *p)
+                .unwrap_or_else(|| panic!("{name}: step {i} never ended: {seen:?}"))
+        };
+        // The home step (method 19/24, home offset 0) defines position 0 at the home.
+        assert!(end(0).abs() <= 1, "{name}: after homing at {}", end(0));
+        // The pp step ends at its last target.
+        assert_eq!(f64::from(end(1)), (rev / 2.0).round(), "{name}: pp");
+        // pv reached its velocity; tq its torque where the drive has tq.
+        assert!(
+            (seen.max_velocity - velocity).abs() <= 0.02 * velocity,
+            "{name}: pv peaked at {} units/s, not {velocity}",
+            seen.max_velocity
+        );
+        if p.supports(OperationMode::ProfileTorque) {
+            assert!(
+                (seen.max_torque - torque).abs() <= 0.02 * torque,
+                "{name}: tq peaked at {} ‰, not {torque}",
+                seen.max_torque
+            );
+        }
+    }
+}
+
+/// A BLV-R whose remote input keeps statusword bit 9 at 0 ignores the controlword: a motion
+/// session reports it (`MasterEvent::RemoteOff`, watched on the outputs the session sends) and
+/// the drive never leaves Switch on disabled, whatever the runtime asks.
+#[test]
+fn the_remote_gate_is_reported_in_a_motion_session() {
+    let p = &blv_r::PROFILE;
+    let node = blv_r::EMU_NODE_ID;
+    let mut bus = SimBus::new();
+    bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+    let mut m = Master::new(bus, MasterConfig::default());
+    m.configure_drive(node, DriveSetup::new(p))
+        .expect("configure");
+    m.start(node).expect("NMT start");
+    m.transport_mut()
+        .node_mut(node)
+        .expect("node")
+        .set_remote(false);
+    let mut s =
+        MotionSession::new(m, &[(node, axis_setup(p, Vec::new(), RunMode::Pp))]).expect("session");
+    s.command(Command::Enable(Axes::All));
+    let mut reported = false;
+    for _ in 0..500 {
+        s.cycle().expect("cycle");
+        while let Some(e) = s.master_mut().poll_event() {
+            reported |= matches!(e, ecdrive::canopen::MasterEvent::RemoteOff { .. });
+        }
+        if reported {
+            break;
+        }
+    }
+    assert!(reported, "no RemoteOff within 500 cycles");
+    assert!(s.master().remote_off(node));
+    assert_ne!(
+        s.master().transport().node(node).expect("node").state(),
+        State::OperationEnabled
+    );
+}
