@@ -43,6 +43,7 @@ pub struct CanDrive {
     tpdo_seen_us: [Option<u64>; 4],
     binding: AxisBinding,
     last_output: Option<Output>,
+    rpdo_sent_us: Option<u64>,
 }
 
 impl CanDrive {
@@ -88,6 +89,7 @@ impl CanDrive {
             tpdo_seen_us: [None; 4],
             binding,
             last_output: None,
+            rpdo_sent_us: None,
         })
     }
 
@@ -196,6 +198,15 @@ impl CanDrive {
     pub fn write_output(&mut self, out: &Output) {
         self.binding.write(out, &mut self.rx);
         self.last_output = Some(*out);
+    }
+
+    /// When the master last sent this drive's RPDOs (the transport's clock).
+    pub const fn rpdo_sent_us(&self) -> Option<u64> {
+        self.rpdo_sent_us
+    }
+
+    pub(crate) fn set_rpdo_sent_us(&mut self, t: u64) {
+        self.rpdo_sent_us = Some(t);
     }
 
     /// The outputs of the last [`CanDrive::step`].

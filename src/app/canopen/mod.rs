@@ -2,4 +2,5 @@
 
 pub mod demo;
 pub mod eds;
+pub mod run;
 pub mod tools;

@@ -47,10 +47,15 @@
 //! entry names it (`profile = "mr-j4-tm"`), selects by identity, or selects a position of the
 //! emulated devices; otherwise the master checks the same at start-up, naming the drive.
 //!
+//! A file whose interface is a CANopen bus (`can-sim`, `vbus:PATH`) or whose drives are
+//! selected by `node` is a CANopen run: [`canopen`] reads it with the same program, units,
+//! limits and start-up values ([`parse_any`], [`load_any`]).
+//!
 //! Program values are in the drive's user units when `units` is given (positions and distances
 //! in `name`, velocities in `name`/s, accelerations in `name`/s², jerks in `name`/s³), otherwise
 //! in position counts; torques are always in the drive's torque unit.
 
+pub mod canopen;
 pub mod profile_file;
 mod raw;
 
@@ -219,6 +224,7 @@ fn read_text(path: &Path, what: &str) -> Result<(String, String), ConfigError> {
     }
 }
 
+#[derive(Clone, Copy)]
 struct Ctx<'a> {
     text: &'a str,
     file: &'a str,
@@ -372,6 +378,56 @@ fn deserialize<T: serde::de::DeserializeOwned>(cx: &Ctx<'_>) -> Result<T, Config
 pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
     let cx = Ctx { text, file: source };
     let f: raw::File = deserialize(&cx)?;
+    if canopen::is_canopen(&f) {
+        let i = f.interface.get_ref();
+        return Err(cx.err(
+            f.interface.span(),
+            "interface",
+            if i == "can-sim" || i.starts_with("vbus:") {
+                format!(
+                    "{i:?} is a CANopen bus: this file is a CANopen run (`ecdrive run` takes \
+                     it); an EtherCAT run needs a network interface or \"sim\""
+                )
+            } else {
+                "a drive selected by `node` makes this file a CANopen run (`ecdrive run` takes \
+                 it); an EtherCAT run selects by position, alias or identity"
+                    .to_string()
+            },
+        ));
+    }
+    parse_ethercat(&cx, f)
+}
+
+/// A run file of either bus.
+#[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)]
+pub enum Config {
+    /// An EtherCAT run.
+    EtherCat(RunConfig),
+    /// A CANopen run (`interface = "can-sim"`, `"vbus:PATH"`, or drives selected by `node`).
+    CanOpen(canopen::CanRunConfig),
+}
+
+/// Check a run file of either bus: a CANopen run when the interface is a CANopen bus or a
+/// drive is selected by `node`, else an EtherCAT run ([`parse`]).
+pub fn parse_any(text: &str, source: &str) -> Result<Config, ConfigError> {
+    let cx = Ctx { text, file: source };
+    let f: raw::File = deserialize(&cx)?;
+    if canopen::is_canopen(&f) {
+        canopen::parse(&cx, &f).map(Config::CanOpen)
+    } else {
+        parse_ethercat(&cx, f).map(Config::EtherCat)
+    }
+}
+
+/// Read and check a run file of either bus ([`parse_any`]).
+pub fn load_any(path: &Path) -> Result<Config, ConfigError> {
+    let (text, file) = read_text(path, "the file")?;
+    parse_any(&text, &file)
+}
+
+fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> {
+    let cx = *cx;
 
     // Where the segment is.
     let (target, sim_names) = match (f.interface.get_ref().as_str(), &f.sim) {
@@ -604,7 +660,7 @@ pub fn parse(text: &str, source: &str) -> Result<RunConfig, ConfigError> {
         );
     }
     Ok(RunConfig {
-        source: source.to_string(),
+        source: cx.file.to_string(),
         target,
         sim,
         master,
@@ -1176,110 +1232,16 @@ fn drive(
         }
     }
 
-    // Units.
-    let units = match &r.units {
-        Some(u) => {
-            let k = u.get_ref().counts_per_unit;
-            if !(k.is_finite() && k > 0.0) {
-                return Err(cx.err(
-                    u.span(),
-                    key("units.counts_per_unit"),
-                    format!("must be a positive number, not {k}"),
-                ));
-            }
-            Some(UserUnits {
-                name: u.get_ref().name.clone(),
-                counts_per_unit: k,
-            })
-        }
-        None => None,
-    };
-    let k = units.as_ref().map_or(1.0, |u| u.counts_per_unit);
-    let uname = units
-        .as_ref()
-        .map_or("counts", |u| u.name.as_str())
-        .to_string();
-
-    // Limits.
-    let mut fe_limit = None;
-    if let Some(l) = &r.limits {
-        let lim = l.get_ref();
-        for (name, v) in [
-            ("following_error", lim.following_error),
-            ("max_velocity", lim.max_velocity),
-            ("max_acceleration", lim.max_acceleration),
-            ("max_torque", lim.max_torque),
-        ] {
-            if let Some(v) = v
-                && !(v.is_finite() && v > 0.0)
-            {
-                return Err(cx.err(
-                    l.span(),
-                    key(&format!("limits.{name}")),
-                    format!("must be a positive number, not {v}"),
-                ));
-            }
-        }
-        if let Some(fe) = lim.following_error {
-            let counts = (fe * k).round();
-            if counts < 1.0 || counts > f64::from(u32::MAX) {
-                return Err(cx.err(
-                    l.span(),
-                    key("limits.following_error"),
-                    format!(
-                        "{fe} {uname} is {counts} counts; it must be 1 to {} counts",
-                        u32::MAX
-                    ),
-                ));
-            }
-            fe_limit = Some(counts as u32);
-        }
-    }
-
-    // Program.
-    let mut steps = Vec::with_capacity(r.program.len());
-    let mut described = Vec::with_capacity(r.program.len());
-    for (n, s) in r.program.iter().enumerate() {
-        let step = scale_step(s.get_ref(), k)
-            .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
-        if let Some(l) = &r.limits {
-            check_limits(s.get_ref(), l.get_ref(), &uname)
-                .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
-        }
-        // A sine at or above half the cycle rate is sampled at the same phase every cycle (or
-        // between two), so the axis does not follow it at all: 500 Hz at 1 ms "completed" with
-        // nothing moved.
-        if let raw::Step::Sine { frequency, .. } = *s.get_ref() {
-            let nyquist = 0.5 / cycle.as_secs_f64();
-            if frequency >= nyquist {
-                return Err(cx.err(
-                    s.span(),
-                    key(&format!("program[{n}]")),
-                    format!(
-                        "a sine of {frequency} Hz at a {} µs cycle is sampled at or beyond half \
-                         the cycle rate ({nyquist} Hz): the axis would not follow it; lower the \
-                         frequency well below that",
-                        cycle.as_micros()
-                    ),
-                ));
-            }
-        }
-        described.push(describe(s.get_ref(), &uname));
-        steps.push(step);
-    }
+    let Program {
+        units,
+        k,
+        fe_limit,
+        steps,
+        described,
+    } = program_of(cx, &key, d, mode, cycle)?;
     if let Some(p) = profile {
         rated(i, p, r, k, warnings);
     }
-    program::validate(&steps, mode).map_err(|e| {
-        let n = match &e {
-            program::ProgramError::WrongMode { index, .. }
-            | program::ProgramError::Profile { index, .. }
-            | program::ProgramError::ProbeNotArmed { index, .. } => *index,
-        };
-        let span = r.program.get(n).map_or(d.span(), Spanned::span);
-        cx.err(span, key(&format!("program[{n}]")), e.to_string())
-    })?;
-
     // pp targets within what the drive takes in 0x607A.
     if let Some(range) = profile.and_then(|p| p.caps.pp_target_range)
         && let Some((n, t)) = program::pp_target_beyond(&steps, range)
@@ -1385,53 +1347,8 @@ fn drive(
     };
 
     // Start-up SDOs.
-    let mut sdos = Vec::new();
-    if let Some(table) = &r.sdos {
-        for (a, v) in table.get_ref() {
-            let k = key(&format!("sdos.\"{a}\""));
-            let addr: ObjectAddress = a.parse().map_err(|e: crate::od::AddressParseError| {
-                cx.err(v.span(), k.clone(), e.to_string())
-            })?;
-            let text = match v.get_ref() {
-                toml::Value::Integer(i) => i.to_string(),
-                toml::Value::Float(x) => x.to_string(),
-                toml::Value::String(s) => s.clone(),
-                toml::Value::Boolean(b) => b.to_string(),
-                other => {
-                    return Err(cx.err(
-                        v.span(),
-                        k,
-                        format!(
-                            "a start-up value is a number, a string or a boolean, not {}",
-                            other.type_str()
-                        ),
-                    ));
-                }
-            };
-            let value = match profile {
-                Some(p) => {
-                    let dt = Dictionary::new(p.dictionary)
-                        .data_type(addr)
-                        .ok_or_else(|| {
-                            cx.err(
-                                v.span(),
-                                k.clone(),
-                                format!("{addr} is not in the {} dictionary", p.name),
-                            )
-                        })?;
-                    Value::parse(&text, dt)
-                        .map_err(|e| cx.err(v.span(), k.clone(), e.to_string()))?
-                }
-                None => match v.get_ref() {
-                    toml::Value::Integer(i) => Value::Int(*i),
-                    toml::Value::Float(x) => Value::Real(*x),
-                    toml::Value::Boolean(b) => Value::Uint(u64::from(*b)),
-                    _ => Value::Str(text),
-                },
-            };
-            sdos.push((addr, value));
-        }
-    }
+    let dict = profile.map(|p| (p.dictionary, p.name));
+    let mut sdos = start_up_values(cx, &key, r.sdos.as_ref(), dict)?;
     // A start-up value for an object a home, pp, pv or tq step writes would silently change
     // that step.
     if let Some((a, _)) = sdos
@@ -1497,6 +1414,194 @@ fn drive(
             steps: described,
         },
     ))
+}
+
+/// The start-up values of a drive entry (`sdos`), typed by the drive's dictionary when its
+/// profile is known (`dict`: its objects and name), else by the TOML value.
+#[allow(clippy::type_complexity)]
+fn start_up_values(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    table: Option<&Spanned<std::collections::BTreeMap<String, Spanned<toml::Value>>>>,
+    dict: Option<(&'static [crate::od::ObjectDesc], &str)>,
+) -> Result<Vec<(ObjectAddress, Value)>, ConfigError> {
+    let mut sdos = Vec::new();
+    if let Some(table) = table {
+        for (a, v) in table.get_ref() {
+            let k = key(&format!("sdos.\"{a}\""));
+            let addr: ObjectAddress = a.parse().map_err(|e: crate::od::AddressParseError| {
+                cx.err(v.span(), k.clone(), e.to_string())
+            })?;
+            let text = match v.get_ref() {
+                toml::Value::Integer(i) => i.to_string(),
+                toml::Value::Float(x) => x.to_string(),
+                toml::Value::String(s) => s.clone(),
+                toml::Value::Boolean(b) => b.to_string(),
+                other => {
+                    return Err(cx.err(
+                        v.span(),
+                        k,
+                        format!(
+                            "a start-up value is a number, a string or a boolean, not {}",
+                            other.type_str()
+                        ),
+                    ));
+                }
+            };
+            let value = match dict {
+                Some((objects, name)) => {
+                    let dt = Dictionary::new(objects).data_type(addr).ok_or_else(|| {
+                        cx.err(
+                            v.span(),
+                            k.clone(),
+                            format!("{addr} is not in the {name} dictionary"),
+                        )
+                    })?;
+                    Value::parse(&text, dt)
+                        .map_err(|e| cx.err(v.span(), k.clone(), e.to_string()))?
+                }
+                None => match v.get_ref() {
+                    toml::Value::Integer(i) => Value::Int(*i),
+                    toml::Value::Float(x) => Value::Real(*x),
+                    toml::Value::Boolean(b) => Value::Uint(u64::from(*b)),
+                    _ => Value::Str(text),
+                },
+            };
+            sdos.push((addr, value));
+        }
+    }
+    Ok(sdos)
+}
+
+/// A drive entry's program as the file gives it: its units, the following-error limit, and
+/// the steps in counts (with each step described in the file's units), checked against the
+/// mode they run in, their own parameters, the entry's `limits` and the cycle. The same for an
+/// EtherCAT and a CANopen drive.
+struct Program {
+    units: Option<UserUnits>,
+    /// Counts per user unit (1 without units).
+    k: f64,
+    fe_limit: Option<u32>,
+    steps: Vec<Step>,
+    described: Vec<String>,
+}
+
+fn program_of(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    d: &Spanned<raw::Drive>,
+    mode: RunMode,
+    cycle: Duration,
+) -> Result<Program, ConfigError> {
+    let r = d.get_ref();
+    // Units.
+    let units = match &r.units {
+        Some(u) => {
+            let k = u.get_ref().counts_per_unit;
+            if !(k.is_finite() && k > 0.0) {
+                return Err(cx.err(
+                    u.span(),
+                    key("units.counts_per_unit"),
+                    format!("must be a positive number, not {k}"),
+                ));
+            }
+            Some(UserUnits {
+                name: u.get_ref().name.clone(),
+                counts_per_unit: k,
+            })
+        }
+        None => None,
+    };
+    let k = units.as_ref().map_or(1.0, |u| u.counts_per_unit);
+    let uname = units
+        .as_ref()
+        .map_or("counts", |u| u.name.as_str())
+        .to_string();
+
+    // Limits.
+    let mut fe_limit = None;
+    if let Some(l) = &r.limits {
+        let lim = l.get_ref();
+        for (name, v) in [
+            ("following_error", lim.following_error),
+            ("max_velocity", lim.max_velocity),
+            ("max_acceleration", lim.max_acceleration),
+            ("max_torque", lim.max_torque),
+        ] {
+            if let Some(v) = v
+                && !(v.is_finite() && v > 0.0)
+            {
+                return Err(cx.err(
+                    l.span(),
+                    key(&format!("limits.{name}")),
+                    format!("must be a positive number, not {v}"),
+                ));
+            }
+        }
+        if let Some(fe) = lim.following_error {
+            let counts = (fe * k).round();
+            if counts < 1.0 || counts > f64::from(u32::MAX) {
+                return Err(cx.err(
+                    l.span(),
+                    key("limits.following_error"),
+                    format!(
+                        "{fe} {uname} is {counts} counts; it must be 1 to {} counts",
+                        u32::MAX
+                    ),
+                ));
+            }
+            fe_limit = Some(counts as u32);
+        }
+    }
+
+    // Program.
+    let mut steps = Vec::with_capacity(r.program.len());
+    let mut described = Vec::with_capacity(r.program.len());
+    for (n, s) in r.program.iter().enumerate() {
+        let step = scale_step(s.get_ref(), k)
+            .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
+        if let Some(l) = &r.limits {
+            check_limits(s.get_ref(), l.get_ref(), &uname)
+                .map_err(|m| cx.err(s.span(), key(&format!("program[{n}]")), m))?;
+        }
+        // A sine at or above half the cycle rate is sampled at the same phase every cycle (or
+        // between two), so the axis does not follow it at all: 500 Hz at 1 ms "completed" with
+        // nothing moved.
+        if let raw::Step::Sine { frequency, .. } = *s.get_ref() {
+            let nyquist = 0.5 / cycle.as_secs_f64();
+            if frequency >= nyquist {
+                return Err(cx.err(
+                    s.span(),
+                    key(&format!("program[{n}]")),
+                    format!(
+                        "a sine of {frequency} Hz at a {} µs cycle is sampled at or beyond half \
+                         the cycle rate ({nyquist} Hz): the axis would not follow it; lower the \
+                         frequency well below that",
+                        cycle.as_micros()
+                    ),
+                ));
+            }
+        }
+        described.push(describe(s.get_ref(), &uname));
+        steps.push(step);
+    }
+    program::validate(&steps, mode).map_err(|e| {
+        let n = match &e {
+            program::ProgramError::WrongMode { index, .. }
+            | program::ProgramError::Profile { index, .. }
+            | program::ProgramError::ProbeNotArmed { index, .. } => *index,
+        };
+        let span = r.program.get(n).map_or(d.span(), Spanned::span);
+        cx.err(span, key(&format!("program[{n}]")), e.to_string())
+    })?;
+
+    Ok(Program {
+        units,
+        k,
+        fe_limit,
+        steps,
+        described,
+    })
 }
 
 fn build_mapping(
@@ -1842,9 +1947,9 @@ fn positive_all(step: &str, values: &[(&str, f64)]) -> Result<(), String> {
 /// (pp velocity), 0x6083/0x6084 (pp and pv acceleration and deceleration), 0x6087 (tq slope).
 /// They are written once, in PRE-OP, so every step that sets one object must ask the same
 /// value of it (the error names both steps).
-fn profile_writes(
+fn profile_writes<B>(
     program: &[Spanned<raw::Step>],
-    p: Option<&'static DriveProfile>,
+    p: Option<&'static crate::cia402::Profile<B>>,
     k: f64,
 ) -> Result<Vec<(ObjectAddress, Value)>, (usize, String)> {
     use crate::cia402::{AccelUnit, TorqueSlopeUnit};
@@ -1959,9 +2064,9 @@ fn profile_writes(
 /// drive's units): they are written once, in PRE-OP, so every home step of a drive must ask
 /// the same. Checks the method against the drive's 0x60E3 (where its dictionary lists it) and
 /// that the drive has hm.
-fn homing_writes(
+fn homing_writes<B>(
     program: &[Spanned<raw::Step>],
-    p: Option<&'static DriveProfile>,
+    p: Option<&'static crate::cia402::Profile<B>>,
     k: f64,
 ) -> Result<Vec<(ObjectAddress, Value)>, (usize, String)> {
     use crate::cia402::{AccelUnit, OperationMode};

@@ -118,6 +118,8 @@ impl EsiRef {
 #[serde(deny_unknown_fields)]
 pub(super) struct Drive {
     #[serde(default)]
+    pub node: Option<Spanned<u8>>,
+    #[serde(default)]
     pub position: Option<Spanned<u16>>,
     #[serde(default)]
     pub alias: Option<Spanned<u16>>,

@@ -428,9 +428,11 @@ enum Command {
         op: EdsOp,
     },
     /// A cyclic run from a configuration file: OP, enable, each drive's set-point program,
-    /// controlled stop, summary. Progress on a terminal; quiet when piped.
+    /// controlled stop, summary. Progress on a terminal; quiet when piped. A file whose
+    /// interface is a CANopen bus (can-sim, vbus:PATH) or whose drives are selected by `node`
+    /// is a CANopen run: the same programs on the CANopen drives, paced by SYNC.
     #[command(
-        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n  ecdrive run -c examples/csp_move_sine.toml -i veth0\n\nThe configuration file is described in the README (\"Configuration file\")."
+        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n  ecdrive run -c examples/csp_move_sine.toml -i veth0\n  ecdrive run -c examples/canopen_profile_modes.toml\n  ecdrive run -c examples/canopen_profile_modes.toml -i vbus:/tmp/can.sock\n\nThe configuration file is described in the README (\"Configuration file\")."
     )]
     Run {
         /// The configuration file (TOML).

@@ -906,3 +906,49 @@ pub fn startup(t: &ecdrive::master::StartupTimes) {
         t.op_ms.map(|o| format!(", OP {o:.1}")).unwrap_or_default()
     );
 }
+
+/// A CANopen run's summary: per drive its program, states, modes and final position, then how
+/// the run ended and every EMCY decoded.
+pub fn can_run_report(r: &ecdrive::app::canopen::run::CanRunReport) {
+    println!(
+        "{}: CANopen run on {}, SYNC every {} µs",
+        r.config, r.bus, r.cycle_us
+    );
+    for d in &r.drives {
+        let position = match d.position_user {
+            Some(u) => format!("{u:.4} {} ({} counts)", d.units, d.position),
+            None => format!("{} counts", d.position),
+        };
+        println!(
+            "node {} ({}): program {}; modes {}; at {position}",
+            d.node,
+            d.drive,
+            if d.program.is_empty() {
+                "none"
+            } else if d.program_done {
+                "done"
+            } else {
+                "not finished"
+            },
+            if d.modes.is_empty() {
+                "-".to_string()
+            } else {
+                d.modes.join(" → ")
+            },
+        );
+        println!("  states: {}", d.states.join(" → "));
+        for e in &d.errors {
+            println!("  error: {e}");
+        }
+    }
+    for e in &r.emergencies {
+        println!("EMCY: {e}");
+    }
+    println!(
+        "{}: {} ({} cycles, {:.3} s of bus time)",
+        r.outcome.describe(),
+        r.reason,
+        r.cycles,
+        r.bus_time_us as f64 * 1e-6
+    );
+}

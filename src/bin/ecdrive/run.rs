@@ -15,8 +15,11 @@ pub fn run(
     esi: Option<&Path>,
     json: bool,
 ) -> ExitCode {
-    let mut cfg = match ecdrive::app::config::load(path) {
-        Ok(c) => c,
+    let mut cfg = match ecdrive::app::config::load_any(path) {
+        Ok(ecdrive::app::config::Config::EtherCat(c)) => c,
+        Ok(ecdrive::app::config::Config::CanOpen(c)) => {
+            return run_canopen(c, interface, duration, check, record, esi, json);
+        }
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
     if let Some(dir) = esi {
@@ -127,6 +130,106 @@ pub fn run(
         }
     } else {
         print::run_report(&report);
+    }
+    if code != exit::OK {
+        eprintln!(
+            "ecdrive run: {}: {}",
+            report.outcome.describe(),
+            report.reason
+        );
+    }
+    ExitCode::from(code)
+}
+
+/// A CANopen run file: the drives on the motion runtime over the file's CAN bus.
+fn run_canopen(
+    mut cfg: ecdrive::app::config::canopen::CanRunConfig,
+    interface: Option<&str>,
+    duration: Option<Duration>,
+    check: bool,
+    record: Option<&Path>,
+    esi: Option<&Path>,
+    json: bool,
+) -> ExitCode {
+    use ecdrive::app::config::canopen::CanTarget;
+    if record.is_some() || esi.is_some() || crate::pcap().is_some() {
+        return fail_with(
+            "run",
+            &format!(
+                "{}: --record, --plot, --esi and --pcap are not available for CANopen runs yet",
+                cfg.source
+            ),
+            exit::USAGE,
+        );
+    }
+    if let Some(i) = interface {
+        cfg.target = if i == "can-sim" {
+            CanTarget::Sim
+        } else {
+            match i.parse() {
+                Ok(b) => CanTarget::Bus(b),
+                Err(e) => return fail_with("run", &format!("--interface {i:?}: {e}"), exit::USAGE),
+            }
+        };
+    }
+    if check {
+        if json {
+            #[derive(serde::Serialize)]
+            struct Checked<'a> {
+                config: &'a str,
+                bus: String,
+                cycle_ns: u64,
+                drives: usize,
+                valid: bool,
+                warnings: &'a [String],
+            }
+            return print_json(
+                "run",
+                &Checked {
+                    config: &cfg.source,
+                    bus: cfg.target.to_string(),
+                    cycle_ns: cfg.cycle.as_nanos() as u64,
+                    drives: cfg.drives.len(),
+                    valid: true,
+                    warnings: &cfg.warnings,
+                },
+            );
+        }
+        println!(
+            "{}: valid; CANopen run, {} drive{}, SYNC every {} µs, on {}",
+            cfg.source,
+            cfg.drives.len(),
+            if cfg.drives.len() == 1 { "" } else { "s" },
+            cfg.cycle.as_micros(),
+            cfg.target
+        );
+        for w in &cfg.warnings {
+            println!("warning: {w}");
+        }
+        return ExitCode::SUCCESS;
+    }
+    for w in &cfg.warnings {
+        eprintln!("ecdrive run: warning: {w}");
+    }
+    let signals = crate::stop_signals();
+    let report = match ecdrive::app::canopen::run::run(&cfg, duration, &signals.stop) {
+        Ok(r) => r,
+        Err(e) => return fail_with("run", &e.to_string(), exit::BUS),
+    };
+    use ecdrive::app::ethercat::tools::run::Outcome;
+    let code = match report.outcome {
+        Outcome::Completed | Outcome::Interrupted => exit::OK,
+        Outcome::DriveFault => exit::FAULT,
+        Outcome::Refused => exit::REFUSED,
+        Outcome::BusLost => exit::BUS,
+    };
+    if json {
+        let c = print_json("run", &report);
+        if c != ExitCode::SUCCESS {
+            return c;
+        }
+    } else {
+        print::can_run_report(&report);
     }
     if code != exit::OK {
         eprintln!(

@@ -16,6 +16,7 @@ impl<T: CanTransport> Master<T> {
             }
             _ => now,
         };
+        let sent_at = self.t.now_us();
         for i in 0..self.drives.len() {
             let Some(d) = self.drives.get(i) else {
                 continue;
@@ -24,6 +25,24 @@ impl<T: CanTransport> Master<T> {
             if d.last_output().is_none() || self.nmt_state(node) != Some(NmtState::Operational) {
                 continue;
             }
+            // RPDOs no closer than the drive takes them (ASDA-A2: two on one COB-ID within
+            // 1 ms raise AL112): a cycle whose frames went out late keeps its place in the
+            // schedule, so the next may come sooner; then this cycle's wait for the next
+            // (the drive keeps the last values, as on a lost frame).
+            let min = u64::from(d.profile().comm.rpdo_min_interval_us);
+            if min > 0
+                && d.rpdo_sent_us()
+                    .is_some_and(|t| sent_at.saturating_sub(t) < min)
+            {
+                self.stats.rpdos_deferred += 1;
+                continue;
+            }
+            if let Some(d) = self.drives.get_mut(i) {
+                d.set_rpdo_sent_us(sent_at);
+            }
+            let Some(d) = self.drives.get(i) else {
+                continue;
+            };
             for k in 0..d.rpdos().len() {
                 let frame = self
                     .drives

@@ -278,6 +278,9 @@ pub struct MasterStats {
     pub unhandled: u64,
     /// SDO responses that came too late or unasked.
     pub stray_sdo: u64,
+    /// Cycles whose RPDOs to a drive were held back: the last went out less than the drive's
+    /// minimum RPDO gap before ([`CommSupport::rpdo_min_interval_us`](super::profile::CommSupport::rpdo_min_interval_us)).
+    pub rpdos_deferred: u64,
 }
 
 /// What configuring a drive needs.

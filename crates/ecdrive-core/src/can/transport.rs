@@ -52,6 +52,13 @@ pub trait CanTransport {
     fn send(&mut self, frame: &CanFrame) -> Result<(), TransportError>;
     /// Wait at most `timeout_us` for a frame (0 = do not wait). `Ok(None)` on timeout.
     fn recv(&mut self, timeout_us: u64) -> Result<Option<CanFrame>, TransportError>;
+    /// As [`CanTransport::recv`], with the time the frame was on the bus (this transport's
+    /// clock): a transport that knows when it was sent says so (a frame that waited in a
+    /// socket keeps its time, as on a CAN bus, where frames cannot bunch); by default the time
+    /// it is received.
+    fn recv_stamped(&mut self, timeout_us: u64) -> Result<Option<(CanFrame, u64)>, TransportError> {
+        Ok(self.recv(timeout_us)?.map(|f| (f, self.now_us())))
+    }
 }
 
 impl<T: CanTransport + ?Sized> CanTransport for Box<T> {
@@ -67,6 +74,9 @@ impl<T: CanTransport + ?Sized> CanTransport for Box<T> {
     fn recv(&mut self, timeout_us: u64) -> Result<Option<CanFrame>, TransportError> {
         (**self).recv(timeout_us)
     }
+    fn recv_stamped(&mut self, timeout_us: u64) -> Result<Option<(CanFrame, u64)>, TransportError> {
+        (**self).recv_stamped(timeout_us)
+    }
 }
 
 impl<T: CanTransport + ?Sized> CanTransport for &mut T {
@@ -81,6 +91,9 @@ impl<T: CanTransport + ?Sized> CanTransport for &mut T {
     }
     fn recv(&mut self, timeout_us: u64) -> Result<Option<CanFrame>, TransportError> {
         (**self).recv(timeout_us)
+    }
+    fn recv_stamped(&mut self, timeout_us: u64) -> Result<Option<(CanFrame, u64)>, TransportError> {
+        (**self).recv_stamped(timeout_us)
     }
 }
 

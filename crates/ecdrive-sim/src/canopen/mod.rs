@@ -249,10 +249,10 @@ pub fn serve(
         }
         let now = transport.now_us();
         let wait = next_tick.saturating_sub(now);
-        if let Some(f) = transport.recv(wait)? {
-            let now = transport.now_us();
+        // Each frame at the time it was on the bus (the sender's, on a vbus hub).
+        if let Some((f, at)) = transport.recv_stamped(wait)? {
             for n in nodes.iter_mut() {
-                n.receive(&f, now);
+                n.receive(&f, at);
             }
         }
         let now = transport.now_us();

@@ -121,6 +121,9 @@ pub struct EmulatedNode {
     main_power: bool,
     out: VecDeque<CanFrame>,
     now_us: u64,
+    /// When the frame being handled was on the bus: the gaps a drive judges between requests
+    /// are the bus's (a frame that waited in a socket keeps its time).
+    frame_us: u64,
     last_tick_us: Option<u64>,
     last_sdo_us: Option<u64>,
     sync_next_us: Option<u64>,
@@ -212,6 +215,7 @@ impl EmulatedNode {
             out: VecDeque::with_capacity(64),
             now_us: 0,
             last_tick_us: None,
+            frame_us: 0,
             last_sdo_us: None,
             sync_next_us: None,
             last_sync_us: None,
@@ -442,6 +446,7 @@ impl EmulatedNode {
             return;
         }
         self.now_us = self.now_us.max(now_us);
+        self.frame_us = now_us;
         let id = frame.id();
         if id == cob::NMT {
             if let Some((cmd, node)) = NmtCommand::parse(frame)
@@ -509,8 +514,8 @@ impl EmulatedNode {
         let too_soon = min > 0
             && self
                 .last_sdo_us
-                .is_some_and(|t| self.now_us.saturating_sub(t) < min);
-        self.last_sdo_us = Some(self.now_us);
+                .is_some_and(|t| self.frame_us.saturating_sub(t) < min);
+        self.last_sdo_us = Some(self.frame_us);
         if too_soon {
             // The drive's SDO receive buffer overruns: the request is lost (ASDA-A2 AL111).
             self.stats.sdo_overruns += 1;
@@ -541,9 +546,9 @@ impl EmulatedNode {
         let min = u64::from(self.profile.comm.rpdo_min_interval_us);
         let too_soon = min > 0
             && p.last_rx_us
-                .is_some_and(|t| self.now_us.saturating_sub(t) < min);
+                .is_some_and(|t| self.frame_us.saturating_sub(t) < min);
         if let Some(r) = self.rpdo.get_mut(k) {
-            r.last_rx_us = Some(self.now_us);
+            r.last_rx_us = Some(self.frame_us);
         }
         if too_soon {
             self.stats.rpdos_rejected += 1;

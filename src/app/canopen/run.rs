@@ -1,0 +1,450 @@
+//! `ecdrive run FILE` for a CANopen run file ([`crate::app::config::canopen`]): the drives
+//! configured and started by the CANopen master, then run by the motion runtime the EtherCAT
+//! runs use ([`crate::canopen::MotionSession`]): enable, the programs, a controlled stop,
+//! disable, NMT Stop. [`run`] returns a [`CanRunReport`]; the CLI prints it or its JSON.
+//!
+//! On `can-sim` the emulated drives run on simulated time (a run of seconds takes
+//! milliseconds); on a `vbus:` hub or a SocketCAN interface the SYNC period is real time.
+
+use crate::app::canopen::tools::open_bus;
+use crate::app::config::canopen::{CanDriveConfig, CanRunConfig, CanTarget};
+use crate::app::ethercat::tools::run::Outcome;
+use crate::canopen::error::{CanError, CanErrorKind, NodeRef};
+use crate::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
+use crate::canopen::motion::{MotionSession, axis_setup};
+use crate::canopen::transport::CanTransport;
+use crate::cia402::State;
+use crate::master::{Axes, Command, EventKind, StopKind, StopReason};
+use crate::sim::canopen::{EmulatedNode, SimBus};
+use serde::Serialize;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+/// **\[REC\]** How long the drives may take to reach Operation enabled, and to be disabled at
+/// the end.
+pub const ENABLE_TIMEOUT: Duration = Duration::from_secs(5);
+
+/// **\[REC\]** How long a controlled stop may take before the run disables regardless (the
+/// runtime's own stop timeout is 2 s).
+pub const STOP_WAIT: Duration = Duration::from_secs(5);
+
+/// What a run did, per drive.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CanDriveReport {
+    /// Node-ID.
+    pub node: u8,
+    /// The drive's name.
+    pub drive: &'static str,
+    /// The program, as the file gives it.
+    pub program: Vec<String>,
+    /// Whether the program ran to its end.
+    pub program_done: bool,
+    /// The CiA 402 states it went through.
+    pub states: Vec<String>,
+    /// The modes it ran in.
+    pub modes: Vec<String>,
+    /// Its actual position at the end, counts.
+    pub position: i64,
+    /// The same in the file's user unit, when it gives one.
+    pub position_user: Option<f64>,
+    /// The user unit's name, or "counts".
+    pub units: String,
+    /// What went wrong on it (faults with the drive's alarm, refusals, a failed home step).
+    pub errors: Vec<String>,
+}
+
+/// What a CANopen run did.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CanRunReport {
+    /// The configuration file.
+    pub config: String,
+    /// The bus.
+    pub bus: String,
+    /// The SYNC period, µs.
+    pub cycle_us: u64,
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Why, in words.
+    pub reason: String,
+    /// SYNC cycles run.
+    pub cycles: u64,
+    /// The bus's time the run took, from opening the bus to NMT Stop, µs (simulated on
+    /// `can-sim`).
+    pub bus_time_us: u64,
+    /// Per drive, in file order.
+    pub drives: Vec<CanDriveReport>,
+    /// Every EMCY received, decoded with the drive's alarm table.
+    pub emergencies: Vec<String>,
+}
+
+/// Run `cfg` (`duration` overrides the file's). `stop` ends it early with a controlled stop
+/// (Ctrl-C). An error is a bus or configuration failure before the drives moved, naming the
+/// node; what happens to a drive afterwards is in the report.
+pub fn run(
+    cfg: &CanRunConfig,
+    duration: Option<Duration>,
+    stop: &AtomicBool,
+) -> Result<CanRunReport, CanError> {
+    let bus_err = |e| {
+        CanError::new(
+            NodeRef { id: 0, drive: None },
+            None,
+            CanErrorKind::Transport(e),
+        )
+    };
+    match &cfg.target {
+        CanTarget::Sim => {
+            let mut bus = SimBus::new();
+            for d in &cfg.drives {
+                let node = EmulatedNode::new(d.profile, d.node).map_err(|e| {
+                    CanError::new(
+                        NodeRef {
+                            id: d.node,
+                            drive: Some(d.profile.name),
+                        },
+                        None,
+                        CanErrorKind::NotReady(format!("the emulated drive: {e}")),
+                    )
+                })?;
+                bus.add_node(node);
+            }
+            run_on(bus, cfg, duration, stop)
+        }
+        CanTarget::Bus(spec) => run_on(open_bus(spec).map_err(bus_err)?, cfg, duration, stop),
+    }
+}
+
+/// The run on an open bus.
+pub fn run_on<T: CanTransport>(
+    transport: T,
+    cfg: &CanRunConfig,
+    duration: Option<Duration>,
+    stop: &AtomicBool,
+) -> Result<CanRunReport, CanError> {
+    let cycle_us = u64::try_from(cfg.cycle.as_micros()).unwrap_or(u64::MAX);
+    let mut m = Master::new(
+        transport,
+        MasterConfig {
+            cycle_us,
+            ..MasterConfig::default()
+        },
+    );
+    let started_us = m.now_us();
+    m.pump(50_000)?;
+    // A node an earlier run left in Stopped serves no SDO: every drive to Pre-operational
+    // first (harmless to one already there, and to an enabled drive).
+    for d in &cfg.drives {
+        m.nmt(d.node, crate::canopen::nmt::NmtCommand::EnterPreOperational)?;
+    }
+    m.pump(20_000)?;
+    for d in &cfg.drives {
+        let mut setup = DriveSetup::new(d.profile);
+        setup.settings = d.settings.clone();
+        setup.initial_mode = crate::cia402::OperationMode::from_i8(d.mode.code());
+        m.configure_drive(d.node, setup)?;
+        m.start(d.node)?;
+    }
+    let axes: Vec<_> = cfg
+        .drives
+        .iter()
+        .map(|d| {
+            let mut s = axis_setup(d.profile, d.steps.clone(), d.mode);
+            s.following_error_limit = d.following_error_limit;
+            s.limits = d.limits;
+            (d.node, s)
+        })
+        .collect();
+    let mut s = MotionSession::new(m, &axes)?;
+    let mut run = Run::new(cfg, duration.or(cfg.duration), started_us);
+    let (outcome, reason) = run.drive(&mut s, stop)?;
+    run.finish(s, outcome, reason)
+}
+
+/// A run under way: its limits and what it saw.
+struct Run<'a> {
+    cfg: &'a CanRunConfig,
+    cycles_per_s: f64,
+    duration_cycles: Option<u64>,
+    cycles: u64,
+    errors: Vec<Vec<String>>,
+    done: Vec<bool>,
+    /// The bus's time when the run began, µs.
+    started_us: u64,
+}
+
+impl<'a> Run<'a> {
+    fn new(cfg: &'a CanRunConfig, duration: Option<Duration>, started_us: u64) -> Self {
+        let cycles_per_s = 1.0 / cfg.cycle.as_secs_f64();
+        Self {
+            cfg,
+            cycles_per_s,
+            duration_cycles: duration.map(|d| (d.as_secs_f64() * cycles_per_s).ceil() as u64),
+            cycles: 0,
+            errors: vec![Vec::new(); cfg.drives.len()],
+            done: cfg.drives.iter().map(|d| d.steps.is_empty()).collect(),
+            started_us,
+        }
+    }
+
+    fn cycles_of(&self, d: Duration) -> u64 {
+        (d.as_secs_f64() * self.cycles_per_s).ceil() as u64
+    }
+
+    /// One cycle, its events sorted into the drives' errors and ends; `Some(reason)` when the
+    /// axes were stopped for one.
+    fn cycle<T: CanTransport>(
+        &mut self,
+        s: &mut MotionSession<T>,
+    ) -> Result<Option<StopReason>, CanError> {
+        s.cycle()?;
+        self.cycles += 1;
+        let mut stopped = None;
+        for e in s.take_events() {
+            let axis = |a: u16| usize::from(a);
+            match e.kind {
+                EventKind::ProgramDone { axis: a } => {
+                    if let Some(d) = self.done.get_mut(axis(a)) {
+                        *d = true;
+                    }
+                }
+                EventKind::CommandRefused { axis: a, why } => self.error(axis(a), why.to_string()),
+                EventKind::HomingFailed { axis: a, .. } => {
+                    self.error(axis(a), crate::master::telemetry::event_text(&e.kind));
+                }
+                EventKind::Axis {
+                    axis: a,
+                    event: crate::cia402::Event::Fault { .. },
+                } => self.error(axis(a), "the drive faulted (its EMCY below)".into()),
+                EventKind::FollowingError {
+                    axis: a,
+                    value,
+                    limit,
+                } => self.error(
+                    axis(a),
+                    format!("following error {value} counts beyond the limit of {limit}"),
+                ),
+                EventKind::Stopping { reason } => stopped = stopped.or(Some(reason)),
+                _ => {}
+            }
+        }
+        while let Some(e) = s.master_mut().poll_event() {
+            if let MasterEvent::HeartbeatLost { node, .. } | MasterEvent::GuardingLost { node, .. } =
+                e
+                && let Some(i) = self.cfg.drives.iter().position(|d| d.node == node.id)
+            {
+                self.error(i, e.to_string());
+                stopped = stopped.or(Some(StopReason::DriveFault { axis: i as u16 }));
+            }
+            if let MasterEvent::RemoteOff { node } = e
+                && let Some(i) = self.cfg.drives.iter().position(|d| d.node == node.id)
+            {
+                self.error(i, e.to_string());
+            }
+        }
+        Ok(stopped)
+    }
+
+    fn error(&mut self, i: usize, text: String) {
+        if let Some(v) = self.errors.get_mut(i)
+            && !v.contains(&text)
+        {
+            v.push(text);
+        }
+    }
+
+    /// Enable, run the programs (or the duration), stop: the outcome and why.
+    fn drive<T: CanTransport>(
+        &mut self,
+        s: &mut MotionSession<T>,
+        stop: &AtomicBool,
+    ) -> Result<(Outcome, String), CanError> {
+        s.command(Command::Enable(Axes::All));
+        let limit = self.cycles_of(ENABLE_TIMEOUT);
+        let enabled = |s: &MotionSession<T>| {
+            (0..self.cfg.drives.len()).all(|i| {
+                s.telemetry(i)
+                    .is_some_and(|t| t.state == Some(State::OperationEnabled))
+            })
+        };
+        let mut n = 0;
+        while !enabled(s) {
+            if let Some(r) = self.cycle(s)? {
+                return Ok((Outcome::DriveFault, self.stop_reason(r)));
+            }
+            n += 1;
+            if n > limit || stop.load(Ordering::Relaxed) {
+                let late: Vec<String> = (0..self.cfg.drives.len())
+                    .filter(|i| {
+                        s.telemetry(*i)
+                            .is_none_or(|t| t.state != Some(State::OperationEnabled))
+                    })
+                    .map(|i| describe_not_enabled(s, &self.cfg.drives[i], i))
+                    .collect();
+                if stop.load(Ordering::Relaxed) {
+                    return Ok((Outcome::Interrupted, "stopped while enabling".into()));
+                }
+                return Ok((
+                    Outcome::Refused,
+                    format!(
+                        "not every drive reached Operation enabled within {} s: {}",
+                        ENABLE_TIMEOUT.as_secs(),
+                        late.join("; ")
+                    ),
+                ));
+            }
+        }
+        for (i, d) in self.cfg.drives.iter().enumerate() {
+            if !d.steps.is_empty() {
+                s.command(Command::RunProgram(Axes::One(i as u16)));
+            }
+        }
+        let start = self.cycles;
+        loop {
+            if let Some(r) = self.cycle(s)? {
+                return Ok((Outcome::DriveFault, self.stop_reason(r)));
+            }
+            if stop.load(Ordering::Relaxed) {
+                return Ok((Outcome::Interrupted, "stopped on request".into()));
+            }
+            let elapsed = self.cycles - start;
+            match self.duration_cycles {
+                Some(d) if elapsed >= d => {
+                    return Ok((Outcome::Completed, "the duration passed".into()));
+                }
+                None if self.done.iter().all(|d| *d) => {
+                    return Ok((Outcome::Completed, "every program finished".into()));
+                }
+                _ => {}
+            }
+            if self.errors.iter().any(|e| !e.is_empty()) {
+                return Ok((Outcome::Refused, "a program could not go on".into()));
+            }
+        }
+    }
+
+    fn stop_reason(&self, r: StopReason) -> String {
+        let name = |a: u16| {
+            self.cfg.drives.get(usize::from(a)).map_or_else(
+                || format!("axis {a}"),
+                |d| format!("node {} ({})", d.node, d.profile.name),
+            )
+        };
+        match r {
+            StopReason::DriveFault { axis } => format!("{} faulted", name(axis)),
+            StopReason::FollowingError { axis } => format!("{}: following error", name(axis)),
+            StopReason::HomingFailed { axis } => format!("{}: homing failed", name(axis)),
+            other => format!("{other:?}"),
+        }
+    }
+
+    /// A controlled stop, disable, NMT Stop; the report.
+    fn finish<T: CanTransport>(
+        mut self,
+        mut s: MotionSession<T>,
+        outcome: Outcome,
+        reason: String,
+    ) -> Result<CanRunReport, CanError> {
+        s.command(Command::Stop(StopKind::Ramp));
+        let limit = self.cycles_of(STOP_WAIT);
+        for _ in 0..limit {
+            self.cycle(&mut s)?;
+            let still = (0..self.cfg.drives.len()).any(|i| {
+                s.telemetry(i)
+                    .is_some_and(|t| t.state.is_some_and(State::is_energised))
+            });
+            if !still {
+                break;
+            }
+        }
+        s.command(Command::Disable(Axes::All));
+        for _ in 0..self.cycles_of(ENABLE_TIMEOUT) {
+            self.cycle(&mut s)?;
+            if (0..self.cfg.drives.len()).all(|i| {
+                s.telemetry(i)
+                    .is_some_and(|t| !t.state.is_some_and(State::is_energised))
+            }) {
+                break;
+            }
+        }
+        let drives: Vec<CanDriveReport> = self
+            .cfg
+            .drives
+            .iter()
+            .enumerate()
+            .map(|(i, d)| self.drive_report(&s, d, i))
+            .collect();
+        let mut m = s.into_master();
+        let mut emergencies = Vec::new();
+        for d in &self.cfg.drives {
+            emergencies.extend(m.emergencies(d.node).map(ToString::to_string));
+            // NMT Stop is refused to a drive still energised (the master's safety rule): the
+            // report says so.
+            if let Err(e) = m.nmt(d.node, crate::canopen::nmt::NmtCommand::Stop) {
+                emergencies.push(format!("NMT Stop of node {}: {e}", d.node));
+            }
+        }
+        Ok(CanRunReport {
+            config: self.cfg.source.clone(),
+            bus: self.cfg.target.to_string(),
+            cycle_us: u64::try_from(self.cfg.cycle.as_micros()).unwrap_or(u64::MAX),
+            outcome,
+            reason,
+            cycles: self.cycles,
+            bus_time_us: m.now_us().saturating_sub(self.started_us),
+            drives,
+            emergencies,
+        })
+    }
+
+    fn drive_report<T: CanTransport>(
+        &self,
+        s: &MotionSession<T>,
+        d: &CanDriveConfig,
+        i: usize,
+    ) -> CanDriveReport {
+        let t = s.telemetry(i).copied().unwrap_or_default();
+        let a = s.axis(i);
+        let k = d.units.as_ref().map(|u| u.counts_per_unit);
+        CanDriveReport {
+            node: d.node,
+            drive: d.profile.name,
+            program: d.described.clone(),
+            program_done: self.done.get(i).copied().unwrap_or(false) && !d.steps.is_empty(),
+            states: a.map_or_else(Vec::new, |a| {
+                a.states().iter().map(ToString::to_string).collect()
+            }),
+            modes: a.map_or_else(Vec::new, |a| {
+                a.modes_run().iter().map(ToString::to_string).collect()
+            }),
+            position: t.position_actual,
+            position_user: k.map(|k| t.position_actual as f64 / k),
+            units: d
+                .units
+                .as_ref()
+                .map_or_else(|| "counts".to_string(), |u| u.name.clone()),
+            errors: self.errors.get(i).cloned().unwrap_or_default(),
+        }
+    }
+}
+
+/// Why drive `i` is not enabled: its state and statusword.
+fn describe_not_enabled<T: CanTransport>(
+    s: &MotionSession<T>,
+    d: &CanDriveConfig,
+    i: usize,
+) -> String {
+    let t = s.telemetry(i).copied().unwrap_or_default();
+    let remote = if s.master().remote_off(d.node) {
+        ", statusword bit 9 (remote) is 0: the drive ignores the controlword"
+    } else {
+        ""
+    };
+    format!(
+        "node {} ({}) is in {} (statusword 0x{:04X}){remote}",
+        d.node,
+        d.profile.name,
+        t.state
+            .map_or_else(|| "no state yet".to_string(), |s| s.to_string()),
+        t.statusword
+    )
+}

@@ -1,0 +1,435 @@
+//! A CANopen run file: the EtherCAT run file's schema with a CANopen bus as `interface` and
+//! each `[[drive]]` selected by its `node`.
+//!
+//! ```toml
+//! interface = "can-sim"      # the emulated drives in-process, one per [[drive]] at its node;
+//!                            # or "vbus:PATH" (ecdrive sim --can vbus:PATH in another
+//!                            # process), or a SocketCAN interface ("can0")
+//! cycle = "4ms"              # the SYNC period (default 4 ms)
+//! duration = "10s"           # stop after this long (default: when every program has finished)
+//!
+//! [[drive]]
+//! node = 3                   # node-ID 1–127
+//! profile = "blv-r"          # blv-r, asda-a2, lexium-mdrive, lexium-mdrive-closed-loop
+//! mode = "pp"                # the mode at start: pp, pv or tq
+//! units = { name = "rev", counts_per_unit = 36000 }
+//! sdos = { "0x607C:00" = 0 }
+//! program = [
+//!   { step = "home", method = 24, speed_switch = 5, speed_zero = 0.5, acceleration = 100 },
+//!   { step = "pp", targets = [1, 0.5], velocity = 10, acceleration = 100 },
+//! ]
+//! ```
+//!
+//! The steps, units, limits and start-up values are read and checked as for an EtherCAT drive
+//! (the same functions); what only the EtherCAT bus has (`position`, `alias`, `identity`,
+//! `esi`, `profile_file`, `mapping`, `[sim]`, `dc_shift`, `[rt]`, `[supervision]`,
+//! `allow_generic`) is refused with the key named. The cyclic modes (csp, csv, cst) and the
+//! touch probe are not run over CANopen yet: the PDO plans carry the profile modes.
+
+use super::{ConfigError, Ctx, Program, UserUnits, homing_writes, profile_writes, raw};
+use super::{mode_of, parse_duration, program_of, start_up_values};
+use crate::app::canopen::tools::{BusSpec, EMULATED_NODES};
+use crate::canopen::profile::CanDriveProfile;
+use crate::master::SetpointLimits;
+use crate::master::program::{RunMode, Step};
+use crate::od::{ObjectAddress, Value};
+use std::time::Duration;
+use toml::Spanned;
+
+/// Where a CANopen run's drives are.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum CanTarget {
+    /// `interface = "can-sim"`: an emulated drive per `[[drive]]`, in-process, at its node,
+    /// on simulated time.
+    Sim,
+    /// A bus: a SocketCAN interface or a `vbus:PATH` hub.
+    Bus(BusSpec),
+}
+
+impl core::fmt::Display for CanTarget {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::Sim => f.write_str("can-sim (emulated drives in-process)"),
+            Self::Bus(b) => write!(f, "CAN bus {b}"),
+        }
+    }
+}
+
+/// One checked `[[drive]]` of a CANopen run.
+#[derive(Debug, Clone)]
+pub struct CanDriveConfig {
+    /// Node-ID.
+    pub node: u8,
+    /// The profile's name in the file (`blv-r`).
+    pub key: &'static str,
+    /// The drive's profile.
+    pub profile: &'static CanDriveProfile,
+    /// The mode at start.
+    pub mode: RunMode,
+    /// User units, if given.
+    pub units: Option<UserUnits>,
+    /// The program, in counts.
+    pub steps: Vec<Step>,
+    /// The program steps, described in the file's units.
+    pub described: Vec<String>,
+    /// Start-up writes: the home, pp, pv and tq steps' objects, then `sdos`.
+    pub settings: Vec<(ObjectAddress, Value)>,
+    /// The master's following-error limit, counts (judged in the cyclic position mode only).
+    pub following_error_limit: Option<u32>,
+    /// What the program's set-points must keep (counts).
+    pub limits: SetpointLimits,
+}
+
+/// A checked CANopen run file.
+#[derive(Debug, Clone)]
+pub struct CanRunConfig {
+    /// Where it came from (for messages).
+    pub source: String,
+    /// Where the drives are.
+    pub target: CanTarget,
+    /// The SYNC period.
+    pub cycle: Duration,
+    /// How long to run, if limited.
+    pub duration: Option<Duration>,
+    /// The drives, in file order.
+    pub drives: Vec<CanDriveConfig>,
+    /// What the check found questionable but not wrong.
+    pub warnings: Vec<String>,
+}
+
+/// Whether the file is a CANopen run: a CANopen interface or a drive selected by node.
+pub(super) fn is_canopen(f: &raw::File) -> bool {
+    let i = f.interface.get_ref();
+    i == "can-sim" || i.starts_with("vbus:") || f.drive.iter().any(|d| d.get_ref().node.is_some())
+}
+
+/// **\[REC\]** The SYNC period of a CANopen run unless the file gives one: 4 ms, which every
+/// drive of the project takes (the ASDA-A2 needs RPDOs at least 1 ms apart).
+pub const DEFAULT_CYCLE: Duration = Duration::from_millis(4);
+
+pub(super) fn parse(cx: &Ctx<'_>, f: &raw::File) -> Result<CanRunConfig, ConfigError> {
+    let iface = f.interface.get_ref().as_str();
+    let target = match iface {
+        "" => return Err(cx.err(f.interface.span(), "interface", "is empty")),
+        "can-sim" => CanTarget::Sim,
+        "sim" | "virtual" => {
+            return Err(cx.err(
+                f.interface.span(),
+                "interface",
+                format!(
+                    "{iface:?} is not a CANopen bus: a CANopen run takes \"can-sim\" (the \
+                     emulated drives in-process), \"vbus:PATH\" or a SocketCAN interface"
+                ),
+            ));
+        }
+        other => CanTarget::Bus(other.parse().map_err(
+            |e: crate::app::canopen::tools::BusSpecError| {
+                cx.err(f.interface.span(), "interface", e.to_string())
+            },
+        )?),
+    };
+    ethercat_only(cx, f)?;
+    let cycle = match &f.cycle {
+        Some(c) => parse_duration(c.get_ref()).map_err(|m| cx.err(c.span(), "cycle", m))?,
+        None => DEFAULT_CYCLE,
+    };
+    if cycle < Duration::from_micros(250) || cycle > Duration::from_secs(1) {
+        let span = f.cycle.as_ref().map_or(f.interface.span(), Spanned::span);
+        return Err(cx.err(span, "cycle", "a SYNC period is between 250 us and 1 s"));
+    }
+    let duration = match &f.duration {
+        Some(d) => Some(parse_duration(d.get_ref()).map_err(|m| cx.err(d.span(), "duration", m))?),
+        None => None,
+    };
+    let mut drives: Vec<CanDriveConfig> = Vec::with_capacity(f.drive.len());
+    let mut warnings = Vec::new();
+    for (i, d) in f.drive.iter().enumerate() {
+        let dc = drive(cx, i, d, cycle, &f.cycle, &mut warnings)?;
+        if let Some(j) = drives.iter().position(|o| o.node == dc.node) {
+            return Err(cx.err(
+                d.span(),
+                format!("drive[{i}].node"),
+                format!("node {} is drive[{j}] too", dc.node),
+            ));
+        }
+        drives.push(dc);
+    }
+    if drives.is_empty() {
+        return Err(cx.err(
+            f.interface.span(),
+            "drive",
+            "a CANopen run needs at least one [[drive]] with its node",
+        ));
+    }
+    Ok(CanRunConfig {
+        source: cx.file.to_string(),
+        target,
+        cycle,
+        duration,
+        drives,
+        warnings,
+    })
+}
+
+/// The file-level keys only an EtherCAT run has.
+fn ethercat_only(cx: &Ctx<'_>, f: &raw::File) -> Result<(), ConfigError> {
+    let at = f.interface.span();
+    let refuse = |key: &str, what: &str| {
+        Err(cx.err(
+            at.clone(),
+            key,
+            format!("{what} is for EtherCAT runs; this file is a CANopen run (interface or a drive's node)"),
+        ))
+    };
+    if let Some(s) = &f.sim {
+        return Err(cx.err(
+            s.span(),
+            "sim",
+            "[sim] lists emulated EtherCAT devices; a CANopen run emulates its drives with \
+             interface = \"can-sim\", one per [[drive]] at its node",
+        ));
+    }
+    if let Some(s) = &f.dc_shift {
+        return Err(cx.err(
+            s.span(),
+            "dc_shift",
+            "distributed clocks are EtherCAT's; a CANopen run is paced by SYNC",
+        ));
+    }
+    if f.rt.is_some() {
+        return refuse("rt", "[rt]");
+    }
+    if f.supervision.is_some() {
+        return refuse("supervision", "[supervision]");
+    }
+    if f.allow_generic {
+        return refuse("allow_generic", "allow_generic");
+    }
+    Ok(())
+}
+
+/// One `[[drive]]` of a CANopen run.
+fn drive(
+    cx: &Ctx<'_>,
+    i: usize,
+    d: &Spanned<raw::Drive>,
+    cycle: Duration,
+    cycle_key: &Option<Spanned<String>>,
+    warnings: &mut Vec<String>,
+) -> Result<CanDriveConfig, ConfigError> {
+    let key = |k: &str| {
+        if k.is_empty() {
+            format!("drive[{i}]")
+        } else {
+            format!("drive[{i}].{k}")
+        }
+    };
+    let r = d.get_ref();
+    for (given, name) in [
+        (r.position.as_ref().map(Spanned::span), "position"),
+        (r.alias.as_ref().map(Spanned::span), "alias"),
+        (r.identity.as_ref().map(Spanned::span), "identity"),
+        (r.esi.as_ref().map(Spanned::span), "esi"),
+        (r.profile_file.as_ref().map(Spanned::span), "profile_file"),
+        (r.mapping.as_ref().map(Spanned::span), "mapping"),
+    ] {
+        if let Some(span) = given {
+            return Err(cx.err(
+                span,
+                key(name),
+                format!(
+                    "`{name}` is an EtherCAT key; a CANopen drive is selected by `node` and \
+                     its PDOs are planned from its profile"
+                ),
+            ));
+        }
+    }
+    let node = match &r.node {
+        Some(n) if (1..=127).contains(n.get_ref()) => *n.get_ref(),
+        Some(n) => {
+            return Err(cx.err(
+                n.span(),
+                key("node"),
+                format!("a node-ID is 1–127, not {}", n.get_ref()),
+            ));
+        }
+        None => {
+            return Err(cx.err(d.span(), key(""), "say which node: give `node` (1–127)"));
+        }
+    };
+    let Some(p) = &r.profile else {
+        return Err(cx.err(
+            d.span(),
+            key(""),
+            format!("name the drive's profile: {}", profile_names()),
+        ));
+    };
+    let Some(&(name, profile, _)) = EMULATED_NODES.iter().find(|(n, _, _)| *n == p.get_ref())
+    else {
+        return Err(cx.err(
+            p.span(),
+            key("profile"),
+            format!(
+                "{:?} is not a CANopen drive profile: {}",
+                p.get_ref(),
+                profile_names()
+            ),
+        ));
+    };
+    check_cycle(cx, &key, d, profile, cycle, cycle_key)?;
+    let mode = match &r.mode {
+        Some(m) => {
+            let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
+            if mode.is_cyclic() {
+                return Err(cx.err(
+                    m.span(),
+                    key("mode"),
+                    format!("{} is not run over CANopen yet: pp, pv or tq", mode.name()),
+                ));
+            }
+            mode
+        }
+        None => RunMode::Pp,
+    };
+    let Program {
+        units,
+        k,
+        fe_limit,
+        steps,
+        described,
+    } = program_of(cx, &key, d, mode, cycle)?;
+    for (n, s) in steps.iter().enumerate() {
+        let unsupported = match s {
+            Step::Mode { mode } if mode.is_cyclic() => {
+                Some(format!("{} is not run over CANopen yet", mode.name()))
+            }
+            Step::Mode { mode }
+                if !profile.supports(crate::cia402::OperationMode::from_i8(mode.code())) =>
+            {
+                Some(format!(
+                    "the {} does not support {}",
+                    profile.name,
+                    mode.name()
+                ))
+            }
+            Step::TouchProbe { .. } | Step::ProbeWait { .. } => {
+                Some("the touch probe is not run over CANopen yet".to_string())
+            }
+            _ => None,
+        };
+        if let Some(m) = unsupported {
+            let span = r.program.get(n).map_or(d.span(), Spanned::span);
+            return Err(cx.err(span, key(&format!("program[{n}]")), m));
+        }
+    }
+    if !profile.supports(crate::cia402::OperationMode::from_i8(mode.code())) {
+        let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
+        return Err(cx.err(
+            span,
+            key("mode"),
+            format!("the {} does not support {}", profile.name, mode.name()),
+        ));
+    }
+    let step_err = |n: usize, m: String| {
+        let span = r.program.get(n).map_or(d.span(), Spanned::span);
+        cx.err(span, key(&format!("program[{n}]")), m)
+    };
+    let homing = homing_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
+    let objects = profile_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
+    let sdos = start_up_values(
+        cx,
+        &key,
+        r.sdos.as_ref(),
+        Some((profile.dictionary, profile.name)),
+    )?;
+    if let Some((a, _)) = sdos
+        .iter()
+        .find(|(a, _)| homing.iter().chain(&objects).any(|(h, _)| h == a))
+    {
+        let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
+        return Err(cx.err(
+            span,
+            key("sdos"),
+            format!("{a} is written by a step of the program: give it there, not in sdos"),
+        ));
+    }
+    // A step's object the drive does not have (the Lexium MDrive has no homing acceleration
+    // 0x609A): the drive uses its own value; said, not written.
+    let dict = crate::od::Dictionary::new(profile.dictionary);
+    let mut settings = Vec::new();
+    for (a, v) in homing.into_iter().chain(objects) {
+        if dict.entry(a).is_some() {
+            settings.push((a, v));
+        } else {
+            warnings.push(format!(
+                "drive[{i}]: the {} has no {a}: the program's value for it is not written, the \
+                 drive uses its own",
+                profile.name
+            ));
+        }
+    }
+    settings.extend(sdos);
+    Ok(CanDriveConfig {
+        node,
+        key: name,
+        profile,
+        mode,
+        units,
+        steps,
+        described,
+        settings,
+        following_error_limit: fe_limit,
+        limits: r.limits.as_ref().map_or_else(Default::default, |l| {
+            let l = l.get_ref();
+            SetpointLimits {
+                max_velocity: l.max_velocity.map(|v| v * k),
+                max_acceleration: l.max_acceleration.map(|v| v * k),
+                max_torque: l.max_torque,
+            }
+        }),
+    })
+}
+
+/// The SYNC period against what the drive takes: RPDOs no closer than its minimum gap, and a
+/// whole multiple of its cycle-period granularity (0x1006).
+fn check_cycle(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    d: &Spanned<raw::Drive>,
+    p: &CanDriveProfile,
+    cycle: Duration,
+    cycle_key: &Option<Spanned<String>>,
+) -> Result<(), ConfigError> {
+    let us = u64::try_from(cycle.as_micros()).unwrap_or(u64::MAX);
+    let c = &p.comm;
+    let why = if us < u64::from(c.rpdo_min_interval_us) {
+        Some(format!(
+            "the {} takes RPDOs at least {} µs apart",
+            p.name, c.rpdo_min_interval_us
+        ))
+    } else if c.cycle_period_granularity_us > 0
+        && us % u64::from(c.cycle_period_granularity_us) != 0
+    {
+        Some(format!(
+            "the {}'s cycle period (0x1006) is a multiple of {} µs",
+            p.name, c.cycle_period_granularity_us
+        ))
+    } else {
+        None
+    };
+    match why {
+        Some(w) => {
+            let (span, k) = match cycle_key {
+                Some(c) => (c.span(), "cycle".to_string()),
+                None => (d.span(), key("")),
+            };
+            Err(cx.err(span, k, format!("a SYNC period of {us} µs: {w}")))
+        }
+        None => Ok(()),
+    }
+}
+
+fn profile_names() -> String {
+    let names: Vec<&str> = EMULATED_NODES.iter().map(|(n, _, _)| *n).collect();
+    format!("profile = one of {}", names.join(", "))
+}

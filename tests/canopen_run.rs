@@ -1,0 +1,253 @@
+//! CANopen runs from the configuration file (`ecdrive run -c FILE` with a CANopen interface
+//! and `[[drive]] node = N`): the three CANopen drives run programs — home, pp, pv, tq where
+//! the drive has it — through the same configuration schema and motion runtime as the
+//! EtherCAT drives, in-process on `can-sim` and over a `vbus:` hub served by `ecdrive sim
+//! --can` in another process; and what a CANopen run cannot take is named with its key.
+
+mod support {
+    pub mod cli;
+}
+use ecdrive::app::config::{self, Config};
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use support::cli::ecdrive;
+
+const EXE: &str = env!("CARGO_BIN_EXE_ecdrive");
+
+/// Each drive ends its program with a pp move to 2 rev: the reported position (0x6064 through
+/// its TPDO) must be there, in each drive's own position unit.
+const ENDS_AT_TWO_REV: &str = r#"
+interface = "can-sim"
+cycle = "4ms"
+
+[[drive]]
+node = 3
+profile = "blv-r"
+units = { name = "rev", counts_per_unit = 36000 }
+program = [
+  { step = "home", method = 24, speed_switch = 5, speed_zero = 0.5, acceleration = 100 },
+  { step = "pp", to = [1, 0.5], velocity = 10, acceleration = 100 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = 5, acceleration = 100, seconds = 0.2 },
+  { step = "mode", mode = "tq" },
+  { step = "tq", torque = 300, seconds = 0.1 },
+  { step = "mode", mode = "pp" },
+  { step = "pp", to = [2], velocity = 10, acceleration = 100 },
+]
+
+[[drive]]
+node = 0x7F
+profile = "asda-a2"
+units = { name = "rev", counts_per_unit = 1280000 }
+program = [
+  { step = "home", method = 19, speed_switch = 5, speed_zero = 0.5, acceleration = 100 },
+  { step = "pp", to = [1, 0.5], velocity = 10, acceleration = 100 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = 5, acceleration = 100, seconds = 0.2 },
+  { step = "mode", mode = "pp" },
+  { step = "pp", to = [2], velocity = 10, acceleration = 100 },
+]
+
+[[drive]]
+node = 0x41
+profile = "lexium-mdrive"
+units = { name = "rev", counts_per_unit = 51200 }
+program = [
+  { step = "home", method = 19, speed_switch = 5, speed_zero = 0.5, acceleration = 100 },
+  { step = "mode", mode = "pv" },
+  { step = "pv", velocity = -5, acceleration = 100, seconds = 0.2 },
+  { step = "mode", mode = "pp" },
+  { step = "pp", to = [2], velocity = 10, acceleration = 100 },
+]
+"#;
+
+fn can(text: &str) -> config::canopen::CanRunConfig {
+    match config::parse_any(text, "can.toml").unwrap_or_else(|e| panic!("{e}")) {
+        Config::CanOpen(c) => c,
+        Config::EtherCat(_) => panic!("not read as a CANopen run"),
+    }
+}
+
+#[test]
+fn the_three_drives_run_their_programs_from_a_file_on_can_sim() {
+    let cfg = can(ENDS_AT_TWO_REV);
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r = ecdrive::app::canopen::run::run(&cfg, None, &stop).expect("run");
+    eprintln!("{r:#?}");
+    assert_eq!(
+        r.outcome,
+        ecdrive::app::ethercat::tools::run::Outcome::Completed,
+        "{}",
+        r.reason
+    );
+    assert_eq!(r.drives.len(), 3);
+    for (d, want) in r.drives.iter().zip([72_000, 2_560_000, 102_400]) {
+        assert!(d.program_done, "{d:?}");
+        assert!(d.errors.is_empty(), "{d:?}");
+        assert_eq!(d.position, want, "{}: {d:?}", d.drive);
+        assert_eq!(d.position_user, Some(2.0), "{d:?}");
+        assert_eq!(
+            d.states.last().map(String::as_str),
+            Some("Switch on disabled")
+        );
+    }
+    assert!(
+        r.drives[0].modes.iter().any(|m| m.starts_with("tq")),
+        "{:?}",
+        r.drives[0]
+    );
+    assert!(
+        r.drives[2].modes.iter().any(|m| m.starts_with("hm")),
+        "{:?}",
+        r.drives[2]
+    );
+    assert!(r.emergencies.is_empty(), "{:?}", r.emergencies);
+}
+
+#[test]
+fn the_example_runs_from_the_command_line() {
+    let j = ecdrive(&["run", "-c", "examples/canopen_profile_modes.toml", "--json"]).json();
+    assert_eq!(j["outcome"], "completed", "{j:#}");
+    for d in j["drives"].as_array().expect("drives") {
+        assert_eq!(d["program_done"], true, "{d:#}");
+    }
+    let out = ecdrive(&[
+        "run",
+        "-c",
+        "examples/canopen_profile_modes.toml",
+        "--check",
+    ])
+    .ok()
+    .to_string();
+    assert!(
+        out.contains("valid; CANopen run, 3 drives, SYNC every 4000 µs"),
+        "{out}"
+    );
+}
+
+/// `ecdrive sim --can BUS --node …` in another process, until its banner lists `nodes`.
+fn serve(bus: &str, nodes: &[&str]) -> Child {
+    let mut cmd = Command::new(EXE);
+    cmd.args(["sim", "--can", bus]);
+    for n in nodes {
+        cmd.args(["--node", n]);
+    }
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start ecdrive sim --can");
+    let mut err = BufReader::new(child.stderr.take().expect("stderr"));
+    let mut banner = String::new();
+    let mut line = String::new();
+    while err.read_line(&mut line).expect("read") > 0 {
+        banner.push_str(&line);
+        if banner.lines().filter(|l| l.starts_with("  node ")).count() == nodes.len() {
+            break;
+        }
+        line.clear();
+    }
+    assert!(banner.contains("serving"), "{banner}");
+    std::thread::spawn(move || {
+        let mut rest = String::new();
+        let _ = std::io::Read::read_to_string(&mut err, &mut rest);
+    });
+    child
+}
+
+#[test]
+fn a_file_runs_over_a_bus_served_by_another_process() {
+    let dir = std::env::temp_dir().join(format!("ecdrive-can-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let sock = dir.join("bus.sock");
+    let bus = format!("vbus:{}", sock.display());
+    let mut child = serve(&bus, &["blv-r@3", "asda-a2", "lexium-mdrive"]);
+    let file = dir.join("run.toml");
+    std::fs::write(&file, ENDS_AT_TWO_REV).expect("write");
+    let path = file.display().to_string();
+    let run = || ecdrive(&["run", "-c", &path, "-i", &bus, "--json"]).json();
+    let first = run();
+    // Again, against the same nodes: the first run left them in NMT Stopped.
+    let j = run();
+    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    let _ = nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM);
+    let _ = child.wait();
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(first["outcome"], "completed", "{first:#}");
+    assert_eq!(j["outcome"], "completed", "{j:#}");
+    for (d, want) in j["drives"]
+        .as_array()
+        .expect("drives")
+        .iter()
+        .zip([72_000, 2_560_000, 102_400])
+    {
+        assert_eq!(d["program_done"], true, "{d:#}");
+        assert_eq!(d["position"], want, "{d:#}");
+    }
+}
+
+/// What only an EtherCAT run has, or what the CANopen drives cannot do, is refused before
+/// anything touches the bus, one line naming the key.
+#[test]
+fn what_a_canopen_run_cannot_take_is_named() {
+    let base = "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\n";
+    for (extra, key, says) in [
+        ("position = 0\n", "drive[0].position", "is an EtherCAT key"),
+        (
+            "mode = \"csp\"\n",
+            "drive[0].mode",
+            "not run over CANopen yet",
+        ),
+        (
+            "program = [{ step = \"mode\", mode = \"csv\" }]\n",
+            "drive[0].program[0]",
+            "not run over CANopen yet",
+        ),
+        (
+            "program = [{ step = \"touch_probe\", probe = 1, edge = \"rising\" }]\n",
+            "drive[0].program[0]",
+            "touch probe",
+        ),
+        (
+            "sdos = { \"0x7777:00\" = 1 }\n",
+            "drive[0].sdos.\"0x7777:00\"",
+            "not in the BLV-R dictionary",
+        ),
+    ] {
+        let e = config::parse_any(&format!("{base}{extra}"), "can.toml").unwrap_err();
+        assert_eq!(e.key.as_deref(), Some(key), "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+    let e = config::parse_any(
+        "interface = \"can-sim\"\ncycle = \"500us\"\n[[drive]]\nnode = 0x7F\nprofile = \"asda-a2\"\n",
+        "can.toml",
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("cycle"), "{e}");
+    assert!(e.to_string().contains("at least 1000 µs apart"), "{e}");
+    let e = config::parse_any(
+        "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"mr-j4-tm\"\n",
+        "can.toml",
+    )
+    .unwrap_err();
+    assert!(
+        e.to_string().contains("blv-r, asda-a2, lexium-mdrive"),
+        "{e}"
+    );
+    let e = config::parse_any(
+        "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\n[[drive]]\nnode = 3\nprofile = \"asda-a2\"\n",
+        "can.toml",
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("node 3 is drive[0] too"), "{e}");
+    let e = config::parse_any(
+        "interface = \"can-sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\n",
+        "can.toml",
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("sim"), "{e}");
+    // An EtherCAT tool given a CANopen file says what it is.
+    let e = config::parse(base, "can.toml").unwrap_err();
+    assert!(e.message.contains("is a CANopen bus"), "{e}");
+}
