@@ -21,11 +21,14 @@
 //! | [`rt`] | real-time thread set-up, absolute-time sleeping, statistics |
 //! | [`can`] | CANopen (CiA 301) wire vocabulary and protocols shared by master and emulated nodes: frames, NMT, SDO, EMCY, transports, the CANopen part of the drive profile |
 //! | [`canopen`] | the CANopen master (`ecdrive-canopen`): the same CiA 402 layer over CANopen |
+//! | [`motion`] | the motion runtime both masters step their axes with (`ecdrive-motion`): programs, homing, profile modes, probes, stops, supervision |
 //! | [`app`] | the applications: demo, soak, commissioning tools, the `ecdrive run` configuration file, the jitter harness |
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 
 pub use ecdrive_core::{can, cia402, drives, ec, eds, esi, link, od, pdo, rt};
+/// The motion runtime both masters step their axes with (`ecdrive-motion`).
+pub use ecdrive_motion as motion;
 pub use ecdrive_sim as sim;
 
 // The façade: what an application driving EtherCAT drives uses, from one path (the README's

@@ -202,3 +202,110 @@ fn the_remote_gate_is_reported_in_a_motion_session() {
         State::OperationEnabled
     );
 }
+
+/// The application's side of the runtime on CANopen: a callback ([`MotionSession::cycle_with`])
+/// asks each drive, with no program, for pv and streams its velocity set-point (a ramp to
+/// 2 rev/s and back to 0, one value a cycle), then for pp and a target. What the emulated node
+/// did is read from the node: its velocity followed the stream, its position ends at the
+/// target.
+#[test]
+fn each_canopen_drive_takes_a_callbacks_requests_and_stream() {
+    use ecdrive::motion::Requests;
+    let drives: [(u8, &'static CanDriveProfile); 3] = [
+        (blv_r::EMU_NODE_ID, &blv_r::PROFILE),
+        (0x7F, &asda_a2::PROFILE),
+        (0x41, &lexium_mdrive::PROFILE),
+    ];
+    for (node, p) in drives {
+        let name = p.name;
+        let mut bus = SimBus::new();
+        bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+        let mut m = Master::new(bus, MasterConfig::default());
+        let mut setup = DriveSetup::new(p);
+        setup.settings = ecdrive::app::canopen::demo::motion_settings(p, 10.0, 100.0);
+        m.configure_drive(node, setup).expect("configure");
+        m.start(node).expect("NMT start");
+        let mut s = MotionSession::new(m, &[(node, axis_setup(p, Vec::new(), RunMode::Pp))])
+            .expect("session");
+        s.command(Command::Enable(Axes::All));
+        for _ in 0..500 {
+            s.cycle().expect("cycle");
+            if s.telemetry(0)
+                .is_some_and(|t| t.state == Some(State::OperationEnabled))
+            {
+                break;
+            }
+        }
+        let rev = p.units.position_per_rev;
+        let peak = 2.0 * rev;
+        // The stream: up over 100 cycles, hold 100, down over 100 (counts/s).
+        let stream = |k: usize| -> f64 {
+            let k = k as f64;
+            if k < 100.0 {
+                peak * k / 100.0
+            } else if k < 200.0 {
+                peak
+            } else {
+                (peak * (300.0 - k) / 100.0).max(0.0)
+            }
+        };
+        let mut k = 0usize;
+        let mut max_v: f64 = 0.0;
+        let mut phase = 0; // 0: to pv, 1: streaming, 2: to pp, 3: pp target, 4: done
+        let target = 3.0 * rev;
+        for _ in 0..20_000 {
+            let mode_now = s.telemetry(0).map_or(0, |t| t.mode_display);
+            let req = match phase {
+                0 => Requests {
+                    mode: Some(RunMode::Pv),
+                    ..Requests::default()
+                },
+                1 => Requests {
+                    setpoint: Some(stream(k)),
+                    ..Requests::default()
+                },
+                2 => Requests {
+                    mode: Some(RunMode::Pp),
+                    ..Requests::default()
+                },
+                3 => Requests {
+                    pp: Some((target, false, false)),
+                    ..Requests::default()
+                },
+                _ => Requests::default(),
+            };
+            s.cycle_with(|_, _| req).expect("cycle");
+            let n = s.master().transport().node(node).expect("node");
+            if phase == 1 {
+                max_v = max_v.max(n.velocity_units_per_s().abs());
+            }
+            let t = *s.telemetry(0).expect("axis");
+            phase = match phase {
+                0 if mode_now == 3 => 1,
+                1 => {
+                    k += 1;
+                    if k > 320 { 2 } else { 1 }
+                }
+                2 if mode_now == 1 => 3,
+                3 => 4,
+                4 if t.task == ecdrive::master::DriveTask::TargetReached => 5,
+                p => p,
+            };
+            if phase == 5 {
+                break;
+            }
+        }
+        assert_eq!(
+            phase,
+            5,
+            "{name}: stuck in phase {phase}: {:?}",
+            s.take_events()
+        );
+        assert!(
+            (max_v - peak).abs() <= 0.02 * peak,
+            "{name}: the stream peaked at {peak} counts/s, the drive at {max_v}"
+        );
+        let n = s.master().transport().node(node).expect("node");
+        assert_eq!(f64::from(n.position()), target.round(), "{name}: pp target");
+    }
+}

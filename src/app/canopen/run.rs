@@ -93,23 +93,7 @@ pub fn run(
         )
     };
     match &cfg.target {
-        CanTarget::Sim => {
-            let mut bus = SimBus::new();
-            for d in &cfg.drives {
-                let node = EmulatedNode::new(d.profile, d.node).map_err(|e| {
-                    CanError::new(
-                        NodeRef {
-                            id: d.node,
-                            drive: Some(d.profile.name),
-                        },
-                        None,
-                        CanErrorKind::NotReady(format!("the emulated drive: {e}")),
-                    )
-                })?;
-                bus.add_node(node);
-            }
-            run_on(bus, cfg, duration, stop)
-        }
+        CanTarget::Sim => run_on(emulated_bus(cfg)?, cfg, duration, stop),
         CanTarget::Bus(spec) => run_on(open_bus(spec).map_err(bus_err)?, cfg, duration, stop),
     }
 }
@@ -121,6 +105,22 @@ pub fn run_on<T: CanTransport>(
     duration: Option<Duration>,
     stop: &AtomicBool,
 ) -> Result<CanRunReport, CanError> {
+    let (mut s, started_us) = session(transport, cfg)?;
+    let mut run = Run::new(cfg, duration.or(cfg.duration), started_us);
+    let (outcome, reason) = run.drive(&mut s, stop)?;
+    run.finish(s, outcome, reason)
+}
+
+/// The drives of `cfg` on an open bus, configured and started, on the motion runtime: each
+/// node to Pre-operational (a node an earlier run left Stopped serves no SDO), configured
+/// (identity, PDO plan, supervision, the program's and the file's start-up values), started,
+/// and one motion axis per drive with its program, limits and mode. With the bus's time when
+/// it began, µs. What a run then does is [`run_on`]'s; a test or an application may drive the
+/// session itself.
+pub fn session<T: CanTransport>(
+    transport: T,
+    cfg: &CanRunConfig,
+) -> Result<(MotionSession<T>, u64), CanError> {
     let cycle_us = u64::try_from(cfg.cycle.as_micros()).unwrap_or(u64::MAX);
     let mut m = Master::new(
         transport,
@@ -131,8 +131,6 @@ pub fn run_on<T: CanTransport>(
     );
     let started_us = m.now_us();
     m.pump(50_000)?;
-    // A node an earlier run left in Stopped serves no SDO: every drive to Pre-operational
-    // first (harmless to one already there, and to an enabled drive).
     for d in &cfg.drives {
         m.nmt(d.node, crate::canopen::nmt::NmtCommand::EnterPreOperational)?;
     }
@@ -154,10 +152,26 @@ pub fn run_on<T: CanTransport>(
             (d.node, s)
         })
         .collect();
-    let mut s = MotionSession::new(m, &axes)?;
-    let mut run = Run::new(cfg, duration.or(cfg.duration), started_us);
-    let (outcome, reason) = run.drive(&mut s, stop)?;
-    run.finish(s, outcome, reason)
+    Ok((MotionSession::new(m, &axes)?, started_us))
+}
+
+/// The emulated drives of a `can-sim` run: one per `[[drive]]`, at its node.
+pub fn emulated_bus(cfg: &CanRunConfig) -> Result<SimBus, CanError> {
+    let mut bus = SimBus::new();
+    for d in &cfg.drives {
+        let node = EmulatedNode::new(d.profile, d.node).map_err(|e| {
+            CanError::new(
+                NodeRef {
+                    id: d.node,
+                    drive: Some(d.profile.name),
+                },
+                None,
+                CanErrorKind::NotReady(format!("the emulated drive: {e}")),
+            )
+        })?;
+        bus.add_node(node);
+    }
+    Ok(bus)
 }
 
 /// A run under way: its limits and what it saw.

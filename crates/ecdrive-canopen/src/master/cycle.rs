@@ -16,8 +16,8 @@ impl<T: CanTransport> Master<T> {
             }
             _ => now,
         };
-        let sent_at = self.t.now_us();
         for i in 0..self.drives.len() {
+            let sent_at = self.t.now_us();
             let Some(d) = self.drives.get(i) else {
                 continue;
             };
@@ -37,12 +37,6 @@ impl<T: CanTransport> Master<T> {
                 self.stats.rpdos_deferred += 1;
                 continue;
             }
-            if let Some(d) = self.drives.get_mut(i) {
-                d.set_rpdo_sent_us(sent_at);
-            }
-            let Some(d) = self.drives.get(i) else {
-                continue;
-            };
             for k in 0..d.rpdos().len() {
                 let frame = self
                     .drives
@@ -52,6 +46,11 @@ impl<T: CanTransport> Master<T> {
                 if let Some(f) = frame {
                     self.send(&f)?;
                 }
+            }
+            // When the last of them went out: the next may not come before this plus the gap.
+            let done = self.t.now_us();
+            if let Some(d) = self.drives.get_mut(i) {
+                d.set_rpdo_sent_us(done);
             }
         }
         if self.cfg.sync_producer {
