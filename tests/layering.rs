@@ -586,6 +586,23 @@ fn no_function_of_the_master_and_slave_crates_exceeds_150_lines() {
     );
 }
 
+/// The EtherCAT cycle keeps only the bus's work (the motion is the runtime's): none of its
+/// files is over 1 000 lines (`master::cycle`: the turn, the bus's supervision, each drive's
+/// process image, the settings and report).
+#[test]
+fn the_ethercat_cycle_keeps_only_the_buss_work() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let files = source_scan::rust_files(&root.join("crates/ecdrive-ethercat/src/cycle"));
+    assert!(files.len() >= 2, "{files:?}");
+    for f in files {
+        let n = std::fs::read_to_string(&f)
+            .unwrap_or_default()
+            .lines()
+            .count();
+        assert!(n < 1000, "{}: {n} lines", f.display());
+    }
+}
+
 /// No function of the motion runtime (the crate both masters step their axes with) is longer
 /// than 80 lines (tests excepted).
 #[test]

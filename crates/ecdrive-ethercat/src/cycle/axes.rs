@@ -1,0 +1,167 @@
+//! Each drive's side of the process image: its fields, cycle counter and AL state around its
+//! axis of the motion runtime, and the application's view of it.
+
+use super::*;
+
+/// One drive on the segment: its place in the process image, what the bus side remembers of
+/// it, and its axis of the motion runtime.
+pub(super) struct AxisRt {
+    /// Position on the segment (index in the group).
+    pub(super) sub: usize,
+    pub(super) fields: DriveFields,
+    pub(super) counter: u8,
+    pub(super) al_state: u8,
+    /// This cycle's inputs, read before the application runs.
+    pub(super) fb: Option<Feedback>,
+    pub(super) m: MotionAxis,
+}
+
+impl AxisRt {
+    /// The axis of drive `d` (set-up: allocations allowed), or `None` if its engine cannot be
+    /// built.
+    pub(super) fn new(d: &ConfiguredDrive, cycle: Duration) -> Option<Self> {
+        let pf = &d.fields.probe;
+        let setup = AxisSetup {
+            caps: d.profile.caps,
+            velocity_unit: d.profile.units.velocity_position_per_s(),
+            program: d.setup.program.clone(),
+            mode: d.setup.mode,
+            following_error_limit: d.setup.following_error_limit,
+            limits: d.setup.limits,
+            probe_objects: ProbeObjects {
+                function: pf.function.is_some(),
+                status: pf.status.is_some(),
+                positions: pf.positions.map(|p| p.is_some()),
+            },
+        };
+        Some(Self {
+            sub: usize::from(d.info.position),
+            fields: d.fields.clone(),
+            counter: 0,
+            al_state: 0,
+            fb: None,
+            m: MotionAxis::new(&setup, cycle)?,
+        })
+    }
+
+    /// Outputs that carry fixed values from the first cycle on, and Disable voltage.
+    pub(super) fn initial_outputs(&self, out: &mut [u8]) {
+        for (f, v) in &self.fields.held_outputs {
+            let _ = f.write_raw(out, *v);
+        }
+        for (f, v) in &self.fields.output_defaults {
+            pdo::axis::write(Some(*f), out, *v);
+        }
+        self.fields.axis.write_disable_voltage(out);
+    }
+
+    /// Advance the drive's cycle counter (if mapped) in `out`: one per cycle, as the drive
+    /// expects, also on a cycle whose outputs are otherwise unchanged.
+    pub(super) fn count(&mut self, out: &mut [u8]) {
+        if let Some((c, _)) = &self.fields.counter {
+            self.counter = self.counter.wrapping_add(1);
+            pdo::axis::write(Some(*c), out, i64::from(self.counter));
+        }
+    }
+
+    /// Below OP nothing of the drive is judged: a slave may serve stale inputs until OP (a mode
+    /// display of 0, a statusword of 0), and it should not act on the outputs. They stay safe
+    /// all the same, for a slave that does: Disable voltage.
+    pub(super) fn below_op(&mut self, out: &mut [u8]) {
+        self.fields.axis.write_disable_voltage(out);
+        self.count(out);
+        self.m.below_op();
+        self.m.telemetry_mut().al_state = self.al_state;
+    }
+
+    /// Read this cycle's inputs from the process image into the motion axis.
+    pub(super) fn read_inputs(&mut self, inputs: &[u8], pulse: u64) -> Feedback {
+        let pf = &self.fields.probe;
+        let b = &self.fields.axis;
+        let read = Inputs {
+            feedback: b.feedback(inputs),
+            probe_status: pdo::axis::read(pf.status, inputs).unwrap_or(0) as u16,
+            probe_positions: pf
+                .positions
+                .map(|f| pdo::axis::read(f, inputs).unwrap_or(0) as i32),
+            following_error_drive: b.following_error(inputs),
+        };
+        self.m.read(&read, pulse)
+    }
+
+    /// The engine's outputs into the process image, and the cycle counter.
+    pub(super) fn write_outputs(&mut self, out: &Output, image: &mut [u8]) {
+        self.fields.axis.write(out, image);
+        if let Some(f) = self.m.probe_function() {
+            pdo::axis::write(self.fields.probe.function, image, i64::from(f));
+        }
+        self.count(image);
+        self.m.telemetry_mut().al_state = self.al_state;
+    }
+}
+
+/// What the application's callback ([`AppAxis`]) asked of an axis in one cycle.
+pub(super) fn requests_of(app: &AppAxis) -> Requests {
+    Requests {
+        setpoint: app.setpoint,
+        mode: app.mode_request,
+        home: app.home_request,
+        pp: app.pp_request,
+        probe: app.probe_request,
+    }
+}
+
+/// Bring the application's view of axis `a` up to date with this cycle's inputs, and clear
+/// last cycle's requests.
+pub(super) fn refresh_view(
+    view: &mut AppAxis,
+    a: &AxisRt,
+    in_op: bool,
+    inputs: &[u8],
+    outputs: &[u8],
+) {
+    view.clear_requests();
+    view.in_op = in_op;
+    if !in_op {
+        view.enabled = false;
+        return;
+    }
+    view.tel = *a.m.telemetry();
+    let st = a.m.status();
+    view.tel.state = st.state;
+    view.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+    view.program_running = a.m.program_running();
+    let n = view.inputs.len().min(inputs.len());
+    view.inputs[..n].copy_from_slice(&inputs[..n]);
+    let n = view.outputs.len().min(outputs.len());
+    view.outputs[..n].copy_from_slice(&outputs[..n]);
+}
+
+/// The application's view of drive `d` (set-up): every mapped entry, the ones the engine
+/// drives marked.
+pub(super) fn app_view(d: &ConfiguredDrive) -> AppAxis {
+    let b = &d.fields.axis;
+    let mut engine: Vec<usize> = [
+        b.controlword,
+        b.mode,
+        b.target_position,
+        b.target_velocity,
+        b.target_torque,
+        b.velocity_offset,
+        b.torque_offset,
+        b.ip_position,
+    ]
+    .into_iter()
+    .flatten()
+    .map(|f| f.bit_position())
+    .collect();
+    if let Some((c, _)) = &d.fields.counter {
+        engine.push(c.bit_position());
+    }
+    let rx = d.layout.image(pdo::Direction::Rx);
+    let is_engine =
+        |a: crate::od::ObjectAddress| rx.find(a).is_some_and(|e| engine.contains(&e.bit_position));
+    let dict = crate::od::Dictionary::new(d.profile.dictionary);
+    let signed = |a: crate::od::ObjectAddress| dict.data_type(a).is_some_and(|t| t.is_signed());
+    AppAxis::new(&d.layout, &is_engine, &signed)
+}
