@@ -72,7 +72,10 @@ fn can(text: &str) -> config::canopen::CanRunConfig {
 fn the_three_drives_run_their_programs_from_a_file_on_can_sim() {
     let cfg = can(ENDS_AT_TWO_REV);
     let stop = std::sync::atomic::AtomicBool::new(false);
-    let r = ecdrive::app::canopen::run::run(&cfg, None, &stop).expect("run");
+    let dir = std::env::temp_dir().join(format!("ecdrive-can-record-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let csv = dir.join("run.csv");
+    let r = ecdrive::app::canopen::run::run(&cfg, None, Some(&csv), &stop).expect("run");
     eprintln!("{r:#?}");
     assert_eq!(
         r.outcome,
@@ -102,6 +105,36 @@ fn the_three_drives_run_their_programs_from_a_file_on_can_sim() {
         r.drives[2]
     );
     assert!(r.emergencies.is_empty(), "{:?}", r.emergencies);
+    // The recording, against what the emulated machine does: each axis leaves hm at its home
+    // (position 0, home offset 0) and ends at its pp target; one line per axis and cycle.
+    let rec = r.record.as_ref().expect("recorded");
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (axis, mode, actual) = (col("axis"), col("mode"), col("actual_counts"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len() as u64, rec.samples);
+    for (i, want) in [72_000i64, 2_560_000, 102_400].into_iter().enumerate() {
+        let own: Vec<(i8, i64)> = rows
+            .iter()
+            .filter(|r| r[axis] == i.to_string())
+            .map(|r| {
+                (
+                    r[mode].parse().expect("mode"),
+                    r[actual].parse().expect("actual"),
+                )
+            })
+            .collect();
+        let left_hm = own
+            .windows(2)
+            .find(|w| w[0].0 == 6 && w[1].0 != 6)
+            .map(|w| w[1].1)
+            .unwrap_or_else(|| panic!("axis {i}: never left hm"));
+        assert!(left_hm.abs() <= 1, "axis {i}: left hm at {left_hm}");
+        assert_eq!(own.last().map(|s| s.1), Some(want), "axis {i}");
+    }
 }
 
 #[test]
@@ -111,6 +144,27 @@ fn the_example_runs_from_the_command_line() {
     for d in j["drives"].as_array().expect("drives") {
         assert_eq!(d["program_done"], true, "{d:#}");
     }
+    // Recorded and plotted, as an EtherCAT run is.
+    let dir = std::env::temp_dir().join(format!("ecdrive-can-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let (csv, svg) = (dir.join("r.csv"), dir.join("r.svg"));
+    let out = ecdrive(&[
+        "run",
+        "-c",
+        "examples/canopen_profile_modes.toml",
+        "--record",
+        &csv.display().to_string(),
+        "--plot",
+        &svg.display().to_string(),
+    ])
+    .ok()
+    .to_string();
+    assert!(out.contains("recorded "), "{out}");
+    let drawing = std::fs::read_to_string(&svg).expect("svg");
+    for caption in ["(BLV-R)", "(ASDA-A2)", "(Lexium MDrive)", "\nhm\n", "\ntq\n"] {
+        assert!(drawing.contains(caption), "{caption} not in the plot");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
     let out = ecdrive(&[
         "run",
         "-c",

@@ -213,6 +213,11 @@ fn range(v: &[f64]) -> (f64, f64) {
     if !lo.is_finite() || !hi.is_finite() {
         return (-1.0, 1.0);
     }
+    // A constant (a torque that stays 0): ±1 around it, not a span of 10^-9 with nine-digit
+    // labels.
+    if hi - lo <= 1e-9 * hi.abs().max(1.0) {
+        return (lo - 1.0, hi + 1.0);
+    }
     let pad = ((hi - lo) * 0.05)
         .max(1e-6 * hi.abs().max(lo.abs()))
         .max(1e-9);

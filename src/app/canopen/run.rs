@@ -8,13 +8,14 @@
 
 use crate::app::canopen::tools::open_bus;
 use crate::app::config::canopen::{CanDriveConfig, CanRunConfig, CanTarget};
-use crate::app::ethercat::tools::run::Outcome;
+use crate::app::ethercat::tools::run::{Outcome, RecordSummary};
 use crate::canopen::error::{CanError, CanErrorKind, NodeRef};
 use crate::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
 use crate::canopen::motion::{MotionSession, axis_setup};
 use crate::canopen::transport::CanTransport;
 use crate::cia402::State;
 use crate::master::{Axes, Command, EventKind, StopKind, StopReason};
+use crate::master::{CycleSample, SampleScale};
 use crate::sim::canopen::{EmulatedNode, SimBus};
 use serde::Serialize;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -75,6 +76,100 @@ pub struct CanRunReport {
     pub drives: Vec<CanDriveReport>,
     /// Every EMCY received, decoded with the drive's alarm table.
     pub emergencies: Vec<String>,
+    /// The recording, if one was asked for.
+    pub record: Option<RecordSummary>,
+    /// What went wrong beside the drives (a recording that could not be written).
+    pub warnings: Vec<String>,
+}
+
+/// A CANopen run's recording: every cycle's sample of every axis with feedback, as the
+/// EtherCAT runs write it ([`crate::master::CSV_HEADER`]; `ecdrive plot` draws it). The
+/// position column holds the node-ID; latency, exchange time and working counter are 0 (a
+/// CAN bus has none of them).
+struct Recorder {
+    out: std::io::BufWriter<std::fs::File>,
+    path: std::path::PathBuf,
+    t0_ns: Option<u64>,
+    scales: Vec<SampleScale>,
+    samples: u64,
+}
+
+impl Recorder {
+    fn create(path: &std::path::Path, cfg: &CanRunConfig) -> std::io::Result<Self> {
+        use std::io::Write;
+        let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+        writeln!(out, "{}", crate::master::CSV_HEADER)?;
+        let scales = cfg
+            .drives
+            .iter()
+            .map(|d| {
+                let (unit, counts_per_unit) = match &d.units {
+                    Some(u) => (u.name.clone(), u.counts_per_unit),
+                    None => ("count".to_string(), 1.0),
+                };
+                SampleScale {
+                    position: u16::from(d.node),
+                    drive: d.profile.name.replace(',', ";"),
+                    unit,
+                    counts_per_unit,
+                    velocity_counts_per_s: d.profile.units.velocity_position_per_s(),
+                    torque_per_mille: d.profile.units.torque_per_mille,
+                }
+            })
+            .collect();
+        Ok(Self {
+            out,
+            path: path.to_path_buf(),
+            t0_ns: None,
+            scales,
+            samples: 0,
+        })
+    }
+
+    /// One line per axis with feedback.
+    fn cycle<T: CanTransport>(&mut self, s: &MotionSession<T>, cycle: u64) -> std::io::Result<()> {
+        let time_ns = s.master().now_us().saturating_mul(1000);
+        let t0 = *self.t0_ns.get_or_insert(time_ns);
+        for (i, scale) in self.scales.iter().enumerate() {
+            let Some(t) = s.telemetry(i) else { continue };
+            if t.state.is_none() {
+                continue;
+            }
+            let sample = CycleSample {
+                cycle,
+                time_ns,
+                wake_latency_ns: 0,
+                exchange_ns: 0,
+                wkc: 0,
+                axis: i as u16,
+                mode_sent: t.mode,
+                demand: Some(t.position_demand),
+                actual: t.position_actual,
+                velocity_demand: Some(t.velocity_demand),
+                velocity: t.velocity_actual,
+                torque_demand: Some(t.torque_demand),
+                torque: t.torque_actual,
+                following_error: None,
+                statusword: t.statusword,
+                mode: t.mode_display,
+                probes: t.probes,
+            }
+            .defined();
+            sample.write_csv(&mut self.out, t0, Some(scale))?;
+            self.samples += 1;
+        }
+        Ok(())
+    }
+
+    fn finish(mut self) -> std::io::Result<RecordSummary> {
+        use std::io::Write;
+        self.out.flush()?;
+        Ok(RecordSummary {
+            file: self.path.display().to_string(),
+            samples: self.samples,
+            dropped: 0,
+        })
+    }
 }
 
 /// Run `cfg` (`duration` overrides the file's). `stop` ends it early with a controlled stop
@@ -83,6 +178,7 @@ pub struct CanRunReport {
 pub fn run(
     cfg: &CanRunConfig,
     duration: Option<Duration>,
+    record: Option<&std::path::Path>,
     stop: &AtomicBool,
 ) -> Result<CanRunReport, CanError> {
     let bus_err = |e| {
@@ -93,8 +189,14 @@ pub fn run(
         )
     };
     match &cfg.target {
-        CanTarget::Sim => run_on(emulated_bus(cfg)?, cfg, duration, stop),
-        CanTarget::Bus(spec) => run_on(open_bus(spec).map_err(bus_err)?, cfg, duration, stop),
+        CanTarget::Sim => run_on(emulated_bus(cfg)?, cfg, duration, record, stop),
+        CanTarget::Bus(spec) => run_on(
+            open_bus(spec).map_err(bus_err)?,
+            cfg,
+            duration,
+            record,
+            stop,
+        ),
     }
 }
 
@@ -103,10 +205,22 @@ pub fn run_on<T: CanTransport>(
     transport: T,
     cfg: &CanRunConfig,
     duration: Option<Duration>,
+    record: Option<&std::path::Path>,
     stop: &AtomicBool,
 ) -> Result<CanRunReport, CanError> {
+    let recorder = match record {
+        Some(p) => Some(Recorder::create(p, cfg).map_err(|e| {
+            CanError::new(
+                NodeRef { id: 0, drive: None },
+                None,
+                CanErrorKind::NotReady(format!("recording to {}: {e}", p.display())),
+            )
+        })?),
+        None => None,
+    };
     let (mut s, started_us) = session(transport, cfg)?;
     let mut run = Run::new(cfg, duration.or(cfg.duration), started_us);
+    run.recorder = recorder;
     let (outcome, reason) = run.drive(&mut s, stop)?;
     run.finish(s, outcome, reason)
 }
@@ -184,6 +298,9 @@ struct Run<'a> {
     done: Vec<bool>,
     /// The bus's time when the run began, µs.
     started_us: u64,
+    recorder: Option<Recorder>,
+    /// Why the recording stopped, if it failed.
+    record_error: Option<String>,
 }
 
 impl<'a> Run<'a> {
@@ -197,6 +314,8 @@ impl<'a> Run<'a> {
             errors: vec![Vec::new(); cfg.drives.len()],
             done: cfg.drives.iter().map(|d| d.steps.is_empty()).collect(),
             started_us,
+            recorder: None,
+            record_error: None,
         }
     }
 
@@ -212,6 +331,12 @@ impl<'a> Run<'a> {
     ) -> Result<Option<StopReason>, CanError> {
         s.cycle()?;
         self.cycles += 1;
+        if let Some(r) = self.recorder.as_mut()
+            && let Err(e) = r.cycle(s, self.cycles)
+        {
+            self.record_error = Some(e.to_string());
+            self.recorder = None;
+        }
         let mut stopped = None;
         for e in s.take_events() {
             let axis = |a: u16| usize::from(a);
@@ -397,6 +522,18 @@ impl<'a> Run<'a> {
                 emergencies.push(format!("NMT Stop of node {}: {e}", d.node));
             }
         }
+        let record = match self.recorder.take().map(Recorder::finish).transpose() {
+            Ok(r) => r,
+            Err(e) => {
+                self.record_error = Some(e.to_string());
+                None
+            }
+        };
+        let warnings = self
+            .record_error
+            .iter()
+            .map(|e| format!("the recording stopped: {e}"))
+            .collect();
         Ok(CanRunReport {
             config: self.cfg.source.clone(),
             bus: self.cfg.target.to_string(),
@@ -407,6 +544,8 @@ impl<'a> Run<'a> {
             bus_time_us: m.now_us().saturating_sub(self.started_us),
             drives,
             emergencies,
+            record,
+            warnings,
         })
     }
 

@@ -944,6 +944,12 @@ pub fn can_run_report(r: &ecdrive::app::canopen::run::CanRunReport) {
     for e in &r.emergencies {
         println!("EMCY: {e}");
     }
+    for w in &r.warnings {
+        println!("warning: {w}");
+    }
+    if let Some(rec) = &r.record {
+        println!("recorded {} samples to {}", rec.samples, rec.file);
+    }
     println!(
         "{}: {} ({} cycles, {:.3} s of bus time)",
         r.outcome.describe(),

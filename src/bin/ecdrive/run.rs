@@ -152,11 +152,11 @@ fn run_canopen(
     json: bool,
 ) -> ExitCode {
     use ecdrive::app::config::canopen::CanTarget;
-    if record.is_some() || esi.is_some() || crate::pcap().is_some() {
+    if esi.is_some() || crate::pcap().is_some() {
         return fail_with(
             "run",
             &format!(
-                "{}: --record, --plot, --esi and --pcap are not available for CANopen runs yet",
+                "{}: --esi and --pcap are for EtherCAT runs (a CANopen drive's file is its EDS)",
                 cfg.source
             ),
             exit::USAGE,
@@ -212,7 +212,7 @@ fn run_canopen(
         eprintln!("ecdrive run: warning: {w}");
     }
     let signals = crate::stop_signals();
-    let report = match ecdrive::app::canopen::run::run(&cfg, duration, &signals.stop) {
+    let report = match ecdrive::app::canopen::run::run(&cfg, duration, record, &signals.stop) {
         Ok(r) => r,
         Err(e) => return fail_with("run", &e.to_string(), exit::BUS),
     };
