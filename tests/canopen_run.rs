@@ -161,7 +161,13 @@ fn the_example_runs_from_the_command_line() {
     .to_string();
     assert!(out.contains("recorded "), "{out}");
     let drawing = std::fs::read_to_string(&svg).expect("svg");
-    for caption in ["(BLV-R)", "(ASDA-A2)", "(Lexium MDrive)", "\nhm\n", "\ntq\n"] {
+    for caption in [
+        "(BLV-R)",
+        "(ASDA-A2)",
+        "(Lexium MDrive)",
+        "\nhm\n",
+        "\ntq\n",
+    ] {
         assert!(drawing.contains(caption), "{caption} not in the plot");
     }
     let _ = std::fs::remove_dir_all(&dir);
@@ -304,4 +310,46 @@ fn what_a_canopen_run_cannot_take_is_named() {
     // An EtherCAT tool given a CANopen file says what it is.
     let e = config::parse(base, "can.toml").unwrap_err();
     assert!(e.message.contains("is a CANopen bus"), "{e}");
+}
+
+/// A fault latched before the run (an earlier run's, the drive's own): the run refuses, naming
+/// the drive, its error code and its EMCY decoded with the drive's alarm table; with
+/// `reset_faults = true` it resets the fault and runs.
+#[test]
+fn a_latched_fault_is_named_or_reset_as_the_file_says() {
+    use ecdrive::app::ethercat::tools::run::Outcome;
+    let text = "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\n\
+                program = [{ step = \"pp\", to = [36000], velocity = 360000, acceleration = 3600000 }]\n";
+    for reset in [false, true] {
+        let cfg = can(&if reset {
+            format!("reset_faults = true\n{text}")
+        } else {
+            text.to_string()
+        });
+        let mut bus = ecdrive::app::canopen::run::emulated_bus(&cfg).expect("bus");
+        let p = &ecdrive::drives::blv_r::PROFILE;
+        let alarm = ecdrive::app::canopen::demo::demo_alarm(p).expect("an alarm");
+        assert!(bus.node_mut(3).expect("node").inject_alarm(alarm));
+        let stop = std::sync::atomic::AtomicBool::new(false);
+        let r = ecdrive::app::canopen::run::run_on(bus, &cfg, None, None, &stop).expect("run");
+        if reset {
+            assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+            assert_eq!(r.drives[0].position, 36_000);
+        } else {
+            assert_eq!(r.outcome, Outcome::Refused, "{}", r.reason);
+            assert!(
+                r.reason
+                    .contains("node 3 (BLV-R) is in Fault, error code 0x"),
+                "{}",
+                r.reason
+            );
+            assert!(r.reason.contains("reset_faults = true"), "{}", r.reason);
+            // The EMCY decoded with the BLV-R's alarm table (alarm 30h, overload).
+            assert!(r.reason.contains("alarm 30h overload"), "{}", r.reason);
+            assert!(
+                !r.drives[0].states.iter().any(|s| s == "Operation enabled"),
+                "{r:?}"
+            );
+        }
+    }
 }

@@ -397,6 +397,9 @@ impl<'a> Run<'a> {
         s: &mut MotionSession<T>,
         stop: &AtomicBool,
     ) -> Result<(Outcome, String), CanError> {
+        if let Some(refused) = self.latched_faults(s)? {
+            return Ok((Outcome::Refused, refused));
+        }
         s.command(Command::Enable(Axes::All));
         let limit = self.cycles_of(ENABLE_TIMEOUT);
         let enabled = |s: &MotionSession<T>| {
@@ -459,6 +462,81 @@ impl<'a> Run<'a> {
                 return Ok((Outcome::Refused, "a program could not go on".into()));
             }
         }
+    }
+
+    /// Faults the drives show before the run (latched by an earlier one): reset when the file
+    /// says `reset_faults = true`, else the run is refused naming each drive, its error code
+    /// and its last EMCY. Waits for every drive's first feedback.
+    fn latched_faults<T: CanTransport>(
+        &mut self,
+        s: &mut MotionSession<T>,
+    ) -> Result<Option<String>, CanError> {
+        let n = self.cfg.drives.len();
+        let fed = |s: &MotionSession<T>| {
+            (0..n).all(|i| s.telemetry(i).is_some_and(|t| t.state.is_some()))
+        };
+        for _ in 0..self.cycles_of(ENABLE_TIMEOUT) {
+            if fed(s) {
+                break;
+            }
+            self.cycle(s)?;
+        }
+        let faulted: Vec<usize> = (0..n)
+            .filter(|i| {
+                s.telemetry(*i)
+                    .is_some_and(|t| t.state == Some(State::Fault))
+            })
+            .collect();
+        if faulted.is_empty() {
+            return Ok(None);
+        }
+        if !self.cfg.reset_faults {
+            let named: Vec<String> = faulted
+                .iter()
+                .map(|&i| {
+                    let d = &self.cfg.drives[i];
+                    let code = s.telemetry(i).map_or(0, |t| t.error_code);
+                    // Decoded with the drive's alarm table (an EMCY sent before the master
+                    // knew the node came undecoded).
+                    let emcy = s
+                        .master()
+                        .emergencies(d.node)
+                        .last()
+                        .map_or_else(String::new, |e| {
+                            format!(": {}", d.profile.decode_emcy(&e.emergency))
+                        });
+                    format!(
+                        "node {} ({}) is in Fault, error code 0x{code:04X}{emcy}",
+                        d.node, d.profile.name
+                    )
+                })
+                .collect();
+            return Ok(Some(format!(
+                "{}; clear it at the drive, or run with reset_faults = true",
+                named.join("; ")
+            )));
+        }
+        for &i in &faulted {
+            s.command(Command::FaultReset(Axes::One(i as u16)));
+        }
+        for _ in 0..self.cycles_of(ENABLE_TIMEOUT) {
+            self.cycle(s)?;
+            if faulted.iter().all(|&i| {
+                s.telemetry(i)
+                    .is_some_and(|t| t.state != Some(State::Fault))
+            }) {
+                // The reset's own refusals and the fault's account are history, not this run's.
+                for &i in &faulted {
+                    if let Some(v) = self.errors.get_mut(i) {
+                        v.clear();
+                    }
+                }
+                return Ok(None);
+            }
+        }
+        Ok(Some(
+            "a fault reset did not clear every drive's fault".into(),
+        ))
     }
 
     fn stop_reason(&self, r: StopReason) -> String {

@@ -7,6 +7,7 @@
 //!                            # process), or a SocketCAN interface ("can0")
 //! cycle = "4ms"              # the SYNC period (default 4 ms)
 //! duration = "10s"           # stop after this long (default: when every program has finished)
+//! reset_faults = false       # clear faults latched before the run (default: refuse, saying which)
 //!
 //! [[drive]]
 //! node = 3                   # node-ID 1–127
@@ -95,6 +96,9 @@ pub struct CanRunConfig {
     pub drives: Vec<CanDriveConfig>,
     /// What the check found questionable but not wrong.
     pub warnings: Vec<String>,
+    /// Clear faults latched before the run (a fault reset to each drive in Fault) instead of
+    /// refusing to run.
+    pub reset_faults: bool,
 }
 
 /// Whether the file is a CANopen run: a CANopen interface or a drive selected by node.
@@ -168,6 +172,7 @@ pub(super) fn parse(cx: &Ctx<'_>, f: &raw::File) -> Result<CanRunConfig, ConfigE
         duration,
         drives,
         warnings,
+        reset_faults: f.reset_faults,
     })
 }
 
