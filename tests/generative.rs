@@ -749,6 +749,13 @@ fn run_case(c: &Case) -> Result<(), TestCaseError> {
                     .collect();
                 m.command(Command::RunProgram(Axes::All))
                     .map_err(|e| TestCaseError::fail(e.to_string()))?;
+                // Started first: the telemetry of the last program (done, at its last step)
+                // stands until the command is applied.
+                check(&mut m, "every program started", 5, |t| {
+                    t.axes
+                        .iter()
+                        .all(|a| a.program_running || a.program_step == 0)
+                })?;
                 check(&mut m, "every program done", 15, |t| {
                     t.axes
                         .iter()
@@ -991,4 +998,73 @@ fn a_quick_stop_in_a_torque_mode_commands_no_braking_torque() {
         ops: vec![Op::Enable, Op::Program, Op::Enable, Op::QuickStopThenEnable],
     };
     run_case(&c).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// Found by seed 12026296202516686879 (300 cases): a second `RunProgram` right after the first
+/// program had finished was taken as done at once (the last program's telemetry — not running,
+/// at its last step — stood until the command was applied), so the next mode command met the
+/// new program starting: the program took its start mode back and the switch neither happened
+/// nor was refused. The case now waits for the programs to start, and a mode command while a
+/// program runs is refused (`mode_commands_wait_for_the_program`).
+#[test]
+fn a_program_run_twice_then_every_mode() {
+    let c = Case {
+        devices: vec![drive(Kind::Bdhde, RunMode::Csv)],
+        cycle_us: 500,
+        ops: vec![
+            Op::Enable,
+            Op::Program,
+            Op::Program,
+            Op::Mode(0, 0),
+            Op::Mode(0, 1),
+            Op::Mode(0, 2),
+            Op::Mode(0, 3),
+            Op::Mode(0, 4),
+            Op::Mode(0, 5),
+        ],
+    };
+    run_case(&c).unwrap_or_else(|e| panic!("{e}"));
+}
+
+/// A mode command while a program runs is refused with the reason (the program owns the
+/// axis's mode, as it owns its set-points and pp targets); the program goes on in its mode.
+#[test]
+fn mode_commands_wait_for_the_program() {
+    use ecdrive::master::{Axes, Command, StopKind};
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
+                loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csv\"\n\
+                program = [{ step = \"ramp\", velocity = 100000, acceleration = 1000000, hold = 2 }, \
+                { step = \"ramp\", velocity = 0, acceleration = 1000000 }]\n";
+    let cfg = ecdrive::app::config::parse(text, "mode.toml").unwrap_or_else(|e| panic!("{e}"));
+    let link = cfg
+        .target
+        .open_with(&cfg.sim)
+        .unwrap_or_else(|e| panic!("{e}"));
+    let mut m = ecdrive::master::Master::start(link, cfg.master.clone())
+        .unwrap_or_else(|f| panic!("{}", f.error));
+    let guard = Duration::from_secs(20);
+    m.wait_until("OP", guard, |t| t.cycle.all_op).expect("OP");
+    m.command(Command::Enable(Axes::All)).expect("enable");
+    m.wait_until("enabled", guard, |t| {
+        t.axes
+            .iter()
+            .all(|a| a.state == Some(ecdrive::State::OperationEnabled))
+    })
+    .expect("enabled");
+    m.command(Command::RunProgram(Axes::All)).expect("run");
+    m.wait_until("running", guard, |t| t.axes[0].program_running)
+        .expect("running");
+    m.command(Command::Mode(Axes::All, RunMode::Pv))
+        .expect("mode");
+    m.wait_until("the program", guard, |t| {
+        !t.axes[0].program_running && t.axes[0].program_step >= 1
+    })
+    .expect("program done");
+    let refused = m.history().iter().any(|h| {
+        h.text
+            .contains("mode switch refused: a program runs on the axis")
+    });
+    assert_eq!(m.telemetry().axes[0].mode, RunMode::Csv.code());
+    let _ = m.stop(StopKind::Ramp);
+    assert!(refused, "no refusal in the history");
 }

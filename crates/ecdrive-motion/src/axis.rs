@@ -508,7 +508,9 @@ impl MotionAxis {
         ctx: &StepContext,
         ev: &mut dyn EventSink,
     ) -> Option<Sample> {
+        // Not while a program runs (it owns the mode): not now, as for a pp target.
         if let Some(m) = app.mode
+            && self.program == ProgramState::Idle
             && st.active_mode.as_i8() != m.code()
             && st.mode_switch == ModeSwitchPhase::Idle
             && self
@@ -1674,6 +1676,11 @@ impl MotionAxis {
                 } else {
                     Some("fault reset ignored: the drive shows no fault")
                 }
+            }
+            // A running program owns the axis's mode (it would take its own back at its next
+            // step): refused, as a pp target or a set-point is.
+            Command::Mode(ax, _) if ax.includes(i) && self.program != ProgramState::Idle => {
+                Some("mode switch refused: a program runs on the axis")
             }
             Command::Mode(ax, m) if ax.includes(i) => self
                 .axis
