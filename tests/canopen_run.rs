@@ -75,7 +75,11 @@ fn the_three_drives_run_their_programs_from_a_file_on_can_sim() {
     let dir = std::env::temp_dir().join(format!("ecdrive-can-record-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let csv = dir.join("run.csv");
-    let r = ecdrive::app::canopen::run::run(&cfg, None, Some(&csv), &stop).expect("run");
+    let opts = ecdrive::app::canopen::run::CanRunOptions {
+        record: Some(csv.clone()),
+        ..Default::default()
+    };
+    let r = ecdrive::app::canopen::run::run(&cfg, &opts, &stop).expect("run");
     eprintln!("{r:#?}");
     assert_eq!(
         r.outcome,
@@ -169,6 +173,42 @@ fn the_example_runs_from_the_command_line() {
         "\ntq\n",
     ] {
         assert!(drawing.contains(caption), "{caption} not in the plot");
+    }
+    // Every frame, in candump's log format: boot-ups, NMT, SDO, SYNC (080, no data), each
+    // drive's RPDOs and TPDOs, at the bus's (simulated) time, never going back.
+    let log = dir.join("r.log");
+    let out = ecdrive(&[
+        "run",
+        "-c",
+        "examples/canopen_profile_modes.toml",
+        "--candump",
+        &log.display().to_string(),
+    ])
+    .ok()
+    .to_string();
+    let text = std::fs::read_to_string(&log).expect("candump log");
+    let n = text.lines().count();
+    assert!(out.contains(&format!("logged {n} CAN frames to ")), "{out}");
+    let mut last = 0.0f64;
+    let mut ids = std::collections::BTreeSet::new();
+    for l in text.lines() {
+        let (time, rest) = l.split_once(") ").expect("(time) …");
+        let t: f64 = time.trim_start_matches('(').parse().expect("seconds");
+        assert!(t >= last, "time went back: {l}");
+        last = t;
+        let (iface, frame) = rest.split_once(' ').expect("iface frame");
+        assert_eq!(iface, "can_sim");
+        let (id, data) = frame.split_once('#').expect("ID#DATA");
+        assert_eq!(id.len(), 3, "{l}");
+        ids.insert(u16::from_str_radix(id, 16).expect("hex id"));
+        assert!(
+            data == "R" || (data.len() % 2 == 0 && data.len() <= 16),
+            "{l}"
+        );
+    }
+    // NMT, SYNC; the BLV-R's (node 3) boot-up, SDO request and response, TPDO1 and RPDO1.
+    for id in [0x000, 0x080, 0x703, 0x603, 0x583, 0x183, 0x203] {
+        assert!(ids.contains(&id), "no frame with COB-ID 0x{id:03X}");
     }
     let _ = std::fs::remove_dir_all(&dir);
     let out = ecdrive(&[

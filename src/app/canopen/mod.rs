@@ -1,5 +1,6 @@
 //! The CANopen applications: the demo and the tools behind `ecdrive … --can`.
 
+pub mod candump;
 pub mod demo;
 pub mod eds;
 pub mod run;

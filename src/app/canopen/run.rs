@@ -80,6 +80,8 @@ pub struct CanRunReport {
     pub record: Option<RecordSummary>,
     /// What went wrong beside the drives (a recording that could not be written).
     pub warnings: Vec<String>,
+    /// The frame log, if one was asked for (`--candump`).
+    pub candump: Option<super::candump::CandumpSummary>,
 }
 
 /// A CANopen run's recording: every cycle's sample of every axis with feedback, as the
@@ -172,13 +174,23 @@ impl Recorder {
     }
 }
 
-/// Run `cfg` (`duration` overrides the file's). `stop` ends it early with a controlled stop
-/// (Ctrl-C). An error is a bus or configuration failure before the drives moved, naming the
-/// node; what happens to a drive afterwards is in the report.
+/// What can change how [`run`] runs a file.
+#[derive(Debug, Clone, Default)]
+pub struct CanRunOptions {
+    /// Override the file's duration.
+    pub duration: Option<Duration>,
+    /// Record every cycle into this CSV file (`--record`).
+    pub record: Option<std::path::PathBuf>,
+    /// Log every CAN frame into this file, candump format (`--candump`).
+    pub candump: Option<std::path::PathBuf>,
+}
+
+/// Run `cfg` as `opts` says. `stop` ends it early with a controlled stop (Ctrl-C). An error is
+/// a bus or configuration failure before the drives moved, naming the node; what happens to a
+/// drive afterwards is in the report.
 pub fn run(
     cfg: &CanRunConfig,
-    duration: Option<Duration>,
-    record: Option<&std::path::Path>,
+    opts: &CanRunOptions,
     stop: &AtomicBool,
 ) -> Result<CanRunReport, CanError> {
     let bus_err = |e| {
@@ -189,15 +201,38 @@ pub fn run(
         )
     };
     match &cfg.target {
-        CanTarget::Sim => run_on(emulated_bus(cfg)?, cfg, duration, record, stop),
-        CanTarget::Bus(spec) => run_on(
+        CanTarget::Sim => run_logged(emulated_bus(cfg)?, "can-sim", cfg, opts, stop),
+        CanTarget::Bus(spec) => run_logged(
             open_bus(spec).map_err(bus_err)?,
+            &spec.to_string(),
             cfg,
-            duration,
-            record,
+            opts,
             stop,
         ),
     }
+}
+
+/// [`run_on`], with every frame logged when `opts.candump` says so.
+fn run_logged<T: CanTransport>(
+    transport: T,
+    iface: &str,
+    cfg: &CanRunConfig,
+    opts: &CanRunOptions,
+    stop: &AtomicBool,
+) -> Result<CanRunReport, CanError> {
+    let Some(path) = &opts.candump else {
+        return run_on(transport, cfg, opts.duration, opts.record.as_deref(), stop);
+    };
+    let (tap, log) = super::candump::CandumpTap::new(transport, path, iface).map_err(|e| {
+        CanError::new(
+            NodeRef { id: 0, drive: None },
+            None,
+            CanErrorKind::NotReady(format!("the candump log {}: {e}", path.display())),
+        )
+    })?;
+    let mut report = run_on(tap, cfg, opts.duration, opts.record.as_deref(), stop)?;
+    report.candump = Some(log.summary());
+    Ok(report)
 }
 
 /// The run on an open bus.
@@ -624,6 +659,7 @@ impl<'a> Run<'a> {
             emergencies,
             record,
             warnings,
+            candump: None,
         })
     }
 

@@ -466,6 +466,10 @@ enum Command {
         /// as warnings).
         #[arg(long, value_name = "FILE|DIR")]
         esi: Option<PathBuf>,
+        /// A CANopen run only: every CAN frame, both directions, in candump's log format
+        /// (`candump -l`: `(seconds) IFACE ID#DATA`), at the bus's time (simulated on can-sim).
+        #[arg(long, value_name = "FILE")]
+        candump: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
     },
@@ -1647,6 +1651,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             record,
             plot,
             esi,
+            candump,
             json,
         } => {
             let code = run::run(
@@ -1654,8 +1659,11 @@ fn dispatch(cli: Cli) -> ExitCode {
                 interface.as_deref(),
                 duration,
                 check,
-                record.as_deref(),
-                esi.as_deref(),
+                run::RunFiles {
+                    record: record.as_deref(),
+                    esi: esi.as_deref(),
+                    candump: candump.as_deref(),
+                },
                 json.json,
             );
             match (&record, &plot) {

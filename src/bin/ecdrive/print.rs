@@ -950,6 +950,9 @@ pub fn can_run_report(r: &ecdrive::app::canopen::run::CanRunReport) {
     if let Some(rec) = &r.record {
         println!("recorded {} samples to {}", rec.samples, rec.file);
     }
+    if let Some(c) = &r.candump {
+        println!("logged {} CAN frames to {}", c.frames, c.file);
+    }
     println!(
         "{}: {} ({} cycles, {:.3} s of bus time)",
         r.outcome.describe(),

@@ -11,17 +11,31 @@ pub fn run(
     interface: Option<&str>,
     duration: Option<Duration>,
     check: bool,
-    record: Option<&Path>,
-    esi: Option<&Path>,
+    files: RunFiles<'_>,
     json: bool,
 ) -> ExitCode {
+    let RunFiles {
+        record,
+        esi,
+        candump,
+    } = files;
     let mut cfg = match ecdrive::app::config::load_any(path) {
         Ok(ecdrive::app::config::Config::EtherCat(c)) => c,
         Ok(ecdrive::app::config::Config::CanOpen(c)) => {
-            return run_canopen(c, interface, duration, check, record, esi, json);
+            return run_canopen(c, interface, duration, check, files, json);
         }
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
     };
+    if candump.is_some() {
+        return fail_with(
+            "run",
+            &format!(
+                "{}: --candump logs the frames of a CANopen run; this file is an EtherCAT run (--pcap captures its frames)",
+                cfg.source
+            ),
+            exit::USAGE,
+        );
+    }
     if let Some(dir) = esi {
         let l = match crate::load_esi("run", dir) {
             Ok(l) => l,
@@ -141,18 +155,25 @@ pub fn run(
     ExitCode::from(code)
 }
 
+/// The files a run may be asked to read or write: `--record`, `--esi`, `--candump`.
+#[derive(Clone, Copy)]
+pub struct RunFiles<'a> {
+    pub record: Option<&'a Path>,
+    pub esi: Option<&'a Path>,
+    pub candump: Option<&'a Path>,
+}
+
 /// A CANopen run file: the drives on the motion runtime over the file's CAN bus.
 fn run_canopen(
     mut cfg: ecdrive::app::config::canopen::CanRunConfig,
     interface: Option<&str>,
     duration: Option<Duration>,
     check: bool,
-    record: Option<&Path>,
-    esi: Option<&Path>,
+    files: RunFiles<'_>,
     json: bool,
 ) -> ExitCode {
     use ecdrive::app::config::canopen::CanTarget;
-    if esi.is_some() || crate::pcap().is_some() {
+    if files.esi.is_some() || crate::pcap().is_some() {
         return fail_with(
             "run",
             &format!(
@@ -212,7 +233,12 @@ fn run_canopen(
         eprintln!("ecdrive run: warning: {w}");
     }
     let signals = crate::stop_signals();
-    let report = match ecdrive::app::canopen::run::run(&cfg, duration, record, &signals.stop) {
+    let opts = ecdrive::app::canopen::run::CanRunOptions {
+        duration,
+        record: files.record.map(Path::to_path_buf),
+        candump: files.candump.map(Path::to_path_buf),
+    };
+    let report = match ecdrive::app::canopen::run::run(&cfg, &opts, &signals.stop) {
         Ok(r) => r,
         Err(e) => return fail_with("run", &e.to_string(), exit::BUS),
     };
