@@ -8,11 +8,7 @@ mod support {
     pub mod cli;
 }
 use ecdrive::app::config::{self, Config};
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
 use support::cli::ecdrive;
-
-const EXE: &str = env!("CARGO_BIN_EXE_ecdrive");
 
 /// Each drive ends its program with a pp move to 2 rev: the reported position (0x6064 through
 /// its TPDO) must be there, in each drive's own position unit.
@@ -225,44 +221,21 @@ fn the_example_runs_from_the_command_line() {
     );
 }
 
-/// `ecdrive sim --can BUS --node …` in another process, until its banner lists `nodes`.
-fn serve(bus: &str, nodes: &[&str]) -> Child {
-    let mut cmd = Command::new(EXE);
-    cmd.args(["sim", "--can", bus]);
-    for n in nodes {
-        cmd.args(["--node", n]);
-    }
-    let mut child = cmd
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start ecdrive sim --can");
-    let mut err = BufReader::new(child.stderr.take().expect("stderr"));
-    let mut banner = String::new();
-    let mut line = String::new();
-    while err.read_line(&mut line).expect("read") > 0 {
-        banner.push_str(&line);
-        if banner.lines().filter(|l| l.starts_with("  node ")).count() == nodes.len() {
-            break;
-        }
-        line.clear();
-    }
-    assert!(banner.contains("serving"), "{banner}");
-    std::thread::spawn(move || {
-        let mut rest = String::new();
-        let _ = std::io::Read::read_to_string(&mut err, &mut rest);
-    });
-    child
-}
-
 #[test]
 fn a_file_runs_over_a_bus_served_by_another_process() {
     let dir = std::env::temp_dir().join(format!("ecdrive-can-run-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let sock = dir.join("bus.sock");
     let bus = format!("vbus:{}", sock.display());
-    let mut child = serve(&bus, &["blv-r@3", "asda-a2", "lexium-mdrive"]);
+    let nodes = [
+        "--node",
+        "blv-r@3",
+        "--node",
+        "asda-a2",
+        "--node",
+        "lexium-mdrive",
+    ];
+    let (mut child, _) = support::cli::serve_can(&bus, &nodes, 3);
     let file = dir.join("run.toml");
     std::fs::write(&file, ENDS_AT_TWO_REV).expect("write");
     let path = file.display().to_string();

@@ -6,39 +6,12 @@
 mod support {
     pub mod cli;
 }
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::Child;
 use support::cli::ecdrive;
-
-const EXE: &str = env!("CARGO_BIN_EXE_ecdrive");
 
 /// `ecdrive sim --can BUS extra…`, started and waited for until its banner is complete.
 fn serve(bus: &str, extra: &[&str], nodes: usize) -> (Child, String) {
-    let mut child = Command::new(EXE)
-        .args(["sim", "--can", bus])
-        .args(extra)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start ecdrive sim --can");
-    let mut err = BufReader::new(child.stderr.take().expect("stderr"));
-    let mut banner = String::new();
-    let mut line = String::new();
-    while err.read_line(&mut line).expect("read") > 0 {
-        banner.push_str(&line);
-        if banner.lines().filter(|l| l.starts_with("  node ")).count() == nodes {
-            break;
-        }
-        line.clear();
-    }
-    assert!(banner.contains("serving"), "{banner}");
-    // Keep reading stderr so that the child never blocks on it.
-    std::thread::spawn(move || {
-        let mut rest = String::new();
-        let _ = std::io::Read::read_to_string(&mut err, &mut rest);
-    });
-    (child, banner)
+    support::cli::serve_can(bus, extra, nodes)
 }
 
 fn stop(mut child: Child) -> std::process::Output {

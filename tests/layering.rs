@@ -557,13 +557,27 @@ fn long_functions(text: &str, max: usize) -> Vec<(usize, String, usize)> {
 /// held to 80 ([`no_function_of_the_motion_runtime_exceeds_80_lines`]).
 #[test]
 fn no_function_of_the_master_and_slave_crates_exceeds_150_lines() {
+    let found = functions_over(
+        &[
+            "crates/ecdrive-ethercat/src",
+            "crates/ecdrive-canopen/src",
+            "crates/ecdrive-sim/src",
+        ],
+        150,
+    );
+    assert!(
+        found.is_empty(),
+        "functions over 150 lines:\n{}",
+        found.join("\n")
+    );
+}
+
+/// Every function over `limit` lines in the crates under `dirs` (test code left out), as
+/// `file:line: fn name has n lines`.
+fn functions_over(dirs: &[&str], limit: usize) -> Vec<String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut found = Vec::new();
-    for dir in [
-        "crates/ecdrive-ethercat/src",
-        "crates/ecdrive-canopen/src",
-        "crates/ecdrive-sim/src",
-    ] {
+    for dir in dirs {
         for f in source_scan::rust_files(&root.join(dir)) {
             let rel = f
                 .strip_prefix(root)
@@ -574,16 +588,12 @@ fn no_function_of_the_master_and_slave_crates_exceeds_150_lines() {
                 continue;
             }
             let text = std::fs::read_to_string(&f).unwrap_or_default();
-            for (line, name, n) in long_functions(&text, 150) {
+            for (line, name, n) in long_functions(&text, limit) {
                 found.push(format!("{rel}:{line}: fn {name} has {n} lines"));
             }
         }
     }
-    assert!(
-        found.is_empty(),
-        "functions over 150 lines:\n{}",
-        found.join("\n")
-    );
+    found
 }
 
 /// The EtherCAT cycle keeps only the bus's work (the motion is the runtime's): none of its
@@ -607,24 +617,7 @@ fn the_ethercat_cycle_keeps_only_the_buss_work() {
 /// than 80 lines (tests excepted).
 #[test]
 fn no_function_of_the_motion_runtime_exceeds_80_lines() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut found = Vec::new();
-    for dir in ["crates/ecdrive-motion/src"] {
-        for f in source_scan::rust_files(&root.join(dir)) {
-            let rel = f
-                .strip_prefix(root)
-                .unwrap_or(&f)
-                .to_string_lossy()
-                .replace('\\', "/");
-            if rel.ends_with("/tests.rs") || rel.contains("/tests/") {
-                continue;
-            }
-            let text = std::fs::read_to_string(&f).unwrap_or_default();
-            for (line, name, n) in long_functions(&text, 80) {
-                found.push(format!("{rel}:{line}: fn {name} has {n} lines"));
-            }
-        }
-    }
+    let found = functions_over(&["crates/ecdrive-motion/src"], 80);
     assert!(
         found.is_empty(),
         "functions over 80 lines:\n{}",

@@ -276,3 +276,32 @@ impl Drop for SimOnVeth {
         }
     }
 }
+
+/// `ecdrive sim --can BUS args…` in a process of its own, once its banner lists `nodes` nodes;
+/// its stderr keeps being read so that it never blocks. The banner with it.
+pub fn serve_can(bus: &str, args: &[&str], nodes: usize) -> (Child, String) {
+    let mut child = Command::new(ECDRIVE)
+        .args(["sim", "--can", bus])
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start ecdrive sim --can");
+    let mut err = BufReader::new(child.stderr.take().expect("stderr"));
+    let mut banner = String::new();
+    let mut line = String::new();
+    while err.read_line(&mut line).expect("read") > 0 {
+        banner.push_str(&line);
+        if banner.lines().filter(|l| l.starts_with("  node ")).count() == nodes {
+            break;
+        }
+        line.clear();
+    }
+    assert!(banner.contains("serving"), "{banner}");
+    std::thread::spawn(move || {
+        let mut rest = String::new();
+        let _ = err.read_to_string(&mut rest);
+    });
+    (child, banner)
+}

@@ -50,6 +50,39 @@ pub struct CycleSample {
 }
 
 impl CycleSample {
+    /// Axis `axis`'s sample of cycle `cycle` (at `time_ns`) from its telemetry; the following
+    /// error only when the master `judged` it this cycle. The bus's own columns (wake-up
+    /// latency, exchange time, working counter) are 0 for the caller to fill. Every column
+    /// with a meaning in the mode sent ([`CycleSample::defined`]).
+    pub fn of_axis(
+        cycle: u64,
+        time_ns: u64,
+        axis: u16,
+        t: &crate::telemetry::AxisTelemetry,
+        judged: bool,
+    ) -> Self {
+        Self {
+            cycle,
+            time_ns,
+            wake_latency_ns: 0,
+            exchange_ns: 0,
+            wkc: 0,
+            axis,
+            mode_sent: t.mode,
+            demand: Some(t.position_demand),
+            actual: t.position_actual,
+            velocity_demand: Some(t.velocity_demand),
+            velocity: t.velocity_actual,
+            torque_demand: Some(t.torque_demand),
+            torque: t.torque_actual,
+            following_error: judged.then_some(t.following_error),
+            statusword: t.statusword,
+            mode: t.mode_display,
+            probes: t.probes,
+        }
+        .defined()
+    }
+
     /// Whether the mode sent is one of `codes`.
     fn sent_in(&self, codes: &[i8]) -> bool {
         codes.contains(&self.mode_sent)
@@ -92,23 +125,39 @@ pub struct SampleScale {
 }
 
 impl SampleScale {
+    /// The scale of the drive `drive` at `position` (a segment position, or a CANopen node-ID),
+    /// with its units and the run's user units, if any.
+    pub fn of(
+        position: u16,
+        drive: &str,
+        user_units: Option<&crate::startup::UserUnits>,
+        units: &ecdrive_core::cia402::Units,
+    ) -> Self {
+        let (unit, counts_per_unit) = match user_units {
+            Some(u) if u.counts_per_unit > 0.0 => (u.name.clone(), u.counts_per_unit),
+            _ => ("count".to_string(), 1.0),
+        };
+        Self {
+            position,
+            drive: drive.replace(',', ";"),
+            unit,
+            counts_per_unit,
+            velocity_counts_per_s: units.velocity_position_per_s(),
+            torque_per_mille: units.torque_per_mille,
+        }
+    }
+
     /// The scales of a running master's drives, by axis.
     pub fn of_drives(drives: &[crate::DriveSummary]) -> Vec<Self> {
         drives
             .iter()
             .map(|d| {
-                let (unit, counts_per_unit) = match &d.user_units {
-                    Some(u) if u.counts_per_unit > 0.0 => (u.name.clone(), u.counts_per_unit),
-                    _ => ("count".to_string(), 1.0),
-                };
-                Self {
-                    position: d.drive.position,
-                    drive: d.drive.name.replace(',', ";"),
-                    unit,
-                    counts_per_unit,
-                    velocity_counts_per_s: d.units.velocity_position_per_s(),
-                    torque_per_mille: d.units.torque_per_mille,
-                }
+                Self::of(
+                    d.drive.position,
+                    &d.drive.name,
+                    d.user_units.as_ref(),
+                    &d.units,
+                )
             })
             .collect()
     }

@@ -105,18 +105,8 @@ impl Recorder {
             .drives
             .iter()
             .map(|d| {
-                let (unit, counts_per_unit) = match &d.units {
-                    Some(u) => (u.name.clone(), u.counts_per_unit),
-                    None => ("count".to_string(), 1.0),
-                };
-                SampleScale {
-                    position: u16::from(d.node),
-                    drive: d.profile.name.replace(',', ";"),
-                    unit,
-                    counts_per_unit,
-                    velocity_counts_per_s: d.profile.units.velocity_position_per_s(),
-                    torque_per_mille: d.profile.units.torque_per_mille,
-                }
+                let u = &d.profile.units;
+                SampleScale::of(u16::from(d.node), d.profile.name, d.units.as_ref(), u)
             })
             .collect();
         Ok(Self {
@@ -137,26 +127,7 @@ impl Recorder {
             if t.state.is_none() {
                 continue;
             }
-            let sample = CycleSample {
-                cycle,
-                time_ns,
-                wake_latency_ns: 0,
-                exchange_ns: 0,
-                wkc: 0,
-                axis: i as u16,
-                mode_sent: t.mode,
-                demand: Some(t.position_demand),
-                actual: t.position_actual,
-                velocity_demand: Some(t.velocity_demand),
-                velocity: t.velocity_actual,
-                torque_demand: Some(t.torque_demand),
-                torque: t.torque_actual,
-                following_error: None,
-                statusword: t.statusword,
-                mode: t.mode_display,
-                probes: t.probes,
-            }
-            .defined();
+            let sample = CycleSample::of_axis(cycle, time_ns, i as u16, t, false);
             sample.write_csv(&mut self.out, t0, Some(scale))?;
             self.samples += 1;
         }

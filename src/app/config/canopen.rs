@@ -341,23 +341,9 @@ fn drive(
     };
     let homing = homing_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
     let objects = profile_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
-    let sdos = start_up_values(
-        cx,
-        &key,
-        r.sdos.as_ref(),
-        Some((profile.dictionary, profile.name)),
-    )?;
-    if let Some((a, _)) = sdos
-        .iter()
-        .find(|(a, _)| homing.iter().chain(&objects).any(|(h, _)| h == a))
-    {
-        let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
-        return Err(cx.err(
-            span,
-            key("sdos"),
-            format!("{a} is written by a step of the program: give it there, not in sdos"),
-        ));
-    }
+    let steps_write: Vec<ObjectAddress> = homing.iter().chain(&objects).map(|(a, _)| *a).collect();
+    let dict = Some((profile.dictionary, profile.name));
+    let sdos = start_up_values(cx, &key, d, dict, &steps_write)?;
     // A step's object the drive does not have (the Lexium MDrive has no homing acceleration
     // 0x609A): the drive uses its own value; said, not written.
     let dict = crate::od::Dictionary::new(profile.dictionary);

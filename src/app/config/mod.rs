@@ -1348,20 +1348,12 @@ fn drive(
 
     // Start-up SDOs.
     let dict = profile.map(|p| (p.dictionary, p.name));
-    let mut sdos = start_up_values(cx, &key, r.sdos.as_ref(), dict)?;
-    // A start-up value for an object a home, pp, pv or tq step writes would silently change
-    // that step.
-    if let Some((a, _)) = sdos
+    let steps_write: Vec<ObjectAddress> = homing
         .iter()
-        .find(|(a, _)| homing.iter().chain(&profile_objects).any(|(h, _)| h == a))
-    {
-        let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
-        return Err(cx.err(
-            span,
-            key("sdos"),
-            format!("{a} is written by a step of the program: give it there, not in sdos"),
-        ));
-    }
+        .chain(&profile_objects)
+        .map(|(a, _)| *a)
+        .collect();
+    let mut sdos = start_up_values(cx, &key, d, dict, &steps_write)?;
     // A value for the object of one of the ESI file's Fixed InitCmds.
     if let Some(p) = profile
         && let Some(ic) = p.bus.init_cmds.iter().find(|ic| {
@@ -1417,14 +1409,17 @@ fn drive(
 }
 
 /// The start-up values of a drive entry (`sdos`), typed by the drive's dictionary when its
-/// profile is known (`dict`: its objects and name), else by the TOML value.
+/// profile is known (`dict`: its objects and name), else by the TOML value. None may be an
+/// object a home, pp, pv or tq step writes (`steps_write`): it would silently change that step.
 #[allow(clippy::type_complexity)]
 fn start_up_values(
     cx: &Ctx<'_>,
     key: &dyn Fn(&str) -> String,
-    table: Option<&Spanned<std::collections::BTreeMap<String, Spanned<toml::Value>>>>,
+    d: &Spanned<raw::Drive>,
     dict: Option<(&'static [crate::od::ObjectDesc], &str)>,
+    steps_write: &[ObjectAddress],
 ) -> Result<Vec<(ObjectAddress, Value)>, ConfigError> {
+    let table = d.get_ref().sdos.as_ref();
     let mut sdos = Vec::new();
     if let Some(table) = table {
         for (a, v) in table.get_ref() {
@@ -1469,6 +1464,14 @@ fn start_up_values(
             };
             sdos.push((addr, value));
         }
+    }
+    if let Some((a, _)) = sdos.iter().find(|(a, _)| steps_write.contains(a)) {
+        let span = table.map_or(d.span(), Spanned::span);
+        return Err(cx.err(
+            span,
+            key("sdos"),
+            format!("{a} is written by a step of the program: give it there, not in sdos"),
+        ));
     }
     Ok(sdos)
 }

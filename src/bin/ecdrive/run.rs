@@ -131,26 +131,40 @@ pub fn run(
     if let Some(c) = &report.capture {
         crate::report_capture("run", c);
     }
-    let code = match report.outcome {
+    finish(
+        &report,
+        report.outcome,
+        &report.reason,
+        json,
+        print::run_report,
+    )
+}
+
+/// A run's report on stdout (its JSON, or `text`), why it ended on stderr unless it
+/// completed, and its exit code: the same for both buses.
+fn finish<R: serde::Serialize>(
+    report: &R,
+    outcome: Outcome,
+    reason: &str,
+    json: bool,
+    text: fn(&R),
+) -> ExitCode {
+    let code = match outcome {
         Outcome::Completed | Outcome::Interrupted => exit::OK,
         Outcome::DriveFault => exit::FAULT,
         Outcome::Refused => exit::REFUSED,
         Outcome::BusLost => exit::BUS,
     };
     if json {
-        let c = print_json("run", &report);
+        let c = print_json("run", report);
         if c != ExitCode::SUCCESS {
             return c;
         }
     } else {
-        print::run_report(&report);
+        text(report);
     }
     if code != exit::OK {
-        eprintln!(
-            "ecdrive run: {}: {}",
-            report.outcome.describe(),
-            report.reason
-        );
+        eprintln!("ecdrive run: {}: {reason}", outcome.describe());
     }
     ExitCode::from(code)
 }
@@ -242,27 +256,11 @@ fn run_canopen(
         Ok(r) => r,
         Err(e) => return fail_with("run", &e.to_string(), exit::BUS),
     };
-    use ecdrive::app::ethercat::tools::run::Outcome;
-    let code = match report.outcome {
-        Outcome::Completed | Outcome::Interrupted => exit::OK,
-        Outcome::DriveFault => exit::FAULT,
-        Outcome::Refused => exit::REFUSED,
-        Outcome::BusLost => exit::BUS,
-    };
-    if json {
-        let c = print_json("run", &report);
-        if c != ExitCode::SUCCESS {
-            return c;
-        }
-    } else {
-        print::can_run_report(&report);
-    }
-    if code != exit::OK {
-        eprintln!(
-            "ecdrive run: {}: {}",
-            report.outcome.describe(),
-            report.reason
-        );
-    }
-    ExitCode::from(code)
+    finish(
+        &report,
+        report.outcome,
+        &report.reason,
+        json,
+        print::can_run_report,
+    )
 }

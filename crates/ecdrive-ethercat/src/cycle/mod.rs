@@ -691,28 +691,12 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         for (i, a) in self.axes.iter_mut().enumerate() {
             let judged = a.m.take_fe_judged();
             let t = a.m.telemetry();
-            r.push(
-                CycleSample {
-                    cycle: c.cycle,
-                    time_ns: c.woke,
-                    wake_latency_ns: latency,
-                    exchange_ns: exchange,
-                    wkc: self.counts.last_wkc,
-                    axis: i as u16,
-                    mode_sent: t.mode,
-                    demand: Some(t.position_demand),
-                    actual: t.position_actual,
-                    velocity_demand: Some(t.velocity_demand),
-                    velocity: t.velocity_actual,
-                    torque_demand: Some(t.torque_demand),
-                    torque: t.torque_actual,
-                    following_error: judged.then_some(t.following_error),
-                    statusword: t.statusword,
-                    mode: t.mode_display,
-                    probes: t.probes,
-                }
-                .defined(),
-            );
+            r.push(CycleSample {
+                wake_latency_ns: latency,
+                exchange_ns: exchange,
+                wkc: self.counts.last_wkc,
+                ..CycleSample::of_axis(c.cycle, c.woke, i as u16, t, judged)
+            });
         }
     }
 
