@@ -203,8 +203,26 @@ fn the_remote_gate_is_reported_in_a_motion_session() {
     );
 }
 
-/// The application's side of the runtime on CANopen: a callback ([`MotionSession::cycle_with`])
-/// asks each drive, with no program, for pv and streams its velocity set-point (a ramp to
+/// What a callback asks of axis 0 in one cycle.
+struct Asks(ecdrive::motion::Requests);
+
+impl ecdrive::CycleApp for Asks {
+    fn cycle(&mut self, c: &mut ecdrive::AppCycle<'_>) {
+        let Some(a) = c.axis(0) else { return };
+        if let Some(m) = self.0.mode {
+            a.request_mode(m);
+        }
+        if let Some(v) = self.0.setpoint {
+            a.set_target(v);
+        }
+        if let Some((t, relative, immediate)) = self.0.pp {
+            a.request_pp(t, relative, immediate);
+        }
+    }
+}
+
+/// The application's side of the runtime on CANopen, cycle by cycle in simulated time: a
+/// callback ([`MotionSession::cycle_app`]) asks each drive, with no program, for pv and streams its velocity set-point (a ramp to
 /// 2 rev/s and back to 0, one value a cycle), then for pp and a target. What the emulated node
 /// did is read from the node: its velocity followed the stream, its position ends at the
 /// target.
@@ -274,7 +292,7 @@ fn each_canopen_drive_takes_a_callbacks_requests_and_stream() {
                 },
                 _ => Requests::default(),
             };
-            s.cycle_with(|_, _| req).expect("cycle");
+            s.cycle_app(&mut Asks(req)).expect("cycle");
             let n = s.master().transport().node(node).expect("node");
             if phase == 1 {
                 max_v = max_v.max(n.velocity_units_per_s().abs());

@@ -191,7 +191,9 @@ fn the_canopen_master_crate_depends_on_the_core_only() {
 }
 
 /// The motion runtime stands on the core only: no bus master, no bus, no threads of its own,
-/// no async runtime, no CLI. Both masters step their axes with it.
+/// no async runtime, no CLI. Both masters step their axes with it. (The set-point streams'
+/// lock-free ring, `rtrb`, is a data structure the application API shares across both buses,
+/// not a thread.)
 #[test]
 fn the_motion_runtime_crate_depends_on_the_core_only() {
     let bad = beyond_the_core(
@@ -204,7 +206,6 @@ fn the_motion_runtime_crate_depends_on_the_core_only() {
             "clap",
             "indicatif",
             "toml",
-            "rtrb",
             "triple_buffer",
         ],
     );

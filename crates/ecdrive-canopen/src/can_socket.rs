@@ -9,7 +9,7 @@ use super::frame::CanFrame;
 use super::transport::{CanTransport, TransportError, monotonic_us};
 use socketcan::{CanSocket, EmbeddedFrame, Id, Socket, SocketOptions, StandardId};
 use std::io::ErrorKind;
-use std::time::Duration;
+use std::os::fd::AsFd;
 
 /// ARPHRD_CAN: the `type` of a CAN network interface in sysfs.
 pub const ARPHRD_CAN: u32 = 280;
@@ -63,6 +63,8 @@ impl SocketCanTransport {
         let sock = CanSocket::open(ifname).map_err(|e| io(ifname, "open", e))?;
         sock.set_error_filter_drop_all()
             .map_err(|e| io(ifname, "set error filter", e))?;
+        sock.set_nonblocking(true)
+            .map_err(|e| io(ifname, "set non-blocking", e))?;
         Ok(Self {
             sock,
             name: ifname.to_string(),
@@ -111,27 +113,28 @@ impl CanTransport for SocketCanTransport {
             interface: self.name.clone(),
             what: format!("cannot build frame {frame}"),
         })?;
-        self.sock
-            .write_frame_insist(&f)
-            .map_err(|e| io(&self.name, "write", e))
+        let mut r = self.sock.write_frame(&f);
+        // Non-blocking: a full transmit queue waits (up to 100 ms) as a blocking write did.
+        if matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
+            ecdrive_core::rt::wait_writable(self.sock.as_fd(), 100_000)
+                .map_err(|e| io(&self.name, "wait to write", e))?;
+            r = self.sock.write_frame(&f);
+        }
+        r.map_err(|e| io(&self.name, "write", e))
     }
 
     fn recv(&mut self, timeout_us: u64) -> Result<Option<CanFrame>, TransportError> {
         let deadline = monotonic_us().saturating_add(timeout_us);
         loop {
+            // The socket is non-blocking (set at open): a read, and when nothing is there a
+            // wait for the rest of the time (one ppoll), then the read again.
+            let mut r = self.sock.read_frame();
             let left = deadline.saturating_sub(monotonic_us());
-            let r = if left == 0 {
-                self.sock
-                    .set_nonblocking(true)
-                    .map_err(|e| io(&self.name, "set non-blocking", e))?;
-                let r = self.sock.read_frame();
-                self.sock
-                    .set_nonblocking(false)
-                    .map_err(|e| io(&self.name, "set blocking", e))?;
-                r
-            } else {
-                self.sock.read_frame_timeout(Duration::from_micros(left))
-            };
+            if left > 0 && matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
+                ecdrive_core::rt::wait_readable(self.sock.as_fd(), left)
+                    .map_err(|e| io(&self.name, "wait", e))?;
+                r = self.sock.read_frame();
+            }
             match r {
                 Ok(f) => {
                     if let Some(f) = Self::convert(&f) {

@@ -42,6 +42,7 @@ pub struct CanDrive {
     tpdos: Vec<PdoSlot>,
     tpdo_seen_us: [Option<u64>; 4],
     binding: AxisBinding,
+    layout: Layout,
     last_output: Option<Output>,
     rpdo_sent_us: Option<u64>,
 }
@@ -88,6 +89,7 @@ impl CanDrive {
             tpdos,
             tpdo_seen_us: [None; 4],
             binding,
+            layout,
             last_output: None,
             rpdo_sent_us: None,
         })
@@ -198,6 +200,18 @@ impl CanDrive {
     pub fn write_output(&mut self, out: &Output) {
         self.binding.write(out, &mut self.rx);
         self.last_output = Some(*out);
+    }
+
+    /// The images' layout: the RPDOs one after another in the output image, the TPDOs in
+    /// the input image, in PDO-number order.
+    pub const fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// Write `raw` into `field` of the output image (an application's write to a mapped
+    /// output, [`crate::motion::MotionSession::cycle_app`]); sent with the next RPDOs.
+    pub fn write_raw(&mut self, field: crate::pdo::Field, raw: u64) {
+        let _ = field.write_raw(&mut self.rx, raw);
     }
 
     /// When the master last sent this drive's RPDOs (the transport's clock).

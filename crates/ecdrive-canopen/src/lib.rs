@@ -27,6 +27,6 @@ pub use drive::CanDrive;
 pub use error::{CanError, CanErrorKind, NodeRef};
 pub use frame::{CanFrame, FrameError, NodeId, Service};
 pub use master::{DriveSetup, Master, MasterConfig, MasterEvent, Supervision};
-pub use motion::MotionSession;
+pub use motion::{CycleThread, MotionSession};
 pub use pdo_plan::PdoPlan;
 pub use transport::{CanTransport, Hub, PortId, TransportError, VirtualBus, VirtualPort};

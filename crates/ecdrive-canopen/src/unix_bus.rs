@@ -14,6 +14,7 @@
 use super::frame::CanFrame;
 use super::transport::{CanTransport, TransportError, monotonic_us};
 use std::io::ErrorKind;
+use std::os::fd::AsFd;
 use std::os::unix::net::UnixDatagram;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -191,6 +192,8 @@ impl UnixBusPort {
         let sock = UnixDatagram::bind(&own).map_err(|e| io(&own, "bind", e))?;
         sock.connect(hub).map_err(|e| io(hub, "connect", e))?;
         sock.send(HELLO).map_err(|e| io(hub, "hello", e))?;
+        sock.set_nonblocking(true)
+            .map_err(|e| io(&own, "set non-blocking", e))?;
         Ok(Self {
             sock,
             own,
@@ -219,7 +222,14 @@ impl CanTransport for UnixBusPort {
         let mut msg = [0u8; RECORD + 8];
         msg[..RECORD].copy_from_slice(&frame.to_record());
         msg[RECORD..].copy_from_slice(&monotonic_us().to_le_bytes());
-        match self.sock.send(&msg) {
+        let mut r = self.sock.send(&msg);
+        // Non-blocking: a full queue at the hub waits (up to 100 ms) as a blocking send did.
+        if matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
+            ecdrive_core::rt::wait_writable(self.sock.as_fd(), 100_000)
+                .map_err(|e| io(&self.own, "wait to send", e))?;
+            r = self.sock.send(&msg);
+        }
+        match r {
             Ok(_) => Ok(()),
             Err(e) if matches!(e.kind(), ErrorKind::NotFound | ErrorKind::ConnectionRefused) => {
                 Err(TransportError::Closed(self.name.clone()))
@@ -236,22 +246,15 @@ impl CanTransport for UnixBusPort {
         let deadline = monotonic_us().saturating_add(timeout_us);
         let mut buf = [0u8; 64];
         loop {
+            // The socket is non-blocking (set at connect): a receive, and when nothing is
+            // there a wait for the rest of the time (one ppoll), then the receive again.
+            let mut r = self.sock.recv(&mut buf);
             let left = deadline.saturating_sub(monotonic_us());
-            let r = if left == 0 {
-                self.sock
-                    .set_nonblocking(true)
-                    .map_err(|e| io(&self.own, "set non-blocking", e))?;
-                let r = self.sock.recv(&mut buf);
-                self.sock
-                    .set_nonblocking(false)
-                    .map_err(|e| io(&self.own, "set blocking", e))?;
-                r
-            } else {
-                self.sock
-                    .set_read_timeout(Some(Duration::from_micros(left)))
-                    .map_err(|e| io(&self.own, "set timeout", e))?;
-                self.sock.recv(&mut buf)
-            };
+            if left > 0 && matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
+                ecdrive_core::rt::wait_readable(self.sock.as_fd(), left)
+                    .map_err(|e| io(&self.own, "wait", e))?;
+                r = self.sock.recv(&mut buf);
+            }
             match r {
                 Ok(n) => {
                     let msg = buf.get(..n).unwrap_or(&[]);

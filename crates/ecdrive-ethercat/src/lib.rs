@@ -16,9 +16,8 @@
 pub(crate) use ecdrive_core::{cia402, drives, ec, link, od, pdo, rt};
 // The motion runtime this master runs per axis (shared with the CANopen master), under the
 // paths the applications know.
-pub use ecdrive_motion::{program, setpoint, telemetry};
+pub use ecdrive_motion::{app, program, setpoint, stream, telemetry};
 
-mod app;
 pub mod bus;
 pub mod coe;
 pub mod cycle;
@@ -29,7 +28,6 @@ pub mod io;
 mod record;
 pub mod session;
 pub mod startup;
-mod stream;
 
 mod wkc;
 

@@ -7,7 +7,10 @@
 //! generation ([`program`], [`setpoint`]), homing, the profile modes pp/pv/tq, the touch
 //! probes, controlled stops, following-error supervision and the limits of the application's
 //! set-points; the events and telemetry it reports are the vocabulary both masters publish
-//! ([`telemetry`]).
+//! ([`telemetry`]). The application's code in the cycle ([`CycleApp`], its view of an axis
+//! [`AppAxis`]) and set-points streamed from other threads ([`Streams`]) are the same on both
+//! buses: each master builds the views, calls the application between its read and its step,
+//! and hands the requests to the step.
 //!
 //! Built on `ecdrive-core` only: the masters read their bus into a
 //! [`Feedback`](ecdrive_core::cia402::Feedback), call the step and write its
@@ -16,15 +19,19 @@
 
 pub(crate) use ecdrive_core::cia402;
 
+pub mod app;
 mod axis;
 mod limits;
 pub mod program;
 pub mod setpoint;
+pub mod stream;
 pub mod telemetry;
 
+pub use app::{AppAxis, AppCycle, CycleApp, EntryError};
 pub use axis::{
     AxisSetup, DRIVE_FE_STUCK_CYCLES, EventSink, FEEDBACK_PULSES, Inputs, MotionAxis, ProbeObjects,
     Requests, SetpointSteps, StepContext,
 };
 pub use limits::SetpointLimits;
 pub use program::{ProbeEdge, RunMode, Step, Target};
+pub use stream::{StreamProducer, Streams};

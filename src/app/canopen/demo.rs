@@ -47,6 +47,7 @@
 use super::tools::{self, DEMO_NODES};
 use crate::canopen::error::{CanError, CanErrorKind, NodeRef};
 use crate::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
+use crate::canopen::motion::{ProfileSpeeds, profile_settings};
 use crate::canopen::profile::CanDriveProfile;
 use crate::canopen::transport::CanTransport;
 use crate::cia402::interpolated::linear_point;
@@ -72,45 +73,22 @@ pub mod defaults {
     pub const STEP_TIMEOUT_US: u64 = 20_000_000;
 }
 
-fn uint(v: f64) -> Value {
-    Value::Uint(v.round().clamp(1.0, f64::from(u32::MAX)) as u64)
-}
-
-/// SDO settings for profile velocity, accelerations and homing speeds in the drive's units
-/// (r/min, PUU/s and ms-to-3000 r/min, steps/s … — converted with its [`Units`]); none for a
-/// profile that does not describe its profile-mode units.
-///
-/// [`Units`]: crate::canopen::profile::Units
+/// SDO settings for profile velocity, accelerations and homing speeds in the drive's units,
+/// with the demo's homing speeds ([`defaults`]): [`profile_settings`] of the CANopen master.
 pub fn motion_settings(
     profile: &CanDriveProfile,
     velocity_rev_s: f64,
     accel_rev_s2: f64,
 ) -> Vec<(ObjectAddress, Value)> {
-    let u = &profile.units;
-    let (Some(pu), Some(acc)) = (u.profile, u.accel_from_rev_per_s2(accel_rev_s2)) else {
-        return Vec::new();
-    };
-    let acc = uint(acc);
-    let mut v = vec![
-        (
-            ObjectAddress::new(0x6081, 0),
-            uint(u.from_rev_per_s(pu.profile_velocity, velocity_rev_s)),
-        ),
-        (ObjectAddress::new(0x6083, 0), acc.clone()),
-        (ObjectAddress::new(0x6084, 0), acc.clone()),
-        (ObjectAddress::new(0x6085, 0), acc),
-        (
-            ObjectAddress::new(0x6099, 1),
-            uint(u.from_rev_per_s(pu.homing_velocity, defaults::HOMING_FAST_REV_S)),
-        ),
-        (
-            ObjectAddress::new(0x6099, 2),
-            uint(u.from_rev_per_s(pu.homing_velocity, defaults::HOMING_SLOW_REV_S)),
-        ),
-    ];
-    let dict = crate::od::Dictionary::new(profile.dictionary);
-    v.retain(|(a, _)| dict.entry(*a).is_some());
-    v
+    profile_settings(
+        profile,
+        &ProfileSpeeds {
+            velocity_rev_s,
+            accel_rev_s2,
+            homing_fast_rev_s: defaults::HOMING_FAST_REV_S,
+            homing_slow_rev_s: defaults::HOMING_SLOW_REV_S,
+        },
+    )
 }
 
 fn err<T: CanTransport>(m: &Master<T>, node: u8, what: String) -> CanError {

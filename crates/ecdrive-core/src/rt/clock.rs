@@ -39,6 +39,34 @@ pub fn sleep_until_ns(deadline_ns: u64) {
     }
 }
 
+/// Wait up to `timeout_us` µs for `fd` to become readable (`ppoll`, one syscall); `Ok(false)`
+/// on timeout or a signal. The receive paths of the transports use it with a non-blocking
+/// socket, so a cycle's wait costs one `ppoll` and one receive, no socket option per call.
+pub fn wait_readable(fd: std::os::fd::BorrowedFd<'_>, timeout_us: u64) -> std::io::Result<bool> {
+    wait_fd(fd, nix::poll::PollFlags::POLLIN, timeout_us)
+}
+
+/// Wait up to `timeout_us` µs for `fd` to take a write (`ppoll`): a non-blocking socket whose
+/// peer's queue is full.
+pub fn wait_writable(fd: std::os::fd::BorrowedFd<'_>, timeout_us: u64) -> std::io::Result<bool> {
+    wait_fd(fd, nix::poll::PollFlags::POLLOUT, timeout_us)
+}
+
+fn wait_fd(
+    fd: std::os::fd::BorrowedFd<'_>,
+    events: nix::poll::PollFlags,
+    timeout_us: u64,
+) -> std::io::Result<bool> {
+    use nix::poll::{PollFd, ppoll};
+    let mut fds = [PollFd::new(fd, events)];
+    let ts = TimeSpec::from_duration(std::time::Duration::from_micros(timeout_us));
+    match ppoll(&mut fds, Some(ts), None) {
+        Ok(n) => Ok(n > 0),
+        Err(nix::errno::Errno::EINTR) => Ok(false),
+        Err(e) => Err(std::io::Error::from_raw_os_error(e as i32)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,6 +10,6 @@ pub mod host;
 pub mod stats;
 pub mod thread;
 
-pub use clock::{monotonic_ns, sleep_until_ns};
+pub use clock::{monotonic_ns, sleep_until_ns, wait_readable, wait_writable};
 pub use stats::{LatencyHistogram, Summary};
 pub use thread::{RtReport, RtSettings};

@@ -100,43 +100,6 @@ impl AxisRt {
     }
 }
 
-/// What the application's callback ([`AppAxis`]) asked of an axis in one cycle.
-pub(super) fn requests_of(app: &AppAxis) -> Requests {
-    Requests {
-        setpoint: app.setpoint,
-        mode: app.mode_request,
-        home: app.home_request,
-        pp: app.pp_request,
-        probe: app.probe_request,
-    }
-}
-
-/// Bring the application's view of axis `a` up to date with this cycle's inputs, and clear
-/// last cycle's requests.
-pub(super) fn refresh_view(
-    view: &mut AppAxis,
-    a: &AxisRt,
-    in_op: bool,
-    inputs: &[u8],
-    outputs: &[u8],
-) {
-    view.clear_requests();
-    view.in_op = in_op;
-    if !in_op {
-        view.enabled = false;
-        return;
-    }
-    view.tel = *a.m.telemetry();
-    let st = a.m.status();
-    view.tel.state = st.state;
-    view.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-    view.program_running = a.m.program_running();
-    let n = view.inputs.len().min(inputs.len());
-    view.inputs[..n].copy_from_slice(&inputs[..n]);
-    let n = view.outputs.len().min(outputs.len());
-    view.outputs[..n].copy_from_slice(&outputs[..n]);
-}
-
 /// The application's view of drive `d` (set-up): every mapped entry, the ones the engine
 /// drives marked.
 pub(super) fn app_view(d: &ConfiguredDrive) -> AppAxis {

@@ -43,7 +43,7 @@ mod axes;
 mod bus;
 mod settings;
 
-use axes::{AxisRt, app_view, refresh_view, requests_of};
+use axes::{AxisRt, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
 pub use settings::{
@@ -617,19 +617,19 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 a.fb = Some(a.read_inputs(io.inputs(), ctx.pulse));
             }
             if with_app {
-                refresh_view(view, a, in_op, io.inputs(), io.outputs());
+                view.refresh(&a.m, in_op, io.inputs(), io.outputs());
             }
         }
         if let Some(app) = self.app.as_deref_mut() {
             let ev = &mut self.ev;
             let mut emit = |k: EventKind| ev.emit(k);
-            let mut c = AppCycle {
-                cycle: ctx.cycle,
-                dt: ctx.dt,
-                dc_time_ns: self.clock.dc_time,
-                axes: &mut self.app_axes,
-                events: &mut emit,
-            };
+            let mut c = AppCycle::new(
+                ctx.cycle,
+                ctx.dt,
+                self.clock.dc_time,
+                &mut self.app_axes,
+                &mut emit,
+            );
             app.cycle(&mut c);
         }
         for (i, (a, view)) in self.axes.iter_mut().zip(self.app_axes.iter()).enumerate() {
@@ -646,14 +646,14 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             }
             let Some(fb) = a.fb.take() else { continue };
             let req = if with_app {
-                requests_of(view)
+                view.requests()
             } else {
                 Requests::default()
             };
             let out = a.m.step(i, fb, &ctx, &mut self.ev, req);
             let mut io = sd.io_raw_mut();
             a.write_outputs(&out, io.outputs());
-            for &(f, raw) in &view.writes {
+            for &(f, raw) in view.writes() {
                 let _ = f.write_raw(io.outputs(), raw);
             }
         }

@@ -16,16 +16,23 @@
 //! [`Command::RunProgram`], and call [`MotionSession::cycle`] until the program's
 //! [`EventKind::ProgramDone`].
 
+use crate::cia402::Feedback;
 use crate::error::{CanError, CanErrorKind, NodeRef};
 use crate::master::Master;
+use crate::od::{Dictionary, ObjectAddress, Value};
+use crate::pdo::{AxisBinding, axis::standard_type};
 use crate::profile::CanDriveProfile;
 use crate::transport::CanTransport;
 use ecdrive_motion::program::{RunMode, Step};
 use ecdrive_motion::telemetry::{AxisTelemetry, Command, Event, EventKind, StopKind};
+use ecdrive_motion::{AppAxis, AppCycle, CycleApp};
 use ecdrive_motion::{
     AxisSetup, EventSink, Inputs, MotionAxis, ProbeObjects, Requests, SetpointLimits, StepContext,
 };
 use std::time::Duration;
+
+mod thread;
+pub use thread::{CycleThread, SessionView, ThreadEnd};
 
 /// **\[REC\]** A controlled stop's ramp: 0.2 s (as the EtherCAT master's default).
 pub const STOP_RAMP: Duration = Duration::from_millis(200);
@@ -46,6 +53,72 @@ pub fn axis_setup(profile: &CanDriveProfile, program: Vec<Step>, mode: RunMode) 
         limits: SetpointLimits::default(),
         probe_objects: ProbeObjects::default(),
     }
+}
+
+/// Profile-mode speeds in revolutions of the motor shaft, for [`profile_settings`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileSpeeds {
+    /// Profile velocity (6081h), rev/s.
+    pub velocity_rev_s: f64,
+    /// Profile acceleration and deceleration, quick-stop deceleration (6083h–6085h), rev/s².
+    pub accel_rev_s2: f64,
+    /// Homing search speed (6099h:01), rev/s.
+    pub homing_fast_rev_s: f64,
+    /// Homing creep speed (6099h:02), rev/s.
+    pub homing_slow_rev_s: f64,
+}
+
+/// SDO settings for `speeds` in the drive's units (r/min, PUU/s and ms-to-3000 r/min,
+/// steps/s … — converted with its [`Units`](crate::profile::Units)), for a [`DriveSetup`]'s
+/// `settings`: only the objects the drive's dictionary has; none for a profile that does not
+/// describe its profile-mode units.
+///
+/// [`DriveSetup`]: crate::master::DriveSetup
+pub fn profile_settings(
+    profile: &CanDriveProfile,
+    speeds: &ProfileSpeeds,
+) -> Vec<(ObjectAddress, Value)> {
+    let uint = |v: f64| Value::Uint(v.round().clamp(1.0, f64::from(u32::MAX)) as u64);
+    let u = &profile.units;
+    let (Some(pu), Some(acc)) = (u.profile, u.accel_from_rev_per_s2(speeds.accel_rev_s2)) else {
+        return Vec::new();
+    };
+    let acc = uint(acc);
+    let mut v = vec![
+        (
+            ObjectAddress::new(0x6081, 0),
+            uint(u.from_rev_per_s(pu.profile_velocity, speeds.velocity_rev_s)),
+        ),
+        (ObjectAddress::new(0x6083, 0), acc.clone()),
+        (ObjectAddress::new(0x6084, 0), acc.clone()),
+        (ObjectAddress::new(0x6085, 0), acc),
+        (
+            ObjectAddress::new(0x6099, 1),
+            uint(u.from_rev_per_s(pu.homing_velocity, speeds.homing_fast_rev_s)),
+        ),
+        (
+            ObjectAddress::new(0x6099, 2),
+            uint(u.from_rev_per_s(pu.homing_velocity, speeds.homing_slow_rev_s)),
+        ),
+    ];
+    let dict = Dictionary::new(profile.dictionary);
+    v.retain(|(a, _)| dict.entry(*a).is_some());
+    v
+}
+
+/// Events held between two [`MotionSession::take_events`] without reallocation.
+const EVENTS_CAPACITY: usize = 256;
+
+/// The application's view of drive `d`: every entry its PDOs map, the ones the CiA 402 engine
+/// writes ([`AxisBinding::drives`]) marked, typed by the drive's dictionary.
+fn app_view(d: &crate::drive::CanDrive) -> AppAxis {
+    let dict = Dictionary::new(d.profile().dictionary);
+    let signed = |a: ObjectAddress| {
+        dict.data_type(a)
+            .or_else(|| standard_type(a))
+            .is_some_and(|t| t.is_signed())
+    };
+    AppAxis::new(d.layout(), &AxisBinding::drives, &signed)
 }
 
 /// The events of the runtime's steps, stamped with the cycle and the bus's time.
@@ -72,6 +145,9 @@ pub struct MotionSession<T: CanTransport> {
     /// The node of each axis, in the order of the set-ups.
     nodes: Vec<u8>,
     axes: Vec<MotionAxis>,
+    /// The application's view of each axis, and each axis's feedback of this cycle.
+    views: Vec<AppAxis>,
+    feedback: Vec<Option<Feedback>>,
     events: Vec<Event>,
     /// Cycles so far, and those in which every drive had fed back (the programs' clock).
     cycle: u64,
@@ -89,6 +165,7 @@ impl<T: CanTransport> MotionSession<T> {
         let cycle = Duration::from_micros(cycle_us);
         let mut nodes = Vec::with_capacity(axes.len());
         let mut built = Vec::with_capacity(axes.len());
+        let mut views = Vec::with_capacity(axes.len());
         for (node, setup) in axes {
             let why = |what: &str| {
                 CanError::new(
@@ -97,9 +174,10 @@ impl<T: CanTransport> MotionSession<T> {
                     CanErrorKind::NotReady(what.into()),
                 )
             };
-            if master.drive(*node).is_none() {
+            let Some(d) = master.drive(*node) else {
                 return Err(why("not a configured drive"));
-            }
+            };
+            views.push(app_view(d));
             let a = MotionAxis::new(setup, cycle)
                 .ok_or_else(|| why("the drive's capabilities give no axis for this cycle"))?;
             nodes.push(*node);
@@ -109,8 +187,10 @@ impl<T: CanTransport> MotionSession<T> {
         Ok(Self {
             master,
             nodes,
+            feedback: vec![None; built.len()],
             axes: built,
-            events: Vec::new(),
+            views,
+            events: Vec::with_capacity(EVENTS_CAPACITY),
             cycle: 0,
             tick: 0,
             dt: cycle.as_secs_f64(),
@@ -148,18 +228,22 @@ impl<T: CanTransport> MotionSession<T> {
         }
     }
 
-    /// One cycle with no requests of an application: [`MotionSession::cycle_with`].
+    /// One cycle with no application: [`MotionSession::cycle_app`] without one.
     pub fn cycle(&mut self) -> Result<(), CanError> {
-        self.cycle_with(|_, _| Requests::default())
+        self.cycle_inner(None)
     }
 
-    /// One cycle: the bus's ([`Master::cycle`]), then for each drive with feedback the
-    /// runtime's step with what `requests` asks of axis `i` (given its telemetry), its outputs
-    /// into the RPDO image; then the stops supervised (a drive that faulted stops the others).
-    pub fn cycle_with(
-        &mut self,
-        mut requests: impl FnMut(usize, &AxisTelemetry) -> Requests,
-    ) -> Result<(), CanError> {
+    /// One cycle with the application's code in it: the bus's ([`Master::cycle`]: RPDOs,
+    /// SYNC, the TPDOs answering it), then every axis's view refreshed from its TPDO data,
+    /// then `app` (its requests, its writes to mapped outputs the engine does not drive), then
+    /// for each drive with feedback the runtime's step with those requests, its outputs and
+    /// the application's writes into the RPDO image sent with the next SYNC; then the stops
+    /// supervised (a drive that faulted stops the others). Allocation-free.
+    pub fn cycle_app(&mut self, app: &mut dyn CycleApp) -> Result<(), CanError> {
+        self.cycle_inner(Some(app))
+    }
+
+    fn cycle_inner(&mut self, mut app: Option<&mut dyn CycleApp>) -> Result<(), CanError> {
         self.master.cycle()?;
         self.cycle += 1;
         let fed = self
@@ -180,31 +264,85 @@ impl<T: CanTransport> MotionSession<T> {
             stop_ramp_cycles: self.stop_ramp_cycles,
             stop_timeout_cycles: self.stop_timeout_cycles,
         };
+        let now_us = self.master.now_us();
+        self.read_feedback(&ctx, app.is_some());
+        if let Some(app) = app.as_deref_mut() {
+            let events = &mut self.events;
+            let cycle = self.cycle;
+            let mut emit = |kind: EventKind| {
+                events.push(Event {
+                    cycle,
+                    time_ns: now_us.saturating_mul(1000),
+                    kind,
+                })
+            };
+            let mut c = AppCycle::new(
+                self.cycle,
+                self.dt,
+                now_us.saturating_mul(1000),
+                &mut self.views,
+                &mut emit,
+            );
+            app.cycle(&mut c);
+        }
         let mut sink = Sink {
             events: &mut self.events,
             cycle: self.cycle,
-            time_us: self.master.now_us(),
+            time_us: now_us,
         };
-        for (i, (node, a)) in self.nodes.iter().zip(self.axes.iter_mut()).enumerate() {
+        for (i, ((node, a), view)) in self
+            .nodes
+            .iter()
+            .zip(self.axes.iter_mut())
+            .zip(self.views.iter())
+            .enumerate()
+        {
+            let Some(fb) = self.feedback.get_mut(i).and_then(Option::take) else {
+                continue;
+            };
             let Some(d) = self.master.drive_mut(*node) else {
                 continue;
             };
-            if !d.has_feedback() {
-                continue;
-            }
-            let inputs = Inputs {
-                feedback: d.feedback(),
-                probe_status: 0,
-                probe_positions: [0; 4],
-                following_error_drive: d.binding().following_error(d.tx_image()),
+            let req = if app.is_some() {
+                view.requests()
+            } else {
+                Requests::default()
             };
-            let fb = a.read(&inputs, ctx.pulse);
-            let req = requests(i, a.telemetry());
             let out = a.step(i, fb, &ctx, &mut sink, req);
             d.write_output(&out);
+            for &(field, raw) in view.writes() {
+                d.write_raw(field, raw);
+            }
         }
         self.supervise();
         Ok(())
+    }
+
+    /// Each drive's feedback of this cycle (its TPDO data) read into its axis, and with an
+    /// application its view refreshed.
+    fn read_feedback(&mut self, ctx: &StepContext, with_app: bool) {
+        for (i, (node, a)) in self.nodes.iter().zip(self.axes.iter_mut()).enumerate() {
+            let Some(d) = self.master.drive(*node) else {
+                continue;
+            };
+            // TPDOs come from Operational nodes only.
+            let in_op = d.has_feedback();
+            let fb = in_op.then(|| {
+                let inputs = Inputs {
+                    feedback: d.feedback(),
+                    probe_status: 0,
+                    probe_positions: [0; 4],
+                    following_error_drive: d.binding().following_error(d.tx_image()),
+                };
+                a.read(&inputs, ctx.pulse)
+            });
+            if let Some(slot) = self.feedback.get_mut(i) {
+                *slot = fb;
+            }
+            if with_app && let Some(view) = self.views.get_mut(i) {
+                view.refresh(a, in_op, d.tx_image(), d.rx_image());
+            }
+        }
     }
 
     /// After the steps: a drive that faulted stops every other axis; stops that take too long
@@ -234,6 +372,39 @@ impl<T: CanTransport> MotionSession<T> {
     /// The events so far, leaving none.
     pub fn take_events(&mut self) -> Vec<Event> {
         core::mem::take(&mut self.events)
+    }
+
+    /// Hand every event so far to `f`, keeping the buffer (allocation-free: the cycle
+    /// thread's way, [`CycleThread`]).
+    pub fn drain_events(&mut self, mut f: impl FnMut(Event)) {
+        for e in self.events.drain(..) {
+            f(e);
+        }
+    }
+
+    /// Whether any axis is energised or stopping (a controlled stop has not ended yet).
+    pub fn any_busy(&self) -> bool {
+        self.axes.iter().any(|a| a.busy() || a.stopping())
+    }
+
+    /// The cycle period, µs.
+    pub fn cycle_us(&self) -> u64 {
+        self.master.config().cycle_us.max(1)
+    }
+
+    /// Cycles so far.
+    pub fn cycles(&self) -> u64 {
+        self.cycle
+    }
+
+    /// The number of axes.
+    pub fn len(&self) -> usize {
+        self.axes.len()
+    }
+
+    /// Whether the session has no axis.
+    pub fn is_empty(&self) -> bool {
+        self.axes.is_empty()
     }
 
     /// Axis `i`'s telemetry (in the order of the set-ups).

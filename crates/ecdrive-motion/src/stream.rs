@@ -29,7 +29,7 @@ pub struct StreamProducer {
 }
 
 impl StreamProducer {
-    /// Queue a set-point (drive units of the axis's mode, as [`crate::app::AppAxis::set_target`]);
+    /// Queue a set-point (drive units of the axis's mode, as [`AppAxis::set_target`](crate::app::AppAxis::set_target));
     /// `Err` with it back when the ring is full.
     pub fn push(&mut self, value: f64) -> Result<(), f64> {
         self.tx.push(value).map_err(|rtrb::PushError::Full(v)| v)
@@ -102,7 +102,7 @@ impl CycleApp for Streams {
     /// One set-point per axis that takes set-points now (Operation enabled, no program).
     fn cycle(&mut self, c: &mut AppCycle<'_>) {
         for s in self.consumers.iter_mut() {
-            let Some(axis) = c.axes.get_mut(s.axis) else {
+            let Some(axis) = c.axis(s.axis) else {
                 continue;
             };
             if !axis.enabled() || axis.program_running() {
@@ -121,7 +121,7 @@ impl CycleApp for Streams {
                     let total = s.counters.underruns.fetch_add(1, Ordering::Relaxed) + 1;
                     if !s.in_underrun {
                         s.in_underrun = true;
-                        (c.events)(EventKind::StreamUnderrun {
+                        c.emit(EventKind::StreamUnderrun {
                             axis: s.axis as u16,
                             total,
                         });

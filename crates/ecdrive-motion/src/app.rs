@@ -11,13 +11,13 @@
 //!
 //! Everything here is allocation-free per cycle: the views are built once per run.
 
+pub use crate::SetpointLimits;
 use crate::cia402::State;
-use crate::od::ObjectAddress;
-use crate::pdo::{Direction, Field, Layout};
-
 use crate::program::{ProbeEdge, RunMode};
-use crate::telemetry::{AxisTelemetry, DriveTask, ProbeState};
-pub use ecdrive_motion::SetpointLimits;
+use crate::telemetry::{AxisTelemetry, DriveTask, EventKind, ProbeState};
+use crate::{MotionAxis, Requests};
+use ecdrive_core::od::ObjectAddress;
+use ecdrive_core::pdo::{Direction, Field, Layout};
 
 /// Application code called by the cycle thread once per cycle. It must not block, sleep,
 /// allocate or make syscalls: the cycle audit holds it to the same rules as the cycle.
@@ -56,25 +56,26 @@ struct Entry {
 /// application asks of it.
 #[derive(Debug)]
 pub struct AppAxis {
-    pub(crate) tel: AxisTelemetry,
-    pub(crate) enabled: bool,
-    pub(crate) program_running: bool,
-    pub(crate) in_op: bool,
-    pub(crate) inputs: Vec<u8>,
-    pub(crate) outputs: Vec<u8>,
+    tel: AxisTelemetry,
+    enabled: bool,
+    program_running: bool,
+    in_op: bool,
+    inputs: Vec<u8>,
+    outputs: Vec<u8>,
     entries: Vec<Entry>,
-    pub(crate) setpoint: Option<f64>,
-    pub(crate) mode_request: Option<RunMode>,
-    pub(crate) writes: Vec<(Field, u64)>,
-    pub(crate) home_request: Option<i8>,
-    pub(crate) pp_request: Option<(f64, bool, bool)>,
-    pub(crate) probe_request: Option<(u8, ProbeEdge)>,
+    setpoint: Option<f64>,
+    mode_request: Option<RunMode>,
+    writes: Vec<(Field, u64)>,
+    home_request: Option<i8>,
+    pp_request: Option<(f64, bool, bool)>,
+    probe_request: Option<(u8, ProbeEdge)>,
 }
 
 impl AppAxis {
-    /// The view of an axis with `layout` (set-up: allocations allowed). `engine` says which
-    /// entries the engine drives, `signed` which hold a signed type.
-    pub(crate) fn new(
+    /// The view of an axis whose process image is `layout` (the master builds it at set-up:
+    /// allocations allowed). `engine` says which entries the engine drives, `signed` which
+    /// hold a signed type.
+    pub fn new(
         layout: &Layout,
         engine: &dyn Fn(ObjectAddress) -> bool,
         signed: &dyn Fn(ObjectAddress) -> bool,
@@ -245,7 +246,7 @@ impl AppAxis {
     /// Arm touch probe `probe` (1 or 2) on `edge` (0x60B8): the drive latches the position at
     /// the next such edge of its probe input; armed again, it latches again. Taken in OP with
     /// no program running, when the mapping carries 0x60B8, 0x60B9 and the probe's position
-    /// object (a [`crate::startup::DriveSetup`]'s `probes` maps them); else refused with an
+    /// object (on EtherCAT a `DriveSetup`'s `probes` maps them); else refused with an
     /// event. Follow it with [`AppAxis::probe`].
     pub fn arm_probe(&mut self, probe: u8, edge: ProbeEdge) {
         self.probe_request = Some((probe, edge));
@@ -271,27 +272,80 @@ impl AppAxis {
         self.mode_request = Some(mode);
     }
 
-    /// Clear last cycle's requests (the cycle calls this before the application).
-    pub(crate) fn clear_requests(&mut self) {
+    /// The master's side, before the application: clear last cycle's requests and bring the
+    /// view up to date with axis `m` and this cycle's images (`in_op`: the drive's inputs are
+    /// valid). Allocation-free.
+    pub fn refresh(&mut self, m: &MotionAxis, in_op: bool, inputs: &[u8], outputs: &[u8]) {
         self.setpoint = None;
         self.mode_request = None;
         self.writes.clear();
         self.home_request = None;
         self.pp_request = None;
         self.probe_request = None;
+        self.in_op = in_op;
+        if !in_op {
+            self.enabled = false;
+            return;
+        }
+        self.tel = *m.telemetry();
+        let st = m.status();
+        self.tel.state = st.state;
+        self.enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+        self.program_running = m.program_running();
+        let n = self.inputs.len().min(inputs.len());
+        self.inputs[..n].copy_from_slice(&inputs[..n]);
+        let n = self.outputs.len().min(outputs.len());
+        self.outputs[..n].copy_from_slice(&outputs[..n]);
+    }
+
+    /// The master's side, after the application: what it asked of the axis this cycle, for
+    /// [`MotionAxis::step`].
+    pub fn requests(&self) -> Requests {
+        Requests {
+            setpoint: self.setpoint,
+            mode: self.mode_request,
+            home: self.home_request,
+            pp: self.pp_request,
+            probe: self.probe_request,
+        }
+    }
+
+    /// The master's side, after the step: the application's writes to mapped outputs this
+    /// cycle (field, raw value), to put into the output image after the engine's.
+    pub fn writes(&self) -> &[(Field, u64)] {
+        &self.writes
     }
 }
 
 /// What the application gets each cycle.
 pub struct AppCycle<'a> {
-    pub(crate) cycle: u64,
-    pub(crate) dt: f64,
-    pub(crate) dc_time_ns: u64,
-    pub(crate) axes: &'a mut [AppAxis],
-    pub(crate) events: &'a mut dyn FnMut(crate::telemetry::EventKind),
+    cycle: u64,
+    dt: f64,
+    dc_time_ns: u64,
+    axes: &'a mut [AppAxis],
+    events: &'a mut dyn FnMut(EventKind),
 }
 
-impl AppCycle<'_> {
+impl<'a> AppCycle<'a> {
+    /// The master's side: cycle `cycle` of period `dt` seconds at the bus's time
+    /// `bus_time_ns` (EtherCAT: the DC system time; CANopen: the transport's clock), with the
+    /// axes' views and where the application's events go.
+    pub fn new(
+        cycle: u64,
+        dt: f64,
+        bus_time_ns: u64,
+        axes: &'a mut [AppAxis],
+        events: &'a mut dyn FnMut(EventKind),
+    ) -> Self {
+        Self {
+            cycle,
+            dt,
+            dc_time_ns: bus_time_ns,
+            axes,
+            events,
+        }
+    }
+
     /// The cycle number.
     pub fn cycle(&self) -> u64 {
         self.cycle
@@ -304,8 +358,9 @@ impl AppCycle<'_> {
     pub fn time(&self) -> f64 {
         self.cycle as f64 * self.dt
     }
-    /// The DC system time of this cycle's frame (the reference clock's, ns; 0 before it first
-    /// answered). A cycle that wakes a whole period late still counts one cycle, but the DC
+    /// The bus's time of this cycle, ns: on EtherCAT the DC system time of this cycle's frame
+    /// (the reference clock's; 0 before it first answered), on CANopen the transport's clock
+    /// when the SYNC went out. A cycle that wakes a whole period late still counts one cycle, but the DC
     /// time moves on: a trajectory computed from it stays with the drives' SYNC0 instants.
     pub fn dc_time_ns(&self) -> u64 {
         self.dc_time_ns
@@ -319,7 +374,7 @@ impl AppCycle<'_> {
         self.axes.get_mut(i)
     }
     /// Report something in the event stream (and so the run's history).
-    pub fn emit(&mut self, kind: crate::telemetry::EventKind) {
+    pub fn emit(&mut self, kind: EventKind) {
         (self.events)(kind);
     }
 }
