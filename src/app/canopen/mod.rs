@@ -3,5 +3,6 @@
 pub mod candump;
 pub mod demo;
 pub mod eds;
+pub mod reset;
 pub mod run;
 pub mod tools;

@@ -46,8 +46,10 @@ fn present<T: CanTransport>(cmd: &str, m: &mut Master<T>, node: u8) -> Result<()
             cmd,
             &format!(
                 "node {node} (0x{node:02X}) does not answer: no reply to an SDO upload of 0x1000 \
-                 within {} ms",
-                tools::SCAN_WINDOW_US / 1000
+                 within {} ms (a node in NMT Stopped serves no SDO: `ecdrive reset --can {} -n \
+                 {node}` takes it to Pre-operational)",
+                tools::SCAN_WINDOW_US / 1000,
+                m.transport().name()
             ),
             exit::BUS,
         )),
@@ -262,5 +264,52 @@ pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
         }
         Err(e @ tools::ServeError::Bus { .. }) => fail_with("sim", &e.to_string(), exit::BUS),
         Err(e) => fail_with("sim", &e.to_string(), exit::USAGE),
+    }
+}
+
+/// `ecdrive reset --can BUS [-n NODE]`: exit 0 when no drive is left in Fault, 4 when one is.
+pub fn reset(bus: &str, node: Option<u8>, cycle: std::time::Duration, json: bool) -> ExitCode {
+    use ecdrive::app::canopen::reset::{CanResetOptions, reset};
+    let spec: BusSpec = match bus.parse() {
+        Ok(s) => s,
+        Err(e) => {
+            let e: tools::BusSpecError = e;
+            return fail_with("reset", &e.to_string(), exit::USAGE);
+        }
+    };
+    let t = match tools::open_bus(&spec) {
+        Ok(t) => t,
+        Err(e) => return fail_with("reset", &format!("opening CAN bus {spec}: {e}"), exit::BUS),
+    };
+    let opts = CanResetOptions {
+        node,
+        cycle,
+        ..CanResetOptions::default()
+    };
+    let r = match reset(t, &spec.to_string(), &opts) {
+        Ok(r) => r,
+        Err(e) => return fail("reset", &e),
+    };
+    if json {
+        let c = print_json("reset", &r);
+        if c != ExitCode::SUCCESS {
+            return c;
+        }
+    } else {
+        crate::print::can_reset(&r);
+    }
+    match r.drives.iter().find(|d| d.cleared == Some(false)) {
+        None => ExitCode::SUCCESS,
+        Some(d) => {
+            eprintln!(
+                "ecdrive reset: node {} ({}): still in {} after the reset edge ({}): its cause \
+                 is still present, or the drive needs a power cycle",
+                d.node,
+                d.drive,
+                d.after,
+                d.fault.as_deref().unwrap_or("fault")
+            );
+            ExitCode::from(exit::REFUSED)
+        }
     }
 }

@@ -292,21 +292,25 @@ enum Command {
     },
     /// Clear the faults the drives have latched: a short cyclic session that gives each drive
     /// in Fault the rising edge on controlword bit 7, reports what it had latched (0x603F with
-    /// the drive's alarm name) and whether it cleared, and takes the drives down again. A fault
-    /// that does not clear (the cause is still there, or the drive needs a power cycle) is said
-    /// so, with exit code 4.
+    /// the drive's alarm name) and whether it cleared, and takes the drives down again (EtherCAT:
+    /// INIT; CANopen: disabled, NMT Pre-operational). A fault that does not clear (the cause is
+    /// still there, or the drive needs a power cycle) is said so, with exit code 4.
     #[command(
-        after_help = "Examples:\n  ecdrive reset -i eth1\n  ecdrive reset -i eth1 -p 0 --json"
+        after_help = "Examples:\n  ecdrive reset -i eth1\n  ecdrive reset -i eth1 -p 0 --json\n  ecdrive reset --can can0\n  ecdrive reset --can vbus:/tmp/can.sock -n 3"
     )]
     Reset {
         #[command(flatten)]
-        bus: BusArgs,
-        /// Only this drive (default: every drive).
-        #[arg(short, long, value_name = "POS")]
+        bus: AnyBusArgs,
+        /// EtherCAT: only this drive (default: every drive).
+        #[arg(short, long, value_name = "POS", conflicts_with = "can")]
         position: Option<u16>,
-        /// Cycle time of the session, µs.
-        #[arg(long, value_name = "US", default_value_t = 1000)]
-        cycle_us: u32,
+        /// CANopen: only this node (1–127, decimal or 0x hex; default: every node with a
+        /// drive profile).
+        #[arg(short, long, value_name = "NODE", value_parser = parse_node, conflicts_with = "interface")]
+        node: Option<u8>,
+        /// Cycle time of the session, µs (default: EtherCAT 1000, CANopen 4000).
+        #[arg(long, value_name = "US")]
+        cycle_us: Option<u32>,
         #[command(flatten)]
         json: Json,
     },
@@ -1300,10 +1304,21 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Reset {
             bus,
             position,
+            node,
             cycle_us,
             json,
         } => {
-            let target: Target = match bus.interface.parse() {
+            let Some(interface) = bus.interface else {
+                let cycle = Duration::from_micros(u64::from(cycle_us.unwrap_or(4000)));
+                return can::reset(
+                    bus.can.as_deref().unwrap_or_default(),
+                    node,
+                    cycle,
+                    json.json,
+                );
+            };
+            let cycle_us = cycle_us.unwrap_or(1000);
+            let target: Target = match interface.parse() {
                 Ok(t) => t,
                 Err(e) => return fail("reset", &e),
             };

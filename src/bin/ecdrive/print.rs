@@ -250,6 +250,25 @@ pub fn reset(r: &ecdrive::app::ethercat::tools::reset::ResetReport) {
     }
 }
 
+pub fn can_reset(r: &ecdrive::app::canopen::reset::CanResetReport) {
+    if r.drives.is_empty() {
+        println!("{}: no drive found", r.bus);
+    }
+    for d in &r.drives {
+        match (&d.fault, d.cleared) {
+            (Some(f), Some(true)) => println!(
+                "node {} ({}): {}: {f}; reset, now {}",
+                d.node, d.drive, d.before, d.after
+            ),
+            (Some(f), _) => println!(
+                "node {} ({}): {}: {f}; NOT cleared, still {}",
+                d.node, d.drive, d.before, d.after
+            ),
+            (None, _) => println!("node {} ({}): {}, no fault", d.node, d.drive, d.before),
+        }
+    }
+}
+
 pub fn pdos(r: &PdoReport) {
     for sm in &r.sync_managers {
         let size = match sm.mapped_bytes {
