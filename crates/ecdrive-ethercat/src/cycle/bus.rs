@@ -3,6 +3,9 @@
 
 use super::*;
 
+/// How many cycles the AL status code of a device that left OP is asked for.
+const AL_CODE_TRIES: u8 = 20;
+
 impl<L: FrameLink> Cycle<'_, '_, L> {
     /// Device `i` is in AL state `raw`: note it, and a device that left OP on its own.
     pub(super) fn on_al_state(&mut self, i: usize, raw: u8, scan: &mut StateScan) {
@@ -28,13 +31,18 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             state: raw,
         });
         if was_op && raw != 8 && !self.ending() {
-            // A device left OP on its own: decode why, stop every axis, end.
+            // A device left OP on its own: decode why, stop every axis, end. The code is read
+            // within a quarter cycle; a device that does not answer that fast (a loaded host,
+            // a slow link) is asked again in the next cycles, and the event waits for it.
             let code = self.al_status_code(i);
-            self.ev.emit(EventKind::LeftOp {
-                device: i as u16,
-                state: raw,
-                code,
-            });
+            match code {
+                Some(_) => self.ev.emit(EventKind::LeftOp {
+                    device: i as u16,
+                    state: raw,
+                    code,
+                }),
+                None => self.left_op_code = Some((i, raw, 1)),
+            }
             if scan.left_op.is_none() {
                 scan.left_op = Some(i as u16);
                 self.end_reason = Some(CycleEnd::DriveLeftOp {
@@ -45,6 +53,34 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             }
         }
     }
+    /// A device that left OP and whose AL status code (0x0134) did not come within its
+    /// cycle: asked again once per cycle, up to [`AL_CODE_TRIES`] times; then the event goes out
+    /// with the code or without it, and the end reason gets it.
+    /// `last`: the cycle ends, no more tries.
+    pub(super) fn retry_left_op_code(&mut self, last: bool) {
+        let Some((i, raw, tries)) = self.left_op_code else {
+            return;
+        };
+        let code = self.al_status_code(i);
+        if code.is_none() && tries < AL_CODE_TRIES && !last {
+            self.left_op_code = Some((i, raw, tries + 1));
+            return;
+        }
+        self.left_op_code = None;
+        self.ev.emit(EventKind::LeftOp {
+            device: i as u16,
+            state: raw,
+            code,
+        });
+        if let Some(CycleEnd::DriveLeftOp {
+            device, code: c, ..
+        }) = &mut self.end_reason
+            && usize::from(*device) == i
+        {
+            *c = code;
+        }
+    }
+
     /// Device `i`'s AL status code (0x0134), if it answers within a quarter cycle.
     pub(super) fn al_status_code(&mut self, i: usize) -> Option<u16> {
         let addr = self.addresses.get(i).copied().unwrap_or(0);
@@ -288,6 +324,7 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             Some(at) => {
                 let out_of_op = self.al_states.iter().all(|s| s & 0x0F != 8);
                 if out_of_op || (cycle - at) * self.k.cycle_ns > 1_000_000_000 {
+                    self.retry_left_op_code(true);
                     self.ev.emit(EventKind::Stopped);
                     return Some(self.end_reason.unwrap_or(CycleEnd::Stopped));
                 }

@@ -227,6 +227,9 @@ struct Cycle<'a, 'p, L: FrameLink> {
     /// The hooks were told steady state began (and not yet that it ended).
     steady: bool,
     end_reason: Option<CycleEnd>,
+    /// A device that left OP whose AL status code is still to be read: (device, AL state,
+    /// tries so far).
+    left_op_code: Option<(usize, u8, u8)>,
     last_telemetry: CycleTelemetry,
 }
 
@@ -393,6 +396,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             phase: RunPhase::Running,
             steady: false,
             end_reason: None,
+            left_op_code: None,
             last_telemetry: CycleTelemetry::default(),
         }
     }
@@ -499,6 +503,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 self.clock.dc_time = resp.extra.dc_system_time;
                 self.counts.last_wkc = resp.working_counter;
                 self.clock.next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
+                // A code still owed from an earlier cycle first (not twice in one cycle).
+                self.retry_left_op_code(false);
                 let mut scan = StateScan::default();
                 for (i, st) in resp.subdevice_states.iter().enumerate() {
                     self.on_al_state(i, raw_al_state(st), &mut scan);
