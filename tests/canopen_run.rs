@@ -260,6 +260,79 @@ fn a_file_runs_over_a_bus_served_by_another_process() {
     }
 }
 
+/// The ASDA-A2's cyclic mode, ip (it has no csp; SYNC-paced 60C1h:01, 60C2h:01 = the SYNC
+/// period in ms), from a run file: a pp move, then into ip, a `move` and a `sine` streamed one
+/// point per SYNC, back to pp and home. The node's own position says where each part ended;
+/// the recording has the demand and the master's following error in ip, and the error stays
+/// within two SYNC periods' travel at the move's speed.
+#[test]
+fn the_asda_a2_runs_ip_from_a_run_file() {
+    let text = "interface = \"can-sim\"\ncycle = \"4ms\"\n[[drive]]\nnode = 0x7F\n\
+                profile = \"asda-a2\"\nmode = \"pp\"\n\
+                units = { name = \"rev\", counts_per_unit = 1280000 }\n\
+                limits = { following_error = 0.1 }\nprogram = [\n\
+                { step = \"pp\", to = [1], velocity = 10, acceleration = 100 },\n\
+                { step = \"mode\", mode = \"ip\" },\n\
+                { step = \"move\", by = 2, velocity = 5, acceleration = 50 },\n\
+                { step = \"dwell\", seconds = 0.05 },\n\
+                { step = \"sine\", amplitude = 0.25, frequency = 2, periods = 2 },\n\
+                { step = \"mode\", mode = \"pp\" },\n\
+                { step = \"pp\", to = [0.5], velocity = 10, acceleration = 100 },\n]\n";
+    let cfg = can(text);
+    let dir = std::env::temp_dir().join(format!("ecdrive-can-ip-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let csv = dir.join("ip.csv");
+    let mut bus = ecdrive::app::canopen::run::emulated_bus(&cfg).expect("bus");
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r =
+        ecdrive::app::canopen::run::run_on(&mut bus, &cfg, None, Some(&csv), &stop).expect("run");
+    let text = std::fs::read_to_string(&csv).expect("csv");
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(
+        r.outcome,
+        ecdrive::app::ethercat::tools::run::Outcome::Completed,
+        "{}: {r:#?}",
+        r.reason
+    );
+    let d = &r.drives[0];
+    assert!(d.errors.is_empty(), "{d:?}");
+    assert!(
+        d.modes.iter().any(|m| m.starts_with("ip (7)")),
+        "{:?}",
+        d.modes
+    );
+    // The node itself: back at 0.5 rev after the final pp move.
+    assert_eq!(bus.node(0x7F).expect("node").position(), 640_000);
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).expect(name);
+    let (mode_sent, demand, actual, fe) = (
+        col("mode_sent"),
+        col("demand_counts"),
+        col("actual_counts"),
+        col("following_error_counts"),
+    );
+    let ip: Vec<Vec<&str>> = lines
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|r| r[mode_sent] == "7")
+        .collect();
+    assert!(ip.len() > 200, "{} cycles in ip", ip.len());
+    // The move ended at 3 rev: the dwell's demand, and the drive there by the dwell's end.
+    assert!(
+        ip.iter()
+            .any(|r| r[demand] == "3840000" && r[actual] == "3840000"),
+        "the ip move never stood at 3 rev"
+    );
+    let max_fe = ip
+        .iter()
+        .filter_map(|r| r[fe].parse::<i64>().ok())
+        .map(i64::abs)
+        .max()
+        .expect("the following error is recorded in ip");
+    // 5 rev/s × 1 280 000 PUU/rev × 2 × 4 ms = 51 200 PUU.
+    assert!(max_fe <= 51_200, "max |following error| {max_fe} PUU in ip");
+}
+
 /// What only an EtherCAT run has, or what the CANopen drives cannot do, is refused before
 /// anything touches the bus, one line naming the key.
 #[test]
@@ -299,6 +372,28 @@ fn what_a_canopen_run_cannot_take_is_named() {
     .unwrap_err();
     assert_eq!(e.key.as_deref(), Some("cycle"), "{e}");
     assert!(e.to_string().contains("at least 1000 µs apart"), "{e}");
+    // ip: only where the drive has it, at a SYNC period its 60C2h:01 takes, never on EtherCAT.
+    let e = config::parse_any(&format!("{base}mode = \"ip\"\n"), "can.toml").unwrap_err();
+    assert!(
+        e.to_string().contains("the BLV-R does not support ip"),
+        "{e}"
+    );
+    let e = config::parse_any(
+        "interface = \"can-sim\"\ncycle = \"2500us\"\n[[drive]]\nnode = 0x7F\nprofile = \"asda-a2\"\nmode = \"ip\"\n",
+        "can.toml",
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("cycle"), "{e}");
+    assert!(
+        e.to_string().contains("60C2h:01 milliseconds, 1–20 ms"),
+        "{e}"
+    );
+    let e = config::parse_any(
+        "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\nmode = \"ip\"\n",
+        "ethercat.toml",
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("ip is run on CANopen drives"), "{e}");
     let e = config::parse_any(
         "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"mr-j4-tm\"\n",
         "can.toml",

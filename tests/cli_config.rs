@@ -229,10 +229,16 @@ fn wrong_types_and_values_name_the_key() {
         "1–99",
     );
     check(
+        &format!("{HEAD}[[drive]]\nposition = 0\nmode = \"vl\"\n"),
+        6,
+        Some("drive[0].mode"),
+        "csp, csv, cst, pp, pv, tq and ip",
+    );
+    check(
         &format!("{HEAD}[[drive]]\nposition = 0\nmode = \"ip\"\n"),
         6,
         Some("drive[0].mode"),
-        "csp, csv, cst, pp, pv and tq",
+        "ip is run on CANopen drives",
     );
     check("interface = \"eth0\"\ncycle = \"1ms\n", 2, None, "");
 }
@@ -353,7 +359,7 @@ fn programs_are_checked_against_mode_parameters_and_limits() {
         ),
         6,
         Some("drive[0].program[0]"),
-        "csp, csv, cst, pp, pv and tq",
+        "an EtherCAT drive streams positions in csp",
     );
 }
 

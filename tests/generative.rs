@@ -151,6 +151,8 @@ fn setpoint(m: RunMode) -> ecdrive::od::ObjectAddress {
         RunMode::Csp | RunMode::Pp => A(0x607A, 0),
         RunMode::Csv | RunMode::Pv => A(0x60FF, 0),
         RunMode::Cst | RunMode::Tq => A(0x6071, 0),
+        // Not generated: ip is a CANopen mode (an EtherCAT run refuses it).
+        RunMode::Ip => A(0x60C1, 1),
     }
 }
 
@@ -501,7 +503,7 @@ fn toml(c: &Case) -> String {
 /// A short program in the start mode.
 fn program(m: RunMode) -> &'static str {
     match m {
-        RunMode::Csp => {
+        RunMode::Csp | RunMode::Ip => {
             "{ step = \"move\", by = 20000, velocity = 200000, acceleration = 4000000 }"
         }
         RunMode::Csv => "{ step = \"ramp\", velocity = 20000, acceleration = 400000, hold = 0.05 }",

@@ -225,11 +225,12 @@ fn range(v: &[f64]) -> (f64, f64) {
 }
 
 /// The mode bands: (0x6060 code, name, colour).
-pub const MODES: [(i8, &str, RGBColor); 7] = [
+pub const MODES: [(i8, &str, RGBColor); 8] = [
     (1, "pp", RGBColor(230, 159, 0)),
     (3, "pv", RGBColor(86, 180, 233)),
     (4, "tq", RGBColor(204, 121, 167)),
     (6, "hm", RGBColor(240, 228, 66)),
+    (7, "ip", RGBColor(120, 94, 240)),
     (8, "csp", RGBColor(0, 114, 178)),
     (9, "csv", RGBColor(0, 158, 115)),
     (10, "cst", RGBColor(213, 94, 0)),

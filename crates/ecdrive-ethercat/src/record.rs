@@ -91,9 +91,9 @@ impl CycleSample {
     /// The columns that have a meaning in the mode sent, the others `None` (the cycle fills
     /// every field; this is the one place that decides which are shown).
     pub fn defined(mut self) -> Self {
-        // 0x6060 codes: pp 1, pv 3, tq 4, csp 8, csv 9, cst 10. In pp 0x607A is a target
-        // (relative, with controlword bit 6), not a demand the axis follows.
-        if !self.sent_in(&[8]) {
+        // 0x6060 codes: pp 1, pv 3, tq 4, ip 7, csp 8, csv 9, cst 10. In pp 0x607A is a
+        // target (relative, with controlword bit 6), not a demand the axis follows.
+        if !self.sent_in(&[7, 8]) {
             self.demand = None;
         }
         if !self.sent_in(&[3, 9]) {

@@ -1205,6 +1205,7 @@ fn setpoint_object(mode: RunMode) -> ObjectAddress {
         RunMode::Csp | RunMode::Pp => ObjectAddress::new(0x607A, 0),
         RunMode::Csv | RunMode::Pv => ObjectAddress::new(0x60FF, 0),
         RunMode::Cst | RunMode::Tq => ObjectAddress::new(0x6071, 0),
+        RunMode::Ip => ObjectAddress::new(0x60C1, 1),
     }
 }
 

@@ -54,6 +54,9 @@ pub struct AxisSetup {
     pub limits: SetpointLimits,
     /// The touch-probe objects the process data carry.
     pub probe_objects: ProbeObjects,
+    /// In ip the drive interpolates only with controlword bit 4 set (CiA 402; not the
+    /// ASDA-A2, which takes 60C1h:01 at each SYNC).
+    pub ip_enable_bit: bool,
 }
 
 /// One cycle's inputs of an axis, as the master read them from the bus.
@@ -287,6 +290,8 @@ pub struct MotionAxis {
     mode: RunMode,
     requested_mode: Option<RunMode>,
     fe_limit: Option<u32>,
+    /// Controlword bit 4 in ip ([`AxisSetup::ip_enable_bit`]).
+    ip_enable_bit: bool,
     /// 0x60F4 was seen other than 0 while the axis moved in csp.
     fe_drive_alive: bool,
     /// The master judged the following error in this cycle's step (energised in csp): the
@@ -356,6 +361,7 @@ impl MotionAxis {
             mode: setup.mode,
             requested_mode: None,
             fe_limit: setup.following_error_limit,
+            ip_enable_bit: setup.ip_enable_bit,
             fe_drive_alive: false,
             fe_judged: false,
             fe_drive_zero_cycles: 0,
@@ -562,7 +568,7 @@ impl MotionAxis {
         {
             Ok((vel, acc)) => {
                 let sp = match mode {
-                    RunMode::Csp => Sample {
+                    RunMode::Csp | RunMode::Ip => Sample {
                         pos: v,
                         vel,
                         acc,
@@ -1353,6 +1359,15 @@ impl MotionAxis {
             // The drive generates the motion; `profile_mode` gives it its targets.
             RunMode::Pp | RunMode::Pv | RunMode::Tq => Ok(()),
             RunMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
+            RunMode::Ip => {
+                let bits = if self.ip_enable_bit {
+                    cia402::interpolated::ENABLE_IP
+                } else {
+                    cia402::ControlWord::empty()
+                };
+                self.axis.set_mode_bits(bits);
+                self.axis.set_position((sp.pos.round() as i64) as i32)
+            }
             RunMode::Csv => self.axis.set_velocity(self.drive_velocity(sp.vel)),
             RunMode::Cst => self.axis.set_torque(drive_torque(sp.torque)),
         };
@@ -1466,7 +1481,7 @@ impl MotionAxis {
         if let Some((p, v, t)) = self.last_out {
             let s = &mut self.steps;
             let step = match RunMode::from_code(running.active_mode.as_i8()) {
-                Some(RunMode::Csp) => Some((
+                Some(RunMode::Csp | RunMode::Ip) => Some((
                     i64::from(out.target_position.wrapping_sub(p)).abs(),
                     &mut s.position,
                     0,
@@ -1529,9 +1544,10 @@ impl MotionAxis {
         }
         let moving = self.last_demand.is_some_and(|l| l != demand);
         self.last_demand = (!homing).then_some(demand);
-        // The master's following error only while csp runs (in hm the drive moves on its own).
+        // The master's following error only while csp or ip runs (in hm the drive moves on its
+        // own).
         self.fe_judged =
-            energised && self.mode == RunMode::Csp && out.mode.as_i8() == RunMode::Csp.code();
+            energised && self.mode.streams_position() && out.mode.as_i8() == self.mode.code();
         if self.fe_judged {
             self.judge_following_error(i, moving, ctx.cycle, ev);
         }
@@ -1738,11 +1754,11 @@ impl MotionAxis {
     /// [`Command::Setpoint`]: the held set-point of the cyclic mode the axis runs.
     fn command_setpoint(&mut self, v: f64) -> Option<&'static str> {
         match self.mode {
-            RunMode::Csp => self.hold.pos = v,
+            RunMode::Csp | RunMode::Ip => self.hold.pos = v,
             RunMode::Csv => self.hold.vel = v,
             RunMode::Cst => self.hold.torque = v,
             RunMode::Pp | RunMode::Pv | RunMode::Tq => {
-                return Some("a set-point command needs csp, csv or cst");
+                return Some("a set-point command needs csp, csv, cst or ip");
             }
         }
         None
@@ -1802,6 +1818,12 @@ impl MotionAxis {
     /// call: the recording shows the following error only in those cycles.
     pub fn take_fe_judged(&mut self) -> bool {
         core::mem::take(&mut self.fe_judged)
+    }
+
+    /// Whether the last step judged the master's following error (csp or ip, energised), for
+    /// a recording that reads it without taking it.
+    pub fn fe_judged(&self) -> bool {
+        self.fe_judged
     }
 
     /// 0x60B8 to write, once a probe was armed.

@@ -30,7 +30,7 @@ impl SetpointLimits {
             return Err(("a finite set-point", v, 0.0));
         }
         let (vel, acc) = match mode {
-            RunMode::Csp => {
+            RunMode::Csp | RunMode::Ip => {
                 let vel = (v - prev.0) / dt;
                 (vel, (vel - prev.1) / dt)
             }

@@ -32,14 +32,19 @@ pub enum RunMode {
     Pv,
     /// Profile torque (0x6060 = 4): `tq` steps give the drive a target torque.
     Tq,
+    /// Interpolated position (0x6060 = 7): the program streams target positions as in csp,
+    /// carried in 0x60C1:01 (the cyclic position mode of drives without csp, such as the
+    /// CANopen ASDA-A2), with controlword bit 4 where the drive needs it.
+    Ip,
 }
 
 impl RunMode {
     /// Every mode, in 0x6060 order of the cyclic ones first.
-    pub const ALL: [RunMode; 6] = [
+    pub const ALL: [RunMode; 7] = [
         Self::Csp,
         Self::Csv,
         Self::Cst,
+        Self::Ip,
         Self::Pp,
         Self::Pv,
         Self::Tq,
@@ -54,6 +59,7 @@ impl RunMode {
             Self::Pp => 1,
             Self::Pv => 3,
             Self::Tq => 4,
+            Self::Ip => 7,
         }
     }
 
@@ -66,11 +72,12 @@ impl RunMode {
             1 => Some(Self::Pp),
             3 => Some(Self::Pv),
             4 => Some(Self::Tq),
+            7 => Some(Self::Ip),
             _ => None,
         }
     }
 
-    /// `"csp"`, `"csv"`, `"cst"`, `"pp"`, `"pv"` or `"tq"`.
+    /// `"csp"`, `"csv"`, `"cst"`, `"pp"`, `"pv"`, `"tq"` or `"ip"`.
     pub const fn name(self) -> &'static str {
         match self {
             Self::Csp => "csp",
@@ -79,12 +86,18 @@ impl RunMode {
             Self::Pp => "pp",
             Self::Pv => "pv",
             Self::Tq => "tq",
+            Self::Ip => "ip",
         }
     }
 
-    /// Whether the master streams the set-point every cycle (csp, csv, cst).
+    /// Whether the master streams the set-point every cycle (csp, csv, cst, ip).
     pub const fn is_cyclic(self) -> bool {
-        matches!(self, Self::Csp | Self::Csv | Self::Cst)
+        matches!(self, Self::Csp | Self::Csv | Self::Cst | Self::Ip)
+    }
+
+    /// Whether the master streams positions (csp, ip).
+    pub const fn streams_position(self) -> bool {
+        matches!(self, Self::Csp | Self::Ip)
     }
 }
 
@@ -294,7 +307,7 @@ impl Step {
             | Self::TouchProbe { .. }
             | Self::ProbeWait { .. } => true,
             Self::Move { .. } | Self::Sine { .. } | Self::Ramp { .. } | Self::Jog { .. } => {
-                matches!(mode, RunMode::Csp | RunMode::Csv)
+                matches!(mode, RunMode::Csp | RunMode::Csv | RunMode::Ip)
             }
             Self::Torque { .. } => mode == RunMode::Cst,
             Self::Pp { .. } => mode == RunMode::Pp,

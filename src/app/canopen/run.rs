@@ -127,7 +127,8 @@ impl Recorder {
             if t.state.is_none() {
                 continue;
             }
-            let sample = CycleSample::of_axis(cycle, time_ns, i as u16, t, false);
+            let judged = s.axis(i).is_some_and(|a| a.fe_judged());
+            let sample = CycleSample::of_axis(cycle, time_ns, i as u16, t, judged);
             sample.write_csv(&mut self.out, t0, Some(scale))?;
             self.samples += 1;
         }

@@ -285,11 +285,14 @@ fn drive(
     let mode = match &r.mode {
         Some(m) => {
             let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
-            if mode.is_cyclic() {
+            if mode.is_cyclic() && mode != RunMode::Ip {
                 return Err(cx.err(
                     m.span(),
                     key("mode"),
-                    format!("{} is not run over CANopen yet: pp, pv or tq", mode.name()),
+                    format!(
+                        "{} is not run over CANopen yet: pp, pv, tq, or ip where the drive has it",
+                        mode.name()
+                    ),
                 ));
             }
             mode
@@ -305,7 +308,7 @@ fn drive(
     } = program_of(cx, &key, d, mode, cycle)?;
     for (n, s) in steps.iter().enumerate() {
         let unsupported = match s {
-            Step::Mode { mode } if mode.is_cyclic() => {
+            Step::Mode { mode } if mode.is_cyclic() && *mode != RunMode::Ip => {
                 Some(format!("{} is not run over CANopen yet", mode.name()))
             }
             Step::Mode { mode }
@@ -326,6 +329,17 @@ fn drive(
             let span = r.program.get(n).map_or(d.span(), Spanned::span);
             return Err(cx.err(span, key(&format!("program[{n}]")), m));
         }
+    }
+    let uses_ip = mode == RunMode::Ip
+        || steps
+            .iter()
+            .any(|s| matches!(s, Step::Mode { mode } if *mode == RunMode::Ip));
+    if uses_ip && let Err(why) = ip_period(profile, cycle) {
+        let (span, k) = match cycle_key {
+            Some(c) => (c.span(), "cycle".to_string()),
+            None => (d.span(), key("")),
+        };
+        return Err(cx.err(span, k, why));
     }
     if !profile.supports(crate::cia402::OperationMode::from_i8(mode.code())) {
         let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
@@ -418,6 +432,29 @@ fn check_cycle(
         }
         None => Ok(()),
     }
+}
+
+/// Whether the drive interpolates at this SYNC period: the master writes the period into
+/// 60C2h:01 in milliseconds (60C2h:02 = −3), so it must be whole milliseconds within the
+/// range the drive's dictionary gives 60C2h:01 (the ASDA-A2: 1–20 ms).
+fn ip_period(p: &CanDriveProfile, cycle: Duration) -> Result<(), String> {
+    let dict = crate::od::Dictionary::new(p.dictionary);
+    let Some(e) = dict.entry(crate::od::ObjectAddress::new(0x60C2, 1)) else {
+        return Ok(());
+    };
+    let ms = |v: crate::od::ConstValue| v.as_i128();
+    let (lo, hi) = (ms(e.min).unwrap_or(1), ms(e.max).unwrap_or(255));
+    let us = cycle.as_micros();
+    let whole = us % 1000 == 0;
+    let n = (us / 1000) as i128;
+    if whole && (lo..=hi).contains(&n) {
+        return Ok(());
+    }
+    Err(format!(
+        "a SYNC period of {us} µs: ip on the {} interpolates at 60C2h:01 milliseconds, \
+         {lo}–{hi} ms, so the period must be whole milliseconds in that range",
+        p.name
+    ))
 }
 
 fn profile_names() -> String {

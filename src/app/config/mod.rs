@@ -1195,6 +1195,9 @@ fn drive(
     let mode = match &r.mode {
         Some(m) => {
             let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
+            if mode == RunMode::Ip {
+                return Err(cx.err(m.span(), key("mode"), IP_ON_ETHERCAT));
+            }
             if let Some(p) = profile
                 && !p
                     .caps
@@ -1274,11 +1277,15 @@ fn drive(
 
     // Every mode the program runs in.
     let mut modes = vec![mode];
-    for s in &steps {
-        if let Step::Mode { mode } = s
-            && !modes.contains(mode)
-        {
-            modes.push(*mode);
+    for (n, s) in steps.iter().enumerate() {
+        if let Step::Mode { mode } = s {
+            if *mode == RunMode::Ip {
+                let span = r.program.get(n).map_or(d.span(), Spanned::span);
+                return Err(cx.err(span, key(&format!("program[{n}]")), IP_ON_ETHERCAT));
+            }
+            if !modes.contains(mode) {
+                modes.push(*mode);
+            }
         }
     }
     // Mapping override.
@@ -1301,6 +1308,7 @@ fn drive(
                     RunMode::Csp | RunMode::Pp => (a(0x607A, 0), "target position"),
                     RunMode::Csv | RunMode::Pv => (a(0x60FF, 0), "target velocity"),
                     RunMode::Cst | RunMode::Tq => (a(0x6071, 0), "target torque"),
+                    RunMode::Ip => (a(0x60C1, 1), "interpolation data record"),
                 };
                 need.push((Direction::Rx, obj, format!("the {what} of {}", m.name())));
             }
@@ -1765,12 +1773,17 @@ fn mode_of(s: &str) -> Result<RunMode, String> {
         "pp" => Ok(RunMode::Pp),
         "pv" => Ok(RunMode::Pv),
         "tq" => Ok(RunMode::Tq),
+        "ip" => Ok(RunMode::Ip),
         other => Err(format!(
-            "unknown mode {other:?}; the modes are csp, csv, cst, pp, pv and tq (hm through a \
-             home step)"
+            "unknown mode {other:?}; the modes are csp, csv, cst, pp, pv, tq and ip (hm through \
+             a home step)"
         )),
     }
 }
+
+/// Why an EtherCAT run refuses ip.
+const IP_ON_ETHERCAT: &str = "ip is run on CANopen drives without csp (the ASDA-A2); an \
+                              EtherCAT drive streams positions in csp";
 
 /// A file step in counts (`k` counts per user unit).
 fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
@@ -1839,11 +1852,13 @@ fn scale_step(s: &raw::Step, k: f64) -> Result<Step, String> {
             ..
         } => {
             for (name, v) in [
-                ("speed_switch", speed_switch),
-                ("speed_zero", speed_zero),
+                ("speed_switch", Some(speed_switch)),
+                ("speed_zero", Some(speed_zero)),
                 ("acceleration", acceleration),
             ] {
-                if !(v.is_finite() && v > 0.0) {
+                if let Some(v) = v
+                    && !(v.is_finite() && v > 0.0)
+                {
                     return Err(format!("home: {name} must be a positive number, not {v}"));
                 }
             }
@@ -2073,7 +2088,9 @@ fn homing_writes<B>(
     k: f64,
 ) -> Result<Vec<(ObjectAddress, Value)>, (usize, String)> {
     use crate::cia402::{AccelUnit, OperationMode};
-    let mut first: Option<(usize, i8, f64, f64, f64, Option<f64>)> = None;
+    // The first home step: (its index, method, speeds, acceleration, offset).
+    type HomeValues = (usize, i8, f64, f64, Option<f64>, Option<f64>);
+    let mut first: Option<HomeValues> = None;
     for (n, s) in program.iter().enumerate() {
         let raw::Step::Home {
             method,
@@ -2190,19 +2207,22 @@ fn homing_writes<B>(
         }
     };
     let speed = |v: f64| u.from_rev_per_s(pu.homing_velocity, v * k / u.position_per_rev);
-    let acc_rev_s2 = acc * k / u.position_per_rev;
-    let acc_value = match pu.acceleration {
-        AccelUnit::MillisecondsTo { rpm } => rpm / 60.0 / acc_rev_s2 * 1000.0,
-        AccelUnit::RpmPerSecond => acc_rev_s2 * 60.0,
-        AccelUnit::PositionPerSecond2 => acc * k,
-    };
     let a = ObjectAddress::new;
     let mut out = vec![
         (a(0x6098, 0), Value::Int(i64::from(method))),
         (a(0x6099, 1), fits("speed_switch", "0x6099:01", speed(v1))?),
         (a(0x6099, 2), fits("speed_zero", "0x6099:02", speed(v2))?),
-        (a(0x609A, 0), fits("acceleration", "0x609A", acc_value)?),
     ];
+    // Without an acceleration the drive keeps its own 0x609A.
+    if let Some(acc) = acc {
+        let acc_rev_s2 = acc * k / u.position_per_rev;
+        let acc_value = match pu.acceleration {
+            AccelUnit::MillisecondsTo { rpm } => rpm / 60.0 / acc_rev_s2 * 1000.0,
+            AccelUnit::RpmPerSecond => acc_rev_s2 * 60.0,
+            AccelUnit::PositionPerSecond2 => acc * k,
+        };
+        out.push((a(0x609A, 0), fits("acceleration", "0x609A", acc_value)?));
+    }
     // The home offset (0x607C): the position the home then reads, in position units.
     if let Some(o) = offset {
         if let Some(why) = p.caps.home_offset_set_by_drive {
@@ -2277,7 +2297,10 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
         } => {
             over("speed_switch", speed_switch, l.max_velocity, "/s")?;
             over("speed_zero", speed_zero, l.max_velocity, "/s")?;
-            over("acceleration", acceleration, l.max_acceleration, "/s²")
+            match acceleration {
+                Some(a) => over("acceleration", a, l.max_acceleration, "/s²"),
+                None => Ok(()),
+            }
         }
         raw::Step::Pp {
             velocity,

@@ -228,7 +228,10 @@ pub(super) enum Step {
         method: i8,
         speed_switch: f64,
         speed_zero: f64,
-        acceleration: f64,
+        /// Homing acceleration (0x609A); without it the drive uses its own (a drive without
+        /// 0x609A, such as the Lexium MDrive, takes none).
+        #[serde(default)]
+        acceleration: Option<f64>,
         #[serde(default)]
         offset: Option<f64>,
     },

@@ -52,6 +52,7 @@ pub fn axis_setup(profile: &CanDriveProfile, program: Vec<Step>, mode: RunMode) 
         following_error_limit: None,
         limits: SetpointLimits::default(),
         probe_objects: ProbeObjects::default(),
+        ip_enable_bit: profile.ip_needs_enable_bit,
     }
 }
 

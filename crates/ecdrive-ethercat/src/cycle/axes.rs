@@ -33,6 +33,8 @@ impl AxisRt {
                 status: pf.status.is_some(),
                 positions: pf.positions.map(|p| p.is_some()),
             },
+            // CiA 402: the drive interpolates with controlword bit 4 set.
+            ip_enable_bit: true,
         };
         Some(Self {
             sub: usize::from(d.info.position),
