@@ -5,7 +5,7 @@
 //! `harness = false` (see Cargo.toml): `main` decides whether it is the parent or the child.
 //! Timeouts are generous failure guards, not timing assertions.
 
-use ecdrive::app::canopen::demo;
+use ecdrive::app::canopen::steps;
 use ecdrive::app::canopen::tools;
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
 use ecdrive::canopen::nmt::NmtState;
@@ -79,12 +79,12 @@ fn parent() {
             Value::Str("BLVD-KRD".into())
         );
         let mut setup = DriveSetup::new(&blv_r::PROFILE);
-        setup.settings = demo::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
+        setup.settings = steps::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
         m.configure_drive(NODE, setup).unwrap();
         m.start(NODE).unwrap();
         let guard = GUARD.as_micros() as u64;
         m.enable(NODE, guard).unwrap();
-        let pos = demo::move_pp(&mut m, NODE, &[SetPoint::absolute(3600)], guard).unwrap();
+        let pos = steps::move_pp(&mut m, NODE, &[SetPoint::absolute(3600)], guard).unwrap();
         assert_eq!(pos, 3600);
         // Disable through the controlword, then NMT Stop: the node process ends.
         m.shutdown_node(NODE, guard).unwrap();

@@ -6,7 +6,7 @@
 mod canopen_util;
 
 use canopen_util::{T, bus, events, node_int, setup};
-use ecdrive::app::canopen::demo;
+use ecdrive::app::canopen::steps;
 use ecdrive::app::canopen::tools;
 use ecdrive::canopen::master::{Master, MasterEvent};
 use ecdrive::canopen::nmt::NmtState;
@@ -83,13 +83,13 @@ fn acceptance(c: Case) {
     assert_eq!(node(&m, id).state(), State::OperationEnabled);
 
     // Home with a method the drive lists and a home offset.
-    let pos = demo::home(&mut m, id, c.homing_method, 1000, T).unwrap();
+    let pos = steps::home(&mut m, id, c.homing_method, 1000, T).unwrap();
     assert_eq!(pos, 1000);
     assert_eq!(node(&m, id).position(), 1000);
     assert_eq!(node_int(&m, id, 0x6061, 0), 6);
 
     // pp: absolute, then a relative set-point queued behind it.
-    let pos = demo::move_pp(
+    let pos = steps::move_pp(
         &mut m,
         id,
         &[
@@ -106,20 +106,20 @@ fn acceptance(c: Case) {
     // pv: 5 rev/s in the drive's velocity unit, then halt to zero speed.
     let u = &p.units;
     let v = u.from_rev_per_s(u.velocity, 5.0).round() as i32;
-    let held = demo::run_pv(&mut m, id, v, 100_000, T).unwrap();
+    let held = steps::run_pv(&mut m, id, v, 100_000, T).unwrap();
     assert_eq!(held, v);
     assert!(node(&m, id).velocity_units_per_s().abs() < 1.0, "halted");
 
     // tq where the drive has it.
     if p.supports(OperationMode::ProfileTorque) {
-        assert_eq!(demo::run_tq(&mut m, id, 300, T).unwrap(), 300);
+        assert_eq!(steps::run_tq(&mut m, id, 300, T).unwrap(), 300);
         assert_eq!(node(&m, id).torque(), 0.0);
     }
 
     // ip on the ASDA-A2.
     if p.supports(OperationMode::InterpolatedPosition) {
         let start = node(&m, id).position();
-        let end = demo::run_ip(&mut m, id, rev, 200, T).unwrap();
+        let end = steps::run_ip(&mut m, id, rev, 200, T).unwrap();
         // The path starts where the axis is (a coasting load may have crept a few counts).
         assert!((end - start - rev).abs() <= rev / 1000, "{start} -> {end}");
         assert_eq!(node(&m, id).position(), end);
@@ -130,7 +130,7 @@ fn acceptance(c: Case) {
     // Fault: the node raises an alarm; the master decodes the EMCY with the alarm table; the
     // axis reports the fault, resets it and enables again.
     let alarm = c.alarm;
-    let text = demo::fault_and_reset(
+    let text = steps::fault_and_reset(
         &mut m,
         id,
         |bus| {
@@ -214,16 +214,16 @@ fn lexium_closed_loop_acceptance_with_tq_and_index_homing() {
 fn homing_methods_the_drive_does_not_list_are_refused() {
     // BLV-R lists 1, 2, 8, 12, 17, 18, 24, 28, 35, 37, -1 only: 19 is aborted at 6098h.
     let mut m = canopen_util::ready(&blv_r::PROFILE, 3);
-    let e = demo::home(&mut m, 3, 19, 0, T).unwrap_err();
+    let e = steps::home(&mut m, 3, 19, 0, T).unwrap_err();
     assert_eq!(e.address, Some(ObjectAddress::new(0x6098, 0)));
     assert_eq!(e.abort_code(), Some(ecdrive::od::SdoAbortCode::VALUE_RANGE));
     // Lexium open loop: index methods end in a homing error (no encoder).
     let mut m = canopen_util::ready(&lexium_mdrive::PROFILE, 0x41);
-    let e = demo::home(&mut m, 0x41, 33, 0, T).unwrap_err();
+    let e = steps::home(&mut m, 0x41, 33, 0, T).unwrap_err();
     assert!(e.to_string().contains("Error"), "{e}");
     // Method 35 (current position) works everywhere it is listed.
     let mut m = canopen_util::ready(&asda_a2::PROFILE, 0x7F);
-    assert_eq!(demo::home(&mut m, 0x7F, 35, -500, T).unwrap(), -500);
+    assert_eq!(steps::home(&mut m, 0x7F, 35, -500, T).unwrap(), -500);
 }
 
 #[test]
@@ -269,7 +269,7 @@ fn three_drives_share_one_bus() {
     ] {
         let rev = p.units.position_per_rev as i32;
         assert_eq!(
-            demo::move_pp(&mut m, id, &[SetPoint::absolute(rev)], T).unwrap(),
+            steps::move_pp(&mut m, id, &[SetPoint::absolute(rev)], T).unwrap(),
             rev
         );
     }

@@ -37,8 +37,8 @@ fn run(node: u8, p: &'static CanDriveProfile) -> (Seen, f64, f64) {
     bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
     let mut m = Master::new(bus, MasterConfig::default());
     let mut setup = DriveSetup::new(p);
-    setup.settings = ecdrive::app::canopen::demo::motion_settings(p, 10.0, 100.0);
-    let method = ecdrive::app::canopen::demo::demo_homing_method(p);
+    setup.settings = ecdrive::app::canopen::steps::motion_settings(p, 10.0, 100.0);
+    let method = ecdrive::app::canopen::steps::demo_homing_method(p);
     setup
         .settings
         .push((ObjectAddress::new(0x6098, 0), Value::Int(method.into())));
@@ -240,7 +240,7 @@ fn each_canopen_drive_takes_a_callbacks_requests_and_stream() {
         bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
         let mut m = Master::new(bus, MasterConfig::default());
         let mut setup = DriveSetup::new(p);
-        setup.settings = ecdrive::app::canopen::demo::motion_settings(p, 10.0, 100.0);
+        setup.settings = ecdrive::app::canopen::steps::motion_settings(p, 10.0, 100.0);
         m.configure_drive(node, setup).expect("configure");
         m.start(node).expect("NMT start");
         let mut s = MotionSession::new(m, &[(node, axis_setup(p, Vec::new(), RunMode::Pp))])

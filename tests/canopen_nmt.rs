@@ -6,7 +6,7 @@
 mod canopen_util;
 
 use canopen_util::{T, bus, events, node_int, ready, setup, write};
-use ecdrive::app::canopen::demo;
+use ecdrive::app::canopen::steps;
 use ecdrive::canopen::CanTransport;
 use ecdrive::canopen::error::CanErrorKind;
 use ecdrive::canopen::master::{Master, MasterEvent, Supervision};
@@ -402,7 +402,7 @@ fn boot_up_after_reset_and_store_restore() {
     m.start(3).unwrap();
     m.enable(3, T).unwrap();
     assert_eq!(
-        demo::move_pp(&mut m, 3, &[ecdrive::cia402::SetPoint::absolute(100)], T).unwrap(),
+        steps::move_pp(&mut m, 3, &[ecdrive::cia402::SetPoint::absolute(100)], T).unwrap(),
         100
     );
 }

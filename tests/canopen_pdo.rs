@@ -273,7 +273,7 @@ fn tpdo_transmission_types() {
     m.enable(3, T).unwrap();
     let before = m.transport().node(3).unwrap().stats().tpdos_sent;
     let t0 = m.now_us();
-    ecdrive::app::canopen::demo::move_pp(
+    ecdrive::app::canopen::steps::move_pp(
         &mut m,
         3,
         &[ecdrive::cia402::SetPoint::absolute(36_000)],

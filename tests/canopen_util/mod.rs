@@ -2,7 +2,7 @@
 //! drives, configured and enabled through the public API.
 #![allow(dead_code)]
 
-use ecdrive::app::canopen::demo;
+use ecdrive::app::canopen::steps;
 use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
 use ecdrive::canopen::profile::CanDriveProfile;
 use ecdrive::od::{ObjectAddress, Value};
@@ -30,7 +30,7 @@ pub fn bus_with(nodes: &[(&'static CanDriveProfile, u8)], cfg: MasterConfig) -> 
 /// The standard setup with the demo's motion settings.
 pub fn setup(p: &'static CanDriveProfile) -> DriveSetup {
     let mut s = DriveSetup::new(p);
-    s.settings = demo::motion_settings(p, 10.0, 100.0);
+    s.settings = steps::motion_settings(p, 10.0, 100.0);
     s
 }
 

@@ -1,522 +1,123 @@
 //! `ecdrive demo --canopen`: the three emulated CANopen drives on the in-process virtual bus,
-//! run through the same [`Axis`](crate::cia402::Axis) engine and profile-mode helpers as the
-//! EtherCAT drives. [`run`] returns a [`DemoSummary`]; the CLI prints it.
+//! run as a configuration: `examples/canopen_profile_modes.toml`, the file `ecdrive run -c`
+//! takes, on the motion runtime the EtherCAT drives run on. [`run`] returns a
+//! [`DemoSummary`]; the CLI prints it.
 //!
-//! For each drive: scan (identity), configure (PDO plan, supervision, preconditions), start,
-//! enable, home, a pp move (absolute, then relative), pv, tq where the drive has it, ip on the
-//! ASDA-A2, an injected alarm decoded from its EMCY and reset, disable and NMT stop. Simulated
-//! time: the demo takes milliseconds of wall time.
-//!
-//! The step functions ([`home`], [`move_pp`], [`run_pv`], [`run_tq`], [`run_ip`]) are public so
-//! other front ends can reuse them.
-//!
-//! # Running a drive
-//!
-//! ```
-//! use ecdrive::sim::canopen::{EmulatedNode, SimBus};
-//! use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
-//! use ecdrive::cia402::{ProfilePosition, SetPoint};
-//! use ecdrive::drives::blv_r;
-//!
-//! let mut bus = SimBus::new();
-//! bus.add_node(EmulatedNode::new(&blv_r::PROFILE, 3).unwrap());
-//! let mut m = Master::new(bus, MasterConfig::default());
-//! let mut setup = DriveSetup::new(&blv_r::PROFILE);
-//! setup.settings = ecdrive::app::canopen::demo::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
-//! m.configure_drive(3, setup).unwrap(); // identity, supervision, PDOs, mode
-//! m.start(3).unwrap(); // NMT start
-//! m.enable(3, 1_000_000).unwrap(); // Axis → Operation enabled
-//! let mut pp = ProfilePosition::default();
-//! pp.push(SetPoint::absolute(36_000)).unwrap();
-//! loop {
-//!     let mut done = false;
-//!     m.cycle_step(|d| {
-//!         let sw = d.statusword();
-//!         let st = pp.step(d.axis_mut(), sw);
-//!         done = st.target_reached && st.acknowledged == 1;
-//!     })
-//!     .unwrap();
-//!     if done {
-//!         break;
-//!     }
-//! }
-//! assert_eq!(m.transport().node(3).unwrap().position(), 36_000);
-//! m.shutdown_node(3, 1_000_000).unwrap(); // disable, then NMT stop
-//! ```
+//! The bus is scanned (identity of every node), the file's programs run (each drive homes, runs
+//! pp, pv, tq where its firmware has it, and ip on the ASDA-A2; controlled stop, disable, NMT
+//! Stop), then each drive gets an alarm injected and `ecdrive reset`'s procedure clears it,
+//! naming it with the drive's alarm table. Simulated time: the demo takes milliseconds of wall
+//! time.
 
-use super::tools::{self, DEMO_NODES};
+use super::reset::{CanResetOptions, CanResetReport, reset};
+use super::run::{CanRunReport, emulated_bus, run_on};
+use super::tools;
+use crate::app::config::canopen::CanRunConfig;
+use crate::app::ethercat::tools::run::Outcome;
 use crate::canopen::error::{CanError, CanErrorKind, NodeRef};
-use crate::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
-use crate::canopen::motion::{ProfileSpeeds, profile_settings};
+use crate::canopen::master::{Master, MasterConfig};
 use crate::canopen::profile::CanDriveProfile;
 use crate::canopen::transport::CanTransport;
-use crate::cia402::interpolated::linear_point;
-use crate::cia402::{
-    Event, Homing, HomingOutcome, Interpolation, OperationMode, ProfilePosition, ProfileTorque,
-    ProfileVelocity, SetPoint,
-};
-use crate::od::{ObjectAddress, Value};
-use crate::sim::canopen::SimBus;
 use core::fmt;
+use std::time::Duration;
 
-/// **\[REC\]** Demo motion: profile velocity 10 rev/s, ramps 100 rev/s², homing 5 / 0.5 rev/s.
-pub mod defaults {
-    /// Profile velocity, rev/s.
-    pub const VELOCITY_REV_S: f64 = 10.0;
-    /// Acceleration and deceleration, rev/s².
-    pub const ACCEL_REV_S2: f64 = 100.0;
-    /// Homing search speed, rev/s.
-    pub const HOMING_FAST_REV_S: f64 = 5.0;
-    /// Homing creep speed, rev/s.
-    pub const HOMING_SLOW_REV_S: f64 = 0.5;
-    /// Timeout of each step, µs (simulated time).
-    pub const STEP_TIMEOUT_US: u64 = 20_000_000;
-}
+/// The demo's configuration, as `ecdrive run -c examples/canopen_profile_modes.toml` reads it.
+pub const CONFIG: &str = include_str!("../../../examples/canopen_profile_modes.toml");
 
-/// SDO settings for profile velocity, accelerations and homing speeds in the drive's units,
-/// with the demo's homing speeds ([`defaults`]): [`profile_settings`] of the CANopen master.
-pub fn motion_settings(
-    profile: &CanDriveProfile,
-    velocity_rev_s: f64,
-    accel_rev_s2: f64,
-) -> Vec<(ObjectAddress, Value)> {
-    profile_settings(
-        profile,
-        &ProfileSpeeds {
-            velocity_rev_s,
-            accel_rev_s2,
-            homing_fast_rev_s: defaults::HOMING_FAST_REV_S,
-            homing_slow_rev_s: defaults::HOMING_SLOW_REV_S,
-        },
-    )
-}
-
-fn err<T: CanTransport>(m: &Master<T>, node: u8, what: String) -> CanError {
-    CanError::new(m.node_ref(node), None, CanErrorKind::Timeout(what))
-}
-
-fn fault_text<T: CanTransport>(m: &mut Master<T>, node: u8) -> Option<String> {
-    let d = m.drive_mut(node)?;
-    let mut t = None;
-    while let Some(e) = d.axis_mut().poll_event() {
-        if let Event::Fault { error, .. } = e {
-            t = Some(match error {
-                Some(e) => format!("the drive faulted: {e}"),
-                None => "the drive faulted".into(),
-            });
-        }
-    }
-    t
-}
-
-/// Home `node` with `method` (6098h) and home offset `offset` (607Ch): switch to hm, run the
-/// [`Homing`] helper to its end. Returns the position afterwards.
-pub fn home<T: CanTransport>(
-    m: &mut Master<T>,
-    node: u8,
-    method: i8,
-    offset: i32,
-    timeout_us: u64,
-) -> Result<i32, CanError> {
-    m.switch_mode(node, OperationMode::Homing, timeout_us)?;
-    m.download_value(
-        node,
-        ObjectAddress::new(0x6098, 0),
-        &Value::Int(method.into()),
-        None,
-    )?;
-    m.download_value(
-        node,
-        ObjectAddress::new(0x607C, 0),
-        &Value::Int(offset.into()),
-        None,
-    )?;
-    let mut h = Homing::default();
-    h.start();
-    let deadline = m.now_us().saturating_add(timeout_us);
-    loop {
-        m.cycle_step(|d| {
-            if d.node() == node {
-                let sw = d.statusword();
-                h.step(d.axis_mut(), sw);
-            }
-        })?;
-        if let Some(f) = fault_text(m, node) {
-            return Err(err(m, node, format!("homing: {f}")));
-        }
-        match h.outcome() {
-            Some(HomingOutcome::Completed) => break,
-            Some(o) => return Err(err(m, node, format!("homing method {method}: {o:?}"))),
-            None => {}
-        }
-        if m.now_us() > deadline {
-            return Err(err(
-                m,
-                node,
-                format!("homing method {method} did not finish"),
-            ));
-        }
-    }
-    Ok(m.drive(node)
-        .and_then(|d| d.feedback().position)
-        .unwrap_or(0))
-}
-
-/// Run the pp set-points `sps` on `node` (switching to pp first) until all are acknowledged and
-/// the target is reached. Returns the position.
-pub fn move_pp<T: CanTransport>(
-    m: &mut Master<T>,
-    node: u8,
-    sps: &[SetPoint],
-    timeout_us: u64,
-) -> Result<i32, CanError> {
-    m.switch_mode(node, OperationMode::ProfilePosition, timeout_us)?;
-    let mut pp = ProfilePosition::default();
-    for sp in sps {
-        pp.push(*sp).map_err(|e| err(m, node, format!("pp: {e}")))?;
-    }
-    let n = sps.len() as u32;
-    let deadline = m.now_us().saturating_add(timeout_us);
-    loop {
-        let mut st = None;
-        m.cycle_step(|d| {
-            if d.node() == node {
-                let sw = d.statusword();
-                st = Some(pp.step(d.axis_mut(), sw));
-            }
-        })?;
-        if let Some(f) = fault_text(m, node) {
-            return Err(err(m, node, format!("pp: {f}")));
-        }
-        if let Some(st) = st {
-            if let Some(e) = st.error {
-                return Err(err(m, node, format!("pp: {e}")));
-            }
-            if st.target_reached && st.acknowledged >= n {
-                break;
-            }
-        }
-        if m.now_us() > deadline {
-            return Err(err(m, node, "pp: target not reached".into()));
-        }
-    }
-    Ok(m.drive(node)
-        .and_then(|d| d.feedback().position)
-        .unwrap_or(0))
-}
-
-/// Run pv at `velocity` (drive units) on `node` until speed reached, hold it for `hold_us`,
-/// then halt until zero speed. Returns the velocity reported at the end of the hold.
-pub fn run_pv<T: CanTransport>(
-    m: &mut Master<T>,
-    node: u8,
-    velocity: i32,
-    hold_us: u64,
-    timeout_us: u64,
-) -> Result<i32, CanError> {
-    m.switch_mode(node, OperationMode::ProfileVelocity, timeout_us)?;
-    let zero_bit = m.profile(node).is_some_and(|p| p.pv_zero_speed_bit);
-    let mut pv = ProfileVelocity::new(zero_bit);
-    pv.set_target(velocity);
-    let deadline = m.now_us().saturating_add(timeout_us);
-    let mut reached_at = None;
-    let seen;
-    loop {
-        let mut st = None;
-        m.cycle_step(|d| {
-            if d.node() == node {
-                let sw = d.statusword();
-                st = Some(pv.step(d.axis_mut(), sw));
-            }
-        })?;
-        if let Some(f) = fault_text(m, node) {
-            return Err(err(m, node, format!("pv: {f}")));
-        }
-        let now = m.now_us();
-        if st.is_some_and(|s| s.target_reached && s.streaming) && reached_at.is_none() {
-            reached_at = Some(now);
-        }
-        if let Some(t) = reached_at
-            && now >= t + hold_us
-        {
-            seen = m
-                .drive(node)
-                .and_then(|d| d.feedback().velocity)
-                .unwrap_or(0);
-            break;
-        }
-        if now > deadline {
-            return Err(err(m, node, "pv: speed not reached".into()));
-        }
-    }
-    pv.set_halt(true);
-    loop {
-        let mut st = None;
-        m.cycle_step(|d| {
-            if d.node() == node {
-                let sw = d.statusword();
-                st = Some(pv.step(d.axis_mut(), sw));
-            }
-        })?;
-        let stopped = st.is_some_and(|s| s.zero_speed.unwrap_or(s.target_reached));
-        if stopped {
-            break;
-        }
-        if m.now_us() > deadline {
-            return Err(err(m, node, "pv: halt did not stop the axis".into()));
-        }
-    }
-    Ok(seen)
-}
-
-/// Run tq at `torque` (‰) on `node` until torque reached, then ramp back to 0 and wait for
-/// standstill. Returns the torque reported when reached.
-pub fn run_tq<T: CanTransport>(
-    m: &mut Master<T>,
-    node: u8,
-    torque: i16,
-    timeout_us: u64,
-) -> Result<i16, CanError> {
-    m.switch_mode(node, OperationMode::ProfileTorque, timeout_us)?;
-    let mut tq = ProfileTorque::new();
-    tq.set_target(torque);
-    let deadline = m.now_us().saturating_add(timeout_us);
-    let mut got = 0;
-    let mut phase = 0;
-    loop {
-        let mut st = None;
-        m.cycle_step(|d| {
-            if d.node() == node {
-                let sw = d.statusword();
-                st = Some(tq.step(d.axis_mut(), sw));
-            }
-        })?;
-        if let Some(f) = fault_text(m, node) {
-            return Err(err(m, node, format!("tq: {f}")));
-        }
-        let fb_t = m.drive(node).and_then(|d| d.feedback().torque).unwrap_or(0);
-        if st.is_some_and(|s| s.target_reached && s.streaming) {
-            if phase == 0 && fb_t == torque {
-                got = fb_t;
-                phase = 1;
-                tq.set_target(0);
-            } else if phase == 1 && fb_t == 0 {
-                // Torque off: wait for the load to coast to standstill too.
-                let still = m.drive(node).and_then(|d| d.feedback().velocity) == Some(0);
-                if still {
-                    break;
-                }
-            }
-        }
-        if m.now_us() > deadline {
-            return Err(err(m, node, "tq: torque not reached".into()));
-        }
-    }
-    Ok(got)
-}
-
-/// Run ip on `node` along a straight line from the present position by `distance` over
-/// `cycles` cycles (one point per SYNC), then wait until the drive holds the end point.
-/// Returns the final position.
-pub fn run_ip<T: CanTransport>(
-    m: &mut Master<T>,
-    node: u8,
-    distance: i32,
-    cycles: u32,
-    timeout_us: u64,
-) -> Result<i32, CanError> {
-    m.switch_mode(node, OperationMode::InterpolatedPosition, timeout_us)?;
-    let needs_bit = m.profile(node).is_some_and(|p| p.ip_needs_enable_bit);
-    let mut ip = Interpolation::new(needs_bit);
-    let from = m
-        .drive(node)
-        .and_then(|d| d.feedback().position)
-        .unwrap_or(0);
-    let to = from.wrapping_add(distance);
-    let deadline = m.now_us().saturating_add(timeout_us);
-    let mut k = 0u32;
-    loop {
-        let p = linear_point(from, to, cycles, k);
-        m.cycle_step(|d| {
-            if d.node() == node {
-                let sw = d.statusword();
-                ip.step(d.axis_mut(), sw, p);
-            }
-        })?;
-        if let Some(f) = fault_text(m, node) {
-            return Err(err(m, node, format!("ip: {f}")));
-        }
-        k = k.saturating_add(1);
-        let pos = m.drive(node).and_then(|d| d.feedback().position);
-        if k > cycles && pos == Some(to) {
-            return Ok(to);
-        }
-        if m.now_us() > deadline {
-            return Err(err(
-                m,
-                node,
-                format!("ip: end point {to} not reached (at {pos:?})"),
-            ));
-        }
-    }
-}
-
-/// Inject-and-reset check: raise alarm `number` on the emulated node `node` of `bus` access
-/// `inject`, wait for the axis to report the fault, reset it and enable again. Returns the
-/// EMCY text the master decoded.
-pub fn fault_and_reset<T: CanTransport>(
-    m: &mut Master<T>,
-    node: u8,
-    inject: impl FnOnce(&mut T),
-    timeout_us: u64,
-) -> Result<String, CanError> {
-    inject(m.transport_mut());
-    let deadline = m.now_us().saturating_add(timeout_us);
-    let mut emcy = None;
-    let mut faulted = false;
-    while !(faulted && emcy.is_some()) {
-        m.cycle_step(|_| {})?;
-        while let Some(e) = m.poll_event() {
-            if let MasterEvent::Emergency(r) = e
-                && r.node == node
-                && !r.emergency.is_reset()
-            {
-                emcy = Some(r.to_string());
-            }
-        }
-        if let Some(d) = m.drive_mut(node) {
-            while let Some(e) = d.axis_mut().poll_event() {
-                if matches!(e, Event::Fault { .. }) {
-                    faulted = true;
-                }
-            }
-        }
-        if m.now_us() > deadline {
-            return Err(err(m, node, "fault: no fault seen".into()));
-        }
-    }
-    let d = m.drive_mut(node).ok_or_else(|| {
-        CanError::new(
-            NodeRef {
-                id: node,
-                drive: None,
-            },
-            None,
-            CanErrorKind::NotReady("no drive".into()),
-        )
-    })?;
-    d.axis_mut().request_fault_reset();
-    let mut cleared = false;
-    while !cleared {
-        m.cycle_step(|_| {})?;
-        if let Some(d) = m.drive_mut(node) {
-            while let Some(e) = d.axis_mut().poll_event() {
-                if matches!(e, Event::FaultCleared) {
-                    cleared = true;
-                }
-            }
-        }
-        if m.now_us() > deadline {
-            return Err(err(m, node, "fault reset did not clear the fault".into()));
-        }
-    }
-    m.enable(node, timeout_us)?;
-    Ok(emcy.unwrap_or_default())
-}
+/// Its name in messages.
+pub const CONFIG_NAME: &str = "examples/canopen_profile_modes.toml";
 
 /// Options of [`run`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct DemoOptions {
-    /// The communication cycle, µs.
-    pub cycle_us: u64,
-}
-
-impl Default for DemoOptions {
-    /// A 2 ms cycle.
-    fn default() -> Self {
-        Self { cycle_us: 2_000 }
-    }
-}
-
-/// One step of the demo on one drive.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct StepResult {
-    /// What was done.
-    pub step: String,
-    /// The outcome: a short description, or the error.
-    pub outcome: Result<String, String>,
-    /// Simulated time at the end, µs.
-    pub time_us: u64,
-}
-
-/// What happened to one drive.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub struct DriveSummary {
-    /// Node-ID.
-    pub node: u8,
-    /// Drive name.
-    pub drive: &'static str,
-    /// The steps, in order.
-    pub steps: Vec<StepResult>,
-}
-
-impl DriveSummary {
-    /// Whether every step succeeded.
-    pub fn ok(&self) -> bool {
-        self.steps.iter().all(|s| s.outcome.is_ok())
-    }
+    /// The SYNC period, µs (`None`: the file's, 4 ms).
+    pub cycle_us: Option<u64>,
 }
 
 /// The demo's result.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct DemoSummary {
     /// The scan, one line per node.
     pub scan: Vec<String>,
-    /// Per drive.
-    pub drives: Vec<DriveSummary>,
-    /// Simulated time, µs.
+    /// The run of [`CONFIG`].
+    pub run: CanRunReport,
+    /// The injected alarms, named and reset.
+    pub faults: CanResetReport,
+    /// Simulated time at the end, µs.
     pub sim_time_us: u64,
-    /// Frames the master sent and received.
-    pub frames: (u64, u64),
-    /// Master events (heartbeats, EMCYs, …), as text.
-    pub events: Vec<String>,
 }
 
 impl DemoSummary {
-    /// Whether every step of every drive succeeded.
+    /// Whether the run completed with every program done and no error, and every injected
+    /// alarm was named and cleared.
     pub fn ok(&self) -> bool {
-        !self.drives.is_empty() && self.drives.iter().all(DriveSummary::ok)
+        self.run.outcome == Outcome::Completed
+            && !self.run.drives.is_empty()
+            && self
+                .run
+                .drives
+                .iter()
+                .all(|d| d.program_done && d.errors.is_empty())
+            && self.faults.drives.len() == self.run.drives.len()
+            && self
+                .faults
+                .drives
+                .iter()
+                .all(|d| d.fault.is_some() && d.cleared == Some(true))
     }
 }
 
 impl fmt::Display for DemoSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(f, "CANopen demo on the virtual bus")?;
+        writeln!(
+            f,
+            "CANopen demo: {CONFIG_NAME} on the emulated drives in-process, SYNC every {} µs",
+            self.run.cycle_us
+        )?;
         writeln!(f, "nodes found:")?;
         for l in &self.scan {
             writeln!(f, "  {l}")?;
         }
-        for d in &self.drives {
-            writeln!(f, "node {} ({}):", d.node, d.drive)?;
-            for s in &d.steps {
-                match &s.outcome {
-                    Ok(t) => writeln!(f, "  [ok]   {:<10} {t}", s.step)?,
-                    Err(e) => writeln!(f, "  [FAIL] {:<10} {e}", s.step)?,
+        for d in &self.run.drives {
+            let at = match d.position_user {
+                Some(u) => format!("{u:.4} {} ({} counts)", d.units, d.position),
+                None => format!("{} counts", d.position),
+            };
+            writeln!(
+                f,
+                "node {} ({}): {}; modes {}; at {at}",
+                d.node,
+                d.drive,
+                if d.program_done {
+                    "program done"
+                } else {
+                    "program NOT done"
+                },
+                d.modes.join(" → ")
+            )?;
+            for e in &d.errors {
+                writeln!(f, "  error: {e}")?;
+            }
+            if let Some(r) = self.faults.drives.iter().find(|r| r.node == d.node) {
+                match (&r.fault, r.cleared) {
+                    (Some(fault), Some(true)) => {
+                        writeln!(f, "  alarm injected: {fault}; reset, now {}", r.after)?
+                    }
+                    (Some(fault), _) => {
+                        writeln!(f, "  alarm injected: {fault}; NOT cleared, {}", r.after)?
+                    }
+                    (None, _) => writeln!(f, "  alarm injected, but the drive showed no fault")?,
                 }
             }
         }
         writeln!(
             f,
-            "{} ms simulated, {} frames sent, {} received, {} events; {}",
+            "{}: {} ({} cycles, {} ms simulated); {}",
+            self.run.outcome.describe(),
+            self.run.reason,
+            self.run.cycles,
             self.sim_time_us / 1000,
-            self.frames.0,
-            self.frames.1,
-            self.events.len(),
-            if self.ok() {
-                "all steps passed"
-            } else {
-                "SOME STEPS FAILED"
-            }
+            if self.ok() { "demo OK" } else { "demo FAILED" }
         )
     }
 }
@@ -535,125 +136,47 @@ pub fn demo_alarm(profile: &CanDriveProfile) -> Option<u16> {
     }
 }
 
-/// **\[REC\]** The homing method each demo drive uses: home switch, positive start (BLV-R 24,
-/// others 19).
-pub fn demo_homing_method(profile: &CanDriveProfile) -> i8 {
-    if profile.homing.supports(24) && !profile.homing.supports(19) {
-        24
-    } else {
-        19
-    }
-}
-
-fn step<T: CanTransport>(
-    m: &mut Master<T>,
-    steps: &mut Vec<StepResult>,
-    name: &str,
-    r: Result<String, CanError>,
-) -> bool {
-    let ok = r.is_ok();
-    steps.push(StepResult {
-        step: name.to_string(),
-        outcome: r.map_err(|e| e.to_string()),
-        time_us: m.now_us(),
-    });
-    ok
-}
-
-fn exercise(m: &mut Master<SimBus>, node: u8, p: &'static CanDriveProfile) -> DriveSummary {
-    let t = defaults::STEP_TIMEOUT_US;
-    let mut steps = Vec::new();
-    let mut setup = DriveSetup::new(p);
-    setup.settings = motion_settings(p, defaults::VELOCITY_REV_S, defaults::ACCEL_REV_S2);
-    let r = m
-        .configure_drive(node, setup)
-        .map(|_| "PDO plan, supervision and preconditions written".to_string());
-    let mut ok = step(m, &mut steps, "configure", r);
-    if ok {
-        let r = m
-            .start(node)
-            .and_then(|_| m.enable(node, t))
-            .map(|_| "Operation enabled".into());
-        ok = step(m, &mut steps, "enable", r);
-    }
-    let rev = p.units.position_per_rev as i32;
-    if ok {
-        let method = demo_homing_method(p);
-        let r = home(m, node, method, 0, t).map(|pos| format!("method {method}, position {pos}"));
-        step(m, &mut steps, "home", r);
-        let r = move_pp(
-            m,
-            node,
-            &[
-                SetPoint::absolute(rev),
-                SetPoint::relative(-rev / 2).queued(),
-            ],
-            t,
+/// The demo's configuration, with the SYNC period of `opts`.
+pub fn config(opts: &DemoOptions) -> Result<CanRunConfig, CanError> {
+    let not_canopen = |why: String| {
+        CanError::new(
+            NodeRef { id: 0, drive: None },
+            None,
+            CanErrorKind::NotReady(why),
         )
-        .map(|pos| format!("absolute {rev} then relative {}: position {pos}", -rev / 2));
-        step(m, &mut steps, "pp", r);
-        let u = &p.units;
-        let v = u.from_rev_per_s(u.velocity, 5.0).round() as i32;
-        let r = run_pv(m, node, v, 200_000, t).map(|got| format!("target {v}, held {got}, halted"));
-        step(m, &mut steps, "pv", r);
-        if p.supports(OperationMode::ProfileTorque) {
-            let r = run_tq(m, node, 300, t).map(|got| format!("300 per mille reached ({got})"));
-            step(m, &mut steps, "tq", r);
-        }
-        if p.supports(OperationMode::InterpolatedPosition) {
-            let r = run_ip(m, node, rev, 250, t)
-                .map(|pos| format!("one revolution in 250 SYNCs, at {pos}"));
-            step(m, &mut steps, "ip", r);
-        }
-        if let Some(a) = demo_alarm(p) {
-            let r = fault_and_reset(
-                m,
-                node,
-                |bus| {
-                    if let Some(n) = bus.node_mut(node) {
-                        n.inject_alarm(a);
-                    }
-                },
-                t,
-            )
-            .map(|emcy| format!("{emcy}; reset, enabled again"));
-            step(m, &mut steps, "fault", r);
-        }
-        let r = m
-            .shutdown_node(node, t)
-            .map(|_| "disabled, then NMT stop".into());
-        step(m, &mut steps, "shutdown", r);
+    };
+    let mut cfg = match crate::app::config::parse_any(CONFIG, CONFIG_NAME) {
+        Ok(crate::app::config::Config::CanOpen(c)) => c,
+        Ok(_) => return Err(not_canopen(format!("{CONFIG_NAME} is not a CANopen run"))),
+        Err(e) => return Err(not_canopen(e.to_string())),
+    };
+    if let Some(us) = opts.cycle_us {
+        cfg.cycle = Duration::from_micros(us);
     }
-    DriveSummary {
-        node,
-        drive: p.name,
-        steps,
-    }
+    Ok(cfg)
 }
 
-/// Run the demo. Errors only if the bus itself fails; drive failures are in the summary.
+/// Run the demo: scan, the configuration's run, an alarm per drive named and reset.
 pub fn run(opts: &DemoOptions) -> Result<DemoSummary, CanError> {
-    let bus = tools::demo_bus();
-    let cfg = MasterConfig {
-        cycle_us: opts.cycle_us.max(1000),
-        ..MasterConfig::default()
+    let cfg = config(opts)?;
+    let mut bus = emulated_bus(&cfg)?;
+    let scan = {
+        let mut m = Master::new(&mut bus, MasterConfig::default());
+        m.pump(50_000)?;
+        tools::scan(&mut m, 1..=127)?
     };
-    let mut m = Master::new(bus, cfg);
-    m.pump(50_000)?;
-    let scan = tools::scan(&mut m, 1..=127)?;
-    let mut drives = Vec::new();
-    for (node, p) in DEMO_NODES {
-        drives.push(exercise(&mut m, node, p));
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let report = run_on(&mut bus, &cfg, None, None, &stop)?;
+    for d in &cfg.drives {
+        if let (Some(number), Some(n)) = (demo_alarm(d.profile), bus.node_mut(d.node)) {
+            n.inject_alarm(number);
+        }
     }
-    let mut events = Vec::new();
-    while let Some(e) = m.poll_event() {
-        events.push(e.to_string());
-    }
+    let faults = reset(&mut bus, "can-sim", &CanResetOptions::default())?;
     Ok(DemoSummary {
         scan: scan.iter().map(ToString::to_string).collect(),
-        drives,
-        sim_time_us: m.now_us(),
-        frames: (m.stats().frames_tx, m.stats().frames_rx),
-        events,
+        run: report,
+        faults,
+        sim_time_us: bus.now_us(),
     })
 }

@@ -5,4 +5,5 @@ pub mod demo;
 pub mod eds;
 pub mod reset;
 pub mod run;
+pub mod steps;
 pub mod tools;

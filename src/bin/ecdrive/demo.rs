@@ -133,23 +133,48 @@ pub fn run(args: DemoArgs) -> ExitCode {
             &ecdrive::app::canopen::demo::DemoOptions::default(),
         ) {
             Ok(s) if args.json => {
+                // Per drive: its program's steps (done when the program ran to its end), then
+                // the injected alarm; the whole run and reset reports beside.
+                let drives: Vec<serde_json::Value> = s
+                    .run
+                    .drives
+                    .iter()
+                    .map(|d| {
+                        let fault = s.faults.drives.iter().find(|r| r.node == d.node);
+                        let mut steps: Vec<serde_json::Value> = d
+                            .program
+                            .iter()
+                            .map(|st| {
+                                serde_json::json!({
+                                    "step": st,
+                                    "ok": d.program_done,
+                                    "outcome": if d.program_done { "done" } else { "not done" },
+                                })
+                            })
+                            .collect();
+                        let cleared = fault.is_some_and(|r| r.cleared == Some(true));
+                        steps.push(serde_json::json!({
+                            "step": "alarm injected, then reset",
+                            "ok": cleared,
+                            "outcome": fault
+                                .and_then(|r| r.fault.clone())
+                                .unwrap_or_else(|| "no fault shown".into()),
+                        }));
+                        serde_json::json!({
+                            "node": d.node,
+                            "drive": d.drive,
+                            "ok": d.program_done && d.errors.is_empty() && cleared,
+                            "steps": steps,
+                        })
+                    })
+                    .collect();
                 let j = serde_json::json!({
+                    "config": ecdrive::app::canopen::demo::CONFIG_NAME,
                     "scan": s.scan,
-                    "drives": s.drives.iter().map(|d| serde_json::json!({
-                        "node": d.node,
-                        "drive": d.drive,
-                        "ok": d.ok(),
-                        "steps": d.steps.iter().map(|st| serde_json::json!({
-                            "step": st.step,
-                            "ok": st.outcome.is_ok(),
-                            "outcome": match &st.outcome { Ok(t) | Err(t) => t },
-                            "time_us": st.time_us,
-                        })).collect::<Vec<_>>(),
-                    })).collect::<Vec<_>>(),
+                    "drives": drives,
+                    "run": s.run,
+                    "faults": s.faults,
                     "sim_time_us": s.sim_time_us,
-                    "frames_sent": s.frames.0,
-                    "frames_received": s.frames.1,
-                    "events": s.events,
                     "ok": s.ok(),
                 });
                 let code = crate::print_json("demo", &j);
