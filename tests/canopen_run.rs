@@ -333,6 +333,65 @@ fn the_asda_a2_runs_ip_from_a_run_file() {
     assert!(max_fe <= 51_200, "max |following error| {max_fe} PUU in ip");
 }
 
+/// The BLV-R's touch probe (§7.6) from a run file: probe 1 armed on the rising edge, a pv move
+/// across the machine's probe input 1 (active from 1.3 to 1.7 rev, [REC] in the emulator's
+/// machine model), the program waits for the latch; then probe 1 armed for the falling edge
+/// and probe 2 for its rising edge (its input from −1.6 to −1.2 rev) while a pp move goes back
+/// to −2 rev. Each latch sits where the motor crossed the input's boundary (exact whatever the
+/// SYNC period), as the node reports it in 60BAh–60BCh; 60B8h went out in an RPDO and 60B9h and
+/// the latches came back in TPDOs, which the file's probe steps added to the PDO plan.
+#[test]
+fn the_blv_r_latches_its_touch_probe_from_a_run_file() {
+    let text = "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\n\
+                mode = \"pv\"\nunits = { name = \"rev\", counts_per_unit = 36000 }\nprogram = [\n\
+                { step = \"touch_probe\", probe = 1, edge = \"rising\" },\n\
+                { step = \"pv\", velocity = 1, acceleration = 20, seconds = 2 },\n\
+                { step = \"probe_wait\", probe = 1, seconds = 1 },\n\
+                { step = \"mode\", mode = \"pp\" },\n\
+                { step = \"touch_probe\", probe = 1, edge = \"falling\" },\n\
+                { step = \"touch_probe\", probe = 2, edge = \"rising\" },\n\
+                { step = \"pp\", to = [-2], velocity = 2, acceleration = 20 },\n\
+                { step = \"probe_wait\", probe = 2, seconds = 1 },\n]\n";
+    let cfg = can(text);
+    let mut bus = ecdrive::app::canopen::run::emulated_bus(&cfg).expect("bus");
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r = ecdrive::app::canopen::run::run_on(&mut bus, &cfg, None, None, &stop).expect("run");
+    assert_eq!(
+        r.outcome,
+        ecdrive::app::ethercat::tools::run::Outcome::Completed,
+        "{}: {r:#?}",
+        r.reason
+    );
+    let d = &r.drives[0];
+    assert!(d.errors.is_empty(), "{d:?}");
+    let latches: Vec<(u8, &str, i64)> = d
+        .probe_latches
+        .iter()
+        .map(|l| (l.probe, l.edge, l.counts))
+        .collect();
+    // 36 000 counts per revolution: input 1 goes on at 1.3 rev moving up; moving down it goes
+    // on at 1.7 rev and off at 1.3 rev; input 2 goes on at −1.2 rev moving down.
+    assert_eq!(
+        latches,
+        vec![
+            (1, "rising", 46_800),
+            (1, "falling", 46_800),
+            (2, "rising", -43_200)
+        ],
+        "{d:?}"
+    );
+    // The node's own objects say the same.
+    let n = bus.node(3).expect("node");
+    let obj = |i: u16| match n.value(ecdrive::od::ObjectAddress::new(i, 0)) {
+        Some(ecdrive::od::Value::Int(v)) => Some(v),
+        Some(ecdrive::od::Value::Uint(v)) => i64::try_from(v).ok(),
+        _ => None,
+    };
+    assert_eq!(obj(0x60BA), Some(46_800));
+    assert_eq!(obj(0x60BB), Some(46_800));
+    assert_eq!(obj(0x60BC), Some(-43_200));
+}
+
 /// What only an EtherCAT run has, or what the CANopen drives cannot do, is refused before
 /// anything touches the bus, one line naming the key.
 #[test]
@@ -351,11 +410,6 @@ fn what_a_canopen_run_cannot_take_is_named() {
             "not run over CANopen yet",
         ),
         (
-            "program = [{ step = \"touch_probe\", probe = 1, edge = \"rising\" }]\n",
-            "drive[0].program[0]",
-            "touch probe",
-        ),
-        (
             "sdos = { \"0x7777:00\" = 1 }\n",
             "drive[0].sdos.\"0x7777:00\"",
             "not in the BLV-R dictionary",
@@ -372,6 +426,19 @@ fn what_a_canopen_run_cannot_take_is_named() {
     .unwrap_err();
     assert_eq!(e.key.as_deref(), Some("cycle"), "{e}");
     assert!(e.to_string().contains("at least 1000 µs apart"), "{e}");
+    // The touch probe only where the drive has one (60B8h): the BLV-R does, the ASDA-A2 not.
+    let e = config::parse_any(
+        "interface = \"can-sim\"\n[[drive]]\nnode = 0x7F\nprofile = \"asda-a2\"\n\
+         program = [{ step = \"touch_probe\", probe = 1, edge = \"rising\" }]\n",
+        "can.toml",
+    )
+    .unwrap_err();
+    assert_eq!(e.key.as_deref(), Some("drive[0].program[0]"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("the ASDA-A2 has no touch probe (60B8h)"),
+        "{e}"
+    );
     // ip: only where the drive has it, at a SYNC period its 60C2h:01 takes, never on EtherCAT.
     let e = config::parse_any(&format!("{base}mode = \"ip\"\n"), "can.toml").unwrap_err();
     assert!(

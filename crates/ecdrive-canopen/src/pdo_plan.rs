@@ -218,6 +218,52 @@ impl PdoPlan {
     /// (applied at the next SYNC, so a controlword and its target take effect together), TPDOs
     /// type 1 (sent at every SYNC). Inhibit times and event timers 0.
     pub fn standard(profile: &CanDriveProfile) -> Self {
+        Self::packed(profile, STANDARD_RX, STANDARD_TX).0
+    }
+
+    /// The standard plan plus the touch probe's objects for `probes` (probe number, edge:
+    /// `true` rising): 60B8h in an RPDO, 60B9h and each probe's latch (60BAh–60BDh) in the
+    /// TPDOs. An error names what the drive's PDOs cannot carry (no such mappable object, or
+    /// more than its four PDOs of eight bytes).
+    pub fn with_probes(profile: &CanDriveProfile, probes: &[(u8, bool)]) -> Result<Self, String> {
+        if probes.is_empty() {
+            return Ok(Self::standard(profile));
+        }
+        let mut rx = STANDARD_RX.to_vec();
+        let mut tx = STANDARD_TX.to_vec();
+        rx.push(PdoEntry::new(0x60B8, 0, 16));
+        tx.push(PdoEntry::new(0x60B9, 0, 16));
+        for &(probe, rising) in probes {
+            let index = match (probe, rising) {
+                (1, true) => 0x60BA,
+                (1, false) => 0x60BB,
+                (2, true) => 0x60BC,
+                _ => 0x60BD,
+            };
+            let e = PdoEntry::new(index, 0, 32);
+            if !tx.contains(&e) {
+                tx.push(e);
+            }
+        }
+        let (plan, left_out) = Self::packed(profile, &rx, &tx);
+        let wanted = |e: &PdoEntry| matches!(e.index, 0x60B8..=0x60BD);
+        match left_out.iter().find(|e| wanted(e)) {
+            None => Ok(plan),
+            Some(e) => Err(format!(
+                "the {}'s PDOs cannot carry {:04X}h:{:02X} for the touch probe (not mappable, or \
+                 more than its 4 PDOs of {} bytes per direction)",
+                profile.name, e.index, e.sub, profile.pdo.max_pdo_bytes
+            )),
+        }
+    }
+
+    /// `rx`/`tx` packed in order into as few PDOs as the drive allows (see
+    /// [`PdoPlan::standard`]), with the entries left out (not mappable here, or no room).
+    fn packed(
+        profile: &CanDriveProfile,
+        rx: &[PdoEntry],
+        tx: &[PdoEntry],
+    ) -> (Self, Vec<PdoEntry>) {
         let dict = Dictionary::new(profile.dictionary);
         let tq = profile.supports(crate::cia402::OperationMode::ProfileTorque);
         let ip = profile.supports(crate::cia402::OperationMode::InterpolatedPosition);
@@ -228,10 +274,15 @@ impl PdoPlan {
             dict.entry(e.address())
                 .is_some_and(|d| d.access.contains(flag) && d.bit_len == u16::from(e.bits))
         };
-        let pack = |cands: &[PdoEntry], flag: EntryAccess, dir: Direction, ttype: u8| {
+        let mut left_out = Vec::new();
+        let mut pack = |cands: &[PdoEntry], flag: EntryAccess, dir: Direction, ttype: u8| {
             let limits = profile.pdo.limits.direction(dir);
             let mut out: Vec<CanPdo> = Vec::new();
-            for e in cands.iter().filter(|e| usable(e, flag)) {
+            for e in cands {
+                if !usable(e, flag) {
+                    left_out.push(*e);
+                    continue;
+                }
                 let max_entries = limits
                     .range_of(map_index(dir, (out.len().max(1)) as u8))
                     .map(|r| usize::from(r.max_entries))
@@ -243,7 +294,8 @@ impl PdoPlan {
                 });
                 if !fits {
                     if out.len() >= 4 {
-                        break;
+                        left_out.push(*e);
+                        continue;
                     }
                     out.push(CanPdo {
                         number: out.len() as u8 + 1,
@@ -262,10 +314,9 @@ impl PdoPlan {
         };
         let rt = pick_type(&profile.pdo.rpdo_types, &[0, 1, 255]);
         let tt = pick_type(&profile.pdo.tpdo_types, &[1, 0, 255]);
-        Self {
-            rpdos: pack(STANDARD_RX, EntryAccess::RXPDO, Direction::Rx, rt),
-            tpdos: pack(STANDARD_TX, EntryAccess::TXPDO, Direction::Tx, tt),
-        }
+        let rpdos = pack(rx, EntryAccess::RXPDO, Direction::Rx, rt);
+        let tpdos = pack(tx, EntryAccess::TXPDO, Direction::Tx, tt);
+        (Self { rpdos, tpdos }, left_out)
     }
 
     /// The PDOs of one direction.

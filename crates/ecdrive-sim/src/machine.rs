@@ -169,6 +169,99 @@ pub fn homing_end(method: i8, world: &World, pos: f64, ppr: f64, index_pulse: bo
     }
 }
 
+/// A drive's two touch probes as CiA 402 describes them (0x60B8 function, 0x60B9 status, the
+/// latches 0x60BA–0x60BD), on the machine's probe inputs: one model for the emulated drives of
+/// both buses.
+///
+/// 0x60B8 enables each probe (bit 0/8), chooses one or every edge (bit 1/9), the input or the
+/// index pulse (bit 2/10, where the drive offers that), and which edges are sampled (bits 4/5,
+/// 12/13); a sampled edge latches the position where the motor crossed the input's boundary and
+/// sets its bit in 0x60B9 (1/2, 9/10; 0/8 mirror the enables). Clearing a sample bit clears its
+/// stored bit, which re-arms a single-edge probe; so does enabling it again.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct TouchProbes {
+    /// 0x60B8 as last seen.
+    function: u16,
+    /// 0x60B9.
+    status: u16,
+}
+
+/// What one step of [`TouchProbes::step`] latched: positions (reported units) for probe 1
+/// rising, probe 1 falling, probe 2 rising, probe 2 falling (0x60BA–0x60BD).
+pub type ProbeLatches = [Option<i64>; 4];
+
+impl TouchProbes {
+    /// 0x60B9.
+    pub fn status(&self) -> u16 {
+        self.status
+    }
+
+    /// One step's travel from `from` to `to` (world positions, `ppr` per revolution) with
+    /// function `f` (0x60B8); `offset` turns a world position into a reported one;
+    /// `index_pulse`: the drive offers its encoder's zero point as a trigger (bit 2/10).
+    /// Returns the new status (0x60B9) and what was latched.
+    pub fn step(
+        &mut self,
+        f: u16,
+        world: &World,
+        (from, to): (f64, f64),
+        ppr: f64,
+        offset: f64,
+        index_pulse: bool,
+    ) -> (u16, ProbeLatches) {
+        let mut latched: ProbeLatches = [None; 4];
+        if f == 0 && self.status == 0 {
+            self.function = 0;
+            return (0, latched);
+        }
+        let mut st = self.status;
+        for (k, (n, base)) in [(1u8, 0u16), (2, 8)].into_iter().enumerate() {
+            let bit = |b: u16| f >> (base + b) & 1 != 0;
+            if !bit(0) {
+                st &= !(0x0007 << base);
+                continue;
+            }
+            let was_enabled = self.function >> base & 1 != 0;
+            st |= 1 << base;
+            if !was_enabled {
+                st &= !(0x0006 << base);
+            }
+            for (sample, stored) in [(4u16, 1u16), (5, 2)] {
+                if !bit(sample) {
+                    st &= !(1 << (base + stored));
+                }
+            }
+            let edge = if bit(2) {
+                // The encoder's zero point (index pulse, whole revolutions): a rising edge each
+                // time the motor passes one.
+                index_pulse
+                    .then(|| {
+                        let (lo, hi) = if from < to { (from, to) } else { (to, from) };
+                        let z = (hi / ppr).floor() * ppr;
+                        (z > lo && z <= hi).then_some((z, true))
+                    })
+                    .flatten()
+            } else {
+                world.probe_edge(n, from, to, ppr)
+            };
+            let Some((at, rising)) = edge else {
+                continue;
+            };
+            let (sample, stored, slot) = if rising { (4u16, 1u16, 0) } else { (5, 2, 1) };
+            let continuous = bit(1);
+            if bit(sample) && (continuous || st >> (base + stored) & 1 == 0) {
+                if let Some(l) = latched.get_mut(2 * k + slot) {
+                    *l = Some((at + offset).round() as i64);
+                }
+                st |= 1 << (base + stored);
+            }
+        }
+        self.status = st;
+        self.function = f;
+        (st, latched)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -52,6 +52,21 @@ pub struct CanDriveReport {
     pub units: String,
     /// What went wrong on it (faults with the drive's alarm, refusals, a failed home step).
     pub errors: Vec<String>,
+    /// Touch-probe latches, in order.
+    pub probe_latches: Vec<CanProbeLatch>,
+}
+
+/// One touch-probe latch of a CANopen run.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CanProbeLatch {
+    /// Probe 1 or 2.
+    pub probe: u8,
+    /// `"rising"` or `"falling"`.
+    pub edge: &'static str,
+    /// The latched position, counts.
+    pub counts: i64,
+    /// The same in the file's user unit, when it gives one.
+    pub value: Option<f64>,
 }
 
 /// What a CANopen run did.
@@ -259,6 +274,14 @@ pub fn session<T: CanTransport>(
     for d in &cfg.drives {
         let mut setup = DriveSetup::new(d.profile);
         setup.settings = d.settings.clone();
+        // The touch probe's objects in the PDOs when the program arms one (the file's check
+        // found room for them).
+        let probes: Vec<(u8, bool)> = crate::master::program::probes_used(&d.steps)
+            .into_iter()
+            .map(|(p, e)| (p, e == crate::master::program::ProbeEdge::Rising))
+            .collect();
+        setup.plan = crate::canopen::PdoPlan::with_probes(d.profile, &probes)
+            .map_err(|why| CanError::new(m.node_ref(d.node), None, CanErrorKind::NotReady(why)))?;
         setup.initial_mode = crate::cia402::OperationMode::from_i8(d.mode.code());
         m.configure_drive(d.node, setup)?;
         m.start(d.node)?;
@@ -662,6 +685,17 @@ impl<'a> Run<'a> {
                 .as_ref()
                 .map_or_else(|| "counts".to_string(), |u| u.name.clone()),
             errors: self.errors.get(i).cloned().unwrap_or_default(),
+            probe_latches: a.map_or_else(Vec::new, |a| {
+                a.latches()
+                    .iter()
+                    .map(|&(probe, edge, counts)| CanProbeLatch {
+                        probe,
+                        edge: edge.name(),
+                        counts,
+                        value: k.map(|k| counts as f64 / k),
+                    })
+                    .collect()
+            }),
         }
     }
 }

@@ -320,8 +320,12 @@ fn drive(
                     mode.name()
                 ))
             }
-            Step::TouchProbe { .. } | Step::ProbeWait { .. } => {
-                Some("the touch probe is not run over CANopen yet".to_string())
+            Step::TouchProbe { .. } | Step::ProbeWait { .. }
+                if crate::od::Dictionary::new(profile.dictionary)
+                    .object(0x60B8)
+                    .is_none() =>
+            {
+                Some(format!("the {} has no touch probe (60B8h)", profile.name))
             }
             _ => None,
         };
@@ -329,6 +333,13 @@ fn drive(
             let span = r.program.get(n).map_or(d.span(), Spanned::span);
             return Err(cx.err(span, key(&format!("program[{n}]")), m));
         }
+    }
+    let probes: Vec<(u8, bool)> = crate::master::program::probes_used(&steps)
+        .into_iter()
+        .map(|(p, e)| (p, e == crate::master::program::ProbeEdge::Rising))
+        .collect();
+    if let Err(why) = crate::canopen::PdoPlan::with_probes(profile, &probes) {
+        return Err(cx.err(d.span(), key("program"), why));
     }
     let uses_ip = mode == RunMode::Ip
         || steps

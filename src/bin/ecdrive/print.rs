@@ -956,6 +956,16 @@ pub fn can_run_report(r: &ecdrive::app::canopen::run::CanRunReport) {
             },
         );
         println!("  states: {}", d.states.join(" → "));
+        for l in &d.probe_latches {
+            let at = match l.value {
+                Some(v) => format!("{v:.4} {} ({} counts)", d.units, l.counts),
+                None => format!("{} counts", l.counts),
+            };
+            println!(
+                "  touch probe {}: latched on the {} edge at {at}",
+                l.probe, l.edge
+            );
+        }
         for e in &d.errors {
             println!("  error: {e}");
         }

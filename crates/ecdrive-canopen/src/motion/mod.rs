@@ -20,7 +20,7 @@ use crate::cia402::Feedback;
 use crate::error::{CanError, CanErrorKind, NodeRef};
 use crate::master::Master;
 use crate::od::{Dictionary, ObjectAddress, Value};
-use crate::pdo::{AxisBinding, axis::standard_type};
+use crate::pdo::{AxisBinding, Direction, Field, axis::standard_type};
 use crate::profile::CanDriveProfile;
 use crate::transport::CanTransport;
 use ecdrive_motion::program::{RunMode, Step};
@@ -41,8 +41,9 @@ pub const STOP_RAMP: Duration = Duration::from_millis(200);
 pub const STOP_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// What the runtime needs of a CANopen drive from its profile, with a program to run from
-/// `mode`: its capabilities and velocity unit; no following-error limit, no set-point limits
-/// and no touch probe (set them on the result).
+/// `mode`: its capabilities and velocity unit; no following-error limit and no set-point
+/// limits (set them on the result). The touch-probe objects are the ones the drive's PDO plan
+/// carries ([`crate::PdoPlan::with_probes`]), found by [`MotionSession::new`].
 pub fn axis_setup(profile: &CanDriveProfile, program: Vec<Step>, mode: RunMode) -> AxisSetup {
     AxisSetup {
         caps: profile.caps,
@@ -110,6 +111,29 @@ pub fn profile_settings(
 /// Events held between two [`MotionSession::take_events`] without reallocation.
 const EVENTS_CAPACITY: usize = 256;
 
+/// Where a drive's PDOs carry its touch-probe objects: 60B8h (RPDO), 60B9h and the latches
+/// 60BAh–60BDh (TPDOs).
+#[derive(Debug, Clone, Copy, Default)]
+struct ProbeFields {
+    function: Option<Field>,
+    status: Option<Field>,
+    positions: [Option<Field>; 4],
+}
+
+impl ProbeFields {
+    fn of(d: &crate::drive::CanDrive) -> Self {
+        use crate::od::DataType::{Integer32, Unsigned16};
+        let l = d.layout();
+        let a = |i: u16| ObjectAddress::new(i, 0);
+        let field = |dir, i, t| l.field(dir, a(i), t).ok();
+        Self {
+            function: field(Direction::Rx, 0x60B8, Unsigned16),
+            status: field(Direction::Tx, 0x60B9, Unsigned16),
+            positions: [0x60BA, 0x60BB, 0x60BC, 0x60BD].map(|i| field(Direction::Tx, i, Integer32)),
+        }
+    }
+}
+
 /// The application's view of drive `d`: every entry its PDOs map, the ones the CiA 402 engine
 /// writes ([`AxisBinding::drives`]) marked, typed by the drive's dictionary.
 fn app_view(d: &crate::drive::CanDrive) -> AppAxis {
@@ -149,6 +173,8 @@ pub struct MotionSession<T: CanTransport> {
     /// The application's view of each axis, and each axis's feedback of this cycle.
     views: Vec<AppAxis>,
     feedback: Vec<Option<Feedback>>,
+    /// Each axis's touch-probe objects in its PDOs.
+    probes: Vec<ProbeFields>,
     events: Vec<Event>,
     /// Cycles so far, and those in which every drive had fed back (the programs' clock).
     cycle: u64,
@@ -167,6 +193,7 @@ impl<T: CanTransport> MotionSession<T> {
         let mut nodes = Vec::with_capacity(axes.len());
         let mut built = Vec::with_capacity(axes.len());
         let mut views = Vec::with_capacity(axes.len());
+        let mut probes = Vec::with_capacity(axes.len());
         for (node, setup) in axes {
             let why = |what: &str| {
                 CanError::new(
@@ -179,7 +206,18 @@ impl<T: CanTransport> MotionSession<T> {
                 return Err(why("not a configured drive"));
             };
             views.push(app_view(d));
-            let a = MotionAxis::new(setup, cycle)
+            let pf = ProbeFields::of(d);
+            probes.push(pf);
+            // The probe objects the PDOs carry, as the EtherCAT start-up tells its axes.
+            let setup = AxisSetup {
+                probe_objects: ProbeObjects {
+                    function: pf.function.is_some(),
+                    status: pf.status.is_some(),
+                    positions: pf.positions.map(|p| p.is_some()),
+                },
+                ..setup.clone()
+            };
+            let a = MotionAxis::new(&setup, cycle)
                 .ok_or_else(|| why("the drive's capabilities give no axis for this cycle"))?;
             nodes.push(*node);
             built.push(a);
@@ -191,6 +229,7 @@ impl<T: CanTransport> MotionSession<T> {
             feedback: vec![None; built.len()],
             axes: built,
             views,
+            probes,
             events: Vec::with_capacity(EVENTS_CAPACITY),
             cycle: 0,
             tick: 0,
@@ -311,6 +350,12 @@ impl<T: CanTransport> MotionSession<T> {
             };
             let out = a.step(i, fb, &ctx, &mut sink, req);
             d.write_output(&out);
+            if let (Some(f), Some(v)) = (
+                self.probes.get(i).and_then(|p| p.function),
+                a.probe_function(),
+            ) {
+                d.write_raw(f, u64::from(v));
+            }
             for &(field, raw) in view.writes() {
                 d.write_raw(field, raw);
             }
@@ -329,11 +374,18 @@ impl<T: CanTransport> MotionSession<T> {
             // TPDOs come from Operational nodes only.
             let in_op = d.has_feedback();
             let fb = in_op.then(|| {
+                let pf = self.probes.get(i).copied().unwrap_or_default();
+                let tx = d.tx_image();
+                let read = |f: Option<Field>| {
+                    f.and_then(|f| f.read_int(tx).ok())
+                        .and_then(|v| i64::try_from(v).ok())
+                        .unwrap_or(0)
+                };
                 let inputs = Inputs {
                     feedback: d.feedback(),
-                    probe_status: 0,
-                    probe_positions: [0; 4],
-                    following_error_drive: d.binding().following_error(d.tx_image()),
+                    probe_status: read(pf.status) as u16,
+                    probe_positions: pf.positions.map(|p| read(p) as i32),
+                    following_error_drive: d.binding().following_error(tx),
                 };
                 a.read(&inputs, ctx.pulse)
             });

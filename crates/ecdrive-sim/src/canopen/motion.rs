@@ -166,6 +166,16 @@ impl Motion {
         f64::from(reported) - self.offset
     }
 
+    /// The machine around the motor.
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    /// Position units per revolution.
+    pub fn ppr(&self) -> f64 {
+        self.ppr
+    }
+
     /// Digital inputs 60FDh: bit 0 negative limit, bit 1 positive limit, bit 2 home switch.
     pub fn digital_inputs(&self) -> u32 {
         self.world.digital_inputs(self.pos, self.ppr)

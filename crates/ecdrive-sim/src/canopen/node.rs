@@ -99,6 +99,10 @@ pub struct EmulatedNode {
     profile: &'static CanDriveProfile,
     /// What the node does beyond its dictionary (the emulator's own data).
     quirks: super::quirks::EmulationQuirks,
+    /// The touch probes (60B8h–60BDh, 60D5h–60D8h) on the machine's probe inputs, and the
+    /// world position of the last tick they saw.
+    probes: crate::machine::TouchProbes,
+    probe_from: f64,
     od: ValueStore,
     stored: ValueStore,
     restore_pending: [bool; 5],
@@ -192,6 +196,8 @@ impl EmulatedNode {
             id,
             profile,
             quirks: super::quirks::for_vendor(profile.identity.vendor_id),
+            probes: crate::machine::TouchProbes::default(),
+            probe_from: 0.0,
             od,
             stored,
             restore_pending: [false; 5],
@@ -981,6 +987,43 @@ impl EmulatedNode {
         }
     }
 
+    /// The touch probes over this tick's travel, where the dictionary has 60B8h: status into
+    /// 60B9h, latches into 60BAh–60BDh, each latch counted in 60D5h–60D8h (UINT16, wrapping).
+    fn touch_probe(&mut self) {
+        let to = self.motion.pos;
+        let from = core::mem::replace(&mut self.probe_from, to);
+        let a = |i: u16| ObjectAddress::new(i, 0);
+        if self.od.entry_desc(a(0x60B8)).is_none() {
+            return;
+        }
+        let f = self.od.uint(a(0x60B8)).unwrap_or(0) as u16;
+        let (st, latched) = self.probes.step(
+            f,
+            self.motion.world(),
+            (from, to),
+            self.motion.ppr(),
+            self.motion.offset,
+            self.quirks.touch_probe_index_pulse,
+        );
+        let _ = self.od.set_uint(a(0x60B9), u64::from(st));
+        for ((latch, counter), v) in [
+            (0x60BA, 0x60D5),
+            (0x60BB, 0x60D6),
+            (0x60BC, 0x60D7),
+            (0x60BD, 0x60D8),
+        ]
+        .into_iter()
+        .zip(latched)
+        {
+            let Some(v) = v else { continue };
+            let _ = self.od.set_int(a(latch), v);
+            if self.od.entry_desc(a(counter)).is_some() {
+                let n = self.od.uint(a(counter)).unwrap_or(0);
+                let _ = self.od.set_uint(a(counter), (n + 1) & 0xFFFF);
+            }
+        }
+    }
+
     /// Advance the node to `now_us`: timers, the device state machine, motion, event TPDOs.
     pub fn tick(&mut self, now_us: u64) {
         if !self.powered {
@@ -1081,6 +1124,7 @@ impl EmulatedNode {
             0x60FD,
             i64::from(self.motion.digital_inputs()),
         );
+        self.touch_probe();
 
         // Event-driven TPDOs.
         if self.nmt == NmtState::Operational {

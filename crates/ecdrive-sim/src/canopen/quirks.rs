@@ -41,6 +41,10 @@ pub struct EmulationQuirks {
     pub ip_needs_enable_bit: bool,
     /// Statusword bit 12 in pv is the zero-speed flag (all three drives).
     pub pv_zero_speed_bit: bool,
+    /// The touch probe may trigger on the encoder's zero point (60B8h bit 2/10: the BLV-R's
+    /// ZSG-N output, §7.6.1); the probe inputs themselves are the machine's
+    /// ([`crate::machine::World`]) for every node whose dictionary has 60B8h.
+    pub touch_probe_index_pulse: bool,
 }
 
 impl EmulationQuirks {
@@ -54,6 +58,7 @@ impl EmulationQuirks {
         guarding_alarm: None,
         ip_needs_enable_bit: true,
         pv_zero_speed_bit: true,
+        touch_probe_index_pulse: false,
     };
 }
 
@@ -65,6 +70,8 @@ const BLV_R: EmulationQuirks = EmulationQuirks {
     pdo_length_alarm: Some(0x8210),
     // MANUAL GAP: whether guarding/heartbeat loss stops the motor; the node only sends EMCY
     // 8130h.
+    // §7.6.1: probe triggers are USR-LAT-IN0/IN1 or the ZSG-N output (once per revolution).
+    touch_probe_index_pulse: true,
     ..EmulationQuirks::NONE
 };
 

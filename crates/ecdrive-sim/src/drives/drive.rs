@@ -238,10 +238,8 @@ pub struct EmulatedDrive {
     world: crate::machine::World,
     /// A warning the drive shows (statusword bit 7): its id and text.
     warning: Option<(&'static str, &'static str)>,
-    /// The touch-probe latches seen in 0x60B9 (bits 1, 2, 9, 10) and the 0x60B8 the probe runs
-    /// with (its enable bits' edges re-arm).
-    probe_status: u16,
-    probe_function: u16,
+    /// The touch probes (0x60B8/0x60B9), on the machine's probe inputs.
+    probes: crate::machine::TouchProbes,
     prev_cw: u16,
     /// csp motion started by bit 4's edge ([`DriveSpec::csp_start_edge`]).
     csp_started: bool,
@@ -370,8 +368,7 @@ impl EmulatedDrive {
             homing: Homing::default(),
             world: crate::machine::World::default(),
             warning: None,
-            probe_status: 0,
-            probe_function: 0,
+            probes: crate::machine::TouchProbes::default(),
             prev_cw: 0,
             csp_started: false,
             in_window_ns: 0,
@@ -1310,75 +1307,30 @@ impl EmulatedDrive {
         self.plan_position(dt);
     }
 
-    /// The touch probe over one cycle's travel from `from_rev` to `to_rev` (motor revolutions):
-    /// 0x60B8 enables each probe (bit 0/8), chooses one or every edge (bit 1/9), the input or
-    /// the index pulse (bit 2/10, where the drive has that), and which edges are sampled (bits
-    /// 4/5, 12/13); a sampled edge latches the position where the motor crossed the input's
-    /// boundary into 0x60BA/0x60BB (probe 1) or 0x60BC/0x60BD (probe 2) and sets its bit in
-    /// 0x60B9 (1/2, 9/10; 0/8 mirror the enables). Clearing a sample bit clears its stored
-    /// bit, which re-arms a single-edge probe; so does enabling it again.
+    /// The touch probe over one cycle's travel from `from_rev` to `to_rev` (motor revolutions),
+    /// as [`crate::machine::TouchProbes`] describes it; the latches into 0x60BA–0x60BD.
     fn touch_probe(&mut self, from_rev: f64, to_rev: f64) {
         let f = self.od.dict().uint(obj::TOUCH_PROBE_FUNCTION).unwrap_or(0) as u16;
-        if f == 0 && self.probe_status == 0 {
-            self.probe_function = 0;
-            return;
-        }
         let upr = self.units_per_rev();
-        let (from, to) = (from_rev * upr, to_rev * upr);
-        let mut st = self.probe_status;
-        let latches = [
-            (obj::TOUCH_PROBE_1_RISING, obj::TOUCH_PROBE_1_FALLING),
-            (obj::TOUCH_PROBE_2_RISING, obj::TOUCH_PROBE_2_FALLING),
+        let (st, latched) = self.probes.step(
+            f,
+            &self.world,
+            (from_rev * upr, to_rev * upr),
+            upr,
+            self.offset_units,
+            self.spec.touch_probe_index_pulse,
+        );
+        let objects = [
+            obj::TOUCH_PROBE_1_RISING,
+            obj::TOUCH_PROBE_1_FALLING,
+            obj::TOUCH_PROBE_2_RISING,
+            obj::TOUCH_PROBE_2_FALLING,
         ];
-        for (n, (base, (rise_obj, fall_obj))) in
-            [1u8, 2].into_iter().zip([0u16, 8].into_iter().zip(latches))
-        {
-            let bit = |b: u16| f >> (base + b) & 1 != 0;
-            if !bit(0) {
-                st &= !(0x0007 << base);
-                continue;
-            }
-            let was_enabled = self.probe_function >> base & 1 != 0;
-            st |= 1 << base;
-            if !was_enabled {
-                st &= !(0x0006 << base);
-            }
-            for (sample, stored) in [(4u16, 1u16), (5, 2)] {
-                if !bit(sample) {
-                    st &= !(1 << (base + stored));
-                }
-            }
-            let edge = if bit(2) {
-                // The encoder's zero point (index pulse, whole revolutions), where the drive
-                // offers it as a trigger: a rising edge each time the motor passes one.
-                self.spec
-                    .touch_probe_index_pulse
-                    .then(|| {
-                        let (lo, hi) = if from < to { (from, to) } else { (to, from) };
-                        let k = (hi / upr).floor();
-                        (k * upr > lo && k * upr <= hi).then_some((k * upr, true))
-                    })
-                    .flatten()
-            } else {
-                self.world.probe_edge(n, from, to, upr)
-            };
-            let Some((at, rising)) = edge else {
-                continue;
-            };
-            let (sample, stored, obj) = if rising {
-                (4u16, 1u16, rise_obj)
-            } else {
-                (5, 2, fall_obj)
-            };
-            let continuous = bit(1);
-            if bit(sample) && (continuous || st >> (base + stored) & 1 == 0) {
-                let latched = (at + self.offset_units).round() as i64;
-                let _ = self.od.dict_mut().set_int(obj, latched);
-                st |= 1 << (base + stored);
+        for (o, v) in objects.into_iter().zip(latched) {
+            if let Some(v) = v {
+                let _ = self.od.dict_mut().set_int(o, v);
             }
         }
-        self.probe_status = st;
-        self.probe_function = f;
         let _ = self
             .od
             .dict_mut()
