@@ -75,7 +75,13 @@ pub struct Params {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum HomingRun {
     Idle,
-    Running { reference: f64, stopping: bool },
+    /// Moving to `reference`: the home, or (`failing`) the limit switch where a search that
+    /// finds no home switch ends in a homing error.
+    Running {
+        reference: f64,
+        stopping: bool,
+        failing: bool,
+    },
     Done,
     Error,
     Interrupted,
@@ -443,14 +449,17 @@ impl Motion {
         false
     }
 
-    /// Where the method ends on the machine ([`crate::machine::homing_end`]); `None` when it
-    /// cannot (unknown method, no index pulse, no home switch to find).
-    fn homing_reference(&self, method: i8, hs: &HomingSupport) -> Option<f64> {
+    /// Where the method ends on the machine ([`crate::machine::homing_end`]), and whether it
+    /// ends there in a homing error (a search that finds no home switch runs into a limit
+    /// switch, as on the EtherCAT drives); `None` when it cannot start (unknown method, no
+    /// index pulse).
+    fn homing_reference(&self, method: i8, hs: &HomingSupport) -> Option<(f64, bool)> {
         // **\[REC\]** A vendor method −1 (the BLV-R lists it) ends on the home switch's edge,
         // as method 19 does.
         let method = if method == -1 { 19 } else { method };
         match crate::machine::homing_end(method, &self.world, self.pos, self.ppr, hs.index_pulse) {
-            crate::machine::HomingEnd::Reference(r) => Some(r),
+            crate::machine::HomingEnd::Reference(r) => Some((r, false)),
+            crate::machine::HomingEnd::Fails { at } => Some((at, true)),
             _ => None,
         }
     }
@@ -461,17 +470,23 @@ impl Motion {
         self.hm_last_bit4 = bit4;
         if edge {
             self.hm = match self.homing_reference(p.homing_method, hs) {
-                Some(r) if hs.supports(p.homing_method) => HomingRun::Running {
-                    reference: r,
+                Some((reference, failing)) if hs.supports(p.homing_method) => HomingRun::Running {
+                    reference,
                     stopping: false,
+                    failing,
                 },
                 _ => HomingRun::Error,
             };
         }
-        if !bit4 && let HomingRun::Running { reference, .. } = self.hm {
+        if !bit4
+            && let HomingRun::Running {
+                reference, failing, ..
+            } = self.hm
+        {
             self.hm = HomingRun::Running {
                 reference,
                 stopping: true,
+                failing,
             };
         }
         let halt = cw.contains(ControlWord::HALT);
@@ -479,6 +494,7 @@ impl Motion {
             HomingRun::Running {
                 reference,
                 stopping,
+                failing,
             } => {
                 if stopping || halt {
                     let d = p.homing_acceleration;
@@ -492,9 +508,13 @@ impl Motion {
                     let speed = if near { p.homing_slow } else { p.homing_fast };
                     let a = p.homing_acceleration;
                     if self.move_to(reference, speed, a, a, dt) {
-                        self.offset = f64::from(p.home_offset) - reference;
-                        self.pp_base = f64::from(p.home_offset);
-                        self.hm = HomingRun::Done;
+                        if failing {
+                            self.hm = HomingRun::Error;
+                        } else {
+                            self.offset = f64::from(p.home_offset) - reference;
+                            self.pp_base = f64::from(p.home_offset);
+                            self.hm = HomingRun::Done;
+                        }
                     }
                 }
             }

@@ -257,6 +257,12 @@ impl EmulatedNode {
         self.motion.reported_position()
     }
 
+    /// Where the motor stands on the machine, revolutions (the world position, whatever a
+    /// homing made the reported one).
+    pub fn machine_rev(&self) -> f64 {
+        self.motion.pos / self.motion.ppr()
+    }
+
     /// Velocity in position units per second.
     pub fn velocity_units_per_s(&self) -> f64 {
         self.motion.vel
