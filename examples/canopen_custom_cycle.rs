@@ -15,9 +15,9 @@
 //! code drives the drives there.
 
 use ecdrive::canopen::can_socket::SocketCanTransport;
-use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
+use ecdrive::canopen::master::{DriveSetup, MasterConfig};
 use ecdrive::canopen::motion::{
-    CycleThread, MotionSession, ProfileSpeeds, axis_setup, profile_settings,
+    CycleThread, MotionSession, ProfileSpeeds, SessionDrive, axis_setup, profile_settings,
 };
 use ecdrive::canopen::nmt::NmtCommand;
 use ecdrive::canopen::profile::CanDriveProfile;
@@ -116,31 +116,33 @@ pub fn run<T: CanTransport + Send + 'static>(
     bus: T,
     seconds: f64,
 ) -> Result<Vec<AxisResult>, Box<dyn std::error::Error>> {
-    let mut m = Master::new(
-        bus,
-        MasterConfig {
-            cycle_us: 4_000,
-            ..MasterConfig::default()
-        },
-    );
     let speeds = ProfileSpeeds {
         velocity_rev_s: 10.0,
         accel_rev_s2: 100.0,
         homing_fast_rev_s: 5.0,
         homing_slow_rev_s: 0.5,
     };
-    let mut axes = Vec::new();
-    for (node, p, method) in DRIVES {
-        let mut setup = DriveSetup::new(p);
-        setup.settings = profile_settings(p, &speeds);
-        setup
-            .settings
-            .push((ObjectAddress::new(0x6098, 0), Value::Int(method.into())));
-        m.configure_drive(node, setup)?;
-        m.start(node)?;
-        axes.push((node, axis_setup(p, Vec::new(), RunMode::Pp)));
-    }
-    let session = MotionSession::new(m, &axes)?;
+    // Each drive configured with its profile speeds and homing method, on a 4 ms SYNC.
+    let drives = DRIVES
+        .iter()
+        .map(|&(node, p, method)| {
+            let mut setup = DriveSetup::new(p);
+            setup.settings = profile_settings(p, &speeds);
+            setup
+                .settings
+                .push((ObjectAddress::new(0x6098, 0), Value::Int(method.into())));
+            SessionDrive {
+                node,
+                setup,
+                axis: axis_setup(p, Vec::new(), RunMode::Pp),
+            }
+        })
+        .collect();
+    let cfg = MasterConfig {
+        cycle_us: 4_000,
+        ..MasterConfig::default()
+    };
+    let session = MotionSession::start(bus, cfg, drives)?;
     let mut streams = Streams::new();
     let mut producers: Vec<_> = (0..DRIVES.len()).map(|i| streams.add(i, 100)).collect();
     let app = Arc::new(Mutex::new(App {
@@ -187,6 +189,7 @@ pub fn run<T: CanTransport + Send + 'static>(
         return Err(e.into());
     }
     let mut m = end.session.into_master();
+    // The drives are disabled; NMT Stop ends their PDOs.
     for (node, _, _) in DRIVES {
         m.nmt(node, NmtCommand::Stop)?;
     }

@@ -10,9 +10,9 @@
 //! per-thread perf counter on `raw_syscalls:sys_enter` its syscalls outside the allowed set.
 
 use ecdrive::app::canopen::tools::{BusSpec, NodeSpec, serve};
-use ecdrive::canopen::master::{DriveSetup, Master, MasterConfig};
+use ecdrive::canopen::master::{DriveSetup, MasterConfig};
 use ecdrive::canopen::motion::{
-    CycleThread, MotionSession, ProfileSpeeds, axis_setup, profile_settings,
+    CycleThread, MotionSession, ProfileSpeeds, SessionDrive, axis_setup, profile_settings,
 };
 use ecdrive::canopen::profile::CanDriveProfile;
 use ecdrive::canopen::unix_bus::UnixBusPort;
@@ -175,28 +175,29 @@ fn canopen_cycle_thread_allocates_nothing_and_only_does_frame_io_and_sleeps() {
         .expect("the emulated nodes are served");
 
     let port = UnixBusPort::connect(&path).expect("connect to the virtual bus");
-    let mut m = Master::new(
-        port,
-        MasterConfig {
-            cycle_us: 4_000,
-            ..MasterConfig::default()
-        },
-    );
     let speeds = ProfileSpeeds {
         velocity_rev_s: 10.0,
         accel_rev_s2: 100.0,
         homing_fast_rev_s: 5.0,
         homing_slow_rev_s: 0.5,
     };
-    let mut axes = Vec::new();
-    for (node, p, _) in DRIVES {
-        let mut setup = DriveSetup::new(p);
-        setup.settings = profile_settings(p, &speeds);
-        m.configure_drive(node, setup).expect("configure");
-        m.start(node).expect("NMT start");
-        axes.push((node, axis_setup(p, Vec::new(), RunMode::Pp)));
-    }
-    let session = MotionSession::new(m, &axes).expect("session");
+    let drives = DRIVES
+        .iter()
+        .map(|&(node, p, _)| {
+            let mut setup = DriveSetup::new(p);
+            setup.settings = profile_settings(p, &speeds);
+            SessionDrive {
+                node,
+                setup,
+                axis: axis_setup(p, Vec::new(), RunMode::Pp),
+            }
+        })
+        .collect();
+    let cfg = MasterConfig {
+        cycle_us: 4_000,
+        ..MasterConfig::default()
+    };
+    let session = MotionSession::start(port, cfg, drives).expect("session");
     let mut streams = Streams::new();
     let mut producer = streams.add(1, 64);
     let app = Arc::new(Mutex::new(AuditApp {

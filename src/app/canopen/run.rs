@@ -10,8 +10,8 @@ use crate::app::canopen::tools::open_bus;
 use crate::app::config::canopen::{CanDriveConfig, CanRunConfig, CanTarget};
 use crate::app::ethercat::tools::run::{Outcome, RecordSummary};
 use crate::canopen::error::{CanError, CanErrorKind, NodeRef};
-use crate::canopen::master::{DriveSetup, Master, MasterConfig, MasterEvent};
-use crate::canopen::motion::{MotionSession, axis_setup};
+use crate::canopen::master::{DriveSetup, MasterConfig, MasterEvent};
+use crate::canopen::motion::{MotionSession, SessionDrive, axis_setup};
 use crate::canopen::transport::CanTransport;
 use crate::cia402::State;
 use crate::master::{Axes, Command, EventKind, StopKind, StopReason};
@@ -258,19 +258,8 @@ pub fn session<T: CanTransport>(
     cfg: &CanRunConfig,
 ) -> Result<(MotionSession<T>, u64), CanError> {
     let cycle_us = u64::try_from(cfg.cycle.as_micros()).unwrap_or(u64::MAX);
-    let mut m = Master::new(
-        transport,
-        MasterConfig {
-            cycle_us,
-            ..MasterConfig::default()
-        },
-    );
-    let started_us = m.now_us();
-    m.pump(50_000)?;
-    for d in &cfg.drives {
-        m.nmt(d.node, crate::canopen::nmt::NmtCommand::EnterPreOperational)?;
-    }
-    m.pump(20_000)?;
+    let started_us = transport.now_us();
+    let mut drives = Vec::with_capacity(cfg.drives.len());
     for d in &cfg.drives {
         let mut setup = DriveSetup::new(d.profile);
         setup.settings = d.settings.clone();
@@ -280,23 +269,28 @@ pub fn session<T: CanTransport>(
             .into_iter()
             .map(|(p, e)| (p, e == crate::master::program::ProbeEdge::Rising))
             .collect();
-        setup.plan = crate::canopen::PdoPlan::with_probes(d.profile, &probes)
-            .map_err(|why| CanError::new(m.node_ref(d.node), None, CanErrorKind::NotReady(why)))?;
+        setup.plan = crate::canopen::PdoPlan::with_probes(d.profile, &probes).map_err(|why| {
+            let node = NodeRef {
+                id: d.node,
+                drive: Some(d.profile.name),
+            };
+            CanError::new(node, None, CanErrorKind::NotReady(why))
+        })?;
         setup.initial_mode = crate::cia402::OperationMode::from_i8(d.mode.code());
-        m.configure_drive(d.node, setup)?;
-        m.start(d.node)?;
+        let mut axis = axis_setup(d.profile, d.steps.clone(), d.mode);
+        axis.following_error_limit = d.following_error_limit;
+        axis.limits = d.limits;
+        drives.push(SessionDrive {
+            node: d.node,
+            setup,
+            axis,
+        });
     }
-    let axes: Vec<_> = cfg
-        .drives
-        .iter()
-        .map(|d| {
-            let mut s = axis_setup(d.profile, d.steps.clone(), d.mode);
-            s.following_error_limit = d.following_error_limit;
-            s.limits = d.limits;
-            (d.node, s)
-        })
-        .collect();
-    Ok((MotionSession::new(m, &axes)?, started_us))
+    let master = MasterConfig {
+        cycle_us,
+        ..MasterConfig::default()
+    };
+    Ok((MotionSession::start(transport, master, drives)?, started_us))
 }
 
 /// The emulated drives of a `can-sim` run: one per `[[drive]]`, at its node.

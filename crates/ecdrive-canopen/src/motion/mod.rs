@@ -184,7 +184,41 @@ pub struct MotionSession<T: CanTransport> {
     stop_timeout_cycles: u64,
 }
 
+/// One drive of [`MotionSession::start`]: its node, how the master configures it, and its axis.
+#[derive(Debug, Clone)]
+pub struct SessionDrive {
+    /// Node-ID.
+    pub node: u8,
+    /// The master's configuration of it (PDO plan, supervision, start-up values).
+    pub setup: crate::master::DriveSetup,
+    /// What the motion runtime runs on it.
+    pub axis: AxisSetup,
+}
+
 impl<T: CanTransport> MotionSession<T> {
+    /// A master on `transport` with `cfg`, every drive taken to NMT Pre-operational (a node an
+    /// earlier session left Stopped serves no SDO), configured, started (Operational), and
+    /// the session of their axes. An error names the node and why.
+    pub fn start(
+        transport: T,
+        cfg: crate::master::MasterConfig,
+        drives: Vec<SessionDrive>,
+    ) -> Result<Self, CanError> {
+        let mut m = Master::new(transport, cfg);
+        m.pump(50_000)?;
+        for d in &drives {
+            m.nmt(d.node, crate::nmt::NmtCommand::EnterPreOperational)?;
+        }
+        m.pump(20_000)?;
+        let mut axes = Vec::with_capacity(drives.len());
+        for d in drives {
+            m.configure_drive(d.node, d.setup)?;
+            m.start(d.node)?;
+            axes.push((d.node, d.axis));
+        }
+        Self::new(m, &axes)
+    }
+
     /// The session of `master` with one motion axis per `(node, setup)`: every node must be a
     /// drive the master configured. An error names the node and why.
     pub fn new(master: Master<T>, axes: &[(u8, AxisSetup)]) -> Result<Self, CanError> {
