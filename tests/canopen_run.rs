@@ -261,17 +261,19 @@ fn a_file_runs_over_a_bus_served_by_another_process() {
 }
 
 /// The ASDA-A2's cyclic mode, ip (it has no csp; SYNC-paced 60C1h:01, 60C2h:01 = the SYNC
-/// period in ms), from a run file: a pp move, then into ip, a `move` and a `sine` streamed one
-/// point per SYNC, back to pp and home. The node's own position says where each part ended;
-/// the recording has the demand and the master's following error in ip, and the error stays
-/// within two SYNC periods' travel at the move's speed.
+/// period in ms), from a run file: relative pp moves (the last one −0.5 rev: 607Ah holds that
+/// increment, which ip must never take as a position), then into ip, a `move` and a `sine`
+/// streamed one point per SYNC, back to pp and home. The node's own position says where each
+/// part ended; the recording has the demand and the master's following error in ip, the error
+/// stays within two SYNC periods' travel at the move's speed, and the motor never moves
+/// faster than the program's fastest step.
 #[test]
 fn the_asda_a2_runs_ip_from_a_run_file() {
     let text = "interface = \"can-sim\"\ncycle = \"4ms\"\n[[drive]]\nnode = 0x7F\n\
                 profile = \"asda-a2\"\nmode = \"pp\"\n\
                 units = { name = \"rev\", counts_per_unit = 1280000 }\n\
                 limits = { following_error = 0.1 }\nprogram = [\n\
-                { step = \"pp\", to = [1], velocity = 10, acceleration = 100 },\n\
+                { step = \"pp\", by = [1.5, -0.5], velocity = 10, acceleration = 100 },\n\
                 { step = \"mode\", mode = \"ip\" },\n\
                 { step = \"move\", by = 2, velocity = 5, acceleration = 50 },\n\
                 { step = \"dwell\", seconds = 0.05 },\n\
@@ -323,6 +325,14 @@ fn the_asda_a2_runs_ip_from_a_run_file() {
             .any(|r| r[demand] == "3840000" && r[actual] == "3840000"),
         "the ip move never stood at 3 rev"
     );
+    // No jump anywhere, the mode switches included: at most 10 rev/s × 4 ms between cycles.
+    let actuals: Vec<i64> = text
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').nth(actual)?.parse().ok())
+        .collect();
+    let max_step = actuals.windows(2).map(|w| (w[1] - w[0]).abs()).max().unwrap_or(0);
+    assert!(max_step <= 51_200, "the motor moved {max_step} PUU in one cycle");
     let max_fe = ip
         .iter()
         .filter_map(|r| r[fe].parse::<i64>().ok())

@@ -880,12 +880,14 @@ impl Axis {
             self.progress = Some(step.progress);
         }
 
-        // Entering a cyclic position mode from another one: the drive follows 0x607A from the
-        // first frame that names the mode, so every frame until the switch is confirmed carries
-        // the actual position, not what the other mode left there (a pp target, which may be
-        // relative: taken as absolute it is a jump).
+        // Entering a cyclic position mode (csp, or ip: the binding copies 0x607A into
+        // 0x60C1:01) from another one: the drive follows the position from the first frame that
+        // names the mode, so every frame until the switch is confirmed carries the actual
+        // position, not what the other mode left there (a pp target, which may be relative:
+        // taken as absolute it is a jump).
         if self.commanded_mode != self.active_mode
-            && self.commanded_mode.is_cyclic()
+            && (self.commanded_mode.is_cyclic()
+                || self.commanded_mode == OperationMode::InterpolatedPosition)
             && self.commanded_mode.set_point_kind() == Some(SetPointKind::Position)
             && let Some(p) = fb.position
         {
