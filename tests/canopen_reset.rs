@@ -72,7 +72,7 @@ fn reset_without_a_fault_reports_each_drive() {
 /// The command as the README gives it, over `vbus:` against `ecdrive sim --can` in another
 /// process: after a run that left the nodes in NMT Stopped (so they answer no SDO), `reset`
 /// takes them to Pre-operational, finds each drive, reports it, exits 0; `upload` then works
-/// again; a node that is not there is named in one line, exit 3.
+/// again, and so does another run; a node that is not there is named in one line, exit 3.
 #[test]
 fn reset_over_vbus_after_a_run_left_the_nodes_stopped() {
     let dir = std::env::temp_dir().join(format!("ecdrive-can-reset-{}", std::process::id()));
@@ -92,6 +92,8 @@ fn reset_over_vbus_after_a_run_left_the_nodes_stopped() {
     let stopped = ecdrive(&["upload", "--can", &bus, "-n", "3", "0x6041:00"]);
     let reset = ecdrive(&["reset", "--can", &bus]);
     let after = ecdrive(&["upload", "--can", &bus, "-n", "3", "0x6041:00"]);
+    // And a run again after the reset (the run's life guarding starts afresh).
+    let again = ecdrive(&["run", "-c", &path, "-i", &bus, "--json"]);
     let absent = ecdrive(&["reset", "--can", &bus, "-n", "9"]);
     let pid = nix::unistd::Pid::from_raw(child.id() as i32);
     let _ = nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM);
@@ -123,6 +125,7 @@ fn reset_over_vbus_after_a_run_left_the_nodes_stopped() {
         reset.stdout
     );
     assert_eq!(after.code, Some(0), "{}", after.stderr);
+    assert_eq!(again.code, Some(0), "{}{}", again.stdout, again.stderr);
     assert_eq!(absent.code, Some(3), "{}", absent.stderr);
     assert_eq!(absent.stderr.lines().count(), 1, "{}", absent.stderr);
     assert!(

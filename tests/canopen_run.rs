@@ -331,8 +331,15 @@ fn the_asda_a2_runs_ip_from_a_run_file() {
         .skip(1)
         .filter_map(|l| l.split(',').nth(actual)?.parse().ok())
         .collect();
-    let max_step = actuals.windows(2).map(|w| (w[1] - w[0]).abs()).max().unwrap_or(0);
-    assert!(max_step <= 51_200, "the motor moved {max_step} PUU in one cycle");
+    let max_step = actuals
+        .windows(2)
+        .map(|w| (w[1] - w[0]).abs())
+        .max()
+        .unwrap_or(0);
+    assert!(
+        max_step <= 51_200,
+        "the motor moved {max_step} PUU in one cycle"
+    );
     let max_fe = ip
         .iter()
         .filter_map(|r| r[fe].parse::<i64>().ok())
@@ -400,6 +407,62 @@ fn the_blv_r_latches_its_touch_probe_from_a_run_file() {
     assert_eq!(obj(0x60BA), Some(46_800));
     assert_eq!(obj(0x60BB), Some(46_800));
     assert_eq!(obj(0x60BC), Some(-43_200));
+}
+
+/// A master that goes silent in the middle of a run (killed, its host hung): a run sets up
+/// life guarding (100Ch/100Dh), so each drive notices within its life time (300 ms) and reacts
+/// as its manual says — the ASDA-A2 AL170 (guarding error with the servo on, a fault), the
+/// Lexium MDrive Fault on life-time expiry; the BLV-R reports EMCY 8130h, and its manual names
+/// no motor reaction (README: what to add in the machine). Simulated time; the master simply
+/// sends nothing more.
+#[test]
+fn a_master_that_goes_silent_is_noticed_by_each_drive() {
+    use ecdrive::State;
+    use ecdrive::master::{Axes, Command};
+    let cfg = can(
+        "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\nmode = \"pv\"\n\
+         [[drive]]\nnode = 0x7F\nprofile = \"asda-a2\"\nmode = \"pv\"\n\
+         [[drive]]\nnode = 0x41\nprofile = \"lexium-mdrive\"\nmode = \"pv\"\n",
+    );
+    let mut bus = ecdrive::app::canopen::run::emulated_bus(&cfg).expect("bus");
+    {
+        let (mut s, _) = ecdrive::app::canopen::run::session(&mut bus, &cfg).expect("session");
+        s.command(Command::Enable(Axes::All));
+        for _ in 0..2_000 {
+            s.cycle().expect("cycle");
+            if (0..3).all(|i| {
+                s.telemetry(i)
+                    .is_some_and(|t| t.state == Some(State::OperationEnabled))
+            }) {
+                break;
+            }
+        }
+        assert!(
+            (0..3).all(|i| s
+                .telemetry(i)
+                .is_some_and(|t| t.state == Some(State::OperationEnabled))),
+            "enabled"
+        );
+        // The master dies here: the session is dropped, nothing more goes out.
+    }
+    bus.advance(1_000_000);
+    assert_eq!(
+        bus.node(0x7F).expect("node").state(),
+        State::Fault,
+        "ASDA-A2"
+    );
+    assert_eq!(
+        bus.node(0x41).expect("node").state(),
+        State::Fault,
+        "Lexium MDrive"
+    );
+    // The BLV-R's EMCY (COB-ID 80h + 3), among the frames queued for the master: error code
+    // 8130h, little-endian.
+    let mut emcy = false;
+    while let Ok(Some(f)) = ecdrive::canopen::CanTransport::recv(&mut bus, 0) {
+        emcy |= f.id() == 0x83 && f.data().get(..2) == Some(&[0x30, 0x81][..]);
+    }
+    assert!(emcy, "BLV-R: EMCY 8130h");
 }
 
 /// What only an EtherCAT run has, or what the CANopen drives cannot do, is refused before

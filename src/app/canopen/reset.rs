@@ -215,7 +215,14 @@ fn latched<T: CanTransport>(
     p: &CanDriveProfile,
 ) -> String {
     let code = s.telemetry(i).map_or(0, |t| t.error_code);
-    let decoded = match s.master().emergencies(node).last() {
+    // The drive's EMCY for this error code (a later one, such as a guarding error after an
+    // earlier master left, names something else).
+    let emcy = s
+        .master()
+        .emergencies(node)
+        .filter(|e| e.emergency.error_code == code)
+        .last();
+    let decoded = match emcy {
         Some(e) => p.decode_emcy(&e.emergency),
         None => p.decode_emcy(&Emergency {
             error_code: code,

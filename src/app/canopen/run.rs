@@ -277,6 +277,8 @@ pub fn session<T: CanTransport>(
             CanError::new(node, None, CanErrorKind::NotReady(why))
         })?;
         setup.initial_mode = crate::cia402::OperationMode::from_i8(d.mode.code());
+        // Life guarding: the drive sees a master that dies (switched off at the run's end).
+        setup.supervision = crate::canopen::master::Supervision::for_drive(d.profile);
         let mut axis = axis_setup(d.profile, d.steps.clone(), d.mode);
         axis.following_error_limit = d.following_error_limit;
         axis.limits = d.limits;
@@ -618,6 +620,19 @@ impl<'a> Run<'a> {
         let mut emergencies = Vec::new();
         for d in &self.cfg.drives {
             emergencies.extend(m.emergencies(d.node).map(ToString::to_string));
+            // Life guarding off before the master goes, on a drive it disabled (one still
+            // energised keeps watching for its master).
+            let energised = m
+                .drive(d.node)
+                .is_some_and(|x| x.statusword().state().is_some_and(State::is_energised));
+            if !energised
+                && let Err(e) = m.supervise(d.node, crate::canopen::master::Supervision::None)
+            {
+                emergencies.push(format!(
+                    "switching life guarding off on node {}: {e}",
+                    d.node
+                ));
+            }
             // NMT Stop is refused to a drive still energised (the master's safety rule): the
             // report says so.
             if let Err(e) = m.nmt(d.node, crate::canopen::nmt::NmtCommand::Stop) {

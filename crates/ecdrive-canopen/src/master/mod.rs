@@ -103,6 +103,26 @@ impl Supervision {
         producer_ms: 100,
         consumer_ms: 350,
     };
+
+    /// **\[REC\]** Node guarding every 100 ms, life time factor 3: the master sees a silent
+    /// drive, and the drive a silent master, within 300 ms. With a heartbeat the drive produces,
+    /// only the master watches; a master that dies leaves the drives running.
+    pub const LIFE_GUARDING: Self = Self::Guarding {
+        guard_ms: 100,
+        life_factor: 3,
+    };
+
+    /// What a drive of `profile` gets by default: [`Supervision::LIFE_GUARDING`] where it has
+    /// node guarding (each of the three manuals: the ASDA-A2 raises AL170 with the servo on,
+    /// the Lexium MDrive goes to Fault on life-time expiry, the BLV-R sends EMCY 8130h — its
+    /// manual names no motor reaction), else [`Supervision::DEFAULT`].
+    pub fn for_drive(profile: &CanDriveProfile) -> Self {
+        if profile.comm.guarding {
+            Self::LIFE_GUARDING
+        } else {
+            Self::DEFAULT
+        }
+    }
 }
 
 /// An EMCY message as received.
@@ -303,8 +323,10 @@ pub struct DriveSetup {
 }
 
 impl DriveSetup {
-    /// The standard setup: standard PDO plan, default supervision, initial mode pp if the drive
-    /// has it (else its first mode).
+    /// The standard setup: standard PDO plan, default supervision (a heartbeat the drive
+    /// produces: set [`Supervision::for_drive`] for life guarding, so that the drive sees its
+    /// master go, and switch it off before the master leaves), initial mode pp if the drive has
+    /// it (else its first mode).
     pub fn new(profile: &'static CanDriveProfile) -> Self {
         let initial_mode = if profile.supports(OperationMode::ProfilePosition) {
             OperationMode::ProfilePosition

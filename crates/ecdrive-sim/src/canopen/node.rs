@@ -1249,6 +1249,13 @@ impl EmulatedNode {
         match addr.index {
             0x1005 | 0x1006 => self.restart_sync_producer(),
             0x1017 => self.restart_heartbeat(),
+            // **\[REC\]** Life guarding (re)starts with the first guarding request after a new
+            // guard time or life time factor, not from a request of an earlier configuration
+            // (the manuals: it starts with the first request).
+            0x100C | 0x100D => {
+                self.last_guard_us = None;
+                self.guard_lost = false;
+            }
             0x1400..=0x1BFF => self.rebuild_pdos(),
             0x605A => self.refresh_device(),
             _ => {}
