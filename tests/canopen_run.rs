@@ -465,6 +465,52 @@ fn a_master_that_goes_silent_is_noticed_by_each_drive() {
     assert!(emcy, "BLV-R: EMCY 8130h");
 }
 
+/// A run that ends during a pp move (its duration passed) halts each drive on the deceleration
+/// the file gave (100 rev/s²: 0.5 rev from 10 rev/s), not on a drive's own quick-stop ramp:
+/// the Lexium MDrive halts on 6085h by default (605Dh = 2; 200 000 steps/s², 3.9 rev/s²) and
+/// overshot its 20 rev target; a run writes 605Dh = 1 where a drive has it. Each axis stands
+/// still when disabled, about 10.5 rev from the start.
+#[test]
+fn a_run_ending_during_a_pp_move_halts_on_the_files_deceleration() {
+    let mut text = String::from("interface = \"can-sim\"\n");
+    for (node, key, cpr) in [
+        (0x41, "lexium-mdrive", 51_200),
+        (3, "blv-r", 36_000),
+        (0x7F, "asda-a2", 1_280_000),
+    ] {
+        text.push_str(&format!(
+            "[[drive]]\nnode = {node}\nprofile = \"{key}\"\nmode = \"pp\"\n\
+             units = {{ name = \"rev\", counts_per_unit = {cpr} }}\n\
+             program = [{{ step = \"pp\", to = [20], velocity = 10, acceleration = 100 }}]\n"
+        ));
+    }
+    let cfg = can(&text);
+    let mut bus = ecdrive::app::canopen::run::emulated_bus(&cfg).expect("bus");
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r = ecdrive::app::canopen::run::run_on(
+        &mut bus,
+        &cfg,
+        Some(std::time::Duration::from_secs(1)),
+        None,
+        &stop,
+    )
+    .expect("run");
+    for d in &r.drives {
+        let at = d.position_user.expect("units");
+        assert!(
+            (9.5..11.0).contains(&at),
+            "{}: stopped at {at} rev",
+            d.drive
+        );
+        let n = bus.node(d.node).expect("node");
+        assert!(
+            n.velocity_units_per_s().abs() < 1e-6,
+            "{} still turning",
+            d.drive
+        );
+    }
+}
+
 /// What only an EtherCAT run has, or what the CANopen drives cannot do, is refused before
 /// anything touches the bus, one line naming the key.
 #[test]

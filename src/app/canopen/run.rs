@@ -29,6 +29,11 @@ pub const ENABLE_TIMEOUT: Duration = Duration::from_secs(5);
 /// runtime's own stop timeout is 2 s).
 pub const STOP_WAIT: Duration = Duration::from_secs(5);
 
+/// **\[REC\]** At least this many SYNC cycles for each of those waits: each state transition
+/// takes an RPDO applied at one SYNC and a TPDO answering the next, so at a long period (a 1 s
+/// SYNC) five seconds are not enough to walk the state machine.
+pub const MIN_WAIT_CYCLES: u64 = 25;
+
 /// What a run did, per drive.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CanDriveReport {
@@ -345,8 +350,9 @@ impl<'a> Run<'a> {
         }
     }
 
+    /// The cycles `d` lasts, at least [`MIN_WAIT_CYCLES`] (all uses are waits for the drives).
     fn cycles_of(&self, d: Duration) -> u64 {
-        (d.as_secs_f64() * self.cycles_per_s).ceil() as u64
+        ((d.as_secs_f64() * self.cycles_per_s).ceil() as u64).max(MIN_WAIT_CYCLES)
     }
 
     /// One cycle, its events sorted into the drives' errors and ends; `Some(reason)` when the
@@ -384,11 +390,17 @@ impl<'a> Run<'a> {
                     axis: a,
                     value,
                     limit,
-                } => self.error(
-                    axis(a),
-                    format!("following error {value} counts beyond the limit of {limit}"),
-                ),
-                EventKind::Stopping { reason } => stopped = stopped.or(Some(reason)),
+                } => {
+                    let text = self.following_error_text(axis(a), value, limit);
+                    self.error(axis(a), text);
+                }
+                EventKind::Stopping { reason } => {
+                    if let StopReason::ProbeNotLatched { axis: a, .. } = reason {
+                        let text = self.stop_reason(reason);
+                        self.error(axis(a), text);
+                    }
+                    stopped = stopped.or(Some(reason));
+                }
                 _ => {}
             }
         }
@@ -407,6 +419,22 @@ impl<'a> Run<'a> {
             }
         }
         Ok(stopped)
+    }
+
+    /// A following error in counts, and in the file's unit where it has one.
+    fn following_error_text(&self, i: usize, value: i64, limit: u32) -> String {
+        let units = self.cfg.drives.get(i).and_then(|d| d.units.as_ref());
+        match units {
+            Some(u) => format!(
+                "following error {value} counts ({:.4} {}) beyond the limit of {limit} counts \
+                 ({:.4} {})",
+                value as f64 / u.counts_per_unit,
+                u.name,
+                f64::from(limit) / u.counts_per_unit,
+                u.name
+            ),
+            None => format!("following error {value} counts beyond the limit of {limit}"),
+        }
     }
 
     fn error(&mut self, i: usize, text: String) {
@@ -573,10 +601,19 @@ impl<'a> Run<'a> {
             )
         };
         match r {
+            StopReason::Requested => "requested".to_string(),
+            StopReason::Restart => "re-start requested".to_string(),
             StopReason::DriveFault { axis } => format!("{} faulted", name(axis)),
             StopReason::FollowingError { axis } => format!("{}: following error", name(axis)),
             StopReason::HomingFailed { axis } => format!("{}: homing failed", name(axis)),
-            other => format!("{other:?}"),
+            StopReason::ProbeNotLatched { axis, probe } => format!(
+                "{}: touch probe {probe} did not latch within its probe_wait",
+                name(axis)
+            ),
+            // EtherCAT's reasons; a CANopen run does not stop for them.
+            StopReason::FramesLost { cycles } => format!("{cycles} cycles without a reply"),
+            StopReason::DriveLeftOp { device } => format!("device {device} left OP"),
+            StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
         }
     }
 

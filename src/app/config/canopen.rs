@@ -384,6 +384,24 @@ fn drive(
             ));
         }
     }
+    // A controlled stop in pp or pv is a halt (controlword bit 8): where 605Dh can say so, the
+    // drive halts on the slow-down ramp (6084h, the deceleration the file's steps set) rather
+    // than on its quick-stop ramp (the Lexium MDrive's default 605Dh = 2 halts on 6085h, 200 000
+    // steps/s²: a pp move at 10 rev/s then overshot its target by two revolutions). A `sdos`
+    // value of the file's own comes after and wins.
+    let halt = ObjectAddress::new(0x605D, 0);
+    let profile_moves = matches!(mode, RunMode::Pp | RunMode::Pv)
+        || steps.iter().any(|s| {
+            matches!(s, Step::Pp { .. } | Step::Pv { .. })
+                || matches!(s, Step::Mode { mode } if matches!(mode, RunMode::Pp | RunMode::Pv))
+        });
+    if profile_moves
+        && let Some(e) = dict.entry(halt)
+        && e.min.as_i128().is_none_or(|lo| lo <= 1)
+        && e.max.as_i128().is_none_or(|hi| hi >= 1)
+    {
+        settings.push((halt, Value::Int(1)));
+    }
     settings.extend(sdos);
     Ok(CanDriveConfig {
         node,
