@@ -545,6 +545,53 @@ fn what_a_canopen_run_cannot_take_is_named() {
     .unwrap_err();
     assert_eq!(e.key.as_deref(), Some("cycle"), "{e}");
     assert!(e.to_string().contains("at least 1000 µs apart"), "{e}");
+    // Homing methods: the drive's own list, and no index-pulse method without an encoder.
+    for (profile, node, method, says) in [
+        (
+            "asda-a2",
+            "0x7F",
+            99,
+            "homing method 99 is not one the ASDA-A2 takes",
+        ),
+        (
+            "lexium-mdrive",
+            "0x41",
+            33,
+            "the Lexium MDrive (without encoder) does not have",
+        ),
+    ] {
+        let e = config::parse_any(
+            &format!(
+                "interface = \"can-sim\"\n[[drive]]\nnode = {node}\nprofile = \"{profile}\"\n\
+                 program = [{{ step = \"home\", method = {method}, speed_switch = 100, speed_zero = 10 }}]\n"
+            ),
+            "can.toml",
+        )
+        .unwrap_err();
+        assert_eq!(e.key.as_deref(), Some("drive[0].program[0]"), "{e}");
+        assert!(e.to_string().contains(says), "{e}");
+    }
+    // A value the drive refuses at start-up (an SDO abort: 0x6041 is read-only) is the drive's
+    // refusal, exit 4, one line naming the node and the object.
+    let dir = std::env::temp_dir().join(format!("ecdrive-can-abort-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("dir");
+    let file = dir.join("abort.toml");
+    std::fs::write(
+        &file,
+        "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\nsdos = { \"0x6041:00\" = 5 }\n",
+    )
+    .expect("write");
+    let out = ecdrive(&["run", "-c", &file.display().to_string()]);
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(out.code, Some(4), "{}", out.stderr);
+    assert_eq!(out.stderr.lines().count(), 1, "{}", out.stderr);
+    assert!(
+        out.stderr.contains("node 3")
+            && out.stderr.contains("0x6041")
+            && out.stderr.contains("SDO abort"),
+        "{}",
+        out.stderr
+    );
     // The touch probe only where the drive has one (60B8h): the BLV-R does, the ASDA-A2 not.
     let e = config::parse_any(
         "interface = \"can-sim\"\n[[drive]]\nnode = 0x7F\nprofile = \"asda-a2\"\n\

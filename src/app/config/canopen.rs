@@ -320,6 +320,30 @@ fn drive(
                     mode.name()
                 ))
             }
+            Step::Home { method } if *method == 0 || !profile.homing.supports(*method) => {
+                let listed: Vec<String> = profile
+                    .homing
+                    .methods
+                    .iter()
+                    .filter(|m| **m != 0)
+                    .map(i8::to_string)
+                    .collect();
+                Some(format!(
+                    "homing method {method} is not one the {} takes ({})",
+                    profile.name,
+                    listed.join(", ")
+                ))
+            }
+            // Methods 1–14, 33 and 34 home on the index pulse (CiA 402).
+            Step::Home { method }
+                if !profile.homing.index_pulse && matches!(method, 1..=14 | 33 | 34) =>
+            {
+                Some(format!(
+                    "homing method {method} homes on the index pulse, which the {} (without \
+                     encoder) does not have",
+                    profile.name
+                ))
+            }
             Step::TouchProbe { .. } | Step::ProbeWait { .. }
                 if crate::od::Dictionary::new(profile.dictionary)
                     .object(0x60B8)

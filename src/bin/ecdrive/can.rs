@@ -10,12 +10,14 @@ use ecdrive::od::{DataType, ObjectAddress, Value};
 use serde_json::json;
 use std::process::ExitCode;
 
-/// The exit code for a CANopen error.
-fn code(e: &CanError) -> u8 {
+/// The exit code for a CANopen error: a drive's refusal (an SDO abort, an identity that is not
+/// the profile's, an NMT command refused) 4, a value or request the user gave wrong 2, the bus
+/// 3 — the classes of the README's exit-code table.
+pub fn exit_code(e: &CanError) -> u8 {
     match &e.kind {
-        CanErrorKind::Abort(_) | CanErrorKind::NmtRefused { .. } | CanErrorKind::Identity(_) => {
-            exit::REFUSED
-        }
+        CanErrorKind::Abort(_) | CanErrorKind::NmtRefused { .. } => exit::REFUSED,
+        // The configuration names a drive that is not the one at that node.
+        CanErrorKind::Identity(_) => exit::USAGE,
         CanErrorKind::Sdo(s) if s.abort_code().is_some() => exit::REFUSED,
         CanErrorKind::Value(_) | CanErrorKind::UnknownType | CanErrorKind::Invalid(_) => {
             exit::USAGE
@@ -25,7 +27,7 @@ fn code(e: &CanError) -> u8 {
 }
 
 fn fail(cmd: &str, e: &CanError) -> ExitCode {
-    fail_with(cmd, &e.to_string(), code(e))
+    fail_with(cmd, &e.to_string(), exit_code(e))
 }
 
 fn open(cmd: &str, bus: &str) -> Result<Master<Box<dyn CanTransport>>, ExitCode> {

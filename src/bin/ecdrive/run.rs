@@ -254,7 +254,8 @@ fn run_canopen(
     };
     let report = match ecdrive::app::canopen::run::run(&cfg, &opts, &signals.stop) {
         Ok(r) => r,
-        Err(e) => return fail_with("run", &e.to_string(), exit::BUS),
+        // The drive refused (an SDO abort, identity, an NMT refusal): 4; the bus: 3.
+        Err(e) => return fail_with("run", &e.to_string(), crate::can::exit_code(&e)),
     };
     finish(
         &report,
