@@ -34,6 +34,10 @@ pub const STOP_WAIT: Duration = Duration::from_secs(5);
 /// SYNC) five seconds are not enough to walk the state machine.
 pub const MIN_WAIT_CYCLES: u64 = 25;
 
+/// **\[REC\]** A gap between two cycles longer than this (and ten SYNC periods) is a stall of
+/// the master worth naming: the run's life guarding lets a drive wait 300 ms.
+pub const STALL_US: u64 = 300_000;
+
 /// What a run did, per drive.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CanDriveReport {
@@ -332,6 +336,12 @@ struct Run<'a> {
     recorder: Option<Recorder>,
     /// Why the recording stopped, if it failed.
     record_error: Option<String>,
+    /// The bus's time after the last cycle, and the longest gap between two cycles, µs: a
+    /// master that did not run for a while (a stalled host, a stopped process) says so.
+    last_cycle_us: Option<u64>,
+    longest_gap_us: u64,
+    /// Drives whose TPDOs stopped (reported once); `true` until the first TPDO.
+    stale: Vec<bool>,
 }
 
 impl<'a> Run<'a> {
@@ -347,6 +357,9 @@ impl<'a> Run<'a> {
             started_us,
             recorder: None,
             record_error: None,
+            last_cycle_us: None,
+            longest_gap_us: 0,
+            stale: vec![false; cfg.drives.len()],
         }
     }
 
@@ -363,6 +376,10 @@ impl<'a> Run<'a> {
     ) -> Result<Option<StopReason>, CanError> {
         s.cycle()?;
         self.cycles += 1;
+        let now = s.master().now_us();
+        if let Some(last) = self.last_cycle_us.replace(now) {
+            self.longest_gap_us = self.longest_gap_us.max(now.saturating_sub(last));
+        }
         if let Some(r) = self.recorder.as_mut()
             && let Err(e) = r.cycle(s, self.cycles)
         {
@@ -417,8 +434,74 @@ impl<'a> Run<'a> {
             {
                 self.error(i, e.to_string());
             }
+            // A drive that leaves Operational on its own (its reaction to a lost master, an
+            // NMT command of another master) sends no more PDOs and takes none.
+            if let MasterEvent::StateChanged { node, to, .. } = e
+                && to != crate::canopen::nmt::NmtState::Operational
+                && let Some(i) = self.cfg.drives.iter().position(|d| d.node == node)
+                && self.cycles > 1
+            {
+                let d = &self.cfg.drives[i];
+                let text = format!(
+                    "node {} ({}) left NMT Operational on its own (now {to}): its PDOs stopped",
+                    d.node, d.profile.name
+                );
+                self.error(i, text);
+                stopped = stopped.or(Some(StopReason::DriveFault { axis: i as u16 }));
+            }
+        }
+        // TPDOs that stopped coming: the drive's state is unknown from here on.
+        for i in 0..self.cfg.drives.len() {
+            if self.stale.get(i).copied().unwrap_or(true) || self.fresh(s, i) {
+                continue;
+            }
+            if let Some(x) = self.stale.get_mut(i) {
+                *x = true;
+            }
+            let d = &self.cfg.drives[i];
+            let text = format!(
+                "node {} ({}): no TPDO for more than {} ms: its state is unknown from here on",
+                d.node,
+                d.profile.name,
+                self.stale_after_us() / 1000
+            );
+            self.error(i, text);
+            stopped = stopped.or(Some(StopReason::DriveFault { axis: i as u16 }));
         }
         Ok(stopped)
+    }
+
+    /// Whether a drive that still sends TPDOs shows an energised state.
+    fn any_energised<T: CanTransport>(&self, s: &MotionSession<T>) -> bool {
+        (0..self.cfg.drives.len()).any(|i| {
+            self.fresh(s, i)
+                && s.telemetry(i)
+                    .is_some_and(|t| t.state.is_some_and(State::is_energised))
+        })
+    }
+
+    /// How long a drive may send no TPDO: ten SYNC periods, at least 100 ms **\[REC\]**.
+    fn stale_after_us(&self) -> u64 {
+        let cycle_us = u64::try_from(self.cfg.cycle.as_micros()).unwrap_or(u64::MAX);
+        cycle_us.saturating_mul(10).max(100_000)
+    }
+
+    /// Whether drive `i` sent a TPDO recently (or has not started sending yet: before its
+    /// first TPDO there is nothing to miss).
+    fn fresh<T: CanTransport>(&self, s: &MotionSession<T>, i: usize) -> bool {
+        let Some(d) = self
+            .cfg
+            .drives
+            .get(i)
+            .and_then(|d| s.master().drive(d.node))
+        else {
+            return false;
+        };
+        let newest = (0..d.tpdos().len()).filter_map(|k| d.tpdo_seen_us(k)).max();
+        match newest {
+            None => true,
+            Some(t) => s.master().now_us().saturating_sub(t) <= self.stale_after_us(),
+        }
     }
 
     /// A following error in counts, and in the file's unit where it has one.
@@ -626,23 +709,18 @@ impl<'a> Run<'a> {
     ) -> Result<CanRunReport, CanError> {
         s.command(Command::Stop(StopKind::Ramp));
         let limit = self.cycles_of(STOP_WAIT);
+        // A drive whose TPDOs stopped (it left Operational) is not waited for: its last
+        // statusword says nothing, and its RPDOs are not taken either.
         for _ in 0..limit {
             self.cycle(&mut s)?;
-            let still = (0..self.cfg.drives.len()).any(|i| {
-                s.telemetry(i)
-                    .is_some_and(|t| t.state.is_some_and(State::is_energised))
-            });
-            if !still {
+            if !self.any_energised(&s) {
                 break;
             }
         }
         s.command(Command::Disable(Axes::All));
         for _ in 0..self.cycles_of(ENABLE_TIMEOUT) {
             self.cycle(&mut s)?;
-            if (0..self.cfg.drives.len()).all(|i| {
-                s.telemetry(i)
-                    .is_some_and(|t| !t.state.is_some_and(State::is_energised))
-            }) {
+            if !self.any_energised(&s) {
                 break;
             }
         }
@@ -688,10 +766,23 @@ impl<'a> Run<'a> {
             .iter()
             .map(|e| format!("the recording stopped: {e}"))
             .collect();
+        // A master that itself stood still longer than the drives' supervision allows (the
+        // host stalled, the process was stopped): the drives' loss reports are its doing.
+        let cycle_us = u64::try_from(self.cfg.cycle.as_micros()).unwrap_or(u64::MAX);
+        let reason = if self.longest_gap_us > STALL_US.max(10 * cycle_us) {
+            format!(
+                "{reason}; the master itself did not run for {} ms at one point (the host \
+                 stalled or the process was stopped), longer than the drives' supervision \
+                 allows: what they reported then is the master's doing",
+                self.longest_gap_us / 1000
+            )
+        } else {
+            reason
+        };
         Ok(CanRunReport {
             config: self.cfg.source.clone(),
             bus: self.cfg.target.to_string(),
-            cycle_us: u64::try_from(self.cfg.cycle.as_micros()).unwrap_or(u64::MAX),
+            cycle_us,
             outcome,
             reason,
             cycles: self.cycles,

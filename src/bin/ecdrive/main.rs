@@ -1707,8 +1707,23 @@ fn dispatch(cli: Cli) -> ExitCode {
             can: Some(bus),
             nodes,
             json,
+            devices,
+            faults,
             ..
-        } => can::sim(&bus, &nodes, json.json),
+        } => {
+            // The EtherCAT segment's devices and faults mean nothing on a CAN bus: say so
+            // rather than serve without them.
+            if !devices.is_empty() || !faults.is_empty() {
+                return fail_with(
+                    "sim",
+                    "--device and the fault options (--alarm, --drop, …) are for an EtherCAT \
+                     segment; with --can, give the CANopen drives with --node (faults: inject \
+                     them in-process through `sim::canopen::EmulatedNode::inject_alarm`)",
+                    exit::USAGE,
+                );
+            }
+            can::sim(&bus, &nodes, json.json)
+        }
         Command::Sim {
             interface,
             can: None,
