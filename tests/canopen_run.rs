@@ -511,6 +511,75 @@ fn a_run_ending_during_a_pp_move_halts_on_the_files_deceleration() {
     }
 }
 
+/// The emulated bus with another master on it that, after `after` SYNCs of ours, sends
+/// "enter Pre-operational" to `node` (what a second tool on the bus, or the drive's own reaction
+/// to a lost master, does to a run).
+struct Intruder<'a> {
+    bus: &'a mut ecdrive::sim::canopen::SimBus,
+    syncs: u32,
+    after: u32,
+    node: u8,
+}
+
+impl ecdrive::canopen::CanTransport for Intruder<'_> {
+    fn name(&self) -> &str {
+        "can-sim"
+    }
+    fn now_us(&self) -> u64 {
+        self.bus.now_us()
+    }
+    fn send(
+        &mut self,
+        f: &ecdrive::canopen::CanFrame,
+    ) -> Result<(), ecdrive::canopen::TransportError> {
+        if f.id() == 0x80 {
+            self.syncs += 1;
+            if self.syncs == self.after {
+                let nmt =
+                    ecdrive::canopen::CanFrame::new(0x000, &[0x80, self.node]).expect("frame");
+                self.bus.inject(&nmt);
+            }
+        }
+        self.bus.send(f)
+    }
+    fn recv(
+        &mut self,
+        timeout_us: u64,
+    ) -> Result<Option<ecdrive::canopen::CanFrame>, ecdrive::canopen::TransportError> {
+        self.bus.recv(timeout_us)
+    }
+}
+
+/// A drive that leaves NMT Operational in the middle of a run sends no more PDOs and takes
+/// none: the run ends as a drive fault naming the node and why (exit 5), it does not carry on
+/// to "completed" on the drive's last, stale statusword.
+#[test]
+fn a_drive_that_leaves_operational_mid_run_ends_the_run_naming_it() {
+    use ecdrive::app::ethercat::tools::run::Outcome;
+    let cfg = can(
+        "interface = \"can-sim\"\n[[drive]]\nnode = 0x7F\nprofile = \"asda-a2\"\nmode = \"pv\"\n\
+         units = { name = \"rev\", counts_per_unit = 1280000 }\n\
+         program = [{ step = \"pv\", velocity = 1, acceleration = 10, seconds = 3 }]\n",
+    );
+    let mut bus = ecdrive::app::canopen::run::emulated_bus(&cfg).expect("bus");
+    let t = Intruder {
+        bus: &mut bus,
+        syncs: 0,
+        after: 300,
+        node: 0x7F,
+    };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let r = ecdrive::app::canopen::run::run_on(t, &cfg, None, None, &stop).expect("run");
+    assert_eq!(r.outcome, Outcome::DriveFault, "{}: {r:#?}", r.reason);
+    assert!(r.reason.contains("node 127 (ASDA-A2)"), "{}", r.reason);
+    let errors = r.drives[0].errors.join("; ");
+    assert!(
+        errors.contains("left NMT Operational on its own (now Pre-operational)"),
+        "{errors}"
+    );
+    assert!(!r.drives[0].program_done, "{:?}", r.drives[0]);
+}
+
 /// What only an EtherCAT run has, or what the CANopen drives cannot do, is refused before
 /// anything touches the bus, one line naming the key.
 #[test]

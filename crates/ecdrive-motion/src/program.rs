@@ -319,11 +319,13 @@ impl Step {
     /// Why this step needs another mode (for [`ProgramError::WrongMode`]).
     fn mode_rule(&self) -> &'static str {
         match self {
-            Self::Torque { .. } => "torque steps need cst",
+            Self::Torque { .. } => "torque steps need cst (in tq: a `tq` step)",
             Self::Pp { .. } => "pp steps need pp (a `mode` step switches)",
             Self::Pv { .. } => "pv steps need pv (a `mode` step switches)",
             Self::Tq { .. } => "tq steps need tq (a `mode` step switches)",
-            _ => "position and velocity steps need csp or csv",
+            _ => {
+                "position and velocity steps need csp or csv (on CANopen: ip, where the drive has it)"
+            }
         }
     }
 
@@ -700,7 +702,7 @@ fn non_negative(name: &'static str, value: f64) -> Result<f64, ProfileError> {
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {
-        Err(ProfileError::NotFinite { name, value })
+        Err(ProfileError::Negative { name, value })
     }
 }
 

@@ -41,6 +41,14 @@ pub enum ProfileError {
         /// The value given.
         value: f64,
     },
+    /// A duration is negative (or not finite).
+    #[error("{name} must be 0 or more (a finite number), got {value}")]
+    Negative {
+        /// Which parameter.
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
 }
 
 fn positive(name: &'static str, value: f64) -> Result<f64, ProfileError> {
