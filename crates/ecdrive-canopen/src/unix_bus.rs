@@ -190,8 +190,13 @@ impl UnixBusPort {
         let own = PathBuf::from(own);
         let _ = std::fs::remove_file(&own);
         let sock = UnixDatagram::bind(&own).map_err(|e| io(&own, "bind", e))?;
-        sock.connect(hub).map_err(|e| io(hub, "connect", e))?;
-        sock.send(HELLO).map_err(|e| io(hub, "hello", e))?;
+        // A hub that is not there leaves no socket file of ours behind.
+        let undo = |e: TransportError| {
+            let _ = std::fs::remove_file(&own);
+            e
+        };
+        sock.connect(hub).map_err(|e| undo(io(hub, "connect", e)))?;
+        sock.send(HELLO).map_err(|e| undo(io(hub, "hello", e)))?;
         sock.set_nonblocking(true)
             .map_err(|e| io(&own, "set non-blocking", e))?;
         Ok(Self {

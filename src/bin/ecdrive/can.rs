@@ -113,6 +113,13 @@ pub fn slaves(bus: &str, json: bool) -> ExitCode {
         ]);
     }
     crate::print::table(&rows);
+    if nodes.is_empty() {
+        eprintln!(
+            "ecdrive slaves: no node answered an SDO upload of 0x1000 on {bus}; a node in NMT \
+             Stopped (as a run leaves them) answers none: `ecdrive reset --can {bus}` takes \
+             every node to Pre-operational"
+        );
+    }
     ExitCode::SUCCESS
 }
 

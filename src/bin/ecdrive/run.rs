@@ -198,6 +198,17 @@ fn run_canopen(
         );
     }
     if let Some(i) = interface {
+        if i == "sim" || i.starts_with("sim:") {
+            return fail_with(
+                "run",
+                &format!(
+                    "--interface {i:?} is an emulated EtherCAT segment; {} is a CANopen run: \
+                     can-sim (its emulated drives in-process), vbus:PATH or a SocketCAN interface",
+                    cfg.source
+                ),
+                exit::USAGE,
+            );
+        }
         cfg.target = if i == "can-sim" {
             CanTarget::Sim
         } else {
