@@ -1174,7 +1174,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(
             e.to_string(),
-            "step 0 (torque 100) cannot run in csp: torque steps need cst"
+            "step 0 (torque 100) cannot run in csp: torque steps need cst (in tq: a `tq` step)"
         );
         let e = validate(
             &[Step::Move {
