@@ -221,11 +221,15 @@ impl PdoPlan {
         Self::packed(profile, STANDARD_RX, STANDARD_TX).0
     }
 
-    /// The standard plan plus the touch probe's objects for `probes` (probe number, edge:
-    /// `true` rising): 60B8h in an RPDO, 60B9h and each probe's latch (60BAh–60BDh) in the
-    /// TPDOs. An error names what the drive's PDOs cannot carry (no such mappable object, or
-    /// more than its four PDOs of eight bytes).
-    pub fn with_probes(profile: &CanDriveProfile, probes: &[(u8, bool)]) -> Result<Self, String> {
+    /// The standard plan plus the touch probe's objects for `probes` (probe number and edge,
+    /// as a program arms them: [`ecdrive_motion::program::probes_used`]): 60B8h in an RPDO,
+    /// 60B9h and each probe's latch (60BAh–60BDh) in the TPDOs. An error names what the
+    /// drive's PDOs cannot carry (no such mappable object, or more than its four PDOs of eight
+    /// bytes).
+    pub fn with_probes(
+        profile: &CanDriveProfile,
+        probes: &[(u8, ecdrive_motion::ProbeEdge)],
+    ) -> Result<Self, String> {
         if probes.is_empty() {
             return Ok(Self::standard(profile));
         }
@@ -233,7 +237,8 @@ impl PdoPlan {
         let mut tx = STANDARD_TX.to_vec();
         rx.push(PdoEntry::new(0x60B8, 0, 16));
         tx.push(PdoEntry::new(0x60B9, 0, 16));
-        for &(probe, rising) in probes {
+        for &(probe, edge) in probes {
+            let rising = edge == ecdrive_motion::ProbeEdge::Rising;
             let index = match (probe, rising) {
                 (1, true) => 0x60BA,
                 (1, false) => 0x60BB,

@@ -274,10 +274,7 @@ pub fn session<T: CanTransport>(
         setup.settings = d.settings.clone();
         // The touch probe's objects in the PDOs when the program arms one (the file's check
         // found room for them).
-        let probes: Vec<(u8, bool)> = crate::master::program::probes_used(&d.steps)
-            .into_iter()
-            .map(|(p, e)| (p, e == crate::master::program::ProbeEdge::Rising))
-            .collect();
+        let probes = crate::master::program::probes_used(&d.steps);
         setup.plan = crate::canopen::PdoPlan::with_probes(d.profile, &probes).map_err(|why| {
             let node = NodeRef {
                 id: d.node,
@@ -340,7 +337,7 @@ struct Run<'a> {
     /// master that did not run for a while (a stalled host, a stopped process) says so.
     last_cycle_us: Option<u64>,
     longest_gap_us: u64,
-    /// Drives whose TPDOs stopped (reported once); `true` until the first TPDO.
+    /// Drives whose TPDOs stopped (each reported once).
     stale: Vec<bool>,
 }
 

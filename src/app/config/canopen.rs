@@ -358,10 +358,7 @@ fn drive(
             return Err(cx.err(span, key(&format!("program[{n}]")), m));
         }
     }
-    let probes: Vec<(u8, bool)> = crate::master::program::probes_used(&steps)
-        .into_iter()
-        .map(|(p, e)| (p, e == crate::master::program::ProbeEdge::Rising))
-        .collect();
+    let probes = crate::master::program::probes_used(&steps);
     if let Err(why) = crate::canopen::PdoPlan::with_probes(profile, &probes) {
         return Err(cx.err(d.span(), key("program"), why));
     }
