@@ -229,7 +229,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         None => {
             let mut bus = SimBus::new();
             for (node, p, _) in DRIVES {
-                bus.add_node(EmulatedNode::new(p, node)?);
+                bus.add_node(EmulatedNode::new(
+                    ecdrive::app::canopen::tools::emulation_of(p)
+                        .expect("the software slave emulates the drive"),
+                    node,
+                )?);
             }
             run(bus, seconds)?;
         }
@@ -248,7 +252,14 @@ mod tests {
     fn each_canopen_drive_through_a_callback_and_a_stream() {
         let mut bus = SimBus::new();
         for (node, p, _) in DRIVES {
-            bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+            bus.add_node(
+                EmulatedNode::new(
+                    ecdrive::app::canopen::tools::emulation_of(p)
+                        .expect("the software slave emulates the drive"),
+                    node,
+                )
+                .expect("emulated node"),
+            );
         }
         let results = run(bus, 0.6).expect("the example runs");
         for ((_, p, _), r) in DRIVES.iter().zip(&results) {

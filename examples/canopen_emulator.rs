@@ -28,7 +28,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut port = UnixBusPort::connect(&path)?;
     let mut nodes = Vec::new();
     for (id, p) in DEMO_NODES {
-        nodes.push(EmulatedNode::new(p, id)?);
+        nodes.push(EmulatedNode::new(
+            ecdrive::app::canopen::tools::emulation_of(p)
+                .expect("the software slave emulates the drive"),
+            id,
+        )?);
     }
     println!(
         "virtual CAN bus at {}: {} nodes for {secs} s",
@@ -36,7 +40,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         nodes.len()
     );
     for n in &nodes {
-        println!("  node {} (0x{:02X}): {}", n.id(), n.id(), n.profile().name);
+        println!("  node {} (0x{:02X}): {}", n.id(), n.id(), n.spec().name);
     }
     let end = Instant::now() + Duration::from_secs(secs);
     emu::serve(&mut port, &mut nodes, 250, |_| Instant::now() < end)?;

@@ -25,7 +25,8 @@ const GUARD: Duration = Duration::from_secs(60);
 
 fn child(hub: &str) {
     let mut port = UnixBusPort::connect(Path::new(hub)).expect("connect to the hub");
-    let mut nodes = vec![EmulatedNode::new(&blv_r::PROFILE, NODE).expect("node")];
+    let mut nodes =
+        vec![EmulatedNode::new(&ecdrive::sim::canopen::drives::blv_r::SPEC, NODE).expect("node")];
     let start = Instant::now();
     emu::serve(&mut port, &mut nodes, 250, |n| {
         n[0].nmt_state() != NmtState::Stopped && start.elapsed() < GUARD

@@ -149,7 +149,8 @@ fn canopen_cycle_thread_allocates_nothing_and_only_does_frame_io_and_sleeps() {
         .iter()
         .map(|&(node, profile, name)| NodeSpec {
             node,
-            profile,
+            emulation: ecdrive::app::canopen::tools::emulation_of(profile)
+                .expect("the software slave emulates the drive"),
             name,
         })
         .collect();

@@ -109,7 +109,7 @@ proptest! {
         let _ = Emergency::parse(&bytes);
         let _ = CanFrame::from_record(&bytes);
         let mut server = SdoServer::new();
-        let mut node = EmulatedNode::new(&blv_r::PROFILE, NODE).unwrap();
+        let mut node = EmulatedNode::new(&ecdrive::sim::canopen::drives::blv_r::SPEC, NODE).unwrap();
         node.power_on(0);
         let _ = server.handle(&bytes, AlState::PreOp, &mut node);
         if let Ok(f) = CanFrame::new(0x700 + NODE as u16, bytes.get(..bytes.len().min(8)).unwrap_or(&[])) {
@@ -125,7 +125,7 @@ proptest! {
         start in any::<bool>(),
     ) {
         let p = PROFILES[which];
-        let mut node = EmulatedNode::new(p, NODE).unwrap();
+        let mut node = EmulatedNode::new(ecdrive::app::canopen::tools::emulation_of(p).expect("the software slave emulates the drive"), NODE).unwrap();
         node.power_on(0);
         let mut t = 0u64;
         if start {
@@ -179,7 +179,7 @@ proptest! {
         every in 2usize..20,
     ) {
         let mut bus = SimBus::new();
-        bus.add_node(EmulatedNode::new(&blv_r::PROFILE, NODE).unwrap());
+        bus.add_node(EmulatedNode::new(&ecdrive::sim::canopen::drives::blv_r::SPEC, NODE).unwrap());
         let mut m = Master::new(
             Noisy { bus, garbage: VecDeque::new(), every, n: 0 },
             MasterConfig::default(),

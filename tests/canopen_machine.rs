@@ -48,7 +48,15 @@ fn run(
         Config::EtherCat(_) => panic!("not a CANopen run"),
     };
     let mut bus = SimBus::new();
-    bus.add_node(EmulatedNode::with_world(p, node, world).expect("node"));
+    bus.add_node(
+        EmulatedNode::with_world(
+            ecdrive::app::canopen::tools::emulation_of(p)
+                .expect("the software slave emulates the drive"),
+            node,
+            world,
+        )
+        .expect("node"),
+    );
     let stop = std::sync::atomic::AtomicBool::new(false);
     let r = ecdrive::app::canopen::run::run_on(&mut bus, &cfg, None, None, &stop).expect("run");
     let at = bus.node(node).expect("node").machine_rev();
@@ -128,7 +136,15 @@ fn the_probe_latches_where_the_machines_input_goes_on() {
         Config::EtherCat(_) => panic!("not a CANopen run"),
     };
     let mut bus = SimBus::new();
-    bus.add_node(EmulatedNode::with_world(d.1, d.0, MACHINE).expect("node"));
+    bus.add_node(
+        EmulatedNode::with_world(
+            ecdrive::app::canopen::tools::emulation_of(d.1)
+                .expect("the software slave emulates the drive"),
+            d.0,
+            MACHINE,
+        )
+        .expect("node"),
+    );
     let stop = std::sync::atomic::AtomicBool::new(false);
     let r = ecdrive::app::canopen::run::run_on(&mut bus, &cfg, None, None, &stop).expect("run");
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);

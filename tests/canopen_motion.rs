@@ -34,7 +34,14 @@ const TQ_STEP: u16 = 5;
 
 fn run(node: u8, p: &'static CanDriveProfile) -> (Seen, f64, f64) {
     let mut bus = SimBus::new();
-    bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+    bus.add_node(
+        EmulatedNode::new(
+            ecdrive::app::canopen::tools::emulation_of(p)
+                .expect("the software slave emulates the drive"),
+            node,
+        )
+        .expect("emulated node"),
+    );
     let mut m = Master::new(bus, MasterConfig::default());
     let mut setup = DriveSetup::new(p);
     setup.settings = ecdrive::app::canopen::steps::motion_settings(p, 10.0, 100.0);
@@ -173,7 +180,14 @@ fn the_remote_gate_is_reported_in_a_motion_session() {
     let p = &blv_r::PROFILE;
     let node = blv_r::EMU_NODE_ID;
     let mut bus = SimBus::new();
-    bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+    bus.add_node(
+        EmulatedNode::new(
+            ecdrive::app::canopen::tools::emulation_of(p)
+                .expect("the software slave emulates the drive"),
+            node,
+        )
+        .expect("emulated node"),
+    );
     let mut m = Master::new(bus, MasterConfig::default());
     m.configure_drive(node, DriveSetup::new(p))
         .expect("configure");
@@ -237,7 +251,14 @@ fn each_canopen_drive_takes_a_callbacks_requests_and_stream() {
     for (node, p) in drives {
         let name = p.name;
         let mut bus = SimBus::new();
-        bus.add_node(EmulatedNode::new(p, node).expect("emulated node"));
+        bus.add_node(
+            EmulatedNode::new(
+                ecdrive::app::canopen::tools::emulation_of(p)
+                    .expect("the software slave emulates the drive"),
+                node,
+            )
+            .expect("emulated node"),
+        );
         let mut m = Master::new(bus, MasterConfig::default());
         let mut setup = DriveSetup::new(p);
         setup.settings = ecdrive::app::canopen::steps::motion_settings(p, 10.0, 100.0);

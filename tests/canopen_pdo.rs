@@ -82,6 +82,7 @@ fn bad_plans_are_refused_before_anything_is_written() {
                     inhibit_time: 0,
                     event_timer: 0,
                     entries: vec![PdoEntry::new(0x6071, 0, 32)],
+                    fixed: false,
                 });
                 p
             },
@@ -199,9 +200,10 @@ fn asda_a2_and_lexium_pdo_rules() {
     assert_eq!(node_int(&m, 0x7F, 0x1600, 0), 0);
     assert_eq!(node_int(&m, 0x7F, 0x1800, 2), 0);
     assert_eq!(dl(&mut m, 0x7F, 0x1400, 1, 0x8000_027F, 4), None);
+    // Past the range: 0609 0030h, the one range code the ASDA-A2 lists (§5.3).
     assert_eq!(
         dl(&mut m, 0x7F, 0x1600, 0, 9, 1),
-        Some(SdoAbortCode::VALUE_TOO_HIGH)
+        Some(SdoAbortCode::VALUE_RANGE)
     );
     for s in 1..=8u8 {
         assert_eq!(dl(&mut m, 0x7F, 0x1600, s, 0x6060_0008, 4), None);

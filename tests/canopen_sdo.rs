@@ -71,11 +71,13 @@ fn aborts_name_node_object_code_and_text() {
         "node 65 (0x41, Lexium MDrive) 0x1234:00: SDO abort 0x06020000 (Object does not exist \
          in the object dictionary)"
     );
-    // TPDO communication sub 04h is reserved on all three: 0609 0011h.
-    for id in [0x41u8, 1, 0x7F] {
+    // TPDO communication sub 04h does not exist on the Lexium and the BLV-R: 0609 0011h. The
+    // ASDA-A2 manual lists it ("reserved", UNSIGNED8, RW, default 0; §4.4 1800h).
+    for id in [0x41u8, 1] {
         let e = m.sdo_upload(id, a(0x1800, 4)).unwrap_err();
         assert_eq!(e.abort_code(), Some(SdoAbortCode::NO_SUBINDEX), "{e}");
     }
+    assert_eq!(m.sdo_upload(0x7F, a(0x1800, 4)).expect("1800h:04"), [0]);
     // Writes to read-only objects: the statusword everywhere, 1014h on the ASDA-A2.
     let e = m.sdo_download(1, a(0x6041, 0), &[0, 0]).unwrap_err();
     assert_eq!(e.abort_code(), Some(SdoAbortCode::READ_ONLY));
@@ -177,7 +179,11 @@ fn scan_finds_each_node_with_identity() {
         "{}",
         lines[2]
     );
-    assert_eq!(found[2].revision, Some(asda_a2::EMU_REVISION));
+    // The emulator's own reading of the manual's "N/A" (its table's MANUAL GAP).
+    assert_eq!(
+        found[2].revision,
+        Some(ecdrive::sim::canopen::drives::asda_a2::REVISION)
+    );
     assert_eq!(found[0].revision, None, "BLV-R 1018h has no revision");
     // A partial range finds only what is in it.
     let found = tools::scan(&mut m, 2..=0x40).unwrap();

@@ -708,15 +708,50 @@ impl SdoPort for EcPort {
     }
 }
 
-/// The emulated CANopen drive on the in-process virtual bus.
+/// The emulated CANopen drive on the in-process virtual bus (`bus` builds it: the demo's
+/// three drives, or a changed one for the teeth test).
 struct CanPort {
     node: u8,
+    bus: fn() -> ecdrive::sim::canopen::SimBus,
 }
 
 impl CanPort {
     fn master(&self) -> Master<ecdrive::sim::canopen::SimBus> {
-        Master::new(cantools::demo_bus(), MasterConfig::default())
+        Master::new((self.bus)(), MasterConfig::default())
     }
+}
+
+/// The emulated BLV-R with one wrong value in its own table: 6065h (following error window)
+/// reads 123 at power-on.
+fn blv_r_with_a_wrong_value() -> ecdrive::sim::canopen::SimBus {
+    use ecdrive::od::{ConstValue, ObjectDesc};
+    use ecdrive::sim::canopen::{EmulatedNode, NodeSpec, SimBus, drives};
+    let base = &drives::blv_r::SPEC;
+    let dictionary: Vec<ObjectDesc> = base
+        .dictionary
+        .iter()
+        .map(|o| {
+            if o.index != 0x6065 {
+                return *o;
+            }
+            let entries: Vec<_> = o
+                .entries
+                .iter()
+                .map(|e| e.default(ConstValue::Uint(123)))
+                .collect();
+            ObjectDesc {
+                entries: Vec::leak(entries),
+                ..*o
+            }
+        })
+        .collect();
+    let spec: &'static NodeSpec = Box::leak(Box::new(NodeSpec {
+        dictionary: Vec::leak(dictionary),
+        ..*base
+    }));
+    let mut bus = SimBus::new();
+    bus.add_node(EmulatedNode::new(spec, 1).expect("node"));
+    bus
 }
 
 fn can_result<T>(
@@ -1761,7 +1796,10 @@ fn emulated_port(drive: &str) -> Box<dyn SdoPort> {
         .iter()
         .find(|(n, _, _)| *n == drive)
     {
-        Some((_, _, node)) => Box::new(CanPort { node: *node }),
+        Some((_, _, node)) => Box::new(CanPort {
+            node: *node,
+            bus: cantools::demo_bus,
+        }),
         None => Box::new(EcPort(Target::Sim(vec![drive.to_string()]))),
     }
 }
@@ -2090,6 +2128,29 @@ fn a_wrong_value_in_an_emulated_drive_fails_the_oracle() {
             "{d}: a changed 0x6065 in the emulated drive was not caught: {caught:#?}"
         );
     }
+    // The same on the CANopen side: the emulator's own BLV-R table with one wrong default.
+    let file = load("blv-r");
+    let mut gaps = Vec::new();
+    let mut good = CanPort {
+        node: 1,
+        bus: cantools::demo_bus,
+    };
+    let before = check_emulation("blv-r", &mut good, &file.fact, &mut gaps);
+    assert!(
+        !before.iter().any(|b| b.contains("0x6065:00")),
+        "blv-r: {before:#?}"
+    );
+    let mut changed = CanPort {
+        node: 1,
+        bus: blv_r_with_a_wrong_value,
+    };
+    let caught = check_emulation("blv-r", &mut changed, &file.fact, &mut gaps);
+    assert!(
+        caught
+            .iter()
+            .any(|c| c.contains("0x6065:00 reads 123") && c.contains("(emulated)")),
+        "blv-r: a changed 0x6065 in the emulated CANopen node was not caught: {caught:#?}"
+    );
     // An abort answered with a code the manual does not list for its cause.
     struct Lengthy(EcPort);
     impl SdoPort for Lengthy {

@@ -20,7 +20,14 @@ pub fn bus(nodes: &[(&'static CanDriveProfile, u8)]) -> Master<SimBus> {
 pub fn bus_with(nodes: &[(&'static CanDriveProfile, u8)], cfg: MasterConfig) -> Master<SimBus> {
     let mut sim = SimBus::new();
     for (p, id) in nodes {
-        sim.add_node(EmulatedNode::new(p, *id).unwrap());
+        sim.add_node(
+            EmulatedNode::new(
+                ecdrive::app::canopen::tools::emulation_of(p)
+                    .expect("the software slave emulates the drive"),
+                *id,
+            )
+            .unwrap(),
+        );
     }
     let mut m = Master::new(sim, cfg);
     m.pump(20_000).unwrap();

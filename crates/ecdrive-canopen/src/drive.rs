@@ -10,11 +10,11 @@
 use super::pdo_plan::PdoPlan;
 use super::profile::CanDriveProfile;
 use crate::cia402::{Axis, Feedback, Output, StatusWord};
-use crate::od::Dictionary;
+use crate::od::{Dictionary, ObjectAddress};
 use crate::pdo::{AxisBinding, Direction, FieldError, Layout};
 
 /// Bytes of an image: four PDOs of eight bytes.
-pub const IMAGE_BYTES: usize = 32;
+pub const IMAGE_BYTES: usize = 64;
 
 /// One PDO's place in an image.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -45,6 +45,13 @@ pub struct CanDrive {
     layout: Layout,
     last_output: Option<Output>,
     rpdo_sent_us: Option<u64>,
+    /// Outputs carried by SDO ([`PdoPlan::sdo_out`]): object, byte range in the output
+    /// image, and the bytes last written (`None`: not yet).
+    sdo_out: Vec<(ObjectAddress, core::ops::Range<usize>, Option<[u8; 4]>)>,
+    /// Inputs carried by SDO ([`PdoPlan::sdo_in`]): object and byte range in the input image.
+    sdo_in: Vec<(ObjectAddress, core::ops::Range<usize>)>,
+    /// Whether the inputs carried by SDO have been read once.
+    sdo_in_seen: bool,
 }
 
 impl CanDrive {
@@ -56,8 +63,25 @@ impl CanDrive {
         plan: PdoPlan,
         axis: Axis,
     ) -> Result<Self, FieldError> {
-        let mapping = plan.mapping();
+        let mapping = plan.image_mapping();
         let layout = Layout::new(&mapping);
+        let bytes_of = |dir: Direction, e: &crate::pdo::PdoEntry| {
+            layout.find(dir, e.address()).map(|m| {
+                let at = m.byte_offset();
+                (e.address(), at..at + usize::from(m.bits()).div_ceil(8))
+            })
+        };
+        let sdo_out: Vec<_> = plan
+            .sdo_out
+            .iter()
+            .filter_map(|e| bytes_of(Direction::Rx, e))
+            .map(|(a, r)| (a, r, None))
+            .collect();
+        let sdo_in: Vec<_> = plan
+            .sdo_in
+            .iter()
+            .filter_map(|e| bytes_of(Direction::Tx, e))
+            .collect();
         let binding = AxisBinding::resolve(&layout, &Dictionary::new(profile.dictionary))?;
         let slots = |dir: Direction| {
             let mut v: Vec<&super::pdo_plan::CanPdo> = plan.pdos(dir).iter().collect();
@@ -92,7 +116,51 @@ impl CanDrive {
             layout,
             last_output: None,
             rpdo_sent_us: None,
+            sdo_out,
+            sdo_in,
+            sdo_in_seen: false,
         })
+    }
+
+    /// The next output carried by SDO whose value changed since it was last written (slot,
+    /// object, bytes), in the plan's order — the controlword last, so a new target is in
+    /// place before the edge that starts it. Allocation-free.
+    pub fn next_sdo_output(&self) -> Option<(usize, ObjectAddress, [u8; 4], usize)> {
+        self.sdo_out
+            .iter()
+            .enumerate()
+            .find_map(|(k, (addr, range, sent))| {
+                let now = self.rx.get(range.clone())?;
+                let mut b = [0u8; 4];
+                b.get_mut(..now.len())?.copy_from_slice(now);
+                (*sent != Some(b)).then_some((k, *addr, b, now.len()))
+            })
+    }
+
+    /// Record that SDO output slot `k` was written with `bytes`.
+    pub fn sdo_output_written(&mut self, k: usize, bytes: [u8; 4]) {
+        if let Some(s) = self.sdo_out.get_mut(k) {
+            s.2 = Some(bytes);
+        }
+    }
+
+    /// The inputs carried by SDO (object, byte range in the input image).
+    pub fn sdo_inputs(&self) -> &[(ObjectAddress, core::ops::Range<usize>)] {
+        &self.sdo_in
+    }
+
+    /// Store an input read by SDO (slot `k`).
+    pub(crate) fn store_sdo_input(&mut self, k: usize, data: &[u8]) {
+        let Some((_, range)) = self.sdo_in.get(k) else {
+            return;
+        };
+        let n = range.len().min(data.len());
+        if let (Some(dst), Some(src)) =
+            (self.tx.get_mut(range.start..range.start + n), data.get(..n))
+        {
+            dst.copy_from_slice(src);
+        }
+        self.sdo_in_seen = true;
     }
 
     /// The node-ID.
@@ -140,9 +208,11 @@ impl CanDrive {
         &self.tx
     }
 
-    /// Whether every TPDO has been received at least once.
+    /// Whether every TPDO has been received at least once (and the inputs carried by SDO
+    /// read).
     pub fn has_feedback(&self) -> bool {
-        (0..self.tpdos.len()).all(|i| self.tpdo_seen_us.get(i).is_some_and(Option::is_some))
+        (self.sdo_in.is_empty() || self.sdo_in_seen)
+            && (0..self.tpdos.len()).all(|i| self.tpdo_seen_us.get(i).is_some_and(Option::is_some))
     }
 
     /// When TPDO slot `i` last arrived.

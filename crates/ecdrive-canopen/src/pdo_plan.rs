@@ -37,6 +37,9 @@ pub struct CanPdo {
     pub event_timer: u16,
     /// Mapped entries, in order.
     pub entries: Vec<PdoEntry>,
+    /// The drive's own mapping, used as it is: its mapping object cannot be written (an EDS
+    /// file that makes 16xxh/1Axxh read-only, as Faulhaber's and Animatics' do).
+    pub fixed: bool,
 }
 
 impl CanPdo {
@@ -58,14 +61,33 @@ impl CanPdo {
     }
 }
 
-/// The RPDOs (master → drive) and TPDOs (drive → master) of one drive.
+/// The RPDOs (master → drive) and TPDOs (drive → master) of one drive, and the cyclic
+/// objects no PDO of the drive can carry, which go by SDO.
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct PdoPlan {
     /// RPDOs.
     pub rpdos: Vec<CanPdo>,
     /// TPDOs.
     pub tpdos: Vec<CanPdo>,
+    /// Outputs no RPDO carries (6060h not mappable, a drive with fixed RPDOs or none): written
+    /// by SDO when they change, the controlword last.
+    pub sdo_out: Vec<PdoEntry>,
+    /// Inputs no TPDO carries: read by SDO every cycle.
+    pub sdo_in: Vec<PdoEntry>,
 }
+
+/// **\[REC\]** The cyclic objects the master carries by SDO when no PDO of the drive can:
+/// those the CiA 402 engine cannot run without (outputs, inputs). 603Fh and the ip record are
+/// left out (optional).
+const BY_SDO_RX: [u16; 5] = [0x6060, 0x607A, 0x60FF, 0x6071, 0x6040];
+/// See [`BY_SDO_RX`].
+const BY_SDO_TX: [u16; 6] = [0x6041, 0x6061, 0x6064, 0x6063, 0x606C, 0x6077];
+
+/// The pseudo mapping objects under which the SDO-carried objects sit in the process image
+/// (after the PDOs; never written to the drive).
+pub const SDO_IMAGE_RX: u16 = 0x17FF;
+/// See [`SDO_IMAGE_RX`].
+pub const SDO_IMAGE_TX: u16 = 0x1BFF;
 
 /// A plan the drive would refuse; each message names the drive, the PDO and the rule.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -263,7 +285,10 @@ impl PdoPlan {
     }
 
     /// `rx`/`tx` packed in order into as few PDOs as the drive allows (see
-    /// [`PdoPlan::standard`]), with the entries left out (not mappable here, or no room).
+    /// [`PdoPlan::standard`]), with the entries left out (not mappable here, or no room). A
+    /// PDO whose mapping the drive fixes is used as it is where it carries a wanted object;
+    /// the rest go into the PDOs the drive lets the master map; what still has no place and
+    /// the engine needs ([`BY_SDO_RX`], [`BY_SDO_TX`]) goes by SDO.
     fn packed(
         profile: &CanDriveProfile,
         rx: &[PdoEntry],
@@ -272,56 +297,154 @@ impl PdoPlan {
         let dict = Dictionary::new(profile.dictionary);
         let tq = profile.supports(crate::cia402::OperationMode::ProfileTorque);
         let ip = profile.supports(crate::cia402::OperationMode::InterpolatedPosition);
-        let usable = |e: &PdoEntry, flag: EntryAccess| {
+        // A drive without 6064h reports its position as 6063h (internal increments).
+        let tx: Vec<PdoEntry> = tx
+            .iter()
+            .map(|e| {
+                if e.index == 0x6064
+                    && dict.object(0x6064).is_none()
+                    && dict.object(0x6063).is_some()
+                {
+                    PdoEntry::new(0x6063, 0, 32)
+                } else {
+                    *e
+                }
+            })
+            .collect();
+        let tx = tx.as_slice();
+        // The object exists with this size and the drive's modes use it.
+        let exists = |e: &PdoEntry| {
             if (e.index == 0x6071 && !tq) || (e.index == 0x60C1 && !ip) {
                 return false;
             }
             dict.entry(e.address())
-                .is_some_and(|d| d.access.contains(flag) && d.bit_len == u16::from(e.bits))
+                .is_some_and(|d| d.bit_len == u16::from(e.bits))
+        };
+        let usable = |e: &PdoEntry, flag: EntryAccess| {
+            exists(e)
+                && dict
+                    .entry(e.address())
+                    .is_some_and(|d| d.access.contains(flag))
         };
         let mut left_out = Vec::new();
+        let mut by_sdo: [Vec<PdoEntry>; 2] = [Vec::new(), Vec::new()];
         let mut pack = |cands: &[PdoEntry], flag: EntryAccess, dir: Direction, ttype: u8| {
             let limits = profile.pdo.limits.direction(dir);
+            let defaults = match dir {
+                Direction::Rx => profile.pdo.default_rpdos,
+                Direction::Tx => profile.pdo.default_tpdos,
+            };
             let mut out: Vec<CanPdo> = Vec::new();
+            // The drive's fixed PDOs that carry something wanted, as they are.
+            for number in 1..=4u8 {
+                let fixed = limits
+                    .range_of(map_index(dir, number))
+                    .is_some_and(|r| !r.mapping_writable);
+                let Some(d) = defaults.iter().find(|d| d.number == number) else {
+                    continue;
+                };
+                if fixed && d.mapping.iter().any(|e| cands.contains(e) && exists(e)) {
+                    out.push(CanPdo {
+                        number,
+                        cob_id: None,
+                        transmission_type: ttype,
+                        inhibit_time: 0,
+                        event_timer: 0,
+                        entries: d.mapping.to_vec(),
+                        fixed: true,
+                    });
+                }
+            }
+            let carried: Vec<PdoEntry> = out.iter().flat_map(|p| p.entries.clone()).collect();
+            let free: Vec<u8> = (1..=4u8)
+                .filter(|n| {
+                    limits
+                        .range_of(map_index(dir, *n))
+                        .is_some_and(|r| r.mapping_writable)
+                })
+                .collect();
+            let mut current: Option<usize> = None;
+            let mut next_free = 0usize;
             for e in cands {
+                if carried.contains(e) {
+                    continue;
+                }
                 if !usable(e, flag) {
                     left_out.push(*e);
                     continue;
                 }
-                let max_entries = limits
-                    .range_of(map_index(dir, (out.len().max(1)) as u8))
-                    .map(|r| usize::from(r.max_entries))
-                    .unwrap_or(0);
-                let fits = out.last().is_some_and(|p| {
+                let fits = current.and_then(|i| out.get(i)).is_some_and(|p| {
+                    let max_entries = limits
+                        .range_of(map_index(dir, p.number))
+                        .map_or(0, |r| usize::from(r.max_entries));
                     p.entries.len() < max_entries
                         && p.bytes() * 8 + usize::from(e.bits)
                             <= usize::from(profile.pdo.max_pdo_bytes) * 8
                 });
                 if !fits {
-                    if out.len() >= 4 {
+                    // At most four PDOs, and only those the drive lets the master map.
+                    let Some(&number) = free.get(next_free) else {
                         left_out.push(*e);
                         continue;
-                    }
+                    };
+                    next_free += 1;
                     out.push(CanPdo {
-                        number: out.len() as u8 + 1,
+                        number,
                         cob_id: None,
                         transmission_type: ttype,
                         inhibit_time: 0,
                         event_timer: 0,
                         entries: Vec::new(),
+                        fixed: false,
                     });
+                    current = Some(out.len() - 1);
                 }
-                if let Some(p) = out.last_mut() {
+                if let Some(p) = current.and_then(|i| out.get_mut(i)) {
                     p.entries.push(*e);
                 }
             }
+            out.sort_by_key(|p| p.number);
             out
         };
         let rt = pick_type(&profile.pdo.rpdo_types, &[0, 1, 255]);
         let tt = pick_type(&profile.pdo.tpdo_types, &[1, 0, 255]);
         let rpdos = pack(rx, EntryAccess::RXPDO, Direction::Rx, rt);
         let tpdos = pack(tx, EntryAccess::TXPDO, Direction::Tx, tt);
-        (Self { rpdos, tpdos }, left_out)
+        // What the engine needs and no PDO carries: by SDO, where the drive lets the master
+        // write (outputs) or read (inputs) it.
+        for (k, (list, wanted)) in [(rx, &BY_SDO_RX[..]), (tx, &BY_SDO_TX[..])]
+            .into_iter()
+            .enumerate()
+        {
+            let pdos = if k == 0 { &rpdos } else { &tpdos };
+            for index in wanted {
+                let Some(e) = list.iter().find(|e| e.index == *index) else {
+                    continue;
+                };
+                let mapped = pdos.iter().any(|p| p.entries.contains(e));
+                let access_ok = dict.entry(e.address()).is_some_and(|d| {
+                    if k == 0 {
+                        d.access.writable()
+                    } else {
+                        d.access.readable()
+                    }
+                });
+                if !mapped && exists(e) && access_ok {
+                    by_sdo[k].push(*e);
+                    left_out.retain(|x| x != e);
+                }
+            }
+        }
+        let [sdo_out, sdo_in] = by_sdo;
+        (
+            Self {
+                rpdos,
+                tpdos,
+                sdo_out,
+                sdo_in,
+            },
+            left_out,
+        )
     }
 
     /// The PDOs of one direction.
@@ -330,6 +453,22 @@ impl PdoPlan {
             Direction::Rx => &self.rpdos,
             Direction::Tx => &self.tpdos,
         }
+    }
+
+    /// The process image of a drive with this plan: the PDOs' [`PdoPlan::mapping`], then the
+    /// objects carried by SDO under [`SDO_IMAGE_RX`]/[`SDO_IMAGE_TX`], for
+    /// [`crate::pdo::Layout`].
+    pub fn image_mapping(&self) -> Mapping {
+        let m = self.mapping();
+        let mut rx: Vec<Pdo> = m.pdos(Direction::Rx).to_vec();
+        let mut tx: Vec<Pdo> = m.pdos(Direction::Tx).to_vec();
+        if !self.sdo_out.is_empty() {
+            rx.push(Pdo::owned(SDO_IMAGE_RX, self.sdo_out.clone()));
+        }
+        if !self.sdo_in.is_empty() {
+            tx.push(Pdo::owned(SDO_IMAGE_TX, self.sdo_in.clone()));
+        }
+        Mapping::owned(rx, tx)
     }
 
     /// The plan as a generic [`Mapping`] (mapping objects 0x16xx/0x1Axx in PDO-number order),
@@ -407,8 +546,14 @@ impl PdoPlan {
                 }
             }
         }
+        // The drive's fixed PDOs are its own: the generic rules apply to what the master maps.
+        let mapped = PdoPlan {
+            rpdos: self.rpdos.iter().filter(|p| !p.fixed).cloned().collect(),
+            tpdos: self.tpdos.iter().filter(|p| !p.fixed).cloned().collect(),
+            ..PdoPlan::default()
+        };
         crate::pdo::validate(
-            &self.mapping(),
+            &mapped.mapping(),
             &profile.pdo.limits,
             Some(profile.dictionary),
         )?;
@@ -419,6 +564,12 @@ impl PdoPlan {
     /// documentation](self)); PDOs not in the plan are made invalid. Validate first.
     pub fn writes(&self, profile: &CanDriveProfile, node: u8) -> Vec<PdoWrite> {
         let mut out = Vec::new();
+        // A drive with fewer than four PDOs (as its EDS file says), a TPDO record without
+        // inhibit time or event timer, a COB-ID or transmission type the file makes
+        // read-only: what the drive does not have, or does not let the master write, is not
+        // written.
+        let dict = Dictionary::new(profile.dictionary);
+        let has = |addr: ObjectAddress| dict.entry(addr).is_some_and(|e| e.access.writable());
         for dir in Direction::ALL {
             let defaults = match dir {
                 Direction::Rx => profile.pdo.default_rpdos,
@@ -436,6 +587,7 @@ impl PdoPlan {
                         what,
                     };
                 match self.pdos(dir).iter().find(|p| p.number == number) {
+                    None if !has(ObjectAddress::new(comm, 1)) => {}
                     None => {
                         let default_cob = defaults
                             .iter()
@@ -454,45 +606,54 @@ impl PdoPlan {
                     }
                     Some(p) => {
                         let c = u32::from(p.cob_for(dir, node));
-                        out.push(w(
-                            ObjectAddress::new(comm, 1),
-                            0x8000_0000 | no_rtr | c,
-                            DataType::Unsigned32,
-                            "invalidate the PDO (COB-ID bit 31)",
-                        ));
-                        out.push(w(
-                            ObjectAddress::new(map, 0),
-                            0,
-                            DataType::Unsigned8,
-                            "clear the mapping",
-                        ));
-                        for (k, e) in p.entries.iter().enumerate() {
+                        let cob_writable = has(ObjectAddress::new(comm, 1));
+                        if cob_writable {
                             out.push(w(
-                                ObjectAddress::new(map, (k + 1) as u8),
-                                e.to_u32(),
+                                ObjectAddress::new(comm, 1),
+                                0x8000_0000 | no_rtr | c,
                                 DataType::Unsigned32,
-                                "map an object",
+                                "invalidate the PDO (COB-ID bit 31)",
                             ));
                         }
-                        out.push(w(
-                            ObjectAddress::new(map, 0),
-                            p.entries.len() as u32,
-                            DataType::Unsigned8,
-                            "set the number of mapped objects",
-                        ));
-                        out.push(w(
-                            ObjectAddress::new(comm, 2),
-                            u32::from(p.transmission_type),
-                            DataType::Unsigned8,
-                            "set the transmission type",
-                        ));
-                        if dir == Direction::Tx {
+                        if !p.fixed {
+                            out.push(w(
+                                ObjectAddress::new(map, 0),
+                                0,
+                                DataType::Unsigned8,
+                                "clear the mapping",
+                            ));
+                            for (k, e) in p.entries.iter().enumerate() {
+                                out.push(w(
+                                    ObjectAddress::new(map, (k + 1) as u8),
+                                    e.to_u32(),
+                                    DataType::Unsigned32,
+                                    "map an object",
+                                ));
+                            }
+                            out.push(w(
+                                ObjectAddress::new(map, 0),
+                                p.entries.len() as u32,
+                                DataType::Unsigned8,
+                                "set the number of mapped objects",
+                            ));
+                        }
+                        if has(ObjectAddress::new(comm, 2)) {
+                            out.push(w(
+                                ObjectAddress::new(comm, 2),
+                                u32::from(p.transmission_type),
+                                DataType::Unsigned8,
+                                "set the transmission type",
+                            ));
+                        }
+                        if dir == Direction::Tx && has(ObjectAddress::new(comm, 3)) {
                             out.push(w(
                                 ObjectAddress::new(comm, 3),
                                 u32::from(p.inhibit_time),
                                 DataType::Unsigned16,
                                 "set the inhibit time",
                             ));
+                        }
+                        if dir == Direction::Tx && has(ObjectAddress::new(comm, 5)) {
                             out.push(w(
                                 ObjectAddress::new(comm, 5),
                                 u32::from(p.event_timer),
@@ -500,12 +661,14 @@ impl PdoPlan {
                                 "set the event timer",
                             ));
                         }
-                        out.push(w(
-                            ObjectAddress::new(comm, 1),
-                            no_rtr | c,
-                            DataType::Unsigned32,
-                            "validate the PDO",
-                        ));
+                        if cob_writable {
+                            out.push(w(
+                                ObjectAddress::new(comm, 1),
+                                no_rtr | c,
+                                DataType::Unsigned32,
+                                "validate the PDO",
+                            ));
+                        }
                     }
                 }
             }

@@ -305,7 +305,7 @@ pub fn session<T: CanTransport>(
 pub fn emulated_bus(cfg: &CanRunConfig) -> Result<SimBus, CanError> {
     let mut bus = SimBus::new();
     for d in &cfg.drives {
-        let node = EmulatedNode::new(d.profile, d.node).map_err(|e| {
+        let node = EmulatedNode::new(d.emulation, d.node).map_err(|e| {
             CanError::new(
                 NodeRef {
                     id: d.node,
@@ -592,8 +592,19 @@ impl<'a> Run<'a> {
                 }
                 _ => {}
             }
-            if self.errors.iter().any(|e| !e.is_empty()) {
-                return Ok((Outcome::Refused, "a program could not go on".into()));
+            if let Some((i, e)) = self
+                .errors
+                .iter()
+                .enumerate()
+                .find_map(|(i, e)| e.first().map(|e| (i, e)))
+            {
+                let who = self.cfg.drives.get(i).map_or_else(String::new, |d| {
+                    format!(" node {} ({})", d.node, d.profile.name)
+                });
+                return Ok((
+                    Outcome::Refused,
+                    format!("a program could not go on:{who}: {e}"),
+                ));
             }
         }
     }

@@ -13,7 +13,7 @@
 //! use ecdrive::drives::blv_r;
 //!
 //! let mut bus = SimBus::new();
-//! bus.add_node(EmulatedNode::new(&blv_r::PROFILE, 3).unwrap());
+//! bus.add_node(EmulatedNode::new(&ecdrive::sim::canopen::drives::blv_r::SPEC, 3).unwrap());
 //! let mut m = Master::new(bus, MasterConfig::default());
 //! let mut setup = DriveSetup::new(&blv_r::PROFILE);
 //! setup.settings = ecdrive::app::canopen::steps::motion_settings(&blv_r::PROFILE, 10.0, 100.0);

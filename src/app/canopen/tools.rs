@@ -28,6 +28,7 @@ use crate::canopen::transport::{CanTransport, TransportError};
 use crate::canopen::unix_bus::UnixBusPort;
 use crate::drives::{asda_a2, blv_r, lexium_mdrive};
 use crate::od::{DataType, ObjectAddress, SdoAbortCode, Value};
+use crate::sim::canopen::NodeSpec as Emulation;
 use crate::sim::canopen::{EmulatedNode, SimBus};
 use core::fmt;
 use core::ops::RangeInclusive;
@@ -95,11 +96,23 @@ pub const DEMO_NODES: [(u8, &CanDriveProfile); 3] = [
 pub fn demo_bus() -> SimBus {
     let mut bus = SimBus::new();
     for (id, p) in DEMO_NODES {
-        if let Ok(n) = EmulatedNode::new(p, id) {
+        if let Some(e) = emulation_of(p)
+            && let Ok(n) = EmulatedNode::new(e, id)
+        {
             bus.add_node(n);
         }
     }
     bus
+}
+
+/// The software slave's own model of the drive `profile` describes (its table of the same
+/// name, [`crate::sim::canopen::drives`]): the emulation is chosen by the drive's name, never
+/// built from the master's profile.
+pub fn emulation_of(profile: &CanDriveProfile) -> Option<&'static Emulation> {
+    EMULATED_NODES
+        .iter()
+        .find(|(_, p, _)| core::ptr::eq(*p, profile) || p.name == profile.name)
+        .and_then(|(name, _, _)| crate::sim::canopen::drives::by_name(name))
 }
 
 /// Open the bus `spec` names.
@@ -321,48 +334,87 @@ pub const EMULATED_NODES: [(&str, &CanDriveProfile, u8); 4] = [
 ];
 
 /// One emulated node to serve: `NAME` or `NAME@ID` (`asda-a2@0x20`), a name of
-/// [`EMULATED_NODES`] and a node-ID 1–127 (decimal or 0x hex).
+/// [`EMULATED_NODES`] and a node-ID 1–127 (decimal or 0x hex); or `eds:FILE@ID`, any CiA 402
+/// drive emulated from its EDS/DCF file (a DCF's own node-ID unless `@ID` is given); or
+/// `NAME+eds:FILE[@ID]`, a drive of the project with its vendor's file as its dictionary.
 #[derive(Debug, Clone, Copy)]
 pub struct NodeSpec {
     /// The node-ID.
     pub node: u8,
-    /// The emulated drive's profile.
-    pub profile: &'static CanDriveProfile,
-    /// Its name in [`EMULATED_NODES`].
+    /// What is emulated: the software slave's own table, or one built from an EDS file.
+    pub emulation: &'static Emulation,
+    /// Its name in [`EMULATED_NODES`], or the file's product name.
     pub name: &'static str,
+}
+
+/// A node-ID as `@ID` gives it: 1–127, decimal or 0x hex.
+fn node_id(s: &str, t: &str) -> Result<u8, String> {
+    let v = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
+        Some(h) => u8::from_str_radix(h, 16),
+        None => t.parse(),
+    };
+    match v {
+        Ok(v @ 1..=127) => Ok(v),
+        _ => Err(format!("{s:?}: the node-ID must be 1–127, not {t:?}")),
+    }
+}
+
+/// An EDS/DCF file read for emulation, its reader's error as one line naming the file.
+pub fn read_eds(path: &str) -> Result<crate::eds::EdsFile, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("EDS file {path}: {e}"))?;
+    crate::eds::EdsFile::parse(&bytes).map_err(|e| format!("EDS file {path}: {e}"))
 }
 
 impl FromStr for NodeSpec {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        let (name, id) = match s.split_once('@') {
+        let (name, id) = match s.rsplit_once('@') {
             Some((n, id)) => (n.trim(), Some(id.trim())),
             None => (s.trim(), None),
         };
-        let Some(&(name, profile, default)) = EMULATED_NODES.iter().find(|(n, _, _)| *n == name)
-        else {
-            let names: Vec<&str> = EMULATED_NODES.iter().map(|(n, _, _)| *n).collect();
-            return Err(format!(
-                "{name:?} is not an emulated CANopen drive (one of {})",
-                names.join(", ")
-            ));
+        let (table, file) = match name.split_once("eds:") {
+            Some((t, f)) => (t.trim_end_matches('+').trim(), Some(f.trim())),
+            None => (name, None),
         };
-        let node = match id {
-            None => default,
-            Some(t) => {
-                let v = match t.strip_prefix("0x").or_else(|| t.strip_prefix("0X")) {
-                    Some(h) => u8::from_str_radix(h, 16),
-                    None => t.parse(),
-                };
-                match v {
-                    Ok(v @ 1..=127) => v,
-                    _ => return Err(format!("{s:?}: the node-ID must be 1–127, not {t:?}")),
+        let builtin = if table.is_empty() {
+            None
+        } else {
+            match EMULATED_NODES.iter().find(|(n, _, _)| *n == table) {
+                Some(&(n, _, default)) => {
+                    crate::sim::canopen::drives::by_name(n).map(|e| (n, e, default))
+                }
+                None => {
+                    let names: Vec<&str> = EMULATED_NODES.iter().map(|(n, _, _)| *n).collect();
+                    return Err(format!(
+                        "{table:?} is not an emulated CANopen drive (one of {}, or eds:FILE@ID)",
+                        names.join(", ")
+                    ));
                 }
             }
         };
+        let (name, emulation, default) = match (builtin, file) {
+            (Some(b), None) => b,
+            (None, None) => return Err(format!("{s:?}: name an emulated drive or eds:FILE@ID")),
+            (b, Some(path)) => {
+                let f = read_eds(path)?;
+                let e = match b {
+                    Some((_, base, _)) => Emulation::refined(base, &f, path),
+                    None => Emulation::from_eds(&f, path)?,
+                };
+                let name = b.map_or(e.name, |(n, _, _)| n);
+                (name, e, b.map_or(f.node_id.unwrap_or(0), |(_, _, d)| d))
+            }
+        };
+        let node = match id {
+            None if default == 0 => {
+                return Err(format!("{s:?}: give the node-ID: {name}@ID (1–127)"));
+            }
+            None => default,
+            Some(t) => node_id(s, t)?,
+        };
         Ok(Self {
             node,
-            profile,
+            emulation,
             name,
         })
     }
@@ -430,7 +482,7 @@ pub fn serve(
     let mut emulated = Vec::with_capacity(nodes.len());
     for n in nodes {
         emulated.push(
-            EmulatedNode::new(n.profile, n.node).map_err(|e| ServeError::Node {
+            EmulatedNode::new(n.emulation, n.node).map_err(|e| ServeError::Node {
                 node: n.node,
                 name: n.name,
                 reason: e.to_string(),

@@ -12,6 +12,9 @@
 //! [[drive]]
 //! node = 3                   # node-ID 1–127
 //! profile = "blv-r"          # blv-r, asda-a2, lexium-mdrive, lexium-mdrive-closed-loop
+//! # eds = "BLVD-KRD.eds"     # the vendor's EDS/DCF file (relative to this file): alone, any
+//! #                          # CiA 402 drive; with `profile`, the profile takes the file's
+//! #                          # identity and dictionary
 //! mode = "pp"                # the mode at start: pp, pv or tq
 //! units = { name = "rev", counts_per_unit = 36000 }
 //! sdos = { "0x607C:00" = 0 }
@@ -34,6 +37,7 @@ use crate::canopen::profile::CanDriveProfile;
 use crate::master::SetpointLimits;
 use crate::master::program::{RunMode, Step};
 use crate::od::{ObjectAddress, Value};
+use crate::sim::canopen::NodeSpec as Emulation;
 use std::time::Duration;
 use toml::Spanned;
 
@@ -65,6 +69,11 @@ pub struct CanDriveConfig {
     pub key: &'static str,
     /// The drive's profile.
     pub profile: &'static CanDriveProfile,
+    /// The EDS/DCF file the profile was built or refined from, as shown.
+    pub eds: Option<String>,
+    /// What `interface = "can-sim"` emulates at the node: the software slave's own table of
+    /// the drive, or a node built from the same EDS file (never the master's profile).
+    pub emulation: &'static Emulation,
     /// The mode at start.
     pub mode: RunMode,
     /// User units, if given.
@@ -104,7 +113,11 @@ pub struct CanRunConfig {
 /// Whether the file is a CANopen run: a CANopen interface or a drive selected by node.
 pub(super) fn is_canopen(f: &raw::File) -> bool {
     let i = f.interface.get_ref();
-    i == "can-sim" || i.starts_with("vbus:") || f.drive.iter().any(|d| d.get_ref().node.is_some())
+    i == "can-sim"
+        || i.starts_with("vbus:")
+        || f.drive
+            .iter()
+            .any(|d| d.get_ref().node.is_some() || d.get_ref().eds.is_some())
 }
 
 /// **\[REC\]** The SYNC period of a CANopen run unless the file gives one: 4 ms, which every
@@ -262,25 +275,25 @@ fn drive(
             return Err(cx.err(d.span(), key(""), "say which node: give `node` (1–127)"));
         }
     };
-    let Some(p) = &r.profile else {
-        return Err(cx.err(
-            d.span(),
-            key(""),
-            format!("name the drive's profile: {}", profile_names()),
-        ));
+    let builtin = match &r.profile {
+        None => None,
+        Some(p) => match EMULATED_NODES.iter().find(|(n, _, _)| *n == p.get_ref()) {
+            Some(&(name, profile, _)) => Some((name, profile)),
+            None => {
+                return Err(cx.err(
+                    p.span(),
+                    key("profile"),
+                    format!(
+                        "{:?} is not a CANopen drive profile: {}, or give the drive's EDS file                          (eds = \"FILE\")",
+                        p.get_ref(),
+                        profile_names()
+                    ),
+                ));
+            }
+        },
     };
-    let Some(&(name, profile, _)) = EMULATED_NODES.iter().find(|(n, _, _)| *n == p.get_ref())
-    else {
-        return Err(cx.err(
-            p.span(),
-            key("profile"),
-            format!(
-                "{:?} is not a CANopen drive profile: {}",
-                p.get_ref(),
-                profile_names()
-            ),
-        ));
-    };
+    let (name, profile, emulation, eds) =
+        drive_model(cx, &key, d.span(), builtin, r.eds.as_ref(), warnings)?;
     check_cycle(cx, &key, d, profile, cycle, cycle_key)?;
     let mode = match &r.mode {
         Some(m) => {
@@ -315,9 +328,10 @@ fn drive(
                 if !profile.supports(crate::cia402::OperationMode::from_i8(mode.code())) =>
             {
                 Some(format!(
-                    "the {} does not support {}",
+                    "the {} does not support {} ({})",
                     profile.name,
-                    mode.name()
+                    mode.name(),
+                    modes_offered(profile)
                 ))
             }
             Step::Home { method } if *method == 0 || !profile.homing.supports(*method) => {
@@ -378,7 +392,12 @@ fn drive(
         return Err(cx.err(
             span,
             key("mode"),
-            format!("the {} does not support {}", profile.name, mode.name()),
+            format!(
+                "the {} does not support {} ({})",
+                profile.name,
+                mode.name(),
+                modes_offered(profile)
+            ),
         ));
     }
     let step_err = |n: usize, m: String| {
@@ -428,6 +447,8 @@ fn drive(
         node,
         key: name,
         profile,
+        eds,
+        emulation,
         mode,
         units,
         steps,
@@ -443,6 +464,90 @@ fn drive(
             }
         }),
     })
+}
+
+/// The modes a drive offers, for a refusal: "its 6502h declares vl, hm, ip".
+fn modes_offered(p: &CanDriveProfile) -> String {
+    let names: Vec<&str> = p
+        .caps
+        .supported_modes
+        .iter()
+        .map(crate::cia402::OperationMode::short_name)
+        .collect();
+    format!("its 6502h declares {}", names.join(", "))
+}
+
+/// The drive's model: a built-in profile, one built from its EDS file, or a built-in profile
+/// refined by its vendor's file; with what `can-sim` emulates for it (the software slave's own
+/// table, or a node from the same file). Returns the name, the profile, the emulation and the
+/// file as shown.
+fn drive_model(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    span: std::ops::Range<usize>,
+    builtin: Option<(&'static str, &'static CanDriveProfile)>,
+    eds: Option<&Spanned<String>>,
+    warnings: &mut Vec<String>,
+) -> Result<
+    (
+        &'static str,
+        &'static CanDriveProfile,
+        &'static Emulation,
+        Option<String>,
+    ),
+    ConfigError,
+> {
+    let table = |name: &str| {
+        crate::sim::canopen::drives::by_name(name).ok_or_else(|| {
+            cx.err(
+                span.clone(),
+                key("profile"),
+                format!("the software slave has no emulation named {name:?}"),
+            )
+        })
+    };
+    let Some(e) = eds else {
+        let Some((name, profile)) = builtin else {
+            return Err(cx.err(
+                span,
+                key(""),
+                format!(
+                    "name the drive's profile ({}) or its EDS file (eds = \"FILE\")",
+                    profile_names()
+                ),
+            ));
+        };
+        return Ok((name, profile, table(name)?, None));
+    };
+    let dir = std::path::Path::new(cx.file)
+        .parent()
+        .unwrap_or(std::path::Path::new(""));
+    let path = dir.join(e.get_ref());
+    let shown = path.display().to_string();
+    let file = crate::app::canopen::tools::read_eds(&shown)
+        .map_err(|why| cx.err(e.span(), key("eds"), why))?;
+    if !file.warnings.is_empty() {
+        warnings.push(format!(
+            "{}: the EDS file {shown} has {} oddities the reader took in its own way (`ecdrive \
+             eds show {shown}` lists them)",
+            key("eds"),
+            file.warnings.len()
+        ));
+    }
+    match builtin {
+        Some((name, base)) => {
+            let profile = crate::drives::eds_can::refine(base, &file, &shown);
+            let emulation = Emulation::refined(table(name)?, &file, &shown);
+            Ok((name, profile, emulation, Some(shown)))
+        }
+        None => {
+            let profile = crate::drives::eds_can::from_eds(&file, &shown)
+                .map_err(|why| cx.err(e.span(), key("eds"), why.reason))?;
+            let emulation = Emulation::from_eds(&file, &shown)
+                .map_err(|why| cx.err(e.span(), key("eds"), why))?;
+            Ok((profile.name, profile, emulation, Some(shown)))
+        }
+    }
 }
 
 /// The SYNC period against what the drive takes: RPDOs no closer than its minimum gap, and a

@@ -2058,6 +2058,22 @@ fn profile_writes<B>(
                     ),
                 ));
             }
+            // The drive's own range of the object (its manual's, or its EDS file's limits).
+            if let Some(e) = crate::od::Dictionary::new(p.dictionary).entry(obj) {
+                let (lo, hi) = (e.min.as_i128(), e.max.as_i128());
+                if lo.is_some_and(|lo| (r as i128) < lo) || hi.is_some_and(|hi| (r as i128) > hi) {
+                    return Err((
+                        n,
+                        format!(
+                            "the step's {what} is {r} in the {}'s unit of {obj}, outside the \
+                             drive's range {}–{}",
+                            p.name,
+                            lo.map_or_else(|| "…".into(), |v| v.to_string()),
+                            hi.map_or_else(|| "…".into(), |v| v.to_string()),
+                        ),
+                    ));
+                }
+            }
             let value = Value::Uint(r as u64);
             match out.iter().find(|(o, ..)| *o == obj) {
                 Some((_, v0, f)) if *v0 != value => {

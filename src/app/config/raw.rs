@@ -129,6 +129,9 @@ pub(super) struct Drive {
     pub profile: Option<Spanned<String>>,
     #[serde(default)]
     pub esi: Option<Spanned<EsiRef>>,
+    /// CANopen: the drive's EDS/DCF file (relative to the configuration file).
+    #[serde(default)]
+    pub eds: Option<Spanned<String>>,
     #[serde(default)]
     pub profile_file: Option<Spanned<String>>,
     #[serde(default)]

@@ -223,14 +223,14 @@ pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
         DEMO_NODES
             .iter()
             .filter_map(|(id, p)| {
-                EMULATED_NODES
+                let (name, _, _) = EMULATED_NODES
                     .iter()
-                    .find(|(_, q, _)| std::ptr::eq(*q, *p))
-                    .map(|(name, _, _)| NodeSpec {
-                        node: *id,
-                        profile: p,
-                        name,
-                    })
+                    .find(|(_, q, _)| std::ptr::eq(*q, *p))?;
+                Some(NodeSpec {
+                    node: *id,
+                    emulation: tools::emulation_of(p)?,
+                    name,
+                })
             })
             .collect()
     } else {
@@ -257,7 +257,7 @@ pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
             for n in &nodes {
                 eprintln!(
                     "  node {} (0x{:02X}): {} ({})",
-                    n.node, n.node, n.profile.name, n.name
+                    n.node, n.node, n.emulation.name, n.emulation.source
                 );
             }
         },

@@ -594,9 +594,10 @@ pub fn sim(
                     .collect(),
                 can_nodes: EMULATED_NODES
                     .iter()
-                    .map(|(name, p, node)| CanNode {
+                    .map(|(name, _, node)| CanNode {
                         name,
-                        profile: p.name,
+                        profile: ecdrive::sim::canopen::drives::by_name(name)
+                            .map_or("-", |e| e.name),
                         node: *node,
                     })
                     .collect(),
@@ -618,12 +619,18 @@ pub fn sim(
         );
         println!();
         println!("CANopen drives (ecdrive sim --can BUS --node NAME[@ID]), default node-ID:");
-        for (name, p, node) in EMULATED_NODES {
-            println!(
-                "  {name:26} {} ({}), node {node} (0x{node:02X})",
-                p.name, p.source
-            );
+        for (name, _, node) in EMULATED_NODES {
+            if let Some(e) = ecdrive::sim::canopen::drives::by_name(name) {
+                println!(
+                    "  {name:26} {} ({}), node {node} (0x{node:02X})",
+                    e.name, e.source
+                );
+            }
         }
+        println!(
+            "  eds:FILE@ID                any CiA 402 drive from its EDS/DCF file; NAME+eds:FILE \
+             a drive above with its vendor's file as its dictionary"
+        );
         return ExitCode::SUCCESS;
     }
     let Some(interface) = interface else {

@@ -25,6 +25,19 @@ impl<T: CanTransport> Master<T> {
             if d.last_output().is_none() || self.nmt_state(node) != Some(NmtState::Operational) {
                 continue;
             }
+            // Outputs no RPDO of the drive can carry (6060h not mappable, fixed RPDOs or none,
+            // as its EDS file says) go by SDO when they change, before the RPDOs.
+            while let Some((k, addr, bytes, len)) =
+                self.drives.get(i).and_then(CanDrive::next_sdo_output)
+            {
+                self.sdo_download(node, addr, bytes.get(..len).unwrap_or(&[]))?;
+                if let Some(d) = self.drives.get_mut(i) {
+                    d.sdo_output_written(k, bytes);
+                }
+            }
+            let Some(d) = self.drives.get(i) else {
+                continue;
+            };
             // RPDOs no closer than the drive takes them (ASDA-A2: two on one COB-ID within
             // 1 ms raise AL112): a cycle whose frames went out late keeps its place in the
             // schedule, so the next may come sooner; then this cycle's wait for the next
@@ -56,6 +69,29 @@ impl<T: CanTransport> Master<T> {
         if self.cfg.sync_producer {
             self.send(&CanFrame::from_parts(cob::SYNC, [0; 8], 0))?;
             self.stats.syncs += 1;
+        }
+        // Inputs no TPDO of the drive can carry: read by SDO, after the SYNC.
+        for i in 0..self.drives.len() {
+            let Some(d) = self.drives.get(i) else {
+                continue;
+            };
+            let node = d.node();
+            if d.sdo_inputs().is_empty() || self.nmt_state(node) != Some(NmtState::Operational) {
+                continue;
+            }
+            for k in 0..d.sdo_inputs().len() {
+                let Some(addr) = self
+                    .drives
+                    .get(i)
+                    .and_then(|d| d.sdo_inputs().get(k).map(|(a, _)| *a))
+                else {
+                    continue;
+                };
+                let v = self.sdo_upload(node, addr)?;
+                if let Some(d) = self.drives.get_mut(i) {
+                    d.store_sdo_input(k, &v);
+                }
+            }
         }
         let next = start.saturating_add(self.cfg.cycle_us.max(1));
         self.next_cycle_us = Some(next);

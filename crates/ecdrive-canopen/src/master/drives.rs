@@ -112,8 +112,13 @@ impl<T: CanTransport> Master<T> {
                 )?;
             }
         }
-        if dict.object(0x60C2).is_some() && cycle % 1000 == 0 && (1000..=20_000).contains(&cycle) {
-            // ip period in ms (ASDA-A2 60C2h:01, 1–20 ms).
+        // ip period in ms (ASDA-A2 60C2h:01, 1–20 ms), where the drive's range takes it (maxon
+        // EPOS2's EDS file allows only 1 ms: a run that is not ip leaves it alone).
+        let period_fits = dict.entry(ObjectAddress::new(0x60C2, 1)).is_some_and(|e| {
+            let ms = i128::from(cycle / 1000);
+            e.min.as_i128().is_none_or(|lo| ms >= lo) && e.max.as_i128().is_none_or(|hi| ms <= hi)
+        });
+        if period_fits && cycle % 1000 == 0 && (1000..=20_000).contains(&cycle) {
             self.write_uint(
                 node,
                 ObjectAddress::new(0x60C2, 1),

@@ -115,12 +115,15 @@ impl Supervision {
     /// What a drive of `profile` gets by default: [`Supervision::LIFE_GUARDING`] where it has
     /// node guarding (each of the three manuals: the ASDA-A2 raises AL170 with the servo on,
     /// the Lexium MDrive goes to Fault on life-time expiry, the BLV-R sends EMCY 8130h — its
-    /// manual names no motor reaction), else [`Supervision::DEFAULT`].
+    /// manual names no motor reaction), else [`Supervision::DEFAULT`] where it produces a
+    /// heartbeat (1017h), else [`Supervision::None`] (a drive whose EDS file has neither).
     pub fn for_drive(profile: &CanDriveProfile) -> Self {
         if profile.comm.guarding {
             Self::LIFE_GUARDING
-        } else {
+        } else if Dictionary::new(profile.dictionary).object(0x1017).is_some() {
             Self::DEFAULT
+        } else {
+            Self::None
         }
     }
 }

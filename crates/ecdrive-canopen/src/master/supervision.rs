@@ -26,6 +26,17 @@ impl<T: CanTransport> Master<T> {
                         )),
                     ));
                 }
+                if !has(self, 0x1017) {
+                    return Err(self.err(
+                        node,
+                        Some(ObjectAddress::new(0x1017, 0)),
+                        CanErrorKind::Invalid(
+                            "the drive produces no heartbeat (no 1017h): supervise it by node \
+                             guarding"
+                                .into(),
+                        ),
+                    ));
+                }
                 if has(self, 0x100C) {
                     self.write_uint(node, ObjectAddress::new(0x100C, 0), 0, DataType::Unsigned16)?;
                 }
@@ -60,7 +71,9 @@ impl<T: CanTransport> Master<T> {
                         CanErrorKind::Invalid("guard time and life-time factor must be > 0".into()),
                     ));
                 }
-                self.write_uint(node, ObjectAddress::new(0x1017, 0), 0, DataType::Unsigned16)?;
+                if has(self, 0x1017) {
+                    self.write_uint(node, ObjectAddress::new(0x1017, 0), 0, DataType::Unsigned16)?;
+                }
                 self.write_uint(
                     node,
                     ObjectAddress::new(0x100C, 0),
@@ -86,7 +99,9 @@ impl<T: CanTransport> Master<T> {
                 }
             }
             Supervision::None => {
-                self.write_uint(node, ObjectAddress::new(0x1017, 0), 0, DataType::Unsigned16)?;
+                if has(self, 0x1017) {
+                    self.write_uint(node, ObjectAddress::new(0x1017, 0), 0, DataType::Unsigned16)?;
+                }
                 if has(self, 0x100C) {
                     self.write_uint(node, ObjectAddress::new(0x100C, 0), 0, DataType::Unsigned16)?;
                 }

@@ -17,6 +17,8 @@
 //! - [`blv_r`]: Oriental Motor BLV series R type (CANopen).
 //! - [`asda_a2`]: Delta ASDA-A2 (CANopen).
 //! - [`lexium_mdrive`]: Schneider Electric Lexium MDrive (CANopen).
+//! - [`eds_can`]: any CiA 402 drive from its EDS file, and a built-in profile refined by its
+//!   vendor's file.
 //!
 //! ```
 //! use ecdrive_core::drives;
@@ -33,6 +35,7 @@
 pub mod asda_a2;
 pub mod bdhde;
 pub mod blv_r;
+pub mod eds_can;
 pub mod esi_profile;
 pub mod generic;
 pub mod lexium_mdrive;

@@ -38,6 +38,10 @@
 //! [`MAX_FILE_BYTES`] or [`MAX_LINES`], or a file without a single object, is an [`EdsError`].
 //! Nothing in this module panics on any input.
 
+mod dictionary;
+
+pub use dictionary::EdsDictionary;
+
 use crate::od::DataType;
 use std::collections::BTreeMap;
 use std::fmt;

@@ -58,7 +58,7 @@ pub fn standard_type(addr: ObjectAddress) -> Option<DataType> {
         // Error code, controlword, statusword.
         (0x603F..=0x6041, 0) => DataType::Unsigned16,
         (0x6060 | 0x6061, 0) => DataType::Integer8,
-        (0x6064 | 0x606C | 0x607A | 0x60FF | 0x60F4, 0) => DataType::Integer32,
+        (0x6063 | 0x6064 | 0x606C | 0x607A | 0x60FF | 0x60F4, 0) => DataType::Integer32,
         (0x6071 | 0x6077 | 0x60B2, 0) => DataType::Integer16,
         (0x60B1, 0) => DataType::Integer32,
         (0x60FD, 0) => DataType::Unsigned32,
@@ -90,7 +90,13 @@ impl AxisBinding {
             ip_position: get(rx, 0x60C1, 1)?,
             statusword: get(tx, 0x6041, 0)?,
             mode_display: get(tx, 0x6061, 0)?,
-            position: get(tx, 0x6064, 0)?,
+            // A drive without 6064h (Animatics' EDS file) reports its position only as the
+            // internal value 6063h: in increments, which the default factor group (1:1)
+            // makes the same.
+            position: match get(tx, 0x6064, 0)? {
+                Some(f) => Some(f),
+                None => get(tx, 0x6063, 0)?,
+            },
             velocity: get(tx, 0x606C, 0)?,
             torque: get(tx, 0x6077, 0)?,
             error_code: get(tx, 0x603F, 0)?,

@@ -1,7 +1,8 @@
 //! Emulated CANopen drives on the virtual bus.
 //!
 //! - [`EmulatedNode`]: one drive, generic, with all drive differences taken from its
-//!   [`CanDriveProfile`](crate::can::profile::CanDriveProfile) ([`node`]).
+//!   [`NodeSpec`] ([`node`]): the emulator's own tables for the BLV-R, ASDA-A2 and Lexium
+//!   MDrive ([`drives`]), or a vendor's EDS file ([`eds_node`]) — never the master's profiles.
 //! - [`SdoServer`]: the SDO server of a node, over the same object store as the CoE server.
 //! - [`motion`]: the drive side of pp, pv, tq, hm, ip and a simple motor.
 //! - [`SimBus`]: the deterministic in-process world: a [`Hub`] with the master's port and one
@@ -12,14 +13,18 @@
 //!
 //! [`VirtualPort`]: crate::can::transport::VirtualPort
 
+pub mod drives;
+pub mod eds_node;
 pub mod motion;
 pub mod node;
 pub mod quirks;
 pub mod sdo_server;
+pub mod spec;
 
 pub use motion::World;
 pub use node::{EmuError, EmulatedNode, NodeStats};
 pub use sdo_server::SdoServer;
+pub use spec::NodeSpec;
 
 use crate::can::frame::CanFrame;
 use crate::can::transport::{CanTransport, Hub, PortId, TransportError};

@@ -9,7 +9,8 @@
 //! \[REC\].
 
 use super::quirks::EmulationQuirks;
-use crate::can::profile::{CanDriveProfile, HomingSupport, Units};
+use super::spec::NodeSpec;
+use crate::can::profile::{HomingSupport, Units};
 use crate::cia402::{ControlWord, OperationMode, State, StatusWord};
 
 /// **\[REC\]** Velocity below which the motor counts as stopped, rev/s.
@@ -214,7 +215,7 @@ impl Motion {
         mode: OperationMode,
         cw: ControlWord,
         p: &Params,
-        profile: &CanDriveProfile,
+        spec: &NodeSpec,
         quirks: &EmulationQuirks,
         quick_stop_immediate: bool,
     ) -> (StatusWord, bool) {
@@ -246,7 +247,7 @@ impl Motion {
         let mut bits = StatusWord::empty();
         match state {
             State::OperationEnabled => {
-                bits = self.run_mode(now_us, dt, mode, cw, p, profile, quirks);
+                bits = self.run_mode(now_us, dt, mode, cw, p, spec, quirks);
             }
             State::QuickStopActive | State::FaultReactionActive => {
                 self.torque = 0.0;
@@ -286,7 +287,7 @@ impl Motion {
         mode: OperationMode,
         cw: ControlWord,
         p: &Params,
-        profile: &CanDriveProfile,
+        spec: &NodeSpec,
         quirks: &EmulationQuirks,
     ) -> StatusWord {
         let halt = cw.contains(ControlWord::HALT);
@@ -344,7 +345,7 @@ impl Motion {
                 );
             }
             OperationMode::Homing => {
-                bits = self.homing(dt, cw, p, &profile.homing);
+                bits = self.homing(dt, cw, p, &spec.homing);
             }
             OperationMode::InterpolatedPosition => {
                 let enabled =

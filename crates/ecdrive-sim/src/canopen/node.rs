@@ -4,8 +4,8 @@
 //! event timer, RTR), EMCY producer with the error history, store/restore, the device-side
 //! CiA 402 state machine ([`crate::cia402::device`]) and the motion of [`super::motion`].
 //!
-//! The node is generic: every drive difference comes from its [`CanDriveProfile`] (dictionary,
-//! PDO rules, alarms, EMCY format, quirks). It does no I/O: frames go in through
+//! The node is generic: every drive difference comes from its [`NodeSpec`] (dictionary,
+//! PDO rules, alarms, EMCY format, quirks), the emulator's own data, never the master's. It does no I/O: frames go in through
 //! [`EmulatedNode::receive`], time through [`EmulatedNode::tick`], and frames come out of
 //! [`EmulatedNode::poll_transmit`].
 
@@ -14,10 +14,11 @@ use super::motion::{
     STEP_ACCEL_REV_S2, World,
 };
 use super::sdo_server::SdoServer;
+use super::spec::NodeSpec;
 use crate::can::emcy::Emergency;
 use crate::can::frame::{CanFrame, cob};
 use crate::can::nmt::{ErrorControl, NmtCommand, NmtState};
-use crate::can::profile::{Alarm, CanDriveProfile, EnabledNmtReaction, Transmission, od};
+use crate::can::profile::{Alarm, EnabledNmtReaction, Transmission, od};
 use crate::cia402::device::{Device, DeviceConfig, DeviceInputs, Reaction};
 use crate::cia402::{AccelUnit, ProfileUnits, TorqueSlopeUnit, Units};
 use crate::cia402::{ControlWord, OperationMode, State, StopRamp};
@@ -33,7 +34,7 @@ pub enum EmuError {
     /// Node-ID outside 1–127.
     #[error("node-ID {0} is outside 1–127")]
     NodeId(u8),
-    /// The profile's dictionary cannot be served.
+    /// The spec's dictionary cannot be served.
     #[error("the {drive} dictionary cannot be emulated: {reason}")]
     Dictionary {
         /// Drive.
@@ -96,7 +97,7 @@ pub const OUTBOX_FRAMES: usize = 1024;
 #[derive(Debug, Clone)]
 pub struct EmulatedNode {
     id: u8,
-    profile: &'static CanDriveProfile,
+    spec: &'static NodeSpec,
     /// What the node does beyond its dictionary (the emulator's own data).
     quirks: super::quirks::EmulationQuirks,
     /// The touch probes (60B8h–60BDh, 60D5h–60D8h) on the machine's probe inputs, and the
@@ -166,36 +167,32 @@ const SAVE: u32 = 0x6576_6173;
 const LOAD: u32 = 0x6461_6F6C;
 
 impl EmulatedNode {
-    /// A node of `profile` with node-ID `id`, powered off. Call [`EmulatedNode::power_on`] (the
-    /// [`SimBus`](super::SimBus) does) to boot it.
-    pub fn new(profile: &'static CanDriveProfile, id: u8) -> Result<Self, EmuError> {
-        Self::with_world(profile, id, World::default())
+    /// A node of model `spec` with node-ID `id`, powered off. Call [`EmulatedNode::power_on`]
+    /// (the [`SimBus`](super::SimBus) does) to boot it.
+    pub fn new(spec: &'static NodeSpec, id: u8) -> Result<Self, EmuError> {
+        Self::with_world(spec, id, World::default())
     }
 
     /// A node with a custom machine (limit and home switch positions).
-    pub fn with_world(
-        profile: &'static CanDriveProfile,
-        id: u8,
-        world: World,
-    ) -> Result<Self, EmuError> {
+    pub fn with_world(spec: &'static NodeSpec, id: u8, world: World) -> Result<Self, EmuError> {
         if !(1..=127).contains(&id) {
             return Err(EmuError::NodeId(id));
         }
-        let mut od = ValueStore::new(profile.dictionary).map_err(|e| EmuError::Dictionary {
-            drive: profile.name,
+        let mut od = ValueStore::new(spec.dictionary).map_err(|e| EmuError::Dictionary {
+            drive: spec.name,
             reason: e.to_string(),
         })?;
         adjust_node_ids(&mut od, id);
         let stored = od.clone();
-        let caps = profile.caps;
+        let caps = spec.caps;
         let device = Device::new(DeviceConfig::from_caps(
             &caps,
             caps.default_quick_stop_option,
         ));
         Ok(Self {
             id,
-            profile,
-            quirks: super::quirks::for_vendor(profile.identity.vendor_id),
+            spec,
+            quirks: spec.quirks,
             probes: crate::machine::TouchProbes::default(),
             probe_from: 0.0,
             od,
@@ -212,7 +209,7 @@ impl EmulatedNode {
             rpdo: [PdoRt::default(); 4],
             tpdo: [PdoRt::default(); 4],
             device,
-            motion: Motion::new(world, &profile.units),
+            motion: Motion::new(world, &spec.units),
             alarm: None,
             alarm_cause: false,
             warning: None,
@@ -237,9 +234,9 @@ impl EmulatedNode {
         self.id
     }
 
-    /// The profile.
-    pub const fn profile(&self) -> &'static CanDriveProfile {
-        self.profile
+    /// The drive model the node emulates.
+    pub const fn spec(&self) -> &'static NodeSpec {
+        self.spec
     }
 
     /// The NMT state (boot-up until powered on).
@@ -309,11 +306,11 @@ impl EmulatedNode {
         self.motion.following_error = on;
     }
 
-    /// Raise the alarm with vendor number `number` from the profile's table, as the drive does:
+    /// Raise the alarm with vendor number `number` from the spec's table, as the drive does:
     /// EMCY, 603Fh, 1001h, 1003h, and Fault for a fault alarm. Returns `false` for an unknown
     /// number. The cause is gone at once unless [`EmulatedNode::set_alarm_cause`] says otherwise.
     pub fn inject_alarm(&mut self, number: u16) -> bool {
-        match self.profile.alarm(number) {
+        match self.spec.alarm(number) {
             Some(a) => {
                 self.raise(a);
                 true
@@ -362,7 +359,7 @@ impl EmulatedNode {
         for (i, pending) in self.restore_pending.iter_mut().enumerate() {
             if *pending {
                 let (a, b) = comm_range(i as u8);
-                if let Ok(mut fresh) = ValueStore::new(self.profile.dictionary) {
+                if let Ok(mut fresh) = ValueStore::new(self.spec.dictionary) {
                     adjust_node_ids(&mut fresh, self.id);
                     copy_range(&fresh, &mut self.stored, a, b);
                 }
@@ -391,9 +388,9 @@ impl EmulatedNode {
     fn nmt_command(&mut self, cmd: NmtCommand) {
         let energised = self.device.state().is_energised();
         let reaction = match cmd {
-            NmtCommand::Stop if energised => Some(self.profile.nmt_stop_while_enabled),
+            NmtCommand::Stop if energised => Some(self.spec.nmt_stop_while_enabled),
             NmtCommand::ResetNode | NmtCommand::ResetCommunication if energised => {
-                Some(self.profile.nmt_reset_while_enabled)
+                Some(self.spec.nmt_reset_while_enabled)
             }
             NmtCommand::EnterPreOperational if energised && self.quirks.operational_required => {
                 Some(EnabledNmtReaction::Unspecified)
@@ -477,7 +474,7 @@ impl EmulatedNode {
             return;
         }
         if id == cob::error_control(self.id) {
-            if frame.is_remote() && self.profile.comm.guarding {
+            if frame.is_remote() && self.spec.comm.guarding {
                 self.on_guard_request();
             }
             return;
@@ -522,7 +519,7 @@ impl EmulatedNode {
         if !self.nmt.serves_sdo() || self.nmt == NmtState::BootUp {
             return;
         }
-        let min = u64::from(self.profile.comm.sdo_min_interval_us);
+        let min = u64::from(self.spec.comm.sdo_min_interval_us);
         let too_soon = min > 0
             && self
                 .last_sdo_us
@@ -555,7 +552,7 @@ impl EmulatedNode {
         let Some(p) = self.rpdo.get(k).copied() else {
             return;
         };
-        let min = u64::from(self.profile.comm.rpdo_min_interval_us);
+        let min = u64::from(self.spec.comm.rpdo_min_interval_us);
         let too_soon = min > 0
             && p.last_rx_us
                 .is_some_and(|t| self.frame_us.saturating_sub(t) < min);
@@ -790,7 +787,7 @@ impl EmulatedNode {
             self.check_entry(v, rx)?;
             bits += v & 0xFF;
         }
-        if bits > u32::from(self.profile.pdo.max_pdo_bytes) * 8 {
+        if bits > u32::from(self.spec.pdo.max_pdo_bytes) * 8 {
             return Err(SdoAbortCode::PDO_TOO_LONG);
         }
         Ok(())
@@ -828,7 +825,7 @@ impl EmulatedNode {
     // ----- the CiA 402 side --------------------------------------------------------------------
 
     fn quick_stop_option(&self) -> crate::cia402::QuickStopOption {
-        let caps = &self.profile.caps;
+        let caps = &self.spec.caps;
         self.od
             .int(ObjectAddress::new(0x605A, 0))
             .and_then(|c| i16::try_from(c).ok())
@@ -845,7 +842,7 @@ impl EmulatedNode {
     }
 
     fn device_config(&self) -> DeviceConfig {
-        let mut cfg = DeviceConfig::from_caps(&self.profile.caps, self.quick_stop_option());
+        let mut cfg = DeviceConfig::from_caps(&self.spec.caps, self.quick_stop_option());
         if self.bit3_mode() {
             cfg.state_skipping = true;
         }
@@ -860,9 +857,9 @@ impl EmulatedNode {
         let e = Emergency {
             error_code: a.code,
             error_register: a.register,
-            data: self.profile.emcy.vendor_bytes(a.number),
+            data: self.spec.emcy.vendor_bytes(a.number),
         };
-        self.push_history(self.profile.emcy.history_entry(a.code, a.number));
+        self.push_history(self.spec.emcy.history_entry(a.code, a.number));
         let _ = self
             .od
             .set_uint(ObjectAddress::new(0x603F, 0), u64::from(a.code));
@@ -890,7 +887,7 @@ impl EmulatedNode {
     }
 
     fn push_history(&mut self, entry: u32) {
-        let depth = self.profile.comm.error_history;
+        let depth = self.spec.comm.error_history;
         if depth == 0 {
             return;
         }
@@ -921,7 +918,7 @@ impl EmulatedNode {
     }
 
     fn params(&self) -> Params {
-        let u = &self.profile.units;
+        let u = &self.spec.units;
         let ppr = u.position_per_rev;
         let int = |i: u16, s: u8| self.od.int(ObjectAddress::new(i, s));
         let f = |i: u16, s: u8| int(i, s).map(|v| v as f64);
@@ -988,7 +985,7 @@ impl EmulatedNode {
     }
 
     fn clear_targets(&mut self) {
-        for a in self.profile.enable.targets_cleared_on_enable {
+        for a in self.spec.targets_cleared_on_enable {
             let _ = self.od.set_int(*a, 0);
         }
     }
@@ -1062,7 +1059,7 @@ impl EmulatedNode {
             // In Fault, a reset edge clears the alarm once its cause is gone (transition 15
             // needs `fault` false); elsewhere an alarm drives transition 13.
             fault: self.alarm.is_some() && (self.alarm_cause || before != State::Fault),
-            motion_stopped: self.motion.vel.abs() <= 1e-4 * self.profile.units.position_per_rev,
+            motion_stopped: self.motion.vel.abs() <= 1e-4 * self.spec.units.position_per_rev,
             main_power: self.main_power,
             remote: self.remote,
             warning: self.warning.is_some() || self.alarm.is_some(),
@@ -1081,7 +1078,7 @@ impl EmulatedNode {
         let requested =
             OperationMode::from_i8(self.od.int(ObjectAddress::new(0x6060, 0)).unwrap_or(0) as i8);
         let mode = if requested == OperationMode::NoMode
-            || self.profile.caps.supported_modes.contains(requested)
+            || self.spec.caps.supported_modes.contains(requested)
         {
             requested
         } else {
@@ -1102,13 +1099,13 @@ impl EmulatedNode {
             mode,
             cw,
             &p,
-            self.profile,
+            self.spec,
             &self.quirks,
             immediate,
         );
 
         let sw = self.device.statusword() | bits;
-        let u = &self.profile.units;
+        let u = &self.spec.units;
         let vel_units = u.from_rev_per_s(u.velocity, self.motion.vel / u.position_per_rev);
         let pos = i64::from(self.motion.reported_position());
         let set = |od: &mut ValueStore, i: u16, v: i64| {
@@ -1226,7 +1223,7 @@ impl EmulatedNode {
         let cob_id = self.od.uint(ObjectAddress::new(0x1005, 0)).unwrap_or(0x80);
         let period = self.od.uint(ObjectAddress::new(0x1006, 0)).unwrap_or(0);
         self.sync_next_us =
-            (self.profile.comm.sync_producer && cob_id & 0x4000_0000 != 0 && period > 0)
+            (self.spec.comm.sync_producer && cob_id & 0x4000_0000 != 0 && period > 0)
                 .then(|| self.now_us + period);
     }
 
@@ -1277,12 +1274,12 @@ impl EmulatedNode {
             (0x1003, 0) if v != Some(0) => return Err(SdoAbortCode::VALUE_RANGE),
             (0x1005, 0) => {
                 let v = v.unwrap_or(0);
-                if v & 0x4000_0000 != 0 && !self.profile.comm.sync_producer {
+                if v & 0x4000_0000 != 0 && !self.spec.comm.sync_producer {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
             }
             (0x1006, 0) => {
-                let g = u64::from(self.profile.comm.cycle_period_granularity_us);
+                let g = u64::from(self.spec.comm.cycle_period_granularity_us);
                 if g > 0 && v.unwrap_or(0) % g != 0 {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
@@ -1300,10 +1297,10 @@ impl EmulatedNode {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
             }
-            (0x1400..=0x15FF, 2) if !self.profile.pdo.rpdo_types.allows(v.unwrap_or(0) as u8) => {
+            (0x1400..=0x15FF, 2) if !self.spec.pdo.rpdo_types.allows(v.unwrap_or(0) as u8) => {
                 return Err(SdoAbortCode::VALUE_RANGE);
             }
-            (0x1800..=0x19FF, 2) if !self.profile.pdo.tpdo_types.allows(v.unwrap_or(0) as u8) => {
+            (0x1800..=0x19FF, 2) if !self.spec.pdo.tpdo_types.allows(v.unwrap_or(0) as u8) => {
                 return Err(SdoAbortCode::VALUE_RANGE);
             }
             (0x1800..=0x19FF, 3) => {
@@ -1331,16 +1328,16 @@ impl EmulatedNode {
             }
             (0x6060, 0) => {
                 let m = OperationMode::from_i8(sv.unwrap_or(0) as i8);
-                if m != OperationMode::NoMode && !self.profile.caps.supported_modes.contains(m) {
+                if m != OperationMode::NoMode && !self.spec.caps.supported_modes.contains(m) {
                     return Err(SdoAbortCode::VALUE_RANGE);
                 }
             }
-            (0x6098, 0) if !self.profile.homing.supports(sv.unwrap_or(0) as i8) => {
+            (0x6098, 0) if !self.spec.homing.supports(sv.unwrap_or(0) as i8) => {
                 return Err(SdoAbortCode::VALUE_RANGE);
             }
             (0x605A, 0)
                 if self
-                    .profile
+                    .spec
                     .caps
                     .quick_stop_option(sv.unwrap_or(0) as i16)
                     .is_none() =>
@@ -1462,17 +1459,22 @@ impl EmulatedNode {
             return Ok(());
         }
         let need = usize::from(e.bit_len).div_ceil(8);
+        let (too_long, too_short) = if self.quirks.length_abort_high_low {
+            (SdoAbortCode::LENGTH_TOO_HIGH, SdoAbortCode::LENGTH_TOO_LOW)
+        } else {
+            (SdoAbortCode::LENGTH_MISMATCH, SdoAbortCode::LENGTH_MISMATCH)
+        };
         let bytes: &[u8] = if e.data_type.is_string() {
             if data.len() > need && need > 0 {
-                return Err(SdoAbortCode::LENGTH_TOO_HIGH);
+                return Err(too_long);
             }
             data
         } else if data.len() == need {
             data
         } else if data.len() > need {
-            return Err(SdoAbortCode::LENGTH_TOO_HIGH);
+            return Err(too_long);
         } else {
-            return Err(SdoAbortCode::LENGTH_TOO_LOW);
+            return Err(too_short);
         };
         let value = Value::decode(e.data_type, bytes).ok();
         let iv = value.as_ref().and_then(Value::as_i128);
@@ -1480,12 +1482,20 @@ impl EmulatedNode {
             if let Some(min) = e.min.as_i128()
                 && x < min
             {
-                return Err(SdoAbortCode::VALUE_TOO_LOW);
+                return Err(if self.quirks.range_abort_high_low {
+                    SdoAbortCode::VALUE_TOO_LOW
+                } else {
+                    SdoAbortCode::VALUE_RANGE
+                });
             }
             if let Some(max) = e.max.as_i128()
                 && x > max
             {
-                return Err(SdoAbortCode::VALUE_TOO_HIGH);
+                return Err(if self.quirks.range_abort_high_low {
+                    SdoAbortCode::VALUE_TOO_HIGH
+                } else {
+                    SdoAbortCode::VALUE_RANGE
+                });
             }
         }
         let uv = iv.and_then(|x| u64::try_from(x).ok());
@@ -1493,7 +1503,7 @@ impl EmulatedNode {
         self.check_write(addr, uv, sv)?;
         self.od.set_raw(addr, bytes)?;
         if addr.index == 0x1003 {
-            for s in 1..=self.profile.comm.error_history {
+            for s in 1..=self.spec.comm.error_history {
                 let _ = self.od.set_uint(ObjectAddress::new(0x1003, s), 0);
             }
         }

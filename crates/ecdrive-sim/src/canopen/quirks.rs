@@ -1,6 +1,7 @@
-//! What an emulated CANopen node does beyond its dictionary: the emulator's own data, per drive
-//! (found by its vendor ID, 1018h:01), not part of the master's profiles. Each value names the
-//! manual section it comes from.
+//! What an emulated CANopen node does beyond its dictionary: the emulator's own data, not part
+//! of the master's profiles. Each drive's table (`super::drives`) sets its own, naming the
+//! manual section each value comes from; a node from an EDS file has none
+//! ([`EmulationQuirks::NONE`]).
 
 use crate::od::ObjectAddress;
 
@@ -24,10 +25,10 @@ pub struct EmulationQuirks {
     /// Leaving NMT Operational while enabled disables the power stage (BLV-R §5.1 ties
     /// excitation to Operational).
     pub operational_required: bool,
-    /// Alarm (vendor number) raised for an SDO request within the profile's
+    /// Alarm (vendor number) raised for an SDO request within the spec's
     /// `sdo_min_interval_us` of the previous one (ASDA-A2 AL111).
     pub sdo_overrun_alarm: Option<u16>,
-    /// Alarm raised for two frames on one RPDO COB-ID within the profile's
+    /// Alarm raised for two frames on one RPDO COB-ID within the spec's
     /// `rpdo_min_interval_us` (ASDA-A2 AL112).
     pub rpdo_overrun_alarm: Option<u16>,
     /// Alarm raised for an RPDO shorter than its mapping (BLV-R, Lexium: EMCY 8210h; ASDA-A2
@@ -45,6 +46,13 @@ pub struct EmulationQuirks {
     /// ZSG-N output, §7.6.1); the probe inputs themselves are the machine's
     /// ([`crate::machine::World`]) for every node whose dictionary has 60B8h.
     pub touch_probe_index_pulse: bool,
+    /// A value past an entry's range is refused with CiA 301's refinements 0609 0031h (too
+    /// high) / 0609 0032h (too low); `false`: with 0609 0030h only, the one range code the
+    /// drive's manual lists (ASDA-A2 §5.3, Lexium MDrive §7.4).
+    pub range_abort_high_low: bool,
+    /// A value of the wrong length is refused with CiA 301's refinements 0607 0012h (too long)
+    /// / 0607 0013h (too short); `false`: with 0607 0010h only (ASDA-A2 §5.3).
+    pub length_abort_high_low: bool,
 }
 
 impl EmulationQuirks {
@@ -59,61 +67,7 @@ impl EmulationQuirks {
         ip_needs_enable_bit: true,
         pv_zero_speed_bit: true,
         touch_probe_index_pulse: false,
+        range_abort_high_low: true,
+        length_abort_high_low: true,
     };
-}
-
-/// Oriental Motor BLV-R (vendor 0x000002BE).
-const BLV_R: EmulationQuirks = EmulationQuirks {
-    // §5.1: the motor is excited only in NMT Operational.
-    operational_required: true,
-    // An RPDO shorter than its mapping: EMCY 8210h.
-    pdo_length_alarm: Some(0x8210),
-    // MANUAL GAP: whether guarding/heartbeat loss stops the motor; the node only sends EMCY
-    // 8130h.
-    // §7.6.1: probe triggers are USR-LAT-IN0/IN1 or the ZSG-N output (once per revolution).
-    touch_probe_index_pulse: true,
-    ..EmulationQuirks::NONE
-};
-
-/// Delta ASDA-A2 (vendor 0x000001DD).
-const ASDA_A2: EmulationQuirks = EmulationQuirks {
-    // P3-12 (0x230C) digit X = 0: "enable operation" alone switches on (§2.2.2).
-    bit3_enable: Some(Bit3Enable {
-        addr: ObjectAddress::new(0x230C, 0),
-        mask: 0x000F,
-        value: 0,
-    }),
-    // AL111: SDO requests too close together; AL112: RPDO frames too close together; AL123:
-    // RPDO length error; AL170: guarding/heartbeat lost while servo on (alarm list, ch. 10).
-    sdo_overrun_alarm: Some(0x0111),
-    rpdo_overrun_alarm: Some(0x0112),
-    pdo_length_alarm: Some(0x0123),
-    guarding_alarm: Some(0x0170),
-    // §5.2: interpolation runs whenever mode 7 is active.
-    ip_needs_enable_bit: false,
-    ..EmulationQuirks::NONE
-};
-
-/// Schneider Electric Lexium MDrive (vendor 0x0000021B).
-const LEXIUM_MDRIVE: EmulationQuirks = EmulationQuirks {
-    // An RPDO shorter than its mapping: EMCY 8210h; guarding/heartbeat lost: EMCY 8130h.
-    pdo_length_alarm: Some(0x8210),
-    guarding_alarm: Some(0x8130),
-    ..EmulationQuirks::NONE
-};
-
-/// The emulator's quirks for the drive with this vendor ID, by vendor.
-const BY_VENDOR: &[(u32, EmulationQuirks)] = &[
-    (0x0000_02BE, BLV_R),
-    (0x0000_01DD, ASDA_A2),
-    (0x0000_021B, LEXIUM_MDRIVE),
-];
-
-/// The quirks of the drive with vendor ID `vendor_id` ([`EmulationQuirks::NONE`] for one the
-/// emulator has none for).
-pub fn for_vendor(vendor_id: u32) -> EmulationQuirks {
-    BY_VENDOR
-        .iter()
-        .find(|(v, _)| *v == vendor_id)
-        .map_or(EmulationQuirks::NONE, |(_, q)| *q)
 }
