@@ -2,8 +2,9 @@
 //! naming each file's source), read by the EDS reader: no file is refused, the identity each
 //! file declares is the one its manifest row records, every file the manifest marks as having
 //! 6040h/6041h is a CiA 402 drive to the reader, and the three project drives' files give the
-//! values their manuals and the corpus README name. Cut and damaged copies of every file never
-//! panic the reader (seeded; `ECDRIVE_SEED` replays a run).
+//! values their manuals and the corpus README name, and disagree with the manuals only where
+//! `tests/manual_facts/vendor-eds.toml` says so, with both readings. Cut and damaged copies of
+//! every file never panic the reader (seeded; `ECDRIVE_SEED` replays a run).
 
 mod support {
     pub mod corpus;
@@ -146,4 +147,132 @@ fn cut_and_damaged_vendor_files_never_panic() {
             let _ = EdsFile::parse(&b);
         }
     }
+}
+
+/// A value as the facts and the discrepancy list write it: a number (decimal or 0x hex), else
+/// the text.
+fn reading(s: &str) -> Result<i128, String> {
+    num(s).ok_or_else(|| s.trim().to_string())
+}
+
+/// Where the three project drives' vendor EDS files disagree with their manuals: every object
+/// fact of a manual (`tests/manual_facts/DRIVE.toml`) compared with the vendor file's
+/// DefaultValue. Each disagreement must be listed, with both readings, in
+/// `tests/manual_facts/vendor-eds.toml`; an entry that no longer disagrees fails too.
+#[test]
+fn the_vendor_files_disagree_with_the_manuals_only_where_listed() {
+    let Some(dir) = support::corpus::eds_dir() else {
+        return;
+    };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/manual_facts");
+    let list: toml::Value = toml::from_str(
+        &std::fs::read_to_string(root.join("vendor-eds.toml")).expect("vendor-eds.toml"),
+    )
+    .expect("vendor-eds.toml is TOML");
+    let str_of = |v: &toml::Value, k: &str| {
+        v.get(k)
+            .and_then(toml::Value::as_str)
+            .unwrap_or_default()
+            .to_string()
+    };
+    let listed: Vec<(String, String, String, String)> = list
+        .get("discrepancy")
+        .and_then(toml::Value::as_array)
+        .into_iter()
+        .flatten()
+        .map(|d| {
+            assert!(!str_of(d, "why").is_empty(), "{d:?}: say why");
+            (
+                str_of(d, "drive"),
+                str_of(d, "fact"),
+                str_of(d, "manual"),
+                str_of(d, "eds"),
+            )
+        })
+        .collect();
+    let mut found = Vec::new();
+    let files = list
+        .get("file")
+        .and_then(toml::Value::as_array)
+        .expect("[[file]]");
+    for f in files {
+        let (drive, path) = (str_of(f, "drive"), str_of(f, "eds"));
+        let eds = EdsFile::parse(&std::fs::read(dir.join(&path)).expect("file")).expect("read");
+        let facts: toml::Value = toml::from_str(
+            &std::fs::read_to_string(root.join(format!("{drive}.toml"))).expect("facts"),
+        )
+        .expect("facts are TOML");
+        let mut compared = 0;
+        for fact in facts
+            .get("fact")
+            .and_then(toml::Value::as_array)
+            .expect("facts")
+        {
+            if str_of(fact, "kind") != "object" {
+                continue;
+            }
+            let Some(default) = fact.get("default").and_then(toml::Value::as_str) else {
+                continue;
+            };
+            let object = str_of(fact, "object");
+            let (i, s) = object.split_once(':').expect("0xIIII:SS");
+            let index = u16::from_str_radix(i.trim_start_matches("0x"), 16).expect("index");
+            let sub = u8::from_str_radix(s, 16).expect("sub");
+            let entry = eds.entry(index, sub);
+            let Some(e) = entry else {
+                found.push((
+                    drive.clone(),
+                    str_of(fact, "id"),
+                    default.to_string(),
+                    "absent".into(),
+                ));
+                continue;
+            };
+            let theirs = match &e.default {
+                // The file says nothing, or a node-ID formula (the manual writes those for
+                // node 0 in words).
+                ecdrive::eds::EdsValue::None | ecdrive::eds::EdsValue::NodeId { .. } => continue,
+                ecdrive::eds::EdsValue::Int(v) => Ok(*v),
+                ecdrive::eds::EdsValue::Text(t) => Err(t.trim().to_string()),
+                ecdrive::eds::EdsValue::Real(r) => Err(r.to_string()),
+            };
+            compared += 1;
+            if reading(default) != theirs {
+                let shown = match theirs {
+                    Ok(v) => v.to_string(),
+                    Err(t) => t,
+                };
+                found.push((
+                    drive.clone(),
+                    str_of(fact, "id"),
+                    default.to_string(),
+                    shown,
+                ));
+            }
+        }
+        assert!(
+            compared > 30,
+            "{drive}: only {compared} facts compared with {path}"
+        );
+    }
+    let same = |a: &(String, String, String, String), b: &(String, String, String, String)| {
+        a.0 == b.0 && a.1 == b.1 && reading(&a.2) == reading(&b.2) && reading(&a.3) == reading(&b.3)
+    };
+    let unlisted: Vec<String> = found
+        .iter()
+        .filter(|f| !listed.iter().any(|l| same(f, l)))
+        .map(|(d, id, m, e)| format!("{d} {id}: manual {m:?}, vendor file {e:?}"))
+        .collect();
+    let stale: Vec<String> = listed
+        .iter()
+        .filter(|l| !found.iter().any(|f| same(f, l)))
+        .map(|(d, id, m, e)| format!("{d} {id}: manual {m:?}, vendor file {e:?}"))
+        .collect();
+    assert!(
+        unlisted.is_empty() && stale.is_empty(),
+        "vendor file and manual disagree where tests/manual_facts/vendor-eds.toml does not say \
+         so:\n{}\n\nlisted but no longer disagreeing:\n{}",
+        unlisted.join("\n"),
+        stale.join("\n")
+    );
 }

@@ -229,6 +229,39 @@ pub const STANDARD_TX: &[PdoEntry] = &[
     PdoEntry::new(0x603F, 0, 16),
 ];
 
+/// What the engine needs (`wanted`, of the candidates `list`) and no PDO of `pdos` carries: by
+/// SDO, where the dictionary has the object with its size and lets the master write it
+/// (`outputs`) or read it; taken off `left_out`.
+fn by_sdo(
+    dict: &Dictionary<'_>,
+    list: &[PdoEntry],
+    wanted: &[u16],
+    pdos: &[CanPdo],
+    outputs: bool,
+    left_out: &mut Vec<PdoEntry>,
+) -> Vec<PdoEntry> {
+    let mut out = Vec::new();
+    for index in wanted {
+        let Some(e) = list.iter().find(|e| e.index == *index) else {
+            continue;
+        };
+        let mapped = pdos.iter().any(|p| p.entries.contains(e));
+        let usable = dict.entry(e.address()).is_some_and(|d| {
+            d.bit_len == u16::from(e.bits)
+                && if outputs {
+                    d.access.writable()
+                } else {
+                    d.access.readable()
+                }
+        });
+        if !mapped && usable {
+            out.push(*e);
+            left_out.retain(|x| x != e);
+        }
+    }
+    out
+}
+
 fn pick_type(t: &TransmissionTypes, prefs: &[u8]) -> u8 {
     prefs.iter().copied().find(|p| t.allows(*p)).unwrap_or(255)
 }
@@ -327,7 +360,6 @@ impl PdoPlan {
                     .is_some_and(|d| d.access.contains(flag))
         };
         let mut left_out = Vec::new();
-        let mut by_sdo: [Vec<PdoEntry>; 2] = [Vec::new(), Vec::new()];
         let mut pack = |cands: &[PdoEntry], flag: EntryAccess, dir: Direction, ttype: u8| {
             let limits = profile.pdo.limits.direction(dir);
             let defaults = match dir {
@@ -410,32 +442,10 @@ impl PdoPlan {
         let tt = pick_type(&profile.pdo.tpdo_types, &[1, 0, 255]);
         let rpdos = pack(rx, EntryAccess::RXPDO, Direction::Rx, rt);
         let tpdos = pack(tx, EntryAccess::TXPDO, Direction::Tx, tt);
-        // What the engine needs and no PDO carries: by SDO, where the drive lets the master
-        // write (outputs) or read (inputs) it.
-        for (k, (list, wanted)) in [(rx, &BY_SDO_RX[..]), (tx, &BY_SDO_TX[..])]
-            .into_iter()
-            .enumerate()
-        {
-            let pdos = if k == 0 { &rpdos } else { &tpdos };
-            for index in wanted {
-                let Some(e) = list.iter().find(|e| e.index == *index) else {
-                    continue;
-                };
-                let mapped = pdos.iter().any(|p| p.entries.contains(e));
-                let access_ok = dict.entry(e.address()).is_some_and(|d| {
-                    if k == 0 {
-                        d.access.writable()
-                    } else {
-                        d.access.readable()
-                    }
-                });
-                if !mapped && exists(e) && access_ok {
-                    by_sdo[k].push(*e);
-                    left_out.retain(|x| x != e);
-                }
-            }
-        }
-        let [sdo_out, sdo_in] = by_sdo;
+        // What the engine needs and no PDO carries: by SDO (of what the drive's modes use).
+        let used = |l: &[PdoEntry]| l.iter().copied().filter(|e| exists(e)).collect::<Vec<_>>();
+        let sdo_out = by_sdo(&dict, &used(rx), &BY_SDO_RX, &rpdos, true, &mut left_out);
+        let sdo_in = by_sdo(&dict, &used(tx), &BY_SDO_TX, &tpdos, false, &mut left_out);
         (
             Self {
                 rpdos,
