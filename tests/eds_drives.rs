@@ -112,9 +112,15 @@ fn run_one(dir: &std::path::Path, rel: &str, csv: &std::path::Path) -> Row {
             .fold(0.0f64, |a, v| a.max(v));
         Ok((d.position, pv_peak, d.modes.clone()))
     })();
+    // The table names corpus files as the docs do, not by where this machine keeps them.
+    let result = result.map_err(|e| e.replace(&dir.display().to_string(), "../shared/eds-corpus"));
     Row {
         file: rel.to_string(),
-        product,
+        product: if product.trim().is_empty() {
+            "(no ProductName)".to_string()
+        } else {
+            product
+        },
         pv,
         pp,
         result,
