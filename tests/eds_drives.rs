@@ -201,3 +201,98 @@ fn every_corpus_drive_runs_pv_and_pp_from_its_eds_file_alone() {
         failed.join("\n")
     );
 }
+
+/// A copy of a corpus file without the sections of `objects` (the file as a vendor might
+/// ship it for a model without them).
+fn without(dir: &std::path::Path, rel: &str, objects: &[&str]) -> std::path::PathBuf {
+    let text = String::from_utf8_lossy(&std::fs::read(dir.join(rel)).expect("file")).to_string();
+    let mut out = String::new();
+    let mut skip = false;
+    for line in text.lines() {
+        let t = line.trim();
+        if t.starts_with('[') {
+            let name = t
+                .trim_matches(|c| c == '[' || c == ']')
+                .to_ascii_uppercase();
+            skip = objects
+                .iter()
+                .any(|o| name == *o || name.starts_with(&format!("{o}SUB")));
+        }
+        if !skip {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    let path = std::env::temp_dir().join(format!(
+        "ecdrive-eds-without-{}-{}.eds",
+        objects.join("-"),
+        std::process::id()
+    ));
+    std::fs::write(&path, out).expect("write");
+    path
+}
+
+/// A file that declares pv in 6502h but has no 60FFh (target velocity): `--check` refuses pv,
+/// naming the object, instead of a run that "completes" with the drive standing still.
+#[test]
+fn a_mode_without_its_set_point_object_is_refused_by_the_check() {
+    let Some(dir) = support::corpus::eds_dir() else {
+        return;
+    };
+    let path = without(&dir, "maxon/maxon_motor_EPOS4.eds", &["60FF"]);
+    let text = config_text(&path, true, true);
+    let e = config::parse_any(&text, "drive.toml").expect_err("pv without 60FFh");
+    let _ = std::fs::remove_file(&path);
+    let e = e.to_string();
+    assert!(
+        e.contains("drive[0].mode") && e.contains("no 0x60FF:00 (target velocity)"),
+        "{e}"
+    );
+}
+
+/// A node served from an EDS file answers `upload`/`download` without a type given: the
+/// types CiA 301/402 give their objects stand in for the dictionary the master has no profile
+/// of; and `reset` takes the drive's file to know it.
+#[test]
+fn tools_work_on_a_node_from_an_eds_file() {
+    use ecdrive::app::canopen::tools;
+    use ecdrive::canopen::master::{Master, MasterConfig};
+    use ecdrive::od::{ObjectAddress, Value};
+    use ecdrive::sim::canopen::{EmulatedNode, NodeSpec, SimBus};
+    let Some(dir) = support::corpus::eds_dir() else {
+        return;
+    };
+    let path = dir.join("maxon/maxon_motor_EPOS4.eds");
+    let file = tools::read_eds(&path.display().to_string()).expect("read");
+    let mut bus = SimBus::new();
+    let spec = NodeSpec::from_eds(&file, "EPOS4").expect("emulation");
+    bus.add_node(EmulatedNode::new(spec, 5).expect("node"));
+    let mut m = Master::new(bus, MasterConfig::default());
+    m.pump(20_000).expect("boot");
+    let v = tools::upload(&mut m, 5, ObjectAddress::new(0x1018, 1), None).expect("1018h:01");
+    assert_eq!(v, Value::Uint(0xFB), "maxon's vendor ID");
+    tools::download(&mut m, 5, ObjectAddress::new(0x6081, 0), "20000", None).expect("6081h");
+    let v = tools::upload(&mut m, 5, ObjectAddress::new(0x6081, 0), None).expect("6081h");
+    assert_eq!(v, Value::Uint(20_000));
+    // reset: refused without the file (naming --eds), done with it.
+    let mut bus = SimBus::new();
+    bus.add_node(EmulatedNode::new(spec, 5).expect("node"));
+    use ecdrive::app::canopen::reset::{CanResetOptions, reset};
+    let opts = CanResetOptions {
+        node: Some(5),
+        ..CanResetOptions::default()
+    };
+    let e = reset(bus, "virtual", &opts).expect_err("no profile");
+    assert!(e.to_string().contains("--eds FILE"), "{e}");
+    let mut bus = SimBus::new();
+    bus.add_node(EmulatedNode::new(spec, 5).expect("node"));
+    let profile = ecdrive::drives::eds_can::from_eds(&file, "EPOS4").expect("profile");
+    let opts = CanResetOptions {
+        node: Some(5),
+        eds: Some(profile),
+        ..CanResetOptions::default()
+    };
+    let r = reset(bus, "virtual", &opts).expect("reset with the file");
+    assert_eq!(r.drives.len(), 1, "{r:?}");
+    assert!(r.all_clear, "{r:?}");
+}

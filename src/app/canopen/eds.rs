@@ -25,6 +25,9 @@ pub struct EdsSummary {
     pub device_type: Option<u32>,
     /// Whether the file describes a CiA 402 drive.
     pub cia402: bool,
+    /// Why it counts as one, or what is odd about it (1000h names another profile while
+    /// 6040h/6041h are there; 6502h absent or without a value).
+    pub notes: Vec<String>,
     /// The modes 6502h declares, by their short names.
     pub modes: Vec<&'static str>,
     /// NrOfRXPDO, NrOfTXPDO.
@@ -48,15 +51,17 @@ pub struct EdsSummary {
 pub struct ModePlan {
     /// The mode's short name.
     pub mode: &'static str,
-    /// (object, in a PDO?) for the master's outputs.
-    pub rx: Vec<(String, bool)>,
-    /// (object, in a PDO?) for the drive's inputs.
-    pub tx: Vec<(String, bool)>,
+    /// (object, how) for the master's outputs: `"pdo"` (the file lets it into a PDO),
+    /// `"sdo"` (it exists but no PDO may carry it: ecdrive moves it by SDO), `"absent"`.
+    pub rx: Vec<(String, &'static str)>,
+    /// The same for the drive's inputs.
+    pub tx: Vec<(String, &'static str)>,
 }
 
 /// 6502h's bits (CiA 402): bit, short name, the set-point it takes, the actual value shown.
-const MODES: [(u32, &str, Option<u16>, u16); 8] = [
+const MODES: [(u32, &str, Option<u16>, u16); 9] = [
     (0, "pp", Some(0x607A), 0x6064),
+    (1, "vl", Some(0x6042), 0x6044),
     (2, "pv", Some(0x60FF), 0x606C),
     (3, "tq", Some(0x6071), 0x6077),
     (5, "hm", None, 0x6064),
@@ -72,8 +77,41 @@ pub fn show(path: &std::path::Path) -> Result<EdsSummary, String> {
     let f = EdsFile::parse(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     let rx = f.mappable(true);
     let tx = f.mappable(false);
-    let in_pdo =
-        |list: &[(u16, u8, u16)], index: u16| list.iter().any(|(i, s, _)| *i == index && *s == 0);
+    let how = |list: &[(u16, u8, u16)], index: u16| -> &'static str {
+        if list.iter().any(|(i, s, _)| *i == index && *s == 0) {
+            "pdo"
+        } else if f.entry(index, 0).is_some() {
+            "sdo"
+        } else {
+            "absent"
+        }
+    };
+    let mut notes = Vec::new();
+    let profile_no = f
+        .entry(0x1000, 0)
+        .and_then(|e| e.default.resolve(0))
+        .map(|v| v & 0xFFFF);
+    if f.is_cia402() && profile_no.is_some_and(|p| p != 402) {
+        notes.push(format!(
+            "1000h names device profile {} (not 402); taken as a CiA 402 drive by its 6040h \
+             and 6041h",
+            profile_no.unwrap_or(0)
+        ));
+    }
+    match f.entry(0x6502, 0) {
+        None => notes.push(
+            "no 6502h: the file declares no modes; a run from it assumes pp, pv and hm".into(),
+        ),
+        Some(e) if e.default.is_none() && e.parameter_value.is_none() => notes.push(
+            "6502h has no value: the file declares no modes; a run from it assumes pp, pv and hm"
+                .into(),
+        ),
+        Some(_) if f.supported_modes().is_none() => notes.push(
+            "6502h's value is not a 32-bit number: a run from the file assumes pp, pv and hm"
+                .into(),
+        ),
+        Some(_) => {}
+    }
     let raw_modes = f.supported_modes().unwrap_or(0);
     let modes: Vec<&'static str> = MODES
         .iter()
@@ -98,11 +136,11 @@ pub fn show(path: &std::path::Path) -> Result<EdsSummary, String> {
                 mode,
                 rx: r
                     .into_iter()
-                    .map(|i| (format!("{i:04X}h"), in_pdo(&rx, i)))
+                    .map(|i| (format!("{i:04X}h"), how(&rx, i)))
                     .collect(),
                 tx: t
                     .into_iter()
-                    .map(|i| (format!("{i:04X}h"), in_pdo(&tx, i)))
+                    .map(|i| (format!("{i:04X}h"), how(&tx, i)))
                     .collect(),
             }
         })
@@ -119,6 +157,7 @@ pub fn show(path: &std::path::Path) -> Result<EdsSummary, String> {
             _ => None,
         }),
         cia402: f.is_cia402(),
+        notes,
         modes,
         pdos: (f.device.rx_pdos, f.device.tx_pdos),
         baud_rates: f.device.baud_rates.clone(),

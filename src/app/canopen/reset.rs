@@ -26,7 +26,7 @@ use serde::Serialize;
 use std::time::Duration;
 
 /// How [`reset`] runs.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct CanResetOptions {
     /// Only this node (default: every node with a drive profile).
     pub node: Option<u8>,
@@ -34,6 +34,10 @@ pub struct CanResetOptions {
     pub cycle: Duration,
     /// How long a drive may take to report its state, and to leave Fault after the edge.
     pub timeout: Duration,
+    /// A drive ecdrive has no profile for: the profile built from its EDS file
+    /// (`drives::eds_can::from_eds`); a node that matches no built-in profile but this one's
+    /// identity is reset as this drive.
+    pub eds: Option<&'static CanDriveProfile>,
 }
 
 impl Default for CanResetOptions {
@@ -42,6 +46,7 @@ impl Default for CanResetOptions {
             node: None,
             cycle: Duration::from_millis(4),
             timeout: Duration::from_secs(2),
+            eds: None,
         }
     }
 }
@@ -107,7 +112,7 @@ pub fn reset<T: CanTransport>(
     // every node (or the one asked for) to Pre-operational.
     m.nmt(opts.node.unwrap_or(0), NmtCommand::EnterPreOperational)?;
     m.pump(20_000)?;
-    let drives = find_drives(&mut m, opts.node)?;
+    let drives = find_drives(&mut m, opts.node, opts.eds)?;
     for (node, p) in &drives {
         m.configure_drive(*node, DriveSetup::new(p))?;
         m.start(*node)?;
@@ -169,9 +174,20 @@ pub fn reset<T: CanTransport>(
 fn find_drives<T: CanTransport>(
     m: &mut Master<T>,
     only: Option<u8>,
+    eds: Option<&'static CanDriveProfile>,
 ) -> Result<Vec<(u8, &'static CanDriveProfile)>, CanError> {
     let ids = only.map_or(1..=127, |n| n..=n);
-    let found = tools::scan(m, ids)?;
+    let mut found = tools::scan(m, ids)?;
+    // A node no built-in profile knows, which is the drive of the EDS file given.
+    if let Some(p) = eds {
+        for i in found.iter_mut().filter(|i| i.profile.is_none()) {
+            if let (Some(dt), Some(v)) = (i.device_type, i.vendor_id)
+                && p.identity.matches(dt, v, i.product_code)
+            {
+                i.profile = Some(p);
+            }
+        }
+    }
     if let Some(node) = only {
         let at = NodeRef {
             id: node,
@@ -188,15 +204,21 @@ fn find_drives<T: CanTransport>(
             ));
         };
         if info.profile.is_none() {
-            return Err(not_ready(
+            return Err(CanError::new(
                 at,
-                format!(
-                    "no drive profile matches its identity (vendor {}, product {}): reset \
-                     knows the BLV-R, the ASDA-A2 and the Lexium MDrive",
+                None,
+                CanErrorKind::Identity(format!(
+                    "no drive profile matches its identity (vendor {}, product {}){}: give \
+                     the drive's EDS file with --eds FILE (reset knows the BLV-R, the ASDA-A2 \
+                     and the Lexium MDrive without one)",
                     info.vendor_id.map_or("-".into(), |v| format!("0x{v:08X}")),
                     info.product_code
                         .map_or("-".into(), |v| format!("0x{v:08X}")),
-                ),
+                    eds.map_or_else(String::new, |p| format!(
+                        ", nor the {} of the EDS file given",
+                        p.name
+                    )),
+                )),
             ));
         }
     }

@@ -104,6 +104,9 @@ pub struct CanRunReport {
     pub record: Option<RecordSummary>,
     /// What went wrong beside the drives (a recording that could not be written).
     pub warnings: Vec<String>,
+    /// What the configuration check found questionable (an EDS file's oddities, an object
+    /// the drive lacks), as `--check` and the start of the run say it.
+    pub check_warnings: Vec<String>,
     /// The frame log, if one was asked for (`--candump`).
     pub candump: Option<super::candump::CandumpSummary>,
 }
@@ -799,6 +802,7 @@ impl<'a> Run<'a> {
             emergencies,
             record,
             warnings,
+            check_warnings: self.cfg.warnings.clone(),
             candump: None,
         })
     }

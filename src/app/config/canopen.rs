@@ -358,6 +358,9 @@ fn drive(
                     profile.name
                 ))
             }
+            Step::Mode { mode } if missing_setpoint(profile, *mode).is_some() => {
+                missing_setpoint(profile, *mode)
+            }
             Step::TouchProbe { .. } | Step::ProbeWait { .. }
                 if crate::od::Dictionary::new(profile.dictionary)
                     .object(0x60B8)
@@ -399,6 +402,10 @@ fn drive(
                 modes_offered(profile)
             ),
         ));
+    }
+    if let Some(why) = missing_setpoint(profile, mode) {
+        let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
+        return Err(cx.err(span, key("mode"), why));
     }
     let step_err = |n: usize, m: String| {
         let span = r.program.get(n).map_or(d.span(), Spanned::span);
@@ -466,6 +473,44 @@ fn drive(
     })
 }
 
+/// Why `mode` cannot run on the drive: its set-point object (607Ah, 60FFh, 6071h, 60C1h:01)
+/// is not in the dictionary, or not writable — a drive whose EDS file declares the mode in
+/// 6502h but has no object to command it (a Schunk PRL120 file without 60FFh).
+fn missing_setpoint(p: &CanDriveProfile, mode: RunMode) -> Option<String> {
+    let (index, sub, what) = match mode {
+        RunMode::Pp => (0x607A, 0, "target position"),
+        RunMode::Pv => (0x60FF, 0, "target velocity"),
+        RunMode::Tq => (0x6071, 0, "target torque"),
+        RunMode::Ip => (0x60C1, 1, "interpolation data record"),
+        _ => return None,
+    };
+    let addr = ObjectAddress::new(index, sub);
+    match crate::od::Dictionary::new(p.dictionary).entry(addr) {
+        Some(e) if e.access.writable() => None,
+        Some(_) => Some(format!(
+            "{} needs {addr} ({what}) written, which the {} makes read-only",
+            mode.name(),
+            p.name
+        )),
+        None => Some(format!(
+            "the {} has no {addr} ({what}): {} cannot be commanded on it",
+            p.name,
+            mode.name()
+        )),
+    }
+}
+
+/// `s` as one shell word, quoted when it holds a space or a quote (a command the user copies).
+fn shell_word(s: &str) -> String {
+    if s.chars()
+        .all(|c| c.is_ascii_alphanumeric() || "/._-+:@%".contains(c))
+    {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', "'\\''"))
+    }
+}
+
 /// The modes a drive offers, for a refusal: "its 6502h declares vl, hm, ip".
 fn modes_offered(p: &CanDriveProfile) -> String {
     let names: Vec<&str> = p
@@ -529,9 +574,10 @@ fn drive_model(
     if !file.warnings.is_empty() {
         warnings.push(format!(
             "{}: the EDS file {shown} has {} oddities the reader took in its own way (`ecdrive \
-             eds show {shown}` lists them)",
+             eds show {}` lists them)",
             key("eds"),
-            file.warnings.len()
+            file.warnings.len(),
+            shell_word(&shown)
         ));
     }
     match builtin {
@@ -541,6 +587,12 @@ fn drive_model(
             Ok((name, profile, emulation, Some(shown)))
         }
         None => {
+            if file.supported_modes().is_none() {
+                warnings.push(format!(
+                    "{}: the EDS file {shown} declares no modes (6502h): pp, pv and hm assumed",
+                    key("eds")
+                ));
+            }
             let profile = crate::drives::eds_can::from_eds(&file, &shown)
                 .map_err(|why| cx.err(e.span(), key("eds"), why.reason))?;
             let emulation = Emulation::from_eds(&file, &shown)

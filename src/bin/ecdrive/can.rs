@@ -49,7 +49,8 @@ fn present<T: CanTransport>(cmd: &str, m: &mut Master<T>, node: u8) -> Result<()
             &format!(
                 "node {node} (0x{node:02X}) does not answer: no reply to an SDO upload of 0x1000 \
                  within {} ms (a node in NMT Stopped serves no SDO: `ecdrive reset --can {} -n \
-                 {node}` takes it to Pre-operational)",
+                 {node}` takes it to Pre-operational, with `--eds FILE` for a drive ecdrive has \
+                 no profile for)",
                 tools::SCAN_WINDOW_US / 1000,
                 m.transport().name()
             ),
@@ -277,8 +278,27 @@ pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
 }
 
 /// `ecdrive reset --can BUS [-n NODE]`: exit 0 when no drive is left in Fault, 4 when one is.
-pub fn reset(bus: &str, node: Option<u8>, cycle: std::time::Duration, json: bool) -> ExitCode {
+pub fn reset(
+    bus: &str,
+    node: Option<u8>,
+    cycle: std::time::Duration,
+    eds: Option<&std::path::Path>,
+    json: bool,
+) -> ExitCode {
     use ecdrive::app::canopen::reset::{CanResetOptions, reset};
+    let eds = match eds {
+        None => None,
+        Some(path) => {
+            let shown = path.display().to_string();
+            let built = tools::read_eds(&shown).and_then(|f| {
+                ecdrive::drives::eds_can::from_eds(&f, &shown).map_err(|e| e.to_string())
+            });
+            match built {
+                Ok(p) => Some(p),
+                Err(e) => return fail_with("reset", &format!("--eds: {e}"), exit::USAGE),
+            }
+        }
+    };
     let spec: BusSpec = match bus.parse() {
         Ok(s) => s,
         Err(e) => {
@@ -293,6 +313,7 @@ pub fn reset(bus: &str, node: Option<u8>, cycle: std::time::Duration, json: bool
     let opts = CanResetOptions {
         node,
         cycle,
+        eds,
         ..CanResetOptions::default()
     };
     let r = match reset(t, &spec.to_string(), &opts) {

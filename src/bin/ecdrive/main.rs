@@ -296,7 +296,7 @@ enum Command {
     /// INIT; CANopen: disabled, NMT Pre-operational). A fault that does not clear (the cause is
     /// still there, or the drive needs a power cycle) is said so, with exit code 4.
     #[command(
-        after_help = "Examples:\n  ecdrive reset -i eth1\n  ecdrive reset -i eth1 -p 0 --json\n  ecdrive reset --can can0\n  ecdrive reset --can vbus:/tmp/can.sock -n 3"
+        after_help = "Examples:\n  ecdrive reset -i eth1\n  ecdrive reset -i eth1 -p 0 --json\n  ecdrive reset --can can0\n  ecdrive reset --can vbus:/tmp/can.sock -n 3\n  ecdrive reset --can vbus:/tmp/can.sock -n 5 --eds EPOS4.eds"
     )]
     Reset {
         #[command(flatten)]
@@ -311,6 +311,10 @@ enum Command {
         /// Cycle time of the session, µs (default: EtherCAT 1000, CANopen 4000).
         #[arg(long, value_name = "US")]
         cycle_us: Option<u32>,
+        /// CANopen: the EDS/DCF file of a drive ecdrive has no profile for; the nodes with its
+        /// identity are reset as that drive.
+        #[arg(long, value_name = "FILE", conflicts_with = "interface")]
+        eds: Option<PathBuf>,
         #[command(flatten)]
         json: Json,
     },
@@ -1306,6 +1310,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             position,
             node,
             cycle_us,
+            eds,
             json,
         } => {
             let Some(interface) = bus.interface else {
@@ -1314,6 +1319,7 @@ fn dispatch(cli: Cli) -> ExitCode {
                     bus.can.as_deref().unwrap_or_default(),
                     node,
                     cycle,
+                    eds.as_deref(),
                     json.json,
                 );
             };

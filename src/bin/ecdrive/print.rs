@@ -485,15 +485,16 @@ pub fn eds_summary(s: &ecdrive::app::canopen::eds::EdsSummary) {
             s.modes.join(", ")
         }
     );
+    for n in &s.notes {
+        println!("  Note: {n}");
+    }
     for p in &s.plans {
-        let side = |v: &[(String, bool)]| {
+        let side = |v: &[(String, &str)]| {
             v.iter()
-                .map(|(o, m)| {
-                    if *m {
-                        o.clone()
-                    } else {
-                        format!("{o} (not mappable)")
-                    }
+                .map(|(o, how)| match *how {
+                    "pdo" => o.clone(),
+                    "sdo" => format!("{o} (no PDO may carry it: by SDO)"),
+                    _ => format!("{o} (absent)"),
                 })
                 .collect::<Vec<_>>()
                 .join(", ")

@@ -128,8 +128,11 @@ impl<T: CanTransport> Master<T> {
         if let Some(dt) = given {
             return Ok(dt);
         }
+        // The node's profile; for a node without one (served from an EDS file, a drive
+        // ecdrive has no profile for) the type CiA 301/402 give the object.
         self.profile(node)
             .and_then(|p| Dictionary::new(p.dictionary).data_type(addr))
+            .or_else(|| crate::od::standard::data_type(addr))
             .ok_or_else(|| self.err(node, Some(addr), CanErrorKind::UnknownType))
     }
 

@@ -577,6 +577,13 @@ impl EdsFile {
                 ),
             });
         }
+        if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
+            return Err(EdsError {
+                line: 0,
+                what: "UTF-16 text: an EDS file is ASCII (CiA 306); save it as ASCII or UTF-8"
+                    .into(),
+            });
+        }
         let mut warnings = Vec::new();
         let text = text_of(bytes, &mut warnings);
         let secs = sections(&text, &mut warnings)?;
@@ -860,11 +867,16 @@ impl EdsFile {
         by_type || (self.objects.contains_key(&0x6040) && self.objects.contains_key(&0x6041))
     }
 
-    /// The supported drive modes (6502h's default), if the file gives them.
+    /// The supported drive modes (6502h: a DCF's configured value, else the default), if the
+    /// file gives them as a 32-bit number (a larger one is no answer, not all modes).
     pub fn supported_modes(&self) -> Option<u32> {
         self.entry(0x6502, 0)
-            .and_then(|e| e.default.resolve(0))
-            .and_then(|v| u32::try_from(v & 0xFFFF_FFFF).ok())
+            .and_then(|e| {
+                e.parameter_value
+                    .resolve(0)
+                    .or_else(|| e.default.resolve(0))
+            })
+            .and_then(|v| u32::try_from(v).ok())
     }
 
     /// The entries a PDO can carry: `PDOMapping=1`, a fixed-size type, writable (`rx`: into an

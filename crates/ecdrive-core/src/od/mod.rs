@@ -12,6 +12,7 @@ mod desc;
 mod dictionary;
 mod emergency;
 mod segmented;
+pub mod standard;
 mod types;
 mod value;
 

@@ -21,6 +21,9 @@ pub const DEFAULT_SPEED_WINDOW_REV_S: f64 = 0.05;
 pub const DEFAULT_ZERO_SPEED_REV_S: f64 = 0.05;
 /// **\[REC\]** Acceleration used when a ramp object is 0 or absent, rev/s².
 pub const FALLBACK_ACCEL_REV_S2: f64 = 100.0;
+/// **\[REC\]** Profile velocity of a drive with neither 6081h nor 607Fh (an EDS file that
+/// lists neither), rev/s.
+pub const FALLBACK_PROFILE_VELOCITY_REV_S: f64 = 1.0;
 /// **\[REC\]** Acceleration that stands for "immediately" (a time of 0 ms), rev/s².
 pub const STEP_ACCEL_REV_S2: f64 = 1.0e6;
 /// **\[REC\]** Torque-mode load: at 1000 ‰ the speed settles at this many rev/s.

@@ -10,8 +10,8 @@
 //! [`EmulatedNode::poll_transmit`].
 
 use super::motion::{
-    DEFAULT_SPEED_WINDOW_REV_S, DEFAULT_ZERO_SPEED_REV_S, FALLBACK_ACCEL_REV_S2, Motion, Params,
-    STEP_ACCEL_REV_S2, World,
+    DEFAULT_SPEED_WINDOW_REV_S, DEFAULT_ZERO_SPEED_REV_S, FALLBACK_ACCEL_REV_S2,
+    FALLBACK_PROFILE_VELOCITY_REV_S, Motion, Params, STEP_ACCEL_REV_S2, World,
 };
 use super::sdo_server::SdoServer;
 use super::spec::NodeSpec;
@@ -952,7 +952,12 @@ impl EmulatedNode {
         let decel = acc(f(0x6084, 0));
         Params {
             target_position: int(0x607A, 0).unwrap_or(0) as i32,
-            profile_velocity: vel(pu.profile_velocity, f(0x6081, 0).unwrap_or(0.0)),
+            // A drive without 6081h (an EDS file that has none) moves at its maximum
+            // profile velocity 607Fh, else at [REC] FALLBACK_PROFILE_VELOCITY_REV_S.
+            profile_velocity: match f(0x6081, 0).or_else(|| f(0x607F, 0)) {
+                Some(v) => vel(pu.profile_velocity, v),
+                None => FALLBACK_PROFILE_VELOCITY_REV_S * ppr,
+            },
             acceleration: acc(f(0x6083, 0)),
             deceleration: decel,
             quick_stop_deceleration: match f(0x6085, 0) {
