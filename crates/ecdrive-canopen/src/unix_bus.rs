@@ -229,10 +229,20 @@ impl CanTransport for UnixBusPort {
         msg[RECORD..].copy_from_slice(&monotonic_us().to_le_bytes());
         let mut r = self.sock.send(&msg);
         // Non-blocking: a full queue at the hub waits (up to 100 ms) as a blocking send did.
-        if matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
-            ecdrive_core::rt::wait_writable(self.sock.as_fd(), 100_000)
+        // A datagram socket may poll writable while the hub's queue is still full (Linux
+        // wakes on its own buffer): wait again until the hub took the frame or the time is up.
+        let deadline = monotonic_us() + 100_000;
+        while matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
+            let left = deadline.saturating_sub(monotonic_us());
+            if left == 0 {
+                break;
+            }
+            let ready = ecdrive_core::rt::wait_writable(self.sock.as_fd(), left.min(1_000))
                 .map_err(|e| io(&self.own, "wait to send", e))?;
             r = self.sock.send(&msg);
+            if ready && matches!(&r, Err(e) if e.kind() == ErrorKind::WouldBlock) {
+                std::thread::sleep(std::time::Duration::from_micros(100));
+            }
         }
         match r {
             Ok(_) => Ok(()),

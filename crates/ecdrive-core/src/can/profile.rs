@@ -339,6 +339,27 @@ pub struct CommSupport {
     pub rpdo_min_interval_us: u32,
 }
 
+impl CommSupport {
+    /// What a drive's EDS file says of its error control and history: guarding where 100Ch
+    /// and 100Dh exist, heartbeat consumers from 1016h's sub-indices, 1006h, the depth of
+    /// 1003h and the store sub-indices of 1010h. A file cannot say whether the drive produces
+    /// SYNC (1005h bit 30) nor which gaps it tolerates: **\[REC\]** no, and none.
+    pub fn from_eds(f: &crate::eds::EdsFile) -> Self {
+        let has = |i: u16| f.objects.contains_key(&i);
+        Self {
+            guarding: has(0x100C) && has(0x100D),
+            heartbeat_consumers: f.highest_sub(0x1016),
+            sync_producer: false,
+            has_cycle_period: has(0x1006),
+            cycle_period_granularity_us: 0,
+            error_history: f.highest_sub(0x1003),
+            store_subs: f.highest_sub(0x1010),
+            sdo_min_interval_us: 0,
+            rpdo_min_interval_us: 0,
+        }
+    }
+}
+
 /// A CANopen drive's profile: the common part and [`CanOpen`] (see [`Profile`]).
 pub type CanDriveProfile = Profile<CanOpen>;
 

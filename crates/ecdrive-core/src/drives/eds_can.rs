@@ -52,13 +52,6 @@ fn u32_of(v: Option<i128>) -> Option<u32> {
     v.and_then(|v| u32::try_from(v & 0xFFFF_FFFF).ok())
 }
 
-fn highest_sub(f: &EdsFile, index: u16) -> u8 {
-    f.objects
-        .get(&index)
-        .and_then(|o| o.entries.keys().copied().max())
-        .unwrap_or(0)
-}
-
 /// The mapping objects of one direction the file has (at most four: CiA 301's predefined
 /// connection set, the PDOs ecdrive's plans use).
 fn limits(f: &EdsFile, base: u16) -> DirectionLimits {
@@ -67,7 +60,7 @@ fn limits(f: &EdsFile, base: u16) -> DirectionLimits {
     for n in 0..4u16 {
         let index = base + n;
         if f.objects.contains_key(&index) {
-            let subs = highest_sub(f, index).clamp(1, 64);
+            let subs = f.highest_sub(index).clamp(1, 64);
             most = most.max(subs);
             // A mapping whose count (sub-index 0) the file makes read-only is the drive's own:
             // used as it is, never rewritten.
@@ -219,7 +212,7 @@ pub fn from_eds(file: &EdsFile, source: &str) -> Result<&'static CanDriveProfile
         max_pdo_bytes: 8,
         rpdo_types: TransmissionTypes::ALL,
         tpdo_types: TransmissionTypes::ALL,
-        rpdo_comm_subs: highest_sub(file, 0x1400).max(2),
+        rpdo_comm_subs: file.highest_sub(0x1400).max(2),
         default_rpdos: defaults(file, 0x1400, 0x1600),
         default_tpdos: defaults(file, 0x1800, 0x1A00),
     };
@@ -241,17 +234,7 @@ pub fn from_eds(file: &EdsFile, source: &str) -> Result<&'static CanDriveProfile
     } else {
         bitrates[0]
     };
-    let comm = CommSupport {
-        guarding: has(0x100C) && has(0x100D),
-        heartbeat_consumers: highest_sub(file, 0x1016),
-        sync_producer: false,
-        has_cycle_period: has(0x1006),
-        cycle_period_granularity_us: 0,
-        error_history: highest_sub(file, 0x1003),
-        store_subs: highest_sub(file, 0x1010),
-        sdo_min_interval_us: 0,
-        rpdo_min_interval_us: 0,
-    };
+    let comm = CommSupport::from_eds(file);
     Ok(Box::leak(Box::new(CanDriveProfile {
         name,
         vendor: leak(file.device.vendor_name.trim()),

@@ -165,6 +165,14 @@ fn entry(index: u16, e: &EdsEntry, node: Option<u8>, notes: &mut Vec<String>) ->
 pub const FALLBACK_POSITION_PER_REV: f64 = 10_000.0;
 
 impl EdsFile {
+    /// The highest sub-index object `index` has in the file (0: no such object, or a VAR).
+    pub fn highest_sub(&self, index: u16) -> u8 {
+        self.objects
+            .get(&index)
+            .and_then(|o| o.entries.keys().copied().max())
+            .unwrap_or(0)
+    }
+
     /// An entry's value as a number: a DCF's `ParameterValue`, else `DefaultValue` (formulas
     /// for the DCF's node-ID, else node 0).
     pub fn number(&self, index: u16, sub: u8) -> Option<i128> {

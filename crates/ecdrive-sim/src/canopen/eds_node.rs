@@ -120,14 +120,6 @@ fn with_identity(file: &EdsFile, objects: &'static [ObjectDesc]) -> &'static [Ob
     Vec::leak(out)
 }
 
-/// The highest sub-index `index` has in the file (0: no such object).
-fn highest_sub(f: &EdsFile, index: u16) -> u8 {
-    f.objects
-        .get(&index)
-        .and_then(|o| o.entries.keys().copied().max())
-        .unwrap_or(0)
-}
-
 /// PDO mapping objects of one direction (`base` 0x1600 / 0x1A00) the file has, at most four
 /// (the emulated node's PDO engine), with the entries each takes.
 fn pdo_ranges(f: &EdsFile, base: u16) -> (Vec<PdoRange>, u8) {
@@ -138,7 +130,7 @@ fn pdo_ranges(f: &EdsFile, base: u16) -> (Vec<PdoRange>, u8) {
         if !f.objects.contains_key(&index) {
             continue;
         }
-        let subs = highest_sub(f, index).clamp(1, 64);
+        let subs = f.highest_sub(index).clamp(1, 64);
         most = most.max(subs);
         out.push(PdoRange::single(index, subs));
     }
@@ -231,7 +223,7 @@ impl NodeSpec {
             max_pdo_bytes: 8,
             rpdo_types: TransmissionTypes::ALL,
             tpdo_types: TransmissionTypes::ALL,
-            rpdo_comm_subs: highest_sub(file, 0x1400).max(2),
+            rpdo_comm_subs: file.highest_sub(0x1400).max(2),
             default_rpdos: &[],
             default_tpdos: &[],
         };
@@ -249,20 +241,7 @@ impl NodeSpec {
             default_method,
             index_pulse: true,
         };
-        let has = |i: u16| dict.objects.iter().any(|o: &ObjectDesc| o.index == i);
-        let comm = CommSupport {
-            guarding: has(0x100C) && has(0x100D),
-            heartbeat_consumers: highest_sub(file, 0x1016),
-            // [REC] The node does not produce SYNC: a file cannot say whether 1005h bit 30 is
-            // accepted.
-            sync_producer: false,
-            has_cycle_period: has(0x1006),
-            cycle_period_granularity_us: 0,
-            error_history: highest_sub(file, 0x1003),
-            store_subs: highest_sub(file, 0x1010),
-            sdo_min_interval_us: 0,
-            rpdo_min_interval_us: 0,
-        };
+        let comm = CommSupport::from_eds(file);
         Ok(Box::leak(Box::new(NodeSpec {
             name,
             vendor: leak(file.device.vendor_name.trim()),
