@@ -275,7 +275,11 @@ fn canopen_nodes_on_the_virtual_bus() {
         .fails(2, &["node 1", "out of range for UNSIGNED32"]);
     ecdrive(&["upload", "--can", "virtual", "-n", "5", "0x6041:00"])
         .fails(3, &["node 5 (0x05) does not answer"]);
+    // An object the drive's profile lacks takes CiA 301's type (1008h: VISIBLE_STRING), and
+    // the drive itself says it has none; a vendor object without a type needs -t.
     ecdrive(&["upload", "--can", "virtual", "-n", "0x7F", "0x1008:00"])
+        .fails(4, &["node 127", "0x1008:00", "Object does not exist"]);
+    ecdrive(&["upload", "--can", "virtual", "-n", "0x7F", "0x2345:00"])
         .fails(2, &["node 127", "give the type"]);
 }
 
