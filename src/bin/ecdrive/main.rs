@@ -511,8 +511,10 @@ enum Command {
         /// unless one runs there).
         #[arg(long, value_name = "BUS", conflicts_with = "devices")]
         can: Option<String>,
-        /// With --can: an emulated CANopen drive, NAME or NAME@ID; repeat for more. Default:
-        /// blv-r@1, asda-a2@0x7F, lexium-mdrive@0x41 (see --list-devices).
+        /// With --can: an emulated CANopen drive, NAME or NAME@ID; eds:FILE@ID for any CiA 402
+        /// drive from its EDS/DCF file; NAME+eds:FILE[@ID] for a drive above with its vendor's
+        /// file as its dictionary; repeat for more. Default: blv-r@1, asda-a2@0x7F,
+        /// lexium-mdrive@0x41 (see --list-devices).
         #[arg(long = "node", value_name = "NAME[@ID]", requires = "can")]
         nodes: Vec<String>,
         /// A device, in line order, optionally repeated (`mr-j4-tm:32`); repeat the option for

@@ -4,7 +4,7 @@
 //! [`crate::drives::lexium_mdrive`]); generic code reads these fields and never asks which
 //! vendor it talks to.
 //!
-//! What a profile holds (see `/work/shared/reference/canopen-common.md` §3):
+//! What a profile holds (see `../shared/reference/canopen-common.md` §3):
 //! identity ([`Identity`]); the CiA 402 capability set ([`DriveCaps`](crate::cia402::DriveCaps), shared with the EtherCAT
 //! drives); the object dictionary; the PDO rules including the CAN-only ones ([`CanPdoProfile`]);
 //! units and their conversions ([`Units`]); enable preconditions ([`EnableConditions`]); homing

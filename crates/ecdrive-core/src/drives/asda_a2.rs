@@ -1,7 +1,7 @@
 //! Delta ASDA-A2 servo drive, CANopen.
 //!
 //! Source: Delta, *CANopen for ASDA-A2*, `CANopen for ASDA-A2_M_EN_20120920`, V2.01; `§x.y` cite
-//! its sections. Condensed in `/work/shared/reference/drive-asda-a2.md`. Standards: CiA DS 301
+//! its sections. Condensed in `../shared/reference/drive-asda-a2.md`. Standards: CiA DS 301
 //! V4.02, DSP 402 V2.0.
 //!
 //! Behaviour a master must know (all of it data below):

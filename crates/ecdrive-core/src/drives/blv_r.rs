@@ -2,7 +2,7 @@
 //!
 //! Source: *Brushless Motor BLV series R type Driver — CANopen communication profile*; `§x.y`
 //! cite its sections, "App." its appendix object list (§9.1). Condensed in
-//! `/work/shared/reference/drive-blv-r.md`. Conformance claimed: CiA DS301 V4.2.0, DSP402 V4.0.0.
+//! `../shared/reference/drive-blv-r.md`. Conformance claimed: CiA DS301 V4.2.0, DSP402 V4.0.0.
 //!
 //! Behaviour a master must know (all of it data below):
 //! - **Remote bit gate** (§6.1 note, §7.3.4): statusword bit 9 = 0 while the S-ON input is

@@ -2,7 +2,7 @@
 //!
 //! Source: Schneider Electric Motion USA, *CANopen Fieldbus manual for Lexium MDrive*, V1.00
 //! (09.2014); `§x.y` cite its sections. Condensed in
-//! `/work/shared/reference/drive-lexium-mdrive.md`.
+//! `../shared/reference/drive-lexium-mdrive.md`.
 //!
 //! ⚠ This manual is full of wrong headings and indices (6082h named "Polarity", 60F8h shown as
 //! 60FFh, 6068h shown as 6066h, 2002h shown as 2003h, 2019h as 2018h, 1014h as "10142h", …).
