@@ -68,6 +68,24 @@ pub struct Units {
 }
 
 impl Units {
+    /// CiA 402's own units with `position_per_rev` position units per revolution: velocities
+    /// in position units/s, accelerations in units/s², torque in ‰ of rated, its slope in ‰/s
+    /// — what a drive known only from its EDS file is taken to use.
+    pub const fn cia402(position_per_rev: f64) -> Self {
+        Self {
+            position_name: "position unit",
+            position_per_rev,
+            velocity: VelocityUnit::PositionPerSecond,
+            torque_per_mille: 1.0,
+            profile: Some(ProfileUnits {
+                profile_velocity: VelocityUnit::PositionPerSecond,
+                homing_velocity: VelocityUnit::PositionPerSecond,
+                acceleration: AccelUnit::PositionPerSecond2,
+                torque_slope: TorqueSlopeUnit::PerMillePerSecond,
+            }),
+        }
+    }
+
     /// A velocity value in `unit` as revolutions per second.
     pub fn to_rev_per_s(&self, unit: VelocityUnit, v: f64) -> f64 {
         match unit {

@@ -22,11 +22,11 @@ use crate::can::profile::{
     CanDriveProfile, CanOpen, CanPdoProfile, CommSupport, EmcyFormat, EnableConditions,
     EnabledNmtReaction, HomingSupport, Identity, PdoDefault, TransmissionTypes,
 };
-use crate::cia402::units::{AccelUnit, ProfileUnits, TorqueSlopeUnit, Units, VelocityUnit};
+use crate::cia402::units::Units;
 use crate::cia402::{DriveCaps, QuickStopOption, SupportedModes};
 use crate::eds::EdsFile;
 use crate::od::ObjectDesc;
-use crate::pdo::{DirectionLimits, PdoEntry, PdoLimits, PdoRange};
+use crate::pdo::{PdoEntry, PdoLimits};
 
 /// Why a file cannot drive a profile.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -50,35 +50,6 @@ pub const FALLBACK_BITRATE_KBIT: u16 = 500;
 
 fn u32_of(v: Option<i128>) -> Option<u32> {
     v.and_then(|v| u32::try_from(v & 0xFFFF_FFFF).ok())
-}
-
-/// The mapping objects of one direction the file has (at most four: CiA 301's predefined
-/// connection set, the PDOs ecdrive's plans use).
-fn limits(f: &EdsFile, base: u16) -> DirectionLimits {
-    let mut pdos = Vec::new();
-    let mut most = 1u8;
-    for n in 0..4u16 {
-        let index = base + n;
-        if f.objects.contains_key(&index) {
-            let subs = f.highest_sub(index).clamp(1, 64);
-            most = most.max(subs);
-            // A mapping whose count (sub-index 0) the file makes read-only is the drive's own:
-            // used as it is, never rewritten.
-            let writable = f
-                .entry(index, 0)
-                .and_then(|e| e.access)
-                .is_some_and(|a| a.writable());
-            let r = PdoRange::single(index, subs);
-            pdos.push(if writable { r } else { r.fixed() });
-        }
-    }
-    let n = pdos.len().max(1) as u8;
-    DirectionLimits {
-        pdos: Vec::leak(pdos),
-        max_assigned: n,
-        max_entries: u16::from(most) * u16::from(n),
-        max_bytes: 8 * u16::from(n),
-    }
 }
 
 /// The power-on PDOs of one direction: communication record `comm` + n, mapping `map` + n.
@@ -190,23 +161,12 @@ pub fn from_eds(file: &EdsFile, source: &str) -> Result<&'static CanDriveProfile
         ..DriveCaps::CIA402
     };
     let (per_rev, _) = file.position_per_rev();
-    let units = Units {
-        position_name: "position unit",
-        position_per_rev: per_rev,
-        velocity: VelocityUnit::PositionPerSecond,
-        torque_per_mille: 1.0,
-        profile: Some(ProfileUnits {
-            profile_velocity: VelocityUnit::PositionPerSecond,
-            homing_velocity: VelocityUnit::PositionPerSecond,
-            acceleration: AccelUnit::PositionPerSecond2,
-            torque_slope: TorqueSlopeUnit::PerMillePerSecond,
-        }),
-    };
+    let units = Units::cia402(per_rev);
     let pdo = CanPdoProfile {
         limits: PdoLimits {
             drive: name,
-            rx: limits(file, 0x1600),
-            tx: limits(file, 0x1A00),
+            rx: file.pdo_limits(0x1600),
+            tx: file.pdo_limits(0x1A00),
             assignment_writable: true,
         },
         max_pdo_bytes: 8,

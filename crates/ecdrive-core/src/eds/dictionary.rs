@@ -173,6 +173,32 @@ impl EdsFile {
             .unwrap_or(0)
     }
 
+    /// The PDO mapping objects of one direction the file has (`base` 1600h or 1A00h, at most
+    /// four: CiA 301's predefined connection set), each with as many entries as its
+    /// sub-indices and fixed where the file makes its count (sub-index 0) read-only; 8 bytes
+    /// per PDO.
+    pub fn pdo_limits(&self, base: u16) -> crate::pdo::DirectionLimits {
+        let mut pdos = Vec::new();
+        let mut most = 1u8;
+        for index in (base..base + 4).filter(|i| self.objects.contains_key(i)) {
+            let subs = self.highest_sub(index).clamp(1, 64);
+            most = most.max(subs);
+            let writable = self
+                .entry(index, 0)
+                .and_then(|e| e.access)
+                .is_some_and(Access::writable);
+            let r = crate::pdo::PdoRange::single(index, subs);
+            pdos.push(if writable { r } else { r.fixed() });
+        }
+        let n = pdos.len().max(1) as u8;
+        crate::pdo::DirectionLimits {
+            pdos: Vec::leak(pdos),
+            max_assigned: n,
+            max_entries: u16::from(most) * u16::from(n),
+            max_bytes: 8 * u16::from(n),
+        }
+    }
+
     /// An entry's value as a number: a DCF's `ParameterValue`, else `DefaultValue` (formulas
     /// for the DCF's node-ID, else node 0).
     pub fn number(&self, index: u16, sub: u8) -> Option<i128> {

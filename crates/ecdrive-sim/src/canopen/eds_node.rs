@@ -16,11 +16,11 @@ use crate::can::profile::{
     Alarm, CanPdoProfile, CommSupport, EmcyFormat, EnabledNmtReaction, HomingSupport,
     TransmissionTypes,
 };
-use crate::cia402::units::{AccelUnit, ProfileUnits, TorqueSlopeUnit, Units, VelocityUnit};
+use crate::cia402::units::Units;
 use crate::cia402::{DriveCaps, QuickStopOption, SupportedModes};
 use crate::eds::EdsFile;
 use crate::od::{ConstValue, ObjectDesc};
-use crate::pdo::{DirectionLimits, PdoLimits, PdoRange};
+use crate::pdo::PdoLimits;
 
 fn leak(s: &str) -> &'static str {
     String::leak(s.to_owned())
@@ -120,33 +120,6 @@ fn with_identity(file: &EdsFile, objects: &'static [ObjectDesc]) -> &'static [Ob
     Vec::leak(out)
 }
 
-/// PDO mapping objects of one direction (`base` 0x1600 / 0x1A00) the file has, at most four
-/// (the emulated node's PDO engine), with the entries each takes.
-fn pdo_ranges(f: &EdsFile, base: u16) -> (Vec<PdoRange>, u8) {
-    let mut out = Vec::new();
-    let mut most = 0u8;
-    for n in 0..4u16 {
-        let index = base + n;
-        if !f.objects.contains_key(&index) {
-            continue;
-        }
-        let subs = f.highest_sub(index).clamp(1, 64);
-        most = most.max(subs);
-        out.push(PdoRange::single(index, subs));
-    }
-    (out, most)
-}
-
-fn direction(ranges: Vec<PdoRange>, most: u8) -> DirectionLimits {
-    let n = ranges.len().max(1) as u8;
-    DirectionLimits {
-        pdos: Vec::leak(ranges),
-        max_assigned: n,
-        max_entries: u16::from(most) * u16::from(n),
-        max_bytes: 8 * u16::from(n),
-    }
-}
-
 /// The quick-stop codes 605Ah's range allows (every standard code if the file gives none), and
 /// its default.
 fn quick_stop(f: &EdsFile) -> (&'static [QuickStopOption], QuickStopOption) {
@@ -199,25 +172,12 @@ impl NodeSpec {
             ..DriveCaps::CIA402
         };
         let (per_rev, _) = file.position_per_rev();
-        let units = Units {
-            position_name: "position unit",
-            position_per_rev: per_rev,
-            velocity: VelocityUnit::PositionPerSecond,
-            torque_per_mille: 1.0,
-            profile: Some(ProfileUnits {
-                profile_velocity: VelocityUnit::PositionPerSecond,
-                homing_velocity: VelocityUnit::PositionPerSecond,
-                acceleration: AccelUnit::PositionPerSecond2,
-                torque_slope: TorqueSlopeUnit::PerMillePerSecond,
-            }),
-        };
-        let (rx, rx_most) = pdo_ranges(file, 0x1600);
-        let (tx, tx_most) = pdo_ranges(file, 0x1A00);
+        let units = Units::cia402(per_rev);
         let pdo = CanPdoProfile {
             limits: PdoLimits {
                 drive: name,
-                rx: direction(rx, rx_most),
-                tx: direction(tx, tx_most),
+                rx: file.pdo_limits(0x1600),
+                tx: file.pdo_limits(0x1A00),
                 assignment_writable: true,
             },
             max_pdo_bytes: 8,
