@@ -208,7 +208,28 @@ fn a_negative_duration_and_two_entries_for_one_device_are_named() {
     assert!(e.message.contains("is negative"), "{e}");
     let text = "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\n\
         [[drive]]\nidentity = { vendor_id = 0x2E1, product_code = 0xBE2EB }\n";
-    let cfg = parse(text).unwrap_or_else(|e| panic!("{e}"));
+    // With the devices listed in [sim], the file says it (`--check` included).
+    let e = parse(text).unwrap_err();
+    assert!(
+        e.message
+            .contains("selects the same device as drive[0] (device 0 of [sim])"),
+        "{e}"
+    );
+    assert_eq!(e.key.as_deref(), Some("drive[1]"), "{e}");
+    // Without the list, start-up finds it by the identities it reads.
+    let text = text.replace(
+        "[[drive]]\nposition = 0\n",
+        "[[drive]]\nposition = 0\nprofile = \"bdhde\"\n",
+    );
+    let cfg = parse(&text.replace(
+        "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n",
+        "interface = \"unused\"\n",
+    ))
+    .map(|mut c| {
+        c.target = ecdrive::app::ethercat::tools::Target::Sim(vec!["bdhde".into()]);
+        c
+    })
+        .unwrap_or_else(|e| panic!("{e}"));
     let stop = AtomicBool::new(false);
     let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_err();
     assert!(

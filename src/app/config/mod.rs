@@ -599,14 +599,23 @@ fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> 
                 }
             ));
         }
-        // The same device twice.
+        // The same device twice: the same selector, or (on an emulated segment the file lists)
+        // a position and an identity that name one device.
+        let here = sim_position(setup.select, sim_names.as_deref());
         if let Some(j) = master.startup.drives.iter().position(|s: &DriveSetup| {
-            s.select == setup.select && !matches!(s.select, Selector::Identity { .. })
+            (s.select == setup.select && !matches!(s.select, Selector::Identity { .. }))
+                || (here.is_some() && sim_position(s.select, sim_names.as_deref()) == here)
         }) {
             return Err(cx.err(
                 d.span(),
                 format!("drive[{i}]"),
-                format!("selects the same device as drive[{j}]"),
+                match here {
+                    Some(p) => format!(
+                        "selects the same device as drive[{j}] (device {p} of [sim]): one entry \
+                         per device"
+                    ),
+                    None => format!("selects the same device as drive[{j}]"),
+                },
             ));
         }
         master.startup.drives.push(setup);
@@ -939,6 +948,32 @@ fn esi_mapping(
                 ),
             ))
         }
+    }
+}
+
+/// The position in `[sim]` of the device `select` names, when the file lists the emulated
+/// devices: a position as it is, an identity as the first listed device with that identity (as
+/// start-up matches it). `None` when that cannot be known from the file.
+fn sim_position(select: Selector, sim: Option<&[String]>) -> Option<u16> {
+    let names = sim?;
+    match select {
+        Selector::Position(p) => Some(p),
+        Selector::Alias(_) => None,
+        Selector::Identity {
+            vendor_id,
+            product_code,
+        } => names
+            .iter()
+            .position(|n| {
+                crate::sim::quirks::split_name(n)
+                    .ok()
+                    .and_then(|(n, _)| crate::drives::by_key(n))
+                    .is_some_and(|p| {
+                        p.bus.identity.vendor_id == vendor_id
+                            && p.bus.identity.product_code == product_code
+                    })
+            })
+            .and_then(|p| u16::try_from(p).ok()),
     }
 }
 
