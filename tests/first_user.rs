@@ -229,7 +229,7 @@ fn a_negative_duration_and_two_entries_for_one_device_are_named() {
         c.target = ecdrive::app::ethercat::tools::Target::Sim(vec!["bdhde".into()]);
         c
     })
-        .unwrap_or_else(|e| panic!("{e}"));
+    .unwrap_or_else(|e| panic!("{e}"));
     let stop = AtomicBool::new(false);
     let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_err();
     assert!(
