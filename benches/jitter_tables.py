@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's jitter tables from `ecdrive jitter --json` files (benches/jitter_tables.sh).
+"""The jitter tables of docs/guide/jitter.md from `ecdrive jitter --json` files (benches/jitter_tables.sh).
 
 Usage: jitter_tables.py DIR  ->  Markdown on stdout. Reads DIR/{veth,inprocess,stress}-C.json
 and DIR/commit.txt. Every figure is "median [min–max]" of the repetitions' values, as the

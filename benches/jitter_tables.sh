@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# The README's jitter tables, regenerated: `ecdrive jitter` over veth (the headline, with SOEM
+# The jitter tables of docs/guide/jitter.md, regenerated: `ecdrive jitter` over veth (the headline, with SOEM
 # when benches/soem/build.sh can build its loop), in-process, and over veth with --stress, at
 # 1000, 500, 250 and 125 µs. Root, from the repository root, after `cargo build --release`.
 #
 #   benches/jitter_tables.sh [OUT_DIR]          (default target/jitter-tables)
 #
 # REPEAT/SECS set the headline's repetitions and seconds per run (default 5 and 10, the
-# README's command); VREPEAT/VSECS those of the in-process and --stress variants (default 3
+# command of docs/guide/jitter.md); VREPEAT/VSECS those of the in-process and --stress variants (default 3
 # and 5). Writes OUT_DIR/{veth,inprocess,stress}-C.json (+ .svg) and OUT_DIR/tables.md, the
-# Markdown the README shows, made by benches/jitter_tables.py from the JSON alone.
+# Markdown docs/guide/jitter.md shows, made by benches/jitter_tables.py from the JSON alone.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 OUT=${1:-target/jitter-tables}

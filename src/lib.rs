@@ -52,3 +52,8 @@ pub mod master;
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+/// The book's Rust examples (docs/guide/library.md), compiled by `cargo test --doc`.
+#[cfg(doctest)]
+#[doc = include_str!("../docs/guide/library.md")]
+struct GuideLibraryDoctests;

@@ -69,7 +69,7 @@ fn reset_without_a_fault_reports_each_drive() {
     assert!(r.all_clear);
 }
 
-/// The command as the README gives it, over `vbus:` against `ecdrive sim --can` in another
+/// The command as docs/guide/run.md gives it, over `vbus:` against `ecdrive sim --can` in another
 /// process: after a run that left the nodes in NMT Stopped (so they answer no SDO), `reset`
 /// takes them to Pre-operational, finds each drive, reports it, exits 0; `upload` then works
 /// again, and so does another run; a node that is not there is named in one line, exit 3.

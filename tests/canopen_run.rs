@@ -413,8 +413,8 @@ fn the_blv_r_latches_its_touch_probe_from_a_run_file() {
 /// life guarding (100Ch/100Dh), so each drive notices within its life time (300 ms) and reacts
 /// as its manual says — the ASDA-A2 AL170 (guarding error with the servo on, a fault), the
 /// Lexium MDrive Fault on life-time expiry; the BLV-R reports EMCY 8130h, and its manual names
-/// no motor reaction (README: what to add in the machine). Simulated time; the master simply
-/// sends nothing more.
+/// no motor reaction (docs/guide/canopen.md: what to add in the machine). Simulated time; the
+/// master simply sends nothing more.
 #[test]
 fn a_master_that_goes_silent_is_noticed_by_each_drive() {
     use ecdrive::State;

@@ -248,9 +248,13 @@ fn profile_checks_name_the_line_and_the_limit() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// The configuration example of the README's "Configuration file" section, as written.
+/// The book's chapter that holds the "Configuration file" section.
+const CONFIG_FILE: &str = "docs/reference/configuration.md";
+
+/// The configuration example of the book's "Configuration file" section
+/// (docs/reference/configuration.md), as written.
 fn readme_example() -> String {
-    let readme = std::fs::read_to_string("README.md").unwrap();
+    let readme = std::fs::read_to_string(CONFIG_FILE).unwrap();
     let section = readme
         .split("\n## Configuration file\n")
         .nth(1)
@@ -266,7 +270,7 @@ fn readme_example() -> String {
 #[test]
 fn the_readme_configuration_example_is_valid() {
     let block = readme_example();
-    let cfg = ecdrive::app::config::parse(&block, "README.md").unwrap_or_else(|e| panic!("{e}"));
+    let cfg = ecdrive::app::config::parse(&block, CONFIG_FILE).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(cfg.drives.len(), 1);
     let d = &cfg.master.startup.drives[0];
     assert!(d.mapping.is_some());
@@ -275,7 +279,7 @@ fn the_readme_configuration_example_is_valid() {
     assert_eq!(cfg.drives[0].profile.map(|p| p.key), Some("mr-j4-tm"));
 }
 
-/// What the README's example must do wherever it runs: OP, enabled, its four steps on the
+/// What the configuration example must do wherever it runs: OP, enabled, its four steps on the
 /// MR-J4-TM with the mapping override (csp, then csv), the BDHDE alongside on its defaults.
 fn check_readme_run(j: &serde_json::Value) {
     assert_eq!(j["outcome"], "completed", "{j:#}");
@@ -297,7 +301,7 @@ fn check_readme_run(j: &serde_json::Value) {
     }
 }
 
-/// The README's mapping example once failed at start-up ("building the process image
+/// The configuration example's mapping once failed at start-up ("building the process image
 /// (PRE-OP): timeout: mailbox response"): ecdrive's CoE client and ethercrab's kept separate
 /// mailbox counters, and with 10 mapped entries the first request of ethercrab's carried the
 /// counter of ecdrive's last one, which the drive ignores as a repeat. In-process, as written
@@ -306,7 +310,7 @@ fn check_readme_run(j: &serde_json::Value) {
 #[test]
 fn the_readme_configuration_example_runs_in_process() {
     let _one = ONE_RUN_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
-    let mut cfg = ecdrive::app::config::parse(&readme_example(), "README.md").unwrap();
+    let mut cfg = ecdrive::app::config::parse(&readme_example(), CONFIG_FILE).unwrap();
     cfg.sim.loss_detection = false;
     let stop = AtomicBool::new(false);
     let opts = RunOptions {

@@ -54,7 +54,8 @@ fn an_object_mapped_twice_is_refused_where_it_is_written() {
 }
 
 /// A drive that does not reach Operation enabled in time is named with the state it stays in,
-/// its statusword and controlword and the usual causes (the README's promise), not only "not
+/// its statusword and controlword and the usual causes (the promise of
+/// docs/guide/mixed-segments.md), not only "not
 /// every axis reached Operation enabled".
 #[test]
 fn an_enable_that_does_not_finish_says_where_each_drive_stands() {

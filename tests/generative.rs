@@ -867,10 +867,11 @@ fn drive(kind: Kind, mode: RunMode) -> Device {
     }
 }
 
-/// The README's mapping example failed at start-up ("timeout: mailbox response") whenever the
-/// MR-J4-TM's rx + tx entry count was 10, 17 or 24: ecdrive's CoE client and ethercrab's each
-/// counted mailbox requests from 1, and ethercrab's first request repeated the counter of
-/// ecdrive's last, which the drive ignores as a repeat. Every total from 4 to 24 on both drives.
+/// The configuration example's mapping (docs/reference/configuration.md) failed at start-up
+/// ("timeout: mailbox response") whenever the MR-J4-TM's rx + tx entry count was 10, 17 or 24:
+/// ecdrive's CoE client and ethercrab's each counted mailbox requests from 1, and ethercrab's
+/// first request repeated the counter of ecdrive's last, which the drive ignores as a repeat.
+/// Every total from 4 to 24 on both drives.
 #[test]
 fn every_entry_count_remaps_without_a_mailbox_counter_collision() {
     for kind in [Kind::MrJ4, Kind::Bdhde] {

@@ -343,8 +343,8 @@ fn a_following_error_is_reported_in_the_users_units() {
     );
 }
 
-/// The README's example of a drive fault is what `run` prints: the BDHDE's J3 (excessive
-/// position error) raised during the README's own csp example.
+/// The book's example of a drive fault (docs/guide/library.md) is what `run` prints: the
+/// BDHDE's J3 (excessive position error) raised during the README's own csp example.
 #[test]
 fn the_readmes_fault_example_is_what_run_prints() {
     let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
@@ -355,17 +355,17 @@ fn the_readmes_fault_example_is_what_run_prints() {
     ) else {
         return;
     };
-    let readme =
-        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/README.md")).unwrap();
+    let chapter = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/guide/library.md");
+    let readme = std::fs::read_to_string(chapter).unwrap();
     let example = readme
         .split('`')
         .find(|s| s.starts_with("drive 1 (BDHDE): fault ("))
-        .expect("the README's fault example");
+        .expect("the book's fault example");
     // The state in parentheses is the one the drive was seen in (Fault reaction active or
     // Fault, by timing); the rest is fixed.
     let (head, tail) = example.split_once("): error code").unwrap();
     let head = &head[..head.find("fault (").unwrap() + "fault (".len()];
-    // The README's example as written, with more patience for late replies: on the loaded
+    // The README's csp example as written, with more patience for late replies: on the loaded
     // two-core CI machine 3 late replies in a row over veth once stopped the run as "bus lost"
     // before the drive's alarm came; that is not what this test is about.
     let text = std::fs::read_to_string(concat!(
@@ -387,7 +387,7 @@ fn the_readmes_fault_example_is_what_run_prints() {
     let line = stderr_line(&r);
     assert!(
         line.contains(head) && line.contains(&format!("): error code{tail}")),
-        "{line:?} is not the README's {example:?}"
+        "{line:?} is not the book's {example:?}"
     );
 }
 

@@ -1,4 +1,5 @@
-//! `ecdrive run --record` and `ecdrive plot`, checked on the examples as the README runs them:
+//! `ecdrive run --record` and `ecdrive plot`, checked on the examples as docs/guide/run.md runs
+//! them:
 //! every column of the recording means what its header says in every mode (empty where it has
 //! none; the following error's maximum is the summary's; the physical columns are the raw ones
 //! in the manuals' units), and the SVG has a panel per drive and quantity titled by position

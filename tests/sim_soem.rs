@@ -521,6 +521,19 @@ def cycle():
     return [state_of(struct.unpack("<H", s.input[0:2])[0]) for s in m.slaves]
 
 
+def error_code(k):
+    """The drive's 0x603F. A drive that has just faulted also sends its emergency, which SOEM
+    hands to the next mailbox read as an exception: its code is the same fact, and the read is
+    tried again for the object itself."""
+    code = None
+    for _ in range(5):
+        try:
+            return struct.unpack("<H", m.slaves[k].sdo_read(0x603F, 0)[:2])[0]
+        except pysoem.Emergency as e:
+            code = e.error_code
+    return code
+
+
 try:
     out["count"] = config_init(2)
 
@@ -557,7 +570,7 @@ try:
             states = cycle()
         for k, st in enumerate(states):
             if st == "Fault":
-                code = struct.unpack("<H", m.slaves[k].sdo_read(0x603F, 0)[:2])[0]
+                code = error_code(k)
                 faults.append([k, code])
                 cw_out[k] = 0x80
                 for _ in range(50):

@@ -1,4 +1,5 @@
-//! No timed assertions in tests: "a slow machine takes longer, it does not fail" (README). A
+//! No timed assertions in tests: "a slow machine takes longer, it does not fail"
+//! (docs/development/testing.md). A
 //! test waits for an event (`wait_until`, a polling loop, a join) or counts cycles; it does not
 //! sleep and then assert on what it hopes happened meanwhile, nor assert on elapsed time.
 //!

@@ -3,8 +3,9 @@
 //! The CANopen (CiA 301) master: NMT, paced SDO client, SYNC producer, heartbeat consumer,
 //! node guarding, EMCY consumer, drive configuration with PDO plans, the cycle, and the
 //! SocketCAN and Unix-socket transports, through the same CiA 402 layer as the EtherCAT drives.
-//! Built on `ecdrive-core` (the protocols are its `can` module, re-exported here); the
-//! software slave's emulated nodes are only a dev-dependency of tests.
+//! Built on `ecdrive-core` (the protocols are its `can` module, re-exported here); it
+//! does not depend on the software slave (`ecdrive-sim`); the tests that run it against the
+//! emulated nodes live in the root package.
 #![warn(missing_docs)]
 #![deny(unsafe_op_in_unsafe_fn)]
 

@@ -1,8 +1,9 @@
 //! # ecdrive-ethercat
 //!
 //! The EtherCAT master: ethercrab integration, start-up, PDO and DC configuration, the cyclic
-//! loop, supervision. Built on `ecdrive-core`; the software slave is only a dev-dependency of
-//! its tests, never a normal one.
+//! loop, supervision. Built on `ecdrive-core` and `ecdrive-motion`; it does not depend on the
+//! software slave (`ecdrive-sim`) in any way, not even for its own tests: the tests that run it
+//! against emulated drives live in the root package.
 //!
 //! An application needs only the types at the crate root: [`Master`] with its
 //! [`MasterConfig`] (a [`DriveSetup`] per drive, found by a [`Selector`], with a program of

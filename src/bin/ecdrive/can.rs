@@ -12,7 +12,7 @@ use std::process::ExitCode;
 
 /// The exit code for a CANopen error: a drive's refusal (an SDO abort, an identity that is not
 /// the profile's, an NMT command refused) 4, a value or request the user gave wrong 2, the bus
-/// 3 — the classes of the README's exit-code table.
+/// 3 — the classes of the exit-code table (docs/guide/run.md).
 pub fn exit_code(e: &CanError) -> u8 {
     match &e.kind {
         CanErrorKind::Abort(_) | CanErrorKind::NmtRefused { .. } => exit::REFUSED,

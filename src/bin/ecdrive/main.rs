@@ -5,6 +5,7 @@ mod can;
 mod demo;
 mod jitter;
 mod print;
+mod reference;
 mod run;
 mod sim;
 mod soak;
@@ -18,7 +19,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
 
-/// Exit codes (documented in `--help` and the README).
+/// Exit codes (documented in `--help` and in docs/guide/run.md, "Exit codes").
 pub mod exit {
     /// Success.
     pub const OK: u8 = 0;
@@ -440,7 +441,7 @@ enum Command {
     /// interface is a CANopen bus (can-sim, vbus:PATH) or whose drives are selected by `node`
     /// is a CANopen run: the same programs on the CANopen drives, paced by SYNC.
     #[command(
-        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n  ecdrive run -c examples/csp_move_sine.toml -i veth0\n  ecdrive run -c examples/canopen_profile_modes.toml\n  ecdrive run -c examples/canopen_profile_modes.toml -i vbus:/tmp/can.sock\n\nThe configuration file is described in the README (\"Configuration file\")."
+        after_help = "Examples:\n  ecdrive run -c examples/csp_move_sine.toml\n  ecdrive run -c examples/csv_ramp.toml --duration 5s --json\n  ecdrive run -c examples/csp_move_sine.toml -i veth0\n  ecdrive run -c examples/canopen_profile_modes.toml\n  ecdrive run -c examples/canopen_profile_modes.toml -i vbus:/tmp/can.sock\n\nThe configuration file is described in docs/reference/configuration.md."
     )]
     Run {
         /// The configuration file (TOML).
@@ -564,6 +565,10 @@ enum Command {
         #[command(flatten)]
         json: Json,
     },
+    /// The command-line reference as Markdown, from this parser (the book's
+    /// `reference/cli.md`, written by `scripts/docs-reference`).
+    #[command(hide = true)]
+    MarkdownHelp,
 }
 
 #[derive(Subcommand, Clone)]
@@ -1702,6 +1707,13 @@ fn dispatch(cli: Cli) -> ExitCode {
             }
         }
         Command::Plot { file, output } => plot_file(&file, &output),
+        Command::MarkdownHelp => {
+            print!(
+                "{}",
+                reference::markdown(&<Cli as clap::CommandFactory>::command())
+            );
+            ExitCode::SUCCESS
+        }
         Command::Version { json } => {
             let v = ecdrive::app::version::Version::this_build();
             if json.json {
