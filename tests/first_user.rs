@@ -3,6 +3,7 @@
 
 mod support {
     pub mod corpus;
+    pub mod runs;
 }
 
 use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, run};
@@ -368,4 +369,28 @@ fn a_program_faster_than_the_motor_is_refused_at_start_up() {
     let cfg = parse(&text(90.0)).unwrap_or_else(|e| panic!("{e}"));
     let r = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+}
+
+/// A pp move by a distance after a csp move never ended on the BDHDE (the run was killed after
+/// 55 s): the axis stood at its target, but the emulated drive had added the distance to the
+/// motor model's fraction of a count, so the target was 0.4 counts off and never within a
+/// position window of 0. The drive counts whole units; the move ends where it should, exactly.
+#[test]
+fn a_pp_move_by_a_distance_after_a_csp_move_ends_at_its_target() {
+    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
+        loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
+        units = { name = \"rev\", counts_per_unit = 1048576 }\n\
+        program = [{ step = \"move\", by = 0.1, velocity = 1, acceleration = 10 }, \
+        { step = \"mode\", mode = \"pp\" }, \
+        { step = \"pp\", by = [0.5], velocity = 1, acceleration = 50 }]\n";
+    let (r, rec) = support::runs::run_recorded(text, "pp-by-after-csp");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let cycles = &rec[0];
+    let entered = cycles.iter().find(|c| c.mode == 1).expect("pp reported");
+    let last = cycles.last().expect("cycles");
+    assert_eq!(
+        last.actual - entered.actual,
+        524_288,
+        "{entered:?} → {last:?}"
+    );
 }

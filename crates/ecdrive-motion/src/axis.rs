@@ -44,6 +44,8 @@ pub struct AxisSetup {
     pub caps: cia402::DriveCaps,
     /// Position units per second of one unit of the drive's velocity objects.
     pub velocity_unit: f64,
+    /// Position units per revolution of the motor shaft (for the standstill threshold).
+    pub position_per_rev: f64,
     /// The program to run (may be empty).
     pub program: Vec<Step>,
     /// The mode the run starts in.
@@ -57,6 +59,24 @@ pub struct AxisSetup {
     /// In ip the drive interpolates only with controlword bit 4 set (CiA 402; not the
     /// ASDA-A2, which takes 60C1h:01 at each SYNC).
     pub ip_enable_bit: bool,
+}
+
+/// **\[REC\]** The speed at or below which an axis counts as standing still for a switch into a
+/// position mode, in revolutions of the motor shaft per second (0.6 r/min): entered at that
+/// speed, a position mode stops the rest within a few counts. A drive's own zero-speed flag may
+/// mean far more (the MR-J4-TM's S_ZSP: below [Pr. PC07], 50 r/min by default), and a real
+/// drive's velocity at standstill is never exactly 0.
+pub const STANDSTILL_REV_S: f64 = 0.01;
+
+/// [`STANDSTILL_REV_S`] in the drive's velocity units (at least 1).
+fn standstill_velocity(setup: &AxisSetup) -> u32 {
+    let v = STANDSTILL_REV_S * setup.position_per_rev / setup.velocity_unit;
+    if v.is_finite() && v >= 1.0 {
+        // In range: checked above, and u32::MAX saturates.
+        v.min(f64::from(u32::MAX)) as u32
+    } else {
+        1
+    }
 }
 
 /// One cycle's inputs of an axis, as the master read them from the bus.
@@ -161,6 +181,8 @@ enum DriveRun {
         settled: u32,
         reached: bool,
         since: u64,
+        /// Cycles the axis has stood still with every target given and none reported reached.
+        still: u32,
     },
     /// pv or tq: the target went out at good cycle `since` (`None`: the axis is not yet
     /// taking it).
@@ -229,6 +251,42 @@ const PROBE_LATCHES: usize = 16;
 /// counts as reached: the round trip of the last handshake (as [`cia402::profile_velocity`]'s
 /// settling).
 const PP_SETTLE_CYCLES: u32 = 3;
+
+/// **\[REC\]** How long an axis may stand still in pp, every target given, without the drive
+/// reporting the target reached, before the step counts as failed: a drive whose position window
+/// (0x6067/0x6068) is tighter than it settles would otherwise hold the program until
+/// [`DRIVE_STEP_TIMEOUT_S`].
+const PP_STALL_S: f64 = 5.0;
+
+/// Why a pp step has failed, if it has: no target reached within [`DRIVE_STEP_TIMEOUT_S`], a
+/// target not acknowledged, or the axis standing still for [`PP_STALL_S`] (`still` cycles)
+/// without the drive reporting the target reached.
+fn pp_failure(
+    s: &cia402::PpStatus,
+    ctx: &StepContext,
+    since: u64,
+    still: u32,
+) -> Option<&'static str> {
+    if ctx.tick.saturating_sub(since) as f64 * ctx.dt > DRIVE_STEP_TIMEOUT_S {
+        Some(
+            "the program stopped: the drive did not report its pp targets reached within 2 \
+             minutes",
+        )
+    } else if s.error.is_some() {
+        Some(
+            "the program stopped: the drive did not acknowledge a pp target (statusword bit 12 \
+             stayed 0 after controlword bit 4 rose)",
+        )
+    } else if f64::from(still) * ctx.dt > PP_STALL_S {
+        Some(
+            "the program stopped: the axis has stood still for 5 s with every pp target given, \
+             and the drive does not report the target reached (statusword bit 10): is its \
+             position window (0x6067, 0x6068) tighter than the axis settles?",
+        )
+    } else {
+        None
+    }
+}
 
 /// What every axis's step of one cycle shares.
 #[derive(Debug, Clone, Copy)]
@@ -326,11 +384,13 @@ impl MotionAxis {
     pub fn new(setup: &AxisSetup, cycle: Duration) -> Option<Self> {
         let caps = setup.caps;
         let initial = OperationMode::from_i8(setup.mode.code());
-        let axis = Axis::new(caps, AxisConfig::for_cycle_time(&caps, cycle, initial))
-            .or_else(|_| {
-                let csp = OperationMode::CyclicSyncPosition;
-                Axis::new(caps, AxisConfig::for_cycle_time(&caps, cycle, csp))
-            })
+        let config = |mode| {
+            let mut c = AxisConfig::for_cycle_time(&caps, cycle, mode);
+            c.standstill.velocity = standstill_velocity(setup);
+            c
+        };
+        let axis = Axis::new(caps, config(initial))
+            .or_else(|_| Axis::new(caps, config(OperationMode::CyclicSyncPosition)))
             .ok()?;
         Some(Self {
             axis,
@@ -875,6 +935,7 @@ impl MotionAxis {
                     settled: 0,
                     reached: false,
                     since: tick,
+                    still: 0,
                 }
             }
             _ => DriveRun::Profile { index, since: None },
@@ -1204,6 +1265,7 @@ impl MotionAxis {
             mut settled,
             reached,
             since,
+            still,
         } = self.drive_run
         else {
             return;
@@ -1231,15 +1293,13 @@ impl MotionAxis {
             }
         }
         let s = self.pp.step(&mut self.axis, sw);
-        let timed_out = ctx.tick.saturating_sub(since) as f64 * ctx.dt > DRIVE_STEP_TIMEOUT_S;
-        if timed_out {
-            let why = "the program stopped: the drive did not report its pp targets reached \
-                       within 2 minutes";
-            return self.drive_step_failed(i, why, ctx, ev);
-        }
-        if s.error.is_some() {
-            let why = "the program stopped: the drive did not acknowledge a pp target \
-                       (statusword bit 12 stayed 0 after controlword bit 4 rose)";
+        let still =
+            if given == n && s.queued == 0 && !s.target_reached && self.axis.status().standstill {
+                still.saturating_add(1)
+            } else {
+                0
+            };
+        if let Some(why) = pp_failure(&s, ctx, since, still) {
             return self.drive_step_failed(i, why, ctx, ev);
         }
         settled = if s.queued == 0 && s.phase == cia402::PpPhase::Idle {
@@ -1260,6 +1320,7 @@ impl MotionAxis {
             settled,
             reached,
             since,
+            still,
         };
     }
 
@@ -1855,4 +1916,48 @@ impl MotionAxis {
 /// A torque in the drive's unit as its torque value (0x6071), rounded and held to its range.
 fn drive_torque(t: f64) -> i16 {
     t.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ctx(tick: u64) -> StepContext {
+        StepContext {
+            cycle: tick,
+            tick,
+            dt: 0.001,
+            pulse: tick,
+            ending: false,
+            any_energised_before: true,
+            stop_ramp_cycles: 200,
+            stop_timeout_cycles: 2000,
+        }
+    }
+
+    fn status() -> cia402::PpStatus {
+        cia402::PpStatus {
+            phase: cia402::PpPhase::Idle,
+            queued: 0,
+            acknowledged: 1,
+            target_reached: false,
+            following_error: false,
+            aborted: false,
+            error: None,
+        }
+    }
+
+    /// An axis that stands at its pp target without the drive reporting it reached (a
+    /// position window tighter than it settles) fails the step after 5 s, naming the window,
+    /// instead of holding the program for two minutes.
+    #[test]
+    fn a_pp_step_standing_still_without_target_reached_fails_after_5_s() {
+        let s = status();
+        assert_eq!(pp_failure(&s, &ctx(3000), 0, 5000), None);
+        let why = pp_failure(&s, &ctx(6000), 0, 5001).expect("stalled");
+        assert!(why.contains("0x6067"), "{why}");
+        // Still turning (the counter restarts whenever it moves): two minutes at most.
+        assert_eq!(pp_failure(&s, &ctx(119_000), 0, 10), None);
+        assert!(pp_failure(&s, &ctx(120_001), 0, 10).is_some_and(|w| w.contains("2 minutes")));
+    }
 }

@@ -30,7 +30,7 @@ pub mod telemetry;
 pub use app::{AppAxis, AppCycle, CycleApp, EntryError};
 pub use axis::{
     AxisSetup, DRIVE_FE_STUCK_CYCLES, EventSink, FEEDBACK_PULSES, Inputs, MotionAxis, ProbeObjects,
-    Requests, SetpointSteps, StepContext,
+    Requests, STANDSTILL_REV_S, SetpointSteps, StepContext,
 };
 pub use limits::SetpointLimits;
 pub use program::{ProbeEdge, RunMode, Step, Target};

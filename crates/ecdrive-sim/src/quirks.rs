@@ -28,6 +28,7 @@
 //! | `following-error-zero` | 0x60F4 can be mapped but always reads 0 | drives that do not compute it in every mode |
 //! | `interpolation-index-read-only` | 0x60C2:02 (interpolation time index) is read-only at its power-on value | the BDHDE as its object table prints it |
 //! | `outputs-only-in-op` | the output SyncManager is enabled with OP only: in SAFE-OP the outputs are not taken and do not count in the working counter | a stack that starts its output handler with OP (what this emulator did until KickCAT showed it) |
+//! | `modes-only-when-disabled` | 0x6060 is taken only outside Operation enabled: a switch asked for while enabled is never shown in 0x6061 | drives whose firmware changes the mode only with the power stage off |
 //! | `op-needs-sync0` | SAFE-OP → OP is refused with AL status code 0x002D (no sync) while SYNC0 is activated but has not yet fired | slave stacks that check for SYNC0 events before OP; the MR-J4-TM manual §1.4.2 (7) has DC synchronisation established in SAFE-OP before OP |
 
 use core::fmt;
@@ -65,6 +66,8 @@ pub enum Quirk {
     NoHomeSwitch,
     /// The output SM is enabled with OP only.
     OutputsOnlyInOp,
+    /// 0x6060 taken only outside Operation enabled.
+    ModesOnlyWhenDisabled,
 }
 
 /// The entry whose description [`Quirk::SdoInfoBadEntry`] breaks: every CoE device has it.
@@ -101,7 +104,7 @@ pub struct Capabilities {
 
 impl Quirk {
     /// Every quirk, in the order of the table above.
-    pub const ALL: [Quirk; 15] = [
+    pub const ALL: [Quirk; 16] = [
         Quirk::NoStateSkipping,
         Quirk::CycleTimeReadOnly,
         Quirk::SyncObjectsAbsent,
@@ -117,6 +120,7 @@ impl Quirk {
         Quirk::OpNeedsSync0,
         Quirk::NoHomeSwitch,
         Quirk::OutputsOnlyInOp,
+        Quirk::ModesOnlyWhenDisabled,
     ];
 
     /// The name after `+` in a device name.
@@ -137,6 +141,7 @@ impl Quirk {
             Quirk::OpNeedsSync0 => "op-needs-sync0",
             Quirk::NoHomeSwitch => "no-home-switch",
             Quirk::OutputsOnlyInOp => "outputs-only-in-op",
+            Quirk::ModesOnlyWhenDisabled => "modes-only-when-disabled",
         }
     }
 
@@ -167,6 +172,9 @@ impl Quirk {
             Quirk::OutputsOnlyInOp => {
                 "the output SyncManager enabled with OP only: outputs not taken in SAFE-OP"
             }
+            Quirk::ModesOnlyWhenDisabled => {
+                "0x6060 taken only outside Operation enabled (a switch while enabled never shows)"
+            }
             Quirk::NoHomeSwitch => {
                 "no home switch on the emulated machine: homing on it runs into a limit switch \
                  and fails as the drive reports it"
@@ -181,7 +189,9 @@ impl Quirk {
             | Quirk::OutputsInSafeOp
             | Quirk::OpNeedsSync0
             | Quirk::OutputsOnlyInOp => Needs::ProcessData,
-            Quirk::NoStateSkipping | Quirk::NoHomeSwitch => Needs::Cia402,
+            Quirk::NoStateSkipping | Quirk::NoHomeSwitch | Quirk::ModesOnlyWhenDisabled => {
+                Needs::Cia402
+            }
             Quirk::FollowingErrorZero => Needs::FollowingError,
             _ => Needs::Coe,
         }

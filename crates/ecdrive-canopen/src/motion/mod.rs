@@ -48,6 +48,7 @@ pub fn axis_setup(profile: &CanDriveProfile, program: Vec<Step>, mode: RunMode) 
     AxisSetup {
         caps: profile.caps,
         velocity_unit: profile.units.velocity_position_per_s(),
+        position_per_rev: profile.units.position_per_rev,
         program,
         mode,
         following_error_limit: None,

@@ -44,15 +44,19 @@
 //!    position mode, the engine first **brings the axis to standstill** (phase
 //!    [`ModeSwitchPhase::Stopping`]): in csp it ramps the per-cycle position increment down to 0,
 //!    in csv it ramps the target velocity to 0, in cst/cstca the target torque to 0, each in
-//!    [`StopRampConfig::cycles`] cycles (linear); in every other mode it sets Halt (bit 8) so the
-//!    drive stops by 0x605D. It waits for standstill (the drive's zero-speed flag if given, else
-//!    the velocity or position-change threshold, for [`StandstillConfig::cycles`] cycles). Only
-//!    then does it write 0x6060.
+//!    [`StopRampConfig::cycles`] cycles (linear), in pv the target velocity likewise (the drive
+//!    follows by its own deceleration); in every other mode it sets Halt (bit 8) so the
+//!    drive stops by 0x605D. It waits for standstill (the drive's zero-speed flag if given,
+//!    together with the velocity threshold where the velocity is known, since a drive may call
+//!    tens of r/min zero; else the velocity or position-change threshold; for
+//!    [`StandstillConfig::cycles`] cycles). Only then does it write 0x6060. The phase fails after
+//!    [`AxisConfig::mode_switch_timeout_cycles`] without progress: while the actual speed keeps
+//!    falling (a drive braking by its own deceleration in pv) the axis is on its way.
 //!
 //!    A torque set-point of 0 only lets the motor coast, so an axis that turns in a torque
-//!    mode (cst, cstca, tq) is first switched to a velocity mode the drive supports (csv when
-//!    the torque mode or the new mode is cyclic, pv between profile modes; no zero-speed rule
-//!    applies between those) and ramped to 0 there.
+//!    mode (cst, cstca, tq) is first switched to a velocity mode the drive supports (csv where it
+//!    has it, the master setting the deceleration; else pv; no zero-speed rule applies between
+//!    those) and ramped to 0 there.
 //!    The phase reads [`ModeSwitchPhase::Stopping`] throughout, and the switch's `from` is that
 //!    velocity mode from then on. A drive with no such mode gets the torque ramp and coasts.
 //! 2. It writes the new mode to 0x6060 ([`ModeSwitchPhase::Requested`]). Until 0x6061 shows the
@@ -132,8 +136,10 @@ pub struct Output {
     pub torque_offset: i16,
 }
 
-/// How standstill is detected. Sources in order of preference: the drive's zero-speed flag,
-/// the velocity actual value, the change of the actual position per cycle.
+/// How standstill is detected. Sources in order of preference: the drive's zero-speed flag
+/// (with the velocity threshold too where the velocity actual value is known: the flag may mean
+/// "below tens of r/min", the MR-J4-TM's S_ZSP below [Pr. PC07] = 50 r/min), the velocity
+/// actual value, the change of the actual position per cycle.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct StandstillConfig {
     /// |velocity actual| at or below this counts as stopped (drive velocity units).
@@ -508,7 +514,11 @@ enum ModeSwitch {
     },
     Stopping {
         to: OperationMode,
+        /// Cycles since the phase began or the axis last slowed down (the phase's timeout
+        /// counts cycles without progress).
         cycles: u32,
+        /// The lowest |velocity actual| seen in the phase (`u32::MAX` before any).
+        slowest: u32,
         position_step: u32,
         velocity_step: u32,
         torque_step: u32,
@@ -725,6 +735,7 @@ impl Axis {
         ModeSwitch::Stopping {
             to,
             cycles: 0,
+            slowest: u32::MAX,
             position_step: step_size(self.position_delta.unsigned_abs(), n),
             velocity_step: step_size(self.velocity.unsigned_abs(), n),
             torque_step: step_size(u32::from(self.torque.unsigned_abs()), n),
@@ -733,12 +744,13 @@ impl Axis {
 
     /// The velocity mode to brake in when the axis turns in a torque mode and must reach zero
     /// speed before `to`: a torque set-point of 0 only lets the motor coast, so the engine
-    /// switches to a velocity mode and ramps the velocity to 0 there: csv (the master sets the
-    /// deceleration cycle by cycle) when the torque mode or `to` is cyclic, pv (the drive
-    /// decelerates by its own 0x6084) between profile modes, which a drive may not mix with
-    /// cyclic ones (the MR-J4-TM's [Pr. PA01]); the other one if the drive lacks it. `None` when
-    /// the axis is not turning, not enabled, or the drive has neither.
-    fn braking_mode(&self, to: OperationMode) -> Option<OperationMode> {
+    /// switches to a velocity mode and ramps the velocity to 0 there: csv where the drive has it
+    /// (the master sets the deceleration cycle by cycle), else pv (the drive follows the ramped
+    /// target by its own deceleration, 0x6084). A drive whose setting excludes the cyclic modes
+    /// now (the MR-J4-TM's [Pr. PA01] in profile mode) has its [`DriveCaps::supported_modes`]
+    /// restricted by the master, so it brakes in pv. `None` when the axis is not turning, not
+    /// enabled, or the drive has neither.
+    fn braking_mode(&self, _to: OperationMode) -> Option<OperationMode> {
         if self.active_mode.set_point_kind() != Some(SetPointKind::Torque)
             || self.standstill
             || self.state != Some(State::OperationEnabled)
@@ -746,20 +758,12 @@ impl Axis {
         {
             return None;
         }
-        let (first, second) = if self.active_mode.is_cyclic() || to.is_cyclic() {
-            (
-                OperationMode::CyclicSyncVelocity,
-                OperationMode::ProfileVelocity,
-            )
-        } else {
-            (
-                OperationMode::ProfileVelocity,
-                OperationMode::CyclicSyncVelocity,
-            )
-        };
-        [first, second].into_iter().find(|&via| {
-            self.caps.supported_modes.contains(via) && !self.caps.is_position_mode(via)
-        })
+        [
+            OperationMode::CyclicSyncVelocity,
+            OperationMode::ProfileVelocity,
+        ]
+        .into_iter()
+        .find(|&via| self.caps.supported_modes.contains(via) && !self.caps.is_position_mode(via))
     }
 
     /// Target position (0x607A) for pp, ip, csp.
@@ -999,16 +1003,20 @@ impl Axis {
         Ok(())
     }
 
+    /// Halt (bit 8) while stopping for a switch, in a profile mode other than pv: in pv the
+    /// engine ramps the target velocity to 0 and the drive follows it by its own deceleration,
+    /// where a halt would stop it by 0x605D (the MR-J4-TM at its torque limit, −261 %).
     fn halting(&self) -> bool {
         matches!(self.switch, ModeSwitch::Stopping { .. })
             && self.state == Some(State::OperationEnabled)
             && !self.active_mode.is_cyclic()
+            && self.active_mode.set_point_kind() != Some(SetPointKind::Velocity)
     }
 
     fn update_standstill(&mut self, fb: &Feedback) {
         let cfg = self.config.standstill;
         let still = if let Some(z) = fb.zero_speed {
-            z
+            z && fb.velocity.is_none_or(|v| v.unsigned_abs() <= cfg.velocity)
         } else if let Some(v) = fb.velocity {
             v.unsigned_abs() <= cfg.velocity
         } else if let (Some(p), Some(lp)) = (fb.position, self.last_actual_position) {
@@ -1104,7 +1112,16 @@ impl Axis {
                     *c = cycles.saturating_add(1);
                 }
             }
-            ModeSwitch::Stopping { to, cycles, .. } => {
+            ModeSwitch::Stopping {
+                to,
+                cycles,
+                slowest,
+                ..
+            } => {
+                // Progress: the actual speed reached a new low (by more than 1 %, or 1 unit).
+                let progress = fb.velocity.map(i32::unsigned_abs).filter(|&v| {
+                    slowest == u32::MAX || v < slowest.saturating_sub((slowest / 100).max(1))
+                });
                 // The engine's own ramp must have ended too: a drive's zero-speed flag may
                 // already show at a speed it calls zero (the MR-J4-TM's S_ZSP below
                 // [Pr. PC07], 50 r/min by default) while the set-point still brakes, and a
@@ -1118,8 +1135,19 @@ impl Axis {
                     };
                 } else if cycles >= timeout {
                     self.abandon_switch(to, ModeSwitchFailure::NoStandstill, cycles);
-                } else if let ModeSwitch::Stopping { cycles: c, .. } = &mut self.switch {
-                    *c = cycles.saturating_add(1);
+                } else if let ModeSwitch::Stopping {
+                    cycles: c,
+                    slowest: low,
+                    ..
+                } = &mut self.switch
+                {
+                    match progress {
+                        Some(v) => {
+                            *low = v;
+                            *c = 0;
+                        }
+                        None => *c = cycles.saturating_add(1),
+                    }
                 }
             }
             ModeSwitch::Requested { from, to, cycles } => {

@@ -296,6 +296,32 @@ impl SupportedModes {
         }
     }
 
+    /// Only the modes of `allowed` (0x6060 values): what a drive offers while a setting of its
+    /// own restricts the usable modes (the MR-J4-TM's [Pr. PA01]).
+    pub fn restricted_to(self, allowed: &[i8]) -> Self {
+        let mut raw = 0u32;
+        for m in self.iter() {
+            if !allowed.contains(&m.as_i8()) {
+                continue;
+            }
+            let bit = m.standard_bit().or_else(|| match m {
+                OperationMode::Vendor(v) => self
+                    .vendor_bits
+                    .iter()
+                    .find(|vb| vb.mode == v)
+                    .map(|vb| vb.bit),
+                _ => None,
+            });
+            if let Some(b) = bit {
+                raw |= 1u32.checked_shl(u32::from(b)).unwrap_or(0);
+            }
+        }
+        Self {
+            raw,
+            vendor_bits: self.vendor_bits,
+        }
+    }
+
     /// Set bits in 16–31 that the vendor mapping does not explain.
     pub fn unmapped_vendor_bits(self) -> u32 {
         let mut mapped = 0u32;

@@ -16,14 +16,28 @@ pub(super) struct AxisRt {
     pub(super) m: MotionAxis,
 }
 
+/// The drive's capabilities as this run has them: where a setting of the drive selects the
+/// usable modes (the MR-J4-TM's [Pr. PA01]), only the modes of the setting start-up found
+/// allowing the program's (so the engine never brakes in a mode the drive refuses now).
+fn caps_now(d: &ConfiguredDrive) -> crate::cia402::DriveCaps {
+    let mut caps = d.profile.caps;
+    if let Some(sel) = &d.profile.bus.mode_selector
+        && let Some(g) = sel.group_for(&crate::program::modes_used(&d.setup.program, d.setup.mode))
+    {
+        caps.supported_modes = caps.supported_modes.restricted_to(g.modes);
+    }
+    caps
+}
+
 impl AxisRt {
     /// The axis of drive `d` (set-up: allocations allowed), or `None` if its engine cannot be
     /// built.
     pub(super) fn new(d: &ConfiguredDrive, cycle: Duration) -> Option<Self> {
         let pf = &d.fields.probe;
         let setup = AxisSetup {
-            caps: d.profile.caps,
+            caps: caps_now(d),
             velocity_unit: d.profile.units.velocity_position_per_s(),
+            position_per_rev: d.profile.units.position_per_rev,
             program: d.setup.program.clone(),
             mode: d.setup.mode,
             following_error_limit: d.setup.following_error_limit,

@@ -796,8 +796,11 @@ impl EmulatedDrive {
         self.csp_started = false;
         self.velocity_demand = self.motor.speed_rev_s();
         self.torque_demand_permille = 0.0;
+        // The drive counts whole position units: a relative target adds to the position it
+        // stands at, not to the motor model's fraction of a count (a target 0.4 counts off
+        // never comes within a position window of 0).
         self.pp = ProfilePosition {
-            last_target: actual,
+            last_target: actual.round(),
             ..ProfilePosition::default()
         };
     }
@@ -1012,6 +1015,11 @@ impl EmulatedDrive {
     fn switch_mode(&mut self) {
         let requested = self.int(obj::MODES) as i8;
         if requested == self.mode || requested == 0 || !self.allowed_modes.contains(&requested) {
+            return;
+        }
+        if self.quirks.has(Quirk::ModesOnlyWhenDisabled)
+            && self.fsa.state() == State::OperationEnabled
+        {
             return;
         }
         let sm = &self.spec.state_machine;
