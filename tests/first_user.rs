@@ -214,7 +214,7 @@ fn a_negative_duration_and_two_entries_for_one_device_are_named() {
     let e = parse(text).unwrap_err();
     assert!(
         e.message
-            .contains("selects the same device as drive[0] (device 0 of [sim])"),
+            .contains("selects the same device as drive[0] (device 0 of [sim], the only one"),
         "{e}"
     );
     assert_eq!(e.key.as_deref(), Some("drive[1]"), "{e}");
@@ -252,7 +252,7 @@ fn a_homing_method_beyond_the_drives_range_is_named_by_check() {
     let e = parse(text).unwrap_err();
     assert!(
         e.message
-            .contains("homing method 37 is outside what the BDHDE takes in 0x6098 (– to 35)"),
+            .contains("homing method 37 is outside what the BDHDE takes in 0x6098 (at most 35)"),
         "{e}"
     );
     assert!(parse(&text.replace("method = 37", "method = 35")).is_ok());
@@ -393,4 +393,119 @@ fn a_pp_move_by_a_distance_after_a_csp_move_ends_at_its_target() {
         524_288,
         "{entered:?} → {last:?}"
     );
+}
+
+/// Found by trying files this project had not seen (the second first-user trial), each named
+/// where it is written now: a `--log` level with a typo silenced every warning; an identity
+/// that two devices have quietly took the first; `interface = "sim:…"` passed `--check` and
+/// then failed as a bus error; a quirk a device cannot have in `[sim]` had no line; a truncated
+/// ESI file was said to be broken at line 1, column 1; a profile forced on the other drive
+/// suggested the generic profile; a negative hold was "not finite"; a homing range without a
+/// lower bound printed "–".
+#[test]
+fn what_the_second_trial_found_is_named_where_it_is_written() {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ecdrive"))
+        .args(["--log", "wran", "slaves", "-i", "sim:mr-j4-tm"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--log \"wran\" is not a level"), "{err}");
+
+    let two = "interface = \"sim\"\n[sim]\ndevices = [\"mr-j4-tm\", \"mr-j4-tm\"]\n[[drive]]\n\
+        identity = { vendor_id = 0xA1E, product_code = 0x201 }\n";
+    let e = parse(two).unwrap_err();
+    assert!(
+        e.message
+            .contains("its identity matches 2 devices of [sim] (0 mr-j4-tm, 1 mr-j4-tm)"),
+        "{e}"
+    );
+    // One entry per device by identity is what line order is for; a device named by position
+    // is not in question.
+    let each =
+        format!("{two}[[drive]]\nidentity = {{ vendor_id = 0xA1E, product_code = 0x201 }}\n");
+    assert!(parse(&each).is_ok());
+    let by_pos = two.replace("[[drive]]\n", "[[drive]]\nposition = 0\n[[drive]]\n");
+    assert!(parse(&by_pos).is_ok(), "{by_pos}");
+    // Start-up says the same from the identities it reads (no [sim] list: a segment given to
+    // the run).
+    let mut cfg = parse(&two.replace(
+        "interface = \"sim\"\n[sim]\ndevices = [\"mr-j4-tm\", \"mr-j4-tm\"]\n",
+        "interface = \"unused\"\n",
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    cfg.target =
+        ecdrive::app::ethercat::tools::Target::Sim(vec!["mr-j4-tm".into(), "mr-j4-tm".into()]);
+    let stop = AtomicBool::new(false);
+    let e = run(&cfg, &RunOptions::default(), &stop, &mut |_| {}).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("matches 2 devices (0 MR-J4-TM, 1 MR-J4-TM)"),
+        "{e}"
+    );
+
+    let e = parse("interface = \"sim:mr-j4-tm,bdhde\"\n").unwrap_err();
+    assert!(
+        e.message
+            .contains("write interface = \"sim\" and [sim] devices = [\"mr-j4-tm\", \"bdhde\"]"),
+        "{e}"
+    );
+    assert_eq!(e.key.as_deref(), Some("interface"));
+
+    let e =
+        parse("interface = \"sim\"\n[sim]\ndevices = [\"mr-j4-tm\", \"generic-io+no-sdo-info\"]\n")
+            .unwrap_err();
+    assert_eq!(
+        (e.line, e.key.as_deref()),
+        (3, Some("sim.devices[1]")),
+        "{e}"
+    );
+    assert!(e.message.contains("it has no CoE mailbox"), "{e}");
+
+    let esi = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/esi/Servotronix_BDHDE.xml"
+    ))
+    .unwrap();
+    let cut = &esi[..20_000];
+    let e = ecdrive::esi::EsiFile::parse(cut).unwrap_err();
+    let lines = cut.matches('\n').count() + 1;
+    assert_eq!(e.position.line as usize, lines, "{e}");
+
+    let e = parse(
+        "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\n\
+         profile = \"mr-j4-tm\"\n",
+    )
+    .unwrap_err();
+    assert!(e.message.contains("give profile = \"bdhde\""), "{e}");
+    let e = parse(
+        "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\nmode = \"csv\"\n\
+         program = [{ step = \"ramp\", velocity = 1000, acceleration = 10000, hold = -0.2 }]\n",
+    )
+    .unwrap_err();
+    assert!(e.message.contains("hold must be 0 or more"), "{e}");
+}
+
+/// A run's report lists every mode it ran in: it stopped at eight (the kept list's capacity),
+/// without saying so, and the last mode was missing. Now 64 are kept, and beyond them the
+/// report says how many it left out before the last one.
+#[test]
+fn the_report_names_every_mode_run() {
+    let mut steps = Vec::new();
+    for k in 0..10 {
+        let mode = ["csv", "csp", "cst"][k % 3];
+        steps.push(format!(
+            "{{ step = \"mode\", mode = \"{mode}\" }}, {{ step = \"dwell\", seconds = 0.01 }}"
+        ));
+    }
+    let text = format!(
+        "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\nloss_detection = false\n\
+         [[drive]]\nposition = 0\nmode = \"csp\"\nprogram = [{}, {{ step = \"mode\", mode = \"csp\" }}]\n",
+        steps.join(", ")
+    );
+    let (r, _) = support::runs::run_recorded(&text, "modes-run");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let modes = &r.drives[0].modes_run;
+    assert_eq!(modes.len(), 12, "{modes:?}");
+    assert_eq!(modes.last().map(String::as_str), Some("csp"), "{modes:?}");
 }

@@ -333,12 +333,22 @@ impl<'a> CoeClient<'a> {
             error_register: e.error_register,
             data: e.data,
         };
-        tracing::warn!(
-            "{}: emergency 0x{:04X} (error register 0x{:02X})",
-            self.drive,
-            rec.error_code,
-            rec.error_register
-        );
+        // 0x0000 is "error reset or no error" (CiA 301 §7.2.7.1): the drive says its fault
+        // went away, which is news, not a warning.
+        if rec.error_code == 0 {
+            tracing::info!(
+                "{}: emergency 0x0000 (error reset or no error; error register 0x{:02X})",
+                self.drive,
+                rec.error_register
+            );
+        } else {
+            tracing::warn!(
+                "{}: emergency 0x{:04X} (error register 0x{:02X})",
+                self.drive,
+                rec.error_code,
+                rec.error_register
+            );
+        }
         if let Ok(mut log) = self.log.lock() {
             log.push(rec);
         }

@@ -177,6 +177,8 @@ pub struct DriveOutcome {
     pub states: Vec<cia402::State>,
     /// Modes it ran set-points in, in order.
     pub modes_run: Vec<cia402::OperationMode>,
+    /// Mode changes beyond what `modes_run` keeps (`ecdrive_motion::MODES_KEPT`).
+    pub modes_omitted: u32,
     /// Touch-probe latches, in order: (probe, edge, position in counts).
     pub probe_latches: Vec<(u8, crate::program::ProbeEdge, i64)>,
 }
@@ -211,6 +213,7 @@ impl SessionReport {
                     modes_run: c
                         .and_then(|c| c.modes_run.get(i).cloned())
                         .unwrap_or_default(),
+                    modes_omitted: c.and_then(|c| c.modes_omitted.get(i).copied()).unwrap_or(0),
                     probe_latches: c
                         .and_then(|c| c.probe_latches.get(i).cloned())
                         .unwrap_or_default(),

@@ -644,6 +644,59 @@ impl Role {
     }
 }
 
+/// Entries that select by identity take the matching devices in line order, one each: an
+/// identity that more devices match (besides those other entries name by position or alias)
+/// than entries select by it would leave the choice to the line order silently (a second
+/// MR-J4-TM, and the first one moves). Refused, naming them.
+fn ambiguous_identities(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<(), MasterError> {
+    for setup in &cfg.drives {
+        let Selector::Identity { .. } = setup.select else {
+            continue;
+        };
+        let entries = cfg
+            .drives
+            .iter()
+            .filter(|s| s.select == setup.select)
+            .count();
+        // Devices another entry names by position or alias are not in question.
+        let named = |d: &DeviceInfo| {
+            cfg.drives
+                .iter()
+                .any(|s| !matches!(s.select, Selector::Identity { .. }) && selects(s.select, d))
+        };
+        let matching: Vec<&DeviceInfo> = devices
+            .iter()
+            .filter(|d| selects(setup.select, d) && !named(d))
+            .collect();
+        if matching.len() > entries {
+            return Err(MasterError::new(
+                None,
+                "matching the configuration to the segment",
+                ErrorKind::Config,
+                format!(
+                    "{} matches {} devices ({}) but {} [[drive]] {} by it: select each by \
+                     position or alias (entries by identity take the matching devices in line \
+                     order, one each)",
+                    setup.select,
+                    matching.len(),
+                    matching
+                        .iter()
+                        .map(|d| format!("{} {}", d.position, d.name))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    entries,
+                    if entries == 1 {
+                        "entry selects"
+                    } else {
+                        "entries select"
+                    }
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Decide what to do with every device: a drive (a setup and a profile) or an I/O device.
 ///
 /// A device is driven when a profile matches its identity, when the configuration forces a
@@ -653,6 +706,7 @@ impl Role {
 /// nothing, on a device the configuration names that cannot be driven, and on a forced profile
 /// that does not fit.
 pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
+    ambiguous_identities(devices, cfg)?;
     let mut chosen: Vec<Option<DriveSetup>> = vec![None; devices.len()];
     for setup in &cfg.drives {
         let pos = devices
@@ -738,14 +792,22 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
                         format!(
                             "the configuration forces the {} profile (vendor 0x{:08X}, product \
                              0x{:08X}), but the device is vendor 0x{:08X}, product 0x{:08X} \
-                             ({:?}); use the generic-cia402 profile for a drive ecdrive has no \
-                             profile for",
+                             ({:?}); {}",
                             p.name,
                             p.identity.vendor_id,
                             p.identity.product_code,
                             d.vendor_id,
                             d.product_code,
-                            d.name
+                            d.name,
+                            match crate::drives::by_identity(d.vendor_id, d.product_code) {
+                                Some(own) => format!(
+                                    "it is a {}: give profile = \"{}\", or leave profile out",
+                                    own.name, own.key
+                                ),
+                                None => "use the generic-cia402 profile for a drive ecdrive has \
+                                         no profile for"
+                                    .to_string(),
+                            }
                         ),
                     ));
                 }

@@ -252,6 +252,21 @@ const PROBE_LATCHES: usize = 16;
 /// settling).
 const PP_SETTLE_CYCLES: u32 = 3;
 
+/// Mode changes an axis keeps for its report (kept without allocating in the cycle); beyond
+/// them the last entry follows the newest mode and the rest are counted.
+pub const MODES_KEPT: usize = 64;
+
+/// The names of the modes run, as a report prints them: `omitted` changes beyond
+/// [`MODES_KEPT`] shown as `… (N more)` before the last.
+pub fn mode_names(modes: &[OperationMode], omitted: u32) -> Vec<String> {
+    let mut names: Vec<String> = modes.iter().map(|m| m.short_name().to_string()).collect();
+    if omitted > 0 && !names.is_empty() {
+        let at = names.len() - 1;
+        names.insert(at, format!("… ({omitted} more)"));
+    }
+    names
+}
+
 /// **\[REC\]** How long an axis may stand still in pp, every target given, without the drive
 /// reporting the target reached, before the step counts as failed: a drive whose position window
 /// (0x6067/0x6068) is tighter than it settles would otherwise hold the program until
@@ -370,6 +385,9 @@ pub struct MotionAxis {
     last_state: Option<State>,
     states: Vec<State>,
     modes_run: Vec<OperationMode>,
+    /// Mode changes left out of `modes_run` once it held [`MODES_KEPT`] (the last entry is
+    /// always the mode the axis ran in last).
+    modes_omitted: u32,
     /// The touch-probe latches of the run (at most [`PROBE_LATCHES`] kept).
     latches: Vec<(u8, ProbeEdge, i64)>,
     steps: SetpointSteps,
@@ -435,7 +453,8 @@ impl MotionAxis {
             tel: AxisTelemetry::default(),
             last_state: None,
             states: Vec::with_capacity(64),
-            modes_run: Vec::with_capacity(8),
+            modes_run: Vec::with_capacity(MODES_KEPT),
+            modes_omitted: 0,
             latches: Vec::with_capacity(PROBE_LATCHES),
             steps: SetpointSteps::default(),
             last_out: None,
@@ -534,9 +553,13 @@ impl MotionAxis {
         if enabled {
             self.command(sp, &st);
             let m = st.active_mode;
-            if self.modes_run.last() != Some(&m) && self.modes_run.len() < self.modes_run.capacity()
-            {
-                self.modes_run.push(m);
+            if self.modes_run.last() != Some(&m) {
+                if self.modes_run.len() < MODES_KEPT {
+                    self.modes_run.push(m);
+                } else if let Some(last) = self.modes_run.last_mut() {
+                    *last = m;
+                    self.modes_omitted = self.modes_omitted.saturating_add(1);
+                }
             }
         } else if self.stopping == Stopping::No {
             // Not enabled: track the actual values so enabling starts without a jump.
@@ -1898,6 +1921,13 @@ impl MotionAxis {
     }
 
     /// The modes the axis ran in, in order (at most 8 changes).
+    /// Mode changes beyond [`MODES_KEPT`] not in [`Self::modes_run`].
+    pub fn modes_omitted(&self) -> u32 {
+        self.modes_omitted
+    }
+
+    /// The modes the axis ran in while enabled, in order (at most [`MODES_KEPT`]; see
+    /// [`Self::modes_omitted`]).
     pub fn modes_run(&self) -> &[OperationMode] {
         &self.modes_run
     }

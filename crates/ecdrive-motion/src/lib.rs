@@ -29,8 +29,8 @@ pub mod telemetry;
 
 pub use app::{AppAxis, AppCycle, CycleApp, EntryError};
 pub use axis::{
-    AxisSetup, DRIVE_FE_STUCK_CYCLES, EventSink, FEEDBACK_PULSES, Inputs, MotionAxis, ProbeObjects,
-    Requests, STANDSTILL_REV_S, SetpointSteps, StepContext,
+    AxisSetup, DRIVE_FE_STUCK_CYCLES, EventSink, FEEDBACK_PULSES, Inputs, MODES_KEPT, MotionAxis,
+    ProbeObjects, Requests, STANDSTILL_REV_S, SetpointSteps, StepContext, mode_names,
 };
 pub use limits::SetpointLimits;
 pub use program::{ProbeEdge, RunMode, Step, Target};

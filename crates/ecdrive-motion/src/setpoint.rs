@@ -347,7 +347,7 @@ impl VelocityRamp {
         let acc = positive("acceleration", acc)?;
         let (from, to) = (finite("from", from)?, finite("to", to)?);
         if !(hold.is_finite() && hold >= 0.0) {
-            return Err(ProfileError::NotFinite {
+            return Err(ProfileError::Negative {
                 name: "hold",
                 value: hold,
             });
@@ -461,7 +461,7 @@ impl TorqueStep {
             positive("torque slope", slope)?
         };
         if !(hold.is_finite() && hold >= 0.0) {
-            return Err(ProfileError::NotFinite {
+            return Err(ProfileError::Negative {
                 name: "hold",
                 value: hold,
             });

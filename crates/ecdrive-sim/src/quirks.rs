@@ -248,13 +248,13 @@ impl Quirks {
         for q in self.iter() {
             let (ok, lacks) = match q.needs() {
                 Needs::ProcessData => (true, ""),
-                Needs::Coe => (has.coe, "a CoE mailbox"),
-                Needs::Cia402 => (has.cia402, "CiA 402 device control"),
-                Needs::FollowingError => (has.following_error, "0x60F4"),
+                Needs::Coe => (has.coe, "no CoE mailbox"),
+                Needs::Cia402 => (has.cia402, "no CiA 402 device control"),
+                Needs::FollowingError => (has.following_error, "no 0x60F4"),
             };
             if !ok {
                 return Err(format!(
-                    "quirk {q} does not apply to {device}: it has no {lacks}"
+                    "quirk {q} does not apply to {device}: it has {lacks}"
                 ));
             }
         }

@@ -442,6 +442,11 @@ fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> 
                     return Err(cx.err(d.span(), format!("sim.devices[{i}]"), e.to_string()));
                 }
                 let name = sim_esi_name(&cx, d, &format!("sim.devices[{i}]"))?;
+                // Built once here, so what only building finds (a quirk the device cannot
+                // have, a stored parameter it does not take) is named at its line too.
+                if let Err(e) = crate::sim::devices::by_name(&name, i) {
+                    return Err(cx.err(d.span(), format!("sim.devices[{i}]"), e.to_string()));
+                }
                 names.push(name);
             }
             (Target::Sim(names.clone()), Some(names))
@@ -454,6 +459,21 @@ fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> 
             ));
         }
         ("", _) => return Err(cx.err(f.interface.span(), "interface", "is empty")),
+        (name, _) if name.starts_with("sim:") => {
+            let list: Vec<String> = name["sim:".len()..]
+                .split(',')
+                .map(|d| format!("{:?}", d.trim()))
+                .collect();
+            return Err(cx.err(
+                f.interface.span(),
+                "interface",
+                format!(
+                    "{name:?} is the command line's way to name emulated devices; in a \
+                     configuration file write interface = \"sim\" and [sim] devices = [{}]",
+                    list.join(", ")
+                ),
+            ));
+        }
         (name, Some(sim)) => {
             return Err(cx.err(
                 sim.span(),
@@ -600,26 +620,64 @@ fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> 
             ));
         }
         // The same device twice: the same selector, or (on an emulated segment the file lists)
-        // a position and an identity that name one device.
-        let here = sim_position(setup.select, sim_names.as_deref());
+        // an identity whose every device another entry names by position.
         if let Some(j) = master.startup.drives.iter().position(|s: &DriveSetup| {
-            (s.select == setup.select && !matches!(s.select, Selector::Identity { .. }))
-                || (here.is_some() && sim_position(s.select, sim_names.as_deref()) == here)
+            s.select == setup.select && !matches!(s.select, Selector::Identity { .. })
         }) {
             return Err(cx.err(
                 d.span(),
                 format!("drive[{i}]"),
-                match here {
-                    Some(p) => format!(
-                        "selects the same device as drive[{j}] (device {p} of [sim]): one entry \
-                         per device"
-                    ),
-                    None => format!("selects the same device as drive[{j}]"),
-                },
+                format!("selects the same device as drive[{j}]"),
+            ));
+        }
+        if let Some((p, j)) = identity_taken(setup.select, sim_names.as_deref(), &f.drive) {
+            return Err(cx.err(
+                d.span(),
+                format!("drive[{i}]"),
+                format!(
+                    "selects the same device as drive[{j}] (device {p} of [sim], the only one \
+                     with its identity): one entry per device"
+                ),
             ));
         }
         master.startup.drives.push(setup);
         drives.push(dc);
+    }
+    // An identity that more listed devices have than entries select by it (start-up refuses
+    // it too, from the identities it reads).
+    if let Some(names) = &sim_names {
+        let setups = &master.startup.drives;
+        for (i, s) in setups.iter().enumerate() {
+            let Selector::Identity { .. } = s.select else {
+                continue;
+            };
+            let entries = setups.iter().filter(|o| o.select == s.select).count();
+            let matching: Vec<usize> = (0..names.len())
+                .filter(|&p| {
+                    let p16 = u16::try_from(p).unwrap_or(u16::MAX);
+                    sim_identity_is(&names[p], s.select)
+                        && !setups.iter().any(|o| o.select == Selector::Position(p16))
+                })
+                .collect();
+            if matching.len() > entries
+                && let Some(d) = f.drive.get(i)
+            {
+                return Err(cx.err(
+                    d.span(),
+                    format!("drive[{i}]"),
+                    format!(
+                        "its identity matches {} devices of [sim] ({}): select each by position \
+                         (entries by identity take the matching devices in line order, one each)",
+                        matching.len(),
+                        matching
+                            .iter()
+                            .map(|p| format!("{p} {}", names[*p]))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
+        }
     }
     // The emulated devices the file has no [[drive]] table for run their profile's defaults:
     // the cycle time must suit them too.
@@ -951,30 +1009,52 @@ fn esi_mapping(
     }
 }
 
-/// The position in `[sim]` of the device `select` names, when the file lists the emulated
-/// devices: a position as it is, an identity as the first listed device with that identity (as
-/// start-up matches it). `None` when that cannot be known from the file.
-fn sim_position(select: Selector, sim: Option<&[String]>) -> Option<u16> {
+/// For an entry selecting by identity on an emulated segment the file lists: when every listed
+/// device with that identity is named by another entry's position, the first of them and that
+/// entry's index (start-up would find the identity's device taken).
+fn identity_taken(
+    select: Selector,
+    sim: Option<&[String]>,
+    entries: &[Spanned<raw::Drive>],
+) -> Option<(usize, usize)> {
     let names = sim?;
-    match select {
-        Selector::Position(p) => Some(p),
-        Selector::Alias(_) => None,
-        Selector::Identity {
-            vendor_id,
-            product_code,
-        } => names
-            .iter()
-            .position(|n| {
-                crate::sim::quirks::split_name(n)
-                    .ok()
-                    .and_then(|(n, _)| crate::drives::by_key(n))
-                    .is_some_and(|p| {
-                        p.bus.identity.vendor_id == vendor_id
-                            && p.bus.identity.product_code == product_code
-                    })
-            })
-            .and_then(|p| u16::try_from(p).ok()),
+    let Selector::Identity { .. } = select else {
+        return None;
+    };
+    let by_position = |p: usize| {
+        entries.iter().position(|e| {
+            e.get_ref()
+                .position
+                .as_ref()
+                .is_some_and(|q| usize::from(*q.get_ref()) == p)
+        })
+    };
+    let matching: Vec<usize> = (0..names.len())
+        .filter(|&p| sim_identity_is(&names[p], select))
+        .collect();
+    let first = *matching.first()?;
+    if matching.iter().all(|&p| by_position(p).is_some()) {
+        by_position(first).map(|j| (first, j))
+    } else {
+        None
     }
+}
+
+/// Whether the emulated device `name` (a built-in drive) has the identity `select` names.
+fn sim_identity_is(name: &str, select: Selector) -> bool {
+    let Selector::Identity {
+        vendor_id,
+        product_code,
+    } = select
+    else {
+        return false;
+    };
+    crate::sim::quirks::split_name(name)
+        .ok()
+        .and_then(|(n, _)| crate::drives::by_key(n))
+        .is_some_and(|p| {
+            p.bus.identity.vendor_id == vendor_id && p.bus.identity.product_code == product_code
+        })
 }
 
 /// The built-in profile `p` names, or an error listing the known ones.
@@ -1203,11 +1283,12 @@ fn drive(
                 key("profile"),
                 format!(
                     "the {} profile does not fit emulated device {p}, a {} (vendor 0x{:08X} \
-                     product 0x{:08X})",
+                     product 0x{:08X}): give profile = \"{}\", or leave profile out",
                     forced.name,
                     actual.name,
                     actual.identity.vendor_id,
-                    actual.identity.product_code
+                    actual.identity.product_code,
+                    actual.key
                 ),
             ));
         }
@@ -2210,14 +2291,17 @@ fn homing_writes<B>(
         let below = e.min.as_i128().is_some_and(|lo| m < lo);
         let above = e.max.as_i128().is_some_and(|hi| m > hi);
         if below || above {
-            let bound = |v: Option<i128>| v.map_or("–".to_string(), |v| v.to_string());
+            let range = match (e.min.as_i128(), e.max.as_i128()) {
+                (Some(lo), Some(hi)) => format!("{lo} to {hi}"),
+                (Some(lo), None) => format!("at least {lo}"),
+                (None, Some(hi)) => format!("at most {hi}"),
+                (None, None) => "no range".to_string(),
+            };
             return Err((
                 n,
                 format!(
-                    "homing method {method} is outside what the {} takes in 0x6098 ({} to {})",
-                    p.name,
-                    bound(e.min.as_i128()),
-                    bound(e.max.as_i128())
+                    "homing method {method} is outside what the {} takes in 0x6098 ({range})",
+                    p.name
                 ),
             ));
         }

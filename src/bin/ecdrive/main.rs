@@ -84,7 +84,18 @@ fn install_log(level: &str) -> Result<(), String> {
         Ok(v) if !v.trim().is_empty() => {
             EnvFilter::try_new(v.trim()).map_err(|e| format!("RUST_LOG={v:?}: {e}"))?
         }
-        _ => EnvFilter::try_new(level).map_err(|e| format!("--log {level:?}: {e}"))?,
+        _ => {
+            // A bare word is taken by the filter syntax as a module name (`--log wran` would
+            // silence everything): --log takes a level.
+            const LEVELS: [&str; 6] = ["error", "warn", "info", "debug", "trace", "off"];
+            if !LEVELS.contains(&level.to_ascii_lowercase().as_str()) {
+                return Err(format!(
+                    "--log {level:?} is not a level: give error, warn, info, debug, trace or \
+                     off (RUST_LOG takes per-module directives)"
+                ));
+            }
+            EnvFilter::try_new(level).map_err(|e| format!("--log {level:?}: {e}"))?
+        }
     };
     tracing_subscriber::fmt()
         .with_env_filter(filter)

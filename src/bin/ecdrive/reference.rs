@@ -88,7 +88,7 @@ fn arg(a: &Arg) -> String {
         }
     }
     if matches!(a.get_action(), ArgAction::Append) {
-        name.push_str("…");
+        name.push('…');
     }
     let help = a
         .get_long_help()

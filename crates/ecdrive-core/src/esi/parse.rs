@@ -40,10 +40,17 @@ pub(crate) fn parse_str(text: &str) -> R<EsiFile> {
         nodes_limit: MAX_NODES,
     };
     let doc = Document::parse_with_options(text, opts).map_err(|e| {
-        let p = e.pos();
+        // The parser gives no position for a file that ends too early: it ends at its end
+        // (a truncated file), which is where to look.
+        let (row, col) = if matches!(e, roxmltree::Error::UnexpectedEndOfStream) {
+            end_of(text)
+        } else {
+            let p = e.pos();
+            (p.row, p.col)
+        };
         EsiError::new(
             EsiErrorKind::Xml,
-            Position::new(p.row, p.col),
+            Position::new(row, col),
             format!("malformed XML: {e}"),
         )
     })?;
@@ -52,6 +59,17 @@ pub(crate) fn parse_str(text: &str) -> R<EsiFile> {
         warnings: RefCell::new(Vec::new()),
     }
     .file()
+}
+
+/// Line and column (1-based, in characters) just past the last character of `text`.
+fn end_of(text: &str) -> (u32, u32) {
+    let line = text.matches('\n').count() + 1;
+    let last = text.rsplit('\n').next().unwrap_or("");
+    let col = last.chars().count() + 1;
+    (
+        u32::try_from(line).unwrap_or(u32::MAX),
+        u32::try_from(col).unwrap_or(u32::MAX),
+    )
 }
 
 /// The largest ESI text read (the largest real files are a few MiB).

@@ -813,6 +813,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 .map(|a| a.m.telemetry().following_error_drive_stuck)
                 .collect(),
             modes_run: axes.iter().map(|a| a.m.modes_run().to_vec()).collect(),
+            modes_omitted: axes.iter().map(|a| a.m.modes_omitted()).collect(),
             probe_latches: axes.iter().map(|a| a.m.latches().to_vec()).collect(),
             max_setpoint_step: axes.iter().map(|a| a.m.setpoint_steps()).collect(),
             states: axes.iter().map(|a| a.m.states().to_vec()).collect(),

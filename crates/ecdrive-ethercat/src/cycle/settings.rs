@@ -202,6 +202,8 @@ pub struct CycleReport {
     pub following_error_drive_stuck: Vec<bool>,
     /// Per axis: the modes it ran in while enabled, in order (hm for a home step).
     pub modes_run: Vec<Vec<OperationMode>>,
+    /// Per axis: mode changes beyond what `modes_run` keeps.
+    pub modes_omitted: Vec<u32>,
     /// Per axis: the touch-probe latches, in order: (probe, edge, position in counts).
     pub probe_latches: Vec<Vec<(u8, ProbeEdge, i64)>>,
     /// Per axis: the largest change of the streamed set-point from one cycle to the next while

@@ -767,12 +767,7 @@ pub fn run(
                     .map(|o| o.states.iter().map(|s| s.to_string()).collect())
                     .unwrap_or_default(),
                 modes_run: o
-                    .map(|o| {
-                        o.modes_run
-                            .iter()
-                            .map(|m| m.short_name().to_string())
-                            .collect()
-                    })
+                    .map(|o| crate::motion::mode_names(&o.modes_run, o.modes_omitted))
                     .unwrap_or_default(),
                 max_following_error: max_fe,
                 max_following_error_drive: o.and_then(|o| o.max_following_error_drive),
