@@ -640,14 +640,15 @@ fn what_a_canopen_run_cannot_take_is_named() {
         assert_eq!(e.key.as_deref(), Some("drive[0].program[0]"), "{e}");
         assert!(e.to_string().contains(says), "{e}");
     }
-    // A value the drive refuses at start-up (an SDO abort: 0x6041 is read-only) is the drive's
-    // refusal, exit 4, one line naming the node and the object.
+    // A value the drive refuses at start-up (an SDO abort: 0x6065 beyond the BLV-R's range,
+    // which its dictionary in the profile does not carry) is the drive's refusal, exit 4, one
+    // line naming the node and the object. (A read-only object is named by the file check.)
     let dir = std::env::temp_dir().join(format!("ecdrive-can-abort-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("dir");
     let file = dir.join("abort.toml");
     std::fs::write(
         &file,
-        "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\nsdos = { \"0x6041:00\" = 5 }\n",
+        "interface = \"can-sim\"\n[[drive]]\nnode = 3\nprofile = \"blv-r\"\nsdos = { \"0x6065:00\" = 4294967295 }\n",
     )
     .expect("write");
     let out = ecdrive(&["run", "-c", &file.display().to_string()]);
@@ -656,7 +657,7 @@ fn what_a_canopen_run_cannot_take_is_named() {
     assert_eq!(out.stderr.lines().count(), 1, "{}", out.stderr);
     assert!(
         out.stderr.contains("node 3")
-            && out.stderr.contains("0x6041")
+            && out.stderr.contains("0x6065")
             && out.stderr.contains("SDO abort"),
         "{}",
         out.stderr

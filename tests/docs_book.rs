@@ -199,3 +199,141 @@ fn the_book_builds() {
     }
     let _ = std::fs::remove_dir_all(&out);
 }
+
+/// The keys the configuration parser takes where `text` puts the key `zzz`, read from its own
+/// "unknown key" error (the list serde gives: the schema itself).
+fn parser_keys(text: &str) -> Vec<String> {
+    let e = match ecdrive::app::config::parse_any(text, "probe.toml") {
+        Ok(_) => panic!("{text}: zzz was taken"),
+        Err(e) => e.message,
+    };
+    // "… `zzz`, the keys allowed here are `a`, `b`", "… expected `a` or `b`", "… expected `a`".
+    let list = e
+        .split_once("`zzz`")
+        .map(|(_, rest)| rest)
+        .filter(|rest| rest.contains("expected") || rest.contains("allowed"))
+        .unwrap_or_else(|| panic!("{text}: {e}"));
+    list.split('`')
+        .skip(1)
+        .step_by(2)
+        .map(str::to_string)
+        .collect()
+}
+
+/// The words inside backticks of `text` (`identity = { vendor_id, product_code }` gives
+/// identity, vendor_id, product_code).
+fn code_words(text: &str) -> std::collections::BTreeSet<String> {
+    text.split('`')
+        .skip(1)
+        .step_by(2)
+        .flat_map(|span| {
+            span.split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+                .filter(|w| !w.is_empty())
+                .map(str::to_string)
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+/// The configuration reference against the parser, so neither drifts: every key every table
+/// takes, and every program step with its keys, is in `docs/reference/configuration.md`; the
+/// reference's step table lists exactly the parser's steps; its example error lists the drive
+/// table's keys as the parser does.
+#[test]
+fn the_configuration_reference_names_every_key_the_parser_takes() {
+    let doc = std::fs::read_to_string(Path::new(ROOT).join("docs/reference/configuration.md"))
+        .expect("configuration.md");
+    // The reference's prose and tables, not its examples (a key only an example shows is not
+    // explained).
+    let prose: String = doc.split("```").step_by(2).collect::<Vec<_>>().join("\n");
+    let words = code_words(&prose);
+    let head = "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n";
+    let drive = format!("{head}[[drive]]\nposition = 0\n");
+    let tables = [
+        ("the file", "interface = \"sim\"\nzzz = 1\n".to_string()),
+        ("[rt]", "interface = \"sim\"\n[rt]\nzzz = 1\n".to_string()),
+        (
+            "[supervision]",
+            "interface = \"sim\"\n[supervision]\nzzz = 1\n".to_string(),
+        ),
+        ("[sim]", format!("{head}zzz = 1\n")),
+        ("[[drive]]", format!("{head}[[drive]]\nzzz = 1\n")),
+        (
+            "identity",
+            format!("{head}[[drive]]\nidentity = {{ vendor_id = 1, product_code = 1, zzz = 1 }}\n"),
+        ),
+        (
+            "units",
+            format!("{drive}units = {{ name = \"mm\", counts_per_unit = 1, zzz = 1 }}\n"),
+        ),
+        ("limits", format!("{drive}limits = {{ zzz = 1 }}\n")),
+        ("mapping", format!("{drive}mapping = {{ zzz = 1 }}\n")),
+        (
+            "a PDO",
+            format!("{drive}mapping = {{ rx = [{{ pdo = 0x1600, entries = [], zzz = 1 }}] }}\n"),
+        ),
+    ];
+    let mut missing = Vec::new();
+    for (table, text) in &tables {
+        for k in parser_keys(text) {
+            if !words.contains(&k) {
+                missing.push(format!("{table}: `{k}`"));
+            }
+        }
+    }
+    // Steps: the parser's list, each with its keys, in its row of the step table.
+    let steps = parser_keys(&format!("{drive}program = [{{ step = \"zzz\" }}]\n"));
+    assert!(steps.len() >= 13, "{steps:?}");
+    let rows: Vec<&str> = doc.lines().filter(|l| l.starts_with("| `")).collect();
+    let documented: Vec<String> = rows
+        .iter()
+        .filter(|r| r.matches('|').count() == 4)
+        .filter_map(|r| r.split('`').nth(1).map(str::to_string))
+        .collect();
+    for s in &steps {
+        let Some(row) = rows
+            .iter()
+            .find(|r| r.starts_with(&format!("| `{s}` |")) && r.matches('|').count() == 4)
+        else {
+            missing.push(format!("the step table: `{s}`"));
+            continue;
+        };
+        let in_row = code_words(row);
+        for k in parser_keys(&format!(
+            "{drive}program = [{{ step = \"{s}\", zzz = 1 }}]\n"
+        )) {
+            if !in_row.contains(&k) {
+                missing.push(format!("step `{s}`: `{k}`"));
+            }
+        }
+    }
+    for d in &documented {
+        assert!(
+            steps.contains(d),
+            "the step table lists `{d}`, which the parser does not take"
+        );
+    }
+    assert!(
+        missing.is_empty(),
+        "not in docs/reference/configuration.md:\n{}",
+        missing.join("\n")
+    );
+    // The example error, as the parser would write it.
+    let example = doc
+        .lines()
+        .find(|l| l.contains("unknown key `velocty`"))
+        .expect("the example error");
+    let listed: Vec<&str> = example
+        .split("the keys allowed here are")
+        .nth(1)
+        .unwrap_or("")
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .collect();
+    assert_eq!(
+        listed,
+        parser_keys(&format!("{head}[[drive]]\nzzz = 1\n")),
+        "{example}"
+    );
+}

@@ -509,3 +509,33 @@ fn the_report_names_every_mode_run() {
     assert_eq!(modes.len(), 12, "{modes:?}");
     assert_eq!(modes.last().map(String::as_str), Some("csp"), "{modes:?}");
 }
+
+/// Start-up values the drive cannot take, or that ecdrive writes itself, passed `--check` and
+/// failed at start-up (exit 4, the last after the OP timeout with only "did not reach OP"):
+/// a read-only statusword, the mode of operation, the cycle time. Each is named at its key.
+#[test]
+fn start_up_values_the_drive_or_ecdrive_owns_are_named_at_their_key() {
+    let file = |sdo: &str| {
+        format!(
+            "interface = \"sim\"\n[sim]\ndevices = [\"bdhde\"]\n[[drive]]\nposition = 0\n\
+             sdos = {{ {sdo} }}\n"
+        )
+    };
+    for (sdo, says) in [
+        ("\"0x6041:00\" = 5", "is not writable in PRE-OP"),
+        ("\"0x6060:00\" = 10", "the mode of operation"),
+        ("\"0x1C32:02\" = 2000000", "the synchronisation"),
+        ("\"0x1600:01\" = 0x60400010", "part of the PDO mapping"),
+    ] {
+        let e = parse(&file(sdo)).unwrap_err();
+        assert!(e.message.contains(says), "{sdo}: {e}");
+        assert!(
+            e.key
+                .as_deref()
+                .is_some_and(|k| k.starts_with("drive[0].sdos.")),
+            "{e}"
+        );
+    }
+    // A value the drive takes still passes.
+    assert!(parse(&file("\"0x6065:00\" = 5000")).is_ok());
+}

@@ -256,10 +256,14 @@ const PP_SETTLE_CYCLES: u32 = 3;
 /// them the last entry follows the newest mode and the rest are counted.
 pub const MODES_KEPT: usize = 64;
 
-/// The names of the modes run, as a report prints them: `omitted` changes beyond
+/// The modes run as a report prints them, each by `name`: `omitted` changes beyond
 /// [`MODES_KEPT`] shown as `… (N more)` before the last.
-pub fn mode_names(modes: &[OperationMode], omitted: u32) -> Vec<String> {
-    let mut names: Vec<String> = modes.iter().map(|m| m.short_name().to_string()).collect();
+pub fn mode_names(
+    modes: &[OperationMode],
+    omitted: u32,
+    name: fn(&OperationMode) -> String,
+) -> Vec<String> {
+    let mut names: Vec<String> = modes.iter().map(name).collect();
     if omitted > 0 && !names.is_empty() {
         let at = names.len() - 1;
         names.insert(at, format!("… ({omitted} more)"));

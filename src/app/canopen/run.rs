@@ -825,7 +825,7 @@ impl<'a> Run<'a> {
                 a.states().iter().map(ToString::to_string).collect()
             }),
             modes: a.map_or_else(Vec::new, |a| {
-                crate::motion::mode_names(a.modes_run(), a.modes_omitted())
+                crate::motion::mode_names(a.modes_run(), a.modes_omitted(), ToString::to_string)
             }),
             position: t.position_actual,
             position_user: k.map(|k| t.position_actual as f64 / k),

@@ -1586,6 +1586,27 @@ fn start_up_values(
                     _ => Value::Str(text),
                 },
             };
+            if let Some(why) = set_by_ecdrive(addr) {
+                return Err(cx.err(
+                    v.span(),
+                    k,
+                    format!("{addr} is {why}: not a start-up value"),
+                ));
+            }
+            if let Some((objects, name)) = dict
+                && let Some(e) = Dictionary::new(objects).entry(addr)
+                && !e.access.contains(crate::od::EntryAccess::WRITE_PREOP)
+            {
+                return Err(cx.err(
+                    v.span(),
+                    k,
+                    format!(
+                        "{addr} ({}) is not writable in PRE-OP, where start-up writes its sdos, \
+                         by the {name} dictionary",
+                        e.name
+                    ),
+                ));
+            }
             sdos.push((addr, value));
         }
     }
@@ -1598,6 +1619,24 @@ fn start_up_values(
         ));
     }
     Ok(sdos)
+}
+
+/// What ecdrive writes itself, which a start-up value would contradict or be overwritten by.
+fn set_by_ecdrive(addr: ObjectAddress) -> Option<&'static str> {
+    match (addr.index, addr.sub) {
+        (0x6040, _) => Some("the controlword, which the state machine writes every cycle"),
+        (0x6060, _) => Some(
+            "the mode of operation, which ecdrive sets from `mode` and the program's mode steps",
+        ),
+        (0x1C12 | 0x1C13 | 0x1600..=0x17FF | 0x1A00..=0x1BFF, _) => {
+            Some("part of the PDO mapping, which ecdrive writes from `mapping` (or the profile's)")
+        }
+        (0x1C32 | 0x1C33, 1 | 2) => Some(
+            "the synchronisation (sync mode, cycle time), which ecdrive writes from `cycle` and \
+             the drive's profile",
+        ),
+        _ => None,
+    }
 }
 
 /// A drive entry's program as the file gives it: its units, the following-error limit, and

@@ -652,7 +652,9 @@ pub fn run(
                 outcome = Outcome::BusLost;
                 ended_by = Some(format!(
                     "{cycles} cycles in a row without a reply: the axes were stopped in a \
-                     controlled way (a bus problem, no drive fault)"
+                     controlled way (a bus problem; a drive that supervises its cyclic data \
+                     may have latched its loss-of-data fault meanwhile, which `ecdrive reset` \
+                     clears)"
                 ));
             }
             (_, Some(StopReason::WorkingCounter)) => {
@@ -767,7 +769,11 @@ pub fn run(
                     .map(|o| o.states.iter().map(|s| s.to_string()).collect())
                     .unwrap_or_default(),
                 modes_run: o
-                    .map(|o| crate::motion::mode_names(&o.modes_run, o.modes_omitted))
+                    .map(|o| {
+                        crate::motion::mode_names(&o.modes_run, o.modes_omitted, |m| {
+                            m.short_name().to_string()
+                        })
+                    })
                     .unwrap_or_default(),
                 max_following_error: max_fe,
                 max_following_error_drive: o.and_then(|o| o.max_following_error_drive),
