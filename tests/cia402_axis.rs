@@ -313,28 +313,59 @@ fn no_standstill_no_mode_write() {
     assert_eq!(err.reason, ModeSwitchFailure::NoStandstill);
 }
 
-/// Profile modes stop with Halt (bit 8) before a zero-speed switch.
+/// Before a zero-speed switch, pp stops with Halt (bit 8); pv instead ramps its target
+/// velocity to 0, which the drive follows by its own deceleration (a halt stops it by 0x605D:
+/// the emulated MR-J4-TM at its torque limit, −261 %).
 #[test]
 fn profile_mode_switch_uses_halt() {
     let caps = drives::MR_J4_TM;
+    let pp = OperationMode::ProfilePosition;
     let pv = OperationMode::ProfileVelocity;
-    let mut axis = Axis::new(caps, config(&caps, pv)).unwrap();
+    // pp → pv: Halt.
+    let mut axis = Axis::new(caps, config(&caps, pp)).unwrap();
     let mut fb = Feedback::new(StatusWord::from_raw(0x0237));
-    fb.mode_display = Some(pv);
+    fb.mode_display = Some(pp);
     fb.velocity = Some(100);
     axis.request_enable().unwrap();
     axis.step(&fb);
     axis.set_mode_bits(ControlWord::NEW_SET_POINT | ControlWord::SWITCH_ON);
     assert_eq!(axis.step(&fb).controlword.raw(), 0x001F);
-    axis.request_mode(OperationMode::ProfilePosition).unwrap();
+    axis.request_mode(pv).unwrap();
     let out = axis.step(&fb);
     assert_eq!(out.controlword.raw(), 0x010F, "halt, no application bits");
-    assert_eq!(out.mode, pv);
+    assert_eq!(out.mode, pp);
     fb.velocity = Some(0);
     axis.step(&fb);
     let out = axis.step(&fb);
-    assert_eq!(out.mode, OperationMode::ProfilePosition);
+    assert_eq!(out.mode, pv);
     assert_eq!(out.controlword.raw(), 0x000F);
+    // pv → pp: no Halt; the target velocity ramps down from where the axis turns.
+    let mut axis = Axis::new(caps, config(&caps, pv)).unwrap();
+    let mut fb = Feedback::new(StatusWord::from_raw(0x0237));
+    fb.mode_display = Some(pv);
+    fb.velocity = Some(1000);
+    axis.request_enable().unwrap();
+    axis.step(&fb);
+    axis.set_velocity(1000).unwrap();
+    axis.step(&fb);
+    axis.request_mode(pp).unwrap();
+    let first = axis.step(&fb);
+    assert_eq!(first.controlword.raw(), 0x000F, "no halt in pv");
+    assert_eq!(first.mode, pv);
+    let second = axis.step(&fb);
+    assert!(
+        second.target_velocity < first.target_velocity && first.target_velocity < 1000,
+        "{} then {}",
+        first.target_velocity,
+        second.target_velocity
+    );
+    fb.velocity = Some(0);
+    for _ in 0..1000 {
+        if axis.step(&fb).mode == pp {
+            return;
+        }
+    }
+    panic!("pp never requested");
 }
 
 #[test]

@@ -337,7 +337,7 @@ fn programs_are_checked_against_mode_parameters_and_limits() {
         ),
         7,
         Some("drive[0].program[0]"),
-        "velocity 150 counts/s exceeds the drive's limit of 100 counts/s",
+        "velocity 150 counts/s exceeds the entry's limits.max_velocity of 100 counts/s",
     );
     check(
         &format!(

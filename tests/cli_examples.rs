@@ -214,9 +214,9 @@ fn profile_checks_name_the_line_and_the_limit() {
     );
     // A start-up value out of its type's range.
     check(
-        &mr_j4("sdos = { \"0x6060:00\" = 300 }\n"),
+        &mr_j4("sdos = { \"0x6098:00\" = 300 }\n"),
         6,
-        "drive[0].sdos.\"0x6060:00\"",
+        "drive[0].sdos.\"0x6098:00\"",
         "out of range for INTEGER8",
     );
     // A cycle the drive does not accept.

@@ -337,3 +337,21 @@ fn the_configuration_reference_names_every_key_the_parser_takes() {
         "{example}"
     );
 }
+
+/// The book's `ecdrive sim --list-devices` is what the binary lists (the quirk table lacked
+/// two quirks the binary had).
+#[test]
+fn the_books_device_list_is_the_binarys() {
+    let doc = std::fs::read_to_string(Path::new(ROOT).join("docs/guide/sim.md")).expect("sim.md");
+    let block = doc
+        .split("```text\n$ ecdrive sim --list-devices\n")
+        .nth(1)
+        .and_then(|b| b.split("```").next())
+        .expect("the --list-devices block in docs/guide/sim.md");
+    let listed = ecdrive(&["sim", "--list-devices"]);
+    assert_eq!(
+        block.trim_end(),
+        listed.ok().trim_end(),
+        "docs/guide/sim.md's device list is not what `ecdrive sim --list-devices` prints"
+    );
+}

@@ -539,3 +539,120 @@ fn start_up_values_the_drive_or_ecdrive_owns_are_named_at_their_key() {
     // A value the drive takes still passes.
     assert!(parse(&file("\"0x6065:00\" = 5000")).is_ok());
 }
+
+/// Found by the third trial: a switch right after a csp move. The BDHDE entered pp at 2.6 rev/s
+/// (−108 % torque; csp to pp, both position modes, had no standstill rule), and the MR-J4-TM
+/// ran 7 834 counts past a move's target before cst (the stop ramp carried on the move's last
+/// increment). Now the switch waits for standstill and the program's move ends where it should.
+#[test]
+fn a_switch_after_a_csp_move_starts_at_rest_at_the_target() {
+    let bdhde = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
+        loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
+        units = { name = \"rev\", counts_per_unit = 1048576 }\n\
+        program = [{ step = \"move\", by = 10, velocity = 100, acceleration = 2000 }, \
+        { step = \"mode\", mode = \"pp\" }, \
+        { step = \"pp\", by = [0.1], velocity = 2, acceleration = 20 }]\n";
+    let (r, rec) = support::runs::run_recorded(bdhde, "csp-then-pp");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let c = &rec[0];
+    let entered = c.iter().position(|s| s.mode == 1).expect("pp reported");
+    let per_rev_s = 1_048_576.0;
+    assert!(
+        (c[entered].velocity as f64 / per_rev_s).abs() <= 0.02,
+        "pp entered at {} counts/s",
+        c[entered].velocity
+    );
+    assert!(
+        c[entered..].iter().all(|s| s.torque.abs() < 1000),
+        "torque beyond rated in pp"
+    );
+    // pp entered where the move ended (within 0.01 rev, the standstill threshold), and the
+    // pp step moved 0.1 rev from there (the emulated drive's relative base is the position it
+    // stands at when pp is entered).
+    assert!(
+        (c[entered].actual - 10_485_760).abs() <= 10_486,
+        "pp entered at {}",
+        c[entered].actual
+    );
+    let end = c.last().expect("cycles").actual;
+    assert_eq!(end - c[entered].actual, 104_858, "the pp step's 0.1 rev");
+
+    let mr = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\"]\n\
+        loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
+        units = { name = \"rev\", counts_per_unit = 4194304 }\n\
+        program = [{ step = \"move\", by = 1, velocity = 2, acceleration = 20 }, \
+        { step = \"mode\", mode = \"cst\" }, { step = \"torque\", torque = 0, hold = 0.05 }]\n";
+    let (r, rec) = support::runs::run_recorded(mr, "csp-then-cst");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+    let end = rec[0].last().expect("cycles").actual;
+    assert!(
+        (end - 4_194_304).abs() <= 100,
+        "ended at {end}, not at the move's target"
+    );
+}
+
+/// The BDHDE takes 0x60C2:01 from 1 to 64: a cycle of 750 µs is 75 × 10^−5 s, which it
+/// refused (exit 4, "value too high"); it is told in its own 250 µs unit instead (3 × 250 µs).
+#[test]
+fn a_bdhde_cycle_beyond_the_standard_forms_range_is_told_in_its_own_unit() {
+    let text = "interface = \"sim\"\ncycle = \"750us\"\n[sim]\ndevices = [\"bdhde\"]\n\
+        loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
+        program = [{ step = \"move\", by = 10000, velocity = 100000, acceleration = 1000000 }]\n";
+    let (r, _) = support::runs::run_recorded(text, "bdhde-750us");
+    assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
+}
+
+/// What the file can know, `--check` says: the MR-J4-TM's [Pr. PA01] as the emulated device
+/// stores it (or its power-on default), a home offset the MR-J4-TM sets itself, homing method 0
+/// (no method), and a run with no program and no duration (it ends only on a signal).
+#[test]
+fn check_says_what_the_run_would_refuse_where_the_file_knows_it() {
+    let mr = |dev: &str, rest: &str| {
+        format!(
+            "interface = \"sim\"\n[sim]\ndevices = [\"{dev}\"]\n[[drive]]\nposition = 0\n{rest}"
+        )
+    };
+    // (Without a stored value the setting is the drive's factory setting, which its EtherCAT
+    // manual leaves to the servo amplifier's instruction manual: start-up reads it.)
+    let e = parse(&mr(
+        "mr-j4-tm@0x2001=2",
+        "mode = \"csp\"\nprogram = [{ step = \"dwell\", seconds = 0.1 }]\n",
+    ))
+    .err()
+    .expect("csp with [Pr. PA01] = 2 refused");
+    assert!(
+        e.message.contains("[Pr. PA01]")
+            && e.message.contains("Profile mode")
+            && e.key.as_deref() == Some("drive[0].mode"),
+        "{e}"
+    );
+    assert!(
+        parse(&mr(
+            "mr-j4-tm@0x2001=2",
+            "mode = \"pp\"\nprogram = [{ step = \"dwell\", seconds = 0.1 }]\n"
+        ))
+        .is_ok()
+    );
+    let e = parse(&mr("mr-j4-tm", "sdos = { \"0x607C:00\" = 1000 }\n"))
+        .err()
+        .expect("0x607C refused");
+    assert!(
+        e.message.contains("sets its home offset 0x607C itself"),
+        "{e}"
+    );
+    let e = parse(&mr(
+        "bdhde",
+        "program = [{ step = \"home\", method = 0, speed_switch = 1000, speed_zero = 100 }]\n",
+    ))
+    .unwrap_err();
+    assert!(
+        e.message.contains("homing method 0 means no homing method"),
+        "{e}"
+    );
+    let cfg = parse(&mr("bdhde", "")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        cfg.warnings.iter().any(|w| w.contains("until a signal")),
+        "{:?}",
+        cfg.warnings
+    );
+}

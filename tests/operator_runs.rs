@@ -244,7 +244,7 @@ fn lost_frames_are_a_bus_problem_and_the_thresholds_are_the_files() {
         assert!(
             line.starts_with("ecdrive run: bus lost: ")
                 && line.contains("cycles in a row without a reply")
-                && line.contains("no drive fault"),
+                && line.contains("a bus problem"),
             "{line}"
         );
     }

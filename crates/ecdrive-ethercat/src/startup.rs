@@ -697,15 +697,12 @@ fn ambiguous_identities(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<(
     Ok(())
 }
 
-/// Decide what to do with every device: a drive (a setup and a profile) or an I/O device.
-///
-/// A device is driven when a profile matches its identity, when the configuration forces a
-/// profile (which must match its identity; the generic CiA 402 profile only a device that does
-/// not declare another device profile), or when `allow_generic` is set and it declares CiA 402
-/// (device type 0x….0192). Every other device is an I/O device. Fails on setups that select
-/// nothing, on a device the configuration names that cannot be driven, and on a forced profile
-/// that does not fit.
-pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
+/// The device each `[[drive]]` entry selects (by position, alias, or identity in line order,
+/// one each), or why an entry selects none or one another entry took.
+fn choose(
+    devices: &[DeviceInfo],
+    cfg: &StartupConfig,
+) -> Result<Vec<Option<DriveSetup>>, MasterError> {
     ambiguous_identities(devices, cfg)?;
     let mut chosen: Vec<Option<DriveSetup>> = vec![None; devices.len()];
     for setup in &cfg.drives {
@@ -747,6 +744,19 @@ pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, Ma
         };
         chosen[pos] = Some(setup.clone());
     }
+    Ok(chosen)
+}
+
+/// Decide what to do with every device: a drive (a setup and a profile) or an I/O device.
+///
+/// A device is driven when a profile matches its identity, when the configuration forces a
+/// profile (which must match its identity; the generic CiA 402 profile only a device that does
+/// not declare another device profile), or when `allow_generic` is set and it declares CiA 402
+/// (device type 0x….0192). Every other device is an I/O device. Fails on setups that select
+/// nothing, on a device the configuration names that cannot be driven, and on a forced profile
+/// that does not fit.
+pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
+    let chosen = choose(devices, cfg)?;
     let mut out = Vec::with_capacity(devices.len());
     for (d, setup) in devices.iter().zip(chosen) {
         let named = setup.is_some();
@@ -1381,9 +1391,14 @@ async fn write_interpolation(
         } else {
             c.download(index_at, &[index as u8], false).await
         };
+        // A value beyond the drive's range (the BDHDE takes 1–64: 750 µs is 75 × 10^−5 s)
+        // falls back to the vendor's unit, as a refused index does.
+        let set = match set {
+            Ok(()) => c.download(value_at, &[value], false).await,
+            Err(e) => Err(e),
+        };
         match set {
             Ok(()) => {
-                c.download(value_at, &[value], false).await?;
                 return Ok(Ok(format!("{value} × 10^{index} s")));
             }
             Err(e)
@@ -1400,9 +1415,16 @@ async fn write_interpolation(
             Err(e) => return Err(e),
         }
     }
-    // The vendor's unit: with its index in 0x60C2:02 (set back if the drive takes it).
-    let vendor_index = has == Some(vendor)
-        || (has.is_some() && c.download(index_at, &[vendor as u8], false).await.is_ok());
+    // The vendor's unit: with its index in 0x60C2:02 (set back if the drive takes it; it may
+    // have taken the standard form's index above before refusing the value).
+    let vendor_index = has.is_some()
+        && (c.download(index_at, &[vendor as u8], false).await.is_ok()
+            || (has == Some(vendor)
+                && c.upload(index_at, false)
+                    .await
+                    .ok()
+                    .and_then(|v| v.first().map(|b| *b as i8))
+                    == Some(vendor)));
     if vendor_index
         && unit_ns > 0
         && cycle_ns % unit_ns == 0
@@ -2105,39 +2127,7 @@ fn judge_mode_selector(sel: &ModeSelector, modes: &[i8], raw: &[u8]) -> Result<(
     for (d, s) in b.iter_mut().zip(raw) {
         *d = *s;
     }
-    let value = i64::from_le_bytes(b);
-    let names = |ms: &[i8]| -> String {
-        ms.iter()
-            .map(|m| crate::cia402::OperationMode::from_i8(*m).short_name())
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    let group = sel.group(value);
-    let Some(&bad) = modes
-        .iter()
-        .find(|m| !group.is_some_and(|g| g.modes.contains(m)))
-    else {
-        return Ok(());
-    };
-    let now = match group {
-        Some(g) => format!("\"{}\" (allows {})", g.name, names(g.modes)),
-        None => "a setting the manual does not list".to_string(),
-    };
-    let fix = match sel.group_for(modes) {
-        Some(g) => format!("set it to \"{}\" and power-cycle the drive", g.name),
-        None => format!(
-            "no one setting allows all of {}: split the program",
-            names(modes)
-        ),
-    };
-    Err(format!(
-        "the program runs {}, which {} ({}) = 0x{value:04X} does not allow: it selects {now} \
-         ({}); {fix}",
-        crate::cia402::OperationMode::from_i8(bad).short_name(),
-        sel.name,
-        sel.object,
-        sel.source
-    ))
+    sel.judge(modes, i64::from_le_bytes(b))
 }
 
 /// Send one InitCmd with its own timeout, again after a timeout or a refusal as often as its

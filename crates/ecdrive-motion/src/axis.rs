@@ -933,8 +933,11 @@ impl MotionAxis {
             self.runner.mode_switched(actual);
         } else if idle {
             // Nothing under way (also when an earlier request of this run was cut short): ask
-            // for it.
+            // for it, from the demand the program left (at rest: held where it is).
             self.requested_mode = Some(m);
+            if self.runner.at_rest() {
+                self.axis.hold();
+            }
             if self
                 .axis
                 .request_mode(OperationMode::from_i8(m.code()))
@@ -1080,6 +1083,9 @@ impl MotionAxis {
     /// stops the program and the axis.
     fn request_hm(&mut self, i: usize, ctx: &StepContext, ev: &mut dyn EventSink) {
         self.home = HomeRun::ToHm;
+        if self.runner.at_rest() {
+            self.axis.hold();
+        }
         if let Err(e) = self.axis.request_mode(OperationMode::Homing) {
             self.home = HomeRun::Idle;
             self.program = ProgramState::Idle;
@@ -1543,7 +1549,9 @@ impl MotionAxis {
                     .homing
                     .outcome()
                     .unwrap_or(cia402::HomingOutcome::Aborted),
-                drive_says: self.homing_failure,
+                // The fault itself is reported with its own code (a loss-of-data alarm during
+                // homing is not the drive's homing error): no guess at its name here.
+                drive_says: "",
             });
         }
         self.abort_home();

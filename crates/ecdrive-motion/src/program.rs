@@ -789,6 +789,12 @@ impl Runner {
         }
     }
 
+    /// Whether the program's last set-point is at rest (a move that reached its target, a ramp to
+    /// 0), so the next step starts from a standing demand.
+    pub fn at_rest(&self) -> bool {
+        self.last.vel.abs() < 1e-6
+    }
+
     /// Start over from the first step (allocation-free). Call [`Runner::seed`] before the
     /// next tick.
     pub fn restart(&mut self) {

@@ -726,6 +726,13 @@ fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> 
                 .to_string(),
         );
     }
+    if duration.is_none() && master.startup.drives.iter().all(|d| d.program.is_empty()) {
+        warnings.push(
+            "no [[drive]] has a program and no duration is given: the run holds the segment in \
+             OP until a signal (Ctrl-C, SIGTERM) ends it"
+                .to_string(),
+        );
+    }
     Ok(RunConfig {
         source: cx.file.to_string(),
         target,
@@ -1380,6 +1387,30 @@ fn drive(
             ),
         ));
     }
+    // A drive whose setting selects the usable modes (the MR-J4-TM's [Pr. PA01]), emulated here
+    // with the setting stored in its name (`mr-j4-tm@0x2001=2`): the file check says what
+    // start-up would read and refuse. (Without one, the factory setting, which the drive's
+    // EtherCAT manual leaves to another manual, is read at start-up.)
+    if let (Some(p), Selector::Position(pos), Some(names)) = (profile, select, sim)
+        && let Some(sel) = &p.bus.mode_selector
+        && let Some(name) = names.get(usize::from(pos))
+    {
+        let stored = crate::sim::quirks::stored_params(name).ok().and_then(|v| {
+            v.into_iter()
+                .find(|(a, _)| *a == sel.object)
+                .map(|(_, v)| v)
+        });
+        if let Some(value) = stored
+            && let Err(why) = sel.judge(&program::modes_used(&steps, mode), value)
+        {
+            let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
+            return Err(cx.err(
+                span,
+                key("mode"),
+                format!("emulated device {pos} ({name}): {why}"),
+            ));
+        }
+    }
     // The home steps' start-up writes.
     let homing = homing_writes(&r.program, profile, k).map_err(|(n, m)| {
         let span = r.program.get(n).map_or(d.span(), Spanned::span);
@@ -1478,6 +1509,21 @@ fn drive(
         .map(|(a, _)| *a)
         .collect();
     let mut sdos = start_up_values(cx, &key, d, dict, &steps_write)?;
+    // The home offset, where the drive sets it itself (a home step's `offset` is refused for
+    // the same reason).
+    if let Some(p) = profile
+        && let Some(why) = p.caps.home_offset_set_by_drive
+        && sdos
+            .iter()
+            .any(|(a, _)| *a == ObjectAddress::new(0x607C, 0))
+    {
+        let span = r.sdos.as_ref().map_or(d.span(), Spanned::span);
+        return Err(cx.err(
+            span,
+            key("sdos.\"0x607C:00\""),
+            format!("the home offset cannot be given: {why}"),
+        ));
+    }
     // A value for the object of one of the ESI file's Fixed InitCmds.
     if let Some(p) = profile
         && let Some(ic) = p.bus.init_cmds.iter().find(|ic| {
@@ -1551,6 +1597,13 @@ fn start_up_values(
             let addr: ObjectAddress = a.parse().map_err(|e: crate::od::AddressParseError| {
                 cx.err(v.span(), k.clone(), e.to_string())
             })?;
+            if let Some(why) = set_by_ecdrive(addr) {
+                return Err(cx.err(
+                    v.span(),
+                    k,
+                    format!("{addr} is {why}: not a start-up value"),
+                ));
+            }
             let text = match v.get_ref() {
                 toml::Value::Integer(i) => i.to_string(),
                 toml::Value::Float(x) => x.to_string(),
@@ -1586,13 +1639,6 @@ fn start_up_values(
                     _ => Value::Str(text),
                 },
             };
-            if let Some(why) = set_by_ecdrive(addr) {
-                return Err(cx.err(
-                    v.span(),
-                    k,
-                    format!("{addr} is {why}: not a start-up value"),
-                ));
-            }
             if let Some((objects, name)) = dict
                 && let Some(e) = Dictionary::new(objects).entry(addr)
                 && !e.access.contains(crate::od::EntryAccess::WRITE_PREOP)
@@ -2235,9 +2281,14 @@ fn profile_writes<B>(
                     return Err((
                         n,
                         format!(
-                            "this step's {what} sets {obj} to {r}, program[{f}] sets it \
+                            "this step's {what} sets {obj} to {r}{}, program[{f}] sets it \
                              otherwise: profile objects are written once at start-up, so the \
-                             steps of a drive must agree"
+                             steps of a drive must agree",
+                            if obj.index == 0x6087 && r == 0.0 {
+                                " (a tq step without `slope` is a step: 0x6087 = 0)"
+                            } else {
+                                ""
+                            }
                         ),
                     ));
                 }
@@ -2302,6 +2353,15 @@ fn homing_writes<B>(
     };
     if !p.caps.supported_modes.contains(OperationMode::Homing) {
         return Err((n, format!("the {} has no homing mode (0x6502)", p.name)));
+    }
+    // CiA 402: 0x6098 = 0 is "no homing method assigned" (the BDHDE's manual says so too).
+    if method == 0 {
+        return Err((
+            n,
+            "homing method 0 means no homing method (CiA 402, 0x6098): name the method the \
+             drive is to run"
+                .into(),
+        ));
     }
     // The methods the drive lists in 0x60E3 (its dictionary's defaults), if it has the object.
     let listed: Vec<i64> = p
@@ -2417,10 +2477,17 @@ fn homing_writes<B>(
 /// Check a step against the drive's limits (in user units).
 fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String> {
     let over = |what: &str, v: f64, lim: Option<f64>, u: &str| match lim {
-        Some(lim) if v.abs() > lim => Err(format!(
-            "{what} {} {unit}{u} exceeds the drive's limit of {lim} {unit}{u}",
-            v.abs()
-        )),
+        Some(lim) if v.abs() > lim => {
+            let key = if u == "/s" {
+                "max_velocity"
+            } else {
+                "max_acceleration"
+            };
+            Err(format!(
+                "{what} {} {unit}{u} exceeds the entry's limits.{key} of {lim} {unit}{u}",
+                v.abs()
+            ))
+        }
         _ => Ok(()),
     };
     match *s {
@@ -2458,7 +2525,7 @@ fn check_limits(s: &raw::Step, l: &raw::Limits, unit: &str) -> Result<(), String
         }
         raw::Step::Torque { torque, .. } | raw::Step::Tq { torque, .. } => match l.max_torque {
             Some(lim) if torque.abs() > lim => Err(format!(
-                "torque {} exceeds the drive's limit of {lim}",
+                "torque {} exceeds the entry's limits.max_torque of {lim}",
                 torque.abs()
             )),
             _ => Ok(()),

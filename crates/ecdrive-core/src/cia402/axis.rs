@@ -697,9 +697,9 @@ impl Axis {
         }
         // A position mode starts from the actual position: entered while the axis turns, it
         // would stop the axis within a cycle at whatever torque the drive has. So every drive,
-        // not only one that requires zero speed for the switch, is brought to standstill first.
+        // not only one that requires zero speed for the switch, is brought to standstill first,
+        // also from csp (a csp move's demand ends while the axis still follows it).
         let turning_into_position = self.caps.is_position_mode(mode)
-            && !self.caps.is_position_mode(self.active_mode)
             && self.state == Some(State::OperationEnabled)
             && !self.fault
             && !self.standstill;
@@ -764,6 +764,15 @@ impl Axis {
         ]
         .into_iter()
         .find(|&via| self.caps.supported_modes.contains(via) && !self.caps.is_position_mode(via))
+    }
+
+    /// The commanded position is where the motion ends (a program's motion step that reached its
+    /// target at rest): a stopping phase before a mode switch then holds it instead of carrying
+    /// on the last cycle's increment (the last step of a move may be a large one, and the ramp
+    /// down from it ran past the target).
+    pub fn hold(&mut self) {
+        self.position_delta = 0;
+        self.last_position_out = self.position;
     }
 
     /// Target position (0x607A) for pp, ip, csp.

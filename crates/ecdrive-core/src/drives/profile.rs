@@ -323,6 +323,43 @@ impl ModeSelector {
         self.groups.iter().find(|g| g.value == value & self.mask)
     }
 
+    /// Whether the setting `value` allows every one of `modes` (0x6060 values); the error says
+    /// which mode it does not allow, what the setting allows, and the setting that would.
+    pub fn judge(&self, modes: &[i8], value: i64) -> Result<(), String> {
+        let names = |ms: &[i8]| -> String {
+            ms.iter()
+                .map(|m| crate::cia402::OperationMode::from_i8(*m).short_name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let group = self.group(value);
+        let Some(&bad) = modes
+            .iter()
+            .find(|m| !group.is_some_and(|g| g.modes.contains(m)))
+        else {
+            return Ok(());
+        };
+        let now = match group {
+            Some(g) => format!("\"{}\" (allows {})", g.name, names(g.modes)),
+            None => "a setting the manual does not list".to_string(),
+        };
+        let fix = match self.group_for(modes) {
+            Some(g) => format!("set it to \"{}\" and power-cycle the drive", g.name),
+            None => format!(
+                "no one setting allows all of {}: split the program",
+                names(modes)
+            ),
+        };
+        Err(format!(
+            "the program runs {}, which {} ({}) = 0x{value:04X} does not allow: it selects {now} \
+             ({}); {fix}",
+            crate::cia402::OperationMode::from_i8(bad).short_name(),
+            self.name,
+            self.object,
+            self.source
+        ))
+    }
+
     /// A group that allows every one of `modes`, if there is one.
     pub fn group_for(&self, modes: &[i8]) -> Option<&'static ModeGroup> {
         self.groups
