@@ -614,12 +614,12 @@ fn check_says_what_the_run_would_refuse_where_the_file_knows_it() {
     };
     // (Without a stored value the setting is the drive's factory setting, which its EtherCAT
     // manual leaves to the servo amplifier's instruction manual: start-up reads it.)
-    let e = parse(&mr(
+    let Err(e) = parse(&mr(
         "mr-j4-tm@0x2001=2",
         "mode = \"csp\"\nprogram = [{ step = \"dwell\", seconds = 0.1 }]\n",
-    ))
-    .err()
-    .expect("csp with [Pr. PA01] = 2 refused");
+    )) else {
+        panic!("csp with [Pr. PA01] = 2 accepted");
+    };
     assert!(
         e.message.contains("[Pr. PA01]")
             && e.message.contains("Profile mode")
@@ -633,9 +633,9 @@ fn check_says_what_the_run_would_refuse_where_the_file_knows_it() {
         ))
         .is_ok()
     );
-    let e = parse(&mr("mr-j4-tm", "sdos = { \"0x607C:00\" = 1000 }\n"))
-        .err()
-        .expect("0x607C refused");
+    let Err(e) = parse(&mr("mr-j4-tm", "sdos = { \"0x607C:00\" = 1000 }\n")) else {
+        panic!("0x607C accepted");
+    };
     assert!(
         e.message.contains("sets its home offset 0x607C itself"),
         "{e}"
