@@ -355,3 +355,22 @@ fn the_books_device_list_is_the_binarys() {
         "docs/guide/sim.md's device list is not what `ecdrive sim --list-devices` prints"
     );
 }
+
+/// ARCHITECTURE.md reads as a map, not a wall: no table cell of 1 000 characters or more.
+#[test]
+fn architecture_has_no_wall_of_a_table_cell() {
+    let text = std::fs::read_to_string(Path::new(ROOT).join("ARCHITECTURE.md")).unwrap();
+    for (n, line) in text.lines().enumerate() {
+        if !line.trim_start().starts_with('|') {
+            continue;
+        }
+        for cell in line.split('|') {
+            assert!(
+                cell.chars().count() < 1000,
+                "ARCHITECTURE.md line {}: a table cell of {} characters",
+                n + 1,
+                cell.chars().count()
+            );
+        }
+    }
+}

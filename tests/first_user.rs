@@ -371,19 +371,30 @@ fn a_program_faster_than_the_motor_is_refused_at_start_up() {
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
 }
 
+/// The BDHDE in revolutions: a csp `move` with `mv`, a switch to pp, a `pp` step with `pp`.
+fn bdhde_move_then_pp(mv: &str, pp: &str) -> String {
+    format!(
+        "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
+         loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
+         units = {{ name = \"rev\", counts_per_unit = 1048576 }}\n\
+         program = [{{ step = \"move\", {mv} }}, {{ step = \"mode\", mode = \"pp\" }}, \
+         {{ step = \"pp\", {pp} }}]\n"
+    )
+}
+
 /// A pp move by a distance after a csp move never ended on the BDHDE (the run was killed after
 /// 55 s): the axis stood at its target, but the emulated drive had added the distance to the
 /// motor model's fraction of a count, so the target was 0.4 counts off and never within a
 /// position window of 0. The drive counts whole units; the move ends where it should, exactly.
 #[test]
 fn a_pp_move_by_a_distance_after_a_csp_move_ends_at_its_target() {
-    let text = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
-        loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
-        units = { name = \"rev\", counts_per_unit = 1048576 }\n\
-        program = [{ step = \"move\", by = 0.1, velocity = 1, acceleration = 10 }, \
-        { step = \"mode\", mode = \"pp\" }, \
-        { step = \"pp\", by = [0.5], velocity = 1, acceleration = 50 }]\n";
-    let (r, rec) = support::runs::run_recorded(text, "pp-by-after-csp");
+    let (r, rec) = support::runs::run_recorded(
+        &bdhde_move_then_pp(
+            "by = 0.1, velocity = 1, acceleration = 10",
+            "by = [0.5], velocity = 1, acceleration = 50",
+        ),
+        "pp-by-after-csp",
+    );
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
     let cycles = &rec[0];
     let entered = cycles.iter().find(|c| c.mode == 1).expect("pp reported");
@@ -546,13 +557,13 @@ fn start_up_values_the_drive_or_ecdrive_owns_are_named_at_their_key() {
 /// increment). Now the switch waits for standstill and the program's move ends where it should.
 #[test]
 fn a_switch_after_a_csp_move_starts_at_rest_at_the_target() {
-    let bdhde = "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"bdhde\"]\n\
-        loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\n\
-        units = { name = \"rev\", counts_per_unit = 1048576 }\n\
-        program = [{ step = \"move\", by = 10, velocity = 100, acceleration = 2000 }, \
-        { step = \"mode\", mode = \"pp\" }, \
-        { step = \"pp\", by = [0.1], velocity = 2, acceleration = 20 }]\n";
-    let (r, rec) = support::runs::run_recorded(bdhde, "csp-then-pp");
+    let (r, rec) = support::runs::run_recorded(
+        &bdhde_move_then_pp(
+            "by = 10, velocity = 100, acceleration = 2000",
+            "by = [0.1], velocity = 2, acceleration = 20",
+        ),
+        "csp-then-pp",
+    );
     assert_eq!(r.outcome, Outcome::Completed, "{}", r.reason);
     let c = &rec[0];
     let entered = c.iter().position(|s| s.mode == 1).expect("pp reported");
@@ -649,10 +660,17 @@ fn check_says_what_the_run_would_refuse_where_the_file_knows_it() {
         e.message.contains("homing method 0 means no homing method"),
         "{e}"
     );
-    let cfg = parse(&mr("bdhde", "")).unwrap_or_else(|e| panic!("{e}"));
-    assert!(
-        cfg.warnings.iter().any(|w| w.contains("until a signal")),
-        "{:?}",
-        cfg.warnings
-    );
+    let dir = std::env::temp_dir().join(format!("ecdrive-noprog-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("noprog.toml");
+    std::fs::write(&f, mr("bdhde", "")).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_ecdrive"))
+        .args(["run", "--check", "-c"])
+        .arg(&f)
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&dir);
+    let said = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(0), "{said}");
+    assert!(said.contains("until a signal"), "{said}");
 }

@@ -117,6 +117,10 @@ pub struct DriveConfig {
     pub steps: Vec<String>,
 }
 
+/// What `--check` says of a file whose run can only end on a signal: no program, no duration.
+pub const ENDS_ONLY_ON_A_SIGNAL: &str = "no [[drive]] has a program and no duration is given: \
+     the run holds the segment in OP until a signal (Ctrl-C, SIGTERM) ends it";
+
 /// A checked configuration file.
 #[derive(Clone)]
 pub struct RunConfig {
@@ -723,13 +727,6 @@ fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, ConfigError> 
         unchecked.push(
             "devices without a [[drive]] table: what they are is known only from the bus; \
              start-up checks them"
-                .to_string(),
-        );
-    }
-    if duration.is_none() && master.startup.drives.iter().all(|d| d.program.is_empty()) {
-        warnings.push(
-            "no [[drive]] has a program and no duration is given: the run holds the segment in \
-             OP until a signal (Ctrl-C, SIGTERM) ends it"
                 .to_string(),
         );
     }

@@ -60,6 +60,19 @@ pub fn run(
         }
     }
     if check {
+        // Said by the check only: a run without programs that holds OP is what such a file is
+        // for, and its start says nothing more.
+        if cfg.duration.is_none()
+            && cfg
+                .master
+                .startup
+                .drives
+                .iter()
+                .all(|d| d.program.is_empty())
+        {
+            cfg.warnings
+                .push(ecdrive::app::config::ENDS_ONLY_ON_A_SIGNAL.to_string());
+        }
         if json {
             #[derive(serde::Serialize)]
             struct Checked<'a> {
