@@ -644,6 +644,16 @@ impl Role {
     }
 }
 
+/// A configuration that does not fit the segment found (no drive of its own to name).
+fn matching_error(why: String) -> MasterError {
+    MasterError::new(
+        None,
+        "matching the configuration to the segment",
+        ErrorKind::Config,
+        why,
+    )
+}
+
 /// Entries that select by identity take the matching devices in line order, one each: an
 /// identity that more devices match (besides those other entries name by position or alias)
 /// than entries select by it would leave the choice to the line order silently (a second
@@ -669,29 +679,24 @@ fn ambiguous_identities(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<(
             .filter(|d| selects(setup.select, d) && !named(d))
             .collect();
         if matching.len() > entries {
-            return Err(MasterError::new(
-                None,
-                "matching the configuration to the segment",
-                ErrorKind::Config,
-                format!(
-                    "{} matches {} devices ({}) but {} [[drive]] {} by it: select each by \
+            return Err(matching_error(format!(
+                "{} matches {} devices ({}) but {} [[drive]] {} by it: select each by \
                      position or alias (entries by identity take the matching devices in line \
                      order, one each)",
-                    setup.select,
-                    matching.len(),
-                    matching
-                        .iter()
-                        .map(|d| format!("{} {}", d.position, d.name))
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                    entries,
-                    if entries == 1 {
-                        "entry selects"
-                    } else {
-                        "entries select"
-                    }
-                ),
-            ));
+                setup.select,
+                matching.len(),
+                matching
+                    .iter()
+                    .map(|d| format!("{} {}", d.position, d.name))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                entries,
+                if entries == 1 {
+                    "entry selects"
+                } else {
+                    "entries select"
+                }
+            )));
         }
     }
     Ok(())
@@ -714,33 +719,23 @@ fn choose(
         {
             // The device is there, but another entry took it (a position and an identity that
             // select the same drive).
-            return Err(MasterError::new(
-                None,
-                "matching the configuration to the segment",
-                ErrorKind::Config,
-                format!(
-                    "{} selects device {} ({}), which an earlier [[drive]] entry already \
+            return Err(matching_error(format!(
+                "{} selects device {} ({}), which an earlier [[drive]] entry already \
                      selects: one entry per device",
-                    setup.select, taken.position, taken.name
-                ),
-            ));
+                setup.select, taken.position, taken.name
+            )));
         }
         let Some(pos) = pos else {
-            return Err(MasterError::new(
-                None,
-                "matching the configuration to the segment",
-                ErrorKind::Config,
-                format!(
-                    "no device on the segment matches {} ({} device(s) found: {})",
-                    setup.select,
-                    devices.len(),
-                    devices
-                        .iter()
-                        .map(|d| format!("{} {}", d.position, d.name))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ));
+            return Err(matching_error(format!(
+                "no device on the segment matches {} ({} device(s) found: {})",
+                setup.select,
+                devices.len(),
+                devices
+                    .iter()
+                    .map(|d| format!("{} {}", d.position, d.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )));
         };
         chosen[pos] = Some(setup.clone());
     }
