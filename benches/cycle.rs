@@ -19,14 +19,14 @@
 //! Run with `cargo bench --bench cycle`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ecdrive::app::harness::cpu::ThreadCpuClock;
-use ecdrive::app::harness::emulated;
 use ecdrive::master::cycle::CycleHooks;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::{Axes, Command, StopKind};
 use ecdrive::master::{AppCycle, CycleApp};
 use ecdrive::sim::transport::SegmentLink;
+use ecdrive_cli::app::harness::cpu::ThreadCpuClock;
+use ecdrive_cli::app::harness::emulated;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 

@@ -6,11 +6,11 @@
 //! Run with `cargo bench --bench startup`.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use ecdrive::app::harness::emulated;
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::startup::{DriveSetup, Selector};
 use ecdrive::master::telemetry::StopKind;
 use ecdrive::sim::transport::SegmentLink;
+use ecdrive_cli::app::harness::emulated;
 use std::time::{Duration, Instant};
 
 fn bench(c: &mut Criterion) {

@@ -1,7 +1,7 @@
 //! The `ecdrive run` configuration parser (`config::parse`) on arbitrary text.
 //!
 //! The input format and the checks are in `ecdrive_fuzz::config` (`fuzz/src/lib.rs`), shared with
-//! the corpus replay of the normal test suite (`tests/fuzz_corpus.rs`).
+//! the corpus replay of the normal test suite (`tests/app/fuzz_corpus.rs`).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

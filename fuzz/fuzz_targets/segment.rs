@@ -1,7 +1,7 @@
 //! The software slave's frame and datagram processing (`Segment::process`) on arbitrary frames.
 //!
 //! The input format and the checks are in `ecdrive_fuzz::segment` (`fuzz/src/lib.rs`), shared with
-//! the corpus replay of the normal test suite (`tests/fuzz_corpus.rs`).
+//! the corpus replay of the normal test suite (`tests/app/fuzz_corpus.rs`).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;

@@ -1,7 +1,7 @@
 //! What each fuzz target checks, one function per target, on one input.
 //!
 //! The cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`) call these functions; the normal test suite
-//! includes this file with `#[path]` (`tests/fuzz_corpus.rs`) and replays every committed corpus
+//! includes this file with `#[path]` (`tests/app/fuzz_corpus.rs`) and replays every committed corpus
 //! file through the same checks, so the corpus is a regression suite without libFuzzer. This
 //! file therefore depends on nothing but `ecdrive` and `std`.
 //!
@@ -340,7 +340,7 @@ pub fn config(data: &[u8]) {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    match ecdrive::app::config::parse(text, "fuzz.toml") {
+    match ecdrive_cli::app::config::parse(text, "fuzz.toml") {
         Ok(c) => {
             let _ = format!("{c:?}");
         }

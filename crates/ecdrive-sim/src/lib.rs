@@ -45,7 +45,7 @@
 
 // The core layers this crate builds on, under the paths the modules use. The masters' drive
 // profiles (the core's `drives` module) are left out on purpose: the emulated drives are
-// built from their ESI files and their own tables (tests/emulation_independence.rs).
+// built from their ESI files and their own tables (crates/ecdrive-sim/tests/sim/emulation_independence.rs).
 pub(crate) use ecdrive_core::{can, cia402, ec, eds, esi, link, od, pdo, rt};
 
 pub mod canopen;

@@ -16,7 +16,7 @@
 //! bus.add_node(EmulatedNode::new(&ecdrive::sim::canopen::drives::blv_r::SPEC, 3).unwrap());
 //! let mut m = Master::new(bus, MasterConfig::default());
 //! let mut setup = DriveSetup::new(&blv_r::PROFILE);
-//! setup.settings = ecdrive::app::canopen::steps::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
+//! setup.settings = ecdrive_cli::app::canopen::steps::motion_settings(&blv_r::PROFILE, 10.0, 100.0);
 //! m.configure_drive(3, setup).unwrap(); // identity, supervision, PDOs, mode
 //! m.start(3).unwrap(); // NMT start
 //! m.enable(3, 1_000_000).unwrap(); // Axis → Operation enabled

@@ -4,7 +4,7 @@
 //!
 //! ```no_run
 //! use ecdrive::canopen::master::{Master, MasterConfig};
-//! use ecdrive::app::canopen::tools::{self, BusSpec};
+//! use ecdrive_cli::app::canopen::tools::{self, BusSpec};
 //! use ecdrive::od::ObjectAddress;
 //!
 //! let spec: BusSpec = "virtual".parse().unwrap(); // or "can0", or "vbus:/tmp/bus.sock"

@@ -8,10 +8,9 @@ use crate::drives::{
 };
 use crate::od::ObjectAddress;
 use crate::pdo::{DirectionLimits, Mapping, Pdo, PdoEntry, PdoLimits, PdoRange};
+use crate::sim::Segment;
 use crate::sim::devices::generic_coe::{GENERIC_COE_PRODUCT, OBJECTS};
 use crate::sim::devices::{self, TEST_VENDOR_ID};
-use crate::sim::{EscConfig, HostClock, Segment};
-use std::sync::Arc;
 
 static RANGES_RX: &[PdoRange] = &[PdoRange::new(0x1600, 0x1601, 8)];
 static RANGES_TX: &[PdoRange] = &[PdoRange::new(0x1A00, 0x1A01, 8)];
@@ -174,44 +173,24 @@ pub fn profiles(names: &[String]) -> Result<Vec<&'static DriveProfile>, Emulatio
         .collect()
 }
 
-/// \[REC\] The emulated oscillators: drive `i` runs `DRIFT_PPB[i % 4]` fast (negative: slow)
-/// against the host clock, with its local clock `i × 13.7 µs` ahead. Real crystals are
-/// specified to ±50–100 ppm; without drift the DC difference would be trivially zero and say
-/// nothing about the master's drift compensation.
-pub const DRIFT_PPB: [i64; 4] = [30_000, -20_000, 45_000, -35_000];
-
-/// A fresh segment of the named devices on the host clock, every ESC recording its timing
-/// statistics ([`crate::sim::esc::TimingStats`]), each with its own oscillator
-/// ([`DRIFT_PPB`]). The SM watchdog is off so that a stalled machine ends in a late-cycle count
-/// rather than an aborted run.
+/// A fresh segment of the named devices: the software slave's [`devices::line`] (every ESC
+/// recording its timing statistics, each on its own oscillator, [`devices::DRIFT_PPB`]).
 pub fn segment(names: &[String]) -> Result<Segment, EmulationError> {
-    if names.is_empty() {
-        return Err(EmulationError::Empty);
-    }
-    let mut seg = Segment::new(Arc::new(HostClock));
-    for (position, name) in names.iter().enumerate() {
-        let dev = devices::by_name(name, position)
-            .map_err(|source| EmulationError::Device { position, source })?;
-        let at = seg
-            .push(
-                dev,
-                EscConfig {
-                    sm_watchdog: 0,
-                    clock_drift_ppb: DRIFT_PPB[position % DRIFT_PPB.len()],
-                    clock_offset_ns: position as i64 * 13_700,
-                    ..Default::default()
-                },
-            )
-            .map_err(|e| EmulationError::Sii {
-                position,
-                name: name.clone(),
-                reason: e.to_string(),
-            })?;
-        if let Some(s) = seg.slave_mut(at) {
-            s.esc.enable_timing_stats();
+    devices::line(names).map_err(|e| match e {
+        devices::LineError::Empty => EmulationError::Empty,
+        devices::LineError::Device { position, source } => {
+            EmulationError::Device { position, source }
         }
-    }
-    Ok(seg)
+        devices::LineError::Sii {
+            position,
+            name,
+            reason,
+        } => EmulationError::Sii {
+            position,
+            name,
+            reason,
+        },
+    })
 }
 
 #[cfg(test)]

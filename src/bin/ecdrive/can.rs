@@ -1,12 +1,12 @@
 //! `slaves`, `upload` and `download` on a CANopen bus (`--can IF`): the library side is
-//! `ecdrive::app::canopen::tools`.
+//! `ecdrive_cli::app::canopen::tools`.
 
 use crate::{exit, fail_with, print_json};
-use ecdrive::app::canopen::tools::{self, BusSpec};
 use ecdrive::canopen::error::{CanError, CanErrorKind};
 use ecdrive::canopen::master::{Master, MasterConfig};
 use ecdrive::canopen::transport::CanTransport;
 use ecdrive::od::{DataType, ObjectAddress, Value};
+use ecdrive_cli::app::canopen::tools::{self, BusSpec};
 use serde_json::json;
 use std::process::ExitCode;
 
@@ -215,7 +215,7 @@ pub fn download(
 /// `ecdrive sim --can BUS [--node NAME[@ID]…]`: serve emulated CANopen drives until a stop
 /// signal.
 pub fn sim(bus: &str, nodes: &[String], json: bool) -> ExitCode {
-    use ecdrive::app::canopen::tools::{DEMO_NODES, EMULATED_NODES, NodeSpec};
+    use ecdrive_cli::app::canopen::tools::{DEMO_NODES, EMULATED_NODES, NodeSpec};
     let spec: BusSpec = match bus.parse() {
         Ok(s) => s,
         Err(e) => return fail_with("sim", &format!("--can {bus}: {e}"), exit::USAGE),
@@ -285,7 +285,7 @@ pub fn reset(
     eds: Option<&std::path::Path>,
     json: bool,
 ) -> ExitCode {
-    use ecdrive::app::canopen::reset::{CanResetOptions, reset};
+    use ecdrive_cli::app::canopen::reset::{CanResetOptions, reset};
     let eds = match eds {
         None => None,
         Some(path) => {

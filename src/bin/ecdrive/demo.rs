@@ -1,8 +1,8 @@
 //! `ecdrive demo`: argument parsing and output of the demo (the work is `master::demo`).
 
 use clap::Args;
-use ecdrive::app::ethercat::demo::{self, DemoOptions, DemoReport};
 use ecdrive::rt::{RtSettings, Summary};
+use ecdrive_cli::app::ethercat::demo::{self, DemoOptions, DemoReport};
 use std::process::ExitCode;
 use std::time::Duration;
 
@@ -129,8 +129,8 @@ fn print_text(r: &DemoReport) {
 /// Run `ecdrive demo`.
 pub fn run(args: DemoArgs) -> ExitCode {
     if args.canopen {
-        return match ecdrive::app::canopen::demo::run(
-            &ecdrive::app::canopen::demo::DemoOptions::default(),
+        return match ecdrive_cli::app::canopen::demo::run(
+            &ecdrive_cli::app::canopen::demo::DemoOptions::default(),
         ) {
             Ok(s) if args.json => {
                 // Per drive: its program's steps (done when the program ran to its end), then
@@ -169,7 +169,7 @@ pub fn run(args: DemoArgs) -> ExitCode {
                     })
                     .collect();
                 let j = serde_json::json!({
-                    "config": ecdrive::app::canopen::demo::CONFIG_NAME,
+                    "config": ecdrive_cli::app::canopen::demo::CONFIG_NAME,
                     "scan": s.scan,
                     "drives": drives,
                     "run": s.run,

@@ -1,9 +1,9 @@
-//! `ecdrive jitter`: arguments and output. The measurement is `ecdrive::app::harness`.
+//! `ecdrive jitter`: arguments and output. The measurement is `ecdrive_cli::app::harness`.
 
 use super::exit;
 use clap::Args;
-use ecdrive::app::harness::{self, HarnessError, JitterConfig, Transport};
 use ecdrive::rt::RtSettings;
+use ecdrive_cli::app::harness::{self, HarnessError, JitterConfig, Transport};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;

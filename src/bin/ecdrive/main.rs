@@ -1,5 +1,5 @@
 //! The `ecdrive` command line. Argument parsing and output only: the work is in the library
-//! (`ecdrive::app::ethercat::tools`, `ecdrive::app::config`, `ecdrive::sim::run`).
+//! (`ecdrive_cli::app::ethercat::tools`, `ecdrive_cli::app::config`, `ecdrive::sim::run`).
 
 mod can;
 mod demo;
@@ -11,10 +11,10 @@ mod sim;
 mod soak;
 
 use clap::{Args, Parser, Subcommand};
-use ecdrive::app::ethercat::tools::{self, Target};
 use ecdrive::ec::AlState;
 use ecdrive::master::error::{ErrorKind, MasterError};
 use ecdrive::od::{DataType, ObjectAddress};
+use ecdrive_cli::app::ethercat::tools::{self, Target};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -116,7 +116,7 @@ pub fn pcap() -> Option<&'static std::path::Path> {
 }
 
 /// Say what a capture wrote (stderr, one line).
-pub fn report_capture(cmd: &str, c: &ecdrive::app::capture::CaptureSummary) {
+pub fn report_capture(cmd: &str, c: &ecdrive_cli::app::capture::CaptureSummary) {
     eprintln!(
         "ecdrive {cmd}: capture {}: {} frames{}",
         c.path.display(),
@@ -775,7 +775,7 @@ fn parse_u16(s: &str) -> Result<u16, String> {
 }
 
 fn parse_duration(s: &str) -> Result<Duration, String> {
-    ecdrive::app::config::parse_duration(s)
+    ecdrive_cli::app::config::parse_duration(s)
 }
 
 /// The exit code for a library error.
@@ -860,7 +860,7 @@ pub fn fail(cmd: &str, e: &MasterError) -> ExitCode {
 /// Print a message as one line and return `code`.
 /// `ecdrive plot`: read a recording, draw it.
 fn plot_file(file: &std::path::Path, out: &std::path::Path) -> ExitCode {
-    use ecdrive::app::plot;
+    use ecdrive_cli::app::plot;
     match plot::read(file).and_then(|r| plot::draw(&r, out).map(|()| r)) {
         Ok(r) => {
             eprintln!(
@@ -1624,7 +1624,7 @@ fn dispatch(cli: Cli) -> ExitCode {
         }
         Command::Eds {
             op: EdsOp::Show { file, json },
-        } => match ecdrive::app::canopen::eds::show(&file) {
+        } => match ecdrive_cli::app::canopen::eds::show(&file) {
             Ok(s) if json.json => print_json("eds", &s),
             Ok(s) => {
                 print::eds_summary(&s);
@@ -1726,7 +1726,7 @@ fn dispatch(cli: Cli) -> ExitCode {
             ExitCode::SUCCESS
         }
         Command::Version { json } => {
-            let v = ecdrive::app::version::Version::this_build();
+            let v = ecdrive_cli::app::version::Version::this_build();
             if json.json {
                 print_json("version", &v)
             } else {

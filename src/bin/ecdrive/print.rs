@@ -1,9 +1,9 @@
 //! Text output of the commands: tables and listings in the style of the IgH `ethercat` tool.
 
-use ecdrive::app::ethercat::tools::esi::{EsiCheck, EsiSummary};
-use ecdrive::app::ethercat::tools::run::{RunProgress, RunReport};
-use ecdrive::app::ethercat::tools::sii::{SiiDump, SiiInfo};
-use ecdrive::app::ethercat::tools::{
+use ecdrive_cli::app::ethercat::tools::esi::{EsiCheck, EsiSummary};
+use ecdrive_cli::app::ethercat::tools::run::{RunProgress, RunReport};
+use ecdrive_cli::app::ethercat::tools::sii::{SiiDump, SiiInfo};
+use ecdrive_cli::app::ethercat::tools::{
     OdListing, PdoReport, RegisterData, SdoValue, SlaveReport, StateChange,
 };
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -95,11 +95,11 @@ fn slave_verbose(s: &SlaveReport) {
         println!("Description: {d}");
     }
     println!("Alias: {}", s.alias);
-    let state = |al: &ecdrive::app::ethercat::tools::AlStatusReport| match (&al.code, &al.code_text)
-    {
-        (Some(c), Some(t)) => format!("{} (AL status code 0x{c:04X}: {t})", al.state),
-        _ => al.state.clone(),
-    };
+    let state =
+        |al: &ecdrive_cli::app::ethercat::tools::AlStatusReport| match (&al.code, &al.code_text) {
+            (Some(c), Some(t)) => format!("{} (AL status code 0x{c:04X}: {t})", al.state),
+            _ => al.state.clone(),
+        };
     match &s.found {
         Some(f) => println!("State when found: {}", state(f)),
         None => println!("State when found: unknown (no reply to the AL status read)"),
@@ -189,9 +189,9 @@ pub fn downloaded(v: &SdoValue) {
             .unwrap_or_default(),
         v.data_type,
         match v.type_source {
-            ecdrive::app::ethercat::tools::TypeSource::Explicit => "--type",
-            ecdrive::app::ethercat::tools::TypeSource::Profile => "profile",
-            ecdrive::app::ethercat::tools::TypeSource::SdoInfo => "SDO information",
+            ecdrive_cli::app::ethercat::tools::TypeSource::Explicit => "--type",
+            ecdrive_cli::app::ethercat::tools::TypeSource::Profile => "profile",
+            ecdrive_cli::app::ethercat::tools::TypeSource::SdoInfo => "SDO information",
         }
     );
 }
@@ -234,7 +234,7 @@ pub fn sdos(listing: &OdListing) {
     }
 }
 
-pub fn reset(r: &ecdrive::app::ethercat::tools::reset::ResetReport) {
+pub fn reset(r: &ecdrive_cli::app::ethercat::tools::reset::ResetReport) {
     for d in &r.drives {
         match (&d.fault, d.cleared) {
             (Some(f), Some(true)) => println!(
@@ -250,7 +250,7 @@ pub fn reset(r: &ecdrive::app::ethercat::tools::reset::ResetReport) {
     }
 }
 
-pub fn can_reset(r: &ecdrive::app::canopen::reset::CanResetReport) {
+pub fn can_reset(r: &ecdrive_cli::app::canopen::reset::CanResetReport) {
     if r.drives.is_empty() {
         println!("{}: no drive found", r.bus);
     }
@@ -302,7 +302,7 @@ pub fn pdos(r: &PdoReport) {
             }
         }
     }
-    if r.source == ecdrive::app::ethercat::tools::PdoSource::Sii {
+    if r.source == ecdrive_cli::app::ethercat::tools::PdoSource::Sii {
         println!("(from the SII: the device has no CoE)");
     }
 }
@@ -438,7 +438,7 @@ pub fn sii(d: &SiiDump, i: &SiiInfo) {
     }
 }
 
-pub fn eds_summary(s: &ecdrive::app::canopen::eds::EdsSummary) {
+pub fn eds_summary(s: &ecdrive_cli::app::canopen::eds::EdsSummary) {
     let hex = |v: Option<u32>| v.map_or_else(|| "-".to_string(), |v| format!("0x{v:08X}"));
     println!(
         "{}: {:?} {:?}, vendor {} product {} revision {}{}",
@@ -929,7 +929,7 @@ pub fn startup(t: &ecdrive::master::StartupTimes) {
 
 /// A CANopen run's summary: per drive its program, states, modes and final position, then how
 /// the run ended and every EMCY decoded.
-pub fn can_run_report(r: &ecdrive::app::canopen::run::CanRunReport) {
+pub fn can_run_report(r: &ecdrive_cli::app::canopen::run::CanRunReport) {
     println!(
         "{}: CANopen run on {}, SYNC every {} µs",
         r.config, r.bus, r.cycle_us

@@ -1,7 +1,7 @@
 //! `ecdrive run -c FILE`: a cyclic run from a configuration file.
 
 use crate::{exit, fail, fail_with, print, print_json};
-use ecdrive::app::ethercat::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
+use ecdrive_cli::app::ethercat::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
@@ -19,9 +19,9 @@ pub fn run(
         esi,
         candump,
     } = files;
-    let mut cfg = match ecdrive::app::config::load_any(path) {
-        Ok(ecdrive::app::config::Config::EtherCat(c)) => c,
-        Ok(ecdrive::app::config::Config::CanOpen(c)) => {
+    let mut cfg = match ecdrive_cli::app::config::load_any(path) {
+        Ok(ecdrive_cli::app::config::Config::EtherCat(c)) => c,
+        Ok(ecdrive_cli::app::config::Config::CanOpen(c)) => {
             return run_canopen(c, interface, duration, check, files, json);
         }
         Err(e) => return fail_with("run", &e.to_string(), exit::USAGE),
@@ -71,13 +71,13 @@ pub fn run(
                 .all(|d| d.program.is_empty())
         {
             cfg.warnings
-                .push(ecdrive::app::config::ENDS_ONLY_ON_A_SIGNAL.to_string());
+                .push(ecdrive_cli::app::config::ENDS_ONLY_ON_A_SIGNAL.to_string());
         }
         if json {
             #[derive(serde::Serialize)]
             struct Checked<'a> {
                 config: &'a str,
-                target: &'a ecdrive::app::ethercat::tools::Target,
+                target: &'a ecdrive_cli::app::ethercat::tools::Target,
                 cycle_ns: u64,
                 drives: usize,
                 valid: bool,
@@ -192,14 +192,14 @@ pub struct RunFiles<'a> {
 
 /// A CANopen run file: the drives on the motion runtime over the file's CAN bus.
 fn run_canopen(
-    mut cfg: ecdrive::app::config::canopen::CanRunConfig,
+    mut cfg: ecdrive_cli::app::config::canopen::CanRunConfig,
     interface: Option<&str>,
     duration: Option<Duration>,
     check: bool,
     files: RunFiles<'_>,
     json: bool,
 ) -> ExitCode {
-    use ecdrive::app::config::canopen::CanTarget;
+    use ecdrive_cli::app::config::canopen::CanTarget;
     if files.esi.is_some() || crate::pcap().is_some() {
         return fail_with(
             "run",
@@ -271,12 +271,12 @@ fn run_canopen(
         eprintln!("ecdrive run: warning: {w}");
     }
     let signals = crate::stop_signals();
-    let opts = ecdrive::app::canopen::run::CanRunOptions {
+    let opts = ecdrive_cli::app::canopen::run::CanRunOptions {
         duration,
         record: files.record.map(Path::to_path_buf),
         candump: files.candump.map(Path::to_path_buf),
     };
-    let report = match ecdrive::app::canopen::run::run(&cfg, &opts, &signals.stop) {
+    let report = match ecdrive_cli::app::canopen::run::run(&cfg, &opts, &signals.stop) {
         Ok(r) => r,
         // The drive refused (an SDO abort, identity, an NMT refusal): 4; the bus: 3.
         Err(e) => return fail_with("run", &e.to_string(), crate::can::exit_code(&e)),

@@ -269,7 +269,7 @@ fn position(s: &str) -> Result<u16, String> {
 }
 
 fn time(s: &str) -> Result<Duration, String> {
-    ecdrive::app::config::parse_duration(s)
+    ecdrive_cli::app::config::parse_duration(s)
 }
 
 /// A probability: `1%`, `0.5 %` or `0.01`; 0 to 1.
@@ -559,7 +559,7 @@ pub fn sim(
         return make_firmware(&devices, &store, path);
     }
     if list_devices {
-        use ecdrive::app::canopen::tools::EMULATED_NODES;
+        use ecdrive_cli::app::canopen::tools::EMULATED_NODES;
         let names = ecdrive::sim::devices::device_names();
         use ecdrive::sim::quirks::Quirk;
         if json {

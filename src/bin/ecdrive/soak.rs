@@ -1,8 +1,8 @@
 //! `ecdrive soak`: argument parsing and output of the soak (the work is `master::soak`).
 
 use clap::Args;
-use ecdrive::app::ethercat::soak::{self, SoakCounts, SoakOptions, SoakReport};
 use ecdrive::rt::RtSettings;
+use ecdrive_cli::app::ethercat::soak::{self, SoakCounts, SoakOptions, SoakReport};
 use std::process::ExitCode;
 use std::time::Duration;
 

@@ -11,7 +11,7 @@
 //! ([`CanTransport::now_us`]).
 //!
 //! Each of the three drives homes, runs pp, pv and tq (where its firmware has it) on it in
-//! `tests/canopen_motion.rs`: configure and start the drive with the [`Master`], build the
+//! `tests/app/canopen_motion.rs`: configure and start the drive with the [`Master`], build the
 //! session with [`axis_setup`] and a program, send [`Command::Enable`] and
 //! [`Command::RunProgram`], and call [`MotionSession::cycle`] until the program's
 //! [`EventKind::ProgramDone`].

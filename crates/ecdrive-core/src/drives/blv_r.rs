@@ -177,7 +177,7 @@ pub const SUPPORTED_MODES: SupportedModes = SupportedModes::from_raw(0x0000_002D
 /// 6502h of drivers before version 4.00: pp, pv, hm.
 pub const SUPPORTED_MODES_BEFORE_V4: SupportedModes = SupportedModes::from_raw(0x0000_0025);
 
-/// The capability set (the one `tests/support/cia402_drives.rs` wrote from §6, §6.2, §8.3): no
+/// The capability set (the one `crates/ecdrive-core/tests/core/support/cia402_drives.rs` wrote from §6, §6.2, §8.3): no
 /// state skipping (the "switch on + enable operation" row is 3 then 4), no transition 16 (§6.2
 /// "Not supported"), quick-stop codes above (default 2), the remote bit gates the controlword
 /// (§6.1), no zero-speed rule for mode switching (none stated).

@@ -16,7 +16,6 @@ use std::cell::Cell;
 use std::fs::File;
 use std::io::Read;
 use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Why the syscall counter is not available.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -176,27 +175,32 @@ impl SyscallCounter {
 
 // ---- allocation counting ---------------------------------------------------------------------
 
+// Each thread's own window and counts: tests running at the same time in one test binary, each
+// auditing its own cycle thread, never see each other's allocations.
 thread_local! {
     static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static ALLOCS: Cell<u64> = const { Cell::new(0) };
+    static FREES: Cell<u64> = const { Cell::new(0) };
 }
 
-static ALLOCS: AtomicU64 = AtomicU64::new(0);
-static FREES: AtomicU64 = AtomicU64::new(0);
-
 /// A global allocator that counts the allocations and frees made by threads inside an open
-/// window. Install it in a test binary with `#[global_allocator]`.
+/// window, each thread its own. Install it in a test binary with `#[global_allocator]`.
 pub struct CountingAlloc;
 
 fn counting() -> bool {
     COUNTING.try_with(Cell::get).unwrap_or(false)
 }
 
-// SAFETY: every method forwards to the system allocator unchanged; counting touches only atomics
-// and a const-initialised thread-local, which never allocate.
+fn count(counter: &'static std::thread::LocalKey<Cell<u64>>) {
+    let _ = counter.try_with(|c| c.set(c.get() + 1));
+}
+
+// SAFETY: every method forwards to the system allocator unchanged; counting touches only
+// const-initialised thread-locals, which never allocate.
 unsafe impl GlobalAlloc for CountingAlloc {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if counting() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            count(&ALLOCS);
         }
         // SAFETY: forwarded with the caller's guarantees.
         unsafe { System.alloc(layout) }
@@ -204,7 +208,7 @@ unsafe impl GlobalAlloc for CountingAlloc {
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         if counting() {
-            FREES.fetch_add(1, Ordering::Relaxed);
+            count(&FREES);
         }
         // SAFETY: forwarded with the caller's guarantees.
         unsafe { System.dealloc(ptr, layout) }
@@ -212,7 +216,7 @@ unsafe impl GlobalAlloc for CountingAlloc {
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         if counting() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            count(&ALLOCS);
         }
         // SAFETY: forwarded with the caller's guarantees.
         unsafe { System.alloc_zeroed(layout) }
@@ -220,7 +224,7 @@ unsafe impl GlobalAlloc for CountingAlloc {
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         if counting() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            count(&ALLOCS);
         }
         // SAFETY: forwarded with the caller's guarantees.
         unsafe { System.realloc(ptr, layout, new_size) }
@@ -238,8 +242,8 @@ pub struct AllocCounts {
 
 /// Open an allocation-counting window on the calling thread (counts reset).
 pub fn alloc_window_begin() {
-    ALLOCS.store(0, Ordering::Relaxed);
-    FREES.store(0, Ordering::Relaxed);
+    let _ = ALLOCS.try_with(|c| c.set(0));
+    let _ = FREES.try_with(|c| c.set(0));
     let _ = COUNTING.try_with(|c| c.set(true));
 }
 
@@ -248,8 +252,8 @@ pub fn alloc_window_begin() {
 pub fn alloc_window_end() -> AllocCounts {
     let _ = COUNTING.try_with(|c| c.set(false));
     AllocCounts {
-        allocs: ALLOCS.load(Ordering::Relaxed),
-        frees: FREES.load(Ordering::Relaxed),
+        allocs: ALLOCS.try_with(Cell::get).unwrap_or(0),
+        frees: FREES.try_with(Cell::get).unwrap_or(0),
     }
 }
 

@@ -8,7 +8,7 @@
 //! ([`ecdrive_motion::MotionAxis`]: the program, homing, the profile modes, the probes, the
 //! stops and the CiA 402 engine), write the outputs, publish telemetry and events. After start-up nothing here allocates, locks
 //! anything another thread takes, or makes a syscall other than the frame I/O and the sleep —
-//! `tests/cycle_audit.rs` proves it with a counting allocator and per-thread syscall counters.
+//! `crates/ecdrive-ethercat/tests/ethercat/cycle_audit.rs` proves it with a counting allocator and per-thread syscall counters.
 //!
 //! The cycle itself takes the drives from SAFE-OP to OP (after some cycles of valid outputs),
 //! and stops them in a controlled way on request, on a fault, on lost frames or when a drive

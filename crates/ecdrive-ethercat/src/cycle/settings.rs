@@ -42,7 +42,7 @@ pub struct CycleSettings {
     /// Distribute the reference clock's time to the other clocks every cycle (the FRMW of
     /// `tx_rx_dc`): the drift compensation that keeps the SYNC0 pulses of all drives together.
     /// On by default; off only to show what it does (the frame then reads the reference
-    /// clock without writing the others, `tests/faults_master.rs`).
+    /// clock without writing the others, `crates/ecdrive-ethercat/tests/ethercat/faults_master.rs`).
     pub drift_compensation: bool,
 }
 

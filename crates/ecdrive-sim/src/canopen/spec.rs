@@ -6,7 +6,7 @@
 //! emulates. A spec comes from one of two places, never from the master:
 //! - the emulator's own tables for the project's three drives ([`super::drives`]), written from
 //!   their manuals, so that a wrong value on the master's side or the emulator's shows up as a
-//!   disagreement (`tests/manual_facts.rs` checks both against the manuals);
+//!   disagreement (`tests/app/manual_facts.rs` checks both against the manuals);
 //! - a vendor's EDS file ([`NodeSpec::from_eds`]) for any other CiA 402 drive: the file's
 //!   dictionary, modes and PDO counts, with CiA 402's behaviour where the file says nothing.
 //!

@@ -17,10 +17,12 @@ mod echo;
 pub mod esi_dictionary;
 pub mod generic_coe;
 mod io;
+mod line;
 
 pub use echo::EchoMailbox;
 pub use generic_coe::{CoeObservations, GenericCoeDevice};
 pub use io::{IoDevice, IoObservations, TEST_VENDOR_ID};
+pub use line::{DRIFT_PPB, LineError, line};
 
 use super::device::Device;
 use super::quirks::{split_name, stored_params};

@@ -25,7 +25,7 @@
 //! emulated devices in-process (`sim:mr-j4-tm,bdhde`), which needs no root.
 //!
 //! ```
-//! use ecdrive::app::ethercat::tools::{self, Target};
+//! use ecdrive_cli::app::ethercat::tools::{self, Target};
 //!
 //! let target: Target = "sim:mr-j4-tm,bdhde".parse()?;
 //! let slaves = tools::session(&target, |bus| tools::slaves(bus, false))?;

@@ -3,7 +3,7 @@
 //!
 //! Transcribed from the drive's ESI file in `esi/` (itself written from the manual, with the
 //! section of every value cited there) and checked against the manual's object tables; where the
-//! two forms must agree, `tests/drives_dictionary.rs` compares them entry by entry (type, length,
+//! two forms must agree, `crates/ecdrive-sim/tests/sim/drives_dictionary.rs` compares them entry by entry (type, length,
 //! access, PDO mapping, default, range) and every object read over CoE from the emulated drive.
 //! Values the manual leaves open are listed in the parent module's "Values that are ours"
 //! section.

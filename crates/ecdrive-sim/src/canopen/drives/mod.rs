@@ -1,7 +1,7 @@
 //! The emulator's own tables of the project's CANopen drives, one file each, written from the
 //! drives' manuals: dictionary, CiA 402 behaviour, PDO rules, EMCY and alarms, homing, units,
 //! NMT error control and quirks. They share no value with the master's profiles
-//! (`tests/emulation_independence.rs`); `tests/manual_facts.rs` checks both against the manuals
+//! (`crates/ecdrive-sim/tests/sim/emulation_independence.rs`); `tests/app/manual_facts.rs` checks both against the manuals
 //! over the bus, so a wrong value on either side shows up as a disagreement.
 //!
 //! A vendor's EDS file can stand in for a table's dictionary ([`NodeSpec::refined`]), and any

@@ -1,0 +1,3 @@
+//! Helpers of this test binary; those shared with other crates' tests are `ecdrive-testkit`'s.
+
+pub use ecdrive_testkit::generic;
