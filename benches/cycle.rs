@@ -157,10 +157,10 @@ fn start(
         for h in m
             .history()
             .iter()
-            .filter(|h| !h.text.starts_with("AL state"))
+            .filter(|h| !matches!(h.cycle_event(), Some(ecdrive::EventKind::AlState { .. })))
             .take(40)
         {
-            eprintln!("{h:?}");
+            eprintln!("{:?} {h}", h.drive);
         }
         panic!("every axis enabled: {e}")
     });

@@ -54,7 +54,7 @@ fn every_sim_example_runs_to_completion() {
                     h.cycle.unwrap_or(0),
                     (h.time_ns - t0) / 1_000_000,
                     h.drive.as_ref().map_or(String::new(), |d| d.to_string()),
-                    h.text
+                    h.text()
                 ));
             }
             s

@@ -8,7 +8,7 @@ fn demo_runs_both_drives_through_csp_csv_cst() {
     let r = run(&DemoOptions::default()).unwrap();
     eprintln!("{}", serde_json::to_string_pretty(&r).unwrap());
     for h in &r.history {
-        eprintln!("{:?} {:?}: {}", h.cycle, h.drive, h.text);
+        eprintln!("{:?} {:?}: {}", h.cycle, h.drive, h.text());
     }
     assert!(r.ok, "{:#?}\n{:#?}", r.unhandled, r.errors);
     assert!(r.unhandled.is_empty());

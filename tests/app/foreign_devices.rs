@@ -13,9 +13,11 @@
 //!   never speak CoE to a device without a mailbox.
 
 use crate::support;
+use ecdrive::cia402::{self, State};
 use ecdrive::link::{FrameLink, LinkError};
 use ecdrive::master::session::{Master, MasterConfig};
-use ecdrive::master::telemetry::{Axes, Command, StopKind};
+use ecdrive::master::telemetry::{Axes, Command, EventKind, StopKind};
+use ecdrive::master::{HistoryEvent, HistoryKind};
 use ecdrive::sim::EscConfig;
 use ecdrive::sim::run::build_segment;
 use ecdrive::sim::transport::SegmentLink;
@@ -67,12 +69,11 @@ fn run_text(text: &str) -> RunReport {
 fn warnings(r: &RunReport) -> Vec<String> {
     r.history
         .iter()
-        .filter(|h| h.text.starts_with("warning"))
+        .filter(|h| h.kind == HistoryKind::Warning)
         .map(|h| {
             format!(
-                "{}: {}",
+                "{}: {h}",
                 h.drive.as_ref().map_or(String::new(), |d| d.to_string()),
-                h.text
             )
         })
         .collect()
@@ -134,7 +135,11 @@ fn drives_that_need_sync0_before_op_reach_op() {
     ));
     completed(&r);
     assert!(
-        !r.history.iter().any(|h| h.text.contains("0x002D")),
+        !r.history.iter().any(|h| matches!(
+            h.cycle_event(),
+            Some(EventKind::OpTimeout { .. } | EventKind::LeftOp { .. })
+        ) || h.kind == HistoryKind::AlState
+            || matches!(&h.event, HistoryEvent::Warning(w) if w.contains("0x002D"))),
         "{:#?}",
         r.history
     );
@@ -276,11 +281,17 @@ fn stale_inputs_and_outputs_applied_in_safe_op() {
     let all_op = r
         .history
         .iter()
-        .position(|h| h.text == "every drive is in OP")
+        .position(|h| h.cycle_event() == Some(&EventKind::AllOp))
         .expect("OP");
     for h in &r.history[..all_op] {
         assert!(
-            !h.text.contains("→ Ready to switch on") && !h.text.contains("→ Operation enabled"),
+            !matches!(
+                h.axis_event(),
+                Some(cia402::Event::StateChanged {
+                    to: Some(State::ReadyToSwitchOn | State::OperationEnabled),
+                    ..
+                })
+            ),
             "energised below OP: {h:?}"
         );
     }

@@ -27,7 +27,7 @@ use ecdrive::cia402::State;
 use ecdrive::drives::DriveProfile;
 use ecdrive::master::program::RunMode;
 use ecdrive::master::session::Master;
-use ecdrive::master::telemetry::{Axes, Command, StopKind, Telemetry};
+use ecdrive::master::telemetry::{Axes, Command, EventKind, StopKind, Telemetry};
 use ecdrive::pdo::{Direction, Mapping, Pdo, PdoEntry};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, FileFailurePersistence, TestCaseError};
@@ -1064,8 +1064,11 @@ fn mode_commands_wait_for_the_program() {
     })
     .expect("program done");
     let refused = m.history().iter().any(|h| {
-        h.text
-            .contains("mode switch refused: a program runs on the axis")
+        matches!(
+            h.cycle_event(),
+            Some(EventKind::CommandRefused { why, .. })
+                if why.contains("mode switch refused: a program runs on the axis")
+        )
     });
     assert_eq!(m.telemetry().axes[0].mode, RunMode::Csv.code());
     let _ = m.stop(StopKind::Ramp);

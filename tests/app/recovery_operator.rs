@@ -82,13 +82,16 @@ fn after_a_drive_alarm_mid_program_the_operator_recovers_and_the_programs_comple
     let (r, _) = m.stop(StopKind::Ramp);
     let r = r.unwrap();
     assert!(r.shutdown_ok);
-    let faults: Vec<&str> = r
+    let faults: Vec<_> = r
         .history
         .iter()
         .filter(|h| h.kind == HistoryKind::DriveFault)
-        .map(|h| h.text.as_str())
         .collect();
-    assert!(faults.len() == 1 && faults[0].contains("J3"), "{faults:#?}");
+    // The BDHDE's excessive position error, in its own table's words: J3 (FLT 87).
+    assert!(
+        faults.len() == 1 && faults[0].resolved.fault.map(|d| d.name) == Some("J3 (FLT 87)"),
+        "{faults:#?}"
+    );
     assert!(
         !r.history.iter().any(|h| recovery::unhandled_kind(h.kind)),
         "{:#?}",

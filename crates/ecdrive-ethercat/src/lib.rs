@@ -35,7 +35,7 @@ mod wkc;
 pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
 pub use cycle::{CycleEnd, CycleReport, CycleSettings};
 pub use error::{DriveRef, ErrorKind, MasterError};
-pub use history::{HistoryEntry, HistoryKind, HistoryLog};
+pub use history::{HistoryEntry, HistoryEvent, HistoryKind, HistoryLog, Resolved, RestartNote};
 pub use program::{ProbeEdge, RunMode, Step, Target};
 pub use record::{CSV_HEADER, CsvWriter, CycleSample, RecordTx, Recording, SampleScale, recording};
 pub use session::{DriveOutcome, DriveSummary, Master, MasterConfig, SessionReport, StartFailure};

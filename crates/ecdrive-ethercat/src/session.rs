@@ -13,7 +13,9 @@ use super::coe::{CoeClient, EmergencyLog, EmergencyRecord};
 use super::cycle::{self, CycleEnd, CycleHooks, CycleReport, CycleSettings};
 use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec;
-pub use super::history::{HistoryEntry, HistoryKind, HistoryLog, HistorySlice};
+pub use super::history::{
+    HistoryEntry, HistoryEvent, HistoryKind, HistoryLog, HistorySlice, Resolved, RestartNote,
+};
 use super::io::FrameLink;
 use super::record::RecordTx;
 use super::startup::{self, DeviceInfo, StartupConfig};
@@ -293,258 +295,71 @@ impl Decoder {
         self.drives.get(axis as usize).map(|(d, _)| d.clone())
     }
 
-    /// A position in the axis's units where it has them ("1.3000 rev (109051904 counts)"),
-    /// else in counts.
-    fn in_units(&self, axis: u16, counts: i64) -> String {
-        match self.units.get(axis as usize).and_then(Option::as_ref) {
-            Some(u) => format!(
-                "{:.4} {} ({counts} counts)",
-                counts as f64 / u.counts_per_unit,
-                u.name
-            ),
-            None => format!("{counts} counts"),
-        }
-    }
-
-    /// A touch-probe latch in words, in the axis's units where it has them.
-    fn probe_text(&self, kind: &EventKind) -> String {
-        match *kind {
-            EventKind::ProbeLatched {
-                axis,
-                probe,
-                edge,
-                position,
-            } => format!(
-                "touch probe {probe} latched on the {} edge at {}",
-                edge.name(),
-                self.in_units(axis, position)
-            ),
-            _ => String::new(),
-        }
-    }
-
-    fn name(&self, axis: u16) -> String {
-        self.drive(axis)
-            .map_or_else(|| format!("axis {axis}"), |d| d.to_string())
-    }
-
-    fn all_drives(&self) -> String {
-        self.drives
-            .iter()
-            .map(|(d, _)| d.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    }
-
     fn table(&self, axis: u16) -> &'static [ErrorEntry] {
         self.drives.get(axis as usize).map_or(&[], |(_, t)| t)
     }
 
-    /// Whether an engine event of `axis` is an error, and its text.
-    fn axis_event(&self, axis: u16, event: cia402::Event) -> (bool, String) {
-        match event {
-            cia402::Event::Fault { state, error } => (
-                true,
-                match error {
-                    Some(d) => {
-                        // Re-describe with the drive's table (names like "AL.86").
-                        let d = d.code.describe(self.table(axis));
-                        format!(
-                            "fault ({}): {d}",
-                            state.map_or("?".into(), |s| s.to_string())
-                        )
-                    }
-                    None => {
-                        format!("fault ({})", state.map_or("?".into(), |s| s.to_string()))
-                    }
-                },
-            ),
-            cia402::Event::PlannerFailed(p) => (true, format!("state machine: {p}")),
-            cia402::Event::ModeSwitchFailed(m) => (true, format!("mode switch failed: {m}")),
-            cia402::Event::StateChanged { from, to } => {
-                let name = |s: Option<cia402::State>| {
-                    s.map_or("(no state)".to_string(), |s| s.to_string())
-                };
-                (false, format!("state {} → {}", name(from), name(to)))
-            }
-            cia402::Event::TargetReached(t) => (false, format!("reached {t}")),
-            cia402::Event::FaultCleared => (false, "fault cleared".into()),
-            cia402::Event::WarningChanged(w) => (
-                false,
-                if w { "warning set" } else { "warning cleared" }.into(),
-            ),
-            cia402::Event::ModeSwitched { from, to } => (false, format!("mode {from} → {to}")),
-            cia402::Event::ModeDisplayMismatch {
-                expected,
-                displayed,
-            } => (
-                true,
-                format!("0x6061 shows {displayed} instead of {expected}; set-points paused"),
-            ),
-        }
+    fn units(&self, axis: u16) -> Option<startup::UserUnits> {
+        self.units.get(axis as usize).cloned().flatten()
     }
 
-    /// Why the axes were stopped, in words.
-    fn stop_reason(&self, reason: StopReason) -> String {
-        match reason {
-            StopReason::Requested => "requested".to_string(),
-            StopReason::Restart => "re-start requested".to_string(),
-            StopReason::DriveFault { axis } => format!("{} faulted", self.name(axis)),
-            StopReason::FollowingError { axis } => {
-                format!("following error of {}", self.name(axis))
+    /// The history entry of a cycle event: the drive it concerns, and what its words need
+    /// (names, the drive's alarm text, user units), resolved now.
+    fn entry(&self, e: &Event) -> HistoryEntry {
+        let mut r = Resolved::default();
+        let drive = match e.kind {
+            EventKind::AllOp
+            | EventKind::FramesResumed { .. }
+            | EventKind::Stopped
+            | EventKind::Stopping { .. } => None,
+            EventKind::FrameLost { .. }
+            | EventKind::SegmentGone { .. }
+            | EventKind::SegmentLost { .. } => {
+                r.drives = self.drives.iter().map(|(d, _)| d.clone()).collect();
+                None
             }
-            StopReason::FramesLost { cycles } => {
-                format!("{cycles} cycles in a row without a reply")
-            }
-            StopReason::DriveLeftOp { device } => {
-                format!("{} left OP", self.device_name(device))
-            }
-            StopReason::WorkingCounter => "the working counter stayed wrong".to_string(),
-            StopReason::HomingFailed { axis } => format!("homing of {} failed", self.name(axis)),
-            StopReason::ProbeNotLatched { axis, probe } => {
-                format!("touch probe {probe} of {} did not latch", self.name(axis))
-            }
-        }
-    }
-
-    fn entry(&self, e: &Event) -> Option<HistoryEntry> {
-        let (drive, error, text) = match e.kind {
-            EventKind::AllOp => (None, false, "every drive is in OP".to_string()),
-            EventKind::OpTimeout { device, al_state } => (
-                self.device(device),
-                true,
-                format!(
-                    "did not reach OP (AL status {})",
-                    cycle::al_state_name(al_state)
-                ),
-            ),
+            EventKind::OpTimeout { device, .. }
+            | EventKind::OutputsNotTaken { device, .. }
+            | EventKind::AlState { device, .. }
+            | EventKind::LeftOp { device, .. } => self.device(device),
+            EventKind::WorkingCounter { missing, .. } => missing.and_then(|m| self.device(m)),
             EventKind::Axis { axis, event } => {
-                let (error, text) = self.axis_event(axis, event);
-                (self.drive(axis), error, text)
+                if let cia402::Event::Fault { error: Some(d), .. } = event {
+                    // Re-described with the drive's table (names like "AL.86").
+                    r.fault = Some(d.code.describe(self.table(axis)));
+                }
+                self.drive(axis)
             }
-            EventKind::WorkingCounter { missing, .. } => (
-                missing.and_then(|m| self.device(m)),
-                true,
-                wkc_text(&e.kind),
-            ),
-            EventKind::OutputsNotTaken { device, io, .. } => {
-                (self.device(device), !io, wkc_text(&e.kind))
+            EventKind::FollowingError { axis, .. } | EventKind::ProbeLatched { axis, .. } => {
+                r.units = self.units(axis);
+                self.drive(axis)
             }
-            EventKind::AlState { device, state } => (
-                self.device(device),
-                state != 8 && state & 0x10 != 0,
-                format!("AL state {}", cycle::al_state_name(state)),
-            ),
-            EventKind::FrameLost { consecutive } => (
-                None,
-                true,
-                format!(
-                    "no reply in this cycle ({consecutive} in a row); {} held their set-points",
-                    self.all_drives()
-                ),
-            ),
-            EventKind::SegmentGone { cycles } => (
-                None,
-                true,
-                format!(
-                    "the segment stayed silent for {cycles} cycles: the cycle ends; {} are \
-                     disabled by their own watchdogs; a re-start brings them back",
-                    self.all_drives()
-                ),
-            ),
-            EventKind::LeftOp {
-                device,
-                state,
-                code,
-            } => (
-                self.device(device),
-                true,
-                format!(
-                    "left OP on its own: AL status {}, AL status code {}",
-                    cycle::al_state_name(state),
-                    code.map_or("unreadable".to_string(), |c| {
-                        crate::ec::AlStatusCode(c).to_string()
-                    })
-                ),
-            ),
-            EventKind::FramesResumed { lost } => (
-                None,
-                false,
-                format!("replies resumed after {lost} lost cycle(s)"),
-            ),
-            EventKind::SegmentLost { cycles } => (
-                None,
-                true,
-                format!(
-                    "the segment stopped answering ({cycles} cycles without a reply); drives: {}",
-                    self.all_drives()
-                ),
-            ),
-            EventKind::DriveFollowingErrorStuck {
-                axis,
-                cycles,
-                master,
-            } => (
-                self.drive(axis),
-                false,
-                format!(
-                    "warning: 0x60F4 stayed 0 over {cycles} cycles of motion while the master's \
-                     own following error reached {master}: the drive's value is not trusted (the \
-                     master's is shown and checked against the limit)"
-                ),
-            ),
-            EventKind::FollowingError { axis, value, limit } => (
-                self.drive(axis),
-                true,
-                match self.units.get(axis as usize).and_then(Option::as_ref) {
-                    Some(u) => format!(
-                        "master-side following error {:.4} {n} ({value} counts) exceeds the \
-                         limit of {:.4} {n} ({limit} counts)",
-                        value as f64 / u.counts_per_unit,
-                        f64::from(limit) / u.counts_per_unit,
-                        n = u.name
-                    ),
-                    None => format!(
-                        "master-side following error {value} counts exceeds the limit of {limit} \
-                         counts"
-                    ),
-                },
-            ),
-            EventKind::ProgramStep { axis, step } => {
-                (self.drive(axis), false, format!("program step {step}"))
-            }
-            EventKind::ProgramDone { axis } => (self.drive(axis), false, "program done".into()),
-            EventKind::CommandRefused { axis, why } => (self.drive(axis), true, why.to_string()),
-            EventKind::HomingFailed { axis, .. } | EventKind::ProbeNotLatched { axis, .. } => (
-                self.drive(axis),
-                true,
-                crate::telemetry::event_text(&e.kind),
-            ),
-            EventKind::ProbeLatched { axis, .. } => {
-                (self.drive(axis), false, self.probe_text(&e.kind))
-            }
-            EventKind::SetpointLimit { axis, .. } | EventKind::StreamUnderrun { axis, .. } => {
-                (self.drive(axis), app_error(&e.kind), app_text(&e.kind))
-            }
-            EventKind::Stopping { reason } => {
-                let why = self.stop_reason(reason);
-                (
-                    None,
-                    false,
-                    format!("stopping the axes in a controlled way: {why}"),
-                )
-            }
-            EventKind::Stopped => (None, false, "every axis disabled; cycle ended".into()),
+            EventKind::DriveFollowingErrorStuck { axis, .. }
+            | EventKind::ProgramStep { axis, .. }
+            | EventKind::ProgramDone { axis }
+            | EventKind::CommandRefused { axis, .. }
+            | EventKind::HomingFailed { axis, .. }
+            | EventKind::ProbeNotLatched { axis, .. }
+            | EventKind::SetpointLimit { axis, .. }
+            | EventKind::StreamUnderrun { axis, .. } => self.drive(axis),
         };
-        let kind = history_kind(&e.kind);
-        Some(HistoryEntry {
-            time_ns: e.time_ns,
-            cycle: Some(e.cycle),
+        if let EventKind::Stopping { reason } = e.kind {
+            r.subject = match reason {
+                StopReason::DriveFault { axis }
+                | StopReason::FollowingError { axis }
+                | StopReason::HomingFailed { axis }
+                | StopReason::ProbeNotLatched { axis, .. } => self.drive(axis),
+                StopReason::DriveLeftOp { device } => self.device(device),
+                _ => None,
+            };
+        }
+        HistoryEntry::new(
+            e.time_ns,
+            Some(e.cycle),
             drive,
-            error,
-            kind,
-            text,
-        })
+            HistoryEvent::Cycle(e.kind),
+            r,
+        )
     }
 }
 
@@ -565,60 +380,6 @@ fn lock_app(
         .as_ref()
         .map(|r| r.lock().unwrap_or_else(std::sync::PoisonError::into_inner));
     (app, record)
-}
-
-/// Whether an event of the application's set-points is an error.
-fn app_error(kind: &EventKind) -> bool {
-    matches!(kind, EventKind::SetpointLimit { .. })
-}
-
-/// The history text of an event of the application's set-points.
-fn app_text(kind: &EventKind) -> String {
-    match *kind {
-        EventKind::SetpointLimit {
-            limit, value, max, ..
-        } => format!(
-            "the application's set-point breaks {limit}: {value:.1} > {max:.1} (drive units); \
-             the axis is stopped"
-        ),
-        EventKind::StreamUnderrun { total, .. } => format!(
-            "set-point stream ran empty: the last set-point is held ({total} cycle(s) without a \
-             new one so far)"
-        ),
-        _ => String::new(),
-    }
-}
-
-/// The history category of an event.
-fn history_kind(kind: &EventKind) -> HistoryKind {
-    match *kind {
-        EventKind::AllOp
-        | EventKind::AlState { .. }
-        | EventKind::ProgramStep { .. }
-        | EventKind::ProgramDone { .. } => HistoryKind::Info,
-        EventKind::OpTimeout { .. } | EventKind::LeftOp { .. } => HistoryKind::AlState,
-        EventKind::Axis { event, .. } => match event {
-            cia402::Event::Fault { .. } => HistoryKind::DriveFault,
-            cia402::Event::PlannerFailed(_)
-            | cia402::Event::ModeSwitchFailed(_)
-            | cia402::Event::ModeDisplayMismatch { .. } => HistoryKind::StateMachine,
-            cia402::Event::WarningChanged(_) => HistoryKind::Warning,
-            _ => HistoryKind::Info,
-        },
-        EventKind::WorkingCounter { .. } | EventKind::OutputsNotTaken { .. } => {
-            HistoryKind::WorkingCounter
-        }
-        EventKind::FrameLost { .. } | EventKind::FramesResumed { .. } => HistoryKind::FrameLost,
-        EventKind::SegmentLost { .. } | EventKind::SegmentGone { .. } => HistoryKind::SegmentLost,
-        EventKind::FollowingError { .. } => HistoryKind::FollowingError,
-        EventKind::DriveFollowingErrorStuck { .. } => HistoryKind::Warning,
-        EventKind::CommandRefused { .. } => HistoryKind::CommandRefused,
-        EventKind::HomingFailed { .. } => HistoryKind::Homing,
-        EventKind::ProbeLatched { .. } | EventKind::ProbeNotLatched { .. } => HistoryKind::Probe,
-        EventKind::SetpointLimit { .. } => HistoryKind::CommandRefused,
-        EventKind::StreamUnderrun { .. } => HistoryKind::Warning,
-        EventKind::Stopping { .. } | EventKind::Stopped => HistoryKind::Stopping,
-    }
 }
 
 impl<L: FrameLink + Send + 'static> Master<L> {
@@ -993,17 +754,11 @@ fn push_history(shared: &Shared, e: HistoryEntry) {
     }
 }
 
-fn note(shared: &Shared, kind: HistoryKind, error: bool, text: String) {
+/// Record what the session itself notes (no cycle, no drive).
+fn note(shared: &Shared, event: HistoryEvent) {
     push_history(
         shared,
-        HistoryEntry {
-            time_ns: monotonic_ns(),
-            cycle: None,
-            drive: None,
-            error,
-            kind,
-            text,
-        },
+        HistoryEntry::new(monotonic_ns(), None, None, event, Resolved::default()),
     );
 }
 
@@ -1045,12 +800,7 @@ fn session<L: FrameLink + Send>(
             RunEnd::Restart => {
                 failures = 0;
                 restarting = true;
-                note(
-                    shared,
-                    HistoryKind::Restart,
-                    false,
-                    "re-starting the drives on request".into(),
-                );
+                note(shared, HistoryEvent::Restart(RestartNote::Requested));
                 continue;
             }
             RunEnd::Interrupted => {
@@ -1059,18 +809,14 @@ fn session<L: FrameLink + Send>(
                     RestartPolicy::Never => break,
                     RestartPolicy::OnRequest => note(
                         shared,
-                        HistoryKind::Restart,
-                        false,
-                        "waiting for a re-start request (Master::restart)".into(),
+                        HistoryEvent::Restart(RestartNote::WaitingForRequest),
                     ),
                     RestartPolicy::Auto { retry_every, .. } => note(
                         shared,
-                        HistoryKind::Restart,
-                        false,
-                        format!(
-                            "re-starting automatically, trying every {} ms",
-                            retry_every.as_millis()
-                        ),
+                        HistoryEvent::Restart(RestartNote::Automatic {
+                            retry_every_ms: u64::try_from(retry_every.as_millis())
+                                .unwrap_or(u64::MAX),
+                        }),
                     ),
                 }
             }
@@ -1078,9 +824,10 @@ fn session<L: FrameLink + Send>(
                 failures += 1;
                 note(
                     shared,
-                    HistoryKind::Restart,
-                    true,
-                    format!("re-start attempt {failures} failed: {e}"),
+                    HistoryEvent::Restart(RestartNote::AttemptFailed {
+                        attempt: failures,
+                        error: e.to_string(),
+                    }),
                 );
             }
         }
@@ -1093,12 +840,7 @@ fn session<L: FrameLink + Send>(
                     if max_attempts == Some(failures) {
                         note(
                             shared,
-                            HistoryKind::Restart,
-                            true,
-                            format!(
-                                "giving up automatic re-starts after {failures} failed \
-                                 attempts; waiting for a re-start request"
-                            ),
+                            HistoryEvent::Restart(RestartNote::GivingUp { failures }),
                         );
                     }
                     None
@@ -1156,9 +898,9 @@ fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) ->
                 Command::Stop(_) => return false,
                 other => note(
                     shared,
-                    HistoryKind::NoCycle,
-                    true,
-                    format!("{other} refused: no cycle runs (waiting for a re-start)"),
+                    HistoryEvent::NoCycle {
+                        command: other.to_string(),
+                    },
                 ),
             }
         }
@@ -1285,17 +1027,17 @@ fn record_emergencies(log: &EmergencyLog, decoder: &Decoder, shared: &Shared, se
             .iter()
             .find(|(d, _)| d.position == r.position)
             .map_or(&[][..], |(_, t)| *t);
-        let d = ErrorCode(r.error_code).describe(table);
+        let resolved = Resolved {
+            fault: Some(ErrorCode(r.error_code).describe(table)),
+            ..Resolved::default()
+        };
+        let event = HistoryEvent::Emergency {
+            error_code: r.error_code,
+            error_register: r.error_register,
+        };
         push_history(
             shared,
-            HistoryEntry {
-                time_ns: r.time_ns,
-                cycle: None,
-                drive: decoder.device(r.position),
-                error: r.error_code != 0,
-                kind: HistoryKind::Emergency,
-                text: format!("emergency: {d} (error register 0x{:02X})", r.error_register),
-            },
+            HistoryEntry::new(r.time_ns, None, decoder.device(r.position), event, resolved),
         );
     }
     *seen = l.len();
@@ -1410,16 +1152,16 @@ fn start_up<L: FrameLink>(
 /// Start-up's warnings into the history.
 fn note_warnings(shared: &Shared, warnings: &[(DriveRef, String)]) {
     for (drive, w) in warnings {
+        let event = HistoryEvent::Warning(w.clone());
         push_history(
             shared,
-            HistoryEntry {
-                time_ns: monotonic_ns(),
-                cycle: None,
-                drive: Some(drive.clone()),
-                error: false,
-                kind: HistoryKind::Warning,
-                text: format!("warning: {w}"),
-            },
+            HistoryEntry::new(
+                monotonic_ns(),
+                None,
+                Some(drive.clone()),
+                event,
+                Resolved::default(),
+            ),
         );
     }
 }
@@ -1443,12 +1185,9 @@ fn run<L: FrameLink + Send>(
     } else if restarting {
         note(
             shared,
-            HistoryKind::Restart,
-            false,
-            format!(
-                "re-start: the segment answers with the same {} drive(s); taking them to OP",
-                started.drives.len()
-            ),
+            HistoryEvent::Restart(RestartNote::SameDrives {
+                drives: started.drives.len(),
+            }),
         );
     }
     let Some(p) = persist.as_mut() else {
@@ -1500,12 +1239,7 @@ fn run<L: FrameLink + Send>(
         let h = match h {
             Ok(h) => h,
             Err(e) => {
-                note(
-                    shared,
-                    HistoryKind::Session,
-                    true,
-                    format!("cannot start the cycle thread: {e}"),
-                );
+                note(shared, HistoryEvent::CycleThreadFailed(e.to_string()));
                 return None;
             }
         };
@@ -1514,7 +1248,7 @@ fn run<L: FrameLink + Send>(
         if let Ok(rt) = rt_rx.recv_timeout(Duration::from_secs(5)) {
             for w in &rt.warnings {
                 tracing::warn!("{w}");
-                note(shared, HistoryKind::Warning, false, format!("warning: {w}"));
+                note(shared, HistoryEvent::Warning(w.clone()));
             }
             if let Ok(mut r) = shared.rt.lock() {
                 *r = Some(rt);
@@ -1525,15 +1259,16 @@ fn run<L: FrameLink + Send>(
             let mut n = 0usize;
             while let Ok(e) = events.pop() {
                 n += 1;
-                if let Some(entry) = decoder.entry(&e) {
-                    push_history(shared, entry);
-                }
+                push_history(shared, decoder.entry(&e));
                 if matches!(e.kind, EventKind::AllOp) {
                     // When the cycle saw it, not when this thread got round to it.
                     times.reached_op(e.time_ns);
                     if restarting {
-                        let text = format!("re-start {}: every drive is back in OP", before + 1);
-                        note(shared, HistoryKind::Restart, false, text);
+                        let restart = before + 1;
+                        note(
+                            shared,
+                            HistoryEvent::Restart(RestartNote::BackInOp { restart }),
+                        );
                     }
                 }
             }
@@ -1594,55 +1329,6 @@ fn session_pause(idle: Duration, poll: Option<Duration>, next_poll_ns: u64) -> D
 /// ": LRW 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) 18, expected 20" for a
 /// working-counter event: which datagram of the reply was wrong and whom it covers.
 /// What a working-counter event says: the count, the datagram, and what follows.
-fn wkc_text(kind: &EventKind) -> String {
-    match *kind {
-        EventKind::WorkingCounter {
-            got,
-            expected,
-            missing,
-            datagram,
-        } => format!(
-            "working counter {got}, expected {expected}{}{}",
-            datagram.map(describe_datagram).unwrap_or_default(),
-            if missing.is_some() {
-                " (this device did not answer)"
-            } else {
-                ""
-            }
-        ),
-        EventKind::OutputsNotTaken {
-            got,
-            expected,
-            datagram,
-            io,
-            ..
-        } => format!(
-            "in SAFE-OP its process data is not taken: working counter {got}, expected \
-             {expected}{}; {}",
-            datagram.map(describe_datagram).unwrap_or_default(),
-            if io {
-                "an I/O device may take its outputs in OP only (an OpOnly SyncManager or FMMU in \
-                 its ESI): OP requested"
-            } else {
-                "OP was not requested (slave stacks take outputs from SAFE-OP on, ETG.1020)"
-            }
-        ),
-        _ => String::new(),
-    }
-}
-
-fn describe_datagram(d: crate::wkc::DatagramWkc) -> String {
-    let devices = match d.devices {
-        Some((lo, hi)) if lo == hi => format!(", device {lo}"),
-        Some((lo, hi)) => format!(", devices {lo}–{hi}"),
-        None => ", no device".to_owned(),
-    };
-    format!(
-        ": logical datagram {} of {} (logical 0x{:08X}, {} bytes{devices}) came back with {}, expected {}",
-        d.index, d.of, d.address, d.len, d.got, d.expected
-    )
-}
-
 /// What a timed-out wait reports: the cycle's lost frames and every axis's state, with its
 /// error code when it has one, so a wait that failed because a drive faulted says so.
 fn where_things_stand(t: &Telemetry) -> String {
@@ -1655,32 +1341,4 @@ fn where_things_stand(t: &Telemetry) -> String {
         }
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_wrong_datagram_is_named_with_its_devices() {
-        let d = crate::wkc::DatagramWkc {
-            index: 2,
-            of: 2,
-            address: 1466,
-            len: 118,
-            got: 18,
-            expected: 20,
-            devices: Some((38, 47)),
-        };
-        assert_eq!(
-            describe_datagram(d),
-            ": logical datagram 2 of 2 (logical 0x000005BA, 118 bytes, devices 38–47) came back \
-             with 18, expected 20"
-        );
-        let one = crate::wkc::DatagramWkc {
-            devices: Some((5, 5)),
-            ..d
-        };
-        assert!(describe_datagram(one).contains(", device 5)"));
-    }
 }

@@ -194,7 +194,6 @@ pub enum EventKind {
         al_state: u8,
     },
     /// An event of the CiA 402 engine.
-    #[serde(skip)]
     Axis {
         /// Axis index.
         axis: u16,

@@ -77,7 +77,7 @@ fn run<L: FrameLink + Send + 'static>(
         .iter()
         .filter(|h| h.kind == HistoryKind::Warning)
     {
-        println!("history: {}", h.text);
+        println!("history: {}", h.text());
     }
     println!("shut down cleanly: {}", report.shutdown_ok);
     Ok(())

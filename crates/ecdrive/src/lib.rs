@@ -42,9 +42,9 @@ pub use cia402::{OperationMode, State};
 pub use drives::DriveProfile;
 pub use ecdrive_ethercat::{
     AppAxis, AppCycle, Axes, AxisTelemetry, Command, CycleApp, CycleTelemetry, DriveRef,
-    DriveSetup, EntryError, ErrorKind, Event, EventKind, HistoryEntry, HistoryKind, Master,
-    MasterConfig, MasterError, RunMode, Selector, SessionReport, SetpointLimits, StartFailure,
-    Step, StopKind, StopReason, StreamProducer, Streams, Target, Telemetry,
+    DriveSetup, EntryError, ErrorKind, Event, EventKind, HistoryEntry, HistoryEvent, HistoryKind,
+    Master, MasterConfig, MasterError, RunMode, Selector, SessionReport, SetpointLimits,
+    StartFailure, Step, StopKind, StopReason, StreamProducer, Streams, Target, Telemetry,
 };
 pub use link::RawSocket;
 

@@ -337,8 +337,8 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         .iter()
         .filter(|h| h.error)
         .map(|h| match &h.drive {
-            Some(d) => format!("{d}: {}", h.text),
-            None => h.text.clone(),
+            Some(d) => format!("{d}: {}", h.text()),
+            None => h.text(),
         })
         .collect();
     let history = report.history.clone();
@@ -348,8 +348,8 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
             .iter()
             .filter(|h| h.error && recovery::unhandled_kind(h.kind))
             .map(|h| match &h.drive {
-                Some(d) => format!("{d}: {}", h.text),
-                None => h.text.clone(),
+                Some(d) => format!("{d}: {}", h.text()),
+                None => h.text(),
             }),
     );
     let ok = done && unhandled.is_empty() && report.shutdown_ok;

@@ -204,7 +204,7 @@ pub fn run<L: FrameLink + Send + 'static>(
         let text = format!(
             "{}{}",
             e.drive.as_ref().map_or(String::new(), |d| format!("{d}: ")),
-            e.text
+            e.text()
         );
         match seen.iter_mut().find(|(t, _)| *t == text) {
             Some((_, n)) => *n += 1,

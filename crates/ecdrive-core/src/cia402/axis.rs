@@ -263,7 +263,7 @@ pub enum ModeSwitchPhase {
 }
 
 /// Why a mode switch was abandoned.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum ModeSwitchFailure {
     /// The axis did not reach standstill.
     NoStandstill,
@@ -277,7 +277,7 @@ pub enum ModeSwitchFailure {
 }
 
 /// A failed mode switch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error, serde::Serialize)]
 #[error("mode switch {from} -> {to} abandoned after {cycles} cycles: {}", failure_text(.reason))]
 pub struct ModeSwitchError {
     /// The mode before.
@@ -304,7 +304,7 @@ fn failure_text(r: &ModeSwitchFailure) -> &'static str {
 }
 
 /// Something that happened in a step. Read with [`Axis::poll_event`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum Event {
     /// The decoded state changed (`None` = statusword matches no state).
     StateChanged {

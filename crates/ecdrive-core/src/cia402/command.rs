@@ -20,7 +20,7 @@ use super::bits::ControlWord;
 /// BLV-R (§6) tables. "Switch on" and "Disable operation" have the same bits; the state decides
 /// which transition they cause. Fault reset acts on the 0 → 1 edge of bit 7; a planner produces
 /// the edge by sending [`Command::DisableVoltage`] and then [`Command::FaultReset`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum Command {
     /// Shutdown: to Ready to switch on (transitions 2, 6, 8).
     Shutdown,

@@ -13,11 +13,11 @@
 use core::fmt;
 
 /// A 16-bit error code as found in 0x603F, the low word of 0x1003 sub-entries, and EMCY bytes 0–1.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default, serde::Serialize)]
 pub struct ErrorCode(pub u16);
 
 /// The class of an error code: its range in the CiA 301 / CiA 402 table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum ErrorClass {
     /// `0x0000`: no error (or "error reset" in an EMCY).
     NoError,
@@ -109,7 +109,7 @@ impl ErrorEntry {
 }
 
 /// Where a description came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum ErrorSource {
     /// The drive's own table.
     Drive,
@@ -122,7 +122,7 @@ pub enum ErrorSource {
 }
 
 /// A decoded error code. Holds only `'static` text, so it is `Copy` and costs no allocation.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub struct ErrorDescription {
     /// The code.
     pub code: ErrorCode,

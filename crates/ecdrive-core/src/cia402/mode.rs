@@ -26,7 +26,7 @@ use core::hash::{Hash, Hasher};
 /// [`OperationMode::Reserved`] and negative values into [`OperationMode::Vendor`], and
 /// [`OperationMode::as_i8`] gives the value back. Equality and hashing compare the `i8` value, so
 /// a hand-built `Vendor(5)` equals `Reserved(5)`.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize)]
 pub enum OperationMode {
     /// 0: no mode assigned / no mode change.
     NoMode,

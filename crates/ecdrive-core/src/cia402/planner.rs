@@ -78,7 +78,7 @@ use super::command::Command;
 use super::state::State;
 
 /// The state the planner drives towards.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum Target {
     /// Operation enabled (motor energised, following set-points).
     OperationEnabled,
@@ -109,7 +109,7 @@ impl fmt::Display for Target {
 }
 
 /// The likely reason a drive does not move on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum StallCause {
     /// The drive did not react to the command (no further clue in the statusword).
     NoResponse,
@@ -165,7 +165,7 @@ impl fmt::Display for StallCause {
 }
 
 /// Why the planner cannot reach its target.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, thiserror::Error, serde::Serialize)]
 pub enum PlannerError {
     /// The drive stayed in one state too long.
     #[error(

@@ -17,7 +17,7 @@ use core::fmt;
 ///
 /// The table is the same in CiA 402, the MR-J4-TM manual (§5.3.1), the BDHDE manual (§5.4) and
 /// the BLV-R manual (§6.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
 pub enum State {
     /// Not ready to switch on: initialising after power-on (transition 0). The MR-J4-TM does
     /// not even send a statusword here.

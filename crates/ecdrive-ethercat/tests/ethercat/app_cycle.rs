@@ -7,9 +7,10 @@
 use ecdrive_core::cia402::State;
 use ecdrive_core::od::ObjectAddress;
 use ecdrive_core::rt::RtSettings;
+use ecdrive_ethercat::HistoryEntry;
 use ecdrive_ethercat::session::{Master, MasterConfig, SessionReport};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
-use ecdrive_ethercat::telemetry::{Axes, Command, StopKind};
+use ecdrive_ethercat::telemetry::{Axes, Command, EventKind, StopKind};
 use ecdrive_ethercat::{
     AppCycle, CycleApp, DriveTask, EntryError, ProbeEdge, ProbeState, RunMode, SetpointLimits,
     Streams,
@@ -224,18 +225,22 @@ fn a_setpoint_beyond_a_limit_stops_the_axis_naming_the_limit() {
     });
     cfg.app = Some(Arc::new(Mutex::new(Jump(None))));
     let (r, targets) = run(cfg, 1200);
-    let hit: Vec<&str> = r
-        .history
-        .iter()
-        .filter(|h| h.text.contains("breaks max_velocity"))
-        .map(|h| h.text.as_str())
-        .collect();
+    let breaks = |h: &&HistoryEntry| {
+        matches!(
+            h.cycle_event(),
+            Some(EventKind::SetpointLimit {
+                limit: "max_velocity",
+                ..
+            })
+        )
+    };
+    let hit: Vec<String> = r.history.iter().filter(breaks).map(|h| h.text()).collect();
     assert!(!hit.is_empty(), "{:#?}", r.history);
     assert!(
         r.history
             .iter()
-            .any(|h| h.text.contains("breaks max_velocity")
-                && h.drive.as_ref().is_some_and(|d| d.position == 0)),
+            .filter(breaks)
+            .any(|h| h.drive.as_ref().is_some_and(|d| d.position == 0)),
         "{hit:?}"
     );
     // The jump never reached the drive: its target stayed within one cycle's max_velocity
@@ -301,7 +306,7 @@ fn a_stream_is_consumed_one_per_cycle_and_an_underrun_is_reported() {
     let underrun_events = r
         .history
         .iter()
-        .filter(|h| h.text.contains("set-point stream ran empty"))
+        .filter(|h| matches!(h.cycle_event(), Some(EventKind::StreamUnderrun { .. })))
         .count();
     assert!(underrun_events >= 1, "{:#?}", r.history);
     let seg = link.segment();
@@ -546,14 +551,14 @@ fn the_application_arms_a_touch_probe_and_reads_the_latch() {
     );
     // The MR-J4-TM: refused, named, never armed.
     assert_eq!(a.states[0], [ProbeState::Off], "{:?}", a.states[0]);
-    let refused = r
+    let probe = r
         .history
         .iter()
-        .find(|h| h.text.contains("touch probe refused"))
+        .find(|h| refused(h, "touch probe refused"))
         .unwrap_or_else(|| panic!("{:?}", r.history));
     assert!(
-        refused.drive.as_ref().is_some_and(|d| d.position == 0) && refused.text.contains("0x60B8"),
-        "{refused:?}"
+        probe.drive.as_ref().is_some_and(|d| d.position == 0) && refused(probe, "0x60B8"),
+        "{probe:?}"
     );
 }
 
@@ -629,7 +634,7 @@ fn commands_home_arm_a_probe_and_move_in_pp() {
         assert!(
             r.history
                 .iter()
-                .any(|h| h.text.contains(want) && h.drive.as_ref().is_some_and(|d| d.position == 1)),
+                .any(|h| refused(h, want) && h.drive.as_ref().is_some_and(|d| d.position == 1)),
             "{want:?} not in {:?}",
             r.history
         );
@@ -648,4 +653,9 @@ fn commands_home_arm_a_probe_and_move_in_pp() {
         (position as f64 - edge).abs() <= 1.0,
         "latched at {position}, the edge is at {edge}"
     );
+}
+
+/// Whether `h` is a refused command whose reason says `what`.
+fn refused(h: &HistoryEntry, what: &str) -> bool {
+    matches!(h.cycle_event(), Some(EventKind::CommandRefused { why, .. }) if why.contains(what))
 }

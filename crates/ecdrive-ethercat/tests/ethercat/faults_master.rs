@@ -5,7 +5,7 @@
 //! with the emulated drives served from the far end; without root the veth half says loudly
 //! that it was skipped.
 
-use ecdrive_core::cia402::State;
+use ecdrive_core::cia402::{self, State};
 use ecdrive_core::drives::{DriveProfile, bdhde, mr_j4_tm};
 use ecdrive_core::link::FrameLink;
 use ecdrive_core::link::netns::{VethPair, is_root, require_root};
@@ -19,7 +19,10 @@ use ecdrive_ethercat::session::{
     HistoryEntry, HistoryKind, Master, MasterConfig, RestartPolicy, SessionReport,
 };
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
-use ecdrive_ethercat::telemetry::{Axes, Command, Phase, StopKind, Telemetry};
+use ecdrive_ethercat::telemetry::{
+    Axes, Command, EventKind, Phase, StopKind, StopReason, Telemetry,
+};
+use ecdrive_ethercat::{HistoryEvent, RestartNote};
 use ecdrive_sim::devices::GenericCoeDevice;
 use ecdrive_sim::devices::generic_coe::USER_TEXT_LEN;
 use ecdrive_sim::drives::{EmulatedDrive, spec_for};
@@ -150,8 +153,8 @@ fn wait<L: FrameLink + Send + 'static>(
 
 fn line(h: &HistoryEntry) -> String {
     match &h.drive {
-        Some(d) => format!("[{:?}] {d}: {}", h.cycle, h.text),
-        None => format!("[{:?}] {}", h.cycle, h.text),
+        Some(d) => format!("[{:?}] {d}: {h}", h.cycle),
+        None => format!("[{:?}] {h}", h.cycle),
     }
 }
 
@@ -181,9 +184,21 @@ fn moving<L: FrameLink + Send + 'static>(cfg: MasterConfig, link: L, how: &str) 
     m
 }
 
-fn has(r: &[HistoryEntry], kind: HistoryKind, start: &str) -> bool {
-    r.iter()
-        .any(|h| h.kind == kind && h.text.starts_with(start))
+/// Whether the history has an entry whose event is `what`.
+fn has(r: &[HistoryEntry], what: impl Fn(&HistoryEvent) -> bool) -> bool {
+    r.iter().any(|h| what(&h.event))
+}
+
+/// Whether `e` is the cycle's event `kind` (compared by pattern in `matches!`).
+macro_rules! cycle {
+    ($pat:pat) => {
+        |e: &HistoryEvent| matches!(e, HistoryEvent::Cycle($pat))
+    };
+}
+
+/// The names of the drives an entry names.
+fn names(d: &[DriveRef]) -> Vec<&str> {
+    d.iter().map(|d| d.name.as_str()).collect()
 }
 
 fn report_lines(r: &SessionReport) -> Vec<String> {
@@ -227,21 +242,22 @@ fn lost_frames_hold_the_setpoint<L: FrameLink + Send + 'static>(
         .collect();
     assert!(lost.len() >= 4, "{how}: {:#?}", report_lines(&r));
     assert!(
-        lost.iter().all(|h| h
-            .text
-            .contains("drive 0 (MR-J4-TM), drive 1 (BDHDE) held their set-points")),
+        lost.iter().all(
+            |h| matches!(h.event, HistoryEvent::Cycle(EventKind::FrameLost { .. }))
+                && names(&h.resolved.drives) == ["MR-J4-TM", "BDHDE"]
+        ),
         "{how}: {:#?}",
         report_lines(&r)
     );
     assert!(
-        has(&r.history, HistoryKind::FrameLost, "replies resumed after"),
+        has(&r.history, cycle!(EventKind::FramesResumed { .. })),
         "{how}: {:#?}",
         report_lines(&r)
     );
     assert!(
-        !r.history
-            .iter()
-            .any(|h| h.kind == HistoryKind::Stopping && h.text.contains("without a reply")),
+        !r.history.iter().any(|h| cycle!(EventKind::Stopping {
+            reason: StopReason::FramesLost { .. }
+        })(&h.event)),
         "{how}: {:#?}",
         report_lines(&r)
     );
@@ -293,17 +309,14 @@ fn consecutive_losses_stop_the_axes<L: FrameLink + Send + 'static>(
     assert!(
         has(
             &h,
-            HistoryKind::Stopping,
-            "stopping the axes in a controlled way: 3 cycles in a row without a reply"
+            cycle!(EventKind::Stopping {
+                reason: StopReason::FramesLost { cycles: 3 }
+            })
         ),
         "{how}: {:#?}",
         h.iter().map(line).collect::<Vec<_>>()
     );
-    assert!(has(
-        &h,
-        HistoryKind::SegmentLost,
-        "the segment stopped answering (3 cycles"
-    ));
+    assert!(has(&h, cycle!(EventKind::SegmentLost { cycles: 3 })));
     assert!(
         !h.iter().any(|e| e.kind == HistoryKind::DriveFault),
         "{how}"
@@ -433,21 +446,26 @@ fn cable_pull_and_automatic_restart<L: FrameLink + Send + 'static>(
     let r = r.unwrap();
     assert_eq!(r.restarts, 1, "{how}");
     assert!(r.shutdown_ok, "{how}");
-    for (kind, start) in [
+    let expected: [crate::support::Expected; 4] = [
         (
-            HistoryKind::SegmentLost,
-            "the segment stopped answering (3 cycles",
+            "the segment stopped answering (3 cycles)",
+            &cycle!(EventKind::SegmentLost { cycles: 3 }),
         ),
-        (HistoryKind::SegmentLost, "the segment stayed silent"),
-        (HistoryKind::Restart, "re-starting automatically"),
         (
-            HistoryKind::Restart,
-            "re-start 1: every drive is back in OP",
+            "the segment stayed silent",
+            &cycle!(EventKind::SegmentGone { .. }),
         ),
-    ] {
+        ("re-starting automatically", &|e| {
+            matches!(e, HistoryEvent::Restart(RestartNote::Automatic { .. }))
+        }),
+        ("re-start 1: every drive is back in OP", &|e| {
+            *e == HistoryEvent::Restart(RestartNote::BackInOp { restart: 1 })
+        }),
+    ];
+    for (what, is) in expected {
         assert!(
-            has(&r.history, kind, start),
-            "{how}: {start}: {:#?}",
+            has(&r.history, is),
+            "{how}: {what}: {:#?}",
             report_lines(&r)
         );
     }
@@ -455,13 +473,13 @@ fn cable_pull_and_automatic_restart<L: FrameLink + Send + 'static>(
     let at = r
         .history
         .iter()
-        .position(|h| h.text.starts_with("the segment stopped answering"))
+        .position(|h| cycle!(EventKind::SegmentLost { .. })(&h.event))
         .unwrap();
     let lost = r.history[at].cycle.unwrap();
     let first = r.history[..at]
         .iter()
         .rev()
-        .find(|h| h.kind == HistoryKind::FrameLost && h.text.contains("(1 in a row)"))
+        .find(|h| cycle!(EventKind::FrameLost { consecutive: 1 })(&h.event))
         .and_then(|h| h.cycle)
         .unwrap();
     assert!(lost - first <= 2, "{how}: {first} → {lost}");
@@ -496,30 +514,39 @@ fn a_slave_reset_to_init_stops_the_others<L: FrameLink + Send + 'static>(
     let lines: Vec<String> = h.iter().map(line).collect();
     let left = h
         .iter()
-        .find(|e| e.kind == HistoryKind::AlState && e.text.starts_with("left OP on its own"))
+        .find(|e| cycle!(EventKind::LeftOp { .. })(&e.event))
         .unwrap_or_else(|| panic!("{how}: {lines:#?}"));
     assert_eq!(left.drive.as_ref().map(|d| d.position), Some(1), "{how}");
-    assert!(left.text.contains("AL status INIT"), "{how}: {}", left.text);
+    // In INIT (AL status 1), with the AL status code it read.
     assert!(
-        left.text.contains("AL status code 0x"),
-        "{how}: {}",
-        left.text
+        matches!(
+            left.event,
+            HistoryEvent::Cycle(EventKind::LeftOp {
+                state: 1,
+                code: Some(_),
+                ..
+            })
+        ),
+        "{how}: {left}"
     );
     assert!(
-        has(
-            &h,
-            HistoryKind::Stopping,
-            "stopping the axes in a controlled way: drive 1 (BDHDE) left OP"
-        ),
+        h.iter().any(|e| cycle!(EventKind::Stopping {
+            reason: StopReason::DriveLeftOp { device: 1 }
+        })(&e.event)
+            && e.resolved.subject.as_ref().map(|d| d.name.as_str()) == Some("BDHDE")),
         "{how}: {lines:#?}"
     );
     // The MR-J4-TM was ramped down and disabled before the cycle ended.
     assert!(
         h.iter()
             .any(|e| e.drive.as_ref().is_some_and(|d| d.position == 0)
-                && e.text == "state Operation enabled → Switch on disabled"
-                || e.drive.as_ref().is_some_and(|d| d.position == 0)
-                    && e.text.starts_with("state Operation enabled →")),
+                && matches!(
+                    e.axis_event(),
+                    Some(cia402::Event::StateChanged {
+                        from: Some(State::OperationEnabled),
+                        ..
+                    })
+                )),
         "{how}: {lines:#?}"
     );
     assert!(none_enabled(m.telemetry()), "{how}");
@@ -575,7 +602,11 @@ fn a_drive_alarm_stops_both_and_is_decoded<L: FrameLink + Send + 'static>(
         .find(|h| h.kind == HistoryKind::DriveFault)
         .unwrap_or_else(|| panic!("{how}: {lines:#?}"));
     assert_eq!(fault.drive.as_ref().map(|d| d.position), Some(0), "{how}");
-    assert!(fault.text.contains("AL.52"), "{how}: {}", fault.text);
+    assert_eq!(
+        fault.resolved.fault.map(|d| d.name),
+        Some("AL.52"),
+        "{how}: {fault}"
+    );
     // The drive's emergency, pushed while in OP, is in the history decoded with the drive's
     // alarm name (its 0x603F code 0xFF52 through the MR-J4-TM's table).
     let emcy = r
@@ -585,16 +616,20 @@ fn a_drive_alarm_stops_both_and_is_decoded<L: FrameLink + Send + 'static>(
         .unwrap_or_else(|| panic!("{how}: no Emergency entry: {lines:#?}"));
     assert_eq!(emcy.drive.as_ref().map(|d| d.position), Some(0), "{how}");
     assert!(
-        emcy.text.contains("0xFF52") && emcy.text.contains("AL.52"),
-        "{how}: {}",
-        emcy.text
+        matches!(
+            emcy.event,
+            HistoryEvent::Emergency {
+                error_code: 0xFF52,
+                ..
+            }
+        ) && emcy.resolved.fault.map(|d| d.name) == Some("AL.52"),
+        "{how}: {emcy}"
     );
     assert!(
-        has(
-            &r.history,
-            HistoryKind::Stopping,
-            "stopping the axes in a controlled way: drive 0 (MR-J4-TM) faulted"
-        ),
+        r.history.iter().any(|e| cycle!(EventKind::Stopping {
+            reason: StopReason::DriveFault { axis: 0 }
+        })(&e.event)
+            && e.resolved.subject.as_ref().map(|d| d.name.as_str()) == Some("MR-J4-TM")),
         "{how}: {lines:#?}"
     );
 }
@@ -638,7 +673,7 @@ fn a_drifting_clock_is_kept_in_sync<L: FrameLink + Send + 'static>(
     if !(t.cycle.all_op && enabled(&t)) {
         let (r, _) = m.stop(StopKind::Ramp);
         let lines: Vec<String> = r
-            .map(|r| r.history.iter().map(|h| h.text.clone()).collect())
+            .map(|r| r.history.iter().map(HistoryEntry::text).collect())
             .unwrap_or_default();
         panic!(
             "{how}: not all enabled in OP: {:?}\nhistory: {lines:#?}",

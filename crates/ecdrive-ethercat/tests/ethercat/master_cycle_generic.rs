@@ -5,7 +5,7 @@ use crate::support;
 use ecdrive_ethercat::program::RunMode;
 use ecdrive_ethercat::session::{Master, MasterConfig};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
-use ecdrive_ethercat::telemetry::StopKind;
+use ecdrive_ethercat::telemetry::{EventKind, StopKind};
 use ecdrive_sim::transport::SegmentLink;
 use std::time::Duration;
 use support::generic::{GENERIC_TEST, generic_segment};
@@ -41,7 +41,7 @@ fn cycle_reaches_op_and_stops_to_init() {
         report
             .history
             .iter()
-            .any(|h| h.text == "every drive is in OP"),
+            .any(|h| h.cycle_event() == Some(&EventKind::AllOp)),
         "{:#?}",
         report.history
     );
@@ -49,7 +49,7 @@ fn cycle_reaches_op_and_stops_to_init() {
         !report
             .history
             .iter()
-            .any(|h| h.text.starts_with("working counter")),
+            .any(|h| matches!(h.cycle_event(), Some(EventKind::WorkingCounter { .. }))),
         "{:#?}",
         report.history
     );

@@ -5,7 +5,7 @@
 //! axes, is decoded with the drive's alarm name, is reset, and motion resumes; a program cut
 //! short by a fault runs again from its start mode.
 
-use ecdrive_core::cia402::State;
+use ecdrive_core::cia402::{self, State};
 use ecdrive_core::drives::{DriveProfile, bdhde, mr_j4_tm};
 use ecdrive_core::link::FrameLink;
 use ecdrive_core::link::netns::{VethPair, require_root};
@@ -15,9 +15,9 @@ use ecdrive_core::rt::RtSettings;
 use ecdrive_ethercat::cycle::CycleEnd;
 use ecdrive_ethercat::error::ErrorKind;
 use ecdrive_ethercat::program::{RunMode, Step, Target};
-use ecdrive_ethercat::session::{HistoryKind, Master, MasterConfig, SessionReport};
+use ecdrive_ethercat::session::{HistoryEntry, HistoryKind, Master, MasterConfig, SessionReport};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
-use ecdrive_ethercat::telemetry::{Axes, Command, StopKind, Telemetry};
+use ecdrive_ethercat::telemetry::{Axes, Command, EventKind, StopKind, StopReason, Telemetry};
 use ecdrive_sim::drives::{EmulatedDrive, spec_for};
 use ecdrive_sim::faults::{DeviceFault, Fault};
 use ecdrive_sim::transport::{RawServer, SegmentLink};
@@ -75,7 +75,7 @@ fn errors(r: &SessionReport) -> Vec<String> {
     r.history
         .iter()
         .filter(|h| h.error)
-        .map(|h| format!("{:?} {}", h.drive, h.text))
+        .map(|h| format!("{:?} {h}", h.drive))
         .collect()
 }
 
@@ -136,7 +136,7 @@ fn both_drives_reach_op_with_dc_at_1ms_and_500us_over_veth() {
             .history
             .iter()
             .filter(|h| h.error && h.kind != HistoryKind::FrameLost)
-            .map(|h| h.text.clone())
+            .map(HistoryEntry::text)
             .collect();
         assert!(other.is_empty(), "{cycle:?}: {other:#?}");
         let (_, served) = server.stop();
@@ -484,13 +484,24 @@ fn a_following_error_fault_stops_both_axes_is_decoded_reset_and_motion_resumes()
         .find(|e| {
             e.error
                 && e.drive.as_ref().is_some_and(|d| d.position == 1)
-                && e.text.starts_with("fault")
+                && matches!(e.axis_event(), Some(cia402::Event::Fault { .. }))
         })
         .unwrap_or_else(|| panic!("{h:#?}"));
-    assert!(fault.text.contains("J3"), "{}", fault.text);
+    // Named by the BDHDE's own table: J3 (FLT 87), excessive position error.
+    assert_eq!(
+        fault.resolved.fault.map(|d| d.name),
+        Some("J3 (FLT 87)"),
+        "{fault}"
+    );
     assert!(
-        h.iter()
-            .any(|e| e.text == "stopping the axes in a controlled way: drive 1 (BDHDE) faulted"),
+        h.iter().any(|e| e.cycle_event()
+            == Some(&EventKind::Stopping {
+                reason: StopReason::DriveFault { axis: 1 }
+            })
+            && e.resolved
+                .subject
+                .as_ref()
+                .is_some_and(|d| d.name == "BDHDE")),
         "{h:#?}"
     );
     // Clear the jam, reset, enable, run again: motion resumes.

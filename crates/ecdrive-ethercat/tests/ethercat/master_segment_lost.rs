@@ -4,9 +4,11 @@
 use crate::support;
 use ecdrive_core::cia402::State;
 use ecdrive_ethercat::cycle::CycleEnd;
-use ecdrive_ethercat::session::{HistoryKind, Master, MasterConfig, RestartPolicy};
+use ecdrive_ethercat::session::{
+    HistoryEntry, HistoryEvent, HistoryKind, Master, MasterConfig, RestartNote, RestartPolicy,
+};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
-use ecdrive_ethercat::telemetry::{Axes, Command, Phase, StopKind};
+use ecdrive_ethercat::telemetry::{Axes, Command, EventKind, Phase, StopKind};
 use ecdrive_sim::transport::SegmentLink;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -46,12 +48,12 @@ fn cable_pull_is_detected_within_three_cycles_and_the_master_restarts() {
     let first_lost = report
         .history
         .iter()
-        .find(|h| h.text.starts_with("no reply in this cycle"))
+        .find(|h| matches!(h.cycle_event(), Some(EventKind::FrameLost { .. })))
         .expect("a lost-frame entry");
     let lost = report
         .history
         .iter()
-        .find(|h| h.text.starts_with("the segment stopped answering"))
+        .find(|h| matches!(h.cycle_event(), Some(EventKind::SegmentLost { .. })))
         .expect("a segment-lost entry");
     assert!(lost.error);
     assert!(
@@ -60,23 +62,25 @@ fn cable_pull_is_detected_within_three_cycles_and_the_master_restarts() {
         first_lost.cycle,
         lost.cycle
     );
-    assert!(
-        lost.text.contains("drive 0 (generic test device)")
-            && lost.text.contains("drive 1 (generic test device)"),
-        "{}",
-        lost.text
-    );
-    // Lost frames name the drives that held their set-points.
-    assert!(
-        first_lost.text.contains("drive 1 (generic test device)"),
-        "{}",
-        first_lost.text
-    );
+    // Both name the drives (the lost frames: those that held their set-points).
+    for e in [lost, first_lost] {
+        let named: Vec<(u16, &str)> = e
+            .resolved
+            .drives
+            .iter()
+            .map(|d| (d.position, d.name.as_str()))
+            .collect();
+        assert_eq!(
+            named,
+            [(0, "generic test device"), (1, "generic test device")],
+            "{e}"
+        );
+    }
     assert!(
         report
             .history
             .iter()
-            .any(|h| h.text.starts_with("the segment stayed silent")),
+            .any(|h| matches!(h.cycle_event(), Some(EventKind::SegmentGone { .. }))),
         "{:#?}",
         report.history
     );
@@ -119,7 +123,7 @@ fn starting_on_a_dead_segment_fails_cleanly_and_returns_the_link() {
 }
 
 fn texts(m: &Master<PullableLink<SegmentLink>>) -> Vec<String> {
-    m.history().iter().map(|h| h.text.clone()).collect()
+    m.history().iter().map(HistoryEntry::text).collect()
 }
 
 #[test]
@@ -164,8 +168,10 @@ fn after_a_cable_pull_a_restart_on_request_brings_the_drives_back_to_op() {
     assert!(
         m.history().iter().any(|h| h.kind == HistoryKind::NoCycle
             && h.error
-            && h.text
-                .starts_with("enable every axis refused: no cycle runs")),
+            && h.event
+                == HistoryEvent::NoCycle {
+                    command: Command::Enable(Axes::All).to_string()
+                }),
         "{:#?}",
         texts(&m)
     );
@@ -207,16 +213,35 @@ fn after_a_cable_pull_a_restart_on_request_brings_the_drives_back_to_op() {
     assert_eq!(report.restarts, 1);
     assert!(report.shutdown_ok);
     assert_eq!(report.cycle.unwrap().end, CycleEnd::Stopped);
-    let h: Vec<&str> = report.history.iter().map(|h| h.text.as_str()).collect();
-    for want in [
-        "the segment stopped answering",
-        "the segment stayed silent",
-        "waiting for a re-start request",
-        "re-start attempt 1 failed",
-        "re-start: the segment answers with the same 2 drive(s)",
-        "re-start 1: every drive is back in OP",
-    ] {
-        assert!(h.iter().any(|t| t.starts_with(want)), "{want}: {h:#?}");
+    let h: Vec<String> = report.history.iter().map(HistoryEntry::text).collect();
+    let expected: [support::Expected; 6] = [
+        ("the segment stopped answering", &|e| {
+            matches!(e, HistoryEvent::Cycle(EventKind::SegmentLost { .. }))
+        }),
+        ("the segment stayed silent", &|e| {
+            matches!(e, HistoryEvent::Cycle(EventKind::SegmentGone { .. }))
+        }),
+        ("waiting for a re-start request", &|e| {
+            *e == HistoryEvent::Restart(RestartNote::WaitingForRequest)
+        }),
+        ("re-start attempt 1 failed", &|e| {
+            matches!(
+                e,
+                HistoryEvent::Restart(RestartNote::AttemptFailed { attempt: 1, .. })
+            )
+        }),
+        ("re-start: the same 2 drives", &|e| {
+            *e == HistoryEvent::Restart(RestartNote::SameDrives { drives: 2 })
+        }),
+        ("re-start 1: every drive is back in OP", &|e| {
+            *e == HistoryEvent::Restart(RestartNote::BackInOp { restart: 1 })
+        }),
+    ];
+    for (want, is) in expected {
+        assert!(
+            report.history.iter().any(|e| is(&e.event)),
+            "{want}: {h:#?}"
+        );
     }
 }
 

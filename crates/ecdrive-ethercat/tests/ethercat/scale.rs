@@ -17,12 +17,13 @@ use ecdrive_core::ec::frame::{EthercatFrame, EthernetFrame};
 use ecdrive_core::link::netns::{VethPair, require_root};
 use ecdrive_core::link::{FrameLink, LinkError};
 use ecdrive_core::rt::RtSettings;
-use ecdrive_ethercat::HistoryKind;
 use ecdrive_ethercat::cycle::CycleEnd;
 use ecdrive_ethercat::program::{RunMode, Step, Target};
 use ecdrive_ethercat::session::{Master, MasterConfig, SessionReport};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
+use ecdrive_ethercat::telemetry::EventKind;
 use ecdrive_ethercat::telemetry::{Axes, Command, StopKind};
+use ecdrive_ethercat::{DatagramWkc, HistoryEntry, HistoryKind};
 use ecdrive_sim::devices::IoDevice;
 use ecdrive_sim::drives::{EmulatedDrive, spec_for};
 use ecdrive_sim::transport::{RawServer, SegmentLink};
@@ -223,7 +224,7 @@ fn run<L: FrameLink + Send + 'static>(link: L, drives: usize, cycle: Duration) -
         .history
         .iter()
         .filter(|h| h.error && h.kind != ecdrive_ethercat::session::HistoryKind::FrameLost)
-        .map(|h| format!("{:?} {}", h.drive, h.text))
+        .map(|h| format!("{:?} {h}", h.drive))
         .collect();
     assert!(errors.is_empty(), "{drives} drives: {errors:#?}");
     assert!(r.shutdown_ok, "{drives} drives");
@@ -367,15 +368,31 @@ fn a_wrong_working_counter_names_the_datagram_and_its_drives() {
     .unwrap();
     let (r, _) = m.stop(StopKind::Ramp);
     let r = r.unwrap();
-    let wkc: Vec<&str> = r
+    let wkc: Vec<&HistoryEntry> = r
         .history
         .iter()
         .filter(|h| h.kind == HistoryKind::WorkingCounter)
-        .map(|h| h.text.as_str())
         .collect();
-    let want = "working counter 144, expected 146: logical datagram 2 of 2 (logical 0x000005BA, \
-                118 bytes, devices 38–47) came back with 18, expected 20";
-    assert!(wkc.contains(&want), "{wkc:#?}");
+    // Named down to the datagram and its devices: the second of two logical datagrams
+    // (logical 0x000005BA, 118 bytes, devices 38–47) came back with 18 of 20.
+    let want = EventKind::WorkingCounter {
+        got: 144,
+        expected: 146,
+        missing: None,
+        datagram: Some(DatagramWkc {
+            index: 2,
+            of: 2,
+            address: 0x05BA,
+            len: 118,
+            got: 18,
+            expected: 20,
+            devices: Some((38, 47)),
+        }),
+    };
+    assert!(
+        wkc.iter().any(|h| h.cycle_event() == Some(&want)),
+        "{wkc:#?}"
+    );
     // The frame statistics count them: every reply from the arming on had the wrong count.
     let f = r.cycle.as_ref().expect("cycle report").frames;
     assert!(f.wrong_wkc >= 10, "{f:?}");

@@ -102,10 +102,7 @@ pub fn latched<L: FrameLink + Send + 'static>(m: &mut Master<L>, i: usize) -> St
                     .as_ref()
                     .is_some_and(|x| x.position == d.info.position)
         })
-        .map_or_else(
-            || "a fault (0x603F not mapped)".to_string(),
-            |h| h.text.clone(),
-        )
+        .map_or_else(|| "a fault (0x603F not mapped)".to_string(), |h| h.text())
 }
 
 /// In a running master whose drives are in OP: give every drive (of `axes`) that is in Fault

@@ -631,8 +631,8 @@ pub fn run(
                     && position.is_none_or(|p| h.drive.as_ref().is_some_and(|d| d.position == p))
             })
             .map(|h| match &h.drive {
-                Some(d) => format!("{d}: {}", h.text),
-                None => h.text.clone(),
+                Some(d) => format!("{d}: {}", h.text()),
+                None => h.text(),
             })
     };
     let drive_name = |axis: u16| {
@@ -718,8 +718,8 @@ pub fn run(
         .iter()
         .find(|h| h.error)
         .map(|h| match &h.drive {
-            Some(d) => format!("{d}: {}", h.text),
-            None => h.text.clone(),
+            Some(d) => format!("{d}: {}", h.text()),
+            None => h.text(),
         });
     match (outcome, ended_by) {
         (Outcome::Interrupted, _) => reason = "stopped on request (Ctrl-C or a signal)".into(),
@@ -811,7 +811,7 @@ pub fn run(
                                     .as_ref()
                                     .is_some_and(|d| d.position == s.info.position)
                         })
-                        .map(|h| h.text.clone()),
+                        .map(|h| h.text()),
                 ),
                 warnings: once_each(
                     report
@@ -824,7 +824,7 @@ pub fn run(
                                     .as_ref()
                                     .is_some_and(|d| d.position == s.info.position)
                         })
-                        .map(|h| h.text.trim_start_matches("warning: ").to_string()),
+                        .map(|h| h.text().trim_start_matches("warning: ").to_string()),
                 ),
             }
         })
