@@ -405,7 +405,7 @@ impl MotionAxis {
     /// allowed), or `None` if its engine cannot be built.
     pub fn new(setup: &AxisSetup, cycle: Duration) -> Option<Self> {
         let caps = setup.caps;
-        let initial = OperationMode::from_i8(setup.mode.code());
+        let initial = setup.mode.operation_mode();
         let config = |mode| {
             let mut c = AxisConfig::for_cycle_time(&caps, cycle, mode);
             c.standstill.velocity = standstill_velocity(setup);
@@ -604,12 +604,9 @@ impl MotionAxis {
         // Not while a program runs (it owns the mode): not now, as for a pp target.
         if let Some(m) = app.mode
             && self.program == ProgramState::Idle
-            && st.active_mode.as_i8() != m.code()
+            && st.active_mode != m.operation_mode()
             && st.mode_switch == ModeSwitchPhase::Idle
-            && self
-                .axis
-                .request_mode(OperationMode::from_i8(m.code()))
-                .is_err()
+            && self.axis.request_mode(m.operation_mode()).is_err()
         {
             ev.emit(EventKind::CommandRefused {
                 axis: i as u16,
@@ -621,7 +618,7 @@ impl MotionAxis {
         }
         let free =
             enabled && self.stopping == Stopping::No && self.program != ProgramState::Running;
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        let mode = RunMode::of(st.active_mode).unwrap_or(self.mode);
         if let Some((target, relative, immediate)) = app.pp
             && let Err((report, why)) = self.take_pp(target, relative, immediate)
             && report
@@ -710,7 +707,7 @@ impl MotionAxis {
     ) -> Result<(), (bool, &'static str)> {
         let st = self.axis.status();
         let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        let mode = RunMode::of(st.active_mode).unwrap_or(self.mode);
         if !enabled || self.stopping != Stopping::No {
             return Err((false, "pp target refused: the axis is not enabled"));
         }
@@ -805,7 +802,7 @@ impl MotionAxis {
                 // In pp and pv the drive brakes on its own deceleration (halt, target 0),
                 // which may take longer than the master's ramp: disable once it stands still
                 // (`supervise_stop` still disables at the stop timeout).
-                let drive_brakes = RunMode::from_code(st.active_mode.as_i8())
+                let drive_brakes = RunMode::of(st.active_mode)
                     .is_some_and(|m| matches!(m, RunMode::Pp | RunMode::Pv));
                 let braking = enabled
                     && drive_brakes
@@ -926,7 +923,7 @@ impl MotionAxis {
         ev: &mut dyn EventSink,
     ) {
         let idle = st.mode_switch == ModeSwitchPhase::Idle;
-        if idle && st.active_mode.as_i8() == m.code() {
+        if idle && st.active_mode == m.operation_mode() {
             // Already in that mode (a run begins by asking for its start mode): no switch, no
             // event; go on at once.
             self.requested_mode = None;
@@ -938,11 +935,7 @@ impl MotionAxis {
             if self.runner.at_rest() {
                 self.axis.hold();
             }
-            if self
-                .axis
-                .request_mode(OperationMode::from_i8(m.code()))
-                .is_err()
-            {
+            if self.axis.request_mode(m.operation_mode()).is_err() {
                 self.requested_mode = None;
                 ev.emit(EventKind::CommandRefused {
                     axis: i as u16,
@@ -1037,11 +1030,7 @@ impl MotionAxis {
                 Some(cia402::HomingOutcome::Completed) => {
                     self.home = HomeRun::Back;
                     self.requested_mode = None;
-                    if self
-                        .axis
-                        .request_mode(OperationMode::from_i8(self.mode.code()))
-                        .is_err()
-                    {
+                    if self.axis.request_mode(self.mode.operation_mode()).is_err() {
                         self.home = HomeRun::Idle;
                         self.program = ProgramState::Idle;
                         ev.emit(EventKind::CommandRefused {
@@ -1068,7 +1057,7 @@ impl MotionAxis {
                 }
             },
             HomeRun::Back => {
-                if idle && st.active_mode.as_i8() == self.mode.code() {
+                if idle && st.active_mode == self.mode.operation_mode() {
                     self.home = HomeRun::Idle;
                     if self.home_by_app.is_none() {
                         self.runner.drive_done(actual);
@@ -1140,8 +1129,7 @@ impl MotionAxis {
         ev: &mut dyn EventSink,
     ) {
         let st = self.axis.status();
-        let Some(mode) = RunMode::from_code(st.active_mode.as_i8()).filter(|m| !m.is_cyclic())
-        else {
+        let Some(mode) = RunMode::of(st.active_mode).filter(|m| !m.is_cyclic()) else {
             // Outside the profile modes their targets are 0: entering one starts from rest.
             self.pv.set_target(0);
             self.tq.set_target(0);
@@ -1447,7 +1435,7 @@ impl MotionAxis {
 
     /// The set-point into the engine, in the active mode.
     fn command(&mut self, sp: Sample, st: &AxisStatus) {
-        let mode = RunMode::from_code(st.active_mode.as_i8()).unwrap_or(self.mode);
+        let mode = RunMode::of(st.active_mode).unwrap_or(self.mode);
         self.mode = mode;
         let _ = match mode {
             // The drive generates the motion; `profile_mode` gives it its targets.
@@ -1478,7 +1466,7 @@ impl MotionAxis {
         while let Some(e) = self.axis.poll_event() {
             match e {
                 cia402::Event::ModeSwitched { to, .. } => {
-                    if let Some(m) = RunMode::from_code(to.as_i8()) {
+                    if let Some(m) = RunMode::of(to) {
                         self.mode = m;
                         if self.requested_mode == Some(m) {
                             self.requested_mode = None;
@@ -1576,7 +1564,7 @@ impl MotionAxis {
         }
         if let Some((p, v, t)) = self.last_out {
             let s = &mut self.steps;
-            let step = match RunMode::from_code(running.active_mode.as_i8()) {
+            let step = match RunMode::of(running.active_mode) {
                 Some(RunMode::Csp | RunMode::Ip) => Some((
                     i64::from(out.target_position.wrapping_sub(p)).abs(),
                     &mut s.position,
@@ -1618,7 +1606,7 @@ impl MotionAxis {
         // In hm, pp, pv and tq the drive moves on its own (and in hm its position jumps at the
         // home): there is no demand to follow, and none from before may be judged against the
         // positions after.
-        let homing = !RunMode::from_code(out.mode.as_i8()).is_some_and(RunMode::is_cyclic);
+        let homing = !RunMode::of(out.mode).is_some_and(RunMode::is_cyclic);
         if homing {
             self.carried = [(u64::MAX, 0); CARRIED];
             self.tel.following_error = 0;
@@ -1643,7 +1631,7 @@ impl MotionAxis {
         // The master's following error only while csp or ip runs (in hm the drive moves on its
         // own).
         self.fe_judged =
-            energised && self.mode.streams_position() && out.mode.as_i8() == self.mode.code();
+            energised && self.mode.streams_position() && out.mode == self.mode.operation_mode();
         if self.fe_judged {
             self.judge_following_error(i, moving, ctx.cycle, ev);
         }
@@ -1796,7 +1784,7 @@ impl MotionAxis {
             }
             Command::Mode(ax, m) if ax.includes(i) => self
                 .axis
-                .request_mode(OperationMode::from_i8(m.code()))
+                .request_mode(m.operation_mode())
                 .err()
                 .map(|_| "mode switch refused"),
             Command::RunProgram(ax) if ax.includes(i) => self.run_program(),

@@ -7,10 +7,26 @@
 //! drive's velocity object unit with the drive profile.
 
 use super::setpoint::{Jog, Move, ProfileError, Sample, Sine, TorqueStep, VelocityRamp};
+use crate::cia402::OperationMode;
 use serde::{Deserialize, Serialize};
 
 // The configuration file (the application's) reads the TOML form of programs, with file
 // positions in its errors; these types only serialize, for reports.
+
+impl From<RunMode> for OperationMode {
+    fn from(m: RunMode) -> Self {
+        m.operation_mode()
+    }
+}
+
+impl TryFrom<OperationMode> for RunMode {
+    /// The mode, which no program runs in.
+    type Error = OperationMode;
+
+    fn try_from(mode: OperationMode) -> Result<Self, OperationMode> {
+        Self::of(mode).ok_or(mode)
+    }
+}
 
 /// The modes of operation a program (and the application) can run an axis in: the cyclic
 /// synchronous ones, where the master streams the set-point every cycle, and the profile ones,
@@ -50,31 +66,44 @@ impl RunMode {
         Self::Tq,
     ];
 
-    /// The 0x6060 value.
-    pub const fn code(self) -> i8 {
+    /// The CiA 402 mode of operation this is: a run mode is a checked subset of
+    /// [`OperationMode`] (the modes a program runs an axis in).
+    pub const fn operation_mode(self) -> OperationMode {
         match self {
-            Self::Csp => 8,
-            Self::Csv => 9,
-            Self::Cst => 10,
-            Self::Pp => 1,
-            Self::Pv => 3,
-            Self::Tq => 4,
-            Self::Ip => 7,
+            Self::Csp => OperationMode::CyclicSyncPosition,
+            Self::Csv => OperationMode::CyclicSyncVelocity,
+            Self::Cst => OperationMode::CyclicSyncTorque,
+            Self::Pp => OperationMode::ProfilePosition,
+            Self::Pv => OperationMode::ProfileVelocity,
+            Self::Tq => OperationMode::ProfileTorque,
+            Self::Ip => OperationMode::InterpolatedPosition,
         }
     }
 
-    /// The mode for a 0x6060/0x6061 value, if a program can run in it.
-    pub const fn from_code(code: i8) -> Option<Self> {
-        match code {
-            8 => Some(Self::Csp),
-            9 => Some(Self::Csv),
-            10 => Some(Self::Cst),
-            1 => Some(Self::Pp),
-            3 => Some(Self::Pv),
-            4 => Some(Self::Tq),
-            7 => Some(Self::Ip),
+    /// The run mode a CiA 402 mode is, if a program can run in it (not homing, vl, cstca,
+    /// reserved or vendor modes).
+    pub const fn of(mode: OperationMode) -> Option<Self> {
+        match mode {
+            OperationMode::CyclicSyncPosition => Some(Self::Csp),
+            OperationMode::CyclicSyncVelocity => Some(Self::Csv),
+            OperationMode::CyclicSyncTorque => Some(Self::Cst),
+            OperationMode::ProfilePosition => Some(Self::Pp),
+            OperationMode::ProfileVelocity => Some(Self::Pv),
+            OperationMode::ProfileTorque => Some(Self::Tq),
+            OperationMode::InterpolatedPosition => Some(Self::Ip),
             _ => None,
         }
+    }
+
+    /// The 0x6060 value.
+    pub const fn code(self) -> i8 {
+        self.operation_mode().as_i8()
+    }
+
+    /// The mode for a raw 0x6060/0x6061 value (as telemetry carries it), if a program can run
+    /// in it.
+    pub const fn from_code(code: i8) -> Option<Self> {
+        Self::of(OperationMode::from_i8(code))
     }
 
     /// `"csp"`, `"csv"`, `"cst"`, `"pp"`, `"pv"`, `"tq"` or `"ip"`.

@@ -285,7 +285,7 @@ pub fn session<T: CanTransport>(
             };
             CanError::new(node, None, CanErrorKind::NotReady(why))
         })?;
-        setup.initial_mode = crate::cia402::OperationMode::from_i8(d.mode.code());
+        setup.initial_mode = d.mode.operation_mode();
         // Life guarding: the drive sees a master that dies (switched off at the run's end).
         setup.supervision = crate::canopen::master::Supervision::for_drive(d.profile);
         let mut axis = axis_setup(d.profile, d.steps.clone(), d.mode);

@@ -308,7 +308,7 @@ fn csp_csv_cst_follow_the_command_and_mode_switches_make_no_jump() {
         assert_eq!(
             cyc.modes_run[i]
                 .iter()
-                .map(|m| RunMode::from_code(m.as_i8()))
+                .map(|&m| RunMode::of(m))
                 .collect::<Vec<_>>(),
             [
                 Some(RunMode::Csp),
@@ -631,7 +631,7 @@ fn a_program_cut_short_in_csv_runs_again_from_its_start_mode() {
         assert_eq!(
             cyc.modes_run[i]
                 .iter()
-                .map(|m| RunMode::from_code(m.as_i8()))
+                .map(|&m| RunMode::of(m))
                 .collect::<Vec<_>>(),
             [
                 Some(RunMode::Csp),
