@@ -5,12 +5,12 @@ use crate::canopen_util;
 
 use canopen_util::{T, bus, events, node_int, ready};
 use ecdrive::canopen::emcy::Emergency;
-use ecdrive::canopen::master::{EmcyRecord, Master, MasterEvent};
+use ecdrive::canopen::master::{EmergencyRecord, Master, MasterEvent};
 use ecdrive::cia402::{ErrorSource, Event, Phase, State, StatusWord};
 use ecdrive::drives::{asda_a2, blv_r, lexium_mdrive};
 use ecdrive::sim::canopen::SimBus;
 
-fn emcys(m: &mut Master<SimBus>) -> Vec<EmcyRecord> {
+fn emcys(m: &mut Master<SimBus>) -> Vec<EmergencyRecord> {
     events(m)
         .into_iter()
         .filter_map(|e| match e {
@@ -20,7 +20,7 @@ fn emcys(m: &mut Master<SimBus>) -> Vec<EmcyRecord> {
         .collect()
 }
 
-fn inject(m: &mut Master<SimBus>, id: u8, n: u16) -> EmcyRecord {
+fn inject(m: &mut Master<SimBus>, id: u8, n: u16) -> EmergencyRecord {
     assert!(m.transport_mut().node_mut(id).unwrap().inject_alarm(n));
     m.pump(1_000).unwrap();
     let v = emcys(m);

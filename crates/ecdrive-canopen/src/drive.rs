@@ -174,7 +174,7 @@ impl CanDrive {
     }
 
     /// The PDO plan installed on the drive.
-    pub const fn plan(&self) -> &PdoPlan {
+    pub const fn pdo_plan(&self) -> &PdoPlan {
         &self.plan
     }
 

@@ -37,7 +37,8 @@ pub struct MailboxSms {
     pub in_len: u16,
 }
 
-/// An emergency message as received, with when and from whom.
+/// An emergency message as received, with when and from whom (the CANopen master's record of
+/// the same message is `ecdrive_canopen::EmergencyRecord`: the node instead of the position).
 #[derive(Debug, Clone, PartialEq, Eq, serde::Serialize)]
 pub struct EmergencyRecord {
     /// `CLOCK_MONOTONIC` time of reception, ns.
@@ -46,12 +47,8 @@ pub struct EmergencyRecord {
     pub position: u16,
     /// The drive's name.
     pub drive: String,
-    /// Error code (CiA 301 / CiA 402; decoded with the drive profile's alarm table).
-    pub error_code: u16,
-    /// Error register (0x1001).
-    pub error_register: u8,
-    /// Manufacturer-specific bytes.
-    pub data: [u8; 5],
+    /// The message (its error code decoded with the drive profile's alarm table where shown).
+    pub emergency: Emergency,
 }
 
 /// Where a client keeps the emergencies it receives. Shared by every client of a bus.
@@ -329,24 +326,22 @@ impl<'a> CoeClient<'a> {
             time_ns: monotonic_ns(),
             position: self.drive.position,
             drive: self.drive.name.clone(),
-            error_code: e.error_code,
-            error_register: e.error_register,
-            data: e.data,
+            emergency: e,
         };
         // 0x0000 is "error reset or no error" (CiA 301 §7.2.7.1): the drive says its fault
         // went away, which is news, not a warning.
-        if rec.error_code == 0 {
+        if e.error_code == 0 {
             tracing::info!(
                 "{}: emergency 0x0000 (error reset or no error; error register 0x{:02X})",
                 self.drive,
-                rec.error_register
+                e.error_register
             );
         } else {
             tracing::warn!(
                 "{}: emergency 0x{:04X} (error register 0x{:02X})",
                 self.drive,
-                rec.error_code,
-                rec.error_register
+                e.error_code,
+                e.error_register
             );
         }
         if let Ok(mut log) = self.log.lock() {

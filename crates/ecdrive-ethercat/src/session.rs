@@ -274,14 +274,14 @@ type SessionOutcome<L> = Option<(Option<SessionReport>, L)>;
 
 /// Names and alarm tables of the drives (by axis), and the names of every device (by position),
 /// for decoding events outside the cycle.
-struct Decoder {
+struct Resolver {
     drives: Vec<(DriveRef, &'static [ErrorEntry])>,
     devices: Vec<DriveRef>,
     /// Per axis: the user's units, for following errors.
     units: Vec<Option<startup::UserUnits>>,
 }
 
-impl Decoder {
+impl Resolver {
     fn device(&self, position: u16) -> Option<DriveRef> {
         self.devices.get(position as usize).cloned()
     }
@@ -630,10 +630,10 @@ enum RunEnd {
 }
 
 /// What lives across the runs of one session (the supervisory ends stay with the [`Master`]).
-struct Persist {
+struct AcrossRuns {
     cycle_io: cycle::CycleIo,
     events: rtrb::Consumer<Event>,
-    decoder: Decoder,
+    resolver: Resolver,
     summaries: Vec<DriveSummary>,
     io: Vec<IoSummary>,
     last_cycle: Option<CycleReport>,
@@ -643,9 +643,9 @@ struct Persist {
     startup: startup::StartupTimes,
 }
 
-impl Persist {
+impl AcrossRuns {
     /// What the first start of a session leaves for the runs after it: the summaries, the
-    /// decoder, the channels (sized for exactly these drives and I/O devices: every telemetry
+    /// resolver, the channels (sized for exactly these drives and I/O devices: every telemetry
     /// buffer holds one entry each; they live as long as the session, across re-starts). The
     /// supervisory ends go to [`Master::start`] through `started_tx`.
     fn first(
@@ -679,7 +679,7 @@ impl Persist {
                 why: o.why.clone(),
             })
             .collect();
-        let decoder = Decoder {
+        let resolver = Resolver {
             drives: started
                 .drives
                 .iter()
@@ -711,10 +711,10 @@ impl Persist {
             commands: sup.commands,
             telemetry: sup.telemetry,
         }));
-        Persist {
+        AcrossRuns {
             cycle_io,
             events: sup.events,
-            decoder,
+            resolver,
             summaries,
             io,
             last_cycle: None,
@@ -771,7 +771,7 @@ fn session<L: FrameLink + Send>(
     started_tx: &mpsc::Sender<Result<Started, MasterError>>,
 ) -> (Option<SessionReport>, L) {
     let mut link = link;
-    let mut persist: Option<Persist> = None;
+    let mut persist: Option<AcrossRuns> = None;
     let mut failures: u32 = 0;
     let mut restarting = false;
     loop {
@@ -884,7 +884,7 @@ fn session<L: FrameLink + Send>(
 
 /// Between runs: wait for [`Command::Restart`] (true) or [`Command::Stop`] (false), or until
 /// `auto` has passed (true). Other commands are refused in the history: no cycle runs.
-fn wait_for_restart(p: &mut Persist, auto: Option<Duration>, shared: &Shared) -> bool {
+fn wait_for_restart(p: &mut AcrossRuns, auto: Option<Duration>, shared: &Shared) -> bool {
     p.publish_idle(if auto.is_some() {
         Phase::Restarting
     } else {
@@ -1017,27 +1017,33 @@ fn same_drives(
 
 /// Put the emergencies logged since `seen` into the history, each described with its drive's
 /// alarm table (by segment position; an I/O device has none).
-fn record_emergencies(log: &EmergencyLog, decoder: &Decoder, shared: &Shared, seen: &mut usize) {
+fn record_emergencies(log: &EmergencyLog, resolver: &Resolver, shared: &Shared, seen: &mut usize) {
     let Ok(l) = log.lock() else {
         return;
     };
     for r in l.iter().skip(*seen) {
-        let table = decoder
+        let table = resolver
             .drives
             .iter()
             .find(|(d, _)| d.position == r.position)
             .map_or(&[][..], |(_, t)| *t);
         let resolved = Resolved {
-            fault: Some(ErrorCode(r.error_code).describe(table)),
+            fault: Some(ErrorCode(r.emergency.error_code).describe(table)),
             ..Resolved::default()
         };
         let event = HistoryEvent::Emergency {
-            error_code: r.error_code,
-            error_register: r.error_register,
+            error_code: r.emergency.error_code,
+            error_register: r.emergency.error_register,
         };
         push_history(
             shared,
-            HistoryEntry::new(r.time_ns, None, decoder.device(r.position), event, resolved),
+            HistoryEntry::new(
+                r.time_ns,
+                None,
+                resolver.device(r.position),
+                event,
+                resolved,
+            ),
         );
     }
     *seen = l.len();
@@ -1048,7 +1054,7 @@ fn record_emergencies(log: &EmergencyLog, decoder: &Decoder, shared: &Shared, se
 fn shutdown_to_init<L: FrameLink>(
     bus: &mut super::bus::Bus<'_, L>,
     devices: &[DeviceInfo],
-    decoder: &Decoder,
+    resolver: &Resolver,
     end: Option<CycleEnd>,
 ) -> bool {
     if matches!(end, Some(CycleEnd::SegmentLost | CycleEnd::LinkFailed)) {
@@ -1057,7 +1063,7 @@ fn shutdown_to_init<L: FrameLink>(
     let mut ok = true;
     for d in devices {
         let addr = d.address;
-        let name = decoder.device_name(d.position);
+        let name = resolver.device_name(d.position);
         let r = bus.block_on(
             &|| format!("{name}: requesting INIT"),
             Duration::from_secs(2),
@@ -1075,12 +1081,12 @@ fn shutdown_to_init<L: FrameLink>(
 }
 
 /// What follows a run that ended with `end`.
-fn run_end(end: Option<CycleEnd>, restarting: bool, decoder: &Decoder) -> RunEnd {
+fn run_end(end: Option<CycleEnd>, restarting: bool, resolver: &Resolver) -> RunEnd {
     match end {
         None | Some(CycleEnd::Stopped | CycleEnd::LinkFailed) => RunEnd::Over,
         Some(CycleEnd::OpFailed { device, al_state }) if restarting => {
             RunEnd::StartFailed(MasterError::new(
-                decoder.device(device).as_ref(),
+                resolver.device(device).as_ref(),
                 "re-start",
                 ErrorKind::Timeout,
                 format!(
@@ -1136,7 +1142,7 @@ fn poll_mailboxes(
 fn start_up<L: FrameLink>(
     bus: &mut super::bus::Bus<'_, L>,
     cfg: &MasterConfig,
-    persist: Option<&Persist>,
+    persist: Option<&AcrossRuns>,
 ) -> Result<startup::Started, MasterError> {
     let (group, devices) = startup::discover(bus)?;
     if let Some(p) = persist {
@@ -1172,7 +1178,7 @@ fn run<L: FrameLink + Send>(
     cfg: &MasterConfig,
     shared: &Shared,
     started_tx: &mpsc::Sender<Result<Started, MasterError>>,
-    persist: &mut Option<Persist>,
+    persist: &mut Option<AcrossRuns>,
     restarting: bool,
 ) -> RunEnd {
     let started = match start_up(bus, cfg, persist.as_ref()) {
@@ -1181,7 +1187,7 @@ fn run<L: FrameLink + Send>(
     };
     note_warnings(shared, &started.warnings);
     if persist.is_none() {
-        *persist = Some(Persist::first(&started, started_tx));
+        *persist = Some(AcrossRuns::first(&started, started_tx));
     } else if restarting {
         note(
             shared,
@@ -1193,10 +1199,10 @@ fn run<L: FrameLink + Send>(
     let Some(p) = persist.as_mut() else {
         return RunEnd::Over;
     };
-    let Persist {
+    let AcrossRuns {
         cycle_io,
         events,
-        decoder,
+        resolver,
         last_cycle,
         emergencies,
         restarts,
@@ -1209,7 +1215,7 @@ fn run<L: FrameLink + Send>(
 
     let log = bus.emergencies().clone();
     let mut seen_emcy = 0usize;
-    let drain_emcy = |seen: &mut usize| record_emergencies(&log, decoder, shared, seen);
+    let drain_emcy = |seen: &mut usize| record_emergencies(&log, resolver, shared, seen);
 
     let (rt_tx, rt_rx) = mpsc::channel();
     cycle_io.rt_report = Some(rt_tx);
@@ -1259,7 +1265,7 @@ fn run<L: FrameLink + Send>(
             let mut n = 0usize;
             while let Ok(e) = events.pop() {
                 n += 1;
-                push_history(shared, decoder.entry(&e));
+                push_history(shared, resolver.entry(&e));
                 if matches!(e.kind, EventKind::AllOp) {
                     // When the cycle saw it, not when this thread got round to it.
                     times.reached_op(e.time_ns);
@@ -1294,14 +1300,14 @@ fn run<L: FrameLink + Send>(
     *restarts = cycle_io.restarts;
 
     let end = report.as_ref().map(|r| r.end);
-    let shutdown_ok = shutdown_to_init(bus, &started.devices, decoder, end);
+    let shutdown_ok = shutdown_to_init(bus, &started.devices, resolver, end);
     drain_emcy(&mut seen_emcy);
     if let Ok(l) = log.lock() {
         emergencies.extend(l.iter().cloned());
     }
     *shutdown_ok_out = shutdown_ok;
     *last_cycle = report;
-    run_end(end, restarting, decoder)
+    run_end(end, restarting, resolver)
 }
 
 /// The session thread's shortest and longest sleep between looks at the cycle's events.

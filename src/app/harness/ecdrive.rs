@@ -51,7 +51,7 @@ pub struct EcdriveSettings {
 /// CPU samples (and optionally a syscall count) at the edges of steady state, taken on the
 /// cycle thread. The mutexes are taken only there and after the run.
 #[derive(Default)]
-struct Window {
+struct SteadyWindow {
     count_syscalls: bool,
     begin: Mutex<Option<CpuSample>>,
     end: Mutex<Option<CpuSample>>,
@@ -60,7 +60,7 @@ struct Window {
     notes: Mutex<Vec<String>>,
 }
 
-impl CycleHooks for Window {
+impl CycleHooks for SteadyWindow {
     fn steady_begin(&self) {
         let s = CpuSample::take(None);
         if let Ok(mut b) = self.begin.lock() {
@@ -102,9 +102,9 @@ pub fn run<L: FrameLink + Send + 'static>(
     s: &EcdriveSettings,
 ) -> Result<(RunReport, L), HarnessError> {
     let cycle_ns = s.cycle.as_nanos() as u64;
-    let window = Arc::new(Window {
+    let window = Arc::new(SteadyWindow {
         count_syscalls: s.count_syscalls,
-        ..Window::default()
+        ..SteadyWindow::default()
     });
     let mut cfg = MasterConfig::new(s.cycle);
     cfg.cycle.rt = s.rt.clone();

@@ -212,7 +212,7 @@ impl<T: CanTransport> Master<T> {
             return;
         };
         s.seen = true;
-        let rec = EmcyRecord {
+        let rec = EmergencyRecord {
             node,
             drive: s.profile.map(|p| p.name),
             time_us: now,

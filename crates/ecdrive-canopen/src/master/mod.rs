@@ -130,7 +130,7 @@ impl Supervision {
 
 /// An EMCY message as received.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct EmcyRecord {
+pub struct EmergencyRecord {
     /// Node.
     pub node: u8,
     /// Drive name, if identified.
@@ -143,7 +143,7 @@ pub struct EmcyRecord {
     pub decoded: Option<DecodedEmcy>,
 }
 
-impl fmt::Display for EmcyRecord {
+impl fmt::Display for EmergencyRecord {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let node = NodeRef {
             id: self.node,
@@ -204,7 +204,7 @@ pub enum MasterEvent {
         node: u8,
     },
     /// An EMCY message.
-    Emergency(EmcyRecord),
+    Emergency(EmergencyRecord),
     /// The drive ignores the controlword: statusword bit 9 (remote) is 0 while the axis wants it
     /// enabled.
     RemoteOff {
@@ -281,7 +281,7 @@ struct NodeSlot {
     guard: Option<Guard>,
     last_sdo_us: Option<u64>,
     sdo_interval_override: Option<u32>,
-    emcy: VecDeque<EmcyRecord>,
+    emcy: VecDeque<EmergencyRecord>,
     drive: Option<usize>,
     remote_off: bool,
 }
@@ -513,7 +513,7 @@ impl<T: CanTransport> Master<T> {
 
     /// The EMCY messages received from `node`, oldest first (the last
     /// [`MasterConfig::emcy_log`]).
-    pub fn emergencies(&self, node: u8) -> impl Iterator<Item = &EmcyRecord> {
+    pub fn emergencies(&self, node: u8) -> impl Iterator<Item = &EmergencyRecord> {
         self.slot(node).into_iter().flat_map(|s| s.emcy.iter())
     }
 

@@ -10,7 +10,7 @@
 pub struct EmergencyLengthError(pub usize);
 
 /// A CiA 301 emergency message: error code, error register and five manufacturer bytes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, serde::Serialize)]
 pub struct Emergency {
     /// Error code (CiA 301 / CiA 402, e.g. 0x2310 over-current; 0x0000 = error reset).
     pub error_code: u16,

@@ -5,7 +5,7 @@ use super::*;
 
 /// One drive on the segment: its place in the process image, what the bus side remembers of
 /// it, and its axis of the motion runtime.
-pub(super) struct AxisRt {
+pub(super) struct CycleDrive {
     /// Position on the segment (index in the group).
     pub(super) sub: usize,
     pub(super) fields: DriveFields,
@@ -29,7 +29,7 @@ fn caps_now(d: &ConfiguredDrive) -> crate::cia402::DriveCaps {
     caps
 }
 
-impl AxisRt {
+impl CycleDrive {
     /// The axis of drive `d` (set-up: allocations allowed), or `None` if its engine cannot be
     /// built.
     pub(super) fn new(d: &ConfiguredDrive, cycle: Duration) -> Option<Self> {

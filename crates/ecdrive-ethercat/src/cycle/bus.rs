@@ -85,7 +85,7 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
     pub(super) fn al_status_code(&mut self, i: usize) -> Option<u16> {
         let addr = self.addresses.get(i).copied().unwrap_or(0);
         let fut = pin!(EcCommand::fprd(addr, register::AL_STATUS_CODE).receive::<u16>(self.md));
-        match exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns / 4) {
+        match exec::exchange(self.pump, fut, monotonic_ns() + self.consts.cycle_ns / 4) {
             Ok(Ok(c)) => Some(c),
             _ => None,
         }
@@ -110,8 +110,8 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
                 *self.restarts += 1;
             }
             self.ev.emit(EventKind::AllOp);
-            if self.settings.steady_timing_only && self.window == Window::NotYet {
-                self.window = Window::OpensNext;
+            if self.settings.steady_timing_only && self.window == TimingWindow::NotYet {
+                self.window = TimingWindow::OpensNext;
             }
             if let Some(h) = self.hooks {
                 h.steady_begin();
@@ -169,7 +169,7 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             Some(plan) if !seen.is_empty() && !overflow => {
                 plan.check(seen.iter().map(|d| (d.address, d.len, d.wkc)))
             }
-            _ => (self.k.wkc_whole, None),
+            _ => (self.consts.wkc_whole, None),
         }
     }
     /// No reply this cycle: count it, stop the moving axes after a few, end when the segment
@@ -200,7 +200,7 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             self.ev.emit(EventKind::SegmentLost { cycles: lost });
             self.stop_moving_axes(tick, cycle);
         }
-        if u64::from(lost) >= self.k.segment_gone_cycles {
+        if u64::from(lost) >= self.consts.segment_gone_cycles {
             self.ev.emit(EventKind::SegmentGone { cycles: lost });
             return Some(CycleEnd::SegmentLost);
         }
@@ -214,8 +214,8 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
     /// device whose outputs are not taken.
     pub(super) fn request_op(&mut self) -> Option<CycleEnd> {
         let cycle = self.clock.cycle;
-        let synchronised = self.clock.dc_time >= self.k.op_not_before_dc
-            || cycle * self.k.cycle_ns > self.settings.op_timeout.as_nanos() as u64;
+        let synchronised = self.clock.dc_time >= self.consts.op_not_before_dc
+            || cycle * self.consts.cycle_ns > self.settings.op_timeout.as_nanos() as u64;
         if self.op == OpState::SafeOp
             && self.counts.safeop_wkc_bad >= self.settings.wkc_errors_before_stop.max(1)
             && let Some((got, expected, datagram)) = self.counts.safeop_wkc_last
@@ -257,7 +257,8 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
                 self.op = OpState::Requested { at: cycle };
             }
             OpState::Requested { at }
-                if (cycle - at) * self.k.cycle_ns > self.settings.op_timeout.as_nanos() as u64 =>
+                if (cycle - at) * self.consts.cycle_ns
+                    > self.settings.op_timeout.as_nanos() as u64 =>
             {
                 let (device, al_state) = self
                     .al_states
@@ -281,7 +282,8 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             return false;
         };
         let fut = pin!(EcCommand::fprd(addr, 0x0800).receive::<[u8; 64]>(self.md));
-        let Ok(Ok(regs)) = exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns) else {
+        let Ok(Ok(regs)) = exec::exchange(self.pump, fut, monotonic_ns() + self.consts.cycle_ns)
+        else {
             return false;
         };
         crate::startup::process_data_sms(&regs).any(|(_, sm)| {
@@ -292,7 +294,7 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
     pub(super) fn request_al_state(&mut self, state: u16) {
         for &addr in &self.addresses {
             let fut = pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(self.md, state));
-            let _ = exec::exchange(self.pump, fut, monotonic_ns() + self.k.cycle_ns / 2);
+            let _ = exec::exchange(self.pump, fut, monotonic_ns() + self.consts.cycle_ns / 2);
         }
     }
     /// Ending and every axis disabled: leave OP while still exchanging process data (drives
@@ -323,7 +325,7 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             }
             Some(at) => {
                 let out_of_op = self.al_states.iter().all(|s| s & 0x0F != 8);
-                if out_of_op || (cycle - at) * self.k.cycle_ns > 1_000_000_000 {
+                if out_of_op || (cycle - at) * self.consts.cycle_ns > 1_000_000_000 {
                     self.retry_left_op_code(true);
                     self.ev.emit(EventKind::Stopped);
                     return Some(self.end_reason.unwrap_or(CycleEnd::Stopped));

@@ -43,7 +43,7 @@ mod axes;
 mod bus;
 mod settings;
 
-use axes::{AxisRt, app_view};
+use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
 pub use settings::{
@@ -74,7 +74,7 @@ enum RunPhase {
 /// Which cycles the timing histograms and the report's counts cover (see
 /// [`CycleSettings::steady_timing_only`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Window {
+enum TimingWindow {
     /// Not yet (steady state has not begun).
     NotYet,
     /// From the next cycle on.
@@ -87,7 +87,7 @@ enum Window {
     Closed,
 }
 
-impl Window {
+impl TimingWindow {
     fn recording(self) -> bool {
         matches!(self, Self::Open | Self::ClosesAfter)
     }
@@ -116,16 +116,16 @@ impl EventSink for Emitter<'_> {
     }
 }
 
-/// How the exchange of one cycle went.
-enum Exchanged {
+/// How the exchange of one cycle's frame went.
+enum FrameOutcome {
     /// A reply came.
-    Reply,
+    Answered,
     /// No reply in time.
     Lost,
 }
 
 /// The constants of one run, derived from the settings and the drives.
-struct Constants {
+struct RunConstants {
     cycle_ns: u64,
     dt: f64,
     /// The working counter a reply whose image went out in one LRW shows.
@@ -208,11 +208,11 @@ struct Cycle<'a, 'p, L: FrameLink> {
     restarts: &'a mut u32,
     restarting: &'a mut bool,
     ev: Emitter<'a>,
-    k: Constants,
+    consts: RunConstants,
     /// The expected working counter of each logical datagram, from the FMMU configuration the
     /// master sent (`None`: not recorded; the whole-image value is checked instead).
     wkc_plan: Option<WkcPlan>,
-    axes: Vec<AxisRt>,
+    axes: Vec<CycleDrive>,
     /// Every device by position: its station address and last AL state.
     addresses: Vec<u16>,
     al_states: Vec<u8>,
@@ -221,7 +221,7 @@ struct Cycle<'a, 'p, L: FrameLink> {
     clock: Clock,
     counts: Counts,
     timing: Timing,
-    window: Window,
+    window: TimingWindow,
     op: OpState,
     phase: RunPhase,
     /// The hooks were told steady state began (and not yet that it ended).
@@ -255,7 +255,7 @@ pub fn run<L: FrameLink>(
     let mut c = Cycle::new(md, pump, group, drives, others, settings, io, hooks, app);
     c.record = record;
     let end = loop {
-        if let Some(end) = c.turn() {
+        if let Some(end) = c.next_cycle() {
             break end;
         }
     };
@@ -277,9 +277,9 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         app: Option<&'a mut (dyn CycleApp + 'static)>,
     ) -> Self {
         let cycle_ns = (settings.cycle.as_nanos() as u64).max(1);
-        let axes: Vec<AxisRt> = drives
+        let axes: Vec<CycleDrive> = drives
             .iter()
-            .filter_map(|d| AxisRt::new(d, settings.cycle))
+            .filter_map(|d| CycleDrive::new(d, settings.cycle))
             .collect();
         let app_axes: Vec<AppAxis> = drives
             .iter()
@@ -360,7 +360,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 first_stop: None,
             },
             wkc_plan,
-            k: Constants {
+            consts: RunConstants {
                 cycle_ns,
                 dt: settings.cycle.as_secs_f64(),
                 wkc_whole,
@@ -388,9 +388,9 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             },
             timing: Timing::default(),
             window: if settings.steady_timing_only {
-                Window::NotYet
+                TimingWindow::NotYet
             } else {
-                Window::Open
+                TimingWindow::Open
             },
             op: OpState::SafeOp,
             phase: RunPhase::Running,
@@ -410,14 +410,14 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     }
 
     /// One cycle; `Some` when the run ends. No allocation from here on.
-    fn turn(&mut self) -> Option<CycleEnd> {
-        if self.window == Window::OpensNext {
-            self.window = Window::Open;
+    fn next_cycle(&mut self) -> Option<CycleEnd> {
+        if self.window == TimingWindow::OpensNext {
+            self.window = TimingWindow::Open;
         }
         self.wake();
         let good = match self.exchange() {
-            Ok(Exchanged::Reply) => true,
-            Ok(Exchanged::Lost) => {
+            Ok(FrameOutcome::Answered) => true,
+            Ok(FrameOutcome::Lost) => {
                 if let Some(end) = self.on_lost() {
                     return Some(end);
                 }
@@ -441,8 +441,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         if self.window.recording() {
             self.timing.busy.record(monotonic_ns() - self.clock.woke);
         }
-        if self.window == Window::ClosesAfter {
-            self.window = Window::Closed;
+        if self.window == TimingWindow::ClosesAfter {
+            self.window = TimingWindow::Closed;
         }
         self.schedule_next();
         None
@@ -461,7 +461,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 self.timing.period.record(c.woke - c.last_wake);
             }
         }
-        if c.latency > self.k.cycle_ns {
+        if c.latency > self.consts.cycle_ns {
             self.counts.overruns += 1;
             if recording {
                 self.counts.recorded_overruns += 1;
@@ -474,9 +474,9 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 
     /// Exchange the process data (the AL states ride along with the LRW) and look at what came
     /// back; `Err` when the link failed.
-    fn exchange(&mut self) -> Result<Exchanged, CycleEnd> {
+    fn exchange(&mut self) -> Result<FrameOutcome, CycleEnd> {
         let deadline =
-            self.clock.woke + (self.k.cycle_ns as f64 * self.settings.reply_budget) as u64;
+            self.clock.woke + (self.consts.cycle_ns as f64 * self.settings.reply_budget) as u64;
         self.clock.t_ex = monotonic_ns();
         let group = self.group;
         self.pump.clear_logical();
@@ -510,13 +510,13 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     self.on_al_state(i, raw_al_state(st), &mut scan);
                 }
                 self.supervise_bus(scan, resp.working_counter);
-                Ok(Exchanged::Reply)
+                Ok(FrameOutcome::Answered)
             }
             Err(ExchangeError::Late) => {
                 self.counts.late_total += 1;
-                Ok(Exchanged::Lost)
+                Ok(FrameOutcome::Lost)
             }
-            Ok(Err(_)) => Ok(Exchanged::Lost),
+            Ok(Err(_)) => Ok(FrameOutcome::Lost),
             Err(ExchangeError::Link(_)) => Err(CycleEnd::LinkFailed),
         }
     }
@@ -560,8 +560,10 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     fn stop(&mut self, kind: StopKind, restart: bool) {
         if self.settings.steady_timing_only {
             self.window = match self.window {
-                Window::Open | Window::ClosesAfter => Window::ClosesAfter,
-                Window::NotYet | Window::OpensNext | Window::Closed => Window::Closed,
+                TimingWindow::Open | TimingWindow::ClosesAfter => TimingWindow::ClosesAfter,
+                TimingWindow::NotYet | TimingWindow::OpensNext | TimingWindow::Closed => {
+                    TimingWindow::Closed
+                }
             };
         }
         if let Some(h) = self.hooks
@@ -602,12 +604,12 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let ctx = StepContext {
             cycle: self.clock.cycle,
             tick: self.clock.tick,
-            dt: self.k.dt,
-            pulse: self.clock.dc_time / self.k.cycle_ns,
+            dt: self.consts.dt,
+            pulse: self.clock.dc_time / self.consts.cycle_ns,
             ending: self.ending(),
             any_energised_before: self.axes.iter().any(|a| a.m.busy()),
-            stop_ramp_cycles: self.k.stop_ramp_cycles,
-            stop_timeout_cycles: self.k.stop_timeout_cycles,
+            stop_ramp_cycles: self.consts.stop_ramp_cycles,
+            stop_timeout_cycles: self.consts.stop_timeout_cycles,
         };
         let (md, group) = (self.md, self.group);
         let with_app = self.app.is_some();
@@ -679,7 +681,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             }
         }
         for a in self.axes.iter_mut() {
-            a.m.supervise_stop(cycle, self.k.stop_timeout_cycles, ending);
+            a.m.supervise_stop(cycle, self.consts.stop_timeout_cycles, ending);
         }
     }
 
@@ -759,11 +761,11 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let c = &mut self.clock;
         c.next_wake = match c.next_wait {
             Some(w) => c.t_ex + w,
-            None => c.next_wake + self.k.cycle_ns,
+            None => c.next_wake + self.consts.cycle_ns,
         };
         if c.next_wake <= monotonic_ns() {
             // Overrun: skip to the next instant rather than running back-to-back cycles.
-            c.next_wake = monotonic_ns() + self.k.cycle_ns / 2;
+            c.next_wake = monotonic_ns() + self.consts.cycle_ns / 2;
         }
     }
 
@@ -826,7 +828,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     lost: self.counts.lost_total,
                     late: self.counts.late_total,
                     wrong_wkc: self.counts.wkc_wrong_total,
-                    seconds: self.clock.cycle as f64 * self.k.dt,
+                    seconds: self.clock.cycle as f64 * self.consts.dt,
                 }
             },
         }

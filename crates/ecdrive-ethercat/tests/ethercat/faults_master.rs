@@ -755,8 +755,9 @@ fn sdo_faults<L: FrameLink + Send + 'static>(link: L, mut faults: FaultHandle, h
         let emcy = bus.emergencies().lock().unwrap().clone();
         assert!(!emcy.is_empty(), "{how}: the emergency was recorded");
         assert!(
-            emcy.iter()
-                .all(|e| e.position == 0 && e.error_code == 0x8611 && e.data == [1, 2, 3, 4, 5]),
+            emcy.iter().all(|e| e.position == 0
+                && e.emergency.error_code == 0x8611
+                && e.emergency.data == [1, 2, 3, 4, 5]),
             "{how}: {emcy:?}"
         );
         // A refused SDO: the chosen abort code, named with drive and object; the next one

@@ -126,7 +126,7 @@ fn transfers_info_aborts_and_emergencies() {
     })
     .unwrap();
     let log = result;
-    let codes: Vec<u16> = log.iter().map(|e| e.error_code).collect();
+    let codes: Vec<u16> = log.iter().map(|e| e.emergency.error_code).collect();
     assert_eq!(codes, [0x8611, 0x3210], "{log:?}");
     assert!(log.iter().all(|e| e.position == 1));
 }
