@@ -2241,6 +2241,16 @@ fn profile_writes<B>(
                     match pu.torque_slope {
                         TorqueSlopeUnit::PerMillePerSecond => permille_s,
                         TorqueSlopeUnit::MillisecondsToRated => 1000.0 / permille_s * 1000.0,
+                        TorqueSlopeUnit::MilliNewtonMetrePerSecond => {
+                            return Err((
+                                n,
+                                format!(
+                                    "the {} gives 0x6087 in mN·m/s, which needs the motor's \
+                                     rated torque: ecdrive does not write a slope for it",
+                                    p.name
+                                ),
+                            ));
+                        }
                     }
                 }
             };

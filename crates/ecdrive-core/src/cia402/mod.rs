@@ -53,7 +53,7 @@ pub use error_code::{
 };
 pub use homing::{Homing, HomingConfig, HomingOutcome, HomingPhase, HomingState};
 pub use interpolated::{Interpolation, IpStatus};
-pub use mode::{OperationMode, SetPointKind, SupportedModes, VendorModeBit};
+pub use mode::{ModeGroup, OperationMode, SetPointKind, SupportedModes, VendorModeBit};
 pub use planner::{
     Planner, PlannerConfig, PlannerConfigError, PlannerError, Progress, StallCause, Step, Target,
     cycles_for, defaults,

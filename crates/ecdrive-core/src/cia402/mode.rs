@@ -349,3 +349,16 @@ impl SupportedModes {
             .is_some_and(|m| self.raw & m != 0)
     }
 }
+
+/// The modes one setting of a mode-selecting parameter allows (the MR-J4-TM's [Pr. PA01],
+/// read at power-on: cyclic modes or profile modes, never both). One type for the masters'
+/// drive profiles and the software slave's own tables; each side states its values itself.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ModeGroup {
+    /// The selector value (after the parameter's mask).
+    pub value: i64,
+    /// How the manual names the setting ("___2: Profile mode").
+    pub name: &'static str,
+    /// The 0x6060 values it allows.
+    pub modes: &'static [i8],
+}

@@ -29,13 +29,16 @@ pub enum AccelUnit {
     PositionPerSecond2,
 }
 
-/// How the torque slope 0x6087 is expressed.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How the torque slope 0x6087 is expressed. One type for the masters' drive profiles and the
+/// software slave's own tables (each side states its drive's unit on its own).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TorqueSlopeUnit {
-    /// Per mille of rated torque per second (BLV-R 0.1 %/s, Lexium ‰/s).
+    /// Per mille of rated torque per second (MR-J4-TM, BLV-R 0.1 %/s, Lexium ‰/s).
     PerMillePerSecond,
     /// Milliseconds from 0 to 100 % rated torque (ASDA-A2).
     MillisecondsToRated,
+    /// mN·m per second (the BDHDE's 6087h object page), converted with the rated torque.
+    MilliNewtonMetrePerSecond,
 }
 
 /// The units of the profile-mode objects.
@@ -185,7 +188,8 @@ impl Units {
     }
 
     /// A torque-slope value (0x6087) in per mille of rated torque per second (`None`: the
-    /// unit is not described). A time of 0 gives `f64::INFINITY` (a step).
+    /// unit is not described, or is mN·m/s, which needs the motor's rated torque). A time of 0
+    /// gives `f64::INFINITY` (a step).
     pub fn torque_slope_per_mille_per_s(&self, v: f64) -> Option<f64> {
         let step = v <= 0.0;
         Some(match self.profile?.torque_slope {
@@ -193,6 +197,7 @@ impl Units {
             TorqueSlopeUnit::PerMillePerSecond => v,
             TorqueSlopeUnit::MillisecondsToRated if step => f64::INFINITY,
             TorqueSlopeUnit::MillisecondsToRated => 1000.0 / (v / 1000.0),
+            TorqueSlopeUnit::MilliNewtonMetrePerSecond => return None,
         })
     }
 }

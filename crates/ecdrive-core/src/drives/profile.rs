@@ -284,16 +284,9 @@ pub struct ModeSelector {
     pub source: &'static str,
 }
 
-/// The modes one setting of a [`ModeSelector`] allows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ModeGroup {
-    /// The selector value (after the mask).
-    pub value: i64,
-    /// How the manual names the setting ("___2: Profile mode").
-    pub name: &'static str,
-    /// The 0x6060 values it allows.
-    pub modes: &'static [i8],
-}
+/// The modes one setting of a [`ModeSelector`] allows (the type is the core's, shared with the
+/// software slave's own tables).
+pub use crate::cia402::ModeGroup;
 
 impl EtherCat {
     /// The mapping to run a program with the modes `codes` (0x6060 values; modes other than

@@ -486,8 +486,8 @@ impl EmulatedDrive {
                 rules
                     .groups
                     .iter()
-                    .find(|g| g.selector == v)
-                    .map_or((&[][..], 0), |g| (g.modes, g.initial))
+                    .find(|g| g.group.value == v)
+                    .map_or((&[][..], 0), |g| (g.group.modes, g.initial))
             }
             None => (rules.modes, rules.initial),
         };
@@ -1172,10 +1172,13 @@ impl EmulatedDrive {
         let slope = self.od.dict().uint(obj::TORQUE_SLOPE).unwrap_or(0) as f64;
         // As ‰ of the rated torque per second.
         let slope = match self.spec.torque_slope {
-            TorqueSlopeUnit::PermillePerSecond => slope,
+            TorqueSlopeUnit::PerMillePerSecond => slope,
             TorqueSlopeUnit::MilliNewtonMetrePerSecond => {
                 slope / (self.spec.motor.rated_torque_nm * 1000.0) * 1000.0
             }
+            // 0 → 100 % of rated in that many ms.
+            TorqueSlopeUnit::MillisecondsToRated if slope > 0.0 => 1000.0 / slope * 1000.0,
+            TorqueSlopeUnit::MillisecondsToRated => 0.0,
         };
         self.torque_demand_permille = if slope == 0.0 {
             target

@@ -29,9 +29,10 @@
 
 use super::spec::{
     AlarmDef, CommandCheck, Condition, CycleCounterSpec, CycleSource, DriveSpec, EmcyData,
-    ErrorReporting, FollowingErrorSpec, HomingFailure, HomingSpec, LossDetection, LossLimit,
-    ModeGroup, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData, PowerOnValue, Quantity,
-    Scaling, StateMachineSpec, StatusBit, SyncObjects, TorqueLimits, TorqueSlopeUnit, WriteRule,
+    ErrorReporting, FollowingErrorSpec, GroupAtPowerOn, HomingFailure, HomingSpec, LossDetection,
+    LossLimit, ModeGroup, ModeRules, Monitor, MotorSpec, PowerOff, PowerOnData, PowerOnValue,
+    Quantity, Scaling, StateMachineSpec, StatusBit, SyncObjects, TorqueLimits, TorqueSlopeUnit,
+    WriteRule,
 };
 use crate::cia402::QuickStopOption;
 use crate::ec::AlStatusCode;
@@ -253,7 +254,7 @@ pub static SPEC: DriveSpec = DriveSpec {
         max: None,
         speed_limit: Some(a(0x2D20, 0)),
     },
-    torque_slope: TorqueSlopeUnit::PermillePerSecond,
+    torque_slope: TorqueSlopeUnit::PerMillePerSecond,
     torque_mode_quick_stop_immediate: true,
     halt_in_cyclic_modes: false,
     pp_ack_while_moving: true,
@@ -261,29 +262,44 @@ pub static SPEC: DriveSpec = DriveSpec {
     modes: ModeRules {
         selector: Some(a(0x2001, 0)),
         groups: &[
-            ModeGroup {
-                selector: 0,
-                modes: &[6, 8, 9, 10],
+            GroupAtPowerOn {
+                group: ModeGroup {
+                    value: 0,
+                    name: "___0: automatic selection by each network",
+                    modes: &[6, 8, 9, 10],
+                },
                 initial: 8,
             },
-            ModeGroup {
-                selector: 1,
-                modes: &[6, 8, 9, 10],
+            GroupAtPowerOn {
+                group: ModeGroup {
+                    value: 1,
+                    name: "___1: cyclic synchronous mode",
+                    modes: &[6, 8, 9, 10],
+                },
                 initial: 8,
             },
-            ModeGroup {
-                selector: 2,
-                modes: &[1, 3, 4, 6],
+            GroupAtPowerOn {
+                group: ModeGroup {
+                    value: 2,
+                    name: "___2: profile mode",
+                    modes: &[1, 3, 4, 6],
+                },
                 initial: 1,
             },
-            ModeGroup {
-                selector: 6,
-                modes: &[6, -100, -101],
+            GroupAtPowerOn {
+                group: ModeGroup {
+                    value: 6,
+                    name: "___6: positioning mode (point table method)",
+                    modes: &[6, -100, -101],
+                },
                 initial: -101,
             },
-            ModeGroup {
-                selector: 8,
-                modes: &[6, -100, -103],
+            GroupAtPowerOn {
+                group: ModeGroup {
+                    value: 8,
+                    name: "___8: positioning mode (indexer method)",
+                    modes: &[6, -100, -103],
+                },
                 initial: -103,
             },
         ],

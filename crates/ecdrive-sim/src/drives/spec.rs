@@ -282,14 +282,8 @@ pub struct TorqueLimits {
     pub speed_limit: Option<ObjectAddress>,
 }
 
-/// The unit of the torque slope 0x6087.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum TorqueSlopeUnit {
-    /// ‰ of the rated torque per second (MR-J4-TM: 0.1 %/s).
-    PermillePerSecond,
-    /// mN·m per second (BDHDE §9 6087h), converted with the rated torque.
-    MilliNewtonMetrePerSecond,
-}
+/// The unit of the torque slope 0x6087: the core's type, this emulation's own value per drive.
+pub use crate::cia402::TorqueSlopeUnit;
 
 /// Which physical quantity an object shows.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -390,14 +384,15 @@ pub enum WriteRule {
     Mirror(ObjectAddress, ObjectAddress),
 }
 
-/// A group of modes selectable together, keyed by a parameter read at power-on (MR-J4-TM
-/// [Pr. PA01]: cyclic modes or profile modes, never both).
+/// A group of modes selectable together, keyed by a parameter read at power-on (the core's
+/// type, this emulation's own values).
+pub use crate::cia402::ModeGroup;
+
+/// A group of modes and the mode the emulated drive shows in it at power-on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ModeGroup {
-    /// The selector value (low hex digit of the parameter).
-    pub selector: i64,
-    /// The 0x6060 values usable.
-    pub modes: &'static [i8],
+pub struct GroupAtPowerOn {
+    /// The group.
+    pub group: ModeGroup,
     /// 0x6060/0x6061 at power-on.
     pub initial: i8,
 }
@@ -409,7 +404,7 @@ pub struct ModeRules {
     /// emulates is usable.
     pub selector: Option<ObjectAddress>,
     /// The groups (selector = parameter value & 0xF).
-    pub groups: &'static [ModeGroup],
+    pub groups: &'static [GroupAtPowerOn],
     /// Modes usable without a selector.
     pub modes: &'static [i8],
     /// 0x6060/0x6061 at power-on without a selector.
