@@ -20,7 +20,7 @@
 //! sdos = { "0x607C:00" = 0 }
 //! program = [
 //!   { step = "home", method = 24, speed_switch = 5, speed_zero = 0.5, acceleration = 100 },
-//!   { step = "pp", targets = [1, 0.5], velocity = 10, acceleration = 100 },
+//!   { step = "pp", to = [1, 0.5], velocity = 10, acceleration = 100 },
 //! ]
 //! ```
 //!
@@ -30,8 +30,8 @@
 //! `allow_generic`) is refused with the key named. The cyclic modes (csp, csv, cst) and the
 //! touch probe are not run over CANopen yet: the PDO plans carry the profile modes.
 
-use super::{ConfigError, Ctx, Program, UserUnits, homing_writes, profile_writes, raw};
-use super::{mode_of, parse_duration, program_of, start_up_values};
+use super::steps::{Program, homing_writes, profile_writes, program_of};
+use super::{ConfigError, Ctx, UserUnits, parse_duration, raw, start_up_values};
 use crate::app::canopen::tools::{BusSpec, EMULATED_NODES};
 use crate::canopen::profile::CanDriveProfile;
 use crate::master::SetpointLimits;
@@ -297,7 +297,10 @@ fn drive(
     check_cycle(cx, &key, d, profile, cycle, cycle_key)?;
     let mode = match &r.mode {
         Some(m) => {
-            let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
+            let mode: RunMode = m
+                .get_ref()
+                .parse()
+                .map_err(|e: String| cx.err(m.span(), key("mode"), e))?;
             if mode.is_cyclic() && mode != RunMode::Ip {
                 return Err(cx.err(
                     m.span(),
@@ -334,7 +337,7 @@ fn drive(
                     modes_offered(profile)
                 ))
             }
-            Step::Home { method } if *method == 0 || !profile.homing.supports(*method) => {
+            Step::Home { method, .. } if *method == 0 || !profile.homing.supports(*method) => {
                 let listed: Vec<String> = profile
                     .homing
                     .methods
@@ -349,7 +352,7 @@ fn drive(
                 ))
             }
             // Methods 1–14, 33 and 34 home on the index pulse (CiA 402).
-            Step::Home { method }
+            Step::Home { method, .. }
                 if !profile.homing.index_pulse && matches!(method, 1..=14 | 33 | 34) =>
             {
                 Some(format!(
@@ -411,8 +414,8 @@ fn drive(
         let span = r.program.get(n).map_or(d.span(), Spanned::span);
         cx.err(span, key(&format!("program[{n}]")), m)
     };
-    let homing = homing_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
-    let objects = profile_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
+    let homing = homing_writes(&steps, Some(profile)).map_err(|(n, m)| step_err(n, m))?;
+    let objects = profile_writes(&steps, Some(profile)).map_err(|(n, m)| step_err(n, m))?;
     let steps_write: Vec<ObjectAddress> = homing.iter().chain(&objects).map(|(a, _)| *a).collect();
     let dict = Some((profile.dictionary, profile.name));
     let sdos = start_up_values(cx, &key, d, dict, &steps_write)?;
