@@ -9,6 +9,7 @@
 
 use super::{ConfigError, Ctx, UserUnits, raw};
 use crate::drives::DriveProfile;
+use crate::master::SetpointLimits;
 use crate::master::program::{self, RunMode, Step, Target};
 use crate::od::{ObjectAddress, Value};
 use std::time::Duration;
@@ -22,8 +23,13 @@ pub(super) struct Program {
     pub units: Option<UserUnits>,
     /// Counts per user unit (1 without units).
     pub k: f64,
+    /// The following-error limit (counts).
     pub fe_limit: Option<u32>,
+    /// What the program's set-points must keep (counts).
+    pub limits: SetpointLimits,
+    /// The steps, in counts.
     pub steps: Vec<Step>,
+    /// Each step as the file writes it, in its units.
     pub described: Vec<String>,
 }
 
@@ -63,10 +69,19 @@ pub(super) fn program_of(
         let span = r.program.get(n).map_or(d.span(), Spanned::span);
         cx.err(span, key(&format!("program[{n}]")), e.to_string())
     })?;
+    let limits = r.limits.as_ref().map_or_else(Default::default, |l| {
+        let l = l.get_ref();
+        SetpointLimits {
+            max_velocity: l.max_velocity.map(|v| v * k),
+            max_acceleration: l.max_acceleration.map(|v| v * k),
+            max_torque: l.max_torque,
+        }
+    });
     Ok(Program {
         units,
         k,
         fe_limit,
+        limits,
         steps,
         described,
     })
