@@ -56,16 +56,29 @@ fn run(node: u8, p: &'static CanDriveProfile) -> (Seen, f64, f64) {
     // 5 rev/s in pv; 30 % torque in tq (the drives' torque unit is ‰).
     let velocity = 5.0 * rev;
     let torque = 300.0;
+    // The profile values are the settings above (10 rev/s, 100 rev/s², the demo's homing
+    // speeds), written at configuration; the steps say the same.
     let mut program = vec![
-        Step::Home { method },
+        Step::Home {
+            method,
+            speed_switch: ecdrive_cli::app::canopen::steps::defaults::HOMING_FAST_REV_S * rev,
+            speed_zero: ecdrive_cli::app::canopen::steps::defaults::HOMING_SLOW_REV_S * rev,
+            acceleration: None,
+            offset: None,
+        },
         Step::Pp {
             targets: vec![rev, rev / 2.0],
             relative: false,
             immediate: false,
+            velocity: 10.0 * rev,
+            acceleration: 100.0 * rev,
+            deceleration: None,
         },
         Step::Mode { mode: RunMode::Pv },
         Step::Pv {
             velocity,
+            acceleration: 100.0 * rev,
+            deceleration: None,
             seconds: 0.2,
         },
     ];
@@ -73,8 +86,8 @@ fn run(node: u8, p: &'static CanDriveProfile) -> (Seen, f64, f64) {
         program.push(Step::Mode { mode: RunMode::Tq });
         program.push(Step::Tq {
             torque,
+            slope: None,
             seconds: 0.2,
-            ramp: 0.0,
         });
     }
     program.push(Step::Mode { mode: RunMode::Pp });

@@ -436,6 +436,9 @@ program = [
             targets: vec![2_000_000.0],
             relative: true,
             immediate: false,
+            velocity: 4_194_304.0,
+            acceleration: 41_943_040.0,
+            deceleration: None,
         }],
         ..DriveSetup::new(Selector::Position(0))
     });

@@ -1005,9 +1005,7 @@ fn mapping_for_program(
     setup: &DriveSetup,
     profile: &'static DriveProfile,
 ) -> Result<Mapping, (&'static str, String)> {
-    if let Some(range) = profile.caps.pp_target_range
-        && let Some((n, t)) = super::program::pp_target_beyond(&setup.program, range)
-    {
+    if let Some((n, t, range)) = super::program::pp_target_beyond(&setup.program, &profile.caps) {
         return Err((
             "checking the program",
             format!(

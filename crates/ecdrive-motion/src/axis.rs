@@ -13,7 +13,7 @@ use crate::cia402::{
     StatusWord,
 };
 use crate::limits::SetpointLimits;
-use crate::program::{ProbeEdge, RunMode, Runner, Step, Tick};
+use crate::program::{self, ProbeEdge, RunMode, Runner, Step, Tick};
 use crate::setpoint::Sample;
 use crate::telemetry::{
     AxisTelemetry, Command, DriveTask, EventKind, ProbeState, StopKind, StopReason,
@@ -723,9 +723,7 @@ impl MotionAxis {
                 "pp target refused: not a finite position within ±2^31 counts",
             ));
         }
-        if let Some(range) = self.axis.caps().pp_target_range
-            && !range.contains(target.round() as i64)
-        {
+        if self.axis.caps().pp_target_outside(target).is_some() {
             return Err((
                 true,
                 "pp target refused: beyond the range the drive's manual gives for 0x607A in pp",
@@ -1157,45 +1155,65 @@ impl MotionAxis {
             (RunMode::Pp, _) => self.app_pp_step(sw, stopping),
             (RunMode::Pv | RunMode::Tq, DriveRun::Profile { index, since }) => {
                 let since = since.or(st.streaming.then_some(ctx.tick));
-                self.drive_run = DriveRun::Profile { index, since };
-                let t = since.map_or(0.0, |s| ctx.tick.saturating_sub(s) as f64 * ctx.dt);
-                let done = match self.runner.steps().get(index) {
-                    Some(&Step::Pv { velocity, seconds }) if mode == RunMode::Pv => {
-                        let on = since.is_none() || t < seconds;
-                        let v = self.drive_velocity(velocity);
-                        self.pv.set_target(if on { v } else { 0 });
-                        let s = self.pv.step(&mut self.axis, sw);
-                        if t > seconds + DRIVE_STEP_TIMEOUT_S {
-                            let why = "the program stopped: the drive did not report velocity \
-                                       0 reached within 2 minutes of the pv step's end";
-                            return self.drive_step_failed(i, why, ctx, ev);
-                        }
-                        !on && s.streaming && s.target_reached
-                    }
-                    Some(&Step::Tq {
-                        torque,
-                        seconds,
-                        ramp,
-                    }) if mode == RunMode::Tq => {
-                        let on = since.is_none() || t < ramp + seconds;
-                        self.tq
-                            .set_target(if on { drive_torque(torque) } else { 0 });
-                        let s = self.tq.step(&mut self.axis, sw);
-                        !on && s.streaming && self.tq_settled(t, torque, seconds, ramp, ctx.dt)
-                    }
-                    _ => {
-                        // Not this mode's step (a mode switch under way): hold.
-                        self.hold_profile(mode, sw);
-                        false
-                    }
-                };
-                if done {
-                    self.drive_run = DriveRun::Idle;
-                    self.runner.drive_done(actual);
-                    self.hold = actual;
-                }
+                self.profile_step(i, mode, (index, since), sw, actual, ctx, ev);
             }
             _ => self.hold_profile(mode, sw),
+        }
+    }
+
+    /// One cycle of program step `index` in pv or tq, the drive's target switched since good
+    /// cycle `since` (`None`: not yet streaming): the step's target until its time is up, then
+    /// 0, and the step's end once the drive is back at rest.
+    #[allow(clippy::too_many_arguments)]
+    fn profile_step(
+        &mut self,
+        i: usize,
+        mode: RunMode,
+        (index, since): (usize, Option<u64>),
+        sw: StatusWord,
+        actual: Sample,
+        ctx: &StepContext,
+        ev: &mut dyn EventSink,
+    ) {
+        self.drive_run = DriveRun::Profile { index, since };
+        let t = since.map_or(0.0, |s| ctx.tick.saturating_sub(s) as f64 * ctx.dt);
+        let done = match self.runner.steps().get(index) {
+            Some(&Step::Pv {
+                velocity, seconds, ..
+            }) if mode == RunMode::Pv => {
+                let on = since.is_none() || t < seconds;
+                let v = self.drive_velocity(velocity);
+                self.pv.set_target(if on { v } else { 0 });
+                let s = self.pv.step(&mut self.axis, sw);
+                if t > seconds + DRIVE_STEP_TIMEOUT_S {
+                    let why = "the program stopped: the drive did not report velocity 0 \
+                               reached within 2 minutes of the pv step's end";
+                    return self.drive_step_failed(i, why, ctx, ev);
+                }
+                !on && s.streaming && s.target_reached
+            }
+            Some(&Step::Tq {
+                torque,
+                slope,
+                seconds,
+            }) if mode == RunMode::Tq => {
+                let ramp = program::tq_ramp(torque, slope);
+                let on = since.is_none() || t < ramp + seconds;
+                self.tq
+                    .set_target(if on { drive_torque(torque) } else { 0 });
+                let s = self.tq.step(&mut self.axis, sw);
+                !on && s.streaming && self.tq_settled(t, torque, seconds, ramp, ctx.dt)
+            }
+            _ => {
+                // Not this mode's step (a mode switch under way): hold.
+                self.hold_profile(mode, sw);
+                false
+            }
+        };
+        if done {
+            self.drive_run = DriveRun::Idle;
+            self.runner.drive_done(actual);
+            self.hold = actual;
         }
     }
 
@@ -1295,6 +1313,7 @@ impl MotionAxis {
             targets,
             relative,
             immediate,
+            ..
         }) = self.runner.steps().get(index)
         else {
             self.drive_run = DriveRun::Idle;

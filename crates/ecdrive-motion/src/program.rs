@@ -8,10 +8,13 @@
 
 use super::setpoint::{Jog, Move, ProfileError, Sample, Sine, TorqueStep, VelocityRamp};
 use crate::cia402::OperationMode;
-use serde::{Deserialize, Serialize};
+use serde::de::Error as _;
+use serde::{Deserialize, Deserializer, Serialize};
 
-// The configuration file (the application's) reads the TOML form of programs, with file
-// positions in its errors; these types only serialize, for reports.
+// A program is also what a run file writes (`{ step = "move", by = 90, … }`): the application
+// reads its TOML into these types directly, in the file's user units, then takes them to
+// counts with [`Step::scaled`]. Where a word of the file is not one the type takes (a mode, an
+// edge, a move with both `to` and `by`), the message says what the file may write.
 
 impl From<RunMode> for OperationMode {
     fn from(m: RunMode) -> Self {
@@ -32,7 +35,7 @@ impl TryFrom<OperationMode> for RunMode {
 /// synchronous ones, where the master streams the set-point every cycle, and the profile ones,
 /// where the drive generates the motion from a target and its profile objects. Homing (hm) is
 /// not one: a `home` step enters it and comes back.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum RunMode {
     /// Cyclic synchronous position (0x6060 = 8): the program streams target positions.
@@ -130,7 +133,33 @@ impl RunMode {
     }
 }
 
-/// Where a move goes.
+/// A mode by its name, in any case (`"csp"`, `"CSV"`); the error lists the names.
+impl core::str::FromStr for RunMode {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        let lower = s.to_ascii_lowercase();
+        Self::ALL
+            .into_iter()
+            .find(|m| m.name() == lower)
+            .ok_or_else(|| {
+                format!(
+                    "unknown mode {lower:?}; the modes are csp, csv, cst, pp, pv, tq and ip (hm \
+                     through a home step)"
+                )
+            })
+    }
+}
+
+/// Read as [`FromStr`](core::str::FromStr) reads it: its message lists the modes (serde's
+/// would call them variants).
+impl<'de> Deserialize<'de> for RunMode {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        String::deserialize(d)?.parse().map_err(D::Error::custom)
+    }
+}
+
+/// Where a move goes (a run file writes `to = …` or `by = …`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Target {
@@ -141,8 +170,19 @@ pub enum Target {
 }
 
 /// One step of a program.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-#[serde(tag = "step", rename_all = "snake_case")]
+///
+/// When the axis runs it, positions are in counts, velocities, accelerations and jerks in
+/// counts per second (², ³) and torques in the drive's torque unit. A run file writes positions
+/// and their rates in its user units; [`Step::scaled`] takes them to counts.
+///
+/// The profile values of the steps the drive runs (pp's velocity and accelerations, pv's
+/// accelerations, tq's slope, homing's speeds, acceleration and offset) are the drive's
+/// settings, not the axis's: they are written once, in PRE-OP, in the drive's units, and the
+/// axis only hands the drive its targets. The application's run file turns a program's values
+/// into those start-up writes; a program built in code writes them as start-up values of its
+/// own (the drive's setup), and its steps say the same for the reader.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Step {
     /// Switch the mode of operation while enabled (no jump: the new mode starts from the
     /// actual values).
@@ -151,6 +191,7 @@ pub enum Step {
         mode: RunMode,
     },
     /// A point-to-point move (csp: positions; csv: the profile's velocities).
+    #[serde(deserialize_with = "move_step")]
     Move {
         /// Destination.
         #[serde(flatten)]
@@ -160,7 +201,6 @@ pub enum Step {
         /// Acceleration limit (counts/s²).
         acceleration: f64,
         /// Jerk limit (counts/s³); without it the profile is trapezoidal.
-        #[serde(default)]
         jerk: Option<f64>,
     },
     /// A sine around the position where the step starts (csp: positions; csv: velocities).
@@ -213,11 +253,23 @@ pub enum Step {
     Home {
         /// The homing method (0x6098).
         method: i8,
+        /// The speed searching for the switch (counts/s), 0x6099:01.
+        speed_switch: f64,
+        /// The speed searching for zero (counts/s), 0x6099:02.
+        speed_zero: f64,
+        /// The homing acceleration (counts/s²), 0x609A; without it the drive uses its own (a
+        /// drive without 0x609A, such as the Lexium MDrive, takes none).
+        #[serde(default)]
+        acceleration: Option<f64>,
+        /// The position the home then reads (counts), 0x607C; without it the drive's own.
+        #[serde(default)]
+        offset: Option<f64>,
     },
     /// Profile position (pp): the drive moves to each target in turn with the profile
     /// velocity and accelerations start-up wrote (0x6081, 0x6083, 0x6084), each target handed
     /// over with the new-set-point handshake (controlword bit 4, statusword bit 12). Done when
     /// the drive reports the last target reached (statusword bit 10).
+    #[serde(deserialize_with = "pp_step")]
     Pp {
         /// Targets (counts): absolute, or with `relative` each from the previous target.
         targets: Vec<f64>,
@@ -227,26 +279,37 @@ pub enum Step {
         /// runs them one after the other. `true` (single set-point, bit 5 = 1): each target is
         /// handed over once the drive reports the previous one reached.
         immediate: bool,
+        /// The profile velocity (counts/s), 0x6081.
+        velocity: f64,
+        /// The profile acceleration (counts/s²), 0x6083.
+        acceleration: f64,
+        /// The profile deceleration (counts/s²), 0x6084; without it `acceleration`.
+        deceleration: Option<f64>,
     },
     /// Profile velocity (pv): the drive ramps to `velocity` with 0x6083/0x6084, holds it for
     /// `seconds`, then ramps to standstill. Done when the drive reports velocity 0 reached.
     Pv {
         /// Velocity (counts/s), converted to the drive's velocity unit for 0x60FF.
         velocity: f64,
+        /// The profile acceleration (counts/s²), 0x6083.
+        acceleration: f64,
+        /// The profile deceleration (counts/s²), 0x6084; without it `acceleration`.
+        #[serde(default)]
+        deceleration: Option<f64>,
         /// Time at the velocity (s), from the switch of the target.
         seconds: f64,
     },
     /// Profile torque (tq): the drive ramps to `torque` with the slope 0x6087, holds it for
-    /// `seconds`, then ramps it back to 0 (the time the slope needs, from the drive's own
-    /// 0x6087, is waited out: not every drive reports torque reached).
+    /// `seconds`, then ramps it back to 0 (the time the slope needs, [`Step::tq_ramp`], is
+    /// waited out: not every drive reports torque reached).
     Tq {
         /// Torque (the drive's torque unit), for 0x6071.
         torque: f64,
+        /// The torque slope (torque units per second), 0x6087; without it a step (0x6087 = 0).
+        #[serde(default)]
+        slope: Option<f64>,
         /// Time at the torque (s), from the switch of the target.
         seconds: f64,
-        /// Seconds the drive takes to ramp 0 → `torque` with its slope (0 for a step); the
-        /// configuration computes it from the 0x6087 it writes.
-        ramp: f64,
     },
     /// Arm a touch probe (0x60B8): the drive latches the position at the next edge of its
     /// probe input; the program goes on at once, and the latch is reported when the drive
@@ -269,14 +332,94 @@ pub enum Step {
     },
 }
 
+/// A move as a run file writes it: the destination by its key, `to` or `by`.
+fn move_step<'de, D: Deserializer<'de>>(d: D) -> Result<(Target, f64, f64, Option<f64>), D::Error> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct MoveKeys {
+        #[serde(default)]
+        to: Option<f64>,
+        #[serde(default)]
+        by: Option<f64>,
+        velocity: f64,
+        acceleration: f64,
+        #[serde(default)]
+        jerk: Option<f64>,
+    }
+    let k = MoveKeys::deserialize(d)?;
+    let target = match (k.to, k.by) {
+        (Some(t), None) => Target::To(t),
+        (None, Some(b)) => Target::By(b),
+        _ => {
+            return Err(D::Error::custom(
+                "a move needs exactly one of `to` and `by`",
+            ));
+        }
+    };
+    Ok((target, k.velocity, k.acceleration, k.jerk))
+}
+
+/// A pp step as a run file writes it: absolute targets as `to = [...]`, relative ones as
+/// `by = [...]`.
+#[allow(clippy::type_complexity)]
+fn pp_step<'de, D: Deserializer<'de>>(
+    d: D,
+) -> Result<(Vec<f64>, bool, bool, f64, f64, Option<f64>), D::Error> {
+    #[derive(Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct PpKeys {
+        #[serde(default)]
+        to: Option<Vec<f64>>,
+        #[serde(default)]
+        by: Option<Vec<f64>>,
+        velocity: f64,
+        acceleration: f64,
+        #[serde(default)]
+        deceleration: Option<f64>,
+        #[serde(default)]
+        immediate: bool,
+    }
+    let k = PpKeys::deserialize(d)?;
+    let (targets, relative) = match (k.to, k.by) {
+        (Some(t), None) => (t, false),
+        (None, Some(b)) => (b, true),
+        _ => {
+            return Err(D::Error::custom(
+                "a pp step needs exactly one of `to` and `by` (lists)",
+            ));
+        }
+    };
+    Ok((
+        targets,
+        relative,
+        k.immediate,
+        k.velocity,
+        k.acceleration,
+        k.deceleration,
+    ))
+}
+
 /// A touch-probe edge.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ProbeEdge {
     /// Input going on.
     Rising,
     /// Input going off.
     Falling,
+}
+
+/// `"rising"` or `"falling"`; anything else is named in the message.
+impl<'de> Deserialize<'de> for ProbeEdge {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        match String::deserialize(d)?.as_str() {
+            "rising" => Ok(Self::Rising),
+            "falling" => Ok(Self::Falling),
+            other => Err(D::Error::custom(format!(
+                "touch_probe: edge must be \"rising\" or \"falling\", not {other:?}"
+            ))),
+        }
+    }
 }
 
 impl ProbeEdge {
@@ -307,7 +450,7 @@ impl Step {
             Self::Jog { velocity, .. } => format!("jog at {velocity}/s"),
             Self::Torque { torque, .. } => format!("torque {torque}"),
             Self::Dwell { seconds } => format!("dwell {seconds} s"),
-            Self::Home { method } => format!("home (method {method})"),
+            Self::Home { method, .. } => format!("home (method {method})"),
             Self::Pp {
                 targets, relative, ..
             } => format!(
@@ -366,6 +509,80 @@ impl Step {
             Self::Home { .. } | Self::Pp { .. } | Self::Pv { .. } | Self::Tq { .. }
         )
     }
+
+    /// This step with its positions and their rates (velocities, accelerations, jerks)
+    /// multiplied by `counts_per_unit`: a step written in user units, in counts. Times,
+    /// frequencies, torques, slopes, the homing method and the probe stay as they are.
+    pub fn scaled(&self, counts_per_unit: f64) -> Step {
+        let k = counts_per_unit;
+        let mut s = self.clone();
+        let scale = |v: &mut f64| *v *= k;
+        match &mut s {
+            Self::Move {
+                target: Target::To(x) | Target::By(x),
+                velocity,
+                acceleration,
+                jerk,
+            } => {
+                [x, velocity, acceleration].into_iter().for_each(scale);
+                jerk.iter_mut().for_each(scale);
+            }
+            Self::Sine { amplitude, .. } => scale(amplitude),
+            Self::Ramp {
+                velocity,
+                acceleration,
+                ..
+            }
+            | Self::Jog {
+                velocity,
+                acceleration,
+                ..
+            } => [velocity, acceleration].into_iter().for_each(scale),
+            Self::Home {
+                speed_switch,
+                speed_zero,
+                acceleration,
+                offset,
+                ..
+            } => {
+                [speed_switch, speed_zero].into_iter().for_each(scale);
+                acceleration.iter_mut().chain(offset).for_each(scale);
+            }
+            Self::Pp {
+                targets,
+                velocity,
+                acceleration,
+                deceleration,
+                ..
+            } => {
+                targets.iter_mut().for_each(scale);
+                [velocity, acceleration].into_iter().for_each(scale);
+                deceleration.iter_mut().for_each(scale);
+            }
+            Self::Pv {
+                velocity,
+                acceleration,
+                deceleration,
+                ..
+            } => {
+                [velocity, acceleration].into_iter().for_each(scale);
+                deceleration.iter_mut().for_each(scale);
+            }
+            Self::Mode { .. }
+            | Self::Torque { .. }
+            | Self::Dwell { .. }
+            | Self::Tq { .. }
+            | Self::TouchProbe { .. }
+            | Self::ProbeWait { .. } => {}
+        }
+        s
+    }
+}
+
+/// The seconds a tq step of `torque` takes to ramp from 0 to it with `slope` (torque units per
+/// second; none: a step, 0 s).
+pub fn tq_ramp(torque: f64, slope: Option<f64>) -> f64 {
+    slope.map_or(0.0, |sl| torque.abs() / sl)
 }
 
 /// A program that cannot run.
@@ -499,14 +716,17 @@ pub fn fastest_step(steps: &[Step], start: RunMode) -> Option<(usize, f64)> {
     fastest
 }
 
-/// The first value a pp step would write to 0x607A outside `range` (an absolute target, or a
-/// relative step's distance): (step index, value in counts).
-pub fn pp_target_beyond(steps: &[Step], range: crate::cia402::ValueRange) -> Option<(usize, f64)> {
+/// The first value a pp step would write to 0x607A that the drive does not take
+/// ([`DriveCaps::pp_target_outside`](crate::cia402::DriveCaps::pp_target_outside); an absolute
+/// target, or a relative step's distance): (step index, value in counts, the drive's range).
+pub fn pp_target_beyond(
+    steps: &[Step],
+    caps: &crate::cia402::DriveCaps,
+) -> Option<(usize, f64, crate::cia402::ValueRange)> {
     steps.iter().enumerate().find_map(|(n, s)| match s {
         Step::Pp { targets, .. } => targets
             .iter()
-            .find(|t| !range.contains(t.round() as i64))
-            .map(|&t| (n, t)),
+            .find_map(|&t| caps.pp_target_outside(t).map(|range| (n, t, range))),
         _ => None,
     })
 }
@@ -595,19 +815,21 @@ fn plan_waiting(step: &Step, from: &Sample) -> Result<Option<Planned>, ProfileEr
             }
             Planned::Drive
         }
-        Step::Pv { velocity, seconds } => {
+        Step::Pv {
+            velocity, seconds, ..
+        } => {
             finite("velocity", velocity)?;
             non_negative("seconds", seconds)?;
             Planned::Drive
         }
         Step::Tq {
             torque,
+            slope,
             seconds,
-            ramp,
         } => {
             finite("torque", torque)?;
             non_negative("seconds", seconds)?;
-            non_negative("ramp", ramp)?;
+            non_negative("ramp", tq_ramp(torque, slope))?;
             Planned::Drive
         }
         Step::TouchProbe { probe, .. } => {
@@ -988,7 +1210,7 @@ impl Runner {
                 return Tick::SwitchMode(*mode);
             }
             match step {
-                Step::Home { method } => return Tick::Home { method: *method },
+                Step::Home { method, .. } => return Tick::Home { method: *method },
                 &Step::TouchProbe { probe, edge } => match self.arm(probe, edge) {
                     Some(t) => return t,
                     None => continue,
@@ -1259,7 +1481,13 @@ mod tests {
     #[test]
     fn a_home_step_waits_and_the_next_step_starts_from_the_home() {
         let steps = vec![
-            Step::Home { method: 19 },
+            Step::Home {
+                method: 19,
+                speed_switch: 1000.0,
+                speed_zero: 100.0,
+                acceleration: None,
+                offset: None,
+            },
             Step::Move {
                 target: Target::By(100.0),
                 velocity: 1000.0,
@@ -1367,5 +1595,98 @@ mod tests {
             ),
             Err(ProgramError::Profile { .. })
         ));
+    }
+
+    /// User units reach counts once, in every quantity that is a position or its rate, and in
+    /// nothing else.
+    #[test]
+    fn scaling_takes_positions_and_their_rates_to_counts() {
+        let k = 100.0;
+        let moved = Step::Move {
+            target: Target::By(2.0),
+            velocity: 3.0,
+            acceleration: 4.0,
+            jerk: Some(5.0),
+        };
+        assert_eq!(
+            moved.scaled(k),
+            Step::Move {
+                target: Target::By(200.0),
+                velocity: 300.0,
+                acceleration: 400.0,
+                jerk: Some(500.0),
+            }
+        );
+        let home = Step::Home {
+            method: 19,
+            speed_switch: 1.0,
+            speed_zero: 0.5,
+            acceleration: None,
+            offset: Some(-2.0),
+        };
+        assert_eq!(
+            home.scaled(k),
+            Step::Home {
+                method: 19,
+                speed_switch: 100.0,
+                speed_zero: 50.0,
+                acceleration: None,
+                offset: Some(-200.0),
+            }
+        );
+        let pp = Step::Pp {
+            targets: vec![1.0, -1.5],
+            relative: true,
+            immediate: false,
+            velocity: 2.0,
+            acceleration: 3.0,
+            deceleration: Some(4.0),
+        };
+        assert_eq!(
+            pp.scaled(k),
+            Step::Pp {
+                targets: vec![100.0, -150.0],
+                relative: true,
+                immediate: false,
+                velocity: 200.0,
+                acceleration: 300.0,
+                deceleration: Some(400.0),
+            }
+        );
+        // Times, frequencies and torques are not lengths.
+        let sine = |amplitude| Step::Sine {
+            amplitude,
+            frequency: 2.0,
+            periods: 3.0,
+        };
+        assert_eq!(sine(1.0).scaled(k), sine(100.0));
+        for s in [
+            Step::Tq {
+                torque: 50.0,
+                slope: Some(100.0),
+                seconds: 1.0,
+            },
+            Step::Torque {
+                torque: 50.0,
+                slope: None,
+                hold: 1.0,
+            },
+            Step::Dwell { seconds: 1.0 },
+        ] {
+            assert_eq!(s.scaled(k), s);
+        }
+    }
+
+    #[test]
+    fn modes_read_in_any_case_and_a_wrong_one_lists_them() {
+        assert_eq!("CSV".parse::<RunMode>(), Ok(RunMode::Csv));
+        assert_eq!("ip".parse::<RunMode>(), Ok(RunMode::Ip));
+        let e = "hm".parse::<RunMode>().unwrap_err();
+        assert!(
+            e.starts_with("unknown mode \"hm\"; the modes are csp"),
+            "{e}"
+        );
+        assert_eq!(tq_ramp(-50.0, Some(100.0)), 0.5);
+        assert_eq!(tq_ramp(50.0, None), 0.0);
     }
 }

@@ -20,7 +20,7 @@
 //! sdos = { "0x607C:00" = 0 }
 //! program = [
 //!   { step = "home", method = 24, speed_switch = 5, speed_zero = 0.5, acceleration = 100 },
-//!   { step = "pp", targets = [1, 0.5], velocity = 10, acceleration = 100 },
+//!   { step = "pp", to = [1, 0.5], velocity = 10, acceleration = 100 },
 //! ]
 //! ```
 //!
@@ -30,8 +30,8 @@
 //! `allow_generic`) is refused with the key named. The cyclic modes (csp, csv, cst) and the
 //! touch probe are not run over CANopen yet: the PDO plans carry the profile modes.
 
-use super::{ConfigError, Ctx, Program, UserUnits, homing_writes, profile_writes, raw};
-use super::{mode_of, parse_duration, program_of, start_up_values};
+use super::steps::{Program, homing_writes, profile_writes, program_of};
+use super::{ConfigError, Ctx, UserUnits, parse_duration, raw, start_up_values};
 use crate::app::canopen::tools::{BusSpec, EMULATED_NODES};
 use crate::canopen::profile::CanDriveProfile;
 use crate::master::SetpointLimits;
@@ -243,6 +243,45 @@ fn drive(
         }
     };
     let r = d.get_ref();
+    no_ethercat_keys(cx, &key, r)?;
+    let node = node_of(cx, &key, d)?;
+    let builtin = builtin_of(cx, &key, r)?;
+    let (name, profile, emulation, eds) =
+        drive_model(cx, &key, d.span(), builtin, r.eds.as_ref(), warnings)?;
+    check_cycle(cx, &key, d, profile, cycle, cycle_key)?;
+    let mode = start_mode(cx, &key, r)?;
+    let Program {
+        units,
+        fe_limit,
+        limits,
+        steps,
+        described,
+        ..
+    } = program_of(cx, &key, d, mode, cycle)?;
+    runs_here(cx, &key, d, profile, mode, &steps, (cycle, cycle_key))?;
+    let settings = settings_of(cx, &key, d, i, profile, mode, &steps, warnings)?;
+    Ok(CanDriveConfig {
+        node,
+        key: name,
+        profile,
+        eds,
+        emulation,
+        mode,
+        units,
+        steps,
+        described,
+        settings,
+        following_error_limit: fe_limit,
+        limits,
+    })
+}
+
+/// What only the EtherCAT bus has, named at its key.
+fn no_ethercat_keys(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    r: &raw::Drive,
+) -> Result<(), ConfigError> {
     for (given, name) in [
         (r.position.as_ref().map(Spanned::span), "position"),
         (r.alias.as_ref().map(Spanned::span), "alias"),
@@ -262,120 +301,95 @@ fn drive(
             ));
         }
     }
-    let node = match &r.node {
-        Some(n) if (1..=127).contains(n.get_ref()) => *n.get_ref(),
-        Some(n) => {
-            return Err(cx.err(
-                n.span(),
-                key("node"),
-                format!("a node-ID is 1–127, not {}", n.get_ref()),
-            ));
-        }
-        None => {
-            return Err(cx.err(d.span(), key(""), "say which node: give `node` (1–127)"));
-        }
+    Ok(())
+}
+
+/// The drive's node-ID (`node`, 1–127).
+fn node_of(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    d: &Spanned<raw::Drive>,
+) -> Result<u8, ConfigError> {
+    match &d.get_ref().node {
+        Some(n) if (1..=127).contains(n.get_ref()) => Ok(*n.get_ref()),
+        Some(n) => Err(cx.err(
+            n.span(),
+            key("node"),
+            format!("a node-ID is 1–127, not {}", n.get_ref()),
+        )),
+        None => Err(cx.err(d.span(), key(""), "say which node: give `node` (1–127)")),
+    }
+}
+
+/// The built-in profile `profile` names, if it names one: its name and profile.
+fn builtin_of(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    r: &raw::Drive,
+) -> Result<Option<(&'static str, &'static CanDriveProfile)>, ConfigError> {
+    let Some(p) = &r.profile else {
+        return Ok(None);
     };
-    let builtin = match &r.profile {
-        None => None,
-        Some(p) => match EMULATED_NODES.iter().find(|(n, _, _)| *n == p.get_ref()) {
-            Some(&(name, profile, _)) => Some((name, profile)),
-            None => {
-                return Err(cx.err(
-                    p.span(),
-                    key("profile"),
-                    format!(
-                        "{:?} is not a CANopen drive profile: {}, or give the drive's EDS file                          (eds = \"FILE\")",
-                        p.get_ref(),
-                        profile_names()
-                    ),
-                ));
-            }
-        },
+    match EMULATED_NODES.iter().find(|(n, _, _)| *n == p.get_ref()) {
+        Some(&(name, profile, _)) => Ok(Some((name, profile))),
+        None => Err(cx.err(
+            p.span(),
+            key("profile"),
+            format!(
+                "{:?} is not a CANopen drive profile: {}, or give the drive's EDS file                          (eds = \"FILE\")",
+                p.get_ref(),
+                profile_names()
+            ),
+        )),
+    }
+}
+
+/// The mode the drive starts in (`mode`, pp by default): a cyclic one only as ip.
+fn start_mode(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    r: &raw::Drive,
+) -> Result<RunMode, ConfigError> {
+    let Some(m) = &r.mode else {
+        return Ok(RunMode::Pp);
     };
-    let (name, profile, emulation, eds) =
-        drive_model(cx, &key, d.span(), builtin, r.eds.as_ref(), warnings)?;
-    check_cycle(cx, &key, d, profile, cycle, cycle_key)?;
-    let mode = match &r.mode {
-        Some(m) => {
-            let mode = mode_of(m.get_ref()).map_err(|e| cx.err(m.span(), key("mode"), e))?;
-            if mode.is_cyclic() && mode != RunMode::Ip {
-                return Err(cx.err(
-                    m.span(),
-                    key("mode"),
-                    format!(
-                        "{} is not run over CANopen yet: pp, pv, tq, or ip where the drive has it",
-                        mode.name()
-                    ),
-                ));
-            }
-            mode
-        }
-        None => RunMode::Pp,
-    };
-    let Program {
-        units,
-        k,
-        fe_limit,
-        steps,
-        described,
-    } = program_of(cx, &key, d, mode, cycle)?;
+    let mode: RunMode = m
+        .get_ref()
+        .parse()
+        .map_err(|e: String| cx.err(m.span(), key("mode"), e))?;
+    if mode.is_cyclic() && mode != RunMode::Ip {
+        return Err(cx.err(
+            m.span(),
+            key("mode"),
+            format!(
+                "{} is not run over CANopen yet: pp, pv, tq, or ip where the drive has it",
+                mode.name()
+            ),
+        ));
+    }
+    Ok(mode)
+}
+
+/// The program and the start mode on this drive: each step one it runs
+/// ([`unsupported_step`]), its touch probes in the PDO plan, ip at this SYNC period, and the
+/// start mode one the drive supports and can command.
+fn runs_here(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    d: &Spanned<raw::Drive>,
+    profile: &'static CanDriveProfile,
+    mode: RunMode,
+    steps: &[Step],
+    (cycle, cycle_key): (Duration, &Option<Spanned<String>>),
+) -> Result<(), ConfigError> {
+    let r = d.get_ref();
     for (n, s) in steps.iter().enumerate() {
-        let unsupported = match s {
-            Step::Mode { mode } if mode.is_cyclic() && *mode != RunMode::Ip => {
-                Some(format!("{} is not run over CANopen yet", mode.name()))
-            }
-            Step::Mode { mode }
-                if !profile.supports(crate::cia402::OperationMode::from_i8(mode.code())) =>
-            {
-                Some(format!(
-                    "the {} does not support {} ({})",
-                    profile.name,
-                    mode.name(),
-                    modes_offered(profile)
-                ))
-            }
-            Step::Home { method } if *method == 0 || !profile.homing.supports(*method) => {
-                let listed: Vec<String> = profile
-                    .homing
-                    .methods
-                    .iter()
-                    .filter(|m| **m != 0)
-                    .map(i8::to_string)
-                    .collect();
-                Some(format!(
-                    "homing method {method} is not one the {} takes ({})",
-                    profile.name,
-                    listed.join(", ")
-                ))
-            }
-            // Methods 1–14, 33 and 34 home on the index pulse (CiA 402).
-            Step::Home { method }
-                if !profile.homing.index_pulse && matches!(method, 1..=14 | 33 | 34) =>
-            {
-                Some(format!(
-                    "homing method {method} homes on the index pulse, which the {} (without \
-                     encoder) does not have",
-                    profile.name
-                ))
-            }
-            Step::Mode { mode } if missing_setpoint(profile, *mode).is_some() => {
-                missing_setpoint(profile, *mode)
-            }
-            Step::TouchProbe { .. } | Step::ProbeWait { .. }
-                if crate::od::Dictionary::new(profile.dictionary)
-                    .object(0x60B8)
-                    .is_none() =>
-            {
-                Some(format!("the {} has no touch probe (60B8h)", profile.name))
-            }
-            _ => None,
-        };
-        if let Some(m) = unsupported {
+        if let Some(m) = unsupported_step(profile, s) {
             let span = r.program.get(n).map_or(d.span(), Spanned::span);
             return Err(cx.err(span, key(&format!("program[{n}]")), m));
         }
     }
-    let probes = crate::master::program::probes_used(&steps);
+    let probes = crate::master::program::probes_used(steps);
     if let Err(why) = crate::canopen::PdoPlan::with_probes(profile, &probes) {
         return Err(cx.err(d.span(), key("program"), why));
     }
@@ -390,8 +404,8 @@ fn drive(
         };
         return Err(cx.err(span, k, why));
     }
-    if !profile.supports(crate::cia402::OperationMode::from_i8(mode.code())) {
-        let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
+    let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
+    if !profile.supports(mode.operation_mode()) {
         return Err(cx.err(
             span,
             key("mode"),
@@ -404,18 +418,88 @@ fn drive(
         ));
     }
     if let Some(why) = missing_setpoint(profile, mode) {
-        let span = r.mode.as_ref().map_or(d.span(), Spanned::span);
         return Err(cx.err(span, key("mode"), why));
     }
+    Ok(())
+}
+
+/// Why the drive cannot run step `s`: a cyclic mode other than ip, a mode it does not have or
+/// cannot command, a homing method it does not take, a touch probe it does not have.
+fn unsupported_step(profile: &CanDriveProfile, s: &Step) -> Option<String> {
+    match s {
+        Step::Mode { mode } if mode.is_cyclic() && *mode != RunMode::Ip => {
+            Some(format!("{} is not run over CANopen yet", mode.name()))
+        }
+        Step::Mode { mode }
+            if !profile.supports(mode.operation_mode()) =>
+        {
+            Some(format!(
+                "the {} does not support {} ({})",
+                profile.name,
+                mode.name(),
+                modes_offered(profile)
+            ))
+        }
+        Step::Home { method, .. } if *method == 0 || !profile.homing.supports(*method) => {
+            let listed: Vec<String> = profile
+                .homing
+                .methods
+                .iter()
+                .filter(|m| **m != 0)
+                .map(i8::to_string)
+                .collect();
+            Some(format!(
+                "homing method {method} is not one the {} takes ({})",
+                profile.name,
+                listed.join(", ")
+            ))
+        }
+        // Methods 1–14, 33 and 34 home on the index pulse (CiA 402).
+        Step::Home { method, .. }
+            if !profile.homing.index_pulse && matches!(method, 1..=14 | 33 | 34) =>
+        {
+            Some(format!(
+                "homing method {method} homes on the index pulse, which the {} (without \
+                 encoder) does not have",
+                profile.name
+            ))
+        }
+        Step::Mode { mode } => missing_setpoint(profile, *mode),
+        Step::TouchProbe { .. } | Step::ProbeWait { .. }
+            if crate::od::Dictionary::new(profile.dictionary)
+                .object(0x60B8)
+                .is_none() =>
+        {
+            Some(format!("the {} has no touch probe (60B8h)", profile.name))
+        }
+        _ => None,
+    }
+}
+
+/// The drive's start-up writes: the home, pp, pv and tq steps' objects (those the drive has;
+/// the others said, not written), the halt option where the program moves in pp or pv, then
+/// `sdos`.
+#[allow(clippy::too_many_arguments)]
+fn settings_of(
+    cx: &Ctx<'_>,
+    key: &dyn Fn(&str) -> String,
+    d: &Spanned<raw::Drive>,
+    i: usize,
+    profile: &'static CanDriveProfile,
+    mode: RunMode,
+    steps: &[Step],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(ObjectAddress, Value)>, ConfigError> {
+    let r = d.get_ref();
     let step_err = |n: usize, m: String| {
         let span = r.program.get(n).map_or(d.span(), Spanned::span);
         cx.err(span, key(&format!("program[{n}]")), m)
     };
-    let homing = homing_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
-    let objects = profile_writes(&r.program, Some(profile), k).map_err(|(n, m)| step_err(n, m))?;
+    let homing = homing_writes(steps, Some(profile)).map_err(|(n, m)| step_err(n, m))?;
+    let objects = profile_writes(steps, Some(profile)).map_err(|(n, m)| step_err(n, m))?;
     let steps_write: Vec<ObjectAddress> = homing.iter().chain(&objects).map(|(a, _)| *a).collect();
     let dict = Some((profile.dictionary, profile.name));
-    let sdos = start_up_values(cx, &key, d, dict, &steps_write)?;
+    let sdos = start_up_values(cx, key, d, dict, &steps_write)?;
     // A step's object the drive does not have (the Lexium MDrive has no homing acceleration
     // 0x609A): the drive uses its own value; said, not written.
     let dict = crate::od::Dictionary::new(profile.dictionary);
@@ -450,27 +534,7 @@ fn drive(
         settings.push((halt, Value::Int(1)));
     }
     settings.extend(sdos);
-    Ok(CanDriveConfig {
-        node,
-        key: name,
-        profile,
-        eds,
-        emulation,
-        mode,
-        units,
-        steps,
-        described,
-        settings,
-        following_error_limit: fe_limit,
-        limits: r.limits.as_ref().map_or_else(Default::default, |l| {
-            let l = l.get_ref();
-            SetpointLimits {
-                max_velocity: l.max_velocity.map(|v| v * k),
-                max_acceleration: l.max_acceleration.map(|v| v * k),
-                max_torque: l.max_torque,
-            }
-        }),
-    })
+    Ok(settings)
 }
 
 /// Why `mode` cannot run on the drive: its set-point object (607Ah, 60FFh, 6071h, 60C1h:01)

@@ -8,7 +8,8 @@
 //! synchronisation, the cyclic mapping (in the syntax of `[[drive]] mapping`) and the
 //! InitCmds.
 
-use super::{ConfigError, Ctx, build_mapping, deserialize, raw, read_text};
+use super::ethercat::build_mapping;
+use super::{ConfigError, Ctx, deserialize, raw, read_text};
 use crate::drives::esi_profile::{self, EsiProfileError};
 use crate::drives::{CycleTimeObject, DriveProfile, InitCommand};
 use crate::esi::{Device, EsiFile, Transition};

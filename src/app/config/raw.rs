@@ -1,6 +1,7 @@
 //! The configuration file as serde reads it: every table denies unknown keys, and the values
 //! whose meaning is checked afterwards keep their position in the file ([`Spanned`]).
 
+use crate::master::program::Step;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use toml::Spanned;
@@ -144,6 +145,8 @@ pub(super) struct Drive {
     pub limits: Option<Spanned<Limits>>,
     #[serde(default)]
     pub units: Option<Spanned<Units>>,
+    /// The program, in the drive's user units: the motion runtime's own steps
+    /// ([`Step::scaled`] takes them to counts).
     #[serde(default)]
     pub program: Vec<Spanned<Step>>,
 }
@@ -183,92 +186,4 @@ pub(super) struct Limits {
 pub(super) struct Units {
     pub name: String,
     pub counts_per_unit: f64,
-}
-
-/// A program step as the file writes it, in the drive's user units.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "step", rename_all = "snake_case", deny_unknown_fields)]
-pub(super) enum Step {
-    Mode {
-        mode: String,
-    },
-    Move {
-        #[serde(default)]
-        to: Option<f64>,
-        #[serde(default)]
-        by: Option<f64>,
-        velocity: f64,
-        acceleration: f64,
-        #[serde(default)]
-        jerk: Option<f64>,
-    },
-    Sine {
-        amplitude: f64,
-        frequency: f64,
-        periods: f64,
-    },
-    Ramp {
-        velocity: f64,
-        acceleration: f64,
-        #[serde(default)]
-        hold: f64,
-    },
-    Jog {
-        velocity: f64,
-        acceleration: f64,
-        seconds: f64,
-    },
-    Torque {
-        torque: f64,
-        #[serde(default)]
-        slope: Option<f64>,
-        hold: f64,
-    },
-    Dwell {
-        seconds: f64,
-    },
-    Home {
-        method: i8,
-        speed_switch: f64,
-        speed_zero: f64,
-        /// Homing acceleration (0x609A); without it the drive uses its own (a drive without
-        /// 0x609A, such as the Lexium MDrive, takes none).
-        #[serde(default)]
-        acceleration: Option<f64>,
-        #[serde(default)]
-        offset: Option<f64>,
-    },
-    Pp {
-        #[serde(default)]
-        to: Option<Vec<f64>>,
-        #[serde(default)]
-        by: Option<Vec<f64>>,
-        velocity: f64,
-        acceleration: f64,
-        #[serde(default)]
-        deceleration: Option<f64>,
-        #[serde(default)]
-        immediate: bool,
-    },
-    Pv {
-        velocity: f64,
-        acceleration: f64,
-        #[serde(default)]
-        deceleration: Option<f64>,
-        seconds: f64,
-    },
-    Tq {
-        torque: f64,
-        #[serde(default)]
-        slope: Option<f64>,
-        seconds: f64,
-    },
-    TouchProbe {
-        probe: u8,
-        edge: String,
-    },
-    ProbeWait {
-        probe: u8,
-        seconds: f64,
-    },
 }

@@ -1,6 +1,7 @@
 //! The `ecdrive` command line. Argument parsing and output only: the work is in the library
 //! (`ecdrive_cli::app::ethercat::tools`, `ecdrive_cli::app::config`, `ecdrive::sim::run`).
 
+mod bus;
 mod can;
 mod demo;
 mod jitter;
@@ -957,152 +958,6 @@ where
     Ok(r)
 }
 
-/// `ecdrive sii write`.
-fn sii_write(
-    interface: &str,
-    position: u16,
-    file: &std::path::Path,
-    force: bool,
-    json: bool,
-) -> ExitCode {
-    let image = match std::fs::read(file) {
-        Ok(b) => b,
-        Err(e) => {
-            return fail_with(
-                "sii",
-                &format!("reading {}: {e}", file.display()),
-                exit::USAGE,
-            );
-        }
-    };
-    let bar = print::progress("writing the EEPROM");
-    let b2 = bar.clone();
-    let r = session("sii", interface, move |b| {
-        tools::alias::sii_write(b, position, &image, force, &mut |done, total| {
-            b2.set_length(total as u64);
-            b2.set_position(done as u64);
-        })
-    });
-    bar.finish_and_clear();
-    match r {
-        Ok(r) if json => print_json("sii", &r),
-        Ok(r) => {
-            for o in &r.overridden {
-                eprintln!("ecdrive sii: --force: {o}");
-            }
-            println!(
-                "device {}: {} bytes written to the EEPROM ({} words changed, {} unchanged), \
-                 read back",
-                r.position, r.bytes, r.words_written, r.words_unchanged
-            );
-            ExitCode::SUCCESS
-        }
-        Err(code) => code,
-    }
-}
-
-/// `ecdrive foe read|write`.
-fn foe(op: FoeOp) -> ExitCode {
-    match op {
-        FoeOp::Write {
-            bus,
-            position,
-            password,
-            name,
-            file,
-            json,
-        } => {
-            let data = match std::fs::read(&file) {
-                Ok(b) => b,
-                Err(e) => {
-                    return fail_with(
-                        "foe",
-                        &format!("reading {}: {e}", file.display()),
-                        exit::USAGE,
-                    );
-                }
-            };
-            let bar = print::progress("writing over FoE");
-            let b2 = bar.clone();
-            let r = session("foe", &bus.interface, move |b| {
-                tools::foe::foe_write(b, position, &name, password, &data, &mut |done, total| {
-                    b2.set_length(total as u64);
-                    b2.set_position(done as u64);
-                })
-            });
-            bar.finish_and_clear();
-            match r {
-                Ok(r) if json.json => print_json("foe", &r),
-                Ok(r) => {
-                    println!(
-                        "drive {} ({}, {}): wrote {} bytes as {:?} in {} packet(s)",
-                        r.position,
-                        r.drive,
-                        r.al_state,
-                        r.transfer.bytes,
-                        r.name,
-                        r.transfer.packets
-                    );
-                    ExitCode::SUCCESS
-                }
-                Err(code) => code,
-            }
-        }
-        FoeOp::Read {
-            bus,
-            position,
-            password,
-            name,
-            file,
-            json,
-        } => {
-            let to_stdout = file.as_ref().is_none_or(|f| f.as_os_str() == "-");
-            if json.json && to_stdout {
-                return fail_with(
-                    "foe",
-                    "--json prints the report: give FILE for the data",
-                    exit::USAGE,
-                );
-            }
-            let bar = print::progress("reading over FoE");
-            let b2 = bar.clone();
-            let r = session("foe", &bus.interface, move |b| {
-                tools::foe::foe_read(b, position, &name, password, &mut |done| {
-                    b2.set_position(done as u64);
-                })
-            });
-            bar.finish_and_clear();
-            let (data, report) = match r {
-                Ok(x) => x,
-                Err(code) => return code,
-            };
-            if to_stdout {
-                use std::io::Write as _;
-                if let Err(e) = std::io::stdout().write_all(&data) {
-                    return fail_with("foe", &format!("writing standard output: {e}"), exit::USAGE);
-                }
-            } else if let Some(f) = &file
-                && let Err(e) = std::fs::write(f, &data)
-            {
-                return fail_with("foe", &format!("writing {}: {e}", f.display()), exit::USAGE);
-            }
-            if json.json {
-                return print_json("foe", &report);
-            }
-            eprintln!(
-                "drive {} ({}, {}): read {} bytes of {:?} in {} packet(s)",
-                report.position,
-                report.drive,
-                report.al_state,
-                report.transfer.bytes,
-                report.name,
-                report.transfer.packets
-            );
-            ExitCode::SUCCESS
-        }
-    }
-}
-
 fn main() -> ExitCode {
     // Output piped into `head` and the like: end quietly when the reader goes away, as Unix
     // tools do, instead of failing on every later write.
@@ -1159,26 +1014,10 @@ fn main() -> ExitCode {
     }
 }
 
+/// Run the command the line asks for: one function per command (the bus commands are
+/// [`bus`]'s, the others their modules' or below).
 fn dispatch(cli: Cli) -> ExitCode {
-    if cli.pcap.is_some()
-        && !matches!(
-            cli.command,
-            Command::Slaves { .. }
-                | Command::Upload { .. }
-                | Command::Download { .. }
-                | Command::Sdos { .. }
-                | Command::Pdos { .. }
-                | Command::States { .. }
-                | Command::Diag { .. }
-                | Command::Graph { .. }
-                | Command::Reg { .. }
-                | Command::Sii { .. }
-                | Command::Alias { .. }
-                | Command::Foe { .. }
-                | Command::Run { .. }
-                | Command::Demo(_)
-        )
-    {
+    if cli.pcap.is_some() && !sends_frames(&cli.command) {
         eprintln!(
             "ecdrive: --pcap captures the EtherCAT frames of the bus commands and run; this \
              command sends none through it"
@@ -1189,534 +1028,24 @@ fn dispatch(cli: Cli) -> ExitCode {
     match cli.command {
         Command::Demo(args) => demo::run(args),
         Command::Soak(args) => soak::run(args),
-        Command::Slaves { bus, verbose, json } => {
-            let Some(interface) = bus.interface else {
-                return can::slaves(bus.can.as_deref().unwrap_or_default(), json.json);
-            };
-            match session("slaves", &interface, move |b| tools::slaves(b, verbose)) {
-                Ok(r) if json.json => print_json("slaves", &r),
-                Ok(r) => {
-                    print::slaves(&r, verbose);
-                    ExitCode::SUCCESS
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Upload {
-            bus,
-            position,
-            node,
-            address,
-            data_type,
-            json,
-        } => {
-            let (Some(interface), Some(position)) = (bus.interface, position) else {
-                return can::upload(
-                    bus.can.as_deref().unwrap_or_default(),
-                    node.unwrap_or_default(),
-                    address,
-                    data_type,
-                    json.json,
-                );
-            };
-            match session("upload", &interface, move |b| {
-                tools::upload(b, position, address, data_type)
-            }) {
-                Ok(r) if json.json => print_json("upload", &r),
-                Ok(r) => {
-                    print::sdo_value(&r);
-                    ExitCode::SUCCESS
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Download {
-            bus,
-            position,
-            node,
-            address,
-            value,
-            data_type,
-            json,
-        } => {
-            let (Some(interface), Some(position)) = (bus.interface, position) else {
-                return can::download(
-                    bus.can.as_deref().unwrap_or_default(),
-                    node.unwrap_or_default(),
-                    address,
-                    &value,
-                    data_type,
-                    json.json,
-                );
-            };
-            match session("download", &interface, move |b| {
-                tools::download(b, position, address, &value, data_type)
-            }) {
-                Ok(r) if json.json => print_json("download", &r),
-                Ok(r) => {
-                    print::downloaded(&r);
-                    ExitCode::SUCCESS
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Sdos {
-            bus,
-            position,
-            values,
-            json,
-        } => {
-            let bar = print::progress("reading the object dictionary");
-            let b2 = bar.clone();
-            let r = session("sdos", &bus.interface, move |b| {
-                tools::sdos(b, position, values, &mut |done, total| {
-                    b2.set_length(total as u64);
-                    b2.set_position(done as u64);
-                })
-            });
-            bar.finish_and_clear();
-            match r {
-                Ok(r) => {
-                    let printed = if json.json {
-                        print_json("sdos", &r)
-                    } else {
-                        print::sdos(&r);
-                        ExitCode::SUCCESS
-                    };
-                    if printed != ExitCode::SUCCESS {
-                        return printed;
-                    }
-                    match r.problems.first() {
-                        None => ExitCode::SUCCESS,
-                        Some(p) => {
-                            eprintln!(
-                                "ecdrive sdos: drive {} ({}): the listing is incomplete: {} item(s) \
-                                 could not be read{}, the first {} {}: {}",
-                                r.position,
-                                r.drive,
-                                r.problems.len(),
-                                if r.problems.iter().any(|p| p.stopped) {
-                                    " and the drive stopped answering"
-                                } else {
-                                    ""
-                                },
-                                p.what,
-                                p.address,
-                                p.reason
-                            );
-                            ExitCode::from(exit::INCOMPLETE)
-                        }
-                    }
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Pdos {
-            bus,
-            position,
-            json,
-        } => match session("pdos", &bus.interface, move |b| tools::pdos(b, position)) {
-            Ok(r) if json.json => print_json("pdos", &r),
-            Ok(r) => {
-                print::pdos(&r);
-                ExitCode::SUCCESS
-            }
-            Err(code) => code,
-        },
-        Command::Reset {
-            bus,
-            position,
-            node,
-            cycle_us,
-            eds,
-            json,
-        } => {
-            let Some(interface) = bus.interface else {
-                let cycle = Duration::from_micros(u64::from(cycle_us.unwrap_or(4000)));
-                return can::reset(
-                    bus.can.as_deref().unwrap_or_default(),
-                    node,
-                    cycle,
-                    eds.as_deref(),
-                    json.json,
-                );
-            };
-            let cycle_us = cycle_us.unwrap_or(1000);
-            let target: Target = match interface.parse() {
-                Ok(t) => t,
-                Err(e) => return fail("reset", &e),
-            };
-            let link = match target.open() {
-                Ok(l) => l,
-                Err(e) => return fail("reset", &e),
-            };
-            let opts = tools::reset::ResetOptions {
-                position,
-                cycle: Duration::from_micros(u64::from(cycle_us)),
-                ..tools::reset::ResetOptions::default()
-            };
-            let r = match tools::reset::reset(link, &opts) {
-                Ok(r) => r,
-                Err(e) => return fail("reset", &e),
-            };
-            if json.json {
-                let c = print_json("reset", &r);
-                if c != ExitCode::SUCCESS {
-                    return c;
-                }
-            } else {
-                print::reset(&r);
-            }
-            match r.drives.iter().find(|d| d.cleared == Some(false)) {
-                None => ExitCode::SUCCESS,
-                Some(d) => {
-                    eprintln!(
-                        "ecdrive reset: drive {} ({}): still in {} after the reset edge ({}): its \
-                         cause is still present, or the drive needs a power cycle",
-                        d.position,
-                        d.drive,
-                        d.after,
-                        d.fault.as_deref().unwrap_or("fault")
-                    );
-                    ExitCode::from(exit::REFUSED)
-                }
-            }
-        }
-        Command::States {
-            bus,
-            position,
-            state,
-            cycle_us,
-            esi,
-            json,
-        } => {
-            let mut opts = tools::StatesOptions::new(state);
-            opts.position = position;
-            opts.cycle = Duration::from_micros(u64::from(cycle_us));
-            if let Some(path) = &esi {
-                let l = match load_esi("states", path) {
-                    Ok(l) => l,
-                    Err(code) => return code,
-                };
-                for s in l.skipped {
-                    eprintln!("ecdrive states: warning: --esi: {s}");
-                }
-                opts.esi_profiles = l.profiles;
-                opts.esi_not_drives = l.not_drives;
-            }
-            match session("states", &bus.interface, move |b| {
-                tools::states_timed(b, &opts)
-            }) {
-                Ok(report) => {
-                    let r = &report.devices;
-                    let code = if r.iter().all(|c| c.ok) {
-                        ExitCode::SUCCESS
-                    } else {
-                        ExitCode::from(exit::REFUSED)
-                    };
-                    if json.json {
-                        let c = print_json("states", &report);
-                        if c != ExitCode::SUCCESS {
-                            return c;
-                        }
-                    } else {
-                        print::states(r);
-                        if let Some(t) = &report.startup {
-                            print::startup(t);
-                        }
-                    }
-                    if code != ExitCode::SUCCESS {
-                        for c in r.iter().filter(|c| !c.ok) {
-                            eprintln!(
-                                "ecdrive states: drive {} ({}) did not reach {}: {}{}",
-                                c.position,
-                                c.drive,
-                                c.requested,
-                                c.reached,
-                                c.al_status_code
-                                    .map(|k| format!(
-                                        ", AL status code 0x{k:04X} ({})",
-                                        c.code_text.as_deref().unwrap_or("?")
-                                    ))
-                                    .unwrap_or_default()
-                            );
-                            if let Some(h) = &c.hint {
-                                eprintln!("ecdrive states: {h}");
-                            }
-                        }
-                    }
-                    code
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Diag {
-            bus,
-            position,
-            reset,
-            json,
-        } => match session("diag", &bus.interface, move |b| {
-            tools::diag::diag(b, position, reset)
-        }) {
-            Ok(r) if json.json => print_json("diag", &r),
-            Ok(r) => {
-                println!("{}", r.text());
-                ExitCode::SUCCESS
-            }
-            Err(code) => code,
-        },
-        Command::Graph { bus, json } => {
-            let master = bus.interface.clone();
-            match session("graph", &bus.interface, tools::graph::graph) {
-                Ok(g) if json.json => print_json("graph", &g),
-                Ok(g) => {
-                    print!("{}", g.dot(&master));
-                    ExitCode::SUCCESS
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Reg {
-            bus,
-            position,
-            op,
-            json,
-        } => {
-            let r = match op {
-                RegOp::Read {
-                    address,
-                    len,
-                    data_type,
-                } => {
-                    let len = match (len, data_type) {
-                        (Some(l), _) => l,
-                        (None, Some(t)) => match tools::type_len(t) {
-                            Ok(l) => l,
-                            Err(e) => return fail("reg", &e),
-                        },
-                        (None, None) => 1,
-                    };
-                    session("reg", &bus.interface, move |b| {
-                        tools::reg_read(b, position, address, len, data_type)
-                    })
-                }
-                RegOp::Write {
-                    address,
-                    value,
-                    data_type,
-                    bytes: _,
-                } => session("reg", &bus.interface, move |b| {
-                    tools::reg_write(b, position, address, &value, data_type)
-                }),
-            };
-            match r {
-                Ok(r) if json.json => print_json("reg", &r),
-                Ok(r) => {
-                    print::register(&r);
-                    ExitCode::SUCCESS
-                }
-                Err(code) => code,
-            }
-        }
-        Command::Sii {
-            op:
-                Some(SiiOp::Write {
-                    bus,
-                    position,
-                    file,
-                    force,
-                    json,
-                }),
-            ..
-        } => sii_write(&bus.interface, position, &file, force, json.json),
-        Command::Alias {
-            bus,
-            position,
-            alias,
-            json,
-        } => match session("alias", &bus.interface, move |b| {
-            tools::alias::alias(b, position, alias)
-        }) {
-            Ok(r) if json.json => print_json("alias", &r),
-            Ok(r) => {
-                println!(
-                    "device {}: station alias 0x{:04X} (was 0x{:04X}); {} EEPROM word(s) written, \
-                     checksum 0x{:02X}, read back. The ESC loads it at the next power cycle \
-                     (0x0012 reads 0x{:04X} now).",
-                    r.position, r.alias, r.previous, r.words_written, r.checksum, r.register_0x0012
-                );
-                ExitCode::SUCCESS
-            }
-            Err(code) => code,
-        },
-        Command::Foe { op } => foe(op),
-        Command::Sii {
-            op: None,
-            interface: Some(interface),
-            position: Some(position),
-            esi,
-            hex,
-            output,
-            json,
-        } => {
-            let bus = BusArgs { interface };
-            let bar = print::progress("reading the EEPROM");
-            let b2 = bar.clone();
-            let r = session("sii", &bus.interface, move |b| {
-                tools::sii::sii_read(b, position, &mut |done, total| {
-                    b2.set_length(total as u64);
-                    b2.set_position(done as u64);
-                })
-            });
-            bar.finish_and_clear();
-            let dump = match r {
-                Ok(d) => d,
-                Err(code) => return code,
-            };
-            if let Some(path) = &output
-                && let Err(e) = std::fs::write(path, &dump.bytes)
-            {
-                return fail_with(
-                    "sii",
-                    &format!("cannot write {}: {e}", path.display()),
-                    exit::USAGE,
-                );
-            }
-            let info = match tools::sii::SiiInfo::decode(&dump.bytes) {
-                Ok(i) => i,
-                Err(e) => {
-                    return fail_with(
-                        "sii",
-                        &format!("drive {} ({}): {e}", dump.position, dump.drive),
-                        exit::BUS,
-                    );
-                }
-            };
-            if json.json {
-                #[derive(serde::Serialize)]
-                struct Out<'a> {
-                    #[serde(flatten)]
-                    dump: &'a tools::sii::SiiDump,
-                    info: &'a tools::sii::SiiInfo,
-                }
-                return print_json(
-                    "sii",
-                    &Out {
-                        dump: &dump,
-                        info: &info,
-                    },
-                );
-            }
-            if esi {
-                print!("{}", tools::sii::esi_skeleton(&info, &dump.bytes));
-            } else if hex {
-                print::hex_dump(&dump.bytes);
-            } else if output.is_none() {
-                print::sii(&dump, &info);
-            } else if let Some(p) = &output {
-                eprintln!(
-                    "ecdrive sii: wrote {} bytes to {}",
-                    dump.bytes.len(),
-                    p.display()
-                );
-            }
-            ExitCode::SUCCESS
-        }
+        c @ (Command::Upload { .. }
+        | Command::Download { .. }
+        | Command::Sdos { .. }
+        | Command::Pdos { .. }) => bus::dictionary(c),
+        c @ (Command::Slaves { .. }
+        | Command::States { .. }
+        | Command::Reset { .. }
+        | Command::Diag { .. }
+        | Command::Graph { .. }
+        | Command::Reg { .. }
+        | Command::Sii { .. }
+        | Command::Alias { .. }
+        | Command::Foe { .. }) => bus::device(c),
         Command::Eds {
             op: EdsOp::Show { file, json },
-        } => match ecdrive_cli::app::canopen::eds::show(&file) {
-            Ok(s) if json.json => print_json("eds", &s),
-            Ok(s) => {
-                print::eds_summary(&s);
-                ExitCode::SUCCESS
-            }
-            Err(e) => fail_with("eds", &e, exit::USAGE),
-        },
-        Command::Esi { op } => match op {
-            EsiOp::Show { file, json } => match tools::esi::show(&file) {
-                Ok(s) if json.json => print_json("esi", &s),
-                Ok(s) => {
-                    print::esi_summary(&s);
-                    ExitCode::SUCCESS
-                }
-                Err(e) => fail_with("esi", &e.to_string(), exit::USAGE),
-            },
-            EsiOp::Profile {
-                file,
-                device,
-                output,
-            } => match tools::esi::profile(&file, device.as_deref(), output.as_deref()) {
-                Ok(text) => match output {
-                    Some(o) => match std::fs::write(&o, text) {
-                        Ok(()) => {
-                            eprintln!("wrote {}", o.display());
-                            ExitCode::SUCCESS
-                        }
-                        Err(e) => fail_with(
-                            "esi",
-                            &format!("cannot write {}: {e}", o.display()),
-                            exit::USAGE,
-                        ),
-                    },
-                    None => {
-                        print!("{text}");
-                        ExitCode::SUCCESS
-                    }
-                },
-                Err(e) => fail_with("esi", &e, exit::USAGE),
-            },
-            EsiOp::Check { file, json } => {
-                let c = tools::esi::check(&file);
-                if json.json {
-                    let code = print_json("esi", &c);
-                    if code != ExitCode::SUCCESS {
-                        return code;
-                    }
-                } else {
-                    print::esi_check(&c);
-                }
-                if c.valid {
-                    ExitCode::SUCCESS
-                } else {
-                    ExitCode::from(exit::USAGE)
-                }
-            }
-        },
-        Command::Run {
-            config,
-            interface,
-            duration,
-            check,
-            record,
-            plot,
-            esi,
-            candump,
-            json,
-        } => {
-            let code = run::run(
-                &config,
-                interface.as_deref(),
-                duration,
-                check,
-                run::RunFiles {
-                    record: record.as_deref(),
-                    esi: esi.as_deref(),
-                    candump: candump.as_deref(),
-                },
-                json.json,
-            );
-            match (&record, &plot) {
-                (Some(r), Some(p)) if !check => {
-                    let drawn = plot_file(r, p);
-                    if drawn == ExitCode::SUCCESS {
-                        code
-                    } else {
-                        drawn
-                    }
-                }
-                _ => code,
-            }
-        }
+        } => eds_show(&file, json.json),
+        Command::Esi { op } => esi(op),
+        c @ Command::Run { .. } => run::command(c),
         Command::Plot { file, output } => plot_file(&file, &output),
         Command::MarkdownHelp => {
             print!(
@@ -1725,68 +1054,107 @@ fn dispatch(cli: Cli) -> ExitCode {
             );
             ExitCode::SUCCESS
         }
-        Command::Version { json } => {
-            let v = ecdrive_cli::app::version::Version::this_build();
-            if json.json {
-                print_json("version", &v)
-            } else {
-                println!("{}", v.text());
+        Command::Version { json } => version(json.json),
+        c @ Command::Sim { .. } => sim::command(c),
+        Command::Jitter(args) => jitter::run(args),
+    }
+}
+
+/// Whether the command sends EtherCAT frames that `--pcap` can capture: the bus commands and
+/// run.
+fn sends_frames(c: &Command) -> bool {
+    matches!(
+        c,
+        Command::Slaves { .. }
+            | Command::Upload { .. }
+            | Command::Download { .. }
+            | Command::Sdos { .. }
+            | Command::Pdos { .. }
+            | Command::States { .. }
+            | Command::Diag { .. }
+            | Command::Graph { .. }
+            | Command::Reg { .. }
+            | Command::Sii { .. }
+            | Command::Alias { .. }
+            | Command::Foe { .. }
+            | Command::Run { .. }
+            | Command::Demo(_)
+    )
+}
+
+/// `ecdrive eds show`.
+fn eds_show(file: &std::path::Path, json: bool) -> ExitCode {
+    match ecdrive_cli::app::canopen::eds::show(file) {
+        Ok(s) if json => print_json("eds", &s),
+        Ok(s) => {
+            print::eds_summary(&s);
+            ExitCode::SUCCESS
+        }
+        Err(e) => fail_with("eds", &e, exit::USAGE),
+    }
+}
+
+/// `ecdrive esi show|profile|check`.
+fn esi(op: EsiOp) -> ExitCode {
+    match op {
+        EsiOp::Show { file, json } => match tools::esi::show(&file) {
+            Ok(s) if json.json => print_json("esi", &s),
+            Ok(s) => {
+                print::esi_summary(&s);
                 ExitCode::SUCCESS
             }
-        }
-        Command::Sim {
-            can: Some(bus),
-            nodes,
-            json,
-            devices,
-            faults,
-            ..
-        } => {
-            // The EtherCAT segment's devices and faults mean nothing on a CAN bus: say so
-            // rather than serve without them.
-            if !devices.is_empty() || !faults.is_empty() {
-                return fail_with(
-                    "sim",
-                    "--device and the fault options (--alarm, --drop, …) are for an EtherCAT \
-                     segment; with --can, give the CANopen drives with --node (faults: inject \
-                     them in-process through `sim::canopen::EmulatedNode::inject_alarm`)",
-                    exit::USAGE,
-                );
-            }
-            can::sim(&bus, &nodes, json.json)
-        }
-        Command::Sim {
-            interface,
-            can: None,
-            nodes: _,
-            devices,
-            sm_watchdog,
-            no_loss_detection,
-            priority,
-            cpu,
-            list_devices,
-            faults,
-            store,
-            json,
-        } => sim::sim(
-            sim::SimRt {
-                priority: Some(priority),
-                cpu,
-                sm_watchdog,
-                loss_detection: !no_loss_detection,
+            Err(e) => fail_with("esi", &e.to_string(), exit::USAGE),
+        },
+        EsiOp::Profile {
+            file,
+            device,
+            output,
+        } => match tools::esi::profile(&file, device.as_deref(), output.as_deref()) {
+            Ok(text) => match output {
+                Some(o) => match std::fs::write(&o, text) {
+                    Ok(()) => {
+                        eprintln!("wrote {}", o.display());
+                        ExitCode::SUCCESS
+                    }
+                    Err(e) => fail_with(
+                        "esi",
+                        &format!("cannot write {}: {e}", o.display()),
+                        exit::USAGE,
+                    ),
+                },
+                None => {
+                    print!("{text}");
+                    ExitCode::SUCCESS
+                }
             },
-            interface,
-            devices,
-            list_devices,
-            faults,
-            store,
-            json.json,
-        ),
-        Command::Jitter(args) => jitter::run(args),
-        Command::Sii { op: None, .. } => fail_with(
-            "sii",
-            "--interface and --position are required (see --help)",
-            exit::USAGE,
-        ),
+            Err(e) => fail_with("esi", &e, exit::USAGE),
+        },
+        EsiOp::Check { file, json } => {
+            let c = tools::esi::check(&file);
+            if json.json {
+                let code = print_json("esi", &c);
+                if code != ExitCode::SUCCESS {
+                    return code;
+                }
+            } else {
+                print::esi_check(&c);
+            }
+            if c.valid {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(exit::USAGE)
+            }
+        }
+    }
+}
+
+/// `ecdrive version`.
+fn version(json: bool) -> ExitCode {
+    let v = ecdrive_cli::app::version::Version::this_build();
+    if json {
+        print_json("version", &v)
+    } else {
+        println!("{}", v.text());
+        ExitCode::SUCCESS
     }
 }

@@ -1,7 +1,9 @@
 //! Text output of the commands: tables and listings in the style of the IgH `ethercat` tool.
 
 use ecdrive_cli::app::ethercat::tools::esi::{EsiCheck, EsiSummary};
-use ecdrive_cli::app::ethercat::tools::run::{RunProgress, RunReport};
+use ecdrive_cli::app::ethercat::tools::run::{
+    CycleSummary, DriveRunReport, IoRunReport, RunProgress, RunReport,
+};
 use ecdrive_cli::app::ethercat::tools::sii::{SiiDump, SiiInfo};
 use ecdrive_cli::app::ethercat::tools::{
     OdListing, PdoReport, RegisterData, SdoValue, SlaveReport, StateChange,
@@ -727,6 +729,8 @@ fn us(ns: u64) -> String {
     format!("{:.1}", ns as f64 / 1000.0)
 }
 
+/// The report of `ecdrive run`: the outcome, each device in line order, start-up, the
+/// recording, the cycle.
 pub fn run_report(r: &RunReport) {
     println!(
         "{} on {}: {} ({}), {:.2} s, cycle {} µs",
@@ -745,99 +749,10 @@ pub fn run_report(r: &RunReport) {
         .max();
     for pos in 0..=last.unwrap_or(0) {
         if let Some(o) = r.io.iter().find(|o| o.position == pos) {
-            println!();
-            println!(
-                "Device {} {} (vendor 0x{:08X} product 0x{:08X}), not driven: {}",
-                o.position, o.device.name, o.device.vendor_id, o.device.product_code, o.why
-            );
-            println!(
-                "  Process data:        {} output, {} input bytes",
-                o.outputs, o.inputs
-            );
-            println!(
-                "  Last inputs:         {}",
-                if o.last_inputs.is_empty() {
-                    "none".to_string()
-                } else {
-                    o.last_inputs
-                        .iter()
-                        .map(|b| format!("{b:02X}"))
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                }
-            );
+            io_device(o);
         }
-        let Some(d) = r.drives.iter().find(|d| d.position == pos) else {
-            continue;
-        };
-        println!();
-        println!(
-            "Drive {} {} ({}, vendor 0x{:08X} product 0x{:08X}), start mode {}",
-            d.position, d.name, d.device.name, d.device.vendor_id, d.device.product_code, d.mode
-        );
-        let list = |v: &[u16]| {
-            v.iter()
-                .map(|i| format!("0x{i:04X}"))
-                .collect::<Vec<_>>()
-                .join("+")
-        };
-        println!(
-            "  Process data:        RxPDO {} ({} bytes), TxPDO {} ({} bytes)",
-            list(&d.pdos.0),
-            d.image_bytes.0,
-            list(&d.pdos.1),
-            d.image_bytes.1
-        );
-        println!("  States:              {}", d.states.join(" → "));
-        println!(
-            "  Modes run:           {}",
-            if d.modes_run.is_empty() {
-                "none".into()
-            } else {
-                d.modes_run.join(", ")
-            }
-        );
-        for l in &d.probe_latches {
-            let at = match (&d.units, l.value) {
-                (Some(u), Some(v)) => format!("{v:.4} {} ({} counts)", u.name, l.counts),
-                _ => format!("{} counts", l.counts),
-            };
-            println!(
-                "  Touch probe {}:       latched on the {} edge at {at}",
-                l.probe, l.edge
-            );
-        }
-        let drive_fe = if d.following_error_drive_stuck {
-            "; the drive's 0x60F4 stayed 0 while moving (not trusted)".to_string()
-        } else {
-            d.max_following_error_drive
-                .map_or(String::new(), |v| format!("; drive's 0x60F4 at most {v}"))
-        };
-        match (&d.units, d.max_following_error_units) {
-            (Some(u), Some(v)) => println!(
-                "  Max following error: {} counts ({v:.4} {}){drive_fe}",
-                d.max_following_error, u.name
-            ),
-            _ => println!(
-                "  Max following error: {} counts{drive_fe}",
-                d.max_following_error
-            ),
-        }
-        println!(
-            "  Program:             {}/{} steps{}",
-            d.steps_done,
-            d.program.len(),
-            if d.program.is_empty() {
-                String::new()
-            } else {
-                format!(": {}", d.program.join("; "))
-            }
-        );
-        for e in &d.errors {
-            println!("  Error:               {e}");
-        }
-        for w in &d.warnings {
-            println!("  Warning:             {w}");
+        if let Some(d) = r.drives.iter().find(|d| d.position == pos) {
+            drive_report(d);
         }
     }
     if let Some(t) = &r.startup {
@@ -857,50 +772,154 @@ pub fn run_report(r: &RunReport) {
         );
     }
     if let Some(c) = &r.cycle {
-        println!();
-        println!(
-            "Cycle: {} cycles, {} lost, {} overruns{}",
-            c.cycles,
-            c.lost,
-            c.overruns,
-            match (c.priority, c.cpu) {
-                (Some(p), Some(cpu)) => format!(", SCHED_FIFO {p} on CPU {cpu}"),
-                (Some(p), None) => format!(", SCHED_FIFO {p}"),
-                (None, Some(cpu)) => format!(", CPU {cpu}"),
-                (None, None) => String::new(),
-            }
-        );
-        let f = &c.frames;
-        let per_s = |n: u64| n as f64 / f.seconds.max(1e-9);
-        println!(
-            "Frames: {} sent ({:.0}/s), {} answered, {} retransmitted; cycles {} lost, {} late, {} with a wrong working counter",
-            f.sent,
-            per_s(f.sent),
-            f.answered,
-            f.retransmitted,
-            f.lost,
-            f.late,
-            f.wrong_wkc
-        );
-        println!("                 p50 µs    p99 µs    max µs");
-        for (name, s) in [
-            ("wake latency", &c.wake_latency),
-            ("period", &c.period),
-            ("exchange", &c.exchange),
-        ] {
-            println!(
-                "  {name:<12} {:>9} {:>9} {:>9}",
-                us(s.p50),
-                us(s.p99),
-                us(s.max)
-            );
-        }
-        for w in &c.rt_warnings {
-            println!("  warning: {w}");
-        }
+        cycle_report(c);
     }
     if !r.shutdown_ok {
         println!("Not every drive confirmed INIT at the end.");
+    }
+}
+
+/// A device of the run that is not a drive: its process data and last inputs.
+fn io_device(o: &IoRunReport) {
+    println!();
+    println!(
+        "Device {} {} (vendor 0x{:08X} product 0x{:08X}), not driven: {}",
+        o.position, o.device.name, o.device.vendor_id, o.device.product_code, o.why
+    );
+    println!(
+        "  Process data:        {} output, {} input bytes",
+        o.outputs, o.inputs
+    );
+    println!(
+        "  Last inputs:         {}",
+        if o.last_inputs.is_empty() {
+            "none".to_string()
+        } else {
+            o.last_inputs
+                .iter()
+                .map(|b| format!("{b:02X}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        }
+    );
+}
+
+/// A drive of the run: its process data, states, modes, probes, following error, program,
+/// errors and warnings.
+fn drive_report(d: &DriveRunReport) {
+    println!();
+    println!(
+        "Drive {} {} ({}, vendor 0x{:08X} product 0x{:08X}), start mode {}",
+        d.position, d.name, d.device.name, d.device.vendor_id, d.device.product_code, d.mode
+    );
+    let list = |v: &[u16]| {
+        v.iter()
+            .map(|i| format!("0x{i:04X}"))
+            .collect::<Vec<_>>()
+            .join("+")
+    };
+    println!(
+        "  Process data:        RxPDO {} ({} bytes), TxPDO {} ({} bytes)",
+        list(&d.pdos.0),
+        d.image_bytes.0,
+        list(&d.pdos.1),
+        d.image_bytes.1
+    );
+    println!("  States:              {}", d.states.join(" → "));
+    println!(
+        "  Modes run:           {}",
+        if d.modes_run.is_empty() {
+            "none".into()
+        } else {
+            d.modes_run.join(", ")
+        }
+    );
+    for l in &d.probe_latches {
+        let at = match (&d.units, l.value) {
+            (Some(u), Some(v)) => format!("{v:.4} {} ({} counts)", u.name, l.counts),
+            _ => format!("{} counts", l.counts),
+        };
+        println!(
+            "  Touch probe {}:       latched on the {} edge at {at}",
+            l.probe, l.edge
+        );
+    }
+    let drive_fe = if d.following_error_drive_stuck {
+        "; the drive's 0x60F4 stayed 0 while moving (not trusted)".to_string()
+    } else {
+        d.max_following_error_drive
+            .map_or(String::new(), |v| format!("; drive's 0x60F4 at most {v}"))
+    };
+    match (&d.units, d.max_following_error_units) {
+        (Some(u), Some(v)) => println!(
+            "  Max following error: {} counts ({v:.4} {}){drive_fe}",
+            d.max_following_error, u.name
+        ),
+        _ => println!(
+            "  Max following error: {} counts{drive_fe}",
+            d.max_following_error
+        ),
+    }
+    println!(
+        "  Program:             {}/{} steps{}",
+        d.steps_done,
+        d.program.len(),
+        if d.program.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", d.program.join("; "))
+        }
+    );
+    for e in &d.errors {
+        println!("  Error:               {e}");
+    }
+    for w in &d.warnings {
+        println!("  Warning:             {w}");
+    }
+}
+
+/// The cycle of the run: cycles, lost frames and overruns, the frames, the latencies.
+fn cycle_report(c: &CycleSummary) {
+    println!();
+    println!(
+        "Cycle: {} cycles, {} lost, {} overruns{}",
+        c.cycles,
+        c.lost,
+        c.overruns,
+        match (c.priority, c.cpu) {
+            (Some(p), Some(cpu)) => format!(", SCHED_FIFO {p} on CPU {cpu}"),
+            (Some(p), None) => format!(", SCHED_FIFO {p}"),
+            (None, Some(cpu)) => format!(", CPU {cpu}"),
+            (None, None) => String::new(),
+        }
+    );
+    let f = &c.frames;
+    let per_s = |n: u64| n as f64 / f.seconds.max(1e-9);
+    println!(
+        "Frames: {} sent ({:.0}/s), {} answered, {} retransmitted; cycles {} lost, {} late, {} with a wrong working counter",
+        f.sent,
+        per_s(f.sent),
+        f.answered,
+        f.retransmitted,
+        f.lost,
+        f.late,
+        f.wrong_wkc
+    );
+    println!("                 p50 µs    p99 µs    max µs");
+    for (name, s) in [
+        ("wake latency", &c.wake_latency),
+        ("period", &c.period),
+        ("exchange", &c.exchange),
+    ] {
+        println!(
+            "  {name:<12} {:>9} {:>9} {:>9}",
+            us(s.p50),
+            us(s.p99),
+            us(s.max)
+        );
+    }
+    for w in &c.rt_warnings {
+        println!("  warning: {w}");
     }
 }
 

@@ -1,10 +1,56 @@
 //! `ecdrive run -c FILE`: a cyclic run from a configuration file.
 
-use crate::{exit, fail, fail_with, print, print_json};
+use crate::{Command, exit, fail, fail_with, plot_file, print, print_json};
 use ecdrive_cli::app::ethercat::tools::run::{Outcome, RunOptions, RunProgress, run as run_config};
 use std::path::Path;
 use std::process::ExitCode;
 use std::time::Duration;
+
+/// `ecdrive run`: the run, then with `--record` and `--plot` the recording drawn, whatever
+/// the run's end (a failed drawing is the command's failure).
+pub fn command(c: Command) -> ExitCode {
+    match c {
+        Command::Run {
+            config,
+            interface,
+            duration,
+            check,
+            record,
+            plot,
+            esi,
+            candump,
+            json,
+        } => {
+            let files = RunFiles {
+                record: record.as_deref(),
+                esi: esi.as_deref(),
+                candump: candump.as_deref(),
+            };
+            let code = run(
+                &config,
+                interface.as_deref(),
+                duration,
+                check,
+                files,
+                json.json,
+            );
+            // With --plot, the recording is drawn after the run, whatever its end; a failed
+            // drawing is the command's failure.
+            match (&record, &plot) {
+                (Some(r), Some(p)) if !check => {
+                    let drawn = plot_file(r, p);
+                    if drawn == ExitCode::SUCCESS {
+                        code
+                    } else {
+                        drawn
+                    }
+                }
+                _ => code,
+            }
+        }
+        _ => unreachable!("dispatch sends only run here"),
+    }
+}
 
 pub fn run(
     path: &Path,

@@ -1,7 +1,7 @@
 //! `ecdrive sim`: serve emulated devices on an interface until Ctrl-C, optionally injecting
 //! faults.
 
-use crate::{exit, fail_with, print_json};
+use crate::{Command, exit, fail_with, print_json};
 use ecdrive::sim::faults::{Corruption, DropLeg, LinkFault};
 use ecdrive::sim::run::{FaultSpec, ScheduledFault, SimError};
 use std::process::ExitCode;
@@ -546,6 +546,62 @@ pub struct SimRt {
     pub loss_detection: bool,
 }
 
+/// `ecdrive sim`: emulated EtherCAT devices on an interface, or with `--can` CANopen drives
+/// on a CAN bus.
+pub fn command(c: Command) -> ExitCode {
+    match c {
+        Command::Sim {
+            can: Some(bus),
+            nodes,
+            json,
+            devices,
+            faults,
+            ..
+        } => {
+            // The EtherCAT segment's devices and faults mean nothing on a CAN bus: say so
+            // rather than serve without them.
+            if !devices.is_empty() || !faults.is_empty() {
+                return fail_with(
+                    "sim",
+                    "--device and the fault options (--alarm, --drop, …) are for an EtherCAT \
+                     segment; with --can, give the CANopen drives with --node (faults: inject \
+                     them in-process through `sim::canopen::EmulatedNode::inject_alarm`)",
+                    exit::USAGE,
+                );
+            }
+            crate::can::sim(&bus, &nodes, json.json)
+        }
+        Command::Sim {
+            interface,
+            can: None,
+            nodes: _,
+            devices,
+            sm_watchdog,
+            no_loss_detection,
+            priority,
+            cpu,
+            list_devices,
+            faults,
+            store,
+            json,
+        } => sim(
+            SimRt {
+                priority: Some(priority),
+                cpu,
+                sm_watchdog,
+                loss_detection: !no_loss_detection,
+            },
+            interface,
+            devices,
+            list_devices,
+            faults,
+            store,
+            json.json,
+        ),
+        _ => unreachable!("dispatch sends only sim here"),
+    }
+}
+
 pub fn sim(
     rt: SimRt,
     interface: Option<String>,
@@ -559,79 +615,7 @@ pub fn sim(
         return make_firmware(&devices, &store, path);
     }
     if list_devices {
-        use ecdrive_cli::app::canopen::tools::EMULATED_NODES;
-        let names = ecdrive::sim::devices::device_names();
-        use ecdrive::sim::quirks::Quirk;
-        if json {
-            #[derive(serde::Serialize)]
-            struct Dev {
-                name: &'static str,
-                description: String,
-            }
-            #[derive(serde::Serialize)]
-            struct List {
-                devices: Vec<Dev>,
-                quirks: Vec<Dev>,
-                can_nodes: Vec<CanNode>,
-            }
-            #[derive(serde::Serialize)]
-            struct CanNode {
-                name: &'static str,
-                profile: &'static str,
-                node: u8,
-            }
-            let list = List {
-                devices: names
-                    .into_iter()
-                    .map(|(name, description)| Dev { name, description })
-                    .collect(),
-                quirks: Quirk::ALL
-                    .into_iter()
-                    .map(|q| Dev {
-                        name: q.name(),
-                        description: q.describe().into(),
-                    })
-                    .collect(),
-                can_nodes: EMULATED_NODES
-                    .iter()
-                    .map(|(name, _, node)| CanNode {
-                        name,
-                        profile: ecdrive::sim::canopen::drives::by_name(name)
-                            .map_or("-", |e| e.name),
-                        node: *node,
-                    })
-                    .collect(),
-            };
-            return print_json("sim", &list);
-        }
-        for (name, what) in names {
-            println!("{name:14} {what}");
-        }
-        println!();
-        println!("Quirks (behaviour of devices ecdrive did not write): DEVICE+QUIRK[+QUIRK…]");
-        for q in Quirk::ALL {
-            println!("  {:30} {}", q.name(), q.describe());
-        }
-        println!();
-        println!(
-            "Stored parameters (emulated drives): DEVICE@OBJECT=VALUE[@…], in effect from \
-             power-on, e.g. mr-j4-tm@0x2001=2 ([Pr. PA01] = profile mode)"
-        );
-        println!();
-        println!("CANopen drives (ecdrive sim --can BUS --node NAME[@ID]), default node-ID:");
-        for (name, _, node) in EMULATED_NODES {
-            if let Some(e) = ecdrive::sim::canopen::drives::by_name(name) {
-                println!(
-                    "  {name:26} {} ({}), node {node} (0x{node:02X})",
-                    e.name, e.source
-                );
-            }
-        }
-        println!(
-            "  eds:FILE@ID                any CiA 402 drive from its EDS/DCF file; NAME+eds:FILE \
-             a drive above with its vendor's file as its dictionary"
-        );
-        return ExitCode::SUCCESS;
+        return list(json);
     }
     let Some(interface) = interface else {
         return fail_with("sim", "--interface is required", exit::USAGE);
@@ -677,6 +661,89 @@ pub fn sim(
         lock_memory: false,
     };
     let served = prepared.serve_rt(&stop, &settings);
+    say_eeproms_saved(&prepared, &store);
+    served_report(served, &prepared, !faults.is_empty(), json)
+}
+
+/// `ecdrive sim --list-devices`: the emulated devices, the quirks, the stored parameters and
+/// the CANopen drives.
+fn list(json: bool) -> ExitCode {
+    use ecdrive_cli::app::canopen::tools::EMULATED_NODES;
+    let names = ecdrive::sim::devices::device_names();
+    use ecdrive::sim::quirks::Quirk;
+    if json {
+        #[derive(serde::Serialize)]
+        struct Dev {
+            name: &'static str,
+            description: String,
+        }
+        #[derive(serde::Serialize)]
+        struct List {
+            devices: Vec<Dev>,
+            quirks: Vec<Dev>,
+            can_nodes: Vec<CanNode>,
+        }
+        #[derive(serde::Serialize)]
+        struct CanNode {
+            name: &'static str,
+            profile: &'static str,
+            node: u8,
+        }
+        let list = List {
+            devices: names
+                .into_iter()
+                .map(|(name, description)| Dev { name, description })
+                .collect(),
+            quirks: Quirk::ALL
+                .into_iter()
+                .map(|q| Dev {
+                    name: q.name(),
+                    description: q.describe().into(),
+                })
+                .collect(),
+            can_nodes: EMULATED_NODES
+                .iter()
+                .map(|(name, _, node)| CanNode {
+                    name,
+                    profile: ecdrive::sim::canopen::drives::by_name(name).map_or("-", |e| e.name),
+                    node: *node,
+                })
+                .collect(),
+        };
+        return print_json("sim", &list);
+    }
+    for (name, what) in names {
+        println!("{name:14} {what}");
+    }
+    println!();
+    println!("Quirks (behaviour of devices ecdrive did not write): DEVICE+QUIRK[+QUIRK…]");
+    for q in Quirk::ALL {
+        println!("  {:30} {}", q.name(), q.describe());
+    }
+    println!();
+    println!(
+        "Stored parameters (emulated drives): DEVICE@OBJECT=VALUE[@…], in effect from \
+         power-on, e.g. mr-j4-tm@0x2001=2 ([Pr. PA01] = profile mode)"
+    );
+    println!();
+    println!("CANopen drives (ecdrive sim --can BUS --node NAME[@ID]), default node-ID:");
+    for (name, _, node) in EMULATED_NODES {
+        if let Some(e) = ecdrive::sim::canopen::drives::by_name(name) {
+            println!(
+                "  {name:26} {} ({}), node {node} (0x{node:02X})",
+                e.name, e.source
+            );
+        }
+    }
+    println!(
+        "  eds:FILE@ID                any CiA 402 drive from its EDS/DCF file; NAME+eds:FILE \
+         a drive above with its vendor's file as its dictionary"
+    );
+    ExitCode::SUCCESS
+}
+
+/// Where the EEPROMs were saved (with `--eeprom-dir`), or why not.
+fn say_eeproms_saved(prepared: &ecdrive::sim::run::Prepared, store: &StoreArgs) {
     match prepared.save_eeproms() {
         Ok(files) if !files.is_empty() => {
             eprintln!(
@@ -691,6 +758,16 @@ pub fn sim(
         Ok(_) => {}
         Err(e) => eprintln!("ecdrive sim: {e}"),
     }
+}
+
+/// What serving did: the frames answered and dropped, what the faults injected, and with
+/// `--json` the report.
+fn served_report(
+    served: Result<ecdrive::sim::transport::ServeStats, SimError>,
+    prepared: &ecdrive::sim::run::Prepared,
+    injected: bool,
+    json: bool,
+) -> ExitCode {
     match served {
         Ok(stats) => {
             let seg = prepared.segment_stats();
@@ -704,7 +781,7 @@ pub fn sim(
                     String::new()
                 }
             );
-            if !faults.is_empty() {
+            if injected {
                 eprintln!(
                     "ecdrive sim: injected: {} frames dropped ({} on the way back), {} delayed, \
                      {} corrupted, {} lost while disconnected; {} faults applied, {} ignored",

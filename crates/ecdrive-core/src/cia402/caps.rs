@@ -218,6 +218,15 @@ impl DriveCaps {
         pp_target_range: None,
     };
 
+    /// The range a pp target of `target` counts is beyond, where the drive narrows 0x607A in
+    /// pp ([`DriveCaps::pp_target_range`]) and the target, rounded as it is written, is outside
+    /// it; `None` when the drive takes it. The one check of the run file's steps, start-up's
+    /// and the axis's targets.
+    pub fn pp_target_outside(&self, target: f64) -> Option<ValueRange> {
+        self.pp_target_range
+            .filter(|r| !r.contains(target.round() as i64))
+    }
+
     /// Whether `mode` is a position mode on this drive: the standard ones, plus the listed
     /// vendor modes.
     pub fn is_position_mode(&self, mode: OperationMode) -> bool {

@@ -185,7 +185,8 @@ impl CycleApp for AuditApp {
 }
 
 /// pp with a set of set-points and a touch probe armed, pv, tq, pv to rest, in counts (the
-/// profile objects by [`profile_objects`]).
+/// profile objects are written by [`profile_objects`], in each drive's unit: the steps' profile
+/// values are what a run file would convert, the BDHDE's counts).
 fn profile_program() -> Vec<Step> {
     vec![
         Step::TouchProbe {
@@ -196,21 +197,28 @@ fn profile_program() -> Vec<Step> {
             targets: vec![20_000.0, 0.0],
             relative: false,
             immediate: false,
+            velocity: 2_000_000.0,
+            acceleration: 20_000_000.0,
+            deceleration: None,
         },
         Step::Mode { mode: RunMode::Pv },
         Step::Pv {
             velocity: 50_000.0,
+            acceleration: 20_000_000.0,
+            deceleration: None,
             seconds: 0.05,
         },
         Step::Mode { mode: RunMode::Tq },
         Step::Tq {
             torque: 20.0,
+            slope: None,
             seconds: 0.05,
-            ramp: 0.0,
         },
         Step::Mode { mode: RunMode::Pv },
         Step::Pv {
             velocity: 0.0,
+            acceleration: 20_000_000.0,
+            deceleration: None,
             seconds: 0.0,
         },
         Step::Dwell { seconds: 0.2 },
