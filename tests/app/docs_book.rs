@@ -36,6 +36,33 @@ fn the_cli_reference_is_what_the_parser_says() {
     );
 }
 
+/// The book's key index is what the run-file parser takes, table by table and step by step.
+#[test]
+fn the_configuration_key_index_is_what_the_parser_says() {
+    let generated = ecdrive(&["markdown-help", "config"]);
+    let generated = generated.ok();
+    let committed =
+        std::fs::read_to_string(Path::new(ROOT).join("docs/reference/configuration-keys.md"))
+            .expect("docs/reference/configuration-keys.md");
+    assert!(
+        generated == committed,
+        "docs/reference/configuration-keys.md is not what `ecdrive markdown-help config` \
+         prints: run scripts/docs-reference and commit the result"
+    );
+    // Every table and step came with its keys (an empty list: the probe found no error list).
+    for line in committed
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| table"))
+    {
+        if line.starts_with("| `step =`") {
+            continue;
+        }
+        assert!(line.trim_end().ends_with("` |"), "no keys: {line}");
+    }
+    assert!(committed.contains("| [[drive]] | "), "{committed}");
+    assert!(committed.contains("| `move` | "), "{committed}");
+}
+
 /// The chapters `docs/SUMMARY.md` lists.
 fn chapters() -> Vec<PathBuf> {
     let docs = Path::new(ROOT).join("docs");
@@ -198,24 +225,12 @@ fn the_book_builds() {
     let _ = std::fs::remove_dir_all(&out);
 }
 
-/// The keys the configuration parser takes where `text` puts the key `zzz`, read from its own
-/// "unknown key" error (the list serde gives: the schema itself).
+/// The keys the configuration parser takes where `text` puts the key `zzz` (the parser's own
+/// "unknown key" list: the schema itself).
 fn parser_keys(text: &str) -> Vec<String> {
-    let e = match ecdrive_cli::app::config::parse_any(text, "probe.toml") {
-        Ok(_) => panic!("{text}: zzz was taken"),
-        Err(e) => e.message,
-    };
-    // "… `zzz`, the keys allowed here are `a`, `b`", "… expected `a` or `b`", "… expected `a`".
-    let list = e
-        .split_once("`zzz`")
-        .map(|(_, rest)| rest)
-        .filter(|rest| rest.contains("expected") || rest.contains("allowed"))
-        .unwrap_or_else(|| panic!("{text}: {e}"));
-    list.split('`')
-        .skip(1)
-        .step_by(2)
-        .map(str::to_string)
-        .collect()
+    let keys = ecdrive_cli::app::config::schema::keys_at(text);
+    assert!(!keys.is_empty(), "{text}: the parser listed no keys");
+    keys
 }
 
 /// The words inside backticks of `text` (`identity = { vendor_id, product_code }` gives

@@ -6,7 +6,7 @@
 //! counts per second, torques in the drive's torque unit; the cycle converts velocities to the
 //! drive's velocity object unit with the drive profile.
 
-use super::setpoint::{Jog, Move, ProfileError, Sample, Sine, TorqueStep, VelocityRamp};
+use super::setpoint::{Jog, Move, Sample, ShapeError, Sine, TorqueStep, VelocityRamp};
 use crate::cia402::OperationMode;
 use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize};
@@ -602,13 +602,13 @@ pub enum ProgramError {
     },
     /// A step's parameters are invalid.
     #[error("step {index} ({what}): {source}")]
-    Profile {
+    Shape {
         /// Step number (0-based).
         index: usize,
         /// The step.
         what: String,
         /// The parameter problem.
-        source: ProfileError,
+        source: ShapeError,
     },
     /// A `ProbeWait` step waits for a probe no earlier step arms.
     #[error(
@@ -657,7 +657,7 @@ pub fn validate(steps: &[Step], start: RunMode) -> Result<(), ProgramError> {
             });
         }
         // Plan it once from a neutral state to check the parameters.
-        plan(s, &Sample::default()).map_err(|source| ProgramError::Profile {
+        plan_step(s, &Sample::default()).map_err(|source| ProgramError::Shape {
             index,
             what: s.describe(),
             source,
@@ -774,18 +774,18 @@ enum Planned {
 }
 
 /// A probe number: 1 or 2.
-fn check_probe(probe: u8) -> Result<(), ProfileError> {
+fn check_probe(probe: u8) -> Result<(), ShapeError> {
     if matches!(probe, 1 | 2) {
         Ok(())
     } else {
-        Err(ProfileError::NotFinite {
+        Err(ShapeError::NotFinite {
             name: "probe (1 or 2)",
             value: f64::from(probe),
         })
     }
 }
 
-fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
+fn plan_step(step: &Step, from: &Sample) -> Result<Planned, ShapeError> {
     match plan_waiting(step, from)? {
         Some(p) => Ok(p),
         None => plan_setpoints(step, from),
@@ -794,20 +794,20 @@ fn plan(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
 
 /// The plan of a step that hands the motion to the drive or waits (mode, home, pp, pv, tq,
 /// probes); `None` for a step whose set-points the master generates.
-fn plan_waiting(step: &Step, from: &Sample) -> Result<Option<Planned>, ProfileError> {
+fn plan_waiting(step: &Step, from: &Sample) -> Result<Option<Planned>, ShapeError> {
     Ok(Some(match *step {
         Step::Mode { .. } => Planned::Mode,
         Step::Home { .. } => Planned::Drive,
         Step::Pp { ref targets, .. } => {
             if targets.is_empty() {
-                return Err(ProfileError::NotFinite {
+                return Err(ShapeError::NotFinite {
                     name: "targets (none given)",
                     value: f64::NAN,
                 });
             }
             for &t in targets {
                 if !(t.is_finite() && t.abs() <= f64::from(i32::MAX)) {
-                    return Err(ProfileError::NotFinite {
+                    return Err(ShapeError::NotFinite {
                         name: "a pp target (within ±2^31 counts)",
                         value: t,
                     });
@@ -855,7 +855,7 @@ fn plan_waiting(step: &Step, from: &Sample) -> Result<Option<Planned>, ProfileEr
 
 /// The plan of a step whose set-points the master generates (move, sine, ramp, jog, torque,
 /// dwell).
-fn plan_setpoints(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
+fn plan_setpoints(step: &Step, from: &Sample) -> Result<Planned, ShapeError> {
     Ok(match *step {
         Step::Mode { .. }
         | Step::Home { .. }
@@ -934,26 +934,26 @@ fn plan_setpoints(step: &Step, from: &Sample) -> Result<Planned, ProfileError> {
 }
 
 /// A step [`plan_waiting`] plans never reaches [`plan_setpoints`].
-fn unreachable_plan() -> Result<Planned, ProfileError> {
-    Err(ProfileError::NotFinite {
+fn unreachable_plan() -> Result<Planned, ShapeError> {
+    Err(ShapeError::NotFinite {
         name: "a step planned twice",
         value: f64::NAN,
     })
 }
 
-fn finite(name: &'static str, value: f64) -> Result<f64, ProfileError> {
+fn finite(name: &'static str, value: f64) -> Result<f64, ShapeError> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(ProfileError::NotFinite { name, value })
+        Err(ShapeError::NotFinite { name, value })
     }
 }
 
-fn non_negative(name: &'static str, value: f64) -> Result<f64, ProfileError> {
+fn non_negative(name: &'static str, value: f64) -> Result<f64, ShapeError> {
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {
-        Err(ProfileError::Negative { name, value })
+        Err(ShapeError::Negative { name, value })
     }
 }
 
@@ -1020,7 +1020,7 @@ pub struct Runner {
     step_t: f64,
     last: Sample,
     waiting_for_mode: bool,
-    failed: Option<(usize, ProfileError)>,
+    failed: Option<(usize, ShapeError)>,
 }
 
 impl Runner {
@@ -1074,7 +1074,7 @@ impl Runner {
 
     /// A step that could not be planned at run time (its index and why); the runner holds the
     /// last set-point after it.
-    pub fn failure(&self) -> Option<&(usize, ProfileError)> {
+    pub fn failure(&self) -> Option<&(usize, ShapeError)> {
         self.failed.as_ref()
     }
 
@@ -1127,7 +1127,7 @@ impl Runner {
         if !matches!(probe, 1 | 2) {
             self.failed = Some((
                 self.index,
-                ProfileError::NotFinite {
+                ShapeError::NotFinite {
                     name: "probe (1 or 2)",
                     value: f64::from(probe),
                 },
@@ -1218,7 +1218,7 @@ impl Runner {
                 s if s.run_by_drive() => {
                     // Checked once, when the step starts.
                     if self.planned.is_none() {
-                        match plan(s, &self.last) {
+                        match plan_step(s, &self.last) {
                             Ok(p) => self.planned = Some(p),
                             Err(e) => {
                                 self.failed = Some((self.index, e));
@@ -1232,7 +1232,7 @@ impl Runner {
             }
             let planned = match self.planned {
                 Some(p) => p,
-                None => match plan(step, &self.last) {
+                None => match plan_step(step, &self.last) {
                     Ok(p) => {
                         self.planned = Some(p);
                         self.started_at = now;
@@ -1593,7 +1593,7 @@ mod tests {
                 }],
                 RunMode::Csp
             ),
-            Err(ProgramError::Profile { .. })
+            Err(ProgramError::Shape { .. })
         ));
     }
 

@@ -22,9 +22,9 @@ pub struct Sample {
     pub done: bool,
 }
 
-/// An invalid profile request.
+/// A motion shape that cannot be planned (a limit or a value out of range).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ProfileError {
+pub enum ShapeError {
     /// A limit is zero, negative or not a number.
     #[error("{name} must be a positive finite number, got {value}")]
     BadLimit {
@@ -51,19 +51,19 @@ pub enum ProfileError {
     },
 }
 
-fn positive(name: &'static str, value: f64) -> Result<f64, ProfileError> {
+fn positive(name: &'static str, value: f64) -> Result<f64, ShapeError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
-        Err(ProfileError::BadLimit { name, value })
+        Err(ShapeError::BadLimit { name, value })
     }
 }
 
-fn finite(name: &'static str, value: f64) -> Result<f64, ProfileError> {
+fn finite(name: &'static str, value: f64) -> Result<f64, ShapeError> {
     if value.is_finite() {
         Ok(value)
     } else {
-        Err(ProfileError::NotFinite { name, value })
+        Err(ShapeError::NotFinite { name, value })
     }
 }
 
@@ -105,7 +105,7 @@ impl Move {
     /// A move from `start` to `end` with a trapezoidal velocity profile: constant acceleration
     /// `acc` up to at most `vel`, cruise, constant deceleration. Short moves never reach `vel`
     /// (triangular profile).
-    pub fn trapezoid(start: f64, end: f64, vel: f64, acc: f64) -> Result<Self, ProfileError> {
+    pub fn trapezoid(start: f64, end: f64, vel: f64, acc: f64) -> Result<Self, ShapeError> {
         let (start, end) = (finite("start", start)?, finite("end", end)?);
         let (vmax, amax) = (positive("velocity", vel)?, positive("acceleration", acc)?);
         let h = (end - start).abs();
@@ -139,7 +139,7 @@ impl Move {
         vel: f64,
         acc: f64,
         jerk: f64,
-    ) -> Result<Self, ProfileError> {
+    ) -> Result<Self, ShapeError> {
         let (start, end) = (finite("start", start)?, finite("end", end)?);
         let vmax = positive("velocity", vel)?;
         let amax = positive("acceleration", acc)?;
@@ -287,7 +287,7 @@ impl Sine {
         amplitude: f64,
         freq_hz: f64,
         periods: f64,
-    ) -> Result<Self, ProfileError> {
+    ) -> Result<Self, ShapeError> {
         Ok(Self {
             centre: finite("centre", centre)?,
             amplitude: finite("amplitude", amplitude)?,
@@ -343,11 +343,11 @@ impl VelocityRamp {
         to: f64,
         acc: f64,
         hold: f64,
-    ) -> Result<Self, ProfileError> {
+    ) -> Result<Self, ShapeError> {
         let acc = positive("acceleration", acc)?;
         let (from, to) = (finite("from", from)?, finite("to", to)?);
         if !(hold.is_finite() && hold >= 0.0) {
-            return Err(ProfileError::Negative {
+            return Err(ShapeError::Negative {
                 name: "hold",
                 value: hold,
             });
@@ -408,7 +408,7 @@ pub struct Jog {
 
 impl Jog {
     /// A jog starting at rest at `pos`.
-    pub fn new(pos: f64, acc: f64) -> Result<Self, ProfileError> {
+    pub fn new(pos: f64, acc: f64) -> Result<Self, ShapeError> {
         Ok(Self {
             pos: finite("position", pos)?,
             vel: 0.0,
@@ -454,14 +454,14 @@ pub struct TorqueStep {
 
 impl TorqueStep {
     /// A torque step. `slope` = `f64::INFINITY` gives a true step.
-    pub fn new(from: f64, level: f64, slope: f64, hold: f64) -> Result<Self, ProfileError> {
+    pub fn new(from: f64, level: f64, slope: f64, hold: f64) -> Result<Self, ShapeError> {
         let slope = if slope == f64::INFINITY {
             slope
         } else {
             positive("torque slope", slope)?
         };
         if !(hold.is_finite() && hold >= 0.0) {
-            return Err(ProfileError::Negative {
+            return Err(ShapeError::Negative {
                 name: "hold",
                 value: hold,
             });

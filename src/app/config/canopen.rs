@@ -430,16 +430,12 @@ fn unsupported_step(profile: &CanDriveProfile, s: &Step) -> Option<String> {
         Step::Mode { mode } if mode.is_cyclic() && *mode != RunMode::Ip => {
             Some(format!("{} is not run over CANopen yet", mode.name()))
         }
-        Step::Mode { mode }
-            if !profile.supports(mode.operation_mode()) =>
-        {
-            Some(format!(
-                "the {} does not support {} ({})",
-                profile.name,
-                mode.name(),
-                modes_offered(profile)
-            ))
-        }
+        Step::Mode { mode } if !profile.supports(mode.operation_mode()) => Some(format!(
+            "the {} does not support {} ({})",
+            profile.name,
+            mode.name(),
+            modes_offered(profile)
+        )),
         Step::Home { method, .. } if *method == 0 || !profile.homing.supports(*method) => {
             let listed: Vec<String> = profile
                 .homing

@@ -1147,10 +1147,7 @@ fn start_mode(
         return Err(at.err(m.span(), "mode", IP_ON_ETHERCAT));
     }
     if let Some(p) = profile
-        && !p
-            .caps
-            .supported_modes
-            .contains(mode.operation_mode())
+        && !p.caps.supported_modes.contains(mode.operation_mode())
     {
         return Err(at.err(
             m.span(),

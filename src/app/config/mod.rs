@@ -63,6 +63,7 @@ pub mod canopen;
 mod ethercat;
 pub mod profile_file;
 mod raw;
+pub mod schema;
 mod steps;
 
 use crate::app::ethercat::tools::{SimSettings, Target};

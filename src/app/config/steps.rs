@@ -63,7 +63,7 @@ pub(super) fn program_of(
     program::validate(&steps, mode).map_err(|e| {
         let n = match &e {
             program::ProgramError::WrongMode { index, .. }
-            | program::ProgramError::Profile { index, .. }
+            | program::ProgramError::Shape { index, .. }
             | program::ProgramError::ProbeNotArmed { index, .. } => *index,
         };
         let span = r.program.get(n).map_or(d.span(), Spanned::span);

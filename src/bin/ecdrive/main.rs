@@ -578,9 +578,13 @@ enum Command {
         json: Json,
     },
     /// The command-line reference as Markdown, from this parser (the book's
-    /// `reference/cli.md`, written by `scripts/docs-reference`).
+    /// `reference/cli.md`, written by `scripts/docs-reference`); with `config`, the run file's
+    /// keys from the run-file parser (`reference/configuration-keys.md`).
     #[command(hide = true)]
-    MarkdownHelp,
+    MarkdownHelp {
+        /// `config`: the run file's keys instead of the command line.
+        what: Option<String>,
+    },
 }
 
 #[derive(Subcommand, Clone)]
@@ -1047,13 +1051,23 @@ fn dispatch(cli: Cli) -> ExitCode {
         Command::Esi { op } => esi(op),
         c @ Command::Run { .. } => run::command(c),
         Command::Plot { file, output } => plot_file(&file, &output),
-        Command::MarkdownHelp => {
-            print!(
-                "{}",
-                reference::markdown(&<Cli as clap::CommandFactory>::command())
-            );
-            ExitCode::SUCCESS
-        }
+        Command::MarkdownHelp { what } => match what.as_deref() {
+            None => {
+                print!(
+                    "{}",
+                    reference::markdown(&<Cli as clap::CommandFactory>::command())
+                );
+                ExitCode::SUCCESS
+            }
+            Some("config") => {
+                print!("{}", ecdrive_cli::app::config::schema::markdown());
+                ExitCode::SUCCESS
+            }
+            Some(other) => {
+                eprintln!("ecdrive markdown-help: {other:?} is not a reference (only `config`)");
+                ExitCode::from(2)
+            }
+        },
         Command::Version { json } => version(json.json),
         c @ Command::Sim { .. } => sim::command(c),
         Command::Jitter(args) => jitter::run(args),
