@@ -300,7 +300,7 @@ pub enum Step {
         seconds: f64,
     },
     /// Profile torque (tq): the drive ramps to `torque` with the slope 0x6087, holds it for
-    /// `seconds`, then ramps it back to 0 (the time the slope needs, [`Step::tq_ramp`], is
+    /// `seconds`, then ramps it back to 0 (the time the slope needs, [`tq_ramp`], is
     /// waited out: not every drive reports torque reached).
     Tq {
         /// Torque (the drive's torque unit), for 0x6071.

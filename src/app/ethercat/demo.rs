@@ -255,37 +255,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
     m.wait_until("every drive in OP", Duration::from_secs(10), |t| {
         t.cycle.all_op
     })?;
-    // The operator enables the axes and runs the programs; if the drives stop on their own
-    // (their loss supervision trips when the machine stalls the cycle for 7 ms or more) it
-    // resets, enables and runs the programs again, as an application would, and says so.
-    let mut op = Operator::new(steps);
-    let mut unhandled = Vec::new();
-    let deadline = Instant::now() + DEMO_LIMIT;
-    loop {
-        std::thread::sleep(recovery::POLL);
-        if !m.is_running() {
-            unhandled.push("the session ended by itself".to_string());
-            break;
-        }
-        let t = m.telemetry().clone();
-        unhandled.extend(op.step(&mut m, &t)?);
-        if op.programs_completed > 0 || !unhandled.is_empty() {
-            break;
-        }
-        if op.recoveries > MAX_RECOVERIES {
-            unhandled.push(format!(
-                "gave up after {MAX_RECOVERIES} recoveries: the drives keep stopping"
-            ));
-            break;
-        }
-        if Instant::now() >= deadline {
-            unhandled.push(format!(
-                "the programs did not finish within {} s",
-                DEMO_LIMIT.as_secs()
-            ));
-            break;
-        }
-    }
+    let (op, mut unhandled) = operate(&mut m, steps)?;
     let done = op.programs_completed > 0;
     let (report, link) = m.stop(StopKind::Ramp);
     drop(link);
@@ -301,37 +271,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
     let cycle = report.cycle.clone().ok_or_else(|| {
         MasterError::new(None, "the demo", ErrorKind::Bus, "the cycle did not run")
     })?;
-    let drives: Vec<DemoDrive> = report
-        .drives
-        .iter()
-        .enumerate()
-        .map(|(i, d)| {
-            let rev = profiles.get(i).map_or(1.0, |p| p.units.position_per_rev);
-            let fe = cycle.max_following_error.get(i).copied().unwrap_or(0);
-            DemoDrive {
-                position: d.info.position,
-                name: d.profile.to_string(),
-                device_name: d.info.name.clone(),
-                vendor_id: d.info.vendor_id,
-                product_code: d.info.product_code,
-                revision: d.info.revision,
-                serial: d.info.serial,
-                states: cycle
-                    .states
-                    .get(i)
-                    .map(|v| v.iter().map(|s| s.to_string()).collect())
-                    .unwrap_or_default(),
-                modes: cycle
-                    .modes_run
-                    .get(i)
-                    .map(|v| v.iter().map(|m| m.short_name().to_string()).collect())
-                    .unwrap_or_default(),
-                max_following_error: fe,
-                max_following_error_rev: fe as f64 / rev,
-                program_done: done,
-            }
-        })
-        .collect();
+    let drives = demo_drives(&report, &cycle, &profiles, done);
     let errors: Vec<String> = report
         .history
         .iter()
@@ -374,4 +314,84 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         capture,
         ok,
     })
+}
+
+/// The operator enables the axes and runs the programs (`steps` each); if the drives stop on
+/// their own (their loss supervision trips when the machine stalls the cycle for 7 ms or more)
+/// it resets, enables and runs the programs again, as an application would, and says so.
+/// Returns the operator and what it could not handle.
+fn operate(
+    m: &mut Master<ToolLink>,
+    steps: Vec<usize>,
+) -> Result<(Operator, Vec<String>), MasterError> {
+    let mut op = Operator::new(steps);
+    let mut unhandled = Vec::new();
+    let deadline = Instant::now() + DEMO_LIMIT;
+    loop {
+        std::thread::sleep(recovery::POLL);
+        if !m.is_running() {
+            unhandled.push("the session ended by itself".to_string());
+            break;
+        }
+        let t = m.telemetry().clone();
+        unhandled.extend(op.step(m, &t)?);
+        if op.programs_completed > 0 || !unhandled.is_empty() {
+            break;
+        }
+        if op.recoveries > MAX_RECOVERIES {
+            unhandled.push(format!(
+                "gave up after {MAX_RECOVERIES} recoveries: the drives keep stopping"
+            ));
+            break;
+        }
+        if Instant::now() >= deadline {
+            unhandled.push(format!(
+                "the programs did not finish within {} s",
+                DEMO_LIMIT.as_secs()
+            ));
+            break;
+        }
+    }
+    Ok((op, unhandled))
+}
+
+/// Each drive of the demo: its device, the states and modes it went through, its largest
+/// following error (in revolutions too), whether its program completed.
+fn demo_drives(
+    report: &crate::master::SessionReport,
+    cycle: &crate::master::CycleReport,
+    profiles: &[&DriveProfile],
+    done: bool,
+) -> Vec<DemoDrive> {
+    report
+        .drives
+        .iter()
+        .enumerate()
+        .map(|(i, d)| {
+            let rev = profiles.get(i).map_or(1.0, |p| p.units.position_per_rev);
+            let fe = cycle.max_following_error.get(i).copied().unwrap_or(0);
+            DemoDrive {
+                position: d.info.position,
+                name: d.profile.to_string(),
+                device_name: d.info.name.clone(),
+                vendor_id: d.info.vendor_id,
+                product_code: d.info.product_code,
+                revision: d.info.revision,
+                serial: d.info.serial,
+                states: cycle
+                    .states
+                    .get(i)
+                    .map(|v| v.iter().map(|s| s.to_string()).collect())
+                    .unwrap_or_default(),
+                modes: cycle
+                    .modes_run
+                    .get(i)
+                    .map(|v| v.iter().map(|m| m.short_name().to_string()).collect())
+                    .unwrap_or_default(),
+                max_following_error: fe,
+                max_following_error_rev: fe as f64 / rev,
+                program_done: done,
+            }
+        })
+        .collect()
 }

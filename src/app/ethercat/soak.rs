@@ -136,6 +136,80 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
             format!("drop fraction {} is not between 0 and 1", opts.drop),
         ));
     }
+    let (mut m, steps) = start(opts)?;
+    let start = Instant::now();
+    let mut counts = SoakCounts::default();
+    let mut next_seq = 0u64;
+    let mut next_progress = Duration::from_secs(1);
+    let mut op = Operator::new(steps);
+    let mut restarts = Restarts::default();
+    let mut interrupted = false;
+    while match opts.cycles {
+        Some(n) => counts.cycles < n,
+        None => start.elapsed() < opts.duration,
+    } {
+        std::thread::sleep(POLL);
+        if opts
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Acquire))
+        {
+            interrupted = true;
+            break;
+        }
+        if !m.is_running() {
+            unhandled(&mut counts, start, "the session ended by itself".into());
+            break;
+        }
+        next_seq = read_history(&m, next_seq, &mut counts, start);
+        let t: Telemetry = m.telemetry().clone();
+        restarts.count(&t, &mut counts);
+        if start.elapsed() >= next_progress {
+            next_progress += Duration::from_secs(1);
+            if let Some(p) = opts.progress {
+                p(start.elapsed(), &counts);
+            }
+        }
+        for what in op.step(&mut m, &t)? {
+            unhandled(&mut counts, start, what);
+        }
+        counts.programs_completed = op.programs_completed;
+        counts.recoveries = op.recoveries;
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let (report, link) = m.stop(StopKind::Ramp);
+    let report = report.ok_or_else(|| soak_error("the session ended without a report"))?;
+    counts.history = kind_counts(&report.history_totals);
+    let wake_latency_ns = report
+        .cycle
+        .as_ref()
+        .map(|c| c.timing.wake_latency.summary())
+        .unwrap_or_default();
+    if let Some(c) = &report.cycle {
+        counts.cycles = counts.cycles.max(restarts.cycles_before + c.cycles);
+        counts.lost_cycles = counts.lost_cycles.max(restarts.lost_before + c.lost);
+    }
+    counts.restarts = report.restarts;
+    let stats = link.segment().stats();
+    let ok = counts.unhandled.is_empty() && report.shutdown_ok;
+    Ok(SoakReport {
+        seconds,
+        cycle_us: opts.cycle.as_micros() as u64,
+        drop: opts.drop,
+        frames: stats.frames,
+        frames_dropped: stats.dropped,
+        counts,
+        wake_latency_ns,
+        interrupted,
+        shutdown_ok: report.shutdown_ok,
+        ok,
+    })
+}
+
+/// The demo's drives started with the demo's programs, a master that re-starts the session by
+/// itself, in OP, and then the frame drops switched on (start-up has its own retries). Returns
+/// the master and each drive's step count.
+fn start(opts: &SoakOptions) -> Result<(Master<SegmentLink>, Vec<usize>), MasterError> {
     let profiles = [&drives::mr_j4_tm::PROFILE, &drives::bdhde::PROFILE];
     let mut cfg = MasterConfig::new(opts.cycle);
     cfg.cycle = CycleSettings {
@@ -168,131 +242,87 @@ pub fn run(opts: &SoakOptions) -> Result<SoakReport, MasterError> {
             .inject(Fault::Link(f))
             .map_err(|e| soak_error(format!("injecting {f:?}: {e}")))?;
     }
+    Ok((m, steps))
+}
 
-    let start = Instant::now();
-    let mut counts = SoakCounts::default();
-    let mut next_seq = 0u64;
-    let mut next_progress = Duration::from_secs(1);
-    let mut op = Operator::new(steps);
-    let mut last_restarts = 0u32;
-    let mut cycles_before: u64 = 0;
-    let mut last_cycle: u64 = 0;
-    let mut lost_before: u64 = 0;
-    let mut last_lost: u64 = 0;
-    let mut overruns_before: u64 = 0;
-    let unhandled = |counts: &mut SoakCounts, what: String| {
-        counts
-            .unhandled
-            .push(format!("{:.3} s: {what}", start.elapsed().as_secs_f64()));
-    };
+/// What went unhandled, `start` being when the soak began.
+fn unhandled(counts: &mut SoakCounts, start: Instant, what: String) {
+    counts
+        .unhandled
+        .push(format!("{:.3} s: {what}", start.elapsed().as_secs_f64()));
+}
 
-    let mut interrupted = false;
-    while match opts.cycles {
-        Some(n) => counts.cycles < n,
-        None => start.elapsed() < opts.duration,
-    } {
-        std::thread::sleep(POLL);
-        if opts
-            .stop
-            .as_ref()
-            .is_some_and(|s| s.load(Ordering::Acquire))
-        {
-            interrupted = true;
-            break;
+/// The history since `next_seq`, only what is new: counted by kind, and judged for what lost
+/// frames must not cause. Returns the next sequence number to read from.
+fn read_history(
+    m: &Master<SegmentLink>,
+    next_seq: u64,
+    counts: &mut SoakCounts,
+    start: Instant,
+) -> u64 {
+    let h = m.history_since(next_seq);
+    if h.missed > 0 {
+        unhandled(
+            counts,
+            start,
+            format!(
+                "{} history entries were discarded before the soak read them",
+                h.missed
+            ),
+        );
+    }
+    counts.history = kind_counts(&h.totals);
+    for e in &h.entries {
+        if !e.error || e.kind == HistoryKind::FrameLost {
+            continue;
         }
-        if !m.is_running() {
-            unhandled(&mut counts, "the session ended by itself".into());
-            break;
+        let drive = e.drive.as_ref().map_or(String::new(), |d| format!("{d}: "));
+        let text = format!("{:.3} s: {drive}{}", start.elapsed().as_secs_f64(), e.text());
+        // A command that crossed the end of a cycle (sent on the last `Cycling` snapshot)
+        // is not carried out while the session re-starts (`NoCycle`): handled.
+        if recovery::unhandled_kind(e.kind) {
+            counts.unhandled.push(text.clone());
         }
-        // History: only what is new; count by kind, judge what lost frames must not cause.
-        let h = m.history_since(next_seq);
-        next_seq = h.next;
-        if h.missed > 0 {
-            unhandled(
-                &mut counts,
-                format!(
-                    "{} history entries were discarded before the soak read them",
-                    h.missed
-                ),
-            );
+        if counts.errors.len() < MAX_ERRORS {
+            counts.errors.push(text);
         }
-        counts.history = kind_counts(&h.totals);
-        for e in &h.entries {
-            if !e.error || e.kind == HistoryKind::FrameLost {
-                continue;
-            }
-            let drive = e.drive.as_ref().map_or(String::new(), |d| format!("{d}: "));
-            let text = format!(
-                "{:.3} s: {drive}{}",
-                start.elapsed().as_secs_f64(),
-                e.text()
-            );
-            // A command that crossed the end of a cycle (sent on the last `Cycling` snapshot)
-            // is not carried out while the session re-starts (`NoCycle`): handled.
-            if recovery::unhandled_kind(e.kind) {
-                counts.unhandled.push(text.clone());
-            }
-            if counts.errors.len() < MAX_ERRORS {
-                counts.errors.push(text);
-            }
-        }
+    }
+    h.next
+}
 
-        let t: Telemetry = m.telemetry().clone();
-        if t.cycle.restarts != last_restarts {
+/// The cycle's counters across the session's re-starts (each begins them again): what the
+/// sessions before the current one counted, and the current one's so far.
+#[derive(Default)]
+struct Restarts {
+    seen: u32,
+    cycles_before: u64,
+    last_cycle: u64,
+    lost_before: u64,
+    last_lost: u64,
+    overruns_before: u64,
+}
+
+impl Restarts {
+    /// The soak's cycles, lost cycles, late wake-ups and re-starts, with the telemetry `t`.
+    fn count(&mut self, t: &Telemetry, counts: &mut SoakCounts) {
+        if t.cycle.restarts != self.seen {
             // A re-start: the cycle counter began again.
-            last_restarts = t.cycle.restarts;
-            cycles_before += last_cycle;
-            last_cycle = 0;
-            lost_before += last_lost;
-            last_lost = 0;
-            overruns_before = counts.late_wakeups;
+            self.seen = t.cycle.restarts;
+            self.cycles_before += self.last_cycle;
+            self.last_cycle = 0;
+            self.lost_before += self.last_lost;
+            self.last_lost = 0;
+            self.overruns_before = counts.late_wakeups;
         }
-        last_cycle = last_cycle.max(t.cycle.cycle);
-        last_lost = last_lost.max(t.cycle.lost);
-        counts.cycles = cycles_before + last_cycle;
-        counts.lost_cycles = lost_before + last_lost;
-        counts.late_wakeups = counts.late_wakeups.max(overruns_before + t.cycle.overruns);
+        self.last_cycle = self.last_cycle.max(t.cycle.cycle);
+        self.last_lost = self.last_lost.max(t.cycle.lost);
+        counts.cycles = self.cycles_before + self.last_cycle;
+        counts.lost_cycles = self.lost_before + self.last_lost;
+        counts.late_wakeups = counts
+            .late_wakeups
+            .max(self.overruns_before + t.cycle.overruns);
         counts.restarts = t.cycle.restarts;
-        if start.elapsed() >= next_progress {
-            next_progress += Duration::from_secs(1);
-            if let Some(p) = opts.progress {
-                p(start.elapsed(), &counts);
-            }
-        }
-        for what in op.step(&mut m, &t)? {
-            unhandled(&mut counts, what);
-        }
-        counts.programs_completed = op.programs_completed;
-        counts.recoveries = op.recoveries;
     }
-    let seconds = start.elapsed().as_secs_f64();
-    let (report, link) = m.stop(StopKind::Ramp);
-    let report = report.ok_or_else(|| soak_error("the session ended without a report"))?;
-    counts.history = kind_counts(&report.history_totals);
-    let wake_latency_ns = report
-        .cycle
-        .as_ref()
-        .map(|c| c.timing.wake_latency.summary())
-        .unwrap_or_default();
-    if let Some(c) = &report.cycle {
-        counts.cycles = counts.cycles.max(cycles_before + c.cycles);
-        counts.lost_cycles = counts.lost_cycles.max(lost_before + c.lost);
-    }
-    counts.restarts = report.restarts;
-    let stats = link.segment().stats();
-    let ok = counts.unhandled.is_empty() && report.shutdown_ok;
-    Ok(SoakReport {
-        seconds,
-        cycle_us: opts.cycle.as_micros() as u64,
-        drop: opts.drop,
-        frames: stats.frames,
-        frames_dropped: stats.dropped,
-        counts,
-        wake_latency_ns,
-        interrupted,
-        shutdown_ok: report.shutdown_ok,
-        ok,
-    })
 }
 
 fn kind_counts(totals: &BTreeMap<HistoryKind, u64>) -> BTreeMap<String, u64> {

@@ -372,6 +372,49 @@ async fn measure(
     io_clock: Option<ThreadCpuClock>,
 ) -> Result<RunReport, HarnessError> {
     let cycle_ns = s.cycle.as_nanos() as u64;
+    let (group, plans) = request_op(md, s, cycle_ns).await?;
+    // The cycle starts: real-time set-up now (as ecdrive's cycle thread does it).
+    let rt = s.rt.apply_to_current_thread();
+    output_defaults(&group, md, &plans);
+    let mut counter: u8 = 0;
+    let next = cycle_until_op(&group, md, &plans, s, &mut counter).await?;
+    let mut notes = Vec::new();
+    let begin = CpuSample::take(io_clock.as_ref());
+    let sys = start_syscalls(s.count_syscalls, &mut notes);
+    let w = window(&group, md, &plans, s, next, &mut counter).await;
+    let sys_end = sys.map(|w| w.stop());
+    let end = CpuSample::take(io_clock.as_ref());
+    let cpu = apply_syscalls(
+        sys_end,
+        CpuReport::between(&begin, &end, s.cycles),
+        &mut notes,
+    );
+    if s.count_syscalls {
+        notes.push("syscalls are counted on the loop thread only, not the TX/RX thread".into());
+    }
+    if w.not_op > 0 {
+        notes.push(format!("{} cycles with a device not in OP", w.not_op));
+    }
+    back_to_init(group, md, &mut notes).await;
+    Ok(w.h.report(
+        "ethercrab",
+        cycle_ns,
+        rt,
+        w.late,
+        Some(w.missed),
+        cpu,
+        Vec::new(),
+        notes,
+    ))
+}
+
+/// Discovery, each drive's start-up SDOs and SYNC0, PRE-OP with the process image, DC, SAFE-OP
+/// and OP requested, as a plain ethercrab user does it. Returns the group and the drives' plans.
+async fn request_op(
+    md: &MainDevice<'_>,
+    s: &PlainSettings,
+    cycle_ns: u64,
+) -> Result<(OpGroup, Vec<DrivePlan>), HarnessError> {
     // ethercrab's default PDU timeout (what a plain user has) is short enough that a host
     // stall during discovery on a loaded machine loses a frame; that says nothing about the
     // cycle this loop measures, so start-up is tried once more, and said.
@@ -441,21 +484,26 @@ async fn measure(
         .request_into_op(md)
         .await
         .map_err(|e| err("request_into_op", e))?;
+    Ok((group, plans))
+}
 
-    // The cycle starts: real-time set-up now (as ecdrive's cycle thread does it).
-    let rt = s.rt.apply_to_current_thread();
-    output_defaults(&group, md, &plans);
-    let mut counter: u8 = 0;
-
-    // Cycle until every device is in OP (not measured).
+/// Cycle until every device is in OP (not measured). Returns when the next cycle is due.
+async fn cycle_until_op(
+    group: &OpGroup,
+    md: &MainDevice<'_>,
+    plans: &[DrivePlan],
+    s: &PlainSettings,
+    counter: &mut u8,
+) -> Result<u64, HarnessError> {
+    let cycle_ns = s.cycle.as_nanos() as u64;
     let deadline = monotonic_ns() + s.op_timeout.as_nanos() as u64;
     let mut next = monotonic_ns();
     loop {
         sleep_until_ns(next);
         let t0 = monotonic_ns();
         let r = group.tx_rx_dc(md).await;
-        counter = counter.wrapping_add(1);
-        application(&group, md, &plans, counter);
+        *counter = counter.wrapping_add(1);
+        application(group, md, plans, *counter);
         match r {
             Ok(resp) if resp.all_op() => {
                 next = t0 + resp.extra.next_cycle_wait.as_nanos() as u64;
@@ -474,17 +522,35 @@ async fn measure(
             ));
         }
     }
+    Ok(next)
+}
 
-    // The measured window.
+/// What the measured window saw: the histograms, the late wake-ups, the cycles whose reply
+/// missed its budget, the cycles with a device not in OP.
+struct Window {
+    h: RunHistograms,
+    late: u64,
+    missed: u64,
+    not_op: u64,
+}
+
+/// The measured window: `s.cycles` cycles from `next`, each woken, exchanged and given to the
+/// application.
+async fn window(
+    group: &OpGroup,
+    md: &MainDevice<'_>,
+    plans: &[DrivePlan],
+    s: &PlainSettings,
+    mut next: u64,
+    counter: &mut u8,
+) -> Window {
+    let cycle_ns = s.cycle.as_nanos() as u64;
     let mut h = RunHistograms::new(true);
     let mut late = 0u64;
     let mut missed = 0u64;
     let mut not_op = 0u64;
     let budget = (cycle_ns as f64 * s.reply_budget) as u64;
     let mut last_wake = 0u64;
-    let mut notes = Vec::new();
-    let begin = CpuSample::take(io_clock.as_ref());
-    let sys = start_syscalls(s.count_syscalls, &mut notes);
     for _ in 0..s.cycles {
         sleep_until_ns(next);
         let woke = monotonic_ns();
@@ -519,25 +585,21 @@ async fn measure(
                 cycle_ns
             }
         };
-        counter = counter.wrapping_add(1);
-        application(&group, md, &plans, counter);
+        *counter = counter.wrapping_add(1);
+        application(group, md, plans, *counter);
         h.busy.record(monotonic_ns() - woke);
         next = t0 + wait;
     }
-    let sys_end = sys.map(|w| w.stop());
-    let end = CpuSample::take(io_clock.as_ref());
-    let cpu = apply_syscalls(
-        sys_end,
-        CpuReport::between(&begin, &end, s.cycles),
-        &mut notes,
-    );
-    if s.count_syscalls {
-        notes.push("syscalls are counted on the loop thread only, not the TX/RX thread".into());
+    Window {
+        h,
+        late,
+        missed,
+        not_op,
     }
-    if not_op > 0 {
-        notes.push(format!("{not_op} cycles with a device not in OP"));
-    }
+}
 
+/// Back to INIT (not measured); what fails is noted.
+async fn back_to_init(group: OpGroup, md: &MainDevice<'_>, notes: &mut Vec<String>) {
     // Back to INIT (not measured).
     match group.into_safe_op(md).await {
         Ok(g) => match g.into_pre_op(md).await {
@@ -550,14 +612,4 @@ async fn measure(
         },
         Err(e) => notes.push(format!("OP → SAFE-OP at the end failed: {e}")),
     }
-    Ok(h.report(
-        "ethercrab",
-        cycle_ns,
-        rt,
-        late,
-        Some(missed),
-        cpu,
-        Vec::new(),
-        notes,
-    ))
 }

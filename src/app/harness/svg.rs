@@ -126,6 +126,15 @@ pub fn render(report: &JitterReport) -> String {
     };
 
     let mut s = String::new();
+    heading(&mut s, report);
+    grid(&mut s, &ax);
+    histograms(&mut s, &ax, &runs);
+    s.push_str("</svg>\n");
+    s
+}
+
+/// The document's start, the title (the settings) and the host line.
+fn heading(s: &mut String, report: &JitterReport) {
     let _ = writeln!(
         s,
         r#"<?xml version="1.0" encoding="UTF-8"?>
@@ -168,8 +177,10 @@ pub fn render(report: &JitterReport) -> String {
         W / 2.0,
         esc(&host)
     );
+}
 
-    // Grid and ticks.
+/// The plot's frame, its log-scale grid with the tick labels, and the axis titles.
+fn grid(s: &mut String, ax: &Axes) {
     let (bx0, bx1, by0, by1) = (LEFT, W - RIGHT, TOP, H - BOTTOM);
     let _ = writeln!(
         s,
@@ -229,11 +240,14 @@ pub fn render(report: &JitterReport) -> String {
         (by0 + by1) / 2.0,
         (by0 + by1) / 2.0
     );
+}
 
-    // The three histograms and the legend.
+/// The three histograms, and the legend with each run's percentiles.
+fn histograms(s: &mut String, ax: &Axes, runs: &[&RunReport]) {
+    let (bx1, by0) = (W - RIGHT, TOP);
     for (i, r) in runs.iter().enumerate() {
         let (name, colour) = (r.name, colour(r.name));
-        let d = step_path(&ax, &r.wake_latency_histogram);
+        let d = step_path(ax, &r.wake_latency_histogram);
         if !d.is_empty() {
             let _ = writeln!(
                 s,
@@ -261,6 +275,4 @@ pub fn render(report: &JitterReport) -> String {
             ))
         );
     }
-    s.push_str("</svg>\n");
-    s
 }

@@ -552,7 +552,7 @@ impl Planner {
                     )
                 }
             }
-            _ => self.plan(s, sw, standstill),
+            _ => self.next_command(s, sw, standstill),
         };
         if progress == Progress::InProgress && self.stall >= self.timeout {
             let err = PlannerError::Timeout {
@@ -633,7 +633,7 @@ impl Planner {
             Some(State::Fault) if self.reset_requested => self.pulse_command(),
             Some(s) if s.is_fault() || s == State::NotReadyToSwitchOn => Command::DisableVoltage,
             Some(s) => {
-                let (cmd, _, _) = self.plan(s, sw, standstill);
+                let (cmd, _, _) = self.next_command(s, sw, standstill);
                 if raises(s, cmd) { hold_command(s) } else { cmd }
             }
         }
@@ -668,7 +668,7 @@ impl Planner {
     }
 
     /// The next command from a non-fault state.
-    fn plan(&self, s: State, sw: StatusWord, standstill: bool) -> (Command, Progress, StallCause) {
+    fn next_command(&self, s: State, sw: StatusWord, standstill: bool) -> (Command, Progress, StallCause) {
         use Command as C;
         use Progress::{InProgress, Reached};
         use State::*;

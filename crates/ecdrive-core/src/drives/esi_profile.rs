@@ -257,92 +257,14 @@ pub fn from_esi(
             _ => 1 << 9,
         };
     }
-    // Every mode at once if the PDOs allow it (the last entry), else the first mode that
-    // can be carried (csp before csv before cst).
-    let cyclic = plan
-        .mappings
-        .last()
-        .and_then(|m| m.mapping.clone())
-        .or_else(|| plan.mappings.iter().find_map(|m| m.mapping.clone()))
-        .ok_or_else(|| {
-            let why: Vec<String> = plan
-                .mappings
-                .iter()
-                .map(|m| {
-                    let side = |r: &Result<_, String>| r.as_ref().err().cloned();
-                    format!(
-                        "{}: {}",
-                        m.modes.join("+"),
-                        [side(&m.rx), side(&m.tx)]
-                            .into_iter()
-                            .flatten()
-                            .collect::<Vec<_>>()
-                            .join("; ")
-                    )
-                })
-                .collect();
-            if why.is_empty() {
-                return err(
-                    "its 0x6502 (supported drive modes) default lists none of csp, csv and cst: \
-                     ecdrive runs a drive in a cyclic mode"
-                        .into(),
-                );
-            }
-            err(format!(
-                "no cyclic mode can be mapped ({})",
-                why.join(" | ")
-            ))
-        })?;
+    let cyclic = cyclic_mapping(&plan).map_err(err)?;
     let default_mapping = dev
         .default_mapping()
         .unwrap_or_else(|_| Mapping::fixed(&[], &[]));
     let coe = dev.mailbox.as_ref().and_then(|m| m.coe.as_ref());
-    let configurable = coe.is_some_and(|c| c.pdo_config);
-    let (rx_ranges, rx_most) = ranges(dev, Direction::Rx, dictionary, configurable);
-    let (tx_ranges, tx_most) = ranges(dev, Direction::Tx, dictionary, configurable);
     let name = leak(&dev.name);
-    let (rx_assigned, rx_entries) = counts(dev.rx_pdos.len(), rx_most);
-    let (tx_assigned, tx_entries) = counts(dev.tx_pdos.len(), tx_most);
-    let pdo_limits = PdoLimits {
-        drive: name,
-        rx: DirectionLimits {
-            pdos: Vec::leak(rx_ranges),
-            max_assigned: rx_assigned,
-            max_entries: rx_entries,
-            max_bytes: sm_bytes(dev, SmKind::Outputs),
-        },
-        tx: DirectionLimits {
-            pdos: Vec::leak(tx_ranges),
-            max_assigned: tx_assigned,
-            max_entries: tx_entries,
-            max_bytes: sm_bytes(dev, SmKind::Inputs),
-        },
-        assignment_writable: coe.is_some_and(|c| c.pdo_assign),
-    };
-    let sync_type = ObjectAddress::new(0x1C32, 1);
-    let cycle_time = ObjectAddress::new(0x1C32, 2);
-    let sync0_mode = dev.dc.iter().find(|m| m.mode.sync0());
-    let free_run = dev.dc.is_empty() || dev.dc.iter().any(|m| m.mode.assign_activate == 0);
-    let cycle_times = sync0_mode
-        .and_then(|m| m.allowed_cycle_times.as_ref())
-        .map(|t| match t {
-            crate::esi::CycleTimes::List(l) => CycleTimes::List(Vec::leak(l.clone())),
-            crate::esi::CycleTimes::Range { min, max, step } => CycleTimes::Range {
-                min_ns: *min,
-                max_ns: *max,
-                step_ns: (*step).max(1),
-            },
-        })
-        .unwrap_or(super::generic::SYNC.cycle_times);
-    let sync = SyncSpec {
-        free_run,
-        dc_sync0: sync0_mode.is_some(),
-        cycle_times,
-        assign_activate: sync0_mode.map_or(0x0300, |m| m.mode.assign_activate),
-        sync_type_object: writable(dictionary, sync_type).then_some(sync_type),
-        cycle_time_object: writable(dictionary, cycle_time)
-            .then_some(CycleTimeObject::Nanoseconds(cycle_time)),
-    };
+    let pdo_limits = pdo_limits(dev, name, dictionary);
+    let sync = sync_spec(dev, dictionary);
     let init_cmds = init_commands(dev);
     let generic = &super::generic::GENERIC_CIA402;
     let profile = DriveProfile {
@@ -379,6 +301,96 @@ pub fn from_esi(
         },
     };
     Ok(Box::leak(Box::new(profile)))
+}
+
+/// The cyclic mapping of the profile: every mode at once if the PDOs allow it (the plan's last
+/// mapping), else the first mode that can be carried (csp before csv before cst); the reason
+/// when none can.
+fn cyclic_mapping(plan: &DrivePlan) -> Result<Mapping, String> {
+    plan.mappings
+        .last()
+        .and_then(|m| m.mapping.clone())
+        .or_else(|| plan.mappings.iter().find_map(|m| m.mapping.clone()))
+        .ok_or_else(|| {
+            let why: Vec<String> = plan
+                .mappings
+                .iter()
+                .map(|m| {
+                    let side = |r: &Result<_, String>| r.as_ref().err().cloned();
+                    format!(
+                        "{}: {}",
+                        m.modes.join("+"),
+                        [side(&m.rx), side(&m.tx)]
+                            .into_iter()
+                            .flatten()
+                            .collect::<Vec<_>>()
+                            .join("; ")
+                    )
+                })
+                .collect();
+            if why.is_empty() {
+                return "its 0x6502 (supported drive modes) default lists none of csp, csv and \
+                        cst: ecdrive runs a drive in a cyclic mode"
+                    .into();
+            }
+            format!("no cyclic mode can be mapped ({})", why.join(" | "))
+        })
+}
+
+/// The PDO limits of the device: the ranges of its mapping objects, how many PDOs and entries
+/// it takes (configurable only where its CoE says so), and its SyncManagers' sizes.
+fn pdo_limits(dev: &Device, name: &'static str, dictionary: &'static [ObjectDesc]) -> PdoLimits {
+    let coe = dev.mailbox.as_ref().and_then(|m| m.coe.as_ref());
+    let configurable = coe.is_some_and(|c| c.pdo_config);
+    let (rx_ranges, rx_most) = ranges(dev, Direction::Rx, dictionary, configurable);
+    let (tx_ranges, tx_most) = ranges(dev, Direction::Tx, dictionary, configurable);
+    let (rx_assigned, rx_entries) = counts(dev.rx_pdos.len(), rx_most);
+    let (tx_assigned, tx_entries) = counts(dev.tx_pdos.len(), tx_most);
+    PdoLimits {
+        drive: name,
+        rx: DirectionLimits {
+            pdos: Vec::leak(rx_ranges),
+            max_assigned: rx_assigned,
+            max_entries: rx_entries,
+            max_bytes: sm_bytes(dev, SmKind::Outputs),
+        },
+        tx: DirectionLimits {
+            pdos: Vec::leak(tx_ranges),
+            max_assigned: tx_assigned,
+            max_entries: tx_entries,
+            max_bytes: sm_bytes(dev, SmKind::Inputs),
+        },
+        assignment_writable: coe.is_some_and(|c| c.pdo_assign),
+    }
+}
+
+/// The synchronisation of the device: free run where a DC mode without SYNC0 (or none) says
+/// so, DC SYNC0 with its cycle times and AssignActivate, and the sync objects it can write.
+fn sync_spec(dev: &Device, dictionary: &'static [ObjectDesc]) -> SyncSpec {
+    let sync_type = ObjectAddress::new(0x1C32, 1);
+    let cycle_time = ObjectAddress::new(0x1C32, 2);
+    let sync0_mode = dev.dc.iter().find(|m| m.mode.sync0());
+    let free_run = dev.dc.is_empty() || dev.dc.iter().any(|m| m.mode.assign_activate == 0);
+    let cycle_times = sync0_mode
+        .and_then(|m| m.allowed_cycle_times.as_ref())
+        .map(|t| match t {
+            crate::esi::CycleTimes::List(l) => CycleTimes::List(Vec::leak(l.clone())),
+            crate::esi::CycleTimes::Range { min, max, step } => CycleTimes::Range {
+                min_ns: *min,
+                max_ns: *max,
+                step_ns: (*step).max(1),
+            },
+        })
+        .unwrap_or(super::generic::SYNC.cycle_times);
+    SyncSpec {
+        free_run,
+        dc_sync0: sync0_mode.is_some(),
+        cycle_times,
+        assign_activate: sync0_mode.map_or(0x0300, |m| m.mode.assign_activate),
+        sync_type_object: writable(dictionary, sync_type).then_some(sync_type),
+        cycle_time_object: writable(dictionary, cycle_time)
+            .then_some(CycleTimeObject::Nanoseconds(cycle_time)),
+    }
 }
 
 /// What the file's DC mode with SYNC0 asks that ecdrive does not do, one line each: a SYNC0

@@ -587,23 +587,26 @@ impl EdsFile {
         let mut warnings = Vec::new();
         let text = text_of(bytes, &mut warnings);
         let secs = sections(&text, &mut warnings)?;
-        let mut file = EdsFile {
-            file_info: BTreeMap::new(),
-            device: DeviceInfo::default(),
-            dummy_usage: Vec::new(),
-            objects: BTreeMap::new(),
-            node_id: None,
-            dcf: false,
-            warnings: Vec::new(),
+        let mut r = Reading {
+            file: EdsFile {
+                file_info: BTreeMap::new(),
+                device: DeviceInfo::default(),
+                dummy_usage: Vec::new(),
+                objects: BTreeMap::new(),
+                node_id: None,
+                dcf: false,
+                warnings: Vec::new(),
+            },
+            listed: Vec::new(),
+            subs: Vec::new(),
+            compact_values: BTreeMap::new(),
+            compact_names: BTreeMap::new(),
+            warnings,
         };
-        let mut listed: Vec<(u16, usize)> = Vec::new();
-        let mut subs: Vec<(u16, u8, usize)> = Vec::new();
-        let mut compact_values: BTreeMap<u16, usize> = BTreeMap::new();
-        let mut compact_names: BTreeMap<u16, usize> = BTreeMap::new();
         let mut seen_sections: BTreeMap<String, usize> = BTreeMap::new();
         for (k, sec) in secs.iter().enumerate() {
             if let Some(first) = seen_sections.insert(sec.name.clone(), sec.line) {
-                warnings.push(EdsWarning {
+                r.warnings.push(EdsWarning {
                     line: sec.line,
                     what: format!(
                         "[{}] again (first at line {first}): the first is used",
@@ -612,230 +615,16 @@ impl EdsFile {
                 });
                 continue;
             }
-            // Duplicate keys within a section (lists handled below).
-            let is_list = matches!(
-                sec.name.as_str(),
-                "mandatoryobjects" | "optionalobjects" | "manufacturerobjects"
-            );
-            if !is_list {
-                let mut keys: BTreeMap<&str, usize> = BTreeMap::new();
-                for l in &sec.lines {
-                    if let Some(first) = keys.insert(l.key.as_str(), l.line) {
-                        warnings.push(EdsWarning {
-                            line: l.line,
-                            what: format!(
-                                "{} again in [{}] (first at line {first}): the first is used",
-                                l.key, sec.name
-                            ),
-                        });
-                    }
-                }
-            }
-            match sec.name.as_str() {
-                "fileinfo" => {
-                    for l in &sec.lines {
-                        file.file_info
-                            .entry(l.key.clone())
-                            .or_insert_with(|| l.value.to_string());
-                    }
-                }
-                "deviceinfo" => file.device = device_info(sec, &mut warnings),
-                "dummyusage" => {
-                    for l in &sec.lines {
-                        if let Some(t) = l.key.strip_prefix("dummy")
-                            && let Ok(code) = u16::from_str_radix(t, 16)
-                            && number(l.value).is_some_and(|n| n != 0)
-                        {
-                            file.dummy_usage.push(code);
-                        }
-                    }
-                }
-                "devicecomissioning" | "devicecommissioning" => {
-                    file.dcf = true;
-                    file.node_id = sec
-                        .get("nodeid")
-                        .and_then(|(v, _)| number(v))
-                        .and_then(|n| u8::try_from(n).ok());
-                }
-                "mandatoryobjects" | "optionalobjects" | "manufacturerobjects" => {
-                    let mut keys: BTreeMap<&str, usize> = BTreeMap::new();
-                    let mut count = None;
-                    let mut n = 0usize;
-                    for l in &sec.lines {
-                        if l.key == "supportedobjects" {
-                            count = number(l.value);
-                            continue;
-                        }
-                        if let Some(first) = keys.insert(l.key.as_str(), l.line) {
-                            warnings.push(EdsWarning {
-                                line: l.line,
-                                what: format!(
-                                    "list key {} again in [{}] (first at line {first}): both \
-                                     objects are taken",
-                                    l.key, sec.name
-                                ),
-                            });
-                        }
-                        match number(l.value).and_then(|v| u16::try_from(v).ok()) {
-                            Some(i) => {
-                                listed.push((i, l.line));
-                                n += 1;
-                            }
-                            None => warnings.push(EdsWarning {
-                                line: l.line,
-                                what: format!("{:?} in [{}] is not an index", l.value, sec.name),
-                            }),
-                        }
-                    }
-                    if let Some(c) = count
-                        && c != n as i128
-                    {
-                        warnings.push(EdsWarning {
-                            line: sec.line,
-                            what: format!(
-                                "[{}] says SupportedObjects={c} and lists {n}: all {n} are taken",
-                                sec.name
-                            ),
-                        });
-                    }
-                }
-                name => match section_name(name) {
-                    Some(SectionName::Object(index)) => {
-                        let kind = match sec.get("objecttype") {
-                            Some((v, line)) => match number(v).and_then(ObjectKind::from_code) {
-                                Some(k) => k,
-                                None => {
-                                    warnings.push(EdsWarning {
-                                        line,
-                                        what: format!(
-                                            "ObjectType {v:?} of {index:04X}h is not one \
-                                                 of CiA 301's: read as VAR"
-                                        ),
-                                    });
-                                    ObjectKind::Var
-                                }
-                            },
-                            None => ObjectKind::Var,
-                        };
-                        let mut obj = EdsObject {
-                            index,
-                            name: sec
-                                .get("parametername")
-                                .map(|(v, _)| v.to_string())
-                                .unwrap_or_default(),
-                            kind,
-                            sub_number: sec
-                                .get("subnumber")
-                                .and_then(|(v, _)| number(v))
-                                .and_then(|n| u8::try_from(n).ok()),
-                            entries: BTreeMap::new(),
-                            listed: false,
-                            line: sec.line,
-                        };
-                        if matches!(kind, ObjectKind::Var | ObjectKind::Domain) {
-                            obj.entries.insert(0, entry_of(sec, 0, &mut warnings));
-                        }
-                        if let Some((v, line)) = sec.get("compactsubobj")
-                            && let Some(n) = number(v).filter(|n| *n > 0)
-                        {
-                            compact(&mut obj, sec, n, line, &mut warnings);
-                        }
-                        file.objects.insert(index, obj);
-                    }
-                    Some(SectionName::Sub(index, sub)) => subs.push((index, sub, k)),
-                    Some(SectionName::Value(index)) => {
-                        compact_values.insert(index, k);
-                    }
-                    Some(SectionName::Names(index)) => {
-                        compact_names.insert(index, k);
-                    }
-                    None => {
-                        if !matches!(name, "comments" | "tools") {
-                            warnings.push(EdsWarning {
-                                line: sec.line,
-                                what: format!("[{name}] is not a section of CiA 306: left out"),
-                            });
-                        }
-                    }
-                },
-            }
+            r.section(k, sec);
         }
-        // Sub-index sections into their objects.
-        for (index, sub, k) in subs {
-            let Some(sec) = secs.get(k) else { continue };
-            let e = entry_of(sec, sub, &mut warnings);
-            match file.objects.get_mut(&index) {
-                Some(o) => {
-                    o.entries.insert(sub, e);
-                }
-                None => warnings.push(EdsWarning {
-                    line: sec.line,
-                    what: format!(
-                        "[{}] has no object section [{index:04X}]: left out",
-                        sec.name
-                    ),
-                }),
-            }
-        }
-        // CompactSubObj values and names.
-        for (index, k) in compact_values {
-            if let (Some(o), Some(sec)) = (file.objects.get_mut(&index), secs.get(k)) {
-                for l in &sec.lines {
-                    if let Some(sub) = number(&l.key).and_then(|s| u8::try_from(s).ok())
-                        && let Some(e) = o.entries.get_mut(&sub)
-                    {
-                        e.default = value(l.value, e.data_type, l.line, &mut warnings);
-                    }
-                }
-            }
-        }
-        for (index, k) in compact_names {
-            if let (Some(o), Some(sec)) = (file.objects.get_mut(&index), secs.get(k)) {
-                for l in &sec.lines {
-                    if let Some(sub) = number(&l.key).and_then(|s| u8::try_from(s).ok())
-                        && let Some(e) = o.entries.get_mut(&sub)
-                    {
-                        e.name = l.value.to_string();
-                    }
-                }
-            }
-        }
-        // Lists against objects.
-        for (index, line) in &listed {
-            match file.objects.get_mut(index) {
-                Some(o) => o.listed = true,
-                None => warnings.push(EdsWarning {
-                    line: *line,
-                    what: format!("{index:04X}h is listed but has no section: left out"),
-                }),
-            }
-        }
-        for o in file.objects.values() {
-            if !o.listed && !listed.is_empty() {
-                warnings.push(EdsWarning {
-                    line: o.line,
-                    what: format!(
-                        "{:04X}h has a section but no object list names it: taken",
-                        o.index
-                    ),
-                });
-            }
-            if let Some(n) = o.sub_number {
-                let have = o.entries.len();
-                if matches!(o.kind, ObjectKind::Array | ObjectKind::Record)
-                    && usize::from(n) != have
-                {
-                    warnings.push(EdsWarning {
-                        line: o.line,
-                        what: format!(
-                            "{:04X}h says SubNumber={n} and has {have} sub-index section(s): \
-                             those are taken",
-                            o.index
-                        ),
-                    });
-                }
-            }
-        }
+        r.sub_sections(&secs);
+        r.compact_sections(&secs);
+        r.lists_against_objects();
+        let Reading {
+            mut file,
+            mut warnings,
+            ..
+        } = r;
         file.dcf |= file
             .objects
             .values()
@@ -896,6 +685,271 @@ impl EdsFile {
         }
         out
     }
+}
+
+/// An EDS file being read, section by section: the file so far, and what can only be placed
+/// once every section is read (the object lists, the sub-index sections, the CompactSubObj
+/// values and names, each by its section's number).
+struct Reading {
+    file: EdsFile,
+    listed: Vec<(u16, usize)>,
+    subs: Vec<(u16, u8, usize)>,
+    compact_values: BTreeMap<u16, usize>,
+    compact_names: BTreeMap<u16, usize>,
+    warnings: Vec<EdsWarning>,
+}
+
+impl Reading {
+    /// Section `k` of the file, read (a section seen before is left out by the caller).
+    fn section(&mut self, k: usize, sec: &Section<'_>) {
+        let warnings = &mut self.warnings;
+        // Duplicate keys within a section (lists handled below).
+        let is_list = matches!(
+            sec.name.as_str(),
+            "mandatoryobjects" | "optionalobjects" | "manufacturerobjects"
+        );
+        if !is_list {
+            let mut keys: BTreeMap<&str, usize> = BTreeMap::new();
+            for l in &sec.lines {
+                if let Some(first) = keys.insert(l.key.as_str(), l.line) {
+                    warnings.push(EdsWarning {
+                        line: l.line,
+                        what: format!(
+                            "{} again in [{}] (first at line {first}): the first is used",
+                            l.key, sec.name
+                        ),
+                    });
+                }
+            }
+        }
+        let file = &mut self.file;
+        match sec.name.as_str() {
+            "fileinfo" => {
+                for l in &sec.lines {
+                    file.file_info
+                        .entry(l.key.clone())
+                        .or_insert_with(|| l.value.to_string());
+                }
+            }
+            "deviceinfo" => file.device = device_info(sec, warnings),
+            "dummyusage" => {
+                for l in &sec.lines {
+                    if let Some(t) = l.key.strip_prefix("dummy")
+                        && let Ok(code) = u16::from_str_radix(t, 16)
+                        && number(l.value).is_some_and(|n| n != 0)
+                    {
+                        file.dummy_usage.push(code);
+                    }
+                }
+            }
+            "devicecomissioning" | "devicecommissioning" => {
+                file.dcf = true;
+                file.node_id = sec
+                    .get("nodeid")
+                    .and_then(|(v, _)| number(v))
+                    .and_then(|n| u8::try_from(n).ok());
+            }
+            "mandatoryobjects" | "optionalobjects" | "manufacturerobjects" => {
+                object_list(sec, &mut self.listed, warnings);
+            }
+            name => match section_name(name) {
+                Some(SectionName::Object(index)) => {
+                    file.objects.insert(index, object_of(sec, index, warnings));
+                }
+                Some(SectionName::Sub(index, sub)) => self.subs.push((index, sub, k)),
+                Some(SectionName::Value(index)) => {
+                    self.compact_values.insert(index, k);
+                }
+                Some(SectionName::Names(index)) => {
+                    self.compact_names.insert(index, k);
+                }
+                None => {
+                    if !matches!(name, "comments" | "tools") {
+                        warnings.push(EdsWarning {
+                            line: sec.line,
+                            what: format!("[{name}] is not a section of CiA 306: left out"),
+                        });
+                    }
+                }
+            },
+        }
+    }
+
+    /// Sub-index sections into their objects.
+    fn sub_sections(&mut self, secs: &[Section<'_>]) {
+        for &(index, sub, k) in &self.subs {
+            let Some(sec) = secs.get(k) else { continue };
+            let e = entry_of(sec, sub, &mut self.warnings);
+            match self.file.objects.get_mut(&index) {
+                Some(o) => {
+                    o.entries.insert(sub, e);
+                }
+                None => self.warnings.push(EdsWarning {
+                    line: sec.line,
+                    what: format!(
+                        "[{}] has no object section [{index:04X}]: left out",
+                        sec.name
+                    ),
+                }),
+            }
+        }
+    }
+
+    /// CompactSubObj values and names into their objects' entries.
+    fn compact_sections(&mut self, secs: &[Section<'_>]) {
+        for (&index, &k) in &self.compact_values {
+            if let (Some(o), Some(sec)) = (self.file.objects.get_mut(&index), secs.get(k)) {
+                for l in &sec.lines {
+                    if let Some(sub) = number(&l.key).and_then(|s| u8::try_from(s).ok())
+                        && let Some(e) = o.entries.get_mut(&sub)
+                    {
+                        e.default = value(l.value, e.data_type, l.line, &mut self.warnings);
+                    }
+                }
+            }
+        }
+        for (&index, &k) in &self.compact_names {
+            if let (Some(o), Some(sec)) = (self.file.objects.get_mut(&index), secs.get(k)) {
+                for l in &sec.lines {
+                    if let Some(sub) = number(&l.key).and_then(|s| u8::try_from(s).ok())
+                        && let Some(e) = o.entries.get_mut(&sub)
+                    {
+                        e.name = l.value.to_string();
+                    }
+                }
+            }
+        }
+    }
+
+    /// The object lists against the objects: a listed object without a section, a section
+    /// no list names, a SubNumber the sub-index sections do not match.
+    fn lists_against_objects(&mut self) {
+        let (file, warnings) = (&mut self.file, &mut self.warnings);
+        for (index, line) in &self.listed {
+            match file.objects.get_mut(index) {
+                Some(o) => o.listed = true,
+                None => warnings.push(EdsWarning {
+                    line: *line,
+                    what: format!("{index:04X}h is listed but has no section: left out"),
+                }),
+            }
+        }
+        for o in file.objects.values() {
+            if !o.listed && !self.listed.is_empty() {
+                warnings.push(EdsWarning {
+                    line: o.line,
+                    what: format!(
+                        "{:04X}h has a section but no object list names it: taken",
+                        o.index
+                    ),
+                });
+            }
+            if let Some(n) = o.sub_number {
+                let have = o.entries.len();
+                if matches!(o.kind, ObjectKind::Array | ObjectKind::Record)
+                    && usize::from(n) != have
+                {
+                    warnings.push(EdsWarning {
+                        line: o.line,
+                        what: format!(
+                            "{:04X}h says SubNumber={n} and has {have} sub-index section(s): \
+                             those are taken",
+                            o.index
+                        ),
+                    });
+                }
+            }
+        }
+    }
+}
+
+/// An object list section ([MandatoryObjects], …): its indices with their lines into
+/// `listed`; a key twice, a value that is no index and a count that does not match are said.
+fn object_list(sec: &Section<'_>, listed: &mut Vec<(u16, usize)>, warnings: &mut Vec<EdsWarning>) {
+    let mut keys: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut count = None;
+    let mut n = 0usize;
+    for l in &sec.lines {
+        if l.key == "supportedobjects" {
+            count = number(l.value);
+            continue;
+        }
+        if let Some(first) = keys.insert(l.key.as_str(), l.line) {
+            warnings.push(EdsWarning {
+                line: l.line,
+                what: format!(
+                    "list key {} again in [{}] (first at line {first}): both objects are taken",
+                    l.key, sec.name
+                ),
+            });
+        }
+        match number(l.value).and_then(|v| u16::try_from(v).ok()) {
+            Some(i) => {
+                listed.push((i, l.line));
+                n += 1;
+            }
+            None => warnings.push(EdsWarning {
+                line: l.line,
+                what: format!("{:?} in [{}] is not an index", l.value, sec.name),
+            }),
+        }
+    }
+    if let Some(c) = count
+        && c != n as i128
+    {
+        warnings.push(EdsWarning {
+            line: sec.line,
+            what: format!(
+                "[{}] says SupportedObjects={c} and lists {n}: all {n} are taken",
+                sec.name
+            ),
+        });
+    }
+}
+
+/// An object section ([6040]): its kind (VAR where it says none, or one CiA 301 does not
+/// have), name and SubNumber, its entry for a VAR or DOMAIN, and its CompactSubObj entries.
+fn object_of(sec: &Section<'_>, index: u16, warnings: &mut Vec<EdsWarning>) -> EdsObject {
+    let kind = match sec.get("objecttype") {
+        Some((v, line)) => match number(v).and_then(ObjectKind::from_code) {
+            Some(k) => k,
+            None => {
+                warnings.push(EdsWarning {
+                    line,
+                    what: format!(
+                        "ObjectType {v:?} of {index:04X}h is not one \
+                             of CiA 301's: read as VAR"
+                    ),
+                });
+                ObjectKind::Var
+            }
+        },
+        None => ObjectKind::Var,
+    };
+    let mut obj = EdsObject {
+        index,
+        name: sec
+            .get("parametername")
+            .map(|(v, _)| v.to_string())
+            .unwrap_or_default(),
+        kind,
+        sub_number: sec
+            .get("subnumber")
+            .and_then(|(v, _)| number(v))
+            .and_then(|n| u8::try_from(n).ok()),
+        entries: BTreeMap::new(),
+        listed: false,
+        line: sec.line,
+    };
+    if matches!(kind, ObjectKind::Var | ObjectKind::Domain) {
+        obj.entries.insert(0, entry_of(sec, 0, warnings));
+    }
+    if let Some((v, line)) = sec.get("compactsubobj")
+        && let Some(n) = number(v).filter(|n| *n > 0)
+    {
+        compact(&mut obj, sec, n, line, warnings);
+    }
+    obj
 }
 
 /// `[DeviceInfo]`.

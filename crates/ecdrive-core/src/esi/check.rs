@@ -114,173 +114,17 @@ impl Device {
                 severity: Severity::Warning,
             });
         };
-
-        let resolved: Vec<ResolvedObject> = match self.dictionary() {
-            Some(dict) => dict
-                .objects
-                .iter()
-                .filter_map(|o| match dict.resolve_object(o) {
-                    Ok(r) => {
-                        for p in &r.problems {
-                            issue(p.position, p.message.clone());
-                        }
-                        Some(r)
-                    }
-                    Err(e) => {
-                        issue(e.position, e.message);
-                        None
-                    }
-                })
-                .collect(),
-            None => Vec::new(),
-        };
-        let object = |index: u16| resolved.iter().find(|o| o.index == index);
-
+        let resolved = self.resolved_objects(&mut issue);
         for dir in [Direction::Rx, Direction::Tx] {
-            let d = dir.name();
             let pdos = self.pdos(dir);
-            let want_sm = match dir {
-                Direction::Rx => SmKind::Outputs,
-                Direction::Tx => SmKind::Inputs,
-            };
             for (i, p) in pdos.iter().enumerate() {
-                if pdos
-                    .get(..i)
-                    .unwrap_or_default()
-                    .iter()
-                    .any(|q| q.index == p.index)
-                {
-                    issue(
-                        p.position,
-                        format!("{d} 0x{:04X} is described twice", p.index),
-                    );
-                }
-                for x in &p.excludes {
-                    let known = self.pdo(Direction::Rx, *x).is_some()
-                        || self.pdo(Direction::Tx, *x).is_some();
-                    if !known {
-                        issue(
-                            p.position,
-                            format!(
-                                "{d} 0x{:04X} excludes 0x{x:04X}, which is not described",
-                                p.index
-                            ),
-                        );
-                    }
-                    if p.is_default() && pdos.iter().any(|q| q.index == *x && q.is_default()) {
-                        issue(
-                            p.position,
-                            format!(
-                                "{d} 0x{:04X} and 0x{x:04X} are both assigned by default but \
-                                 exclude each other",
-                                p.index
-                            ),
-                        );
-                    }
-                }
-                if let Some(sm) = p.sm {
-                    match self.sync_managers.get(usize::from(sm)) {
-                        Some(s) if s.kind == want_sm => {}
-                        Some(s) => issue(
-                            p.position,
-                            format!(
-                                "{d} 0x{:04X} is assigned to SM{sm}, which is {:?}, not {:?}",
-                                p.index, s.kind, want_sm
-                            ),
-                        ),
-                        None => issue(
-                            p.position,
-                            format!(
-                                "{d} 0x{:04X} is assigned to SM{sm}, which does not exist",
-                                p.index
-                            ),
-                        ),
-                    }
-                }
-                self.check_entries(dir, p, &resolved, &mut issue);
-                if let Some(o) = object(p.index) {
-                    check_mapping_defaults(d, p, o, &mut issue);
-                }
+                self.check_pdo(dir, i, p, &resolved, &mut issue);
             }
-            // Default assignment vs 0x1C12 / 0x1C13 defaults.
-            if let Some(o) = object(dir.assign_index()) {
-                let defaults: Vec<u16> = pdos
-                    .iter()
-                    .filter(|p| p.is_default())
-                    .map(|p| p.index)
-                    .collect();
-                let pos = self
-                    .dictionary()
-                    .and_then(|dd| dd.object(o.index))
-                    .map(|x| x.position)
-                    .unwrap_or(self.position);
-                if let Some(n) = default_int(o, 0) {
-                    if n != defaults.len() as i128 {
-                        issue(
-                            pos,
-                            format!(
-                                "0x{:04X}:00 default {n} differs from the {} {d}s assigned by \
-                                 default",
-                                o.index,
-                                defaults.len()
-                            ),
-                        );
-                    }
-                }
-                for (i, want) in defaults.iter().enumerate() {
-                    let sub = (i + 1).min(255) as u8;
-                    if let Some(v) = default_int(o, sub) {
-                        if v != i128::from(*want) {
-                            issue(
-                                pos,
-                                format!(
-                                    "0x{:04X}:{sub:02X} default {v:#06X} differs from the \
-                                     default-assigned {d} 0x{want:04X}",
-                                    o.index
-                                ),
-                            );
-                        }
-                    }
-                }
+            if let Some(o) = resolved.iter().find(|o| o.index == dir.assign_index()) {
+                self.check_assignment_defaults(dir, o, &mut issue);
             }
-            // SyncManager size vs default mapping.
-            if let Some(sm) = self.sync_manager(want_sm) {
-                let bits: u32 = pdos
-                    .iter()
-                    .filter(|p| p.is_default())
-                    .map(EsiPdo::bits)
-                    .sum();
-                let bytes = bits.div_ceil(8);
-                if let Some(size) = sm.default_size {
-                    if u32::from(size) != bytes {
-                        issue(
-                            sm.position,
-                            format!(
-                                "SM{} DefaultSize {size} differs from the {bytes} bytes of the \
-                                 default {d}s",
-                                sm.index
-                            ),
-                        );
-                    }
-                }
-                let fmmu = match dir {
-                    Direction::Rx => FmmuUsage::Outputs,
-                    Direction::Tx => FmmuUsage::Inputs,
-                };
-                if !pdos.is_empty() && !self.fmmus.iter().any(|f| f.usage == fmmu) {
-                    issue(
-                        sm.position,
-                        format!("the device has {d}s but no <Fmmu>{}</Fmmu>", fmmu.name()),
-                    );
-                }
-            } else if !pdos.is_empty() {
-                issue(
-                    self.position,
-                    format!("the device has {d}s but no <Sm>{}</Sm>", want_sm.name()),
-                );
-            }
+            self.check_process_data_sm(dir, &mut issue);
         }
-
         if self.mailbox.is_some() {
             for k in [SmKind::MBoxOut, SmKind::MBoxIn] {
                 if self.sync_manager(k).is_none() {
@@ -306,6 +150,195 @@ impl Device {
             }
         }
         out
+    }
+
+    /// The dictionary's objects resolved (what cannot be resolved, and each object's problems,
+    /// said).
+    fn resolved_objects(&self, issue: &mut dyn FnMut(Position, String)) -> Vec<ResolvedObject> {
+        let Some(dict) = self.dictionary() else {
+            return Vec::new();
+        };
+        dict.objects
+            .iter()
+            .filter_map(|o| match dict.resolve_object(o) {
+                Ok(r) => {
+                    for p in &r.problems {
+                        issue(p.position, p.message.clone());
+                    }
+                    Some(r)
+                }
+                Err(e) => {
+                    issue(e.position, e.message);
+                    None
+                }
+            })
+            .collect()
+    }
+
+    /// PDO `p`, the `i`-th of its direction: described once, excluding only PDOs that are
+    /// described and not assigned by default with it, assigned to a SyncManager of its kind,
+    /// its entries ([`Device::check_entries`]) and its mapping object's defaults.
+    fn check_pdo(
+        &self,
+        dir: Direction,
+        i: usize,
+        p: &EsiPdo,
+        resolved: &[ResolvedObject],
+        issue: &mut dyn FnMut(Position, String),
+    ) {
+        let d = dir.name();
+        let pdos = self.pdos(dir);
+        let want_sm = process_data_sm(dir);
+        if pdos
+            .get(..i)
+            .unwrap_or_default()
+            .iter()
+            .any(|q| q.index == p.index)
+        {
+            issue(
+                p.position,
+                format!("{d} 0x{:04X} is described twice", p.index),
+            );
+        }
+        for x in &p.excludes {
+            let known =
+                self.pdo(Direction::Rx, *x).is_some() || self.pdo(Direction::Tx, *x).is_some();
+            if !known {
+                issue(
+                    p.position,
+                    format!(
+                        "{d} 0x{:04X} excludes 0x{x:04X}, which is not described",
+                        p.index
+                    ),
+                );
+            }
+            if p.is_default() && pdos.iter().any(|q| q.index == *x && q.is_default()) {
+                issue(
+                    p.position,
+                    format!(
+                        "{d} 0x{:04X} and 0x{x:04X} are both assigned by default but exclude \
+                         each other",
+                        p.index
+                    ),
+                );
+            }
+        }
+        if let Some(sm) = p.sm {
+            match self.sync_managers.get(usize::from(sm)) {
+                Some(s) if s.kind == want_sm => {}
+                Some(s) => issue(
+                    p.position,
+                    format!(
+                        "{d} 0x{:04X} is assigned to SM{sm}, which is {:?}, not {:?}",
+                        p.index, s.kind, want_sm
+                    ),
+                ),
+                None => issue(
+                    p.position,
+                    format!(
+                        "{d} 0x{:04X} is assigned to SM{sm}, which does not exist",
+                        p.index
+                    ),
+                ),
+            }
+        }
+        self.check_entries(dir, p, resolved, issue);
+        if let Some(o) = resolved.iter().find(|o| o.index == p.index) {
+            check_mapping_defaults(d, p, o, issue);
+        }
+    }
+
+    /// The default assignment against the defaults of 0x1C12 / 0x1C13 (`o`).
+    fn check_assignment_defaults(
+        &self,
+        dir: Direction,
+        o: &ResolvedObject,
+        issue: &mut dyn FnMut(Position, String),
+    ) {
+        let d = dir.name();
+        let defaults: Vec<u16> = self
+            .pdos(dir)
+            .iter()
+            .filter(|p| p.is_default())
+            .map(|p| p.index)
+            .collect();
+        let pos = self
+            .dictionary()
+            .and_then(|dd| dd.object(o.index))
+            .map(|x| x.position)
+            .unwrap_or(self.position);
+        if let Some(n) = default_int(o, 0) {
+            if n != defaults.len() as i128 {
+                issue(
+                    pos,
+                    format!(
+                        "0x{:04X}:00 default {n} differs from the {} {d}s assigned by default",
+                        o.index,
+                        defaults.len()
+                    ),
+                );
+            }
+        }
+        for (i, want) in defaults.iter().enumerate() {
+            let sub = (i + 1).min(255) as u8;
+            if let Some(v) = default_int(o, sub) {
+                if v != i128::from(*want) {
+                    issue(
+                        pos,
+                        format!(
+                            "0x{:04X}:{sub:02X} default {v:#06X} differs from the \
+                             default-assigned {d} 0x{want:04X}",
+                            o.index
+                        ),
+                    );
+                }
+            }
+        }
+    }
+
+    /// The direction's process-data SyncManager: there when the device has PDOs of it, its
+    /// default size that of the default PDOs, and an FMMU for it.
+    fn check_process_data_sm(&self, dir: Direction, issue: &mut dyn FnMut(Position, String)) {
+        let d = dir.name();
+        let pdos = self.pdos(dir);
+        let want_sm = process_data_sm(dir);
+        let Some(sm) = self.sync_manager(want_sm) else {
+            if !pdos.is_empty() {
+                issue(
+                    self.position,
+                    format!("the device has {d}s but no <Sm>{}</Sm>", want_sm.name()),
+                );
+            }
+            return;
+        };
+        let bits: u32 = pdos
+            .iter()
+            .filter(|p| p.is_default())
+            .map(EsiPdo::bits)
+            .sum();
+        let bytes = bits.div_ceil(8);
+        if let Some(size) = sm.default_size {
+            if u32::from(size) != bytes {
+                issue(
+                    sm.position,
+                    format!(
+                        "SM{} DefaultSize {size} differs from the {bytes} bytes of the default \
+                         {d}s",
+                        sm.index
+                    ),
+                );
+            }
+        }
+        let fmmu = match dir {
+            Direction::Rx => FmmuUsage::Outputs,
+            Direction::Tx => FmmuUsage::Inputs,
+        };
+        if !pdos.is_empty() && !self.fmmus.iter().any(|f| f.usage == fmmu) {
+            issue(
+                sm.position,
+                format!("the device has {d}s but no <Fmmu>{}</Fmmu>", fmmu.name()),
+            );
+        }
     }
 
     fn check_entries(
@@ -413,5 +446,13 @@ fn check_mapping_defaults(
                 );
             }
         }
+    }
+}
+
+/// The SyncManager kind a direction's PDOs go to: RxPDOs to the outputs, TxPDOs to the inputs.
+fn process_data_sm(dir: Direction) -> SmKind {
+    match dir {
+        Direction::Rx => SmKind::Outputs,
+        Direction::Tx => SmKind::Inputs,
     }
 }

@@ -237,237 +237,283 @@ impl Dictionary {
             )
         };
         let obj_flags = obj.flags.unwrap_or_default();
-        let mut entries = Vec::new();
-        let mut code = ObjectCode::Var;
-        match self.data_type(&obj.type_name) {
-            Some(dt) if !dt.sub_items.is_empty() => {
-                let mut array_elems = 0usize;
-                let mut other = 0usize;
-                for si in &dt.sub_items {
-                    let flags = si.flags.unwrap_or(obj_flags);
-                    let array = self
-                        .data_type(&si.type_name)
-                        .and_then(|t| t.array.map(|a| (t, a)));
-                    // A byte array is one entry (a byte string) where it has a sub-index of
-                    // its own, or where its elements would not fit sub-indices.
-                    let byte_string = array.and_then(|(arr, info)| {
-                        let sub = si.sub_idx.or_else(|| {
-                            (info.elements > 255)
-                                .then(|| u8::try_from(info.lbound.max(1)).ok())
-                                .flatten()
-                        })?;
-                        self.is_byte_array(arr).then_some(sub)
-                    });
-                    if let Some(sub) = byte_string {
-                        other += usize::from(sub != 0);
-                        entries.push(RawEntry {
-                            sub,
-                            name: si.name.clone(),
-                            type_name: "OCTET_STRING".into(),
-                            bit_len: si.bit_size,
-                            flags,
-                        });
-                        continue;
-                    }
-                    match array {
-                        Some((arr, info)) => {
-                            let base = arr.base_type.as_deref().unwrap_or("");
-                            let elem_bits = match self.data_type(base) {
-                                Some(b) if b.sub_items.is_empty() && b.array.is_none() => {
-                                    b.bit_size
-                                }
-                                Some(_) => {
-                                    return Err(err(format!(
-                                        "array type {:?} has structured base type {base:?}",
-                                        arr.name
-                                    )));
-                                }
-                                None => arr.bit_size.checked_div(info.elements).unwrap_or(0),
-                            };
-                            if info.elements > 255 {
-                                return Err(err(format!(
-                                    "array type {:?} has {} elements (at most 255 fit in \
-                                     sub-indices)",
-                                    arr.name, info.elements
-                                )));
-                            }
-                            for i in 0..info.elements {
-                                let sub = info
-                                    .lbound
-                                    .checked_add(i)
-                                    .and_then(|s| u8::try_from(s).ok())
-                                    .ok_or_else(|| {
-                                        err(format!(
-                                            "array type {:?} elements run past sub-index 255",
-                                            arr.name
-                                        ))
-                                    })?;
-                                entries.push(RawEntry {
-                                    sub,
-                                    name: format!("SubIndex {sub:03}"),
-                                    type_name: base.to_string(),
-                                    bit_len: elem_bits,
-                                    flags,
-                                });
-                                array_elems += 1;
-                            }
-                        }
-                        None => {
-                            let Some(sub) = si.sub_idx else { continue };
-                            if sub != 0 {
-                                other += 1;
-                            }
-                            entries.push(RawEntry {
-                                sub,
-                                name: si.name.clone(),
-                                type_name: si.type_name.clone(),
-                                bit_len: si.bit_size,
-                                flags,
-                            });
-                        }
-                    }
-                }
-                code = if array_elems > 0 && other == 0 {
-                    ObjectCode::Array
-                } else {
-                    ObjectCode::Record
-                };
-            }
-            Some(dt) if self.is_byte_array(dt) => entries.push(RawEntry {
-                // An object typed with a byte array is one byte string.
-                sub: 0,
-                name: obj.name.clone(),
-                type_name: "OCTET_STRING".into(),
-                bit_len: if obj.bit_size > 0 {
-                    obj.bit_size
-                } else {
-                    dt.bit_size
-                },
-                flags: obj_flags,
-            }),
-            Some(dt) if dt.array.is_some() => {
-                // An object typed directly with an array type: elements plus a synthesised
-                // sub-index 0 holding the count.
-                let info = dt.array.unwrap_or(ArrayInfo {
-                    lbound: 1,
-                    elements: 0,
-                });
-                let base = dt.base_type.clone().unwrap_or_default();
-                let elem_bits = self
-                    .data_type(&base)
-                    .map(|b| b.bit_size)
-                    .unwrap_or(dt.bit_size.checked_div(info.elements).unwrap_or(0));
-                entries.push(RawEntry {
+        let (code, mut entries) = match self.data_type(&obj.type_name) {
+            Some(dt) if !dt.sub_items.is_empty() => self.record_entries(dt, obj_flags, &err)?,
+            Some(dt) if self.is_byte_array(dt) => (
+                ObjectCode::Var,
+                vec![RawEntry {
+                    // An object typed with a byte array is one byte string.
                     sub: 0,
-                    name: "SubIndex 000".into(),
-                    type_name: "USINT".into(),
-                    bit_len: 8,
-                    flags: Flags {
-                        access: Some(EntryAccess::RO),
-                        ..obj_flags
+                    name: obj.name.clone(),
+                    type_name: "OCTET_STRING".into(),
+                    bit_len: if obj.bit_size > 0 {
+                        obj.bit_size
+                    } else {
+                        dt.bit_size
                     },
-                });
-                for i in 0..info.elements.min(255) {
-                    let Some(sub) = info
-                        .lbound
-                        .checked_add(i)
-                        .and_then(|s| u8::try_from(s).ok())
-                    else {
-                        return Err(err("array elements run past sub-index 255".into()));
-                    };
-                    entries.push(RawEntry {
-                        sub,
-                        name: format!("SubIndex {sub:03}"),
-                        type_name: base.clone(),
-                        bit_len: elem_bits,
-                        flags: obj_flags,
-                    });
-                }
-                code = ObjectCode::Array;
+                    flags: obj_flags,
+                }],
+            ),
+            Some(dt) if dt.array.is_some() => {
+                (ObjectCode::Array, self.array_entries(dt, obj_flags, &err)?)
             }
-            _ => entries.push(RawEntry {
-                sub: 0,
-                name: obj.name.clone(),
-                type_name: obj.type_name.clone(),
-                bit_len: obj.bit_size,
-                flags: obj_flags,
-            }),
-        }
+            _ => (
+                ObjectCode::Var,
+                vec![RawEntry {
+                    sub: 0,
+                    name: obj.name.clone(),
+                    type_name: obj.type_name.clone(),
+                    bit_len: obj.bit_size,
+                    flags: obj_flags,
+                }],
+            ),
+        };
         for e in &mut entries {
             e.type_name = self.base_type_name(&e.type_name);
         }
-
-        let mut out = Vec::with_capacity(entries.len());
-        let mut problems = Vec::new();
-        let n_entries = entries.len();
-        for (pos, e) in entries.into_iter().enumerate() {
-            let info: Option<(&str, &ObjectInfo)> = if code == ObjectCode::Var {
-                Some((e.name.as_str(), &obj.info))
-            } else {
-                let subs = &obj.info.sub_items;
-                subs.iter()
-                    .find(|(n, _)| *n == e.name)
-                    .or_else(|| {
-                        if subs.len() == n_entries {
-                            subs.get(pos)
-                        } else {
-                            None
-                        }
-                    })
-                    .map(|(n, i)| (n.as_str(), i))
-            };
-            let data_type = DataType::parse(&e.type_name);
-            // A value that does not decode is left out and noted; one taken by a tolerance
-            // rule (short data, a `#x` pattern) is kept and noted.
-            let mut decode = |v: &Option<EsiValue>, what: &str| -> Option<Value> {
-                let (v, dt) = (v.as_ref()?, data_type?);
-                let at =
-                    |m: String| err(format!("{what} of sub-index {} ({}): {m}", e.sub, e.name));
-                match decode_value(v, dt) {
-                    Ok((value, None)) => Some(value),
-                    Ok((value, Some(note))) => {
-                        problems.push(at(note));
-                        Some(value)
-                    }
-                    Err(m) => {
-                        problems.push(at(format!("{m} (left out)")));
-                        None
-                    }
-                }
-            };
-            let (name, default, min, max) = match info {
-                Some((n, i)) => (
-                    if code == ObjectCode::Array && e.sub != 0 {
-                        n.to_string()
-                    } else {
-                        e.name.clone()
-                    },
-                    decode(&i.default, "default"),
-                    decode(&i.min, "minimum"),
-                    decode(&i.max, "maximum"),
-                ),
-                None => (e.name.clone(), None, None, None),
-            };
-            out.push(ResolvedEntry {
-                sub: e.sub,
-                name,
-                type_name: e.type_name,
-                data_type,
-                bit_len: e.bit_len,
-                access: e.flags.entry_access(),
-                default,
-                min,
-                max,
-            });
-        }
+        let (entries, problems) = resolved_entries(obj, code, entries, &err);
         Ok(ResolvedObject {
             index: obj.index,
             name: obj.name.clone(),
             code,
-            entries: out,
+            entries,
             problems,
         })
     }
+
+    /// The entries of an object whose type has `<SubItem>`s: a RECORD, or an ARRAY when its
+    /// non-zero entries all come from one array-typed sub-item.
+    fn record_entries(
+        &self,
+        dt: &EsiDataType,
+        obj_flags: Flags,
+        err: &dyn Fn(String) -> EsiError,
+    ) -> Result<(ObjectCode, Vec<RawEntry>), EsiError> {
+        let mut entries = Vec::new();
+        let mut array_elems = 0usize;
+        let mut other = 0usize;
+        for si in &dt.sub_items {
+            let flags = si.flags.unwrap_or(obj_flags);
+            let array = self
+                .data_type(&si.type_name)
+                .and_then(|t| t.array.map(|a| (t, a)));
+            // A byte array is one entry (a byte string) where it has a sub-index of
+            // its own, or where its elements would not fit sub-indices.
+            let byte_string = array.and_then(|(arr, info)| {
+                let sub = si.sub_idx.or_else(|| {
+                    (info.elements > 255)
+                        .then(|| u8::try_from(info.lbound.max(1)).ok())
+                        .flatten()
+                })?;
+                self.is_byte_array(arr).then_some(sub)
+            });
+            if let Some(sub) = byte_string {
+                other += usize::from(sub != 0);
+                entries.push(RawEntry {
+                    sub,
+                    name: si.name.clone(),
+                    type_name: "OCTET_STRING".into(),
+                    bit_len: si.bit_size,
+                    flags,
+                });
+                continue;
+            }
+            match array {
+                Some((arr, info)) => {
+                    array_elems += self.sub_item_elements(arr, info, flags, err, &mut entries)?;
+                }
+                None => {
+                    let Some(sub) = si.sub_idx else { continue };
+                    if sub != 0 {
+                        other += 1;
+                    }
+                    entries.push(RawEntry {
+                        sub,
+                        name: si.name.clone(),
+                        type_name: si.type_name.clone(),
+                        bit_len: si.bit_size,
+                        flags,
+                    });
+                }
+            }
+        }
+        let code = if array_elems > 0 && other == 0 {
+            ObjectCode::Array
+        } else {
+            ObjectCode::Record
+        };
+        Ok((code, entries))
+    }
+
+    /// The elements of an array-typed sub-item (`arr`), numbered from its `LBound`, into
+    /// `entries`; returns how many.
+    fn sub_item_elements(
+        &self,
+        arr: &EsiDataType,
+        info: ArrayInfo,
+        flags: Flags,
+        err: &dyn Fn(String) -> EsiError,
+        entries: &mut Vec<RawEntry>,
+    ) -> Result<usize, EsiError> {
+        let base = arr.base_type.as_deref().unwrap_or("");
+        let elem_bits = match self.data_type(base) {
+            Some(b) if b.sub_items.is_empty() && b.array.is_none() => b.bit_size,
+            Some(_) => {
+                return Err(err(format!(
+                    "array type {:?} has structured base type {base:?}",
+                    arr.name
+                )));
+            }
+            None => arr.bit_size.checked_div(info.elements).unwrap_or(0),
+        };
+        if info.elements > 255 {
+            return Err(err(format!(
+                "array type {:?} has {} elements (at most 255 fit in sub-indices)",
+                arr.name, info.elements
+            )));
+        }
+        for i in 0..info.elements {
+            let sub = info
+                .lbound
+                .checked_add(i)
+                .and_then(|s| u8::try_from(s).ok())
+                .ok_or_else(|| {
+                    err(format!(
+                        "array type {:?} elements run past sub-index 255",
+                        arr.name
+                    ))
+                })?;
+            entries.push(RawEntry {
+                sub,
+                name: format!("SubIndex {sub:03}"),
+                type_name: base.to_string(),
+                bit_len: elem_bits,
+                flags,
+            });
+        }
+        Ok(info.elements as usize)
+    }
+
+    /// The entries of an object typed directly with an array type: elements plus a
+    /// synthesised sub-index 0 holding the count.
+    fn array_entries(
+        &self,
+        dt: &EsiDataType,
+        obj_flags: Flags,
+        err: &dyn Fn(String) -> EsiError,
+    ) -> Result<Vec<RawEntry>, EsiError> {
+        let info = dt.array.unwrap_or(ArrayInfo {
+            lbound: 1,
+            elements: 0,
+        });
+        let base = dt.base_type.clone().unwrap_or_default();
+        let elem_bits = self
+            .data_type(&base)
+            .map(|b| b.bit_size)
+            .unwrap_or(dt.bit_size.checked_div(info.elements).unwrap_or(0));
+        let mut entries = vec![RawEntry {
+            sub: 0,
+            name: "SubIndex 000".into(),
+            type_name: "USINT".into(),
+            bit_len: 8,
+            flags: Flags {
+                access: Some(EntryAccess::RO),
+                ..obj_flags
+            },
+        }];
+        for i in 0..info.elements.min(255) {
+            let Some(sub) = info
+                .lbound
+                .checked_add(i)
+                .and_then(|s| u8::try_from(s).ok())
+            else {
+                return Err(err("array elements run past sub-index 255".into()));
+            };
+            entries.push(RawEntry {
+                sub,
+                name: format!("SubIndex {sub:03}"),
+                type_name: base.clone(),
+                bit_len: elem_bits,
+                flags: obj_flags,
+            });
+        }
+        Ok(entries)
+    }
+}
+
+/// Each entry with the object's info attached (the sub-item info by name, else by position)
+/// and its default and limits decoded with its data type: a value that does not decode is left
+/// out and noted; one taken by a tolerance rule (short data, a `#x` pattern) is kept and
+/// noted. Returns the entries and the notes.
+fn resolved_entries(
+    obj: &EsiObject,
+    code: ObjectCode,
+    entries: Vec<RawEntry>,
+    err: &dyn Fn(String) -> EsiError,
+) -> (Vec<ResolvedEntry>, Vec<EsiError>) {
+    let mut out = Vec::with_capacity(entries.len());
+    let mut problems = Vec::new();
+    let n_entries = entries.len();
+    for (pos, e) in entries.into_iter().enumerate() {
+        let info: Option<(&str, &ObjectInfo)> = if code == ObjectCode::Var {
+            Some((e.name.as_str(), &obj.info))
+        } else {
+            let subs = &obj.info.sub_items;
+            subs.iter()
+                .find(|(n, _)| *n == e.name)
+                .or_else(|| {
+                    if subs.len() == n_entries {
+                        subs.get(pos)
+                    } else {
+                        None
+                    }
+                })
+                .map(|(n, i)| (n.as_str(), i))
+        };
+        let data_type = DataType::parse(&e.type_name);
+        // A value that does not decode is left out and noted; one taken by a tolerance
+        // rule (short data, a `#x` pattern) is kept and noted.
+        let mut decode = |v: &Option<EsiValue>, what: &str| -> Option<Value> {
+            let (v, dt) = (v.as_ref()?, data_type?);
+            let at = |m: String| err(format!("{what} of sub-index {} ({}): {m}", e.sub, e.name));
+            match decode_value(v, dt) {
+                Ok((value, None)) => Some(value),
+                Ok((value, Some(note))) => {
+                    problems.push(at(note));
+                    Some(value)
+                }
+                Err(m) => {
+                    problems.push(at(format!("{m} (left out)")));
+                    None
+                }
+            }
+        };
+        let (name, default, min, max) = match info {
+            Some((n, i)) => (
+                if code == ObjectCode::Array && e.sub != 0 {
+                    n.to_string()
+                } else {
+                    e.name.clone()
+                },
+                decode(&i.default, "default"),
+                decode(&i.min, "minimum"),
+                decode(&i.max, "maximum"),
+            ),
+            None => (e.name.clone(), None, None, None),
+        };
+        out.push(ResolvedEntry {
+            sub: e.sub,
+            name,
+            type_name: e.type_name,
+            data_type,
+            bit_len: e.bit_len,
+            access: e.flags.entry_access(),
+            default,
+            min,
+            max,
+        });
+    }
+    (out, problems)
 }
 
 struct RawEntry {

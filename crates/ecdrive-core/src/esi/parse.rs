@@ -537,107 +537,8 @@ impl<'a, 'input> P<'a, 'input> {
             s => s.to_string(),
         };
 
-        let mut fmmus = Vec::new();
-        for f in children(n, "Fmmu") {
-            let s = format!("<Fmmu> in {scope}");
-            let text = text_of(f);
-            let usage = match text.to_ascii_lowercase().as_str() {
-                "outputs" => FmmuUsage::Outputs,
-                "inputs" => FmmuUsage::Inputs,
-                "mboxstate" => FmmuUsage::SmStatus,
-                "" => FmmuUsage::Unused,
-                _ => {
-                    // ETG.2000's order: FMMU 0 outputs, 1 inputs, 2 the mailbox state.
-                    let (usage, read_as) = match fmmus.len() {
-                        0 => (FmmuUsage::Outputs, "Outputs, as FMMU 0 is"),
-                        1 => (FmmuUsage::Inputs, "Inputs, as FMMU 1 is"),
-                        2 => (FmmuUsage::SmStatus, "MBoxState, as FMMU 2 is"),
-                        _ => (FmmuUsage::Unused, "unused"),
-                    };
-                    self.warn(self.invalid(
-                        self.text_pos(f),
-                        format!(
-                            "{s} has usage {text:?}: expected Outputs, Inputs or MBoxState \
-                             (read as {read_as})"
-                        ),
-                    ));
-                    usage
-                }
-            };
-            fmmus.push(Fmmu {
-                usage,
-                sm: self.soft(self.attr_num(f, "Sm", &s)).flatten(),
-                op_only: self.soft_flag(f, "OpOnly", &s),
-            });
-        }
-
-        let mut sync_managers = Vec::new();
-        for (i, sm) in children(n, "Sm").enumerate() {
-            let index = u8::try_from(i).map_err(|_| {
-                self.invalid(
-                    self.node_pos(sm),
-                    format!("{scope} has more than 256 <Sm>s"),
-                )
-            })?;
-            let s = format!("<Sm> {i} in {scope}");
-            let text = text_of(sm);
-            let kind = match text.to_ascii_lowercase().as_str() {
-                "mboxout" | "mbxout" => SmKind::MBoxOut,
-                "mboxin" | "mbxin" => SmKind::MBoxIn,
-                "outputs" => SmKind::Outputs,
-                "inputs" => SmKind::Inputs,
-                "" => SmKind::Unused,
-                _ => {
-                    // What the ESC does with it is in its control byte (ETG.1000-4: bits
-                    // 0-1 mailbox or buffered, bits 2-3 the master reads or writes).
-                    let Some(cb) = self
-                        .soft(self.attr_num::<u8>(sm, "ControlByte", &s))
-                        .flatten()
-                    else {
-                        return Err(self.invalid(
-                            self.text_pos(sm),
-                            format!(
-                                "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
-                                 Inputs"
-                            ),
-                        ));
-                    };
-                    let kind = match (cb & 0x03 == 0x02, cb & 0x0C == 0x04) {
-                        (true, true) => SmKind::MBoxOut,
-                        (true, false) => SmKind::MBoxIn,
-                        (false, true) => SmKind::Outputs,
-                        (false, false) => SmKind::Inputs,
-                    };
-                    self.warn(self.invalid(
-                        self.text_pos(sm),
-                        format!(
-                            "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
-                             Inputs (read as {}, as its ControlByte 0x{cb:02X} says)",
-                            kind.name()
-                        ),
-                    ));
-                    kind
-                }
-            };
-            let start_address = self
-                .attr_num::<u16>(sm, "StartAddress", &s)?
-                .ok_or_else(|| self.missing(sm, format!("{s} has no StartAddress attribute")))?;
-            sync_managers.push(SyncManager {
-                position: self.node_pos(sm),
-                index,
-                kind,
-                start_address,
-                default_size: self.attr_num(sm, "DefaultSize", &s)?,
-                min_size: self.attr_num(sm, "MinSize", &s)?,
-                max_size: self.attr_num(sm, "MaxSize", &s)?,
-                control_byte: self
-                    .attr_num(sm, "ControlByte", &s)?
-                    .ok_or_else(|| self.missing(sm, format!("{s} has no ControlByte attribute")))?,
-                enable: self.attr_num::<u8>(sm, "Enable", &s)?.unwrap_or(0) != 0,
-                virtual_: self.soft_flag(sm, "Virtual", &s),
-                op_only: self.soft_flag(sm, "OpOnly", &s),
-            });
-        }
+        let fmmus = self.fmmus(n, &scope);
+        let mut sync_managers = self.sync_managers(n, &scope)?;
 
         let mut rx_pdos = children(n, "RxPdo")
             .map(|p| self.pdo(p, "RxPdo"))
@@ -686,6 +587,122 @@ impl<'a, 'input> P<'a, 'input> {
             dc,
             eeprom,
             profiles,
+        })
+    }
+
+    /// The device's `<Fmmu>`s; a usage that is none of ETG.2000's is read by position, noted.
+    fn fmmus(&self, n: Node<'a, 'input>, scope: &str) -> Vec<Fmmu> {
+        let mut fmmus = Vec::new();
+        for f in children(n, "Fmmu") {
+            let s = format!("<Fmmu> in {scope}");
+            let text = text_of(f);
+            let usage = match text.to_ascii_lowercase().as_str() {
+                "outputs" => FmmuUsage::Outputs,
+                "inputs" => FmmuUsage::Inputs,
+                "mboxstate" => FmmuUsage::SmStatus,
+                "" => FmmuUsage::Unused,
+                _ => {
+                    // ETG.2000's order: FMMU 0 outputs, 1 inputs, 2 the mailbox state.
+                    let (usage, read_as) = match fmmus.len() {
+                        0 => (FmmuUsage::Outputs, "Outputs, as FMMU 0 is"),
+                        1 => (FmmuUsage::Inputs, "Inputs, as FMMU 1 is"),
+                        2 => (FmmuUsage::SmStatus, "MBoxState, as FMMU 2 is"),
+                        _ => (FmmuUsage::Unused, "unused"),
+                    };
+                    self.warn(self.invalid(
+                        self.text_pos(f),
+                        format!(
+                            "{s} has usage {text:?}: expected Outputs, Inputs or MBoxState \
+                         (read as {read_as})"
+                        ),
+                    ));
+                    usage
+                }
+            };
+            fmmus.push(Fmmu {
+                usage,
+                sm: self.soft(self.attr_num(f, "Sm", &s)).flatten(),
+                op_only: self.soft_flag(f, "OpOnly", &s),
+            });
+        }
+        fmmus
+    }
+
+    /// The device's `<Sm>`s, numbered in order ([`Self::sm_kind`] reads each one's type).
+    fn sync_managers(&self, n: Node<'a, 'input>, scope: &str) -> R<Vec<SyncManager>> {
+        let mut sync_managers = Vec::new();
+        for (i, sm) in children(n, "Sm").enumerate() {
+            let index = u8::try_from(i).map_err(|_| {
+                self.invalid(
+                    self.node_pos(sm),
+                    format!("{scope} has more than 256 <Sm>s"),
+                )
+            })?;
+            let s = format!("<Sm> {i} in {scope}");
+            let kind = self.sm_kind(sm, &s)?;
+            let start_address = self
+                .attr_num::<u16>(sm, "StartAddress", &s)?
+                .ok_or_else(|| self.missing(sm, format!("{s} has no StartAddress attribute")))?;
+            sync_managers.push(SyncManager {
+                position: self.node_pos(sm),
+                index,
+                kind,
+                start_address,
+                default_size: self.attr_num(sm, "DefaultSize", &s)?,
+                min_size: self.attr_num(sm, "MinSize", &s)?,
+                max_size: self.attr_num(sm, "MaxSize", &s)?,
+                control_byte: self
+                    .attr_num(sm, "ControlByte", &s)?
+                    .ok_or_else(|| self.missing(sm, format!("{s} has no ControlByte attribute")))?,
+                enable: self.attr_num::<u8>(sm, "Enable", &s)?.unwrap_or(0) != 0,
+                virtual_: self.soft_flag(sm, "Virtual", &s),
+                op_only: self.soft_flag(sm, "OpOnly", &s),
+            });
+        }
+        Ok(sync_managers)
+    }
+
+    /// An `<Sm>`'s type (`s` names it): one of ETG.2000's, else what its ControlByte says,
+    /// noted; without one, the file is wrong.
+    fn sm_kind(&self, sm: Node<'a, 'input>, s: &str) -> R<SmKind> {
+        let text = text_of(sm);
+        Ok(match text.to_ascii_lowercase().as_str() {
+            "mboxout" | "mbxout" => SmKind::MBoxOut,
+            "mboxin" | "mbxin" => SmKind::MBoxIn,
+            "outputs" => SmKind::Outputs,
+            "inputs" => SmKind::Inputs,
+            "" => SmKind::Unused,
+            _ => {
+                // What the ESC does with it is in its control byte (ETG.1000-4: bits
+                // 0-1 mailbox or buffered, bits 2-3 the master reads or writes).
+                let Some(cb) = self
+                    .soft(self.attr_num::<u8>(sm, "ControlByte", s))
+                    .flatten()
+                else {
+                    return Err(self.invalid(
+                        self.text_pos(sm),
+                        format!(
+                            "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
+                         Inputs"
+                        ),
+                    ));
+                };
+                let kind = match (cb & 0x03 == 0x02, cb & 0x0C == 0x04) {
+                    (true, true) => SmKind::MBoxOut,
+                    (true, false) => SmKind::MBoxIn,
+                    (false, true) => SmKind::Outputs,
+                    (false, false) => SmKind::Inputs,
+                };
+                self.warn(self.invalid(
+                    self.text_pos(sm),
+                    format!(
+                        "{s} has type {text:?}: expected MBoxOut, MBoxIn, Outputs or \
+                     Inputs (read as {}, as its ControlByte 0x{cb:02X} says)",
+                        kind.name()
+                    ),
+                ));
+                kind
+            }
         })
     }
 

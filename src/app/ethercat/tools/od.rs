@@ -551,68 +551,7 @@ pub fn sdos<L: FrameLink>(
     let mut problems: Vec<OdProblem> = Vec::new();
     for (n, index) in indices.into_iter().enumerate() {
         let r = bus.with_coe(d.address, drive.clone(), false, T_SDO * 4, async |c| {
-            let mut bad = Vec::new();
-            let o = match c.object_description(index).await {
-                Ok(o) => o,
-                Err(e) if item_only(&e) => {
-                    bad.push(OdProblem {
-                        address: format!("0x{index:04X}"),
-                        what: "object description".into(),
-                        reason: e.kind.to_string(),
-                        stopped: false,
-                    });
-                    return Ok((None, bad));
-                }
-                Err(e) => return Err(e),
-            };
-            let subs: Vec<u8> = match ObjectCode::from_code(o.object_code) {
-                Some(ObjectCode::Var) | None => vec![0],
-                _ => (0..=o.max_sub).collect(),
-            };
-            let mut entries = Vec::with_capacity(subs.len());
-            for sub in subs {
-                let addr = ObjectAddress::new(index, sub);
-                let e = match c.entry_description(addr).await {
-                    Ok(e) => e,
-                    Err(e) if is_missing(&e) => continue,
-                    Err(e) if item_only(&e) => {
-                        bad.push(OdProblem {
-                            address: addr.to_string(),
-                            what: "entry description".into(),
-                            reason: e.kind.to_string(),
-                            stopped: false,
-                        });
-                        continue;
-                    }
-                    Err(e) => return Err(e),
-                };
-                let value = if values && e.access.readable() {
-                    Some(value_text(c, addr, DataType::from_code(e.data_type)).await?)
-                } else {
-                    None
-                };
-                entries.push(OdEntry {
-                    sub,
-                    address: addr.to_string(),
-                    name: e.name,
-                    data_type: type_name(e.data_type),
-                    bit_len: e.bit_len,
-                    access: access_text(e.access),
-                    pdo_mapping: mapping_text(e.access),
-                    value,
-                });
-            }
-            Ok((
-                Some(OdObject {
-                    index,
-                    name: o.name.into_owned(),
-                    object_code: ObjectCode::from_code(o.object_code)
-                        .map_or_else(|| o.object_code.to_string(), |c| c.name().to_string()),
-                    max_sub: o.max_sub,
-                    entries,
-                }),
-                bad,
-            ))
+            described_object(c, index, values).await
         });
         match r {
             Ok((obj, bad)) => {
@@ -640,6 +579,78 @@ pub fn sdos<L: FrameLink>(
         progress(n + 1, total);
     }
     Ok(listing(OdSource::SdoInfo, None, out, problems))
+}
+
+/// Object `index` read through SDO information: its description and each entry's (with its
+/// value, with `values`), and the items that could not be read. An error only when the drive
+/// stopped answering.
+async fn described_object(
+    c: &mut crate::master::coe::CoeClient<'_>,
+    index: u16,
+    values: bool,
+) -> Result<(Option<OdObject>, Vec<OdProblem>), CoeError> {
+    let mut bad = Vec::new();
+    let o = match c.object_description(index).await {
+        Ok(o) => o,
+        Err(e) if item_only(&e) => {
+            bad.push(OdProblem {
+                address: format!("0x{index:04X}"),
+                what: "object description".into(),
+                reason: e.kind.to_string(),
+                stopped: false,
+            });
+            return Ok((None, bad));
+        }
+        Err(e) => return Err(e),
+    };
+    let subs: Vec<u8> = match ObjectCode::from_code(o.object_code) {
+        Some(ObjectCode::Var) | None => vec![0],
+        _ => (0..=o.max_sub).collect(),
+    };
+    let mut entries = Vec::with_capacity(subs.len());
+    for sub in subs {
+        let addr = ObjectAddress::new(index, sub);
+        let e = match c.entry_description(addr).await {
+            Ok(e) => e,
+            Err(e) if is_missing(&e) => continue,
+            Err(e) if item_only(&e) => {
+                bad.push(OdProblem {
+                    address: addr.to_string(),
+                    what: "entry description".into(),
+                    reason: e.kind.to_string(),
+                    stopped: false,
+                });
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
+        let value = if values && e.access.readable() {
+            Some(value_text(c, addr, DataType::from_code(e.data_type)).await?)
+        } else {
+            None
+        };
+        entries.push(OdEntry {
+            sub,
+            address: addr.to_string(),
+            name: e.name,
+            data_type: type_name(e.data_type),
+            bit_len: e.bit_len,
+            access: access_text(e.access),
+            pdo_mapping: mapping_text(e.access),
+            value,
+        });
+    }
+    Ok((
+        Some(OdObject {
+            index,
+            name: o.name.into_owned(),
+            object_code: ObjectCode::from_code(o.object_code)
+                .map_or_else(|| o.object_code.to_string(), |c| c.name().to_string()),
+            max_sub: o.max_sub,
+            entries,
+        }),
+        bad,
+    ))
 }
 
 /// The objects of a profile's dictionary, as a listing (values uploaded with `values`).

@@ -105,32 +105,8 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
         let m = crate::master::startup::read_mapping(bus, addr, &drive, "reading the PDO mapping")?;
         (m, PdoSource::Coe)
     } else {
-        let pdo = |p: &super::sii::SiiPdo| {
-            crate::pdo::Pdo::owned(
-                p.index,
-                p.entries
-                    .iter()
-                    .map(|e| PdoEntry::new(e.index, e.sub, e.bits))
-                    .collect(),
-            )
-        };
-        // Without CoE the assignment is the SII's: the PDOs with a default SyncManager.
-        let rx = sii
-            .rx_pdos
-            .iter()
-            .filter(|p| p.sm != 0xFF)
-            .map(pdo)
-            .collect();
-        let tx = sii
-            .tx_pdos
-            .iter()
-            .filter(|p| p.sm != 0xFF)
-            .map(pdo)
-            .collect();
-        (Mapping::owned(rx, tx), PdoSource::Sii)
+        (sii_mapping(&sii), PdoSource::Sii)
     };
-
-    let dict = profile.map(|p| Dictionary::new(p.dictionary));
     // Names the profile and the SII do not give: ask the drive's SDO information, when it has
     // it (General category, CoE details bit 1). Failures only leave the name out.
     let sdo_info = coe
@@ -138,125 +114,203 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
             .general
             .as_ref()
             .is_some_and(|g| g.coe_details & 0x02 != 0);
-    let mut info_names: std::collections::HashMap<ObjectAddress, String> =
-        std::collections::HashMap::new();
-    if sdo_info && profile.is_none() {
-        let mut wanted: Vec<(ObjectAddress, bool)> = Vec::new();
-        for dir in [Direction::Rx, Direction::Tx] {
-            for p in mapping.pdos(dir) {
-                if !sii
-                    .rx_pdos
-                    .iter()
-                    .chain(&sii.tx_pdos)
-                    .any(|s| s.index == p.index)
-                {
-                    wanted.push((ObjectAddress::new(p.index, 0), true));
-                }
-                for e in p.entries.iter().filter(|e| !e.is_padding()) {
-                    wanted.push((e.address(), false));
-                }
+    let info = if sdo_info && profile.is_none() {
+        sdo_info_names(bus, &d, &drive, &mapping, &sii)
+    } else {
+        std::collections::HashMap::new()
+    };
+    let names = Names {
+        dict: profile.map(|p| Dictionary::new(p.dictionary)),
+        sii: &sii,
+        info,
+    };
+    let rx = reported(&mapping, Direction::Rx, &names);
+    let tx = reported(&mapping, Direction::Tx, &names);
+    Ok(PdoReport {
+        position,
+        drive: drive.name,
+        source,
+        sync_managers: sync_managers(&sii, &mapping, rx, tx),
+    })
+}
+
+/// Without CoE the assignment is the SII's: the PDOs with a default SyncManager.
+fn sii_mapping(sii: &SiiInfo) -> Mapping {
+    let pdo = |p: &super::sii::SiiPdo| {
+        crate::pdo::Pdo::owned(
+            p.index,
+            p.entries
+                .iter()
+                .map(|e| PdoEntry::new(e.index, e.sub, e.bits))
+                .collect(),
+        )
+    };
+    let rx = sii
+        .rx_pdos
+        .iter()
+        .filter(|p| p.sm != 0xFF)
+        .map(pdo)
+        .collect();
+    let tx = sii
+        .tx_pdos
+        .iter()
+        .filter(|p| p.sm != 0xFF)
+        .map(pdo)
+        .collect();
+    Mapping::owned(rx, tx)
+}
+
+/// The names of the mapped PDOs the SII does not name and of every mapped entry, from the
+/// drive's SDO information. PDO names are keyed by the mapping index with sub-index 0xFF (no
+/// entry uses it for a name here). What cannot be read is left out.
+fn sdo_info_names<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    d: &crate::master::startup::DeviceInfo,
+    drive: &crate::master::error::DriveRef,
+    mapping: &Mapping,
+    sii: &SiiInfo,
+) -> std::collections::HashMap<ObjectAddress, String> {
+    let mut wanted: Vec<(ObjectAddress, bool)> = Vec::new();
+    for dir in [Direction::Rx, Direction::Tx] {
+        for p in mapping.pdos(dir) {
+            if !sii
+                .rx_pdos
+                .iter()
+                .chain(&sii.tx_pdos)
+                .any(|s| s.index == p.index)
+            {
+                wanted.push((ObjectAddress::new(p.index, 0), true));
             }
-        }
-        wanted.sort();
-        wanted.dedup();
-        let addr = d.address;
-        let names = bus.with_coe(addr, drive.clone(), false, T_SDO * 4, async |c| {
-            let mut out = Vec::new();
-            for (a, object) in &wanted {
-                let name = if *object {
-                    c.object_description(a.index)
-                        .await
-                        .map(|o| o.name.into_owned())
-                } else {
-                    c.entry_description(*a).await.map(|e| e.name)
-                };
-                if let Ok(n) = name
-                    && !n.is_empty()
-                {
-                    out.push((*a, *object, n));
-                }
-            }
-            Ok(out)
-        });
-        if let Ok(names) = names {
-            for (a, object, n) in names {
-                // PDO names are keyed by the mapping index with sub-index 0xFF (no entry
-                // uses it for a name here).
-                let key = if object {
-                    ObjectAddress::new(a.index, 0xFF)
-                } else {
-                    a
-                };
-                info_names.insert(key, n);
+            for e in p.entries.iter().filter(|e| !e.is_padding()) {
+                wanted.push((e.address(), false));
             }
         }
     }
-    let sii_entry_name = |a: ObjectAddress| {
-        sii.rx_pdos
-            .iter()
-            .chain(sii.tx_pdos.iter())
-            .flat_map(|p| p.entries.iter())
-            .find(|e| e.index == a.index && e.sub == a.sub && !e.name.is_empty())
-            .map(|e| e.name.clone())
-    };
-    let sii_pdo_name = |index: u16| {
-        sii.rx_pdos
-            .iter()
-            .chain(sii.tx_pdos.iter())
-            .find(|p| p.index == index && !p.name.is_empty())
-            .map(|p| p.name.clone())
-    };
-    let report_dir = |dir: Direction| -> Vec<ReportedPdo> {
-        let mut bit = 0u32;
-        mapping
-            .pdos(dir)
-            .iter()
-            .map(|p| {
-                let entries = p
-                    .entries
-                    .iter()
-                    .map(|e| {
-                        let a = e.address();
-                        let name = if e.is_padding() {
-                            Some("padding".to_string())
-                        } else {
-                            dict.as_ref()
-                                .and_then(|dict| dict.lookup(a))
-                                .map(|(o, en)| {
-                                    if o.entries.len() <= 1 || en.name.is_empty() {
-                                        o.name.to_string()
-                                    } else {
-                                        en.name.to_string()
-                                    }
-                                })
-                                .or_else(|| sii_entry_name(a))
-                                .or_else(|| info_names.get(&a).cloned())
-                        };
-                        let r = PdoEntryReport {
-                            address: a.to_string(),
-                            index: e.index,
-                            sub: e.sub,
-                            bits: e.bits,
-                            bit_offset: bit,
-                            name,
-                        };
-                        bit += u32::from(e.bits);
-                        r
-                    })
-                    .collect();
-                ReportedPdo {
-                    direction: dir.name().to_string(),
-                    index: p.index,
-                    name: sii_pdo_name(p.index)
-                        .or_else(|| info_names.get(&ObjectAddress::new(p.index, 0xFF)).cloned()),
-                    bits: p.bits(),
-                    entries,
+    wanted.sort();
+    wanted.dedup();
+    let names = bus.with_coe(d.address, drive.clone(), false, T_SDO * 4, async |c| {
+        let mut out = Vec::new();
+        for (a, object) in &wanted {
+            let name = if *object {
+                c.object_description(a.index)
+                    .await
+                    .map(|o| o.name.into_owned())
+            } else {
+                c.entry_description(*a).await.map(|e| e.name)
+            };
+            if let Ok(n) = name
+                && !n.is_empty()
+            {
+                out.push((*a, *object, n));
+            }
+        }
+        Ok(out)
+    });
+    let mut info_names = std::collections::HashMap::new();
+    if let Ok(names) = names {
+        for (a, object, n) in names {
+            let key = if object {
+                ObjectAddress::new(a.index, 0xFF)
+            } else {
+                a
+            };
+            info_names.insert(key, n);
+        }
+    }
+    info_names
+}
+
+/// Where the report's names come from, in this order: the drive profile's dictionary, the
+/// SII, the drive's SDO information ([`sdo_info_names`]).
+struct Names<'a> {
+    dict: Option<Dictionary<'a>>,
+    sii: &'a SiiInfo,
+    info: std::collections::HashMap<ObjectAddress, String>,
+}
+
+impl Names<'_> {
+    fn entry(&self, e: &PdoEntry) -> Option<String> {
+        let a = e.address();
+        if e.is_padding() {
+            return Some("padding".to_string());
+        }
+        self.dict
+            .as_ref()
+            .and_then(|dict| dict.lookup(a))
+            .map(|(o, en)| {
+                if o.entries.len() <= 1 || en.name.is_empty() {
+                    o.name.to_string()
+                } else {
+                    en.name.to_string()
                 }
             })
-            .collect()
-    };
-    let rx = report_dir(Direction::Rx);
-    let tx = report_dir(Direction::Tx);
+            .or_else(|| {
+                self.sii
+                    .rx_pdos
+                    .iter()
+                    .chain(self.sii.tx_pdos.iter())
+                    .flat_map(|p| p.entries.iter())
+                    .find(|e| e.index == a.index && e.sub == a.sub && !e.name.is_empty())
+                    .map(|e| e.name.clone())
+            })
+            .or_else(|| self.info.get(&a).cloned())
+    }
+
+    fn pdo(&self, index: u16) -> Option<String> {
+        self.sii
+            .rx_pdos
+            .iter()
+            .chain(self.sii.tx_pdos.iter())
+            .find(|p| p.index == index && !p.name.is_empty())
+            .map(|p| p.name.clone())
+            .or_else(|| self.info.get(&ObjectAddress::new(index, 0xFF)).cloned())
+    }
+}
+
+/// The PDOs of one direction as reported: each entry with its bit offset in the process image
+/// and its name.
+fn reported(mapping: &Mapping, dir: Direction, names: &Names<'_>) -> Vec<ReportedPdo> {
+    let mut bit = 0u32;
+    mapping
+        .pdos(dir)
+        .iter()
+        .map(|p| {
+            let entries = p
+                .entries
+                .iter()
+                .map(|e| {
+                    let r = PdoEntryReport {
+                        address: e.address().to_string(),
+                        index: e.index,
+                        sub: e.sub,
+                        bits: e.bits,
+                        bit_offset: bit,
+                        name: names.entry(e),
+                    };
+                    bit += u32::from(e.bits);
+                    r
+                })
+                .collect();
+            ReportedPdo {
+                direction: dir.name().to_string(),
+                index: p.index,
+                name: names.pdo(p.index),
+                bits: p.bits(),
+                entries,
+            }
+        })
+        .collect()
+}
+
+/// The SyncManagers the SII lists, the process-data ones with the PDOs assigned to them; a
+/// device whose SII lists no process-data SyncManager but maps PDOs has them reported on the
+/// standard SM2/SM3 anyway.
+fn sync_managers(
+    sii: &SiiInfo,
+    mapping: &Mapping,
+    rx: Vec<ReportedPdo>,
+    tx: Vec<ReportedPdo>,
+) -> Vec<SmReport> {
     let mut rx = Some(rx);
     let mut tx = Some(tx);
     let mut sms = Vec::new();
@@ -283,8 +337,6 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
             pdos,
         });
     }
-    // A device whose SII lists no process-data SyncManager but maps PDOs: report them on the
-    // standard SM2/SM3 anyway.
     for (dir, rest) in [(Direction::Rx, rx), (Direction::Tx, tx)] {
         if let Some(pdos) = rest.filter(|p| !p.is_empty()) {
             sms.push(SmReport {
@@ -303,10 +355,5 @@ pub fn pdos<L: FrameLink>(bus: &mut Bus<'_, L>, position: u16) -> Result<PdoRepo
             });
         }
     }
-    Ok(PdoReport {
-        position,
-        drive: drive.name,
-        source,
-        sync_managers: sms,
-    })
+    sms
 }

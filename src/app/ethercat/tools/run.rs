@@ -14,7 +14,7 @@ use crate::cia402::State;
 use crate::master::HistoryKind;
 use crate::master::cycle::CycleEnd;
 use crate::master::error::{ErrorKind, MasterError};
-use crate::master::session::{HistoryEntry, Master};
+use crate::master::session::{DriveOutcome, DriveSummary, HistoryEntry, Master, SessionReport};
 use crate::master::startup::{DeviceInfo, Selector};
 use crate::master::telemetry::{Axes, Command, StopKind, StopReason, Telemetry};
 use crate::rt::Summary;
@@ -277,12 +277,177 @@ pub fn run(
     progress: &mut dyn FnMut(&RunProgress),
 ) -> Result<RunReport, MasterError> {
     let duration = opts.duration.or(cfg.duration);
+    let mut watch = Watch {
+        progress,
+        duration,
+        programs: Vec::new(),
+        steps_total: 0,
+    };
+    let Started {
+        mut m,
+        writer,
+        capture,
+    } = start(cfg, opts, &mut watch)?;
+    let entries = file_entries(cfg, &m);
+    watch.programs = entries
+        .iter()
+        .map(|e| {
+            e.and_then(|e| cfg.master.startup.drives.get(e))
+                .map_or(0, |s| s.program.len())
+        })
+        .collect();
+    watch.steps_total = watch.programs.iter().sum();
+    let mut going = Going {
+        outcome: Outcome::Completed,
+        reason: String::new(),
+        faulted_before: false,
+    };
+    wait_for_op(&mut m, cfg, opts, stop, &mut watch, &mut going);
+    let mut resets = Vec::new();
+    if going.ok() && watch.n_axes() > 0 {
+        resets = faults_before(&mut m, cfg, &mut watch, &mut going)?;
+    }
+    if going.ok() {
+        enable(&mut m, opts, stop, &mut watch, &mut going)?;
+    }
+    let started = if going.ok() {
+        Some(run_programs(&mut m, stop, &mut watch, &mut going)?)
+    } else {
+        None
+    };
+    let run_seconds = started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+    let t = m.telemetry().clone();
+    watch.tick(
+        "stopping",
+        &t,
+        started.map_or(Duration::ZERO, |t| t.elapsed()),
+    );
+    let steps_done: Vec<usize> = t
+        .axes
+        .iter()
+        .take(watch.n_axes())
+        .map(|a| usize::from(a.program_step))
+        .collect();
+    let summaries = m.drives().to_vec();
+    let io = io_reports(&m, &t);
+    let (report, link) = m.stop_watching(StopKind::Ramp, opts.hurry.as_deref());
+    drop(link);
+    let capture = super::finish_capture(capture)?;
+    let record = writer.map(RecordWriter::finish).transpose()?;
+    let Some(report) = report else {
+        return Err(MasterError::new(
+            None,
+            "stopping the run",
+            ErrorKind::Bus,
+            "the session ended without a report",
+        ));
+    };
+    let ended_by = ended_by(&report, &summaries, &mut going);
+    let finished = finished_reason(duration, watch.steps_total, run_seconds);
+    going.reason = reason(&report, &going, ended_by, finished);
+    let drives = drive_reports(
+        cfg,
+        &report,
+        &summaries,
+        &entries,
+        &steps_done,
+        &watch.programs,
+    );
+    Ok(RunReport {
+        config: cfg.source.clone(),
+        target: cfg.target.clone(),
+        outcome: going.outcome,
+        reason: going.reason,
+        cycle_ns: cfg.master.cycle.cycle.as_nanos() as u64,
+        run_seconds,
+        drives,
+        io,
+        resets,
+        cycle: report.cycle.as_ref().map(cycle_summary),
+        shutdown_ok: report.shutdown_ok,
+        startup: report.startup,
+        record,
+        capture,
+        history: report.history,
+    })
+}
+
+/// How the run is going: the outcome so far and why (empty until something is said), and
+/// whether it was refused for faults from before it.
+struct Going {
+    outcome: Outcome,
+    reason: String,
+    faulted_before: bool,
+}
+
+impl Going {
+    /// Nothing has ended the run yet.
+    fn ok(&self) -> bool {
+        self.outcome == Outcome::Completed
+    }
+
+    /// The run ends with `outcome`, for `reason`.
+    fn end(&mut self, outcome: Outcome, reason: impl Into<String>) {
+        self.outcome = outcome;
+        self.reason = reason.into();
+    }
+}
+
+/// The progress the run reports: the phase, the time, the program steps done of every
+/// axis's program (`programs`: each axis's step count), the cycles.
+struct Watch<'a> {
+    progress: &'a mut dyn FnMut(&RunProgress),
+    duration: Option<Duration>,
+    programs: Vec<usize>,
+    steps_total: usize,
+}
+
+impl Watch<'_> {
+    /// The axes that are drives: the telemetry may carry more axis slots than drives (spare
+    /// slots of the triple buffer); only the first ones are drives.
+    fn n_axes(&self) -> usize {
+        self.programs.len()
+    }
+
+    fn tick(&mut self, phase: &'static str, t: &Telemetry, elapsed: Duration) {
+        let done = t
+            .axes
+            .iter()
+            .take(self.n_axes())
+            .zip(&self.programs)
+            .map(|(a, n)| usize::from(a.program_step).min(*n))
+            .sum();
+        (self.progress)(&RunProgress {
+            phase,
+            elapsed,
+            duration: self.duration,
+            steps_done: done,
+            steps_total: self.steps_total,
+            cycles: t.cycle.cycle,
+        });
+    }
+}
+
+/// A started master, with the recording's writer and the capture, if asked for.
+struct Started {
+    m: Master<super::ToolLink>,
+    writer: Option<RecordWriter>,
+    capture: Option<crate::app::capture::CaptureFile>,
+}
+
+/// The link opened (captured with `--pcap`), the recording's writer started (`--record`), and
+/// the master started: start-up, then the cycle.
+fn start(
+    cfg: &RunConfig,
+    opts: &RunOptions,
+    watch: &mut Watch<'_>,
+) -> Result<Started, MasterError> {
     let link = cfg.target.open_with(&cfg.sim)?;
     let (link, capture) = super::capture_link(link, &cfg.target, opts.pcap.as_deref())?;
-    progress(&RunProgress {
+    (watch.progress)(&RunProgress {
         phase: "starting",
         elapsed: Duration::ZERO,
-        duration,
+        duration: watch.duration,
         steps_done: 0,
         steps_total: 0,
         cycles: 0,
@@ -296,7 +461,7 @@ pub fn run(
         )?),
         None => None,
     };
-    let mut m = match Master::start(link, master_cfg) {
+    let m = match Master::start(link, master_cfg) {
         Ok(m) => m,
         Err(f) => {
             drop(f.link);
@@ -307,10 +472,13 @@ pub fn run(
     if let Some(w) = &writer {
         w.drives_known(m.drives());
     }
-    // Which file entry each axis is.
+    Ok(Started { m, writer, capture })
+}
+
+/// Which file entry each axis is: the first entry not yet taken whose selector selects it.
+fn file_entries(cfg: &RunConfig, m: &Master<super::ToolLink>) -> Vec<Option<usize>> {
     let mut used = vec![false; cfg.drives.len()];
-    let entries: Vec<Option<usize>> = m
-        .drives()
+    m.drives()
         .iter()
         .map(|d| {
             let i = cfg.drives.iter().enumerate().position(|(i, e)| {
@@ -323,274 +491,264 @@ pub fn run(
             }
             i
         })
-        .collect();
-    let programs: Vec<usize> = m
-        .drives()
-        .iter()
-        .zip(&entries)
-        .map(|(_, e)| {
-            e.and_then(|e| cfg.master.startup.drives.get(e))
-                .map_or(0, |s| s.program.len())
-        })
-        .collect();
-    let steps_total: usize = programs.iter().sum();
-    // The telemetry may carry more axis slots than drives (spare slots of the triple buffer);
-    // only the first `n_axes` are drives.
-    let n_axes = programs.len();
-    let mut outcome = Outcome::Completed;
-    let mut reason = String::new();
-    let mut tick = |phase: &'static str, t: &Telemetry, elapsed: Duration| {
-        let done = t
-            .axes
-            .iter()
-            .take(n_axes)
-            .zip(&programs)
-            .map(|(a, n)| usize::from(a.program_step).min(*n))
-            .sum();
-        progress(&RunProgress {
-            phase,
-            elapsed,
-            duration,
-            steps_done: done,
-            steps_total,
-            cycles: t.cycle.cycle,
-        });
-    };
+        .collect()
+}
 
-    // OP: the cycle itself gives up after its `op_timeout`; wait a little longer than that.
+/// Wait until every drive is in OP. The cycle itself gives up after its `op_timeout`; this
+/// waits a little longer than that.
+fn wait_for_op(
+    m: &mut Master<super::ToolLink>,
+    cfg: &RunConfig,
+    opts: &RunOptions,
+    stop: &AtomicBool,
+    watch: &mut Watch<'_>,
+    going: &mut Going,
+) {
     let op_wait = opts
         .op_timeout
         .max(cfg.master.cycle.op_timeout + Duration::from_secs(10));
-    let mut started = None;
     let wait = Instant::now();
     loop {
         let t = m.telemetry().clone();
-        tick("waiting for OP", &t, Duration::ZERO);
+        watch.tick("waiting for OP", &t, Duration::ZERO);
         if t.cycle.all_op {
-            break;
+            return;
         }
         if !m.is_running() || wait.elapsed() > op_wait {
-            outcome = Outcome::Refused;
-            reason = format!("the drives did not reach OP within {} s", op_wait.as_secs());
-            break;
+            let why = format!("the drives did not reach OP within {} s", op_wait.as_secs());
+            return going.end(Outcome::Refused, why);
         }
         if stop.load(Ordering::Relaxed) {
-            outcome = Outcome::Interrupted;
-            reason = "interrupted".into();
-            break;
+            return going.end(Outcome::Interrupted, "interrupted");
         }
         std::thread::sleep(Duration::from_millis(20));
     }
+}
 
-    // Faults latched before this run (a loss alarm of the last one, say): cleared with
-    // `reset_faults`, else the run is refused, saying how to clear them.
-    let mut resets = Vec::new();
-    let mut faulted_before = false;
-    if outcome == Outcome::Completed && n_axes > 0 {
-        tick(
-            "checking for faults",
-            &m.telemetry().clone(),
-            Duration::ZERO,
-        );
-        if cfg.reset_faults {
-            resets = super::reset::clear_faults(&mut m, None, Duration::from_secs(2))?;
-            let stuck: Vec<String> = resets
-                .iter()
-                .filter(|d| d.cleared == Some(false))
-                .map(|d| {
-                    format!(
-                        "drive {} ({}): {}",
-                        d.position,
-                        d.drive,
-                        d.fault.as_deref().unwrap_or("the fault")
-                    )
-                })
-                .collect();
-            if !stuck.is_empty() {
-                outcome = Outcome::Refused;
-                reason = format!(
+/// Faults latched before this run (a loss alarm of the last one, say): cleared with
+/// `reset_faults` (the resets returned), else the run is refused, saying how to clear them.
+fn faults_before(
+    m: &mut Master<super::ToolLink>,
+    cfg: &RunConfig,
+    watch: &mut Watch<'_>,
+    going: &mut Going,
+) -> Result<Vec<super::reset::DriveReset>, MasterError> {
+    watch.tick(
+        "checking for faults",
+        &m.telemetry().clone(),
+        Duration::ZERO,
+    );
+    if cfg.reset_faults {
+        let resets = super::reset::clear_faults(m, None, Duration::from_secs(2))?;
+        let stuck: Vec<String> = resets
+            .iter()
+            .filter(|d| d.cleared == Some(false))
+            .map(|d| {
+                format!(
+                    "drive {} ({}): {}",
+                    d.position,
+                    d.drive,
+                    d.fault.as_deref().unwrap_or("the fault")
+                )
+            })
+            .collect();
+        if !stuck.is_empty() {
+            going.end(
+                Outcome::Refused,
+                format!(
                     "{} did not clear on reset: its cause is still present, or the drive needs \
                      a power cycle",
                     stuck.join("; ")
-                );
-            }
-        } else {
-            m.wait_until("every drive's state", Duration::from_secs(5), |t| {
-                t.axes.iter().all(|a| a.state.is_some())
-            })?;
-            let t = m.telemetry().clone();
-            // Every drive in Fault, each once (after a cable pull, several are).
-            let faulted: Vec<usize> = t
-                .axes
-                .iter()
-                .enumerate()
-                .take(n_axes)
-                .filter(|(_, a)| is_fault(a.state))
-                .map(|(i, _)| i)
-                .collect();
-            if !faulted.is_empty() {
-                let interface = match &cfg.target {
-                    Target::Interface(i) => i.clone(),
-                    Target::Sim(_) => cfg.target.to_string(),
-                };
-                let mut each = Vec::with_capacity(faulted.len());
-                for &i in &faulted {
-                    let fault = super::reset::latched(&mut m, i);
-                    let d = &m.drives()[i];
-                    each.push(format!("{} ({fault})", d.drive));
-                }
-                outcome = Outcome::Refused;
-                faulted_before = true;
-                reason = if let [i] = faulted[..] {
-                    format!(
-                        "{} is in Fault from before this run; clear it with `ecdrive reset -i \
-                         {interface} -p {}`, or set reset_faults = true in the file",
-                        each.join(""),
-                        m.drives()[i].info.position
-                    )
-                } else {
-                    format!(
-                        "{} drives are in Fault from before this run: {}; clear them with \
-                         `ecdrive reset -i {interface}`, or set reset_faults = true in the file",
-                        faulted.len(),
-                        each.join(", ")
-                    )
-                };
-            }
+                ),
+            );
         }
+        return Ok(resets);
     }
-
-    // Enable, then run the programs.
-    if outcome == Outcome::Completed {
-        m.command(Command::Enable(Axes::All))?;
-        let wait = Instant::now();
-        loop {
-            let t = m.telemetry().clone();
-            tick("enabling", &t, Duration::ZERO);
-            if t.axes
-                .iter()
-                .take(n_axes)
-                .all(|a| a.state == Some(State::OperationEnabled))
-            {
-                break;
-            }
-            if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
-                outcome = Outcome::DriveFault;
-                break;
-            }
-            if !m.is_running() || wait.elapsed() > opts.enable_timeout {
-                outcome = Outcome::Refused;
-                // Which drive stays where, with what it shows and what usually causes it.
-                let stuck: Vec<String> = t
-                    .axes
-                    .iter()
-                    .take(n_axes)
-                    .enumerate()
-                    .filter(|(_, a)| a.state != Some(State::OperationEnabled))
-                    .map(|(i, a)| {
-                        let drive = m
-                            .drives()
-                            .get(i)
-                            .map_or_else(|| format!("axis {i}"), |d| d.drive.to_string());
-                        let cause = if a.statusword & 0x0200 == 0 {
-                            crate::cia402::StallCause::RemoteOff
-                        } else if a.statusword & 0x0010 == 0 {
-                            crate::cia402::StallCause::NoMainVoltage
-                        } else {
-                            crate::cia402::StallCause::NoResponse
-                        };
-                        format!(
-                            "{drive} stays in {} (statusword 0x{:04X}, controlword 0x{:04X}): \
-                             {cause}",
-                            a.state
-                                .map_or("an unknown state".to_string(), |s| s.to_string()),
-                            a.statusword,
-                            a.controlword
-                        )
-                    })
-                    .collect();
-                reason = format!(
-                    "not every axis reached Operation enabled within {} s: {}",
-                    opts.enable_timeout.as_secs(),
-                    stuck.join("; ")
-                );
-                break;
-            }
-            if stop.load(Ordering::Relaxed) {
-                outcome = Outcome::Interrupted;
-                reason = "interrupted".into();
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(5));
-        }
-    }
-    if outcome == Outcome::Completed {
-        for (i, n) in programs.iter().enumerate() {
-            if *n > 0 {
-                m.command(Command::RunProgram(Axes::One(i as u16)))?;
-            }
-        }
-        let t0 = Instant::now();
-        started = Some(t0);
-        // Give the cycle a moment to take the programs.
-        std::thread::sleep(Duration::from_millis(20));
-        loop {
-            let elapsed = t0.elapsed();
-            let t = m.telemetry().clone();
-            tick("running", &t, elapsed);
-            if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
-                outcome = Outcome::DriveFault;
-                break;
-            }
-            if !m.is_running() {
-                outcome = Outcome::BusLost;
-                break;
-            }
-            if t.axes
-                .iter()
-                .take(n_axes)
-                .any(|a| a.state != Some(State::OperationEnabled))
-            {
-                // The cycle stopped an axis on its own (following error, a drive left OP).
-                outcome = Outcome::DriveFault;
-                break;
-            }
-            if stop.load(Ordering::Relaxed) {
-                outcome = Outcome::Interrupted;
-                reason = "interrupted".into();
-                break;
-            }
-            let programs_done = steps_total > 0
-                && t.axes.iter().take(n_axes).zip(&programs).all(|(a, n)| {
-                    *n == 0 || (!a.program_running && usize::from(a.program_step) >= *n)
-                });
-            if programs_done && duration.is_none_or(|d| elapsed >= d) {
-                break;
-            }
-            if let Some(d) = duration
-                && elapsed >= d
-            {
-                break;
-            }
-            std::thread::sleep(Duration::from_millis(10));
-        }
-    }
-    let run_seconds = started.map_or(0.0, |t| t.elapsed().as_secs_f64());
+    m.wait_until("every drive's state", Duration::from_secs(5), |t| {
+        t.axes.iter().all(|a| a.state.is_some())
+    })?;
     let t = m.telemetry().clone();
-    tick(
-        "stopping",
-        &t,
-        started.map_or(Duration::ZERO, |t| t.elapsed()),
-    );
-    let steps_done: Vec<usize> = t
+    // Every drive in Fault, each once (after a cable pull, several are).
+    let faulted: Vec<usize> = t
         .axes
         .iter()
-        .take(n_axes)
-        .map(|a| usize::from(a.program_step))
+        .enumerate()
+        .take(watch.n_axes())
+        .filter(|(_, a)| is_fault(a.state))
+        .map(|(i, _)| i)
         .collect();
-    let summaries = m.drives().to_vec();
-    let io: Vec<IoRunReport> = m
-        .io()
+    if faulted.is_empty() {
+        return Ok(Vec::new());
+    }
+    let interface = match &cfg.target {
+        Target::Interface(i) => i.clone(),
+        Target::Sim(_) => cfg.target.to_string(),
+    };
+    let mut each = Vec::with_capacity(faulted.len());
+    for &i in &faulted {
+        let fault = super::reset::latched(m, i);
+        let d = &m.drives()[i];
+        each.push(format!("{} ({fault})", d.drive));
+    }
+    going.faulted_before = true;
+    let why = if let [i] = faulted[..] {
+        format!(
+            "{} is in Fault from before this run; clear it with `ecdrive reset -i {interface} -p \
+             {}`, or set reset_faults = true in the file",
+            each.join(""),
+            m.drives()[i].info.position
+        )
+    } else {
+        format!(
+            "{} drives are in Fault from before this run: {}; clear them with `ecdrive reset -i \
+             {interface}`, or set reset_faults = true in the file",
+            faulted.len(),
+            each.join(", ")
+        )
+    };
+    going.end(Outcome::Refused, why);
+    Ok(Vec::new())
+}
+
+/// Enable every axis and wait until each is in Operation enabled; one that stays behind is
+/// named with what it shows and what usually causes it.
+fn enable(
+    m: &mut Master<super::ToolLink>,
+    opts: &RunOptions,
+    stop: &AtomicBool,
+    watch: &mut Watch<'_>,
+    going: &mut Going,
+) -> Result<(), MasterError> {
+    m.command(Command::Enable(Axes::All))?;
+    let n_axes = watch.n_axes();
+    let wait = Instant::now();
+    loop {
+        let t = m.telemetry().clone();
+        watch.tick("enabling", &t, Duration::ZERO);
+        if t.axes
+            .iter()
+            .take(n_axes)
+            .all(|a| a.state == Some(State::OperationEnabled))
+        {
+            return Ok(());
+        }
+        if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
+            going.outcome = Outcome::DriveFault;
+            return Ok(());
+        }
+        if !m.is_running() || wait.elapsed() > opts.enable_timeout {
+            let why = format!(
+                "not every axis reached Operation enabled within {} s: {}",
+                opts.enable_timeout.as_secs(),
+                not_enabled(m, &t, n_axes).join("; ")
+            );
+            going.end(Outcome::Refused, why);
+            return Ok(());
+        }
+        if stop.load(Ordering::Relaxed) {
+            going.end(Outcome::Interrupted, "interrupted");
+            return Ok(());
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Which drive stays short of Operation enabled, with what it shows and what usually causes
+/// it.
+fn not_enabled(m: &Master<super::ToolLink>, t: &Telemetry, n_axes: usize) -> Vec<String> {
+    t.axes
+        .iter()
+        .take(n_axes)
+        .enumerate()
+        .filter(|(_, a)| a.state != Some(State::OperationEnabled))
+        .map(|(i, a)| {
+            let drive = m
+                .drives()
+                .get(i)
+                .map_or_else(|| format!("axis {i}"), |d| d.drive.to_string());
+            let cause = if a.statusword & 0x0200 == 0 {
+                crate::cia402::StallCause::RemoteOff
+            } else if a.statusword & 0x0010 == 0 {
+                crate::cia402::StallCause::NoMainVoltage
+            } else {
+                crate::cia402::StallCause::NoResponse
+            };
+            format!(
+                "{drive} stays in {} (statusword 0x{:04X}, controlword 0x{:04X}): {cause}",
+                a.state
+                    .map_or("an unknown state".to_string(), |s| s.to_string()),
+                a.statusword,
+                a.controlword
+            )
+        })
+        .collect()
+}
+
+/// Start every axis's program and watch until every program has finished and the duration
+/// (if any) has passed, the duration has passed, the caller asks to stop, or something stops
+/// an axis. Returns when the programs started.
+fn run_programs(
+    m: &mut Master<super::ToolLink>,
+    stop: &AtomicBool,
+    watch: &mut Watch<'_>,
+    going: &mut Going,
+) -> Result<Instant, MasterError> {
+    for (i, n) in watch.programs.iter().enumerate() {
+        if *n > 0 {
+            m.command(Command::RunProgram(Axes::One(i as u16)))?;
+        }
+    }
+    let n_axes = watch.n_axes();
+    let t0 = Instant::now();
+    // Give the cycle a moment to take the programs.
+    std::thread::sleep(Duration::from_millis(20));
+    loop {
+        let elapsed = t0.elapsed();
+        let t = m.telemetry().clone();
+        watch.tick("running", &t, elapsed);
+        if t.axes.iter().take(n_axes).any(|a| is_fault(a.state)) {
+            going.outcome = Outcome::DriveFault;
+            break;
+        }
+        if !m.is_running() {
+            going.outcome = Outcome::BusLost;
+            break;
+        }
+        if t.axes
+            .iter()
+            .take(n_axes)
+            .any(|a| a.state != Some(State::OperationEnabled))
+        {
+            // The cycle stopped an axis on its own (following error, a drive left OP).
+            going.outcome = Outcome::DriveFault;
+            break;
+        }
+        if stop.load(Ordering::Relaxed) {
+            going.end(Outcome::Interrupted, "interrupted");
+            break;
+        }
+        let programs_done = watch.steps_total > 0
+            && t.axes
+                .iter()
+                .take(n_axes)
+                .zip(&watch.programs)
+                .all(|(a, n)| *n == 0 || (!a.program_running && usize::from(a.program_step) >= *n));
+        if programs_done && watch.duration.is_none_or(|d| elapsed >= d) {
+            break;
+        }
+        if let Some(d) = watch.duration
+            && elapsed >= d
+        {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    Ok(t0)
+}
+
+/// The devices that were not driven, with their last inputs.
+fn io_reports(m: &Master<super::ToolLink>, t: &Telemetry) -> Vec<IoRunReport> {
+    m.io()
         .iter()
         .map(|o| IoRunReport {
             position: o.info.position,
@@ -605,148 +763,172 @@ pub fn run(
                 .map(|x| x.inputs().to_vec())
                 .unwrap_or_default(),
         })
-        .collect();
-    let (report, link) = m.stop_watching(StopKind::Ramp, opts.hurry.as_deref());
-    drop(link);
-    let capture = super::finish_capture(capture)?;
-    let record = writer.map(RecordWriter::finish).transpose()?;
-    let Some(report) = report else {
-        return Err(MasterError::new(
-            None,
-            "stopping the run",
-            ErrorKind::Bus,
-            "the session ended without a report",
-        ));
-    };
-    let cycle = report.cycle.as_ref();
-    // The outcome comes from the event that ended the run: the first reason the cycle had to
-    // stop the axes, or how the cycle ended, else what the watching above saw.
-    let entry = |kind: HistoryKind, position: Option<u16>| {
-        report
-            .history
-            .iter()
-            .find(|h| {
-                h.kind == kind
-                    && h.error
-                    && position.is_none_or(|p| h.drive.as_ref().is_some_and(|d| d.position == p))
-            })
-            .map(|h| match &h.drive {
-                Some(d) => format!("{d}: {}", h.text()),
-                None => h.text(),
-            })
-    };
+        .collect()
+}
+
+/// The first error of `kind` in the history (of the drive at `position`, if given), with the
+/// drive it names.
+fn first_of(report: &SessionReport, kind: HistoryKind, position: Option<u16>) -> Option<String> {
+    report
+        .history
+        .iter()
+        .find(|h| {
+            h.kind == kind
+                && h.error
+                && position.is_none_or(|p| h.drive.as_ref().is_some_and(|d| d.position == p))
+        })
+        .map(|h| match &h.drive {
+            Some(d) => format!("{d}: {}", h.text()),
+            None => h.text(),
+        })
+}
+
+/// The event that ended the run, in words, with the outcome it makes (set in `going`): the
+/// first reason the cycle had to stop the axes, or how the cycle ended. Nothing for a run
+/// refused for faults from before it, or one the cycle did not end.
+fn ended_by(
+    report: &SessionReport,
+    summaries: &[DriveSummary],
+    going: &mut Going,
+) -> Option<String> {
+    let c = report.cycle.as_ref().filter(|_| !going.faulted_before)?;
+    let entry = |kind, position| first_of(report, kind, position);
     let drive_name = |axis: u16| {
         summaries
             .get(usize::from(axis))
             .map_or_else(|| format!("axis {axis}"), |s| s.drive.to_string())
     };
-    let mut ended_by: Option<String> = None;
-    if let Some(c) = cycle.filter(|_| !faulted_before) {
-        match (c.end, c.first_stop) {
-            (CycleEnd::SegmentLost | CycleEnd::LinkFailed, _) => {
-                outcome = Outcome::BusLost;
-                ended_by = entry(HistoryKind::SegmentLost, None)
-                    .or_else(|| Some("the link failed".to_string()));
-            }
-            (_, Some(StopReason::FramesLost { cycles })) => {
-                outcome = Outcome::BusLost;
-                ended_by = Some(format!(
-                    "{cycles} cycles in a row without a reply: the axes were stopped in a \
-                     controlled way (a bus problem; a drive that supervises its cyclic data \
-                     may have latched its loss-of-data fault meanwhile, which `ecdrive reset` \
-                     clears)"
-                ));
-            }
-            (_, Some(StopReason::WorkingCounter)) => {
-                outcome = Outcome::BusLost;
-                ended_by = Some(format!(
-                    "the working counter stayed wrong (a device does not exchange its process \
-                     data): the axes were stopped in a controlled way{}",
-                    entry(HistoryKind::WorkingCounter, None)
-                        .map_or(String::new(), |e| format!("; first: {e}"))
-                ));
-            }
-            (_, Some(StopReason::DriveFault { axis })) => {
-                outcome = Outcome::DriveFault;
-                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
-                ended_by = entry(HistoryKind::DriveFault, pos)
-                    .or_else(|| Some(format!("{} faulted", drive_name(axis))));
-            }
-            (_, Some(StopReason::FollowingError { axis })) => {
-                outcome = Outcome::DriveFault;
-                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
-                ended_by = entry(HistoryKind::FollowingError, pos).or_else(|| {
-                    Some(format!(
-                        "the following error of {} exceeded its limit",
-                        drive_name(axis)
-                    ))
+    let pos = |axis: u16| summaries.get(usize::from(axis)).map(|s| s.info.position);
+    let (outcome, why) = match (c.end, c.first_stop) {
+        (CycleEnd::SegmentLost | CycleEnd::LinkFailed, _) => (
+            Outcome::BusLost,
+            entry(HistoryKind::SegmentLost, None).or_else(|| Some("the link failed".to_string())),
+        ),
+        (_, Some(StopReason::FramesLost { cycles })) => (
+            Outcome::BusLost,
+            Some(format!(
+                "{cycles} cycles in a row without a reply: the axes were stopped in a \
+                 controlled way (a bus problem; a drive that supervises its cyclic data \
+                 may have latched its loss-of-data fault meanwhile, which `ecdrive reset` \
+                 clears)"
+            )),
+        ),
+        (_, Some(StopReason::WorkingCounter)) => (
+            Outcome::BusLost,
+            Some(format!(
+                "the working counter stayed wrong (a device does not exchange its process \
+                 data): the axes were stopped in a controlled way{}",
+                entry(HistoryKind::WorkingCounter, None)
+                    .map_or(String::new(), |e| format!("; first: {e}"))
+            )),
+        ),
+        (_, Some(StopReason::DriveFault { axis })) => (
+            Outcome::DriveFault,
+            entry(HistoryKind::DriveFault, pos(axis))
+                .or_else(|| Some(format!("{} faulted", drive_name(axis)))),
+        ),
+        (_, Some(StopReason::FollowingError { axis })) => (
+            Outcome::DriveFault,
+            entry(HistoryKind::FollowingError, pos(axis)).or_else(|| {
+                Some(format!(
+                    "the following error of {} exceeded its limit",
+                    drive_name(axis)
+                ))
+            }),
+        ),
+        (_, Some(StopReason::HomingFailed { axis })) => (
+            Outcome::DriveFault,
+            entry(HistoryKind::Homing, pos(axis))
+                .or_else(|| Some(format!("homing of {} failed", drive_name(axis)))),
+        ),
+        (_, Some(StopReason::ProbeNotLatched { axis, probe })) => (
+            Outcome::DriveFault,
+            entry(HistoryKind::Probe, pos(axis)).or_else(|| {
+                Some(format!(
+                    "touch probe {probe} of {} did not latch",
+                    drive_name(axis)
+                ))
+            }),
+        ),
+        (CycleEnd::DriveLeftOp { device, .. }, _)
+        | (_, Some(StopReason::DriveLeftOp { device })) => (
+            Outcome::DriveFault,
+            entry(HistoryKind::AlState, Some(device)),
+        ),
+        // A working counter that stayed wrong in SAFE-OP says which device does not take its
+        // process data; else the AL state that was not OP.
+        (CycleEnd::OpFailed { device, .. }, _) => (
+            Outcome::Refused,
+            entry(HistoryKind::WorkingCounter, Some(device))
+                .or_else(|| entry(HistoryKind::AlState, Some(device))),
+        ),
+        _ => return None,
+    };
+    going.outcome = outcome;
+    why
+}
+
+/// Why the run ended as it did: on request, finished (`finished` says how), the event that
+/// ended it, what the watching said, or the history's first error; a refusal to enable is
+/// told with the state machine's own account.
+fn reason(
+    report: &SessionReport,
+    going: &Going,
+    ended_by: Option<String>,
+    finished: String,
+) -> String {
+    let said = going.reason.clone();
+    match (going.outcome, ended_by) {
+        (Outcome::Interrupted, _) => "stopped on request (Ctrl-C or a signal)".into(),
+        (Outcome::Completed, _) => finished,
+        (_, Some(e)) => e,
+        (outcome, None) if said.is_empty() => {
+            let first_error = report
+                .history
+                .iter()
+                .find(|h| h.error)
+                .map(|h| match &h.drive {
+                    Some(d) => format!("{d}: {}", h.text()),
+                    None => h.text(),
                 });
-            }
-            (_, Some(StopReason::HomingFailed { axis })) => {
-                outcome = Outcome::DriveFault;
-                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
-                ended_by = entry(HistoryKind::Homing, pos)
-                    .or_else(|| Some(format!("homing of {} failed", drive_name(axis))));
-            }
-            (_, Some(StopReason::ProbeNotLatched { axis, probe })) => {
-                outcome = Outcome::DriveFault;
-                let pos = summaries.get(usize::from(axis)).map(|s| s.info.position);
-                ended_by = entry(HistoryKind::Probe, pos).or_else(|| {
-                    Some(format!(
-                        "touch probe {probe} of {} did not latch",
-                        drive_name(axis)
-                    ))
-                });
-            }
-            (CycleEnd::DriveLeftOp { device, .. }, _)
-            | (_, Some(StopReason::DriveLeftOp { device })) => {
-                outcome = Outcome::DriveFault;
-                ended_by = entry(HistoryKind::AlState, Some(device));
-            }
-            (CycleEnd::OpFailed { device, .. }, _) => {
-                outcome = Outcome::Refused;
-                // A working counter that stayed wrong in SAFE-OP says which device does not
-                // take its process data; else the AL state that was not OP.
-                ended_by = entry(HistoryKind::WorkingCounter, Some(device))
-                    .or_else(|| entry(HistoryKind::AlState, Some(device)));
-            }
-            _ => {}
+            first_error.unwrap_or_else(|| outcome.describe().to_string())
         }
-    }
-    let first_error = report
-        .history
-        .iter()
-        .find(|h| h.error)
-        .map(|h| match &h.drive {
-            Some(d) => format!("{d}: {}", h.text()),
-            None => h.text(),
-        });
-    match (outcome, ended_by) {
-        (Outcome::Interrupted, _) => reason = "stopped on request (Ctrl-C or a signal)".into(),
-        (Outcome::Completed, _) => {
-            reason = match duration {
-                Some(d) if steps_total == 0 || run_seconds >= d.as_secs_f64() => {
-                    format!("ran for {} s", d.as_secs_f64())
-                }
-                _ => "every program finished".into(),
-            }
-        }
-        (_, Some(e)) => reason = e,
-        (_, None) if reason.is_empty() => {
-            reason = first_error.unwrap_or_else(|| outcome.describe().to_string())
-        }
-        (Outcome::Refused, None) if !faulted_before => {
+        (Outcome::Refused, None) if !going.faulted_before => {
             // Why an axis was not enabled: the state machine's own account.
-            if let Some(e) = entry(HistoryKind::StateMachine, None)
-                .or_else(|| entry(HistoryKind::CommandRefused, None))
+            match first_of(report, HistoryKind::StateMachine, None)
+                .or_else(|| first_of(report, HistoryKind::CommandRefused, None))
             {
-                reason = format!("{reason}: {e}");
+                Some(e) => format!("{said}: {e}"),
+                None => said,
             }
         }
-        _ => {}
+        _ => said,
     }
+}
+
+/// A completed run's reason: the time it ran, or that every program finished.
+fn finished_reason(duration: Option<Duration>, steps_total: usize, run_seconds: f64) -> String {
+    match duration {
+        Some(d) if steps_total == 0 || run_seconds >= d.as_secs_f64() => {
+            format!("ran for {} s", d.as_secs_f64())
+        }
+        _ => "every program finished".into(),
+    }
+}
+
+/// Each drive's report: its device and process data, the states and modes it went through,
+/// its following error and probe latches (in the file's units), its program and how far it
+/// got, and its errors and warnings from the history, each once.
+fn drive_reports(
+    cfg: &RunConfig,
+    report: &SessionReport,
+    summaries: &[DriveSummary],
+    entries: &[Option<usize>],
+    steps_done: &[usize],
+    programs: &[usize],
+) -> Vec<DriveRunReport> {
     let outcomes = report.drive_outcomes();
-    let drives = summaries
+    summaries
         .iter()
         .enumerate()
         .map(|(i, s)| {
@@ -782,17 +964,7 @@ pub fn run(
                     .as_ref()
                     .map(|u| max_fe as f64 / u.counts_per_unit),
                 probe_latches: o
-                    .map(|o| {
-                        o.probe_latches
-                            .iter()
-                            .map(|&(probe, edge, counts)| ProbeLatch {
-                                probe,
-                                edge: edge.name(),
-                                counts,
-                                value: units.as_ref().map(|u| counts as f64 / u.counts_per_unit),
-                            })
-                            .collect()
-                    })
+                    .map(|o| probe_latches(o, units.as_ref()))
                     .unwrap_or_default(),
                 units,
                 program: entry.map(|e| e.steps.clone()).unwrap_or_default(),
@@ -801,62 +973,66 @@ pub fn run(
                     .copied()
                     .unwrap_or(0)
                     .min(programs.get(i).copied().unwrap_or(0)),
-                errors: once_each(
-                    report
-                        .history
-                        .iter()
-                        .filter(|h| {
-                            h.error
-                                && h.drive
-                                    .as_ref()
-                                    .is_some_and(|d| d.position == s.info.position)
-                        })
-                        .map(|h| h.text()),
-                ),
-                warnings: once_each(
-                    report
-                        .history
-                        .iter()
-                        .filter(|h| {
-                            h.kind == crate::master::HistoryKind::Warning
-                                && !h.error
-                                && h.drive
-                                    .as_ref()
-                                    .is_some_and(|d| d.position == s.info.position)
-                        })
-                        .map(|h| h.text().trim_start_matches("warning: ").to_string()),
-                ),
+                errors: drive_errors(report, s.info.position),
+                warnings: drive_warnings(report, s.info.position),
             }
         })
-        .collect();
-    Ok(RunReport {
-        config: cfg.source.clone(),
-        target: cfg.target.clone(),
-        outcome,
-        reason,
-        cycle_ns: cfg.master.cycle.cycle.as_nanos() as u64,
-        run_seconds,
-        drives,
-        io,
-        resets,
-        cycle: cycle.map(|c| CycleSummary {
-            cycles: c.cycles,
-            lost: c.lost,
-            overruns: c.overruns,
-            wake_latency: c.timing.wake_latency.summary(),
-            period: c.timing.period.summary(),
-            exchange: c.timing.exchange.summary(),
-            priority: c.rt.priority_granted,
-            cpu: c.rt.cpu_pinned,
-            rt_warnings: c.rt.warnings.clone(),
-            frames: c.frames,
-        }),
-        shutdown_ok: report.shutdown_ok,
-        startup: report.startup,
-        record,
-        capture,
-        history: report.history,
-    })
+        .collect()
+}
+
+/// A drive's probe latches, in the file's units too.
+fn probe_latches(o: &DriveOutcome, units: Option<&UserUnits>) -> Vec<ProbeLatch> {
+    o.probe_latches
+        .iter()
+        .map(|&(probe, edge, counts)| ProbeLatch {
+            probe,
+            edge: edge.name(),
+            counts,
+            value: units.map(|u| counts as f64 / u.counts_per_unit),
+        })
+        .collect()
+}
+
+/// The errors of the history about the drive at `position`, each once.
+fn drive_errors(report: &SessionReport, position: u16) -> Vec<String> {
+    once_each(
+        report
+            .history
+            .iter()
+            .filter(|h| h.error && h.drive.as_ref().is_some_and(|d| d.position == position))
+            .map(|h| h.text()),
+    )
+}
+
+/// The warnings of the history about the drive at `position`, each once.
+fn drive_warnings(report: &SessionReport, position: u16) -> Vec<String> {
+    once_each(
+        report
+            .history
+            .iter()
+            .filter(|h| {
+                h.kind == crate::master::HistoryKind::Warning
+                    && !h.error
+                    && h.drive.as_ref().is_some_and(|d| d.position == position)
+            })
+            .map(|h| h.text().trim_start_matches("warning: ").to_string()),
+    )
+}
+
+/// The cycle's timing and frames, for the report.
+fn cycle_summary(c: &crate::master::CycleReport) -> CycleSummary {
+    CycleSummary {
+        cycles: c.cycles,
+        lost: c.lost,
+        overruns: c.overruns,
+        wake_latency: c.timing.wake_latency.summary(),
+        period: c.timing.period.summary(),
+        exchange: c.timing.exchange.summary(),
+        priority: c.rt.priority_granted,
+        cpu: c.rt.cpu_pinned,
+        rt_warnings: c.rt.warnings.clone(),
+        frames: c.frames,
+    }
 }
 
 /// Each text once, in the order of its first appearance, with how often it came when more

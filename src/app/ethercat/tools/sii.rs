@@ -399,6 +399,19 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
             sm.kind
         );
     }
+    skeleton_pdos(&mut x, info);
+    skeleton_mailbox(&mut x, info, g.coe_details);
+    skeleton_dc(&mut x, info);
+    skeleton_eeprom(&mut x, info, raw);
+    let _ = writeln!(x, "      </Device>");
+    let _ = writeln!(x, "    </Devices>");
+    let _ = writeln!(x, "  </Descriptions>");
+    let _ = writeln!(x, "</EtherCATInfo>");
+    x
+}
+
+/// The device's RxPDOs and TxPDOs, with their entries.
+fn skeleton_pdos(x: &mut String, info: &SiiInfo) {
     for (tag, pdos) in [("RxPdo", &info.rx_pdos), ("TxPdo", &info.tx_pdos)] {
         for p in pdos {
             let sm = if p.sm == 0xFF {
@@ -435,6 +448,11 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
             let _ = writeln!(x, "        </{tag}>");
         }
     }
+}
+
+/// The device's mailbox protocols (CoE with its details, `coe_details` of the General
+/// category).
+fn skeleton_mailbox(x: &mut String, info: &SiiInfo, coe_details: u8) {
     if info.mailbox.is_some() && info.protocol_bits != 0 {
         let _ = writeln!(x, "        <Mailbox>");
         if info.protocol_bits & 0x0001 != 0 {
@@ -444,7 +462,7 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
             let _ = writeln!(x, "          <EoE/>");
         }
         if info.protocol_bits & 0x0004 != 0 {
-            let c = g.coe_details;
+            let c = coe_details;
             let b = |bit: u8| if c & bit != 0 { "true" } else { "false" };
             let _ = writeln!(
                 x,
@@ -468,6 +486,10 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
         }
         let _ = writeln!(x, "        </Mailbox>");
     }
+}
+
+/// The device's DC operation modes.
+fn skeleton_dc(x: &mut String, info: &SiiInfo) {
     if !info.dc_modes.is_empty() {
         let _ = writeln!(x, "        <Dc>");
         for m in &info.dc_modes {
@@ -498,6 +520,11 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
         }
         let _ = writeln!(x, "        </Dc>");
     }
+}
+
+/// The EEPROM's size, its configuration words (the first 14 bytes of `raw`) and the
+/// bootstrap mailbox.
+fn skeleton_eeprom(x: &mut String, info: &SiiInfo, raw: &[u8]) {
     let _ = writeln!(x, "        <Eeprom>");
     let _ = writeln!(x, "          <ByteSize>{}</ByteSize>", info.size_bytes);
     let config: String = raw.iter().take(14).map(|b| format!("{b:02X}")).collect();
@@ -512,11 +539,6 @@ pub fn esi_skeleton(info: &SiiInfo, raw: &[u8]) -> String {
         let _ = writeln!(x, "          <BootStrap>{hex}</BootStrap>");
     }
     let _ = writeln!(x, "        </Eeprom>");
-    let _ = writeln!(x, "      </Device>");
-    let _ = writeln!(x, "    </Devices>");
-    let _ = writeln!(x, "  </Descriptions>");
-    let _ = writeln!(x, "</EtherCATInfo>");
-    x
 }
 
 /// A device's EEPROM as read.

@@ -255,6 +255,10 @@ pub fn states_timed<L: FrameLink>(
     Ok(StatesReport { devices, startup })
 }
 
+/// Every device selected (or the one at `opts.position`) taken to `opts.target`: INIT, PRE-OP
+/// and BOOT by AL control alone, SAFE-OP and OP with process data exchanged, configured as
+/// `run` configures a drive where every device has a profile (`startup` then says where its
+/// time went), else from the devices' own SII.
 fn request<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     opts: &StatesOptions,
@@ -278,32 +282,7 @@ fn request<L: FrameLink>(
         AlState::Init | AlState::PreOp => {
             drive_to(bus, &mut pending, target, opts.timeout, &mut no_exchange)?;
         }
-        AlState::Bootstrap => {
-            // BOOT is reached from INIT only.
-            drive_to(
-                bus,
-                &mut pending,
-                AlState::Init,
-                opts.timeout,
-                &mut no_exchange,
-            )?;
-            let failed: Vec<bool> = pending
-                .iter()
-                .map(|p| p.done.as_ref().is_some_and(|d| !d.ok))
-                .collect();
-            for p in &mut pending {
-                p.done = None;
-            }
-            for (p, d) in pending.iter().zip(&selected) {
-                configure_bootstrap_mailbox(bus, &found.group, d.position, p.address, &p.drive)?;
-            }
-            drive_to(bus, &mut pending, target, opts.timeout, &mut no_exchange)?;
-            for (p, f) in pending.iter_mut().zip(failed) {
-                if let (Some(d), true) = (p.done.as_mut(), f) {
-                    d.ok = false;
-                }
-            }
-        }
+        AlState::Bootstrap => to_bootstrap(bus, &found, &selected, &mut pending, opts)?,
         AlState::SafeOp | AlState::Op => {
             let all_known = found.devices.iter().all(|d| {
                 crate::drives::by_identity(d.vendor_id, d.product_code).is_some()
@@ -311,106 +290,157 @@ fn request<L: FrameLink>(
                         .is_some()
             });
             if all_known {
-                let mut cfg = StartupConfig::new(opts.cycle);
-                cfg.esi_profiles = opts.esi_profiles.clone();
-                cfg.esi_not_drives = opts.esi_not_drives.clone();
-                let plan = startup::plan(&found.devices, &cfg)?;
-                let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
-                let mut times = started.times;
-                let group = started.group;
-                let dc_time = std::cell::Cell::new(0u64);
-                let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
-                    let r = bus
-                        .block_on(&|| "exchanging process data".into(), T_STEP, |md| {
-                            group.tx_rx_dc(md)
-                        })
-                        .map_err(|e| exec_error(None, e))?
-                        .map_err(|e| bus_error(None, "exchanging process data", e))?;
-                    dc_time.set(r.extra.dc_system_time);
-                    Ok(r.extra.next_cycle_wait)
-                };
-                // Valid outputs before OP, with SYNC0 running on every drive, for as many
-                // cycles as the cycle gives them (bounded by the timeout).
-                let cycles = crate::master::CycleSettings::new(opts.cycle).safeop_cycles;
-                let not_before = crate::master::startup::op_not_before_dc(
-                    &started.drives,
-                    cycles,
-                    opts.cycle.as_nanos() as u64,
-                );
-                let until = crate::rt::monotonic_ns() + opts.timeout.as_nanos() as u64;
-                let mut n = 0u32;
-                while n < cycles || dc_time.get() < not_before {
-                    let w = exchange(bus)?;
-                    n = n.saturating_add(1);
-                    if crate::rt::monotonic_ns() > until {
-                        break;
-                    }
-                    std::thread::sleep(w);
-                }
-                drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
-                if target == AlState::Op {
-                    times.reached_op(crate::rt::monotonic_ns());
-                }
-                *startup = Some(times);
-            } else {
-                let group = bus
-                    .block_on(
-                        &|| "building the process image (PRE-OP)".into(),
-                        T_STEP,
-                        |md| found.group.into_pre_op_pdi(md),
-                    )
-                    .map_err(|e| exec_error(None, e))?
-                    .map_err(|e| bus_error(None, "building the process image (PRE-OP)", e))?;
-                // As the run's start-up does: process-data SMs the SII leaves off, enabled.
-                startup::enable_process_data_sms(bus, &found.devices, &mut Vec::new())?;
-                let cycle = opts.cycle;
-                let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
-                    bus.block_on(&|| "exchanging process data".into(), T_STEP, |md| {
-                        group.tx_rx(md)
-                    })
-                    .map_err(|e| exec_error(None, e))?
-                    .map_err(|e| bus_error(None, "exchanging process data", e))?;
-                    Ok(cycle)
-                };
-                if target == AlState::Op {
-                    drive_to(
-                        bus,
-                        &mut pending,
-                        AlState::SafeOp,
-                        opts.timeout,
-                        &mut exchange,
-                    )?;
-                    if pending
-                        .iter()
-                        .any(|p| p.done.as_ref().is_some_and(|d| !d.ok))
-                    {
-                        return Ok(finish(pending, AlState::SafeOp));
-                    }
-                    for p in &mut pending {
-                        p.done = None;
-                    }
-                }
-                drive_to(bus, &mut pending, target, opts.timeout, &mut exchange)?;
-                // Configured from its SII alone, a device that needs DC SYNC0 refuses: say how
-                // to give it what it needs.
-                for p in &mut pending {
-                    if let Some(d) = p
-                        .done
-                        .as_mut()
-                        .filter(|d| d.al_status_code.is_some_and(|c| DC_REFUSALS.contains(&c)))
-                    {
-                        d.hint = Some(
-                            "the device wants DC SYNC0, which `states` sets up only for a drive \
-                             it has a profile for: give the device's ESI file with --esi FILE \
-                             (or a folder of them) and it is configured as `run` would"
-                                .to_string(),
-                        );
-                    }
-                }
+                *startup = Some(to_op_configured(bus, found, &mut pending, opts)?);
+            } else if let Some(refused) = to_op_from_sii(bus, found, &mut pending, opts)? {
+                return Ok(finish(pending, refused));
             }
         }
     }
     Ok(finish(pending, target))
+}
+
+/// BOOT, which is reached from INIT only: INIT first, then each device's bootstrap mailbox
+/// configured, then BOOT; a device that did not reach INIT did not reach BOOT either.
+fn to_bootstrap<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    found: &super::Discovered,
+    selected: &[DeviceInfo],
+    pending: &mut [Pending],
+    opts: &StatesOptions,
+) -> Result<(), MasterError> {
+    let target = opts.target;
+    drive_to(bus, pending, AlState::Init, opts.timeout, &mut no_exchange)?;
+    let failed: Vec<bool> = pending
+        .iter()
+        .map(|p| p.done.as_ref().is_some_and(|d| !d.ok))
+        .collect();
+    for p in pending.iter_mut() {
+        p.done = None;
+    }
+    for (p, d) in pending.iter().zip(selected) {
+        configure_bootstrap_mailbox(bus, &found.group, d.position, p.address, &p.drive)?;
+    }
+    drive_to(bus, pending, target, opts.timeout, &mut no_exchange)?;
+    for (p, f) in pending.iter_mut().zip(failed) {
+        if let (Some(d), true) = (p.done.as_mut(), f) {
+            d.ok = false;
+        }
+    }
+    Ok(())
+}
+
+/// SAFE-OP or OP with the segment configured as `run` configures it (every device has a
+/// profile): valid outputs, with SYNC0 running on every drive, for as many cycles as the cycle
+/// gives them before OP. Returns where start-up's time went.
+fn to_op_configured<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    found: super::Discovered,
+    pending: &mut [Pending],
+    opts: &StatesOptions,
+) -> Result<crate::master::StartupTimes, MasterError> {
+    let target = opts.target;
+    let mut cfg = StartupConfig::new(opts.cycle);
+    cfg.esi_profiles = opts.esi_profiles.clone();
+    cfg.esi_not_drives = opts.esi_not_drives.clone();
+    let plan = startup::plan(&found.devices, &cfg)?;
+    let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
+    let mut times = started.times;
+    let group = started.group;
+    let dc_time = std::cell::Cell::new(0u64);
+    let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
+        let r = bus
+            .block_on(&|| "exchanging process data".into(), T_STEP, |md| {
+                group.tx_rx_dc(md)
+            })
+            .map_err(|e| exec_error(None, e))?
+            .map_err(|e| bus_error(None, "exchanging process data", e))?;
+        dc_time.set(r.extra.dc_system_time);
+        Ok(r.extra.next_cycle_wait)
+    };
+    // Valid outputs before OP, with SYNC0 running on every drive, for as many
+    // cycles as the cycle gives them (bounded by the timeout).
+    let cycles = crate::master::CycleSettings::new(opts.cycle).safeop_cycles;
+    let not_before = crate::master::startup::op_not_before_dc(
+        &started.drives,
+        cycles,
+        opts.cycle.as_nanos() as u64,
+    );
+    let until = crate::rt::monotonic_ns() + opts.timeout.as_nanos() as u64;
+    let mut n = 0u32;
+    while n < cycles || dc_time.get() < not_before {
+        let w = exchange(bus)?;
+        n = n.saturating_add(1);
+        if crate::rt::monotonic_ns() > until {
+            break;
+        }
+        std::thread::sleep(w);
+    }
+    drive_to(bus, pending, target, opts.timeout, &mut exchange)?;
+    if target == AlState::Op {
+        times.reached_op(crate::rt::monotonic_ns());
+    }
+    Ok(times)
+}
+
+/// SAFE-OP or OP with the process image the devices' SII gives (a device without a profile):
+/// SAFE-OP first on the way to OP. Returns the state to report a refusal at when a device did
+/// not reach SAFE-OP; a device that wants DC SYNC0 is told how to give it what it needs.
+fn to_op_from_sii<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    found: super::Discovered,
+    pending: &mut [Pending],
+    opts: &StatesOptions,
+) -> Result<Option<AlState>, MasterError> {
+    let target = opts.target;
+    let group = bus
+        .block_on(
+            &|| "building the process image (PRE-OP)".into(),
+            T_STEP,
+            |md| found.group.into_pre_op_pdi(md),
+        )
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| bus_error(None, "building the process image (PRE-OP)", e))?;
+    // As the run's start-up does: process-data SMs the SII leaves off, enabled.
+    startup::enable_process_data_sms(bus, &found.devices, &mut Vec::new())?;
+    let cycle = opts.cycle;
+    let mut exchange = |bus: &mut Bus<'_, L>| -> Result<Duration, MasterError> {
+        bus.block_on(&|| "exchanging process data".into(), T_STEP, |md| {
+            group.tx_rx(md)
+        })
+        .map_err(|e| exec_error(None, e))?
+        .map_err(|e| bus_error(None, "exchanging process data", e))?;
+        Ok(cycle)
+    };
+    if target == AlState::Op {
+        drive_to(bus, pending, AlState::SafeOp, opts.timeout, &mut exchange)?;
+        if pending
+            .iter()
+            .any(|p| p.done.as_ref().is_some_and(|d| !d.ok))
+        {
+            return Ok(Some(AlState::SafeOp));
+        }
+        for p in pending.iter_mut() {
+            p.done = None;
+        }
+    }
+    drive_to(bus, pending, target, opts.timeout, &mut exchange)?;
+    // Configured from its SII alone, a device that needs DC SYNC0 refuses: say how
+    // to give it what it needs.
+    for p in pending.iter_mut() {
+        if let Some(d) = p
+            .done
+            .as_mut()
+            .filter(|d| d.al_status_code.is_some_and(|c| DC_REFUSALS.contains(&c)))
+        {
+            d.hint = Some(
+                "the device wants DC SYNC0, which `states` sets up only for a drive \
+                 it has a profile for: give the device's ESI file with --esi FILE \
+                 (or a folder of them) and it is configured as `run` would"
+                    .to_string(),
+            );
+        }
+    }
+    Ok(None)
 }
 
 /// AL status codes of a device that wants distributed clocks configured (ETG.1000.6 Table
