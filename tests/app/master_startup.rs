@@ -45,7 +45,7 @@ fn reaches_safe_op_with_dc_and_the_configured_image() {
                     .iter()
                     .all(|d| d.dc && d.vendor_id == TEST_VENDOR_ID)
             );
-            let plan = startup::plan(&devices, &cfg)?;
+            let plan = startup::assign_roles(&devices, &cfg)?;
             let started = startup::configure(bus, group, devices, plan, &cfg)?;
             Ok::<_, ecdrive::master::error::MasterError>(
                 started
@@ -97,7 +97,7 @@ fn unknown_devices_are_named_with_their_identity() {
         move |bus| {
             let (_group, devices) = startup::discover(bus).unwrap();
             assert!(devices.iter().all(|d| d.coe && d.declares_cia402()));
-            let roles = startup::plan(&devices, &cfg).unwrap();
+            let roles = startup::assign_roles(&devices, &cfg).unwrap();
             for r in &roles {
                 match r {
                     startup::Role::Io { why } => {
@@ -106,7 +106,7 @@ fn unknown_devices_are_named_with_their_identity() {
                     other => panic!("{other:?}"),
                 }
             }
-            startup::plan(&devices, &named).map(|_| ())
+            startup::assign_roles(&devices, &named).map(|_| ())
         },
     )
     .unwrap();
@@ -148,7 +148,7 @@ fn a_mapping_over_the_limit_is_refused_before_anything_is_written() {
         BusOptions::default(),
         move |bus| {
             let (group, devices) = startup::discover(bus).unwrap();
-            let plan = startup::plan(&devices, &cfg).unwrap();
+            let plan = startup::assign_roles(&devices, &cfg).unwrap();
             startup::configure(bus, group, devices, plan, &cfg).map(|_| ())
         },
     )
@@ -174,7 +174,7 @@ fn a_cycle_time_the_drive_does_not_accept_is_refused() {
         BusOptions::default(),
         move |bus| {
             let (group, devices) = startup::discover(bus).unwrap();
-            let plan = startup::plan(&devices, &cfg).unwrap();
+            let plan = startup::assign_roles(&devices, &cfg).unwrap();
             startup::configure(bus, group, devices, plan, &cfg).map(|_| ())
         },
     )

@@ -1148,7 +1148,7 @@ fn start_up<L: FrameLink>(
     if let Some(p) = persist {
         same_drives(&p.summaries, &p.io, &devices)?;
     }
-    let plan = startup::plan(&devices, &cfg.startup)?;
+    let plan = startup::assign_roles(&devices, &cfg.startup)?;
     if let Some(p) = persist {
         same_roles(&p.summaries, &devices, &plan)?;
     }

@@ -750,7 +750,7 @@ fn choose(
 /// (device type 0x….0192). Every other device is an I/O device. Fails on setups that select
 /// nothing, on a device the configuration names that cannot be driven, and on a forced profile
 /// that does not fit.
-pub fn plan(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
+pub fn assign_roles(devices: &[DeviceInfo], cfg: &StartupConfig) -> Result<Vec<Role>, MasterError> {
     let chosen = choose(devices, cfg)?;
     let mut out = Vec::with_capacity(devices.len());
     for (d, setup) in devices.iter().zip(chosen) {
@@ -1684,7 +1684,7 @@ fn generic_mappings<L: FrameLink>(
 }
 
 /// Configure every drive in PRE-OP (mapping, sync, start-up SDOs, mode), build the process
-/// image, run DC to SAFE-OP. `devices`/`plan` come from [`discover`] and [`plan`].
+/// image, run DC to SAFE-OP. `devices`/`plan` come from [`discover`] and [`assign_roles`].
 pub fn configure<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     mut group: Group<PreOp>,

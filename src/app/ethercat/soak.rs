@@ -277,7 +277,11 @@ fn read_history(
             continue;
         }
         let drive = e.drive.as_ref().map_or(String::new(), |d| format!("{d}: "));
-        let text = format!("{:.3} s: {drive}{}", start.elapsed().as_secs_f64(), e.text());
+        let text = format!(
+            "{:.3} s: {drive}{}",
+            start.elapsed().as_secs_f64(),
+            e.text()
+        );
         // A command that crossed the end of a cycle (sent on the last `Cycling` snapshot)
         // is not carried out while the session re-starts (`NoCycle`): handled.
         if recovery::unhandled_kind(e.kind) {

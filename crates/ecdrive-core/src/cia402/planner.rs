@@ -668,7 +668,12 @@ impl Planner {
     }
 
     /// The next command from a non-fault state.
-    fn next_command(&self, s: State, sw: StatusWord, standstill: bool) -> (Command, Progress, StallCause) {
+    fn next_command(
+        &self,
+        s: State,
+        sw: StatusWord,
+        standstill: bool,
+    ) -> (Command, Progress, StallCause) {
         use Command as C;
         use Progress::{InProgress, Reached};
         use State::*;

@@ -342,7 +342,7 @@ fn to_op_configured<L: FrameLink>(
     let mut cfg = StartupConfig::new(opts.cycle);
     cfg.esi_profiles = opts.esi_profiles.clone();
     cfg.esi_not_drives = opts.esi_not_drives.clone();
-    let plan = startup::plan(&found.devices, &cfg)?;
+    let plan = startup::assign_roles(&found.devices, &cfg)?;
     let started = startup::configure(bus, found.group, found.devices, plan, &cfg)?;
     let mut times = started.times;
     let group = started.group;
