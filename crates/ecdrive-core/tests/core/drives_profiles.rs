@@ -389,3 +389,17 @@ fn units_and_alarm_names() {
     codes.dedup();
     assert_eq!(codes.len(), 39, "sorted and distinct");
 }
+
+/// A pp target is judged against the range the drive's manual gives 0x607A in pp, rounded as it
+/// is written (the MR-J4-TM's ±999 999 pos units): the one check of the run file, start-up and
+/// the axis. A drive without a narrower range takes any.
+#[test]
+fn pp_targets_are_judged_against_the_drives_range_as_written() {
+    let caps = &mr_j4_tm::PROFILE.caps;
+    assert_eq!(caps.pp_target_outside(999_999.4), None);
+    assert_eq!(caps.pp_target_outside(-999_999.0), None);
+    let range = caps.pp_target_outside(999_999.6).expect("beyond the range");
+    assert_eq!((range.min, range.max), (-999_999, 999_999));
+    assert!(caps.pp_target_outside(-1_000_000.0).is_some());
+    assert_eq!(bdhde::PROFILE.caps.pp_target_outside(1e9), None);
+}
