@@ -502,17 +502,22 @@ pub fn sii_read(
     ExitCode::SUCCESS
 }
 
+/// The bytes of a file a write command sends, or its one-line refusal (exit 2).
+fn read_input(cmd: &str, file: &Path) -> Result<Vec<u8>, ExitCode> {
+    std::fs::read(file).map_err(|e| {
+        fail_with(
+            cmd,
+            &format!("reading {}: {e}", file.display()),
+            exit::USAGE,
+        )
+    })
+}
+
 /// `ecdrive sii write`.
 pub fn sii_write(interface: &str, position: u16, file: &Path, force: bool, json: bool) -> ExitCode {
-    let image = match std::fs::read(file) {
+    let image = match read_input("sii", file) {
         Ok(b) => b,
-        Err(e) => {
-            return fail_with(
-                "sii",
-                &format!("reading {}: {e}", file.display()),
-                exit::USAGE,
-            );
-        }
+        Err(code) => return code,
     };
     let bar = print::progress("writing the EEPROM");
     let b2 = bar.clone();
@@ -592,15 +597,9 @@ fn foe_write(
     file: &Path,
     json: bool,
 ) -> ExitCode {
-    let data = match std::fs::read(file) {
+    let data = match read_input("foe", file) {
         Ok(b) => b,
-        Err(e) => {
-            return fail_with(
-                "foe",
-                &format!("reading {}: {e}", file.display()),
-                exit::USAGE,
-            );
-        }
+        Err(code) => return code,
     };
     let bar = print::progress("writing over FoE");
     let b2 = bar.clone();
