@@ -29,6 +29,7 @@ pub mod io;
 mod record;
 pub mod session;
 pub mod startup;
+mod supervise;
 
 mod wkc;
 
@@ -38,7 +39,9 @@ pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryEvent, HistoryKind, HistoryLog, Resolved, RestartNote};
 pub use program::{ProbeEdge, RunMode, Step, Target};
 pub use record::{CSV_HEADER, CsvWriter, CycleSample, RecordTx, Recording, SampleScale, recording};
-pub use session::{DriveOutcome, DriveSummary, Master, MasterConfig, SessionReport, StartFailure};
+pub use session::{
+    DriveOutcome, DriveSummary, Master, MasterConfig, SdoRequester, SessionReport, StartFailure,
+};
 pub use startup::{DriveSetup, Selector, StartupConfig, StartupFrames, StartupTimes};
 pub use stream::{StreamProducer, Streams};
 pub use telemetry::{

@@ -9,16 +9,16 @@
 
 use super::app::CycleApp;
 use super::bus::{BusOptions, SESSION_STACK, with_bus};
-use super::coe::{CoeClient, EmergencyLog, EmergencyRecord};
+use super::coe::{EmergencyLog, EmergencyRecord};
 use super::cycle::{self, CycleEnd, CycleHooks, CycleReport, CycleSettings};
 use super::error::{DriveRef, ErrorKind, MasterError};
-use super::exec;
 pub use super::history::{
     HistoryEntry, HistoryEvent, HistoryKind, HistoryLog, HistorySlice, Resolved, RestartNote,
 };
 use super::io::FrameLink;
 use super::record::RecordTx;
 use super::startup::{self, DeviceInfo, StartupConfig};
+use super::supervise::{MailboxDevice, MailboxRequest, Mailboxes};
 use super::telemetry::{
     AxisTelemetry, Command, CycleTelemetry, Event, EventKind, Phase, StopKind, StopReason,
     Telemetry,
@@ -248,11 +248,17 @@ impl<L> std::fmt::Display for StartFailure<L> {
 struct Shared {
     history: Mutex<HistoryLog>,
     rt: Mutex<Option<RtReport>>,
+    /// The application's SDO requests ([`Master::sdo_upload`]), served by the session thread.
+    requests: Mutex<mpsc::Receiver<MailboxRequest>>,
+    /// The session thread has ended (no request will be served).
+    ended: std::sync::atomic::AtomicBool,
 }
 
 /// A running master. See the module documentation.
 pub struct Master<L: FrameLink + Send + 'static> {
     commands: rtrb::Producer<Command>,
+    requests: mpsc::Sender<MailboxRequest>,
+    mailbox_timeout: Duration,
     telemetry: triple_buffer::Output<Telemetry>,
     shared: Arc<Shared>,
     drives: Vec<DriveSummary>,
@@ -386,10 +392,14 @@ impl<L: FrameLink + Send + 'static> Master<L> {
     /// Start a master on `link`: start-up, then the cycle. Returns once the cycle runs (the
     /// drives then go to OP by themselves), or with the start-up error and the link.
     pub fn start(link: L, cfg: MasterConfig) -> Result<Self, StartFailure<L>> {
+        let (requests, requests_rx) = mpsc::channel();
         let shared = Arc::new(Shared {
             history: Mutex::new(HistoryLog::new(cfg.history_capacity)),
             rt: Mutex::new(None),
+            requests: Mutex::new(requests_rx),
+            ended: std::sync::atomic::AtomicBool::new(false),
         });
+        let mailbox_timeout = cfg.bus.mailbox_timeout;
         let (tx, rx) = mpsc::channel::<Result<Started, MasterError>>();
         let shared2 = shared.clone();
         let cfg2 = cfg.clone();
@@ -403,7 +413,11 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                 let Ok(link) = link_rx.recv() else {
                     return None;
                 };
-                Some(session(link, &cfg2, &shared2, &tx))
+                let outcome = session(link, &cfg2, &shared2, &tx);
+                shared2
+                    .ended
+                    .store(true, std::sync::atomic::Ordering::Release);
+                Some(outcome)
             });
         let thread = match thread {
             Ok(t) => t,
@@ -433,6 +447,8 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                 telemetry,
             })) => Ok(Self {
                 commands,
+                requests,
+                mailbox_timeout,
                 telemetry,
                 shared,
                 drives,
@@ -480,6 +496,39 @@ impl<L: FrameLink + Send + 'static> Master<L> {
                 "the command queue is full",
             )
         })
+    }
+
+    /// Read an object of the device at segment `position` over CoE while the cycle runs: the
+    /// session thread sends the request with its mailbox polls (its frames ride along in the
+    /// cycle's exchanges; the cycle is not held up). The bytes as the device sent them; an
+    /// error names the device, the object and the reason (an SDO abort code, a timeout).
+    pub fn sdo_upload(
+        &self,
+        position: u16,
+        address: crate::od::ObjectAddress,
+    ) -> Result<Vec<u8>, MasterError> {
+        self.sdo_requester().upload(position, address)
+    }
+
+    /// Write an object of the device at segment `position` over CoE while the cycle runs, as
+    /// [`Master::sdo_upload`] reads one.
+    pub fn sdo_download(
+        &self,
+        position: u16,
+        address: crate::od::ObjectAddress,
+        data: &[u8],
+    ) -> Result<(), MasterError> {
+        self.sdo_requester().download(position, address, data)
+    }
+
+    /// A handle for [`Master::sdo_upload`] and [`Master::sdo_download`] that another thread
+    /// may keep and use without the [`Master`] (a request waits up to the mailbox timeout).
+    pub fn sdo_requester(&self) -> SdoRequester {
+        SdoRequester {
+            requests: self.requests.clone(),
+            shared: self.shared.clone(),
+            mailbox_timeout: self.mailbox_timeout,
+        }
     }
 
     /// The latest telemetry snapshot.
@@ -610,6 +659,87 @@ impl<L: FrameLink + Send + 'static> Drop for Master<L> {
             let _ = self.commands.push(Command::Stop(StopKind::Ramp));
             if let Some(t) = self.thread.take() {
                 let _ = t.join();
+            }
+        }
+    }
+}
+
+/// SDO requests to a running master's session ([`Master::sdo_requester`]).
+#[derive(Clone)]
+pub struct SdoRequester {
+    requests: mpsc::Sender<MailboxRequest>,
+    shared: Arc<Shared>,
+    mailbox_timeout: Duration,
+}
+
+impl SdoRequester {
+    /// [`Master::sdo_upload`].
+    pub fn upload(
+        &self,
+        position: u16,
+        address: crate::od::ObjectAddress,
+    ) -> Result<Vec<u8>, MasterError> {
+        let (reply, rx) = mpsc::channel();
+        let what = format!("reading {address} of the device at position {position}");
+        let r = MailboxRequest::Upload {
+            position,
+            address,
+            reply,
+        };
+        self.request(r, rx, &what)
+    }
+
+    /// [`Master::sdo_download`].
+    pub fn download(
+        &self,
+        position: u16,
+        address: crate::od::ObjectAddress,
+        data: &[u8],
+    ) -> Result<(), MasterError> {
+        let (reply, rx) = mpsc::channel();
+        let what = format!("writing {address} of the device at position {position}");
+        let r = MailboxRequest::Download {
+            position,
+            address,
+            data: data.to_vec(),
+            reply,
+        };
+        self.request(r, rx, &what)
+    }
+
+    /// Hand `r` to the session thread and wait for its answer: the mailbox timeout, plus the
+    /// session's longest pause and a poll under way.
+    fn request<T>(
+        &self,
+        r: MailboxRequest,
+        rx: mpsc::Receiver<Result<T, MasterError>>,
+        what: &str,
+    ) -> Result<T, MasterError> {
+        let ended = || MasterError::new(None, what, ErrorKind::Bus, "the session has ended");
+        let over = || self.shared.ended.load(std::sync::atomic::Ordering::Acquire);
+        if over() || self.requests.send(r).is_err() {
+            return Err(ended());
+        }
+        let wait = self.mailbox_timeout + Duration::from_secs(1);
+        let deadline = monotonic_ns() + wait.as_nanos() as u64;
+        loop {
+            match rx.recv_timeout(Duration::from_millis(50)) {
+                Ok(r) => return r,
+                Err(mpsc::RecvTimeoutError::Disconnected) => return Err(ended()),
+                Err(mpsc::RecvTimeoutError::Timeout) if over() => return Err(ended()),
+                Err(mpsc::RecvTimeoutError::Timeout) if monotonic_ns() > deadline => {
+                    return Err(MasterError::new(
+                        None,
+                        what,
+                        ErrorKind::Timeout,
+                        format!(
+                            "no answer within {} ms (the cycle is not running: starting, \
+                             re-starting or stopping)",
+                            wait.as_millis()
+                        ),
+                    ));
+                }
+                Err(mpsc::RecvTimeoutError::Timeout) => {}
             }
         }
     }
@@ -943,9 +1073,6 @@ fn same_roles(
     Ok(())
 }
 
-/// How long one supervisory mailbox poll during the cycle may take.
-const POLL_TIMEOUT: Duration = Duration::from_millis(250);
-
 /// A device as it was seen before a re-start.
 struct Seen<'a> {
     drive: &'a DriveRef,
@@ -1101,42 +1228,6 @@ fn run_end(end: Option<CycleEnd>, restarting: bool, resolver: &Resolver) -> RunE
     }
 }
 
-/// Read each drive's mailbox once (emergencies land in the log), giving up as soon as
-/// `finished` says the cycle has ended (no frame carries a request then, and a lost segment
-/// must not hold the session up). `counters` carry each drive's mailbox counter across polls.
-fn poll_mailboxes(
-    md: &ethercrab::MainDevice<'_>,
-    drives: &[(u16, DriveRef, bool)],
-    counters: &mut [u8],
-    log: &EmergencyLog,
-    timeout: Duration,
-    finished: &dyn Fn() -> bool,
-) {
-    for ((addr, drive, ca), counter) in drives.iter().zip(counters.iter_mut()) {
-        if finished() {
-            break;
-        }
-        let last = *counter;
-        // A poll only reads what is waiting: a few cycles.
-        let r = exec::run_remote_unless(
-            &|| format!("{drive}: polling the mailbox"),
-            timeout.min(POLL_TIMEOUT),
-            async {
-                let mut c = CoeClient::new(md, *addr, drive.clone(), log.clone())
-                    .await?
-                    .with_complete_access(*ca)
-                    .with_counter(last);
-                c.drain().await?;
-                Ok::<_, super::coe::CoeError>(c.counter())
-            },
-            finished,
-        );
-        if let Ok(Ok(c)) = r {
-            *counter = c;
-        }
-    }
-}
-
 /// Start-up to SAFE-OP; on a re-start, the segment must show the same drives in the same
 /// roles as at the first start.
 fn start_up<L: FrameLink>(
@@ -1223,11 +1314,7 @@ fn run<L: FrameLink + Send>(
     let drives = &started.drives;
     let others = &started.io;
     let group = &started.group;
-    let mbx_timeout = cfg.bus.mailbox_timeout;
-    let addrs: Vec<(u16, DriveRef, bool)> = drives
-        .iter()
-        .map(|d| (d.info.address, d.drive.clone(), d.profile.complete_access))
-        .collect();
+    let mut mailboxes = mailboxes_of(&started, resolver, log.clone(), cfg.bus.mailbox_timeout);
     let (md, pump) = bus.split();
     let report = std::thread::scope(|s| {
         let h = std::thread::Builder::new()
@@ -1250,7 +1337,6 @@ fn run<L: FrameLink + Send>(
             }
         };
         let mut next_poll = monotonic_ns();
-        let mut counters = vec![0u8; addrs.len()];
         if let Ok(rt) = rt_rx.recv_timeout(Duration::from_secs(5)) {
             for w in &rt.warnings {
                 tracing::warn!("{w}");
@@ -1287,12 +1373,15 @@ fn run<L: FrameLink + Send>(
                 && monotonic_ns() >= next_poll
             {
                 next_poll = monotonic_ns() + every.as_nanos() as u64;
-                poll_mailboxes(md, &addrs, &mut counters, &log, mbx_timeout, &|| {
-                    h.is_finished()
-                });
+                mailboxes.poll(md, &|| h.is_finished());
                 drain_emcy(&mut seen_emcy);
             }
-            std::thread::sleep(session_pause(idle, cfg.emergency_poll, next_poll));
+            // Sleeps until the next look, or until the application asks for an SDO.
+            let pause = session_pause(idle, cfg.emergency_poll, next_poll);
+            if let Some(r) = next_request(shared, pause) {
+                mailboxes.serve(md, r, &|| h.is_finished());
+                drain_emcy(&mut seen_emcy);
+            }
         }
         drain_events();
         h.join().ok()
@@ -1322,6 +1411,49 @@ fn next_idle(idle: Duration, events: usize) -> Duration {
     } else {
         (idle * 2).min(SESSION_POLL_MAX)
     }
+}
+
+/// The application's next SDO request, waiting for one at most `pause`.
+fn next_request(shared: &Shared, pause: Duration) -> Option<MailboxRequest> {
+    match shared.requests.lock() {
+        Ok(rx) => rx.recv_timeout(pause).ok(),
+        Err(_) => {
+            std::thread::sleep(pause);
+            None
+        }
+    }
+}
+
+/// Every device with a CoE mailbox, by position: the drives are polled for emergencies, the
+/// others only answer the application's requests.
+fn mailboxes_of(
+    started: &startup::Started,
+    resolver: &Resolver,
+    log: EmergencyLog,
+    timeout: Duration,
+) -> Mailboxes {
+    let devices = started
+        .devices
+        .iter()
+        .filter(|d| d.coe)
+        .map(|d| {
+            let drive = started.drives.iter().find(|s| s.info.position == d.position);
+            MailboxDevice {
+                position: d.position,
+                address: d.address,
+                drive: drive.map_or_else(
+                    || DriveRef {
+                        position: d.position,
+                        name: resolver.device_name(d.position),
+                    },
+                    |s| s.drive.clone(),
+                ),
+                polled: drive.is_some(),
+                complete_access: drive.is_some_and(|s| s.profile.complete_access),
+            }
+        })
+        .collect();
+    Mailboxes::new(devices, log, timeout)
 }
 
 /// How long the session thread sleeps: `idle`, but not past the next mailbox poll.

@@ -1823,12 +1823,19 @@ impl MotionAxis {
                 self.arm_probe(probe, edge).err()
             }
             Command::Setpoint(axis, v) if axis as usize == i => self.command_setpoint(v),
+            Command::Move {
+                axis,
+                to,
+                velocity,
+                acceleration,
+            } if axis as usize == i => self.command_move(to, velocity, acceleration),
             _ => None,
         }
     }
 
     /// [`Command::RunProgram`]: the program from its start, once the axis is enabled.
     fn run_program(&mut self) -> Option<&'static str> {
+        self.runner.use_program();
         if self.runner.steps().is_empty() {
             return Some("the axis has no program");
         }
@@ -1850,6 +1857,40 @@ impl MotionAxis {
             Some("home refused: a program or a homing runs on the axis")
         } else {
             self.home_commanded = Some(method);
+            None
+        }
+    }
+
+    /// [`Command::Move`]: a csp move run as a one-step program in the program's place. Its
+    /// limits must be positive, finite and within the axis's set-point limits.
+    fn command_move(&mut self, to: f64, velocity: f64, acceleration: f64) -> Option<&'static str> {
+        let st = self.axis.status();
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        let within = |v: f64, max: Option<f64>| max.is_none_or(|m| v <= m);
+        if st.state != Some(State::OperationEnabled) || self.stopping != Stopping::No {
+            Some("move refused: the axis is not enabled")
+        } else if self.program == ProgramState::Running
+            || self.home != HomeRun::Idle
+            || self.home_commanded.is_some()
+            || self.drive_run != DriveRun::Idle
+        {
+            Some("move refused: a program, homing or pp move runs on the axis")
+        } else if !to.is_finite() || !positive(velocity) || !positive(acceleration) {
+            Some("move refused: the target must be finite, the velocity and acceleration positive")
+        } else if !within(velocity, self.limits.max_velocity)
+            || !within(acceleration, self.limits.max_acceleration)
+        {
+            Some("move refused: its velocity or acceleration is over the axis's set-point limits")
+        } else {
+            let step = Step::Move {
+                target: program::Target::To(to),
+                velocity,
+                acceleration,
+                jerk: None,
+            };
+            self.runner.run_single(step, RunMode::Csp);
+            self.requested_mode = None;
+            self.program = ProgramState::Pending;
             None
         }
     }

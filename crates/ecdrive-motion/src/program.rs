@@ -1021,6 +1021,11 @@ pub struct Runner {
     last: Sample,
     waiting_for_mode: bool,
     failed: Option<(usize, ShapeError)>,
+    /// While a single step runs in the program's place ([`Runner::run_single`]): the program
+    /// and its start mode; otherwise the single step's slot (capacity reserved at
+    /// construction, so that a step is put in it without allocating).
+    stash: (Vec<Step>, RunMode),
+    single: bool,
 }
 
 impl Runner {
@@ -1037,6 +1042,34 @@ impl Runner {
             last: Sample::default(),
             waiting_for_mode: false,
             failed: None,
+            stash: (Vec::with_capacity(1), start),
+            single: false,
+        }
+    }
+
+    /// Run `step` alone, starting in `start`, in place of the program (until
+    /// [`Runner::use_program`]); then [`Runner::seed`] before the next tick. Allocation-free
+    /// for a step that holds no list (a move, a ramp, a jog: not a pp step's targets).
+    pub fn run_single(&mut self, step: Step, start: RunMode) {
+        if !self.single {
+            std::mem::swap(&mut self.steps, &mut self.stash.0);
+            std::mem::swap(&mut self.start, &mut self.stash.1);
+            self.single = true;
+        }
+        self.steps.clear();
+        self.steps.push(step);
+        self.start = start;
+        self.restart();
+    }
+
+    /// Back to the program after [`Runner::run_single`] (nothing to do if no single step
+    /// ran); then [`Runner::restart`] to run it.
+    pub fn use_program(&mut self) {
+        if self.single {
+            self.steps.clear();
+            std::mem::swap(&mut self.steps, &mut self.stash.0);
+            std::mem::swap(&mut self.start, &mut self.stash.1);
+            self.single = false;
         }
     }
 

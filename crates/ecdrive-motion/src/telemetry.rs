@@ -78,6 +78,22 @@ pub enum Command {
         /// Controlword bit 5: replace the running move (else queued behind it).
         immediate: bool,
     },
+    /// A move to an absolute position (counts) in csp, planned by the cycle as a program's
+    /// `move` step is (trapezoidal, from where the axis stands, at most `velocity` counts/s
+    /// and `acceleration` counts/s²), in place of the axis's program. Taken in Operation
+    /// enabled with no program, homing or pp move running; the axis switches to csp first
+    /// (without a jump). The axis's telemetry `program_running` says while it runs and
+    /// `program_step` reaches 1 when it arrived.
+    Move {
+        /// Axis index.
+        axis: u16,
+        /// Destination (counts).
+        to: f64,
+        /// Velocity limit (counts/s).
+        velocity: f64,
+        /// Acceleration limit (counts/s²).
+        acceleration: f64,
+    },
     /// Arm a touch probe, as `AppAxis::arm_probe`; the axis's telemetry `probes`
     /// says whether it latched, and where.
     ArmProbe {
@@ -126,6 +142,7 @@ impl core::fmt::Display for Command {
                 let how = if *relative { "by" } else { "to" };
                 write!(f, "pp {how} {target} for axis {axis}")
             }
+            Command::Move { axis, to, .. } => write!(f, "move to {to} for axis {axis}"),
             Command::ArmProbe { axis, probe, edge } => write!(
                 f,
                 "arm touch probe {probe} ({} edge) of axis {axis}",

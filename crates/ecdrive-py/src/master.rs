@@ -1,0 +1,1235 @@
+//! `Master`, `Drive` and `Device`: a running EtherCAT master as Python objects.
+//!
+//! The Rust [`ecdrive::Master`] runs the cycle in its own thread; these objects only send it
+//! commands, read its telemetry and history, and ask its session thread for SDOs. Every call
+//! that waits releases the GIL, and holds the master's lock only for a look at a time, so other
+//! Python threads (and other calls on the same master) go on meanwhile.
+
+use crate::errors::{Class, Failure};
+use crate::record::Recorder;
+use crate::values;
+use ecdrive::cia402::{self, OperationMode, State};
+use ecdrive::master::bus::run_session;
+use ecdrive::master::session::IoSummary;
+use ecdrive::master::{DriveSummary, cycle::al_state_name};
+use ecdrive::od::{DataType, Dictionary, ObjectAddress};
+use ecdrive::{
+    Axes, Command, DriveRef, EventKind, HistoryEntry, HistoryEvent, MasterConfig, RunMode,
+    StopKind, Telemetry,
+};
+use ecdrive_cli::app::config::{self, Config};
+use ecdrive_cli::app::ethercat::tools::{self, SimSettings, Target, ToolLink};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
+
+type EcMaster = ecdrive::Master<ToolLink>;
+
+/// Where the segment is, and how the master runs on it.
+struct Setup {
+    target: String,
+    cfg: MasterConfig,
+    op_timeout: Duration,
+    record: bool,
+}
+
+/// A master run: the Rust master and its recording.
+struct Running {
+    m: EcMaster,
+    recorder: Recorder,
+}
+
+enum Session {
+    /// The link, no cycle: the commissioning reads run on it.
+    Idle(ToolLink),
+    /// The cycle runs.
+    Running(Box<Running>),
+    /// Closed (or the link was lost with a failed start).
+    Closed,
+}
+
+/// The drives and I/O devices as the last start found them.
+#[derive(Default, Clone)]
+struct Found {
+    drives: Vec<DriveSummary>,
+    io: Vec<IoSummary>,
+}
+
+pub(crate) struct Inner {
+    setup: Setup,
+    session: Mutex<Session>,
+    found: Mutex<Found>,
+    /// The last run's end, as `stop()` returned it.
+    report: Mutex<Option<serde_json::Value>>,
+}
+
+fn locked<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+fn not_running(what: &str) -> Failure {
+    Failure::new(
+        Class::Bus,
+        None,
+        what,
+        "the master's cycle does not run (start() it; it ends with stop(), close(), a fault \
+         that took a drive out of OP, or a lost segment)",
+    )
+}
+
+impl Inner {
+    /// `f` on the running master, under the lock (a look, not a wait).
+    fn running<R>(
+        &self,
+        what: &str,
+        f: impl FnOnce(&mut Running) -> Result<R, Failure>,
+    ) -> Result<R, Failure> {
+        match &mut *locked(&self.session) {
+            Session::Running(r) => f(r),
+            _ => Err(not_running(what)),
+        }
+    }
+
+    /// Send `c`; the telemetry's cycle and the history's next sequence number as of then.
+    fn command(&self, what: &str, c: Command) -> Result<(u64, u64), Failure> {
+        self.running(what, |r| {
+            let seq = r.m.history_since(u64::MAX).next;
+            let cycle = r.m.telemetry().cycle.cycle;
+            if !r.m.is_running() {
+                return Err(not_running(what));
+            }
+            r.m.command(c).map_err(Failure::from)?;
+            Ok((cycle, seq))
+        })
+    }
+
+    /// Wait (the caller has released the GIL) until `until` says so for axis `axis`,
+    /// watching the history from `from.1` for the command's refusal, a fault, a following
+    /// error or the cycle's end. A telemetry condition counts from three cycles after `from.0`
+    /// on (the command has been taken by then).
+    fn wait(
+        &self,
+        what: &str,
+        drive: &DriveRef,
+        axis: usize,
+        from: (u64, u64),
+        timeout: Duration,
+        until: Until<'_>,
+    ) -> Result<(), Failure> {
+        let deadline = Instant::now() + timeout;
+        let mut seq = from.1;
+        let mut seen = false;
+        loop {
+            let outcome = self.running(what, |r| {
+                let slice = r.m.history_since(seq);
+                seq = slice.next;
+                for e in &slice.entries {
+                    if let Some(f) = stops_the_wait(e, axis, drive, what) {
+                        return Err(f);
+                    }
+                    if let (Until::Event(f), HistoryEvent::Cycle(k)) = (&until, &e.event) {
+                        seen |= f(k);
+                    }
+                }
+                if seen {
+                    return Ok(true);
+                }
+                if !r.m.is_running() {
+                    return Err(Failure::new(Class::Bus, Some(drive), what, "the cycle ended"));
+                }
+                let t = r.m.telemetry();
+                if let Until::Telemetry(done) = &until
+                    && t.cycle.cycle >= from.0 + 3
+                    && done(t)
+                {
+                    return Ok(true);
+                }
+                if Instant::now() > deadline {
+                    return Err(timed_out(what, drive, t.axes.get(axis), timeout));
+                }
+                Ok(false)
+            })?;
+            if outcome {
+                return Ok(());
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+    }
+
+    /// Start the master on the idle link and wait for OP.
+    fn start(&self) -> Result<(), Failure> {
+        let mut s = locked(&self.session);
+        let link = match std::mem::replace(&mut *s, Session::Closed) {
+            Session::Idle(l) => l,
+            Session::Running(r) if r.m.is_running() => {
+                *s = Session::Running(r);
+                return Ok(());
+            }
+            // Ended by itself (a drive left OP, the segment was lost): its link, afresh.
+            Session::Running(r) => r.m.stop(StopKind::QuickStop).1,
+            Session::Closed => {
+                return Err(Failure::new(
+                    Class::Bus,
+                    None,
+                    "starting the master",
+                    "the master is closed",
+                ));
+            }
+        };
+        let mut cfg = self.setup.cfg.clone();
+        let (tx, recorder) = Recorder::start(self.setup.record).map_err(|e| {
+            Failure::new(Class::Bus, None, "starting the recording thread", e.to_string())
+        })?;
+        cfg.record = Some(tx);
+        let mut m = match EcMaster::start(link, cfg) {
+            Ok(m) => m,
+            Err(f) => {
+                *s = Session::Idle(f.link);
+                return Err(f.error.into());
+            }
+        };
+        *locked(&self.found) = Found {
+            drives: m.drives().to_vec(),
+            io: m.io().to_vec(),
+        };
+        let op = m.wait_until("OP", self.setup.op_timeout, |t| t.cycle.all_op);
+        *s = Session::Running(Box::new(Running { m, recorder }));
+        drop(s);
+        if let Err(e) = op {
+            let _ = self.stop(StopKind::QuickStop);
+            return Err(e.into());
+        }
+        Ok(())
+    }
+
+    /// Stop the cycle (every axis stopped and disabled, the devices to INIT); the link is kept
+    /// for another start or the commissioning reads.
+    fn stop(&self, kind: StopKind) -> Result<serde_json::Value, Failure> {
+        let mut s = locked(&self.session);
+        if !matches!(&*s, Session::Running(_)) {
+            return Ok(locked(&self.report).clone().unwrap_or(serde_json::Value::Null));
+        }
+        let Session::Running(r) = std::mem::replace(&mut *s, Session::Closed) else {
+            unreachable!("matched as running above, under the same lock")
+        };
+        let Running { m, recorder } = *r;
+        let (report, link) = m.stop(kind);
+        *s = Session::Idle(link);
+        let summary = stop_summary(report.as_ref(), recorder.max_wake_latency_ns());
+        *locked(&self.report) = Some(summary.clone());
+        Ok(summary)
+    }
+}
+
+/// What a wait waits for.
+enum Until<'a> {
+    /// A condition on the telemetry.
+    Telemetry(&'a (dyn Fn(&Telemetry) -> bool + Sync)),
+    /// An event of the cycle's.
+    Event(&'a (dyn Fn(&EventKind) -> bool + Sync)),
+}
+
+/// A wait that ran out of time, with where the axis stands.
+fn timed_out(
+    what: &str,
+    drive: &DriveRef,
+    a: Option<&ecdrive::AxisTelemetry>,
+    timeout: Duration,
+) -> Failure {
+    Failure::new(
+        Class::Refused,
+        Some(drive),
+        what,
+        format!(
+            "not done within {:.1} s (state {}, statusword 0x{:04X}, mode display {}, error \
+             code 0x{:04X})",
+            timeout.as_secs_f64(),
+            a.and_then(|a| a.state).map_or("none", State::name),
+            a.map_or(0, |a| a.statusword),
+            a.map_or(0, |a| a.mode_display),
+            a.map_or(0, |a| a.error_code),
+        ),
+    )
+}
+
+/// The history entry that ends a wait on axis `axis`, as the failure to raise.
+fn stops_the_wait(e: &HistoryEntry, axis: usize, drive: &DriveRef, what: &str) -> Option<Failure> {
+    let HistoryEvent::Cycle(kind) = &e.event else {
+        return None;
+    };
+    let mine = |a: u16| usize::from(a) == axis;
+    let class = match *kind {
+        EventKind::CommandRefused { axis: a, why } if mine(a) => {
+            return Some(Failure::new(Class::Refused, Some(drive), what, why));
+        }
+        EventKind::Axis {
+            axis: a,
+            event: cia402::Event::Fault { .. },
+        } if mine(a) => Class::Fault,
+        EventKind::FollowingError { axis: a, .. } if mine(a) => Class::Fault,
+        EventKind::HomingFailed { axis: a, .. } if mine(a) => Class::Refused,
+        EventKind::LeftOp { device, .. } if device == drive.position => Class::Bus,
+        EventKind::SegmentLost { .. } => Class::Bus,
+        EventKind::Stopping { .. } => Class::Bus,
+        _ => return None,
+    };
+    let class = match (class, kind) {
+        (_, EventKind::Stopping { reason }) if matches!(
+            reason,
+            ecdrive::StopReason::DriveFault { .. } | ecdrive::StopReason::FollowingError { .. }
+        ) => Class::Fault,
+        (c, _) => c,
+    };
+    Some(Failure::new(class, Some(drive), what, e.text()))
+}
+
+/// What `stop()` returns: how the run ended, its cycle figures, the history's totals.
+fn stop_summary(report: Option<&ecdrive::SessionReport>, max_wake_ns: u64) -> serde_json::Value {
+    let Some(r) = report else {
+        return serde_json::json!({ "shutdown_ok": false });
+    };
+    let cycle = r.cycle.as_ref().map(|c| {
+        serde_json::json!({
+            "end": format!("{:?}", c.end),
+            "cycles": c.cycles,
+            "lost": c.lost,
+            "overruns": c.overruns,
+            "wake_latency_ns": c.timing.wake_latency.summary(),
+            "period_ns": c.timing.period.summary(),
+            "busy_ns": c.timing.busy.summary(),
+            "frames": c.frames,
+        })
+    });
+    let totals: serde_json::Map<String, serde_json::Value> = r
+        .history_totals
+        .iter()
+        .map(|(k, n)| (format!("{k:?}"), serde_json::Value::from(*n)))
+        .collect();
+    serde_json::json!({
+        "shutdown_ok": r.shutdown_ok,
+        "restarts": r.restarts,
+        "cycle": cycle,
+        "max_wake_latency_ns": max_wake_ns,
+        "history_totals": totals,
+        "emergencies": r.emergencies.len(),
+        "drives": r.drive_outcomes().iter().map(|o| serde_json::json!({
+            "position": o.drive.position,
+            "name": o.drive.name,
+            "max_following_error": o.max_following_error,
+            "max_following_error_drive": o.max_following_error_drive,
+            "states": o.states.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
+}
+
+/// The target, the master's configuration and the emulated devices' settings.
+fn setup_of(
+    target: &str,
+    cycle_us: Option<u32>,
+    sim_loss_detection: bool,
+) -> Result<(Target, MasterConfig, SimSettings), Failure> {
+    let cycle = |us: u32| Duration::from_micros(u64::from(us));
+    let is_file = target.ends_with(".toml") || std::path::Path::new(target).is_file();
+    if !is_file {
+        let t: Target = target.parse().map_err(Failure::from)?;
+        let mut sim = SimSettings::default();
+        sim.loss_detection = sim_loss_detection;
+        let cfg = MasterConfig::new(cycle(cycle_us.unwrap_or(1000)));
+        return Ok((t, cfg, sim));
+    }
+    match config::load_any(std::path::Path::new(target)) {
+        Ok(Config::EtherCat(c)) => {
+            let mut master = c.master;
+            if let Some(us) = cycle_us {
+                master.startup.cycle = cycle(us);
+                master.cycle.cycle = cycle(us);
+            }
+            Ok((c.target, master, c.sim))
+        }
+        Ok(Config::CanOpen(c)) => Err(Failure::config(
+            format!("reading {target}"),
+            format!(
+                "{} is a CANopen run: ecdrive.run(\"{target}\") runs it; the Master class \
+                 drives EtherCAT segments",
+                c.source
+            ),
+        )),
+        Err(e) => Err(Failure::config(format!("reading {target}"), e)),
+    }
+}
+
+/// `ecdrive.run`: the run file to its end, its JSON summary.
+pub fn run_file(
+    path: &std::path::Path,
+    interface: Option<&str>,
+    duration: Option<Duration>,
+) -> Result<serde_json::Value, Failure> {
+    let json = |what: &str, v: Result<serde_json::Value, serde_json::Error>| {
+        v.map_err(|e| Failure::config(format!("converting {what}"), e))
+    };
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    match config::load_any(path) {
+        Ok(Config::EtherCat(mut c)) => {
+            if let Some(i) = interface {
+                c.target = i.parse().map_err(Failure::from)?;
+            }
+            let opts = tools::run::RunOptions {
+                duration,
+                ..tools::run::RunOptions::default()
+            };
+            let r = tools::run::run(&c, &opts, &stop, &mut |_| {}).map_err(Failure::from)?;
+            json("the run's report", serde_json::to_value(&r))
+        }
+        Ok(Config::CanOpen(mut c)) => {
+            use ecdrive_cli::app::canopen::run::{CanRunOptions, run};
+            use ecdrive_cli::app::config::canopen::CanTarget;
+            if let Some(i) = interface {
+                c.target = if i == "can-sim" {
+                    CanTarget::Sim
+                } else {
+                    CanTarget::Bus(i.parse().map_err(|e| {
+                        Failure::config(format!("reading the interface {i:?}"), e)
+                    })?)
+                };
+            }
+            let opts = CanRunOptions {
+                duration,
+                record: None,
+                candump: None,
+            };
+            let r = run(&c, &opts, &stop).map_err(|e| {
+                let class = if e.to_string().contains("abort") {
+                    Class::Refused
+                } else {
+                    Class::Bus
+                };
+                Failure::new(class, None, "the CANopen run", e.to_string())
+            })?;
+            json("the run's report", serde_json::to_value(&r))
+        }
+        Err(e) => Err(Failure::config(format!("reading {}", path.display()), e)),
+    }
+}
+
+/// An EtherCAT master: start-up to OP, the cycle in Rust, the drives as [`Drive`]s.
+///
+/// `Master(target, cycle_us=1000, *, start=True, record=True, op_timeout=15.0,
+/// sim_loss_detection=True)`. `target` is `"sim:mr-j4-tm,bdhde"` (emulated drives
+/// in-process, no root), a network interface (`"eth1"`, raw socket: root or CAP_NET_RAW), or a
+/// run file (`.toml`: its target, `[sim]`, drives, mappings and cycle; `cycle_us` overrides its
+/// cycle). With `start=False` the cycle waits for `start()`; meanwhile the commissioning reads
+/// (`slaves`, `pdos`, `sdos`, `states`) run on the link.
+#[pyclass(frozen, subclass, module = "ecdrive._ecdrive")]
+pub struct Master {
+    inner: Arc<Inner>,
+}
+
+#[pymethods]
+impl Master {
+    #[new]
+    #[pyo3(signature = (target, cycle_us=None, *, start=true, record=true, op_timeout=15.0, sim_loss_detection=true))]
+    fn new(
+        py: Python<'_>,
+        target: String,
+        cycle_us: Option<u32>,
+        start: bool,
+        record: bool,
+        op_timeout: f64,
+        sim_loss_detection: bool,
+    ) -> PyResult<Self> {
+        let op_timeout = values::seconds(op_timeout)?;
+        let inner = py.detach(move || -> Result<Arc<Inner>, Failure> {
+            let (t, cfg, sim) = setup_of(&target, cycle_us, sim_loss_detection)?;
+            let link = t.open_with(&sim).map_err(Failure::from)?;
+            let inner = Arc::new(Inner {
+                setup: Setup {
+                    target,
+                    cfg,
+                    op_timeout,
+                    record,
+                },
+                session: Mutex::new(Session::Idle(link)),
+                found: Mutex::new(Found::default()),
+                report: Mutex::new(None),
+            });
+            if start {
+                inner.start()?;
+            }
+            Ok(inner)
+        })?;
+        Ok(Self { inner })
+    }
+
+    /// Start the cycle (start-up to OP); nothing if it runs.
+    fn start(&self, py: Python<'_>) -> PyResult<()> {
+        let inner = self.inner.clone();
+        Ok(py.detach(move || inner.start())?)
+    }
+
+    /// Stop the cycle: every axis ramped down (or quick stopped with `quick=True`) and
+    /// disabled, the devices to INIT. Returns the run's summary (its cycle figures, wake-up
+    /// latency, history totals, each drive's largest following error). The master can be
+    /// started again.
+    #[pyo3(signature = (*, quick=false))]
+    fn stop(&self, py: Python<'_>, quick: bool) -> PyResult<Py<PyAny>> {
+        let inner = self.inner.clone();
+        let kind = if quick {
+            StopKind::QuickStop
+        } else {
+            StopKind::Ramp
+        };
+        let summary = py.detach(move || inner.stop(kind))?;
+        values::json_to_py(py, &summary)
+    }
+
+    /// Stop (as `stop()`) and release the link; the master cannot be used afterwards.
+    fn close(&self, py: Python<'_>) -> PyResult<()> {
+        let inner = self.inner.clone();
+        py.detach(move || -> Result<(), Failure> {
+            inner.stop(StopKind::Ramp)?;
+            *locked(&inner.session) = Session::Closed;
+            Ok(())
+        })?;
+        Ok(())
+    }
+
+    fn __enter__(slf: Py<Self>) -> Py<Self> {
+        slf
+    }
+
+    #[pyo3(signature = (*_args))]
+    fn __exit__(&self, py: Python<'_>, _args: &Bound<'_, pyo3::types::PyTuple>) -> PyResult<bool> {
+        self.close(py)?;
+        Ok(false)
+    }
+
+    /// Whether the cycle runs.
+    #[getter]
+    fn running(&self) -> bool {
+        matches!(&*locked(&self.inner.session), Session::Running(r) if r.m.is_running())
+    }
+
+    /// The target as given.
+    #[getter]
+    fn target(&self) -> String {
+        self.inner.setup.target.clone()
+    }
+
+    /// The cycle time, µs.
+    #[getter]
+    fn cycle_us(&self) -> u64 {
+        self.inner.setup.cfg.cycle.cycle.as_micros() as u64
+    }
+
+    /// Every device of the segment as the last start found it, in segment order, with its AL
+    /// state now.
+    #[getter]
+    fn devices(&self) -> Vec<Device> {
+        let found = locked(&self.inner.found).clone();
+        let (drive_states, io_states) = self
+            .inner
+            .running("reading the states", |r| {
+                let t = r.m.telemetry();
+                Ok((
+                    t.axes.iter().map(|a| a.al_state).collect::<Vec<_>>(),
+                    t.io.iter().map(|i| (i.position, i.al_state)).collect::<Vec<_>>(),
+                ))
+            })
+            .unwrap_or_default();
+        let mut out: Vec<Device> = found
+            .drives
+            .iter()
+            .enumerate()
+            .map(|(i, d)| Device {
+                position: d.drive.position,
+                name: d.drive.name.clone(),
+                vendor_id: d.info.vendor_id,
+                product_code: d.info.product_code,
+                revision: d.info.revision,
+                serial: d.info.serial,
+                alias: d.info.alias,
+                profile: Some(d.profile.to_string()),
+                state: state_name(drive_states.get(i).copied()),
+                is_drive: true,
+            })
+            .collect();
+        out.extend(found.io.iter().map(|d| Device {
+            position: d.device.position,
+            name: d.device.name.clone(),
+            vendor_id: d.info.vendor_id,
+            product_code: d.info.product_code,
+            revision: d.info.revision,
+            serial: d.info.serial,
+            alias: d.info.alias,
+            profile: d.info.profile.map(str::to_string),
+            state: state_name(
+                io_states
+                    .iter()
+                    .find(|(p, _)| *p == d.device.position)
+                    .map(|(_, s)| *s),
+            ),
+            is_drive: false,
+        }));
+        out.sort_by_key(|d| d.position);
+        out
+    }
+
+    /// The drives, in segment order.
+    #[getter]
+    fn drives(&self) -> Vec<Drive> {
+        let found = locked(&self.inner.found).clone();
+        (0..found.drives.len())
+            .filter_map(|i| self.drive_at(&found, i))
+            .collect()
+    }
+
+    /// The drive at segment position `which` (an int), or by name (`"BDHDE"`; the first of
+    /// that name).
+    fn drive(&self, which: &Bound<'_, PyAny>) -> PyResult<Drive> {
+        let found = locked(&self.inner.found).clone();
+        let axis = if let Ok(p) = which.extract::<u16>() {
+            found.drives.iter().position(|d| d.drive.position == p)
+        } else if let Ok(n) = which.extract::<String>() {
+            found
+                .drives
+                .iter()
+                .position(|d| d.drive.name.eq_ignore_ascii_case(&n))
+        } else {
+            None
+        };
+        let names: Vec<String> = found.drives.iter().map(|d| d.drive.to_string()).collect();
+        axis.and_then(|a| self.drive_at(&found, a)).ok_or_else(|| {
+            Failure::config(
+                format!("selecting the drive {which}"),
+                format!(
+                    "no such drive (the drives: {})",
+                    if names.is_empty() {
+                        "none; the master has not started".to_string()
+                    } else {
+                        names.join(", ")
+                    }
+                ),
+            )
+            .into()
+        })
+    }
+
+    /// The cycle's figures now: cycle number, working counter (and the expected one), lost
+    /// cycles, overruns, the last cycle's wake-up latency and exchange time, whether every
+    /// device is in OP, the session's phase.
+    #[getter]
+    fn cycle(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let c = self
+            .inner
+            .running("reading the cycle", |r| Ok(r.m.telemetry().cycle))?;
+        values::to_py(py, "the cycle's figures", &c)
+    }
+
+    /// The largest wake-up latency of any cycle since the master started, µs.
+    #[getter]
+    fn max_wake_latency_us(&self) -> PyResult<f64> {
+        let ns = self
+            .inner
+            .running("reading the latency", |r| Ok(r.recorder.max_wake_latency_ns()))?;
+        Ok(ns as f64 / 1000.0)
+    }
+
+    /// Every cycle's samples since the last call, one row per axis and cycle with a reply, as
+    /// columns: a dict of lists (the package turns them into numpy arrays when numpy is
+    /// installed). Columns: cycle, time_ns, axis, wake_latency_ns, exchange_ns, wkc, mode,
+    /// statusword, position_demand, position, velocity_demand, velocity, torque_demand,
+    /// torque, following_error (counts and the drive's units; None where not mapped).
+    fn record(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let cols = self
+            .inner
+            .running("reading the recording", |r| Ok(r.recorder.take()))?;
+        cols.into_py(py)
+    }
+
+    /// The history (errors, warnings, events), oldest first, each entry as `ecdrive run
+    /// --json` gives it (its event and its text). With `since` (a sequence number), only the
+    /// entries from it on.
+    #[pyo3(signature = (since=0))]
+    fn history(&self, py: Python<'_>, since: u64) -> PyResult<Py<PyAny>> {
+        let entries = self
+            .inner
+            .running("reading the history", |r| Ok(r.m.history_since(since).entries))?;
+        values::to_py(py, "the history", &entries)
+    }
+
+    /// `ecdrive slaves --json`: every device as discovery finds it. Discovers the segment
+    /// afresh (every device to INIT, then PRE-OP), so only while the cycle does not run.
+    #[pyo3(signature = (*, verbose=false))]
+    fn slaves(&self, py: Python<'_>, verbose: bool) -> PyResult<Py<PyAny>> {
+        let r = self.tool(py, "slaves", move |b| tools::slaves(b, verbose))?;
+        values::to_py(py, "the devices", &r)
+    }
+
+    /// `ecdrive pdos -p POSITION --json`: the device's SyncManagers, PDO assignment and
+    /// mapping as it reports them (only while the cycle does not run).
+    fn pdos(&self, py: Python<'_>, position: u16) -> PyResult<Py<PyAny>> {
+        let r = self.tool(py, "pdos", move |b| tools::pdos(b, position))?;
+        values::to_py(py, "the PDO configuration", &r)
+    }
+
+    /// `ecdrive sdos -p POSITION --json`: the device's object dictionary from its SDO
+    /// information, with the values when `values=True` (only while the cycle does not run).
+    #[pyo3(signature = (position, *, values=false))]
+    fn sdos(&self, py: Python<'_>, position: u16, values: bool) -> PyResult<Py<PyAny>> {
+        let r = self.tool(py, "sdos", move |b| {
+            tools::sdos(b, position, values, &mut |_, _| {})
+        })?;
+        values::to_py(py, "the object dictionary", &r)
+    }
+
+    /// `ecdrive states -p POSITION STATE --json`: take the device (every device with
+    /// `position=None`) to INIT, PREOP, SAFEOP, OP or BOOT (only while the cycle does not
+    /// run: `start()` takes the drives to OP and runs them).
+    #[pyo3(signature = (position, state))]
+    fn states(&self, py: Python<'_>, position: Option<u16>, state: &str) -> PyResult<Py<PyAny>> {
+        let target = ecdrive::ec::AlState::parse(state).ok_or_else(|| {
+            Failure::config(
+                format!("reading the state {state:?}"),
+                "use INIT, PREOP, SAFEOP, OP or BOOT",
+            )
+        })?;
+        let mut opts = tools::StatesOptions::new(target);
+        opts.position = position;
+        opts.cycle = self.inner.setup.cfg.cycle.cycle;
+        let r = self.tool(py, "states", move |b| tools::states_timed(b, &opts))?;
+        values::to_py(py, "the state changes", &r)
+    }
+
+    fn __repr__(&self) -> String {
+        let state = match &*locked(&self.inner.session) {
+            Session::Idle(_) => "idle",
+            Session::Running(_) => "running",
+            Session::Closed => "closed",
+        };
+        format!(
+            "ecdrive.Master({:?}, cycle_us={}) [{state}]",
+            self.inner.setup.target,
+            self.cycle_us()
+        )
+    }
+}
+
+impl Master {
+    fn drive_at(&self, found: &Found, axis: usize) -> Option<Drive> {
+        let d = found.drives.get(axis)?;
+        Some(Drive {
+            inner: self.inner.clone(),
+            axis,
+            drive: d.drive.clone(),
+            dictionary: ecdrive::drives::by_identity(d.info.vendor_id, d.info.product_code)
+                .map(|p| p.dictionary),
+        })
+    }
+
+    /// A commissioning tool on the idle link, as the CLI runs it.
+    fn tool<R: Send + 'static>(
+        &self,
+        py: Python<'_>,
+        what: &str,
+        f: impl FnOnce(&mut ecdrive::master::bus::Bus<'_, ToolLink>) -> Result<R, ecdrive::MasterError>
+        + Send
+        + 'static,
+    ) -> PyResult<R> {
+        let inner = self.inner.clone();
+        let what = what.to_string();
+        Ok(py.detach(move || -> Result<R, Failure> {
+            let mut s = locked(&inner.session);
+            let link = match std::mem::replace(&mut *s, Session::Closed) {
+                Session::Idle(l) => l,
+                other => {
+                    *s = other;
+                    return Err(Failure::new(
+                        Class::Bus,
+                        None,
+                        what.as_str(),
+                        "the cycle runs: the commissioning reads discover the segment afresh \
+                         (every device to INIT), as the `ecdrive` commands do; stop() first, \
+                         or use devices, Drive.sdo_read and Drive.sdo_write while it runs",
+                    ));
+                }
+            };
+            // The link comes back whatever the tool's outcome.
+            let (r, link) = match run_session(link, tools::tool_bus_options(), f) {
+                Ok((r, link)) => (r.map_err(Failure::from), link),
+                Err((e, link)) => (
+                    Err(Failure::new(Class::Bus, None, "opening the bus", e.to_string())),
+                    link,
+                ),
+            };
+            *s = Session::Idle(link);
+            r
+        })?)
+    }
+}
+
+fn state_name(al: Option<u8>) -> String {
+    al.map_or_else(|| "unknown".to_string(), al_state_name)
+}
+
+/// A device of the segment, as start-up found it.
+#[pyclass(frozen, get_all, module = "ecdrive._ecdrive")]
+#[derive(Clone)]
+pub struct Device {
+    /// Position on the segment (0 = first).
+    position: u16,
+    /// Name (the profile's, or the SII's for a device no profile matches).
+    name: String,
+    vendor_id: u32,
+    product_code: u32,
+    revision: u32,
+    serial: u32,
+    alias: u16,
+    /// The drive profile ecdrive runs it with (None: not a drive).
+    profile: Option<String>,
+    /// AL state when the list was made: INIT, PRE-OP, SAFE-OP, OP (+ERR).
+    state: String,
+    /// Whether ecdrive drives it (a CiA 402 axis).
+    is_drive: bool,
+}
+
+#[pymethods]
+impl Device {
+    fn __repr__(&self) -> String {
+        format!(
+            "Device(position={}, name={:?}, vendor_id=0x{:08X}, product_code=0x{:08X}, \
+             revision=0x{:08X}, state={:?})",
+            self.position,
+            self.name,
+            self.vendor_id,
+            self.product_code,
+            self.revision,
+            self.state
+        )
+    }
+}
+
+/// One drive of a running master: its telemetry as properties, its commands as methods that
+/// wait for their outcome (releasing the GIL meanwhile).
+#[pyclass(frozen, module = "ecdrive._ecdrive")]
+pub struct Drive {
+    inner: Arc<Inner>,
+    axis: usize,
+    drive: DriveRef,
+    dictionary: Option<&'static [ecdrive::od::ObjectDesc]>,
+}
+
+impl Drive {
+    /// A look at this axis's telemetry.
+    fn look<R>(&self, f: impl FnOnce(&ecdrive::AxisTelemetry) -> R) -> PyResult<R> {
+        Ok(self.inner.running("reading the drive", |r| {
+            r.m.telemetry()
+                .axes
+                .get(self.axis)
+                .map(f)
+                .ok_or_else(|| not_running("reading the drive"))
+        })?)
+    }
+
+    /// Send `c`, then wait until `done` (GIL released).
+    fn command_and_wait(
+        &self,
+        py: Python<'_>,
+        what: String,
+        c: Command,
+        timeout: f64,
+        done: impl Fn(&ecdrive::AxisTelemetry) -> bool + Send + Sync,
+    ) -> PyResult<()> {
+        let timeout = values::seconds(timeout)?;
+        let axis = self.axis;
+        Ok(py.detach(|| -> Result<(), Failure> {
+            let from = self
+                .inner
+                .command(&what, c)
+                .map_err(|f| with_drive(f, &self.drive))?;
+            let done = |t: &Telemetry| t.axes.get(axis).is_some_and(&done);
+            self.inner
+                .wait(&what, &self.drive, axis, from, timeout, Until::Telemetry(&done))
+        })?)
+    }
+
+    fn data_type(&self, address: ObjectAddress, given: Option<&str>) -> PyResult<Option<DataType>> {
+        match given {
+            Some(t) => values::data_type(t).map(Some),
+            None => Ok(self.dictionary.and_then(|d| Dictionary::new(d).data_type(address))),
+        }
+    }
+
+    fn setpoint(&self, what: &str, needs: &[RunMode], v: f64) -> PyResult<()> {
+        let mode = self.look(|a| RunMode::of(OperationMode::from_i8(a.mode)))?;
+        if !mode.is_some_and(|m| needs.contains(&m)) {
+            let names: Vec<&str> = needs.iter().map(|m| m.name()).collect();
+            return Err(Failure::new(
+                Class::Refused,
+                Some(&self.drive),
+                what,
+                format!(
+                    "needs the axis in {} (it runs {}): set `mode` first",
+                    names.join(" or "),
+                    mode.map_or("no mode ecdrive runs", RunMode::name)
+                ),
+            )
+            .into());
+        }
+        self.inner
+            .command(what, Command::Setpoint(self.axis as u16, v))
+            .map_err(|f| with_drive(f, &self.drive))?;
+        Ok(())
+    }
+}
+
+fn with_drive(mut f: Failure, d: &DriveRef) -> Failure {
+    if f.drive.is_none() {
+        f = Failure {
+            drive: Some((d.position, d.name.clone())),
+            message: format!("{d}: {}", f.message),
+            ..f
+        };
+    }
+    f
+}
+
+#[pymethods]
+impl Drive {
+    /// The drive's position on the segment.
+    #[getter]
+    fn slave_position(&self) -> u16 {
+        self.drive.position
+    }
+
+    /// The drive's name (its profile's).
+    #[getter]
+    fn name(&self) -> String {
+        self.drive.name.clone()
+    }
+
+    /// Its axis index (0 = the first drive).
+    #[getter]
+    fn axis(&self) -> usize {
+        self.axis
+    }
+
+    /// Actual position (0x6064, unwrapped), counts.
+    #[getter]
+    fn position(&self) -> PyResult<i64> {
+        self.look(|a| a.position_actual)
+    }
+
+    /// Actual velocity (0x606C), the drive's units.
+    #[getter]
+    fn velocity(&self) -> PyResult<i32> {
+        self.look(|a| a.velocity_actual)
+    }
+
+    /// Actual torque (0x6077), the drive's units (‰ of rated torque for most drives).
+    #[getter]
+    fn torque(&self) -> PyResult<i16> {
+        self.look(|a| a.torque_actual)
+    }
+
+    /// Statusword (0x6041) as received.
+    #[getter]
+    fn statusword(&self) -> PyResult<u16> {
+        self.look(|a| a.statusword)
+    }
+
+    /// Controlword (0x6040) as sent.
+    #[getter]
+    fn controlword(&self) -> PyResult<u16> {
+        self.look(|a| a.controlword)
+    }
+
+    /// CiA 402 state ("Operation enabled", "Switch on disabled", "Fault", …), None when the
+    /// statusword decodes to no state (below OP).
+    #[getter]
+    fn state(&self) -> PyResult<Option<&'static str>> {
+        self.look(|a| a.state.map(State::name))
+    }
+
+    /// Following error as the master computes it (the demand the drive took − the actual
+    /// position), counts.
+    #[getter]
+    fn following_error(&self) -> PyResult<i64> {
+        self.look(|a| a.following_error)
+    }
+
+    /// Largest |following error| while energised in csp, counts.
+    #[getter]
+    fn max_following_error(&self) -> PyResult<i64> {
+        self.look(|a| a.max_following_error)
+    }
+
+    /// Error code (0x603F), 0 if none or not mapped.
+    #[getter]
+    fn error_code(&self) -> PyResult<u16> {
+        self.look(|a| a.error_code)
+    }
+
+    /// Position demand (unwrapped), counts.
+    #[getter]
+    fn target_position(&self) -> PyResult<i64> {
+        self.look(|a| a.position_demand)
+    }
+
+    /// Stream a position set-point (csp, ip): the cycle takes it at its next turn.
+    #[setter]
+    fn set_target_position(&self, v: f64) -> PyResult<()> {
+        self.setpoint("setting target_position", &[RunMode::Csp, RunMode::Ip], v)
+    }
+
+    /// Velocity demand, the drive's units.
+    #[getter]
+    fn target_velocity(&self) -> PyResult<i32> {
+        self.look(|a| a.velocity_demand)
+    }
+
+    /// Stream a velocity set-point (csv), counts/s: the cycle takes it at its next turn.
+    #[setter]
+    fn set_target_velocity(&self, v: f64) -> PyResult<()> {
+        self.setpoint("setting target_velocity", &[RunMode::Csv], v)
+    }
+
+    /// Torque demand, the drive's units.
+    #[getter]
+    fn target_torque(&self) -> PyResult<i16> {
+        self.look(|a| a.torque_demand)
+    }
+
+    /// Stream a torque set-point (cst), the drive's units: the cycle takes it at its next
+    /// turn.
+    #[setter]
+    fn set_target_torque(&self, v: f64) -> PyResult<()> {
+        self.setpoint("setting target_torque", &[RunMode::Cst], v)
+    }
+
+    /// The mode the axis runs ("csp", "csv", "cst", "pp", "pv", "tq", "ip", "hm" while
+    /// homing), as sent in 0x6060.
+    #[getter]
+    fn mode(&self) -> PyResult<String> {
+        self.look(|a| {
+            let m = OperationMode::from_i8(a.mode);
+            RunMode::of(m).map_or_else(|| format!("{m:?}"), |r| r.name().to_string())
+        })
+    }
+
+    /// Switch the mode while enabled, without a jump (the new mode starts from the actual
+    /// values); waits until the drive shows it (0x6061), at most 2 s.
+    #[setter]
+    fn set_mode(&self, py: Python<'_>, mode: &str) -> PyResult<()> {
+        let m: RunMode = mode
+            .parse()
+            .map_err(|e| Failure::config(format!("reading the mode {mode:?}"), e))?;
+        let code = m.operation_mode().as_i8();
+        self.command_and_wait(
+            py,
+            format!("switching to {}", m.name()),
+            Command::Mode(Axes::One(self.axis as u16), m),
+            2.0,
+            move |a| a.mode == code && (a.mode_display == code || a.mode_display == 0),
+        )
+    }
+
+    /// Enable (Operation enabled); waits for it.
+    #[pyo3(signature = (timeout=5.0))]
+    fn enable(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
+        self.command_and_wait(
+            py,
+            "enabling".into(),
+            Command::Enable(Axes::One(self.axis as u16)),
+            timeout,
+            |a| a.state == Some(State::OperationEnabled),
+        )
+    }
+
+    /// Disable (Switch on disabled, without a ramp); waits for it.
+    #[pyo3(signature = (timeout=5.0))]
+    fn disable(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
+        self.command_and_wait(
+            py,
+            "disabling".into(),
+            Command::Disable(Axes::One(self.axis as u16)),
+            timeout,
+            |a| {
+                matches!(
+                    a.state,
+                    Some(State::SwitchOnDisabled | State::ReadyToSwitchOn)
+                )
+            },
+        )
+    }
+
+    /// Quick stop (the drive's quick-stop ramp); waits until it is done.
+    #[pyo3(signature = (timeout=5.0))]
+    fn quick_stop(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
+        self.command_and_wait(
+            py,
+            "quick stop".into(),
+            Command::QuickStop(Axes::One(self.axis as u16)),
+            timeout,
+            |a| a.state != Some(State::OperationEnabled),
+        )
+    }
+
+    /// Reset a fault (a rising edge on controlword bit 7); waits until the drive leaves
+    /// Fault.
+    #[pyo3(signature = (timeout=5.0))]
+    fn fault_reset(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
+        self.command_and_wait(
+            py,
+            "resetting the fault".into(),
+            Command::FaultReset(Axes::One(self.axis as u16)),
+            timeout,
+            |a| !matches!(a.state, Some(State::Fault | State::FaultReactionActive)),
+        )
+    }
+
+    /// Home with `method` (written to 0x6098 first; None: the method the drive holds), in
+    /// homing mode, then back to the axis's mode; waits until homed. The axis must be
+    /// enabled. A failed homing raises DriveRefused (the axes are stopped).
+    #[pyo3(signature = (method=None, timeout=30.0))]
+    fn home(&self, py: Python<'_>, method: Option<i8>, timeout: f64) -> PyResult<()> {
+        let method = match method {
+            Some(m) => {
+                let a = ObjectAddress::new(0x6098, 0);
+                self.download(py, a, m.to_le_bytes().to_vec())?;
+                m
+            }
+            None => {
+                let b = self.upload(py, ObjectAddress::new(0x6098, 0))?;
+                b.first().map_or(0, |b| *b as i8)
+            }
+        };
+        self.command_and_wait(
+            py,
+            format!("homing (method {method})"),
+            Command::Home(Axes::One(self.axis as u16), method),
+            timeout,
+            move |a| matches!(a.task, ecdrive::master::DriveTask::Homed { method: m } if m == method),
+        )
+    }
+
+    /// Move to `target` (counts) in csp, planned by the cycle (trapezoidal: at most
+    /// `velocity` counts/s and `acceleration` counts/s²); the axis switches to csp first if
+    /// it runs another mode. Waits until the set-point arrived.
+    #[pyo3(signature = (target, velocity, acceleration, timeout=10.0))]
+    fn move_to(
+        &self,
+        py: Python<'_>,
+        target: f64,
+        velocity: f64,
+        acceleration: f64,
+        timeout: f64,
+    ) -> PyResult<()> {
+        let timeout = values::seconds(timeout)?;
+        let axis = self.axis;
+        let what = format!("moving to {target}");
+        Ok(py.detach(|| -> Result<(), Failure> {
+            let c = Command::Move {
+                axis: axis as u16,
+                to: target,
+                velocity,
+                acceleration,
+            };
+            let from = self
+                .inner
+                .command(&what, c)
+                .map_err(|f| with_drive(f, &self.drive))?;
+            // Done when the cycle says the move (run as a one-step program) is done.
+            let done = |k: &EventKind| {
+                matches!(*k, EventKind::ProgramDone { axis: a } if usize::from(a) == axis)
+            };
+            self.inner
+                .wait(&what, &self.drive, axis, from, timeout, Until::Event(&done))
+        })?)
+    }
+
+    /// Move by `distance` (counts) from the position demand, as `move_to`.
+    #[pyo3(signature = (distance, velocity, acceleration, timeout=10.0))]
+    fn move_by(
+        &self,
+        py: Python<'_>,
+        distance: f64,
+        velocity: f64,
+        acceleration: f64,
+        timeout: f64,
+    ) -> PyResult<()> {
+        let from = self.look(|a| a.position_demand)? as f64;
+        self.move_to(py, from + distance, velocity, acceleration, timeout)
+    }
+
+    /// Read object `index`:`sub` over CoE while the cycle runs: an int, float or str as the
+    /// drive's dictionary types it (or as `type` says: "u32", "i16", "string", …), bytes when
+    /// the type is not known.
+    #[pyo3(signature = (index, sub=0, r#type=None))]
+    fn sdo_read(
+        &self,
+        py: Python<'_>,
+        index: u16,
+        sub: u8,
+        r#type: Option<&str>,
+    ) -> PyResult<Py<PyAny>> {
+        let a = ObjectAddress::new(index, sub);
+        let dt = self.data_type(a, r#type)?;
+        let bytes = self.upload(py, a)?;
+        values::sdo_to_py(py, dt, &bytes)
+    }
+
+    /// Write `value` to object `index`:`sub` over CoE while the cycle runs, encoded as the
+    /// drive's dictionary types it (or as `type` says); bytes are written as they are.
+    #[pyo3(signature = (index, sub, value, r#type=None))]
+    fn sdo_write(
+        &self,
+        py: Python<'_>,
+        index: u16,
+        sub: u8,
+        value: &Bound<'_, PyAny>,
+        r#type: Option<&str>,
+    ) -> PyResult<()> {
+        let a = ObjectAddress::new(index, sub);
+        let dt = self.data_type(a, r#type)?;
+        let data = values::py_to_sdo(value, dt)?;
+        self.download(py, a, data)
+    }
+
+    /// Everything the telemetry says of the axis, as a dict.
+    fn telemetry(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
+        let t = self.look(|a| *a)?;
+        let d = values::to_py(py, "the telemetry", &t)?;
+        let state = t.state.map(State::name);
+        d.bind(py).cast::<PyDict>()?.set_item("state", state)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Drive(axis={}, slave_position={}, name={:?})",
+            self.axis, self.drive.position, self.drive.name
+        )
+    }
+}
+
+impl Drive {
+    fn upload(&self, py: Python<'_>, a: ObjectAddress) -> PyResult<Vec<u8>> {
+        let inner = self.inner.clone();
+        let position = self.drive.position;
+        Ok(py.detach(move || -> Result<Vec<u8>, Failure> {
+            let req = inner.running("reading an object", |r| Ok(r.m.sdo_requester()))?;
+            req.upload(position, a).map_err(Failure::from)
+        })?)
+    }
+
+    fn download(&self, py: Python<'_>, a: ObjectAddress, data: Vec<u8>) -> PyResult<()> {
+        let inner = self.inner.clone();
+        let position = self.drive.position;
+        Ok(py.detach(move || -> Result<(), Failure> {
+            let req = inner.running("writing an object", |r| Ok(r.m.sdo_requester()))?;
+            req.download(position, a, &data).map_err(Failure::from)
+        })?)
+    }
+}
+
