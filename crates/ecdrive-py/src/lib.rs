@@ -8,12 +8,19 @@
 
 use pyo3::prelude::*;
 
+mod audit;
 mod errors;
 mod master;
 mod record;
 mod values;
 
 pub use errors::{BusError, ConfigError, DriveFault, DriveRefused, Error};
+
+/// The extension's allocator: the system's, counting the allocations of a thread inside an
+/// open window (the cycle audit, `Master(..., audit=True)`); outside a window it only checks a
+/// thread-local flag.
+#[global_allocator]
+static ALLOC: ecdrive::rt::audit::CountingAlloc = ecdrive::rt::audit::CountingAlloc;
 
 /// Run a run file (`ecdrive run FILE`) to its end and return the run's JSON summary (what
 /// `ecdrive run --json` prints) as a dict. EtherCAT and CANopen run files alike; `interface`

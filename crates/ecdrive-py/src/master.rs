@@ -5,6 +5,7 @@
 //! that waits releases the GIL, and holds the master's lock only for a look at a time, so other
 //! Python threads (and other calls on the same master) go on meanwhile.
 
+use crate::audit::Audit;
 use crate::errors::{Class, Failure};
 use crate::record::Recorder;
 use crate::values;
@@ -32,12 +33,14 @@ struct Setup {
     cfg: MasterConfig,
     op_timeout: Duration,
     record: bool,
+    audit: bool,
 }
 
 /// A master run: the Rust master and its recording.
 struct Running {
     m: EcMaster,
     recorder: Recorder,
+    audit: Option<Arc<Audit>>,
 }
 
 enum Session {
@@ -120,17 +123,34 @@ impl Inner {
         let deadline = Instant::now() + timeout;
         let mut seq = from.1;
         let mut seen = false;
+        // A failure that stops the axes is raised once they are stopped and disabled (the
+        // cycle ends after that), within the stop's own time and a margin.
+        let mut failed: Option<(Failure, Instant)> = None;
         loop {
             let outcome = self.running(what, |r| {
                 let slice = r.m.history_since(seq);
                 seq = slice.next;
                 for e in &slice.entries {
-                    if let Some(f) = stops_the_wait(e, axis, drive, what) {
-                        return Err(f);
+                    if failed.is_none()
+                        && let Some(f) = stops_the_wait(e, axis, drive, what)
+                    {
+                        let f = another_drives_fault(&r.m, e, drive, what).unwrap_or(f);
+                        failed = Some((f, Instant::now() + STOP_MARGIN));
                     }
                     if let (Until::Event(f), HistoryEvent::Cycle(k)) = (&until, &e.event) {
                         seen |= f(k);
                     }
+                }
+                let t = r.m.telemetry();
+                let all_off = t
+                    .axes
+                    .iter()
+                    .all(|a| a.state != Some(State::OperationEnabled));
+                if let Some((f, by)) = &failed {
+                    if !r.m.is_running() || all_off || Instant::now() > *by {
+                        return Err(f.clone());
+                    }
+                    return Ok(false);
                 }
                 if seen {
                     return Ok(true);
@@ -182,6 +202,10 @@ impl Inner {
             Failure::new(Class::Bus, None, "starting the recording thread", e.to_string())
         })?;
         cfg.record = Some(tx);
+        let audit = self.setup.audit.then(|| Arc::new(Audit::default()));
+        if let Some(a) = &audit {
+            cfg.hooks = Some(a.clone());
+        }
         let mut m = match EcMaster::start(link, cfg) {
             Ok(m) => m,
             Err(f) => {
@@ -193,8 +217,18 @@ impl Inner {
             drives: m.drives().to_vec(),
             io: m.io().to_vec(),
         };
+        recorder.set_velocity_scales(
+            m.drives()
+                .iter()
+                .map(|d| d.units.velocity_position_per_s())
+                .collect(),
+        );
         let op = m.wait_until("OP", self.setup.op_timeout, |t| t.cycle.all_op);
-        *s = Session::Running(Box::new(Running { m, recorder }));
+        *s = Session::Running(Box::new(Running {
+            m,
+            recorder,
+            audit,
+        }));
         drop(s);
         if let Err(e) = op {
             let _ = self.stop(StopKind::QuickStop);
@@ -213,14 +247,28 @@ impl Inner {
         let Session::Running(r) = std::mem::replace(&mut *s, Session::Closed) else {
             unreachable!("matched as running above, under the same lock")
         };
-        let Running { m, recorder } = *r;
+        let Running {
+            m,
+            recorder,
+            audit,
+        } = *r;
         let (report, link) = m.stop(kind);
         *s = Session::Idle(link);
-        let summary = stop_summary(report.as_ref(), recorder.max_wake_latency_ns());
+        let mut summary = stop_summary(report.as_ref(), recorder.max_wake_latency_ns());
+        if let (Some(a), Some(o)) = (audit, summary.as_object_mut()) {
+            o.insert(
+                "audit".into(),
+                serde_json::to_value(a.result()).unwrap_or_default(),
+            );
+        }
         *locked(&self.report) = Some(summary.clone());
         Ok(summary)
     }
 }
+
+/// How long a wait that ended in a stop waits for the axes to be disabled: the cycle's stop
+/// timeout (3 s) and a margin.
+const STOP_MARGIN: Duration = Duration::from_secs(5);
 
 /// What a wait waits for.
 enum Until<'a> {
@@ -282,6 +330,43 @@ fn stops_the_wait(e: &HistoryEntry, axis: usize, drive: &DriveRef, what: &str) -
         (c, _) => c,
     };
     Some(Failure::new(class, Some(drive), what, e.text()))
+}
+
+/// The wait of `drive` ended because another drive faulted (every axis is being stopped):
+/// that drive's fault, in the words of its alarm table, with what was waiting.
+fn another_drives_fault(
+    m: &EcMaster,
+    e: &HistoryEntry,
+    drive: &DriveRef,
+    what: &str,
+) -> Option<Failure> {
+    let HistoryEvent::Cycle(EventKind::Stopping {
+        reason: ecdrive::StopReason::DriveFault { axis },
+    }) = e.event
+    else {
+        return None;
+    };
+    let faulted = m.drives().get(usize::from(axis))?.drive.clone();
+    let said = last_fault(&m.history(), usize::from(axis)).map(|e| e.text());
+    Some(Failure::new(
+        Class::Fault,
+        Some(&faulted),
+        format!("while {drive} was {what}"),
+        format!(
+            "the drive faulted{}; every axis is stopped and disabled",
+            said.map(|s| format!(": {s}")).unwrap_or_default()
+        ),
+    ))
+}
+
+/// The last fault of axis `axis` in `history`.
+fn last_fault(history: &[HistoryEntry], axis: usize) -> Option<&HistoryEntry> {
+    history.iter().rev().find(|e| {
+        matches!(e.event, HistoryEvent::Cycle(EventKind::Axis {
+            axis: a,
+            event: cia402::Event::Fault { .. },
+        }) if usize::from(a) == axis)
+    })
 }
 
 /// What `stop()` returns: how the run ended, its cycle figures, the history's totals.
@@ -415,11 +500,20 @@ pub fn run_file(
 /// An EtherCAT master: start-up to OP, the cycle in Rust, the drives as [`Drive`]s.
 ///
 /// `Master(target, cycle_us=1000, *, start=True, record=True, op_timeout=15.0,
-/// sim_loss_detection=True)`. `target` is `"sim:mr-j4-tm,bdhde"` (emulated drives
-/// in-process, no root), a network interface (`"eth1"`, raw socket: root or CAP_NET_RAW), or a
-/// run file (`.toml`: its target, `[sim]`, drives, mappings and cycle; `cycle_us` overrides its
-/// cycle). With `start=False` the cycle waits for `start()`; meanwhile the commissioning reads
-/// (`slaves`, `pdos`, `sdos`, `states`) run on the link.
+/// sim_loss_detection=True, audit=False, priority=None)`.
+///
+/// - `target`: `"sim:mr-j4-tm,bdhde"` (emulated drives in-process, no root), a network
+///   interface (`"eth1"`, raw socket: root or CAP_NET_RAW), or a run file (`.toml`: its
+///   target, `[sim]`, drives, mappings, limits and cycle; `cycle_us` overrides its cycle).
+/// - `start=False`: the cycle waits for `start()`; meanwhile the commissioning reads
+///   (`slaves`, `pdos`, `sdos`, `states`) run on the link.
+/// - `record`: keep every cycle's samples for `record()`.
+/// - `sim_loss_detection=False`: the emulated drives do not fault when the cycle stalls (as an
+///   MR-J4-TM with [Pr. PN06] set so), for a host that cannot keep the cycle.
+/// - `audit=True`: count the cycle thread's allocations and syscalls from OP to the stop
+///   (the summary `stop()` returns has them).
+/// - `priority`: SCHED_FIFO priority of the cycle thread (1–99; needs root or CAP_SYS_NICE,
+///   else a warning in the history).
 #[pyclass(frozen, subclass, module = "ecdrive._ecdrive")]
 pub struct Master {
     inner: Arc<Inner>,
@@ -428,7 +522,8 @@ pub struct Master {
 #[pymethods]
 impl Master {
     #[new]
-    #[pyo3(signature = (target, cycle_us=None, *, start=true, record=true, op_timeout=15.0, sim_loss_detection=true))]
+    #[pyo3(signature = (target, cycle_us=None, *, start=true, record=true, op_timeout=15.0, sim_loss_detection=true, audit=false, priority=None))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         target: String,
@@ -437,10 +532,15 @@ impl Master {
         record: bool,
         op_timeout: f64,
         sim_loss_detection: bool,
+        audit: bool,
+        priority: Option<u8>,
     ) -> PyResult<Self> {
         let op_timeout = values::seconds(op_timeout)?;
         let inner = py.detach(move || -> Result<Arc<Inner>, Failure> {
-            let (t, cfg, sim) = setup_of(&target, cycle_us, sim_loss_detection)?;
+            let (t, mut cfg, sim) = setup_of(&target, cycle_us, sim_loss_detection)?;
+            if priority.is_some() {
+                cfg.cycle.rt.priority = priority;
+            }
             let link = t.open_with(&sim).map_err(Failure::from)?;
             let inner = Arc::new(Inner {
                 setup: Setup {
@@ -448,6 +548,7 @@ impl Master {
                     cfg,
                     op_timeout,
                     record,
+                    audit,
                 },
                 session: Mutex::new(Session::Idle(link)),
                 found: Mutex::new(Found::default()),
@@ -639,7 +740,8 @@ impl Master {
     /// columns: a dict of lists (the package turns them into numpy arrays when numpy is
     /// installed). Columns: cycle, time_ns, axis, wake_latency_ns, exchange_ns, wkc, mode,
     /// statusword, position_demand, position, velocity_demand, velocity, torque_demand,
-    /// torque, following_error (counts and the drive's units; None where not mapped).
+    /// torque, following_error (positions in counts, velocities in counts/s, torques in the
+    /// drive's unit; None where not mapped).
     fn record(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
         let cols = self
             .inner
@@ -720,6 +822,8 @@ impl Master {
         let d = found.drives.get(axis)?;
         Some(Drive {
             inner: self.inner.clone(),
+            velocity_scale: d.units.velocity_position_per_s(),
+            pending: Mutex::new(None),
             axis,
             drive: d.drive.clone(),
             dictionary: ecdrive::drives::by_identity(d.info.vendor_id, d.info.product_code)
@@ -814,6 +918,11 @@ impl Device {
 #[pyclass(frozen, module = "ecdrive._ecdrive")]
 pub struct Drive {
     inner: Arc<Inner>,
+    /// Counts per second in one unit of the drive's velocity objects (0x606C, 0x60FF).
+    velocity_scale: f64,
+    /// The move started without waiting: what it is, and where the history and the cycle
+    /// stood when it was sent.
+    pending: Mutex<Option<(String, (u64, u64))>>,
     axis: usize,
     drive: DriveRef,
     dictionary: Option<&'static [ecdrive::od::ObjectDesc]>,
@@ -920,10 +1029,10 @@ impl Drive {
         self.look(|a| a.position_actual)
     }
 
-    /// Actual velocity (0x606C), the drive's units.
+    /// Actual velocity (0x606C), counts/s (from the drive's unit).
     #[getter]
-    fn velocity(&self) -> PyResult<i32> {
-        self.look(|a| a.velocity_actual)
+    fn velocity(&self) -> PyResult<f64> {
+        self.look(|a| f64::from(a.velocity_actual) * self.velocity_scale)
     }
 
     /// Actual torque (0x6077), the drive's units (‰ of rated torque for most drives).
@@ -982,10 +1091,10 @@ impl Drive {
         self.setpoint("setting target_position", &[RunMode::Csp, RunMode::Ip], v)
     }
 
-    /// Velocity demand, the drive's units.
+    /// Velocity demand, counts/s (from the drive's unit).
     #[getter]
-    fn target_velocity(&self) -> PyResult<i32> {
-        self.look(|a| a.velocity_demand)
+    fn target_velocity(&self) -> PyResult<f64> {
+        self.look(|a| f64::from(a.velocity_demand) * self.velocity_scale)
     }
 
     /// Stream a velocity set-point (csv), counts/s: the cycle takes it at its next turn.
@@ -1034,9 +1143,13 @@ impl Drive {
         )
     }
 
-    /// Enable (Operation enabled); waits for it.
+    /// Enable (Operation enabled); waits for it. A drive in Fault raises DriveFault with its
+    /// fault (reset it first with `fault_reset()`).
     #[pyo3(signature = (timeout=5.0))]
     fn enable(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
+        if let Some(f) = self.fault_now()? {
+            return Err(f.into());
+        }
         self.command_and_wait(
             py,
             "enabling".into(),
@@ -1115,8 +1228,9 @@ impl Drive {
 
     /// Move to `target` (counts) in csp, planned by the cycle (trapezoidal: at most
     /// `velocity` counts/s and `acceleration` counts/s²); the axis switches to csp first if
-    /// it runs another mode. Waits until the set-point arrived.
-    #[pyo3(signature = (target, velocity, acceleration, timeout=10.0))]
+    /// it runs another mode. Waits until the set-point arrived, or with `wait=False` returns
+    /// at once (then `wait()` waits for it, so several drives move together).
+    #[pyo3(signature = (target, velocity, acceleration, timeout=10.0, *, wait=true))]
     fn move_to(
         &self,
         py: Python<'_>,
@@ -1124,32 +1238,41 @@ impl Drive {
         velocity: f64,
         acceleration: f64,
         timeout: f64,
+        wait: bool,
     ) -> PyResult<()> {
-        let timeout = values::seconds(timeout)?;
-        let axis = self.axis;
         let what = format!("moving to {target}");
-        Ok(py.detach(|| -> Result<(), Failure> {
-            let c = Command::Move {
-                axis: axis as u16,
-                to: target,
-                velocity,
-                acceleration,
-            };
-            let from = self
-                .inner
-                .command(&what, c)
-                .map_err(|f| with_drive(f, &self.drive))?;
-            // Done when the cycle says the move (run as a one-step program) is done.
-            let done = |k: &EventKind| {
-                matches!(*k, EventKind::ProgramDone { axis: a } if usize::from(a) == axis)
-            };
+        let c = Command::Move {
+            axis: self.axis as u16,
+            to: target,
+            velocity,
+            acceleration,
+        };
+        let from = py.detach(|| self.inner.command(&what, c).map_err(|f| with_drive(f, &self.drive)))?;
+        *locked(&self.pending) = Some((what, from));
+        if wait { self.wait(py, timeout) } else { Ok(()) }
+    }
+
+    /// Wait until the move `move_to(..., wait=False)` started has arrived (nothing to wait
+    /// for when none was started).
+    #[pyo3(signature = (timeout=10.0))]
+    fn wait(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
+        let timeout = values::seconds(timeout)?;
+        let Some((what, from)) = locked(&self.pending).take() else {
+            return Ok(());
+        };
+        let axis = self.axis;
+        // Done when the cycle says the move (run as a one-step program) is done.
+        let done = |k: &EventKind| {
+            matches!(*k, EventKind::ProgramDone { axis: a } if usize::from(a) == axis)
+        };
+        Ok(py.detach(|| {
             self.inner
                 .wait(&what, &self.drive, axis, from, timeout, Until::Event(&done))
         })?)
     }
 
     /// Move by `distance` (counts) from the position demand, as `move_to`.
-    #[pyo3(signature = (distance, velocity, acceleration, timeout=10.0))]
+    #[pyo3(signature = (distance, velocity, acceleration, timeout=10.0, *, wait=true))]
     fn move_by(
         &self,
         py: Python<'_>,
@@ -1157,9 +1280,10 @@ impl Drive {
         velocity: f64,
         acceleration: f64,
         timeout: f64,
+        wait: bool,
     ) -> PyResult<()> {
         let from = self.look(|a| a.position_demand)? as f64;
-        self.move_to(py, from + distance, velocity, acceleration, timeout)
+        self.move_to(py, from + distance, velocity, acceleration, timeout, wait)
     }
 
     /// Read object `index`:`sub` over CoE while the cycle runs: an int, float or str as the
@@ -1214,6 +1338,28 @@ impl Drive {
 }
 
 impl Drive {
+    /// The drive's fault, if it is in Fault: the history's words for it (the drive's own
+    /// alarm name), or its error code.
+    fn fault_now(&self) -> PyResult<Option<Failure>> {
+        let (state, code) = self.look(|a| (a.state, a.error_code))?;
+        if !matches!(state, Some(State::Fault | State::FaultReactionActive)) {
+            return Ok(None);
+        }
+        let axis = self.axis;
+        let said = self
+            .inner
+            .running("reading the history", |r| {
+                Ok(last_fault(&r.m.history(), axis).map(HistoryEntry::text))
+            })?
+            .unwrap_or_else(|| format!("error code 0x{code:04X}"));
+        Ok(Some(Failure::new(
+            Class::Fault,
+            Some(&self.drive),
+            "enabling",
+            format!("the drive is in Fault: {said}; reset it first (fault_reset())"),
+        )))
+    }
+
     fn upload(&self, py: Python<'_>, a: ObjectAddress) -> PyResult<Vec<u8>> {
         let inner = self.inner.clone();
         let position = self.drive.position;

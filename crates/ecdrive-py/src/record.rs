@@ -29,15 +29,16 @@ pub struct Columns {
     statusword: Vec<u16>,
     position_demand: Vec<Option<i64>>,
     position: Vec<i64>,
-    velocity_demand: Vec<Option<i32>>,
-    velocity: Vec<i32>,
+    velocity_demand: Vec<Option<f64>>,
+    velocity: Vec<f64>,
     torque_demand: Vec<Option<i16>>,
     torque: Vec<i16>,
     following_error: Vec<Option<i64>>,
 }
 
 impl Columns {
-    fn push(&mut self, s: &CycleSample) {
+    /// One sample; `scale`: counts/s per unit of the axis's velocity objects.
+    fn push(&mut self, s: &CycleSample, scale: f64) {
         self.cycle.push(s.cycle);
         self.time_ns.push(s.time_ns);
         self.axis.push(s.axis);
@@ -48,8 +49,9 @@ impl Columns {
         self.statusword.push(s.statusword);
         self.position_demand.push(s.demand);
         self.position.push(s.actual);
-        self.velocity_demand.push(s.velocity_demand);
-        self.velocity.push(s.velocity);
+        self.velocity_demand
+            .push(s.velocity_demand.map(|v| f64::from(v) * scale));
+        self.velocity.push(f64::from(s.velocity) * scale);
         self.torque_demand.push(s.torque_demand);
         self.torque.push(s.torque);
         self.following_error.push(s.following_error);
@@ -77,14 +79,34 @@ impl Columns {
     }
 }
 
-/// What the drain thread keeps.
-#[derive(Debug, Default)]
+/// What the drain thread keeps, and the ring it drains (so that a `take` drains it first).
 pub struct Kept {
-    pub columns: Columns,
+    rx: Recording,
+    columns: Columns,
     /// Largest wake-up latency of any cycle recorded since the master started, ns.
     pub max_wake_latency_ns: u64,
     /// Samples the ring could not take (the drain thread fell behind).
     pub dropped: u64,
+    /// Whether the samples are kept (the latency is followed either way).
+    keep: bool,
+    /// Per axis: counts/s per unit of its velocity objects (1 until the master started).
+    scales: Vec<f64>,
+}
+
+impl Kept {
+    /// Everything waiting in the ring into the columns.
+    fn drain(&mut self) {
+        let (columns, max, keep) = (&mut self.columns, &mut self.max_wake_latency_ns, self.keep);
+        let scales = &self.scales;
+        self.rx.drain(|s| {
+            *max = (*max).max(u64::from(s.wake_latency_ns));
+            if keep {
+                let scale = scales.get(usize::from(s.axis)).copied().unwrap_or(1.0);
+                columns.push(s, scale);
+            }
+        });
+        self.dropped = self.rx.dropped();
+    }
 }
 
 /// The drain thread of one master run.
@@ -99,12 +121,19 @@ impl Recorder {
     /// samples are kept as columns (the latency is followed either way).
     pub fn start(keep: bool) -> std::io::Result<(Arc<Mutex<RecordTx>>, Self)> {
         let (tx, rx) = recording(RING);
-        let kept = Arc::new(Mutex::new(Kept::default()));
+        let kept = Arc::new(Mutex::new(Kept {
+            rx,
+            columns: Columns::default(),
+            max_wake_latency_ns: 0,
+            dropped: 0,
+            keep,
+            scales: Vec::new(),
+        }));
         let stop = Arc::new(AtomicBool::new(false));
         let (k, s) = (kept.clone(), stop.clone());
         let thread = std::thread::Builder::new()
             .name("ecdrive-py-record".into())
-            .spawn(move || drain(rx, &k, &s, keep))?;
+            .spawn(move || drain(&k, &s))?;
         Ok((
             Arc::new(Mutex::new(tx)),
             Self {
@@ -115,17 +144,30 @@ impl Recorder {
         ))
     }
 
-    /// The samples since the last call.
+    /// The samples since the last call, up to the last cycle recorded.
     pub fn take(&self) -> Columns {
         self.kept
             .lock()
-            .map(|mut k| std::mem::take(&mut k.columns))
+            .map(|mut k| {
+                k.drain();
+                std::mem::take(&mut k.columns)
+            })
             .unwrap_or_default()
+    }
+
+    /// The drives' velocity units, counts/s per unit, by axis.
+    pub fn set_velocity_scales(&self, scales: Vec<f64>) {
+        if let Ok(mut k) = self.kept.lock() {
+            k.scales = scales;
+        }
     }
 
     /// Largest wake-up latency so far, ns.
     pub fn max_wake_latency_ns(&self) -> u64 {
-        self.kept.lock().map_or(0, |k| k.max_wake_latency_ns)
+        self.kept.lock().map_or(0, |mut k| {
+            k.drain();
+            k.max_wake_latency_ns
+        })
     }
 }
 
@@ -138,18 +180,11 @@ impl Drop for Recorder {
     }
 }
 
-fn drain(mut rx: Recording, kept: &Mutex<Kept>, stop: &AtomicBool, keep: bool) {
+fn drain(kept: &Mutex<Kept>, stop: &AtomicBool) {
     loop {
         let last = stop.load(Ordering::Acquire);
         if let Ok(mut k) = kept.lock() {
-            let k = &mut *k;
-            rx.drain(|s| {
-                k.max_wake_latency_ns = k.max_wake_latency_ns.max(u64::from(s.wake_latency_ns));
-                if keep {
-                    k.columns.push(s);
-                }
-            });
-            k.dropped = rx.dropped();
+            k.drain();
         }
         if last {
             return;
