@@ -396,6 +396,7 @@ fn no_crate_has_an_import_circle() {
         "crates/ecdrive-ethercat/src",
         "crates/ecdrive-canopen/src",
         "crates/ecdrive-motion/src",
+        "crates/ecdrive-py/src",
     ] {
         for c in import_circles(&root.join(dir)) {
             found.push(format!("{dir}: {c}"));
@@ -550,6 +551,7 @@ fn no_function_in_any_crate_exceeds_150_lines() {
             "crates/ecdrive-canopen/src",
             "crates/ecdrive-sim/src",
             "crates/ecdrive-testkit/src",
+            "crates/ecdrive-py/src",
         ],
         150,
     );

@@ -119,6 +119,23 @@ pub struct CanError {
 }
 
 impl CanError {
+    /// The class of failure (the `ecdrive` command's exit code, the Python exception): a
+    /// drive's refusal (an SDO abort, an NMT command refused), input to fix (a value that does
+    /// not fit, an identity that is not the profile's: the configuration names another drive),
+    /// else the bus.
+    pub fn class(&self) -> ecdrive_core::ErrorClass {
+        use ecdrive_core::ErrorClass;
+        match &self.kind {
+            CanErrorKind::Abort(_) | CanErrorKind::NmtRefused { .. } => ErrorClass::Refused,
+            CanErrorKind::Identity(_) => ErrorClass::Input,
+            CanErrorKind::Sdo(s) if s.abort_code().is_some() => ErrorClass::Refused,
+            CanErrorKind::Value(_) | CanErrorKind::UnknownType | CanErrorKind::Invalid(_) => {
+                ErrorClass::Input
+            }
+            _ => ErrorClass::Bus,
+        }
+    }
+
     /// An error of `node` about `address`.
     pub fn new(node: NodeRef, address: Option<ObjectAddress>, kind: CanErrorKind) -> Self {
         Self {

@@ -22,8 +22,11 @@ pub mod cia402;
 pub mod drives;
 pub mod ec;
 pub mod eds;
+mod error_class;
 pub mod esi;
 pub mod link;
 pub mod od;
 pub mod pdo;
 pub mod rt;
+
+pub use error_class::ErrorClass;

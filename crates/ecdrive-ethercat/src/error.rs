@@ -51,6 +51,25 @@ pub enum ErrorKind {
     Bus,
 }
 
+impl ErrorKind {
+    /// The class of failure (the `ecdrive` command's exit code, the Python exception).
+    pub fn class(&self) -> ecdrive_core::ErrorClass {
+        use ecdrive_core::ErrorClass;
+        match self {
+            ErrorKind::Config | ErrorKind::UnknownDevice => ErrorClass::Input,
+            ErrorKind::Discovery | ErrorKind::Timeout | ErrorKind::Link | ErrorKind::Bus => {
+                ErrorClass::Bus
+            }
+            ErrorKind::Sdo(_)
+            | ErrorKind::AlState(_)
+            | ErrorKind::DcSettle
+            | ErrorKind::Incompatible
+            | ErrorKind::Refused => ErrorClass::Refused,
+            ErrorKind::DriveFault => ErrorClass::Fault,
+        }
+    }
+}
+
 /// A failed step of the master.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{}{step}: {reason}", .drive.as_ref().map(|d| format!("{d}: ")).unwrap_or_default())]

@@ -1437,7 +1437,10 @@ fn mailboxes_of(
         .iter()
         .filter(|d| d.coe)
         .map(|d| {
-            let drive = started.drives.iter().find(|s| s.info.position == d.position);
+            let drive = started
+                .drives
+                .iter()
+                .find(|s| s.info.position == d.position);
             MailboxDevice {
                 position: d.position,
                 address: d.address,

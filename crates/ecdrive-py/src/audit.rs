@@ -98,7 +98,7 @@ impl Audit {
             error: lock(&self.error).clone(),
             ..AuditResult::default()
         };
-        if let Some((allocs, sys)) = lock(&self.result).clone() {
+        if let Some((allocs, sys)) = *lock(&self.result) {
             r.complete = true;
             r.allocs = allocs.allocs;
             r.frees = allocs.frees;

@@ -45,32 +45,29 @@ create_exception!(
      code 5)."
 );
 
-/// The classes, as the command's exit codes class the kinds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Class {
-    Config,
-    Bus,
-    Refused,
-    Fault,
-}
+/// The classes, as the command's exit codes class failures.
+pub(crate) use ecdrive::ErrorClass as Class;
 
-/// The class of a master error's kind.
-pub fn class_of(kind: ErrorKind) -> Class {
-    match kind {
-        ErrorKind::Config | ErrorKind::UnknownDevice | ErrorKind::Incompatible => Class::Config,
-        ErrorKind::Discovery
-        | ErrorKind::DcSettle
-        | ErrorKind::Timeout
-        | ErrorKind::Link
-        | ErrorKind::Bus => Class::Bus,
-        ErrorKind::Sdo(_) | ErrorKind::AlState(_) | ErrorKind::Refused => Class::Refused,
-        ErrorKind::DriveFault => Class::Fault,
+/// A failure to raise (boxed: it travels in `Result`s through every wait).
+#[derive(Debug, Clone)]
+pub struct Failure(Box<Details>);
+
+impl std::ops::Deref for Failure {
+    type Target = Details;
+    fn deref(&self) -> &Details {
+        &self.0
     }
 }
 
-/// A failure to raise: its class, the message, and the attributes.
+impl std::ops::DerefMut for Failure {
+    fn deref_mut(&mut self) -> &mut Details {
+        &mut self.0
+    }
+}
+
+/// A failure's class, message and attributes.
 #[derive(Debug, Clone)]
-pub struct Failure {
+pub struct Details {
     pub class: Class,
     pub message: String,
     pub drive: Option<(u16, String)>,
@@ -95,7 +92,7 @@ impl Failure {
             Some((p, n)) => format!("drive {p} ({n}): {step}: {reason}"),
             None => format!("{step}: {reason}"),
         };
-        Self {
+        Self(Box::new(Details {
             class,
             message,
             drive,
@@ -104,12 +101,12 @@ impl Failure {
             kind: format!("{class:?}"),
             abort_code: None,
             al_status_code: None,
-        }
+        }))
     }
 
     /// A configuration error without a drive.
     pub fn config(step: impl Into<String>, reason: impl std::fmt::Display) -> Self {
-        Self::new(Class::Config, None, step, reason.to_string())
+        Self::new(Class::Input, None, step, reason.to_string())
     }
 }
 
@@ -120,8 +117,8 @@ impl From<MasterError> for Failure {
             ErrorKind::AlState(c) => (None, Some(c.0)),
             _ => (None, None),
         };
-        Self {
-            class: class_of(e.kind),
+        Self(Box::new(Details {
+            class: e.kind.class(),
             message: e.to_string(),
             drive: e.drive.as_ref().map(|d| (d.position, d.name.clone())),
             step: e.step.clone(),
@@ -133,14 +130,15 @@ impl From<MasterError> for Failure {
             },
             abort_code,
             al_status_code,
-        }
+        }))
     }
 }
 
 impl From<Failure> for PyErr {
     fn from(f: Failure) -> Self {
+        let f = *f.0;
         let err = match f.class {
-            Class::Config => ConfigError::new_err(f.message.clone()),
+            Class::Input => ConfigError::new_err(f.message.clone()),
             Class::Bus => BusError::new_err(f.message.clone()),
             Class::Refused => DriveRefused::new_err(f.message.clone()),
             Class::Fault => DriveFault::new_err(f.message.clone()),

@@ -156,7 +156,12 @@ impl Inner {
                     return Ok(true);
                 }
                 if !r.m.is_running() {
-                    return Err(Failure::new(Class::Bus, Some(drive), what, "the cycle ended"));
+                    return Err(Failure::new(
+                        Class::Bus,
+                        Some(drive),
+                        what,
+                        "the cycle ended",
+                    ));
                 }
                 let t = r.m.telemetry();
                 if let Until::Telemetry(done) = &until
@@ -199,7 +204,12 @@ impl Inner {
         };
         let mut cfg = self.setup.cfg.clone();
         let (tx, recorder) = Recorder::start(self.setup.record).map_err(|e| {
-            Failure::new(Class::Bus, None, "starting the recording thread", e.to_string())
+            Failure::new(
+                Class::Bus,
+                None,
+                "starting the recording thread",
+                e.to_string(),
+            )
         })?;
         cfg.record = Some(tx);
         let audit = self.setup.audit.then(|| Arc::new(Audit::default()));
@@ -224,11 +234,7 @@ impl Inner {
                 .collect(),
         );
         let op = m.wait_until("OP", self.setup.op_timeout, |t| t.cycle.all_op);
-        *s = Session::Running(Box::new(Running {
-            m,
-            recorder,
-            audit,
-        }));
+        *s = Session::Running(Box::new(Running { m, recorder, audit }));
         drop(s);
         if let Err(e) = op {
             let _ = self.stop(StopKind::QuickStop);
@@ -242,16 +248,14 @@ impl Inner {
     fn stop(&self, kind: StopKind) -> Result<serde_json::Value, Failure> {
         let mut s = locked(&self.session);
         if !matches!(&*s, Session::Running(_)) {
-            return Ok(locked(&self.report).clone().unwrap_or(serde_json::Value::Null));
+            return Ok(locked(&self.report)
+                .clone()
+                .unwrap_or(serde_json::Value::Null));
         }
         let Session::Running(r) = std::mem::replace(&mut *s, Session::Closed) else {
             unreachable!("matched as running above, under the same lock")
         };
-        let Running {
-            m,
-            recorder,
-            audit,
-        } = *r;
+        let Running { m, recorder, audit } = *r;
         let (report, link) = m.stop(kind);
         *s = Session::Idle(link);
         let mut summary = stop_summary(report.as_ref(), recorder.max_wake_latency_ns());
@@ -323,9 +327,12 @@ fn stops_the_wait(e: &HistoryEntry, axis: usize, drive: &DriveRef, what: &str) -
         _ => return None,
     };
     let class = match (class, kind) {
-        (_, EventKind::Stopping { reason }) if matches!(
-            reason,
-            ecdrive::StopReason::DriveFault { .. } | ecdrive::StopReason::FollowingError { .. }
+        (
+            _,
+            EventKind::Stopping {
+                reason:
+                    ecdrive::StopReason::DriveFault { .. } | ecdrive::StopReason::FollowingError { .. },
+            },
         ) => Class::Fault,
         (c, _) => c,
     };
@@ -418,8 +425,10 @@ fn setup_of(
     let is_file = target.ends_with(".toml") || std::path::Path::new(target).is_file();
     if !is_file {
         let t: Target = target.parse().map_err(Failure::from)?;
-        let mut sim = SimSettings::default();
-        sim.loss_detection = sim_loss_detection;
+        let sim = SimSettings {
+            loss_detection: sim_loss_detection,
+            ..SimSettings::default()
+        };
         let cfg = MasterConfig::new(cycle(cycle_us.unwrap_or(1000)));
         return Ok((t, cfg, sim));
     }
@@ -470,27 +479,22 @@ pub fn run_file(
             use ecdrive_cli::app::canopen::run::{CanRunOptions, run};
             use ecdrive_cli::app::config::canopen::CanTarget;
             if let Some(i) = interface {
-                c.target = if i == "can-sim" {
-                    CanTarget::Sim
-                } else {
-                    CanTarget::Bus(i.parse().map_err(|e| {
-                        Failure::config(format!("reading the interface {i:?}"), e)
-                    })?)
-                };
+                c.target =
+                    if i == "can-sim" {
+                        CanTarget::Sim
+                    } else {
+                        CanTarget::Bus(i.parse().map_err(|e| {
+                            Failure::config(format!("reading the interface {i:?}"), e)
+                        })?)
+                    };
             }
             let opts = CanRunOptions {
                 duration,
                 record: None,
                 candump: None,
             };
-            let r = run(&c, &opts, &stop).map_err(|e| {
-                let class = if e.to_string().contains("abort") {
-                    Class::Refused
-                } else {
-                    Class::Bus
-                };
-                Failure::new(class, None, "the CANopen run", e.to_string())
-            })?;
+            let r = run(&c, &opts, &stop)
+                .map_err(|e| Failure::new(e.class(), None, "the CANopen run", e.to_string()))?;
             json("the run's report", serde_json::to_value(&r))
         }
         Err(e) => Err(Failure::config(format!("reading {}", path.display()), e)),
@@ -634,7 +638,9 @@ impl Master {
                 let t = r.m.telemetry();
                 Ok((
                     t.axes.iter().map(|a| a.al_state).collect::<Vec<_>>(),
-                    t.io.iter().map(|i| (i.position, i.al_state)).collect::<Vec<_>>(),
+                    t.io.iter()
+                        .map(|i| (i.position, i.al_state))
+                        .collect::<Vec<_>>(),
                 ))
             })
             .unwrap_or_default();
@@ -655,22 +661,24 @@ impl Master {
                 is_drive: true,
             })
             .collect();
-        out.extend(found.io.iter().map(|d| Device {
-            position: d.device.position,
-            name: d.device.name.clone(),
-            vendor_id: d.info.vendor_id,
-            product_code: d.info.product_code,
-            revision: d.info.revision,
-            serial: d.info.serial,
-            alias: d.info.alias,
-            profile: d.info.profile.map(str::to_string),
-            state: state_name(
-                io_states
-                    .iter()
-                    .find(|(p, _)| *p == d.device.position)
-                    .map(|(_, s)| *s),
-            ),
-            is_drive: false,
+        out.extend(found.io.iter().map(|d| {
+            Device {
+                position: d.device.position,
+                name: d.device.name.clone(),
+                vendor_id: d.info.vendor_id,
+                product_code: d.info.product_code,
+                revision: d.info.revision,
+                serial: d.info.serial,
+                alias: d.info.alias,
+                profile: d.info.profile.map(str::to_string),
+                state: state_name(
+                    io_states
+                        .iter()
+                        .find(|(p, _)| *p == d.device.position)
+                        .map(|(_, s)| *s),
+                ),
+                is_drive: false,
+            }
         }));
         out.sort_by_key(|d| d.position);
         out
@@ -730,9 +738,9 @@ impl Master {
     /// The largest wake-up latency of any cycle since the master started, µs.
     #[getter]
     fn max_wake_latency_us(&self) -> PyResult<f64> {
-        let ns = self
-            .inner
-            .running("reading the latency", |r| Ok(r.recorder.max_wake_latency_ns()))?;
+        let ns = self.inner.running("reading the latency", |r| {
+            Ok(r.recorder.max_wake_latency_ns())
+        })?;
         Ok(ns as f64 / 1000.0)
     }
 
@@ -754,9 +762,9 @@ impl Master {
     /// entries from it on.
     #[pyo3(signature = (since=0))]
     fn history(&self, py: Python<'_>, since: u64) -> PyResult<Py<PyAny>> {
-        let entries = self
-            .inner
-            .running("reading the history", |r| Ok(r.m.history_since(since).entries))?;
+        let entries = self.inner.running("reading the history", |r| {
+            Ok(r.m.history_since(since).entries)
+        })?;
         values::to_py(py, "the history", &entries)
     }
 
@@ -862,7 +870,12 @@ impl Master {
             let (r, link) = match run_session(link, tools::tool_bus_options(), f) {
                 Ok((r, link)) => (r.map_err(Failure::from), link),
                 Err((e, link)) => (
-                    Err(Failure::new(Class::Bus, None, "opening the bus", e.to_string())),
+                    Err(Failure::new(
+                        Class::Bus,
+                        None,
+                        "opening the bus",
+                        e.to_string(),
+                    )),
                     link,
                 ),
             };
@@ -903,12 +916,7 @@ impl Device {
         format!(
             "Device(position={}, name={:?}, vendor_id=0x{:08X}, product_code=0x{:08X}, \
              revision=0x{:08X}, state={:?})",
-            self.position,
-            self.name,
-            self.vendor_id,
-            self.product_code,
-            self.revision,
-            self.state
+            self.position, self.name, self.vendor_id, self.product_code, self.revision, self.state
         )
     }
 }
@@ -957,15 +965,23 @@ impl Drive {
                 .command(&what, c)
                 .map_err(|f| with_drive(f, &self.drive))?;
             let done = |t: &Telemetry| t.axes.get(axis).is_some_and(&done);
-            self.inner
-                .wait(&what, &self.drive, axis, from, timeout, Until::Telemetry(&done))
+            self.inner.wait(
+                &what,
+                &self.drive,
+                axis,
+                from,
+                timeout,
+                Until::Telemetry(&done),
+            )
         })?)
     }
 
     fn data_type(&self, address: ObjectAddress, given: Option<&str>) -> PyResult<Option<DataType>> {
         match given {
             Some(t) => values::data_type(t).map(Some),
-            None => Ok(self.dictionary.and_then(|d| Dictionary::new(d).data_type(address))),
+            None => Ok(self
+                .dictionary
+                .and_then(|d| Dictionary::new(d).data_type(address))),
         }
     }
 
@@ -994,11 +1010,8 @@ impl Drive {
 
 fn with_drive(mut f: Failure, d: &DriveRef) -> Failure {
     if f.drive.is_none() {
-        f = Failure {
-            drive: Some((d.position, d.name.clone())),
-            message: format!("{d}: {}", f.message),
-            ..f
-        };
+        f.drive = Some((d.position, d.name.clone()));
+        f.message = format!("{d}: {}", f.message);
     }
     f
 }
@@ -1247,7 +1260,11 @@ impl Drive {
             velocity,
             acceleration,
         };
-        let from = py.detach(|| self.inner.command(&what, c).map_err(|f| with_drive(f, &self.drive)))?;
+        let from = py.detach(|| {
+            self.inner
+                .command(&what, c)
+                .map_err(|f| with_drive(f, &self.drive))
+        })?;
         *locked(&self.pending) = Some((what, from));
         if wait { self.wait(py, timeout) } else { Ok(()) }
     }
@@ -1262,9 +1279,7 @@ impl Drive {
         };
         let axis = self.axis;
         // Done when the cycle says the move (run as a one-step program) is done.
-        let done = |k: &EventKind| {
-            matches!(*k, EventKind::ProgramDone { axis: a } if usize::from(a) == axis)
-        };
+        let done = |k: &EventKind| matches!(*k, EventKind::ProgramDone { axis: a } if usize::from(a) == axis);
         Ok(py.detach(|| {
             self.inner
                 .wait(&what, &self.drive, axis, from, timeout, Until::Event(&done))
@@ -1378,4 +1393,3 @@ impl Drive {
         })?)
     }
 }
-

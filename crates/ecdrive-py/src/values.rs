@@ -49,10 +49,14 @@ pub fn to_py<T: serde::Serialize>(py: Python<'_>, what: &str, v: &T) -> PyResult
 
 /// Seconds as a duration: finite and not negative.
 pub fn seconds(s: f64) -> PyResult<Duration> {
-    if s.is_finite() && s >= 0.0 && s < 1e9 {
+    if (0.0..1e9).contains(&s) {
         Ok(Duration::from_secs_f64(s))
     } else {
-        Err(Failure::config("reading a time in seconds", format!("{s} is not a duration")).into())
+        Err(Failure::config(
+            "reading a time in seconds",
+            format!("{s} is not a duration"),
+        )
+        .into())
     }
 }
 
@@ -104,7 +108,11 @@ pub fn py_to_sdo(v: &Bound<'_, PyAny>, dt: Option<DataType>) -> PyResult<Vec<u8>
         .into());
     };
     let value = if let Ok(i) = v.extract::<i64>() {
-        if i >= 0 { Value::Uint(i as u64) } else { Value::Int(i) }
+        if i >= 0 {
+            Value::Uint(i as u64)
+        } else {
+            Value::Int(i)
+        }
     } else if let Ok(u) = v.extract::<u64>() {
         Value::Uint(u)
     } else if let Ok(f) = v.extract::<f64>() {

@@ -62,7 +62,13 @@ fn venv(dir: &Path, wheelhouse: &Path, wheel: &Path) -> PathBuf {
     let python = dir.join("bin/python");
     run(
         Command::new(&python)
-            .args(["-m", "pip", "install", "--quiet", "--disable-pip-version-check"])
+            .args([
+                "-m",
+                "pip",
+                "install",
+                "--quiet",
+                "--disable-pip-version-check",
+            ])
             .args(["--no-index", "--find-links"])
             .arg(wheelhouse)
             .args(["pytest", "numpy"])
@@ -82,7 +88,10 @@ fn the_wheel_installs_and_its_tests_pass() {
     };
     if !wheelhouse.join(".").exists()
         || !std::fs::read_dir(&wheelhouse)
-            .map(|d| d.flatten().any(|e| e.file_name().to_string_lossy().starts_with("pytest-")))
+            .map(|d| {
+                d.flatten()
+                    .any(|e| e.file_name().to_string_lossy().starts_with("pytest-"))
+            })
             .unwrap_or(false)
     {
         return missing("target/wheelhouse has no pytest (pip download -r .ci/python.txt)");
@@ -90,9 +99,13 @@ fn the_wheel_installs_and_its_tests_pass() {
     // The binary the tests compare the commissioning reads with, and serve veth from.
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     run(
-        Command::new(cargo)
-            .current_dir(repo)
-            .args(["build", "--release", "--quiet", "--bin", "ecdrive"]),
+        Command::new(cargo).current_dir(repo).args([
+            "build",
+            "--release",
+            "--quiet",
+            "--bin",
+            "ecdrive",
+        ]),
         "cargo build --release --bin ecdrive",
     );
     let wheel = build_wheel(repo, &maturin, &target.join("wheels/test"));
@@ -129,7 +142,10 @@ fn the_wheel_installs_and_its_tests_pass() {
     let text = String::from_utf8_lossy(&out.stdout);
     println!("{text}\n{}", String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "pytest failed ({})", out.status);
-    assert!(!text.contains(" SKIPPED") || !required(), "a test skipped under CI:\n{text}");
+    assert!(
+        !text.contains(" SKIPPED") || !required(),
+        "a test skipped under CI:\n{text}"
+    );
 }
 
 /// `ecdrive sim` with the two drives on the peer end of `pair`, once it serves.
@@ -156,7 +172,10 @@ fn serve(bin: &Path, pair: &VethPair) -> std::process::Child {
             break;
         }
     }
-    assert!(banner.contains("serving 2 device(s)"), "ecdrive sim did not start:\n{banner}");
+    assert!(
+        banner.contains("serving 2 device(s)"),
+        "ecdrive sim did not start:\n{banner}"
+    );
     // Keep reading its stderr so that it never blocks on a full pipe.
     std::thread::spawn(move || for _ in lines {});
     child

@@ -40,6 +40,7 @@ pub use ecdrive_sim as sim;
 // `ecdrive::canopen::{Master, MasterConfig, DriveSetup, CanDrive}`.
 pub use cia402::{OperationMode, State};
 pub use drives::DriveProfile;
+pub use ecdrive_core::ErrorClass;
 pub use ecdrive_ethercat::{
     AppAxis, AppCycle, Axes, AxisTelemetry, Command, CycleApp, CycleTelemetry, DriveRef,
     DriveSetup, EntryError, ErrorKind, Event, EventKind, HistoryEntry, HistoryEvent, HistoryKind,

@@ -2,7 +2,7 @@
 //! `ecdrive_cli::app::canopen::tools`.
 
 use crate::{exit, fail_with, print_json};
-use ecdrive::canopen::error::{CanError, CanErrorKind};
+use ecdrive::canopen::error::CanError;
 use ecdrive::canopen::master::{Master, MasterConfig};
 use ecdrive::canopen::transport::CanTransport;
 use ecdrive::od::{DataType, ObjectAddress, Value};
@@ -14,16 +14,7 @@ use std::process::ExitCode;
 /// the profile's, an NMT command refused) 4, a value or request the user gave wrong 2, the bus
 /// 3 — the classes of the exit-code table (docs/guide/run.md).
 pub fn exit_code(e: &CanError) -> u8 {
-    match &e.kind {
-        CanErrorKind::Abort(_) | CanErrorKind::NmtRefused { .. } => exit::REFUSED,
-        // The configuration names a drive that is not the one at that node.
-        CanErrorKind::Identity(_) => exit::USAGE,
-        CanErrorKind::Sdo(s) if s.abort_code().is_some() => exit::REFUSED,
-        CanErrorKind::Value(_) | CanErrorKind::UnknownType | CanErrorKind::Invalid(_) => {
-            exit::USAGE
-        }
-        _ => exit::BUS,
-    }
+    crate::exit_of(e.class())
 }
 
 fn fail(cmd: &str, e: &CanError) -> ExitCode {

@@ -844,15 +844,16 @@ pub fn ctrl_c_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
 }
 
 pub fn exit_code(kind: &ErrorKind) -> u8 {
-    match kind {
-        ErrorKind::Config | ErrorKind::UnknownDevice => exit::USAGE,
-        ErrorKind::Discovery | ErrorKind::Timeout | ErrorKind::Link | ErrorKind::Bus => exit::BUS,
-        ErrorKind::Sdo(_)
-        | ErrorKind::AlState(_)
-        | ErrorKind::DcSettle
-        | ErrorKind::Incompatible
-        | ErrorKind::Refused => exit::REFUSED,
-        ErrorKind::DriveFault => exit::FAULT,
+    exit_of(kind.class())
+}
+
+/// The exit code of a class of failure.
+pub fn exit_of(class: ecdrive::ErrorClass) -> u8 {
+    match class {
+        ecdrive::ErrorClass::Input => exit::USAGE,
+        ecdrive::ErrorClass::Bus => exit::BUS,
+        ecdrive::ErrorClass::Refused => exit::REFUSED,
+        ecdrive::ErrorClass::Fault => exit::FAULT,
     }
 }
 

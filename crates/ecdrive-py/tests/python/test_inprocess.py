@@ -243,3 +243,14 @@ def test_the_twenty_line_script(capfd):
     ) <= 2, rows[1]
     assert rows[2].startswith("largest wake-up latency: ")
 
+
+
+def test_the_docs_page_shows_the_script_and_a_pysoem_script_that_compiles():
+    page = (REPO / "docs" / "guide" / "python.md").read_text()
+    script = (REPO / "examples" / "python" / "two_drives.py").read_text().rstrip()
+    assert script in page, "docs/guide/python.md must show examples/python/two_drives.py as it is"
+    blocks = page.split("```python\n")[1:]
+    pysoem = [b.split("```")[0] for b in blocks if "import pysoem" in b]
+    assert len(pysoem) == 1
+    compile(pysoem[0], "pysoem side of docs/guide/python.md", "exec")
+    assert pysoem[0].count("\n") > 300
