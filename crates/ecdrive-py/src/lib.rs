@@ -9,6 +9,8 @@
 use pyo3::prelude::*;
 
 mod audit;
+mod backend;
+mod canopen;
 mod errors;
 mod master;
 mod record;

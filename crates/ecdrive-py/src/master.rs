@@ -1,11 +1,13 @@
-//! `Master`, `Drive` and `Device`: a running EtherCAT master as Python objects.
+//! `Master`, `Drive` and `Device`: a running master, EtherCAT or CANopen, as Python objects.
 //!
-//! The Rust [`ecdrive::Master`] runs the cycle in its own thread; these objects only send it
-//! commands, read its telemetry and history, and ask its session thread for SDOs. Every call
+//! The Rust master runs the cycle in its own thread ([`ecdrive::Master`], or the CANopen
+//! master's `CycleThread`, behind [`Backend`]); these objects only send it commands, read its
+//! telemetry and history, and ask the EtherCAT session thread for SDOs. Every call
 //! that waits releases the GIL, and holds the master's lock only for a look at a time, so other
 //! Python threads (and other calls on the same master) go on meanwhile.
 
 use crate::audit::Audit;
+use crate::backend::{Backend, EtherCat};
 use crate::errors::{Class, Failure};
 use crate::record::Recorder;
 use crate::values;
@@ -18,6 +20,7 @@ use ecdrive::{
     Axes, Command, DriveRef, EventKind, HistoryEntry, HistoryEvent, MasterConfig, RunMode,
     StopKind, Telemetry,
 };
+use ecdrive_cli::app::config::canopen::CanRunConfig;
 use ecdrive_cli::app::config::{self, Config};
 use ecdrive_cli::app::ethercat::tools::{self, SimSettings, Target, ToolLink};
 use pyo3::prelude::*;
@@ -27,36 +30,67 @@ use std::time::{Duration, Instant};
 
 type EcMaster = ecdrive::Master<ToolLink>;
 
+/// Which master, configured how.
+enum Bus {
+    /// EtherCAT: the master's configuration (start-up, cycle, drives).
+    EtherCat(Box<MasterConfig>),
+    /// CANopen: the run file's drives, cycle and bus (boxed: the two differ in size).
+    CanOpen(Box<CanRunConfig>),
+}
+
 /// Where the segment is, and how the master runs on it.
 struct Setup {
     target: String,
-    cfg: MasterConfig,
+    bus: Bus,
     op_timeout: Duration,
     record: bool,
     audit: bool,
 }
 
-/// A master run: the Rust master and its recording.
+impl Setup {
+    fn cycle(&self) -> Duration {
+        match &self.bus {
+            Bus::EtherCat(c) => c.cycle.cycle,
+            Bus::CanOpen(c) => c.cycle,
+        }
+    }
+}
+
+/// A master run: the master and its recording.
 struct Running {
-    m: EcMaster,
-    recorder: Recorder,
+    bus: Box<dyn Backend>,
+    recorder: Option<Recorder>,
     audit: Option<Arc<Audit>>,
 }
 
 enum Session {
-    /// The link, no cycle: the commissioning reads run on it.
-    Idle(ToolLink),
+    /// No cycle: the EtherCAT link, on which the commissioning reads run (a CANopen master
+    /// opens its bus when it starts).
+    Idle(Option<ToolLink>),
     /// The cycle runs.
     Running(Box<Running>),
     /// Closed (or the link was lost with a failed start).
     Closed,
 }
 
+/// One drive as the last start found it.
+#[derive(Clone)]
+pub(crate) struct FoundDrive {
+    pub drive: DriveRef,
+    pub device: Device,
+    pub dictionary: Option<&'static [ecdrive::od::ObjectDesc]>,
+    /// Counts per second in one unit of the drive's velocity objects.
+    pub velocity_scale: f64,
+}
+
+/// The drives and the other devices of a start.
+pub(crate) type FoundOf = (Vec<FoundDrive>, Vec<Device>);
+
 /// The drives and I/O devices as the last start found them.
 #[derive(Default, Clone)]
 struct Found {
-    drives: Vec<DriveSummary>,
-    io: Vec<IoSummary>,
+    drives: Vec<FoundDrive>,
+    io: Vec<Device>,
 }
 
 pub(crate) struct Inner {
@@ -97,12 +131,12 @@ impl Inner {
     /// Send `c`; the telemetry's cycle and the history's next sequence number as of then.
     fn command(&self, what: &str, c: Command) -> Result<(u64, u64), Failure> {
         self.running(what, |r| {
-            let seq = r.m.history_since(u64::MAX).next;
-            let cycle = r.m.telemetry().cycle.cycle;
-            if !r.m.is_running() {
+            let seq = r.bus.history_since(u64::MAX).next;
+            let cycle = r.bus.telemetry().cycle.cycle;
+            if !r.bus.is_running() {
                 return Err(not_running(what));
             }
-            r.m.command(c).map_err(Failure::from)?;
+            r.bus.command(c)?;
             Ok((cycle, seq))
         })
     }
@@ -128,26 +162,26 @@ impl Inner {
         let mut failed: Option<(Failure, Instant)> = None;
         loop {
             let outcome = self.running(what, |r| {
-                let slice = r.m.history_since(seq);
+                let slice = r.bus.history_since(seq);
                 seq = slice.next;
                 for e in &slice.entries {
                     if failed.is_none()
                         && let Some(f) = stops_the_wait(e, axis, drive, what)
                     {
-                        let f = another_drives_fault(&r.m, e, drive, what).unwrap_or(f);
+                        let f = another_drives_fault(&mut *r.bus, e, drive, what).unwrap_or(f);
                         failed = Some((f, Instant::now() + STOP_MARGIN));
                     }
                     if let (Until::Event(f), HistoryEvent::Cycle(k)) = (&until, &e.event) {
                         seen |= f(k);
                     }
                 }
-                let t = r.m.telemetry();
+                let t = r.bus.telemetry();
                 let all_off = t
                     .axes
                     .iter()
                     .all(|a| a.state != Some(State::OperationEnabled));
                 if let Some((f, by)) = &failed {
-                    if !r.m.is_running() || all_off || Instant::now() > *by {
+                    if !r.bus.is_running() || all_off || Instant::now() > *by {
                         return Err(f.clone());
                     }
                     return Ok(false);
@@ -155,7 +189,7 @@ impl Inner {
                 if seen {
                     return Ok(true);
                 }
-                if !r.m.is_running() {
+                if !r.bus.is_running() {
                     return Err(Failure::new(
                         Class::Bus,
                         Some(drive),
@@ -163,7 +197,7 @@ impl Inner {
                         "the cycle ended",
                     ));
                 }
-                let t = r.m.telemetry();
+                let t = r.bus.telemetry();
                 if let Until::Telemetry(done) = &until
                     && t.cycle.cycle >= from.0 + 3
                     && done(t)
@@ -187,12 +221,12 @@ impl Inner {
         let mut s = locked(&self.session);
         let link = match std::mem::replace(&mut *s, Session::Closed) {
             Session::Idle(l) => l,
-            Session::Running(r) if r.m.is_running() => {
+            Session::Running(r) if r.bus.is_running() => {
                 *s = Session::Running(r);
                 return Ok(());
             }
             // Ended by itself (a drive left OP, the segment was lost): its link, afresh.
-            Session::Running(r) => r.m.stop(StopKind::QuickStop).1,
+            Session::Running(r) => r.bus.stop(StopKind::QuickStop).1,
             Session::Closed => {
                 return Err(Failure::new(
                     Class::Bus,
@@ -202,7 +236,46 @@ impl Inner {
                 ));
             }
         };
-        let mut cfg = self.setup.cfg.clone();
+        match &self.setup.bus {
+            Bus::EtherCat(cfg) => {
+                let Some(link) = link else {
+                    return Err(Failure::new(
+                        Class::Bus,
+                        None,
+                        "starting the master",
+                        "the link is gone",
+                    ));
+                };
+                self.start_ethercat(s, (**cfg).clone(), link)
+            }
+            Bus::CanOpen(cfg) => {
+                let (mut bus, (drives, io)) = crate::canopen::start(cfg)?;
+                *locked(&self.found) = Found { drives, io };
+                // The drives are Operational; their telemetry means something once the cycle
+                // has had their first feedback.
+                let deadline = Instant::now() + self.setup.op_timeout;
+                while bus.is_running()
+                    && bus.telemetry().cycle.cycle < 3
+                    && Instant::now() < deadline
+                {
+                    std::thread::sleep(Duration::from_millis(1));
+                }
+                *s = Session::Running(Box::new(Running {
+                    bus,
+                    recorder: None,
+                    audit: None,
+                }));
+                Ok(())
+            }
+        }
+    }
+
+    fn start_ethercat(
+        &self,
+        mut s: MutexGuard<'_, Session>,
+        mut cfg: MasterConfig,
+        link: ToolLink,
+    ) -> Result<(), Failure> {
         let (tx, recorder) = Recorder::start(self.setup.record).map_err(|e| {
             Failure::new(
                 Class::Bus,
@@ -219,14 +292,11 @@ impl Inner {
         let mut m = match EcMaster::start(link, cfg) {
             Ok(m) => m,
             Err(f) => {
-                *s = Session::Idle(f.link);
+                *s = Session::Idle(Some(f.link));
                 return Err(f.error.into());
             }
         };
-        *locked(&self.found) = Found {
-            drives: m.drives().to_vec(),
-            io: m.io().to_vec(),
-        };
+        *locked(&self.found) = found_on_ethercat(m.drives(), m.io());
         recorder.set_velocity_scales(
             m.drives()
                 .iter()
@@ -234,7 +304,11 @@ impl Inner {
                 .collect(),
         );
         let op = m.wait_until("OP", self.setup.op_timeout, |t| t.cycle.all_op);
-        *s = Session::Running(Box::new(Running { m, recorder, audit }));
+        *s = Session::Running(Box::new(Running {
+            bus: Box::new(EtherCat { m }),
+            recorder: Some(recorder),
+            audit,
+        }));
         drop(s);
         if let Err(e) = op {
             let _ = self.stop(StopKind::QuickStop);
@@ -255,15 +329,27 @@ impl Inner {
         let Session::Running(r) = std::mem::replace(&mut *s, Session::Closed) else {
             unreachable!("matched as running above, under the same lock")
         };
-        let Running { m, recorder, audit } = *r;
-        let (report, link) = m.stop(kind);
-        *s = Session::Idle(link);
-        let mut summary = stop_summary(report.as_ref(), recorder.max_wake_latency_ns());
-        if let (Some(a), Some(o)) = (audit, summary.as_object_mut()) {
-            o.insert(
-                "audit".into(),
-                serde_json::to_value(a.result()).unwrap_or_default(),
-            );
+        let Running {
+            bus,
+            recorder,
+            audit,
+        } = *r;
+        let (mut summary, link) = bus.stop(kind);
+        *s = match link {
+            Some(l) => Session::Idle(Some(l)),
+            None if matches!(self.setup.bus, Bus::CanOpen(_)) => Session::Idle(None),
+            None => Session::Closed,
+        };
+        if let Some(o) = summary.as_object_mut() {
+            if let Some(r) = recorder {
+                o.insert("max_wake_latency_ns".into(), r.max_wake_latency_ns().into());
+            }
+            if let Some(a) = audit {
+                o.insert(
+                    "audit".into(),
+                    serde_json::to_value(a.result()).unwrap_or_default(),
+                );
+            }
         }
         *locked(&self.report) = Some(summary.clone());
         Ok(summary)
@@ -342,7 +428,7 @@ fn stops_the_wait(e: &HistoryEntry, axis: usize, drive: &DriveRef, what: &str) -
 /// The wait of `drive` ended because another drive faulted (every axis is being stopped):
 /// that drive's fault, in the words of its alarm table, with what was waiting.
 fn another_drives_fault(
-    m: &EcMaster,
+    bus: &mut dyn Backend,
     e: &HistoryEntry,
     drive: &DriveRef,
     what: &str,
@@ -353,8 +439,8 @@ fn another_drives_fault(
     else {
         return None;
     };
-    let faulted = m.drives().get(usize::from(axis))?.drive.clone();
-    let said = last_fault(&m.history(), usize::from(axis)).map(|e| e.text());
+    let faulted = bus.drive_ref(usize::from(axis))?;
+    let said = last_fault(&bus.history_since(0).entries, usize::from(axis)).map(|e| e.text());
     Some(Failure::new(
         Class::Fault,
         Some(&faulted),
@@ -377,7 +463,7 @@ fn last_fault(history: &[HistoryEntry], axis: usize) -> Option<&HistoryEntry> {
 }
 
 /// What `stop()` returns: how the run ended, its cycle figures, the history's totals.
-fn stop_summary(report: Option<&ecdrive::SessionReport>, max_wake_ns: u64) -> serde_json::Value {
+pub(crate) fn stop_summary(report: Option<&ecdrive::SessionReport>) -> serde_json::Value {
     let Some(r) = report else {
         return serde_json::json!({ "shutdown_ok": false });
     };
@@ -402,7 +488,6 @@ fn stop_summary(report: Option<&ecdrive::SessionReport>, max_wake_ns: u64) -> se
         "shutdown_ok": r.shutdown_ok,
         "restarts": r.restarts,
         "cycle": cycle,
-        "max_wake_latency_ns": max_wake_ns,
         "history_totals": totals,
         "emergencies": r.emergencies.len(),
         "drives": r.drive_outcomes().iter().map(|o| serde_json::json!({
@@ -415,12 +500,13 @@ fn stop_summary(report: Option<&ecdrive::SessionReport>, max_wake_ns: u64) -> se
     })
 }
 
-/// The target, the master's configuration and the emulated devices' settings.
+/// The target (none for a CANopen run: its bus is opened at the start), the master's
+/// configuration and the emulated devices' settings.
 fn setup_of(
     target: &str,
     cycle_us: Option<u32>,
     sim_loss_detection: bool,
-) -> Result<(Target, MasterConfig, SimSettings), Failure> {
+) -> Result<(Option<Target>, Bus, SimSettings), Failure> {
     let cycle = |us: u32| Duration::from_micros(u64::from(us));
     let is_file = target.ends_with(".toml") || std::path::Path::new(target).is_file();
     if !is_file {
@@ -430,7 +516,7 @@ fn setup_of(
             ..SimSettings::default()
         };
         let cfg = MasterConfig::new(cycle(cycle_us.unwrap_or(1000)));
-        return Ok((t, cfg, sim));
+        return Ok((Some(t), Bus::EtherCat(Box::new(cfg)), sim));
     }
     match config::load_any(std::path::Path::new(target)) {
         Ok(Config::EtherCat(c)) => {
@@ -439,16 +525,14 @@ fn setup_of(
                 master.startup.cycle = cycle(us);
                 master.cycle.cycle = cycle(us);
             }
-            Ok((c.target, master, c.sim))
+            Ok((Some(c.target), Bus::EtherCat(Box::new(master)), c.sim))
         }
-        Ok(Config::CanOpen(c)) => Err(Failure::config(
-            format!("reading {target}"),
-            format!(
-                "{} is a CANopen run: ecdrive.run(\"{target}\") runs it; the Master class \
-                 drives EtherCAT segments",
-                c.source
-            ),
-        )),
+        Ok(Config::CanOpen(mut c)) => {
+            if let Some(us) = cycle_us {
+                c.cycle = cycle(us);
+            }
+            Ok((None, Bus::CanOpen(Box::new(c)), SimSettings::default()))
+        }
         Err(e) => Err(Failure::config(format!("reading {target}"), e)),
     }
 }
@@ -541,15 +625,17 @@ impl Master {
     ) -> PyResult<Self> {
         let op_timeout = values::seconds(op_timeout)?;
         let inner = py.detach(move || -> Result<Arc<Inner>, Failure> {
-            let (t, mut cfg, sim) = setup_of(&target, cycle_us, sim_loss_detection)?;
-            if priority.is_some() {
-                cfg.cycle.rt.priority = priority;
+            let (t, mut bus, sim) = setup_of(&target, cycle_us, sim_loss_detection)?;
+            if let (Some(p), Bus::EtherCat(cfg)) = (priority, &mut bus) {
+                cfg.cycle.rt.priority = Some(p);
             }
-            let link = t.open_with(&sim).map_err(Failure::from)?;
+            let link = t
+                .map(|t| t.open_with(&sim).map_err(Failure::from))
+                .transpose()?;
             let inner = Arc::new(Inner {
                 setup: Setup {
                     target,
-                    cfg,
+                    bus,
                     op_timeout,
                     record,
                     audit,
@@ -612,7 +698,7 @@ impl Master {
     /// Whether the cycle runs.
     #[getter]
     fn running(&self) -> bool {
-        matches!(&*locked(&self.inner.session), Session::Running(r) if r.m.is_running())
+        matches!(&*locked(&self.inner.session), Session::Running(r) if r.bus.is_running())
     }
 
     /// The target as given.
@@ -624,7 +710,7 @@ impl Master {
     /// The cycle time, µs.
     #[getter]
     fn cycle_us(&self) -> u64 {
-        self.inner.setup.cfg.cycle.cycle.as_micros() as u64
+        self.inner.setup.cycle().as_micros() as u64
     }
 
     /// Every device of the segment as the last start found it, in segment order, with its AL
@@ -632,54 +718,42 @@ impl Master {
     #[getter]
     fn devices(&self) -> Vec<Device> {
         let found = locked(&self.inner.found).clone();
-        let (drive_states, io_states) = self
+        let can = matches!(self.inner.setup.bus, Bus::CanOpen(_));
+        let live = self
             .inner
             .running("reading the states", |r| {
-                let t = r.m.telemetry();
+                let running = r.bus.is_running();
+                let t = r.bus.telemetry();
                 Ok((
+                    running,
                     t.axes.iter().map(|a| a.al_state).collect::<Vec<_>>(),
                     t.io.iter()
                         .map(|i| (i.position, i.al_state))
                         .collect::<Vec<_>>(),
                 ))
             })
-            .unwrap_or_default();
-        let mut out: Vec<Device> = found
-            .drives
-            .iter()
-            .enumerate()
-            .map(|(i, d)| Device {
-                position: d.drive.position,
-                name: d.drive.name.clone(),
-                vendor_id: d.info.vendor_id,
-                product_code: d.info.product_code,
-                revision: d.info.revision,
-                serial: d.info.serial,
-                alias: d.info.alias,
-                profile: Some(d.profile.to_string()),
-                state: state_name(drive_states.get(i).copied()),
-                is_drive: true,
-            })
-            .collect();
-        out.extend(found.io.iter().map(|d| {
-            Device {
-                position: d.device.position,
-                name: d.device.name.clone(),
-                vendor_id: d.info.vendor_id,
-                product_code: d.info.product_code,
-                revision: d.info.revision,
-                serial: d.info.serial,
-                alias: d.info.alias,
-                profile: d.info.profile.map(str::to_string),
-                state: state_name(
-                    io_states
-                        .iter()
-                        .find(|(p, _)| *p == d.device.position)
-                        .map(|(_, s)| *s),
-                ),
-                is_drive: false,
-            }
-        }));
+            .ok();
+        let mut out: Vec<Device> = Vec::new();
+        for (i, d) in found.drives.iter().enumerate() {
+            let mut dev = d.device.clone();
+            dev.state = match (&live, can) {
+                (Some((true, _, _)), true) => "OPERATIONAL".to_string(),
+                (_, true) => "STOPPED".to_string(),
+                (Some((_, axes, _)), false) => state_name(axes.get(i).copied()),
+                (None, false) => "INIT".to_string(),
+            };
+            out.push(dev);
+        }
+        for d in &found.io {
+            let mut dev = d.clone();
+            dev.state = match &live {
+                Some((_, _, io)) => {
+                    state_name(io.iter().find(|(p, _)| *p == d.position).map(|(_, s)| *s))
+                }
+                None => "INIT".to_string(),
+            };
+            out.push(dev);
+        }
         out.sort_by_key(|d| d.position);
         out
     }
@@ -731,7 +805,7 @@ impl Master {
     fn cycle(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
         let c = self
             .inner
-            .running("reading the cycle", |r| Ok(r.m.telemetry().cycle))?;
+            .running("reading the cycle", |r| Ok(r.bus.telemetry().cycle))?;
         values::to_py(py, "the cycle's figures", &c)
     }
 
@@ -739,7 +813,10 @@ impl Master {
     #[getter]
     fn max_wake_latency_us(&self) -> PyResult<f64> {
         let ns = self.inner.running("reading the latency", |r| {
-            Ok(r.recorder.max_wake_latency_ns())
+            r.recorder
+                .as_ref()
+                .map(Recorder::max_wake_latency_ns)
+                .ok_or_else(not_recorded)
         })?;
         Ok(ns as f64 / 1000.0)
     }
@@ -751,9 +828,12 @@ impl Master {
     /// torque, following_error (positions in counts, velocities in counts/s, torques in the
     /// drive's unit; None where not mapped).
     fn record(&self, py: Python<'_>) -> PyResult<Py<PyAny>> {
-        let cols = self
-            .inner
-            .running("reading the recording", |r| Ok(r.recorder.take()))?;
+        let cols = self.inner.running("reading the recording", |r| {
+            r.recorder
+                .as_ref()
+                .map(Recorder::take)
+                .ok_or_else(not_recorded)
+        })?;
         cols.into_py(py)
     }
 
@@ -763,7 +843,7 @@ impl Master {
     #[pyo3(signature = (since=0))]
     fn history(&self, py: Python<'_>, since: u64) -> PyResult<Py<PyAny>> {
         let entries = self.inner.running("reading the history", |r| {
-            Ok(r.m.history_since(since).entries)
+            Ok(r.bus.history_since(since).entries)
         })?;
         values::to_py(py, "the history", &entries)
     }
@@ -806,7 +886,7 @@ impl Master {
         })?;
         let mut opts = tools::StatesOptions::new(target);
         opts.position = position;
-        opts.cycle = self.inner.setup.cfg.cycle.cycle;
+        opts.cycle = self.inner.setup.cycle();
         let r = self.tool(py, "states", move |b| tools::states_timed(b, &opts))?;
         values::to_py(py, "the state changes", &r)
     }
@@ -830,12 +910,11 @@ impl Master {
         let d = found.drives.get(axis)?;
         Some(Drive {
             inner: self.inner.clone(),
-            velocity_scale: d.units.velocity_position_per_s(),
+            velocity_scale: d.velocity_scale,
             pending: Mutex::new(None),
             axis,
             drive: d.drive.clone(),
-            dictionary: ecdrive::drives::by_identity(d.info.vendor_id, d.info.product_code)
-                .map(|p| p.dictionary),
+            dictionary: d.dictionary,
         })
     }
 
@@ -853,7 +932,17 @@ impl Master {
         Ok(py.detach(move || -> Result<R, Failure> {
             let mut s = locked(&inner.session);
             let link = match std::mem::replace(&mut *s, Session::Closed) {
-                Session::Idle(l) => l,
+                Session::Idle(Some(l)) => l,
+                other if matches!(inner.setup.bus, Bus::CanOpen(_)) => {
+                    *s = other;
+                    return Err(Failure::new(
+                        Class::Input,
+                        None,
+                        what.as_str(),
+                        "the commissioning reads are EtherCAT's: for CANopen drives, `ecdrive \
+                         scan`, `upload` and `download` with `--can`",
+                    ));
+                }
                 other => {
                     *s = other;
                     return Err(Failure::new(
@@ -879,9 +968,60 @@ impl Master {
                     link,
                 ),
             };
-            *s = Session::Idle(link);
+            *s = Session::Idle(Some(link));
             r
         })?)
+    }
+}
+
+/// What a CANopen master cannot give.
+fn not_recorded() -> Failure {
+    Failure::new(
+        Class::Input,
+        None,
+        "reading the recording",
+        "a CANopen master's cycles are recorded by `ecdrive run --record` (its run file); \
+         record() and max_wake_latency_us are the EtherCAT master's",
+    )
+}
+
+/// The drives and I/O devices of an EtherCAT start.
+fn found_on_ethercat(drives: &[DriveSummary], io: &[IoSummary]) -> Found {
+    let device =
+        |d: &DriveRef, info: &ecdrive::master::startup::DeviceInfo, profile, drive| Device {
+            position: d.position,
+            name: d.name.clone(),
+            vendor_id: info.vendor_id,
+            product_code: info.product_code,
+            revision: info.revision,
+            serial: info.serial,
+            alias: info.alias,
+            profile,
+            state: String::new(),
+            is_drive: drive,
+        };
+    Found {
+        drives: drives
+            .iter()
+            .map(|d| FoundDrive {
+                drive: d.drive.clone(),
+                device: device(&d.drive, &d.info, Some(d.profile.to_string()), true),
+                dictionary: ecdrive::drives::by_identity(d.info.vendor_id, d.info.product_code)
+                    .map(|p| p.dictionary),
+                velocity_scale: d.units.velocity_position_per_s(),
+            })
+            .collect(),
+        io: io
+            .iter()
+            .map(|d| {
+                device(
+                    &d.device,
+                    &d.info,
+                    d.info.profile.map(str::to_string),
+                    false,
+                )
+            })
+            .collect(),
     }
 }
 
@@ -893,21 +1033,22 @@ fn state_name(al: Option<u8>) -> String {
 #[pyclass(frozen, get_all, module = "ecdrive._ecdrive")]
 #[derive(Clone)]
 pub struct Device {
-    /// Position on the segment (0 = first).
-    position: u16,
+    /// Position on the segment (0 = first); a CANopen drive's node-ID.
+    pub(crate) position: u16,
     /// Name (the profile's, or the SII's for a device no profile matches).
-    name: String,
-    vendor_id: u32,
-    product_code: u32,
-    revision: u32,
-    serial: u32,
-    alias: u16,
+    pub(crate) name: String,
+    pub(crate) vendor_id: u32,
+    pub(crate) product_code: u32,
+    pub(crate) revision: u32,
+    pub(crate) serial: u32,
+    pub(crate) alias: u16,
     /// The drive profile ecdrive runs it with (None: not a drive).
-    profile: Option<String>,
-    /// AL state when the list was made: INIT, PRE-OP, SAFE-OP, OP (+ERR).
-    state: String,
+    pub(crate) profile: Option<String>,
+    /// AL state when the list was made: INIT, PRE-OP, SAFE-OP, OP (+ERR); a CANopen drive's
+    /// NMT state (OPERATIONAL while the master runs).
+    pub(crate) state: String,
     /// Whether ecdrive drives it (a CiA 402 axis).
-    is_drive: bool,
+    pub(crate) is_drive: bool,
 }
 
 #[pymethods]
@@ -921,6 +1062,10 @@ impl Device {
     }
 }
 
+/// A move or program under way: what it is, where the cycle and the history stood when it
+/// was sent, and whether the drive runs it (pp).
+type Pending = (String, (u64, u64), bool);
+
 /// One drive of a running master: its telemetry as properties, its commands as methods that
 /// wait for their outcome (releasing the GIL meanwhile).
 #[pyclass(frozen, module = "ecdrive._ecdrive")]
@@ -928,9 +1073,9 @@ pub struct Drive {
     inner: Arc<Inner>,
     /// Counts per second in one unit of the drive's velocity objects (0x606C, 0x60FF).
     velocity_scale: f64,
-    /// The move started without waiting: what it is, and where the history and the cycle
-    /// stood when it was sent.
-    pending: Mutex<Option<(String, (u64, u64))>>,
+    /// The move or program started without waiting: what it is, where the cycle and the
+    /// history stood when it was sent, and whether the drive runs it (pp).
+    pending: Mutex<Option<Pending>>,
     axis: usize,
     drive: DriveRef,
     dictionary: Option<&'static [ecdrive::od::ObjectDesc]>,
@@ -940,7 +1085,8 @@ impl Drive {
     /// A look at this axis's telemetry.
     fn look<R>(&self, f: impl FnOnce(&ecdrive::AxisTelemetry) -> R) -> PyResult<R> {
         Ok(self.inner.running("reading the drive", |r| {
-            r.m.telemetry()
+            r.bus
+                .telemetry()
                 .axes
                 .get(self.axis)
                 .map(f)
@@ -1135,7 +1281,12 @@ impl Drive {
     fn mode(&self) -> PyResult<String> {
         self.look(|a| {
             let m = OperationMode::from_i8(a.mode);
-            RunMode::of(m).map_or_else(|| format!("{m:?}"), |r| r.name().to_string())
+            match (RunMode::of(m), m) {
+                (Some(r), _) => r.name().to_string(),
+                (None, OperationMode::NoMode) => "none".to_string(),
+                (None, OperationMode::Homing) => "hm".to_string(),
+                (None, m) => format!("{m:?}"),
+            }
         })
     }
 
@@ -1239,33 +1390,80 @@ impl Drive {
         )
     }
 
-    /// Move to `target` (counts) in csp, planned by the cycle (trapezoidal: at most
-    /// `velocity` counts/s and `acceleration` counts/s²); the axis switches to csp first if
-    /// it runs another mode. Waits until the set-point arrived, or with `wait=False` returns
-    /// at once (then `wait()` waits for it, so several drives move together).
-    #[pyo3(signature = (target, velocity, acceleration, timeout=10.0, *, wait=true))]
+    /// Move to `target` (counts). In csp (and any mode but pp) the cycle plans it
+    /// (trapezoidal: at most `velocity` counts/s and `acceleration` counts/s², both needed);
+    /// the axis switches to csp first. In pp the drive runs it with its own profile values
+    /// (0x6081, 0x6083: `sdo_write` them, or the run file's start-up values), handed over with
+    /// the new-set-point handshake; `velocity` and `acceleration` are then not given. Waits
+    /// until the target is reached, or with `wait=False` returns at once (then `wait()`
+    /// waits for it, so several drives move together).
+    #[pyo3(signature = (target, velocity=None, acceleration=None, timeout=10.0, *, wait=true))]
     fn move_to(
         &self,
         py: Python<'_>,
         target: f64,
-        velocity: f64,
-        acceleration: f64,
+        velocity: Option<f64>,
+        acceleration: Option<f64>,
         timeout: f64,
         wait: bool,
     ) -> PyResult<()> {
+        let pp = self.look(|a| RunMode::of(OperationMode::from_i8(a.mode)))? == Some(RunMode::Pp);
         let what = format!("moving to {target}");
-        let c = Command::Move {
-            axis: self.axis as u16,
-            to: target,
-            velocity,
-            acceleration,
+        let c = match (pp, velocity, acceleration) {
+            (true, None, None) => Command::Pp {
+                axis: self.axis as u16,
+                target,
+                relative: false,
+                immediate: true,
+            },
+            (true, _, _) => {
+                return Err(Failure::new(
+                    Class::Input,
+                    Some(&self.drive),
+                    what,
+                    "the axis runs pp: the drive moves with its own profile velocity and \
+                     acceleration (0x6081, 0x6083; sdo_write them, or set them in the run \
+                     file): leave velocity and acceleration out",
+                )
+                .into());
+            }
+            (false, Some(velocity), Some(acceleration)) => Command::Move {
+                axis: self.axis as u16,
+                to: target,
+                velocity,
+                acceleration,
+            },
+            (false, _, _) => {
+                return Err(Failure::new(
+                    Class::Input,
+                    Some(&self.drive),
+                    what,
+                    "a csp move needs velocity= and acceleration= (counts/s, counts/s²)",
+                )
+                .into());
+            }
         };
         let from = py.detach(|| {
             self.inner
                 .command(&what, c)
                 .map_err(|f| with_drive(f, &self.drive))
         })?;
-        *locked(&self.pending) = Some((what, from));
+        *locked(&self.pending) = Some((what, from, pp));
+        if wait { self.wait(py, timeout) } else { Ok(()) }
+    }
+
+    /// Run the axis's program (the run file's `program`) from its first step; waits until it
+    /// is done, or with `wait=False` returns at once (then `wait()`).
+    #[pyo3(signature = (timeout=60.0, *, wait=true))]
+    fn run_program(&self, py: Python<'_>, timeout: f64, wait: bool) -> PyResult<()> {
+        let what = "running its program".to_string();
+        let c = Command::RunProgram(Axes::One(self.axis as u16));
+        let from = py.detach(|| {
+            self.inner
+                .command(&what, c)
+                .map_err(|f| with_drive(f, &self.drive))
+        })?;
+        *locked(&self.pending) = Some((what, from, false));
         if wait { self.wait(py, timeout) } else { Ok(()) }
     }
 
@@ -1274,26 +1472,37 @@ impl Drive {
     #[pyo3(signature = (timeout=10.0))]
     fn wait(&self, py: Python<'_>, timeout: f64) -> PyResult<()> {
         let timeout = values::seconds(timeout)?;
-        let Some((what, from)) = locked(&self.pending).take() else {
+        let Some((what, from, pp)) = locked(&self.pending).take() else {
             return Ok(());
         };
         let axis = self.axis;
-        // Done when the cycle says the move (run as a one-step program) is done.
+        // Done when the cycle says the program (a csp move runs as a one-step program) is
+        // done; a pp move when the drive reports the target reached.
         let done = |k: &EventKind| matches!(*k, EventKind::ProgramDone { axis: a } if usize::from(a) == axis);
+        let reached = |t: &Telemetry| {
+            t.axes
+                .get(axis)
+                .is_some_and(|a| a.task == ecdrive::master::DriveTask::TargetReached)
+        };
+        let until = if pp {
+            Until::Telemetry(&reached)
+        } else {
+            Until::Event(&done)
+        };
         Ok(py.detach(|| {
             self.inner
-                .wait(&what, &self.drive, axis, from, timeout, Until::Event(&done))
+                .wait(&what, &self.drive, axis, from, timeout, until)
         })?)
     }
 
     /// Move by `distance` (counts) from the position demand, as `move_to`.
-    #[pyo3(signature = (distance, velocity, acceleration, timeout=10.0, *, wait=true))]
+    #[pyo3(signature = (distance, velocity=None, acceleration=None, timeout=10.0, *, wait=true))]
     fn move_by(
         &self,
         py: Python<'_>,
         distance: f64,
-        velocity: f64,
-        acceleration: f64,
+        velocity: Option<f64>,
+        acceleration: Option<f64>,
         timeout: f64,
         wait: bool,
     ) -> PyResult<()> {
@@ -1364,7 +1573,7 @@ impl Drive {
         let said = self
             .inner
             .running("reading the history", |r| {
-                Ok(last_fault(&r.m.history(), axis).map(HistoryEntry::text))
+                Ok(last_fault(&r.bus.history_since(0).entries, axis).map(HistoryEntry::text))
             })?
             .unwrap_or_else(|| format!("error code 0x{code:04X}"));
         Ok(Some(Failure::new(
@@ -1379,7 +1588,7 @@ impl Drive {
         let inner = self.inner.clone();
         let position = self.drive.position;
         Ok(py.detach(move || -> Result<Vec<u8>, Failure> {
-            let req = inner.running("reading an object", |r| Ok(r.m.sdo_requester()))?;
+            let req = inner.running("reading an object", |r| r.bus.sdo_requester())?;
             req.upload(position, a).map_err(Failure::from)
         })?)
     }
@@ -1388,7 +1597,7 @@ impl Drive {
         let inner = self.inner.clone();
         let position = self.drive.position;
         Ok(py.detach(move || -> Result<(), Failure> {
-            let req = inner.running("writing an object", |r| Ok(r.m.sdo_requester()))?;
+            let req = inner.running("writing an object", |r| r.bus.sdo_requester())?;
             req.download(position, a, &data).map_err(Failure::from)
         })?)
     }

@@ -116,7 +116,7 @@ pub fn emulation_of(profile: &CanDriveProfile) -> Option<&'static Emulation> {
 }
 
 /// Open the bus `spec` names.
-pub fn open_bus(spec: &BusSpec) -> Result<Box<dyn CanTransport>, TransportError> {
+pub fn open_bus(spec: &BusSpec) -> Result<Box<dyn CanTransport + Send>, TransportError> {
     Ok(match spec {
         BusSpec::SocketCan(i) => Box::new(SocketCanTransport::open(i)?),
         BusSpec::Virtual => Box::new(demo_bus()),
