@@ -340,23 +340,19 @@ impl Resolver {
                 r.units = self.units(axis);
                 self.drive(axis)
             }
-            EventKind::DriveFollowingErrorStuck { axis, .. }
-            | EventKind::ProgramStep { axis, .. }
-            | EventKind::ProgramDone { axis }
-            | EventKind::CommandRefused { axis, .. }
-            | EventKind::HomingFailed { axis, .. }
-            | EventKind::ProbeNotLatched { axis, .. }
-            | EventKind::SetpointLimit { axis, .. }
-            | EventKind::StreamUnderrun { axis, .. } => self.drive(axis),
+            EventKind::DriveFollowingErrorStuck { .. }
+            | EventKind::ProgramStep { .. }
+            | EventKind::ProgramDone { .. }
+            | EventKind::CommandRefused { .. }
+            | EventKind::HomingFailed { .. }
+            | EventKind::ProbeNotLatched { .. }
+            | EventKind::SetpointLimit { .. }
+            | EventKind::StreamUnderrun { .. } => e.kind.axis().and_then(|a| self.drive(a)),
         };
         if let EventKind::Stopping { reason } = e.kind {
             r.subject = match reason {
-                StopReason::DriveFault { axis }
-                | StopReason::FollowingError { axis }
-                | StopReason::HomingFailed { axis }
-                | StopReason::ProbeNotLatched { axis, .. } => self.drive(axis),
                 StopReason::DriveLeftOp { device } => self.device(device),
-                _ => None,
+                r => r.axis().and_then(|a| self.drive(a)),
             };
         }
         HistoryEntry::new(

@@ -112,6 +112,39 @@ pub enum Command {
     Restart,
 }
 
+impl EventKind {
+    /// The axis the event is about, if it is about one.
+    pub fn axis(&self) -> Option<u16> {
+        match *self {
+            EventKind::Axis { axis, .. }
+            | EventKind::FollowingError { axis, .. }
+            | EventKind::ProbeLatched { axis, .. }
+            | EventKind::DriveFollowingErrorStuck { axis, .. }
+            | EventKind::ProgramStep { axis, .. }
+            | EventKind::ProgramDone { axis }
+            | EventKind::CommandRefused { axis, .. }
+            | EventKind::HomingFailed { axis, .. }
+            | EventKind::ProbeNotLatched { axis, .. }
+            | EventKind::SetpointLimit { axis, .. }
+            | EventKind::StreamUnderrun { axis, .. } => Some(axis),
+            _ => None,
+        }
+    }
+}
+
+impl StopReason {
+    /// The axis whose trouble stops the axes, if an axis's.
+    pub fn axis(&self) -> Option<u16> {
+        match *self {
+            StopReason::DriveFault { axis }
+            | StopReason::FollowingError { axis }
+            | StopReason::HomingFailed { axis }
+            | StopReason::ProbeNotLatched { axis, .. } => Some(axis),
+            _ => None,
+        }
+    }
+}
+
 impl core::fmt::Display for Axes {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {

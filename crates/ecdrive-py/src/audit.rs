@@ -6,9 +6,7 @@
 //! included, passes through it (Python's own allocations do not, and need not: the cycle
 //! never calls Python).
 
-use ecdrive::master::cycle::CycleHooks;
-use ecdrive::rt::audit::{self, AllocCounts, SyscallCounter, SyscallCounts};
-use std::sync::Mutex;
+use ecdrive::master::cycle::audit::SteadyAudit;
 
 /// What the audit found, for the stop's summary.
 #[derive(Debug, Clone, Default, serde::Serialize)]
@@ -46,67 +44,26 @@ const ALLOWED_NAMES: [&str; 6] = [
     "ppoll",
 ];
 
-/// The hooks the cycle thread calls.
-#[derive(Default)]
-pub struct Audit {
-    counter: Mutex<Option<SyscallCounter>>,
-    base: Mutex<SyscallCounts>,
-    result: Mutex<Option<(AllocCounts, Option<SyscallCounts>)>>,
-    error: Mutex<Option<String>>,
+/// The hooks the cycle thread calls: the master's steady-state audit with the syscalls above.
+pub fn hooks() -> SteadyAudit {
+    SteadyAudit::new(&ALLOWED)
 }
 
-fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
-    m.lock().unwrap_or_else(std::sync::PoisonError::into_inner)
-}
-
-impl CycleHooks for Audit {
-    fn steady_begin(&self) {
-        // Nothing is allocated here that would be freed inside the window (a list of the
-        // allowed syscalls built here would be, when this function returns).
-        match SyscallCounter::for_current_thread(&ALLOWED) {
-            Ok(c) => {
-                if let Ok(b) = c.overhead() {
-                    *lock(&self.base) = b;
-                }
-                audit::alloc_window_begin();
-                c.start();
-                *lock(&self.counter) = Some(c);
-            }
-            Err(e) => {
-                *lock(&self.error) = Some(e.to_string());
-                audit::alloc_window_begin();
-            }
+/// What the window counted (after the cycle stopped).
+pub fn result(a: &SteadyAudit) -> AuditResult {
+    let mut r = AuditResult {
+        allowed: ALLOWED_NAMES.to_vec(),
+        error: a.error(),
+        ..AuditResult::default()
+    };
+    if let Some(c) = a.counts() {
+        r.complete = true;
+        r.allocs = c.allocs.allocs;
+        r.frees = c.allocs.frees;
+        if let Some(s) = c.syscalls {
+            r.syscalls = Some(s.all);
+            r.syscalls_outside = Some(s.outside);
         }
     }
-
-    fn steady_end(&self) {
-        let counts = lock(&self.counter).as_ref().map(|c| {
-            c.stop();
-            c.read().unwrap_or_default()
-        });
-        let allocs = audit::alloc_window_end();
-        *lock(&self.result) = Some((allocs, counts));
-    }
-}
-
-impl Audit {
-    /// What the window counted (after the cycle stopped).
-    pub fn result(&self) -> AuditResult {
-        let base = *lock(&self.base);
-        let mut r = AuditResult {
-            allowed: ALLOWED_NAMES.to_vec(),
-            error: lock(&self.error).clone(),
-            ..AuditResult::default()
-        };
-        if let Some((allocs, sys)) = *lock(&self.result) {
-            r.complete = true;
-            r.allocs = allocs.allocs;
-            r.frees = allocs.frees;
-            if let Some(s) = sys {
-                r.syscalls = Some(s.all.saturating_sub(base.all));
-                r.syscalls_outside = Some(s.outside.saturating_sub(base.outside));
-            }
-        }
-        r
-    }
+    r
 }

@@ -10,8 +10,7 @@ use ecdrive::cia402::{self, ErrorCode, ErrorEntry};
 use ecdrive::master::session::HistorySlice;
 use ecdrive::master::{HistoryLog, Resolved, SdoRequester};
 use ecdrive::{
-    Command, CycleTelemetry, DriveRef, EventKind, HistoryEntry, HistoryEvent, StopKind, StopReason,
-    Telemetry,
+    Command, CycleTelemetry, DriveRef, EventKind, HistoryEntry, HistoryEvent, StopKind, Telemetry,
 };
 use ecdrive_cli::app::ethercat::tools::ToolLink;
 
@@ -109,37 +108,18 @@ impl<T: CanTransport + Send + 'static> CanOpen<T> {
     /// A cycle event as a history entry: its drive, and a fault in the drive's alarm table.
     fn entry(&self, time_ns: u64, cycle: u64, kind: EventKind) -> HistoryEntry {
         let mut r = Resolved::default();
-        let axis = match kind {
-            EventKind::Axis { axis, event } => {
-                if let cia402::Event::Fault { error: Some(d), .. } = event
-                    && let Some(a) = self.axes.get(usize::from(axis))
-                {
-                    r.fault = Some(ErrorCode(d.code.0).describe(a.errors));
-                }
-                Some(axis)
-            }
-            EventKind::FollowingError { axis, .. }
-            | EventKind::ProbeLatched { axis, .. }
-            | EventKind::DriveFollowingErrorStuck { axis, .. }
-            | EventKind::ProgramStep { axis, .. }
-            | EventKind::ProgramDone { axis }
-            | EventKind::CommandRefused { axis, .. }
-            | EventKind::HomingFailed { axis, .. }
-            | EventKind::ProbeNotLatched { axis, .. }
-            | EventKind::SetpointLimit { axis, .. }
-            | EventKind::StreamUnderrun { axis, .. } => Some(axis),
-            _ => None,
-        };
-        if let EventKind::Stopping {
-            reason:
-                StopReason::DriveFault { axis }
-                | StopReason::FollowingError { axis }
-                | StopReason::HomingFailed { axis }
-                | StopReason::ProbeNotLatched { axis, .. },
+        if let EventKind::Axis {
+            axis,
+            event: cia402::Event::Fault { error: Some(d), .. },
         } = kind
+            && let Some(a) = self.axes.get(usize::from(axis))
         {
-            r.subject = self.drive_ref(usize::from(axis));
+            r.fault = Some(ErrorCode(d.code.0).describe(a.errors));
         }
+        if let EventKind::Stopping { reason } = kind {
+            r.subject = reason.axis().and_then(|a| self.drive_ref(usize::from(a)));
+        }
+        let axis = kind.axis();
         let drive = axis.and_then(|a| self.drive_ref(usize::from(a)));
         HistoryEntry::new(time_ns, Some(cycle), drive, HistoryEvent::Cycle(kind), r)
     }

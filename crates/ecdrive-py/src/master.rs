@@ -6,13 +6,13 @@
 //! that waits releases the GIL, and holds the master's lock only for a look at a time, so other
 //! Python threads (and other calls on the same master) go on meanwhile.
 
-use crate::audit::Audit;
 use crate::backend::{Backend, EtherCat};
 use crate::errors::{Class, Failure};
 use crate::record::Recorder;
 use crate::values;
 use ecdrive::cia402::{self, OperationMode, State};
 use ecdrive::master::bus::run_session;
+use ecdrive::master::cycle::audit::SteadyAudit as Audit;
 use ecdrive::master::session::IoSummary;
 use ecdrive::master::{DriveSummary, cycle::al_state_name};
 use ecdrive::od::{DataType, Dictionary, ObjectAddress};
@@ -285,7 +285,7 @@ impl Inner {
             )
         })?;
         cfg.record = Some(tx);
-        let audit = self.setup.audit.then(|| Arc::new(Audit::default()));
+        let audit = self.setup.audit.then(|| Arc::new(crate::audit::hooks()));
         if let Some(a) = &audit {
             cfg.hooks = Some(a.clone());
         }
@@ -347,7 +347,7 @@ impl Inner {
             if let Some(a) = audit {
                 o.insert(
                     "audit".into(),
-                    serde_json::to_value(a.result()).unwrap_or_default(),
+                    serde_json::to_value(crate::audit::result(&a)).unwrap_or_default(),
                 );
             }
         }

@@ -39,6 +39,7 @@ use ethercrab::{Command as EcCommand, MainDevice, SubDeviceState};
 use std::pin::pin;
 use std::time::Duration;
 
+pub mod audit;
 mod axes;
 mod bus;
 mod settings;

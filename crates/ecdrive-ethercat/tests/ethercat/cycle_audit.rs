@@ -19,8 +19,8 @@ use ecdrive_core::cia402::State;
 use ecdrive_core::link::FrameLink;
 use ecdrive_core::link::netns::{VethPair, require_root};
 use ecdrive_core::od::ObjectAddress;
-use ecdrive_core::rt::audit::{self, AllocCounts, SyscallCounter, SyscallCounts, skip_or_fail};
-use ecdrive_ethercat::cycle::CycleHooks;
+use ecdrive_core::rt::audit::{AllocCounts, skip_or_fail};
+use ecdrive_ethercat::cycle::audit::SteadyAudit;
 use ecdrive_ethercat::program::{ProbeEdge, RunMode, Step, Target};
 use ecdrive_ethercat::session::{Master, MasterConfig};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
@@ -32,58 +32,6 @@ use ecdrive_sim::{EscConfig, HostClock, Segment};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use support::generic::GENERIC_TEST;
-
-struct Audit {
-    allowed: &'static [libc::c_long],
-    counter: Mutex<Option<SyscallCounter>>,
-    base: Mutex<SyscallCounts>,
-    result: Mutex<Option<(AllocCounts, SyscallCounts)>>,
-    error: Mutex<Option<String>>,
-}
-
-impl CycleHooks for Audit {
-    fn steady_begin(&self) {
-        match SyscallCounter::for_current_thread(self.allowed) {
-            Ok(c) => {
-                if let Ok(b) = c.overhead() {
-                    *self.base.lock().unwrap() = b;
-                }
-                audit::alloc_window_begin();
-                c.start();
-                *self.counter.lock().unwrap() = Some(c);
-            }
-            Err(e) => {
-                *self.error.lock().unwrap() = Some(e.to_string());
-                audit::alloc_window_begin();
-            }
-        }
-    }
-
-    fn steady_end(&self) {
-        let guard = self.counter.lock().unwrap();
-        let counts = match guard.as_ref() {
-            Some(c) => {
-                c.stop();
-                c.read().unwrap_or_default()
-            }
-            None => SyscallCounts::default(),
-        };
-        let allocs = audit::alloc_window_end();
-        *self.result.lock().unwrap() = Some((allocs, counts));
-    }
-}
-
-impl Audit {
-    fn new(allowed: &'static [libc::c_long]) -> Self {
-        Self {
-            allowed,
-            counter: Mutex::default(),
-            base: Mutex::default(),
-            result: Mutex::default(),
-            error: Mutex::default(),
-        }
-    }
-}
 
 /// A realistic segment: two drives with an I/O device between them.
 /// What runs: generic servo devices on the test profile without emergency polling, or the
@@ -254,7 +202,7 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
     what: &str,
     app: Option<(Arc<Mutex<AuditApp>>, StreamProducer)>,
 ) {
-    let audit = Arc::new(Audit::new(allowed));
+    let audit = Arc::new(SteadyAudit::new(allowed));
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
     if load == Load::Generic {
         cfg.emergency_poll = None;
@@ -388,28 +336,19 @@ fn audit_run_with<L: FrameLink + Send + 'static>(
     let (report, _) = m.stop(StopKind::Ramp);
     assert!(report.unwrap().shutdown_ok);
 
-    let (allocs, sys) = audit
-        .result
-        .lock()
-        .unwrap()
-        .take()
-        .expect("the window closed");
+    let counts = audit.counts().expect("the window closed");
     assert_eq!(
-        allocs,
+        counts.allocs,
         AllocCounts::default(),
         "{what}: the cycle allocated in steady state"
     );
-    if let Some(e) = audit.error.lock().unwrap().take() {
+    if let Some(e) = audit.error() {
         skip_or_fail(&format!("syscall audit of the cycle ({what}): {e}"));
         return;
     }
-    let base = *audit.base.lock().unwrap();
-    let outside = sys.outside - base.outside;
-    let all = sys.all - base.all;
-    assert_eq!(
-        outside, 0,
-        "{what}: syscalls outside {allowed:?}: {sys:?} (base {base:?})"
-    );
+    let sys = counts.syscalls.expect("counted");
+    let (outside, all) = (sys.outside, sys.all);
+    assert_eq!(outside, 0, "{what}: syscalls outside {allowed:?}: {sys:?}");
     // At least one sleep per cycle: at least the 300 cycles we waited for.
     assert!(all >= 300, "{what}: {sys:?}");
 }
