@@ -65,7 +65,7 @@ impl Backend for EtherCat {
 
     fn stop(self: Box<Self>, kind: StopKind) -> (serde_json::Value, Option<ToolLink>) {
         let (report, link) = self.m.stop(kind);
-        (crate::master::stop_summary(report.as_ref()), Some(link))
+        (stop_summary(report.as_ref()), Some(link))
     }
 }
 
@@ -201,4 +201,42 @@ impl<T: CanTransport + Send + 'static> Backend for CanOpen<T> {
         });
         (summary, None)
     }
+}
+
+/// What `stop()` returns: how the run ended, its cycle figures, the history's totals.
+pub(crate) fn stop_summary(report: Option<&ecdrive::SessionReport>) -> serde_json::Value {
+    let Some(r) = report else {
+        return serde_json::json!({ "shutdown_ok": false });
+    };
+    let cycle = r.cycle.as_ref().map(|c| {
+        serde_json::json!({
+            "end": format!("{:?}", c.end),
+            "cycles": c.cycles,
+            "lost": c.lost,
+            "overruns": c.overruns,
+            "wake_latency_ns": c.timing.wake_latency.summary(),
+            "period_ns": c.timing.period.summary(),
+            "busy_ns": c.timing.busy.summary(),
+            "frames": c.frames,
+        })
+    });
+    let totals: serde_json::Map<String, serde_json::Value> = r
+        .history_totals
+        .iter()
+        .map(|(k, n)| (format!("{k:?}"), serde_json::Value::from(*n)))
+        .collect();
+    serde_json::json!({
+        "shutdown_ok": r.shutdown_ok,
+        "restarts": r.restarts,
+        "cycle": cycle,
+        "history_totals": totals,
+        "emergencies": r.emergencies.len(),
+        "drives": r.drive_outcomes().iter().map(|o| serde_json::json!({
+            "position": o.drive.position,
+            "name": o.drive.name,
+            "max_following_error": o.max_following_error,
+            "max_following_error_drive": o.max_following_error_drive,
+            "states": o.states.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        })).collect::<Vec<_>>(),
+    })
 }

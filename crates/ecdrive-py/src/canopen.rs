@@ -4,8 +4,8 @@
 //! drive them: commands, telemetry and events are the runtime's, shared with EtherCAT.
 
 use crate::backend::{Backend, CanAxis, CanOpen};
+use crate::devices::{Device, FoundDrive, FoundOf};
 use crate::errors::Failure;
-use crate::master::{Device, FoundDrive};
 use ecdrive::canopen::motion::CycleThread;
 use ecdrive::canopen::transport::CanTransport;
 use ecdrive::master::HistoryLog;
@@ -16,9 +16,7 @@ use ecdrive_cli::app::config::canopen::{CanRunConfig, CanTarget};
 
 /// Start the drives of `cfg` on its bus (`can-sim`: the emulated drives in-process) and their
 /// cycle thread; the backend and the drives found.
-pub(crate) fn start(
-    cfg: &CanRunConfig,
-) -> Result<(Box<dyn Backend>, super::master::FoundOf), Failure> {
+pub(crate) fn start(cfg: &CanRunConfig) -> Result<(Box<dyn Backend>, FoundOf), Failure> {
     let fail = |e: ecdrive::canopen::CanError| {
         Failure::new(
             e.class(),
@@ -46,7 +44,7 @@ pub(crate) fn start(
 fn on<T: CanTransport + Send + 'static>(
     transport: T,
     cfg: &CanRunConfig,
-) -> Result<(Box<dyn Backend>, super::master::FoundOf), Failure> {
+) -> Result<(Box<dyn Backend>, FoundOf), Failure> {
     let (s, _) = session(transport, cfg).map_err(|e| {
         Failure::new(
             e.class(),

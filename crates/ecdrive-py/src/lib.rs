@@ -11,6 +11,7 @@ use pyo3::prelude::*;
 mod audit;
 mod backend;
 mod canopen;
+mod devices;
 mod errors;
 mod master;
 mod record;
@@ -51,7 +52,7 @@ fn _ecdrive(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("DriveFault", py.get_type::<DriveFault>())?;
     m.add_class::<master::Master>()?;
     m.add_class::<master::Drive>()?;
-    m.add_class::<master::Device>()?;
+    m.add_class::<devices::Device>()?;
     m.add_function(wrap_pyfunction!(run, m)?)?;
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     Ok(())

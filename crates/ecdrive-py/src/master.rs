@@ -7,6 +7,7 @@
 //! Python threads (and other calls on the same master) go on meanwhile.
 
 use crate::backend::{Backend, EtherCat};
+use crate::devices::{Device, FoundDrive};
 use crate::errors::{Class, Failure};
 use crate::record::Recorder;
 use crate::values;
@@ -72,19 +73,6 @@ enum Session {
     /// Closed (or the link was lost with a failed start).
     Closed,
 }
-
-/// One drive as the last start found it.
-#[derive(Clone)]
-pub(crate) struct FoundDrive {
-    pub drive: DriveRef,
-    pub device: Device,
-    pub dictionary: Option<&'static [ecdrive::od::ObjectDesc]>,
-    /// Counts per second in one unit of the drive's velocity objects.
-    pub velocity_scale: f64,
-}
-
-/// The drives and the other devices of a start.
-pub(crate) type FoundOf = (Vec<FoundDrive>, Vec<Device>);
 
 /// The drives and I/O devices as the last start found them.
 #[derive(Default, Clone)]
@@ -459,44 +447,6 @@ fn last_fault(history: &[HistoryEntry], axis: usize) -> Option<&HistoryEntry> {
             axis: a,
             event: cia402::Event::Fault { .. },
         }) if usize::from(a) == axis)
-    })
-}
-
-/// What `stop()` returns: how the run ended, its cycle figures, the history's totals.
-pub(crate) fn stop_summary(report: Option<&ecdrive::SessionReport>) -> serde_json::Value {
-    let Some(r) = report else {
-        return serde_json::json!({ "shutdown_ok": false });
-    };
-    let cycle = r.cycle.as_ref().map(|c| {
-        serde_json::json!({
-            "end": format!("{:?}", c.end),
-            "cycles": c.cycles,
-            "lost": c.lost,
-            "overruns": c.overruns,
-            "wake_latency_ns": c.timing.wake_latency.summary(),
-            "period_ns": c.timing.period.summary(),
-            "busy_ns": c.timing.busy.summary(),
-            "frames": c.frames,
-        })
-    });
-    let totals: serde_json::Map<String, serde_json::Value> = r
-        .history_totals
-        .iter()
-        .map(|(k, n)| (format!("{k:?}"), serde_json::Value::from(*n)))
-        .collect();
-    serde_json::json!({
-        "shutdown_ok": r.shutdown_ok,
-        "restarts": r.restarts,
-        "cycle": cycle,
-        "history_totals": totals,
-        "emergencies": r.emergencies.len(),
-        "drives": r.drive_outcomes().iter().map(|o| serde_json::json!({
-            "position": o.drive.position,
-            "name": o.drive.name,
-            "max_following_error": o.max_following_error,
-            "max_following_error_drive": o.max_following_error_drive,
-            "states": o.states.iter().map(|s| s.name()).collect::<Vec<_>>(),
-        })).collect::<Vec<_>>(),
     })
 }
 
@@ -1027,39 +977,6 @@ fn found_on_ethercat(drives: &[DriveSummary], io: &[IoSummary]) -> Found {
 
 fn state_name(al: Option<u8>) -> String {
     al.map_or_else(|| "unknown".to_string(), al_state_name)
-}
-
-/// A device of the segment, as start-up found it.
-#[pyclass(frozen, get_all, module = "ecdrive._ecdrive")]
-#[derive(Clone)]
-pub struct Device {
-    /// Position on the segment (0 = first); a CANopen drive's node-ID.
-    pub(crate) position: u16,
-    /// Name (the profile's, or the SII's for a device no profile matches).
-    pub(crate) name: String,
-    pub(crate) vendor_id: u32,
-    pub(crate) product_code: u32,
-    pub(crate) revision: u32,
-    pub(crate) serial: u32,
-    pub(crate) alias: u16,
-    /// The drive profile ecdrive runs it with (None: not a drive).
-    pub(crate) profile: Option<String>,
-    /// AL state when the list was made: INIT, PRE-OP, SAFE-OP, OP (+ERR); a CANopen drive's
-    /// NMT state (OPERATIONAL while the master runs).
-    pub(crate) state: String,
-    /// Whether ecdrive drives it (a CiA 402 axis).
-    pub(crate) is_drive: bool,
-}
-
-#[pymethods]
-impl Device {
-    fn __repr__(&self) -> String {
-        format!(
-            "Device(position={}, name={:?}, vendor_id=0x{:08X}, product_code=0x{:08X}, \
-             revision=0x{:08X}, state={:?})",
-            self.position, self.name, self.vendor_id, self.product_code, self.revision, self.state
-        )
-    }
 }
 
 /// A move or program under way: what it is, where the cycle and the history stood when it
