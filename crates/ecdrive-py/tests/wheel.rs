@@ -115,7 +115,7 @@ fn the_wheel_installs_and_its_tests_pass() {
     let mut pytest = Command::new(&python);
     pytest
         .current_dir(repo.join("crates/ecdrive-py/tests/python"))
-        .args(["-m", "pytest", "-v", "-p", "no:cacheprovider", "-rs"])
+        .args(["-m", "pytest", "-v", "-p", "no:cacheprovider", "-rsP"])
         .env("ECDRIVE_BIN", target.join("release/ecdrive"));
     // As root: two veth pairs, the drives served by `ecdrive sim` in each pair's namespace
     // (the second one started by its test, with an alarm to come).

@@ -112,6 +112,7 @@ def test_the_gil_is_released_while_move_to_waits(two_drives):
     cycles = m.cycle["cycle"] - cycle0
     stop.set()
     t.join()
+    print(f"GIL: the Python thread counted {during} thousand while move_to waited {cycles} cycles")
     assert cycles >= 500, cycles
     # Held, the GIL would have stopped the counter for the whole move; released, it counted
     # on all along (thousands of thousands in half a second).
@@ -217,6 +218,8 @@ def test_the_cycle_audit_holds_with_a_python_client_attached():
         summary = m.stop()
         m.close()
     audit = summary["audit"]
+    print(f"audit with a Python client attached ({len(looks)} looks): {audit}, "
+          f"{summary['cycle']['cycles']} cycles")
     assert audit["complete"], audit
     assert (audit["allocs"], audit["frees"]) == (0, 0), audit
     assert len(looks) > 10
