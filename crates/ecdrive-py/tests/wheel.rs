@@ -141,6 +141,11 @@ fn the_wheel_installs_and_its_tests_pass() {
     drop(pairs);
     let text = String::from_utf8_lossy(&out.stdout);
     println!("{text}\n{}", String::from_utf8_lossy(&out.stderr));
+    // Kept beside the environment: the tests' figures (the GIL, the audit) as they printed them.
+    let _ = std::fs::write(
+        target.join("py-test-venv/pytest-output.txt"),
+        text.as_bytes(),
+    );
     assert!(out.status.success(), "pytest failed ({})", out.status);
     assert!(
         !text.contains(" SKIPPED") || !required(),
