@@ -215,8 +215,20 @@ impl<'a> CoeClient<'a> {
                 sms.in_len
             ))));
         }
+        Ok(Self::with_sms(md, address, drive, log, sms))
+    }
+
+    /// A client for the drive at configured station `address` whose mailbox SyncManagers are
+    /// known (from an earlier client's [`sms`](Self::sms) in the same session): no frame.
+    pub fn with_sms(
+        md: &'a MainDevice<'a>,
+        address: u16,
+        drive: DriveRef,
+        log: EmergencyLog,
+        sms: MailboxSms,
+    ) -> Self {
         let n = sms.out_len.max(sms.in_len) as usize;
-        Ok(Self {
+        Self {
             md,
             address,
             drive,
@@ -228,7 +240,7 @@ impl<'a> CoeClient<'a> {
             timeout: Duration::from_millis(1000),
             log,
             buf: vec![0; n],
-        })
+        }
     }
 
     /// Allow complete access (only if the drive's SII/ESI says it supports it).

@@ -6,16 +6,25 @@
 //! [`Master::sdo_upload`]: crate::Master::sdo_upload
 //! [`Master::sdo_download`]: crate::Master::sdo_download
 
-use super::coe::{CoeClient, CoeError, EmergencyLog};
+use super::coe::{CoeClient, CoeError, EmergencyLog, MailboxSms};
 use super::error::{DriveRef, ErrorKind, MasterError};
 use super::exec;
 use crate::od::ObjectAddress;
 use std::collections::HashMap;
+use std::future::Future;
+use std::pin::Pin;
 use std::sync::mpsc;
 use std::time::Duration;
 
 /// How long one supervisory mailbox poll during the cycle may take.
 const POLL_TIMEOUT: Duration = Duration::from_millis(250);
+
+/// How many drives one emergency poll reads at once: each has one frame in flight, and the
+/// cycle's own frames need the rest of ethercrab's storage ([`crate::bus::MAX_FRAMES`]).
+const POLLED_AT_ONCE: usize = 4;
+
+/// One drive's poll: its station address, mailbox counter and SyncManagers when it answered.
+type Polled<'f> = Pin<Box<dyn Future<Output = Option<(u16, u8, MailboxSms)>> + 'f>>;
 
 /// An SDO request of the application's, served by the session thread between its polls.
 pub(crate) enum MailboxRequest {
@@ -45,10 +54,12 @@ pub(crate) struct MailboxDevice {
 }
 
 /// The session's mailbox state across the polls and requests of one run: every device's
-/// mailbox counter (a device drops a request whose counter repeats the last one's).
+/// mailbox counter (a device drops a request whose counter repeats the last one's) and its
+/// mailbox SyncManagers, read once (by station address).
 pub(crate) struct Mailboxes {
     devices: Vec<MailboxDevice>,
     counters: HashMap<u16, u8>,
+    sms: HashMap<u16, MailboxSms>,
     log: EmergencyLog,
     timeout: Duration,
 }
@@ -58,6 +69,7 @@ impl Mailboxes {
         Self {
             devices,
             counters: HashMap::new(),
+            sms: HashMap::new(),
             log,
             timeout,
         }
@@ -65,18 +77,53 @@ impl Mailboxes {
 
     /// Read each drive's mailbox once (emergencies land in the log), giving up as soon as
     /// `finished` says the cycle has ended (no frame carries a request then, and a lost segment
-    /// must not hold the session up).
+    /// must not hold the session up). [`POLLED_AT_ONCE`] drives are read at once, their frames
+    /// in the same cycles, and the mailbox SyncManagers only at the first poll: the session
+    /// thread wakes for a poll's frames once per cycle, not once per drive and frame (issue 40).
     pub fn poll(&mut self, md: &ethercrab::MainDevice<'_>, finished: &dyn Fn() -> bool) {
-        for i in 0..self.devices.len() {
+        // A poll only reads what is waiting: a few cycles.
+        let t = self.timeout.min(POLL_TIMEOUT);
+        let polled: Vec<(u16, DriveRef, bool)> = self
+            .devices
+            .iter()
+            .filter(|d| d.polled)
+            .map(|d| (d.address, d.drive.clone(), d.complete_access))
+            .collect();
+        for group in polled.chunks(POLLED_AT_ONCE) {
             if finished() {
                 break;
             }
-            if !self.devices.get(i).is_some_and(|d| d.polled) {
-                continue;
+            let log = &self.log;
+            let futs: Vec<Polled<'_>> = group
+                .iter()
+                .map(|(address, drive, ca)| {
+                    let (address, drive, ca) = (*address, drive.clone(), *ca);
+                    let last = self.counters.get(&address).copied().unwrap_or(0);
+                    let sms = self.sms.get(&address).copied();
+                    Box::pin(async move {
+                        let c = match sms {
+                            Some(s) => CoeClient::with_sms(md, address, drive, log.clone(), s),
+                            None => CoeClient::new(md, address, drive, log.clone()).await.ok()?,
+                        };
+                        let mut c = c
+                            .with_complete_access(ca)
+                            .with_timeout(t)
+                            .with_counter(last);
+                        let _ = c.drain().await;
+                        Some((address, c.counter(), c.sms()))
+                    }) as Polled<'_>
+                })
+                .collect();
+            let done = exec::run_remote_unless(
+                &|| "polling the drives' mailboxes".into(),
+                t,
+                exec::join_all(futs),
+                finished,
+            );
+            for (address, counter, sms) in done.into_iter().flatten().flatten() {
+                self.counters.insert(address, counter);
+                self.sms.insert(address, sms);
             }
-            // A poll only reads what is waiting: a few cycles.
-            let t = self.timeout.min(POLL_TIMEOUT);
-            let _ = self.exchange(md, i, t, finished, async |c| c.drain().await.map(|_| ()));
         }
     }
 
@@ -161,25 +208,30 @@ impl Mailboxes {
             ));
         };
         let last = self.counters.get(&d.address).copied().unwrap_or(0);
+        let sms = self.sms.get(&d.address).copied();
         let (address, drive, ca, log) = (d.address, d.drive.clone(), d.complete_access, &self.log);
         let what_drive = drive.clone();
         let r = exec::run_remote_unless(
             &|| format!("{what_drive}: mailbox exchange"),
             timeout,
             async {
-                let mut c = CoeClient::new(md, address, drive, log.clone())
-                    .await?
+                let c = match sms {
+                    Some(s) => CoeClient::with_sms(md, address, drive, log.clone(), s),
+                    None => CoeClient::new(md, address, drive, log.clone()).await?,
+                };
+                let mut c = c
                     .with_complete_access(ca)
                     .with_timeout(timeout)
                     .with_counter(last);
                 let r = op(&mut c).await;
-                Ok::<_, CoeError>((r, c.counter()))
+                Ok::<_, CoeError>((r, c.counter(), c.sms()))
             },
             finished,
         );
         match r {
-            Ok(Ok((r, counter))) => {
+            Ok(Ok((r, counter, sms))) => {
                 self.counters.insert(address, counter);
+                self.sms.insert(address, sms);
                 r.map_err(|e| super::bus::SessionError::Coe(e).into())
             }
             Ok(Err(e)) => Err(super::bus::SessionError::Coe(e).into()),
