@@ -1364,7 +1364,7 @@ fn run<L: FrameLink + Send>(
         };
         let mut idle = SESSION_POLL_MIN;
         while !h.is_finished() {
-            idle = next_idle(idle, drain_events());
+            idle = next_idle(idle, drain_events(), cfg.emergency_poll);
             if let Some(every) = cfg.emergency_poll
                 && monotonic_ns() >= next_poll
             {
@@ -1399,13 +1399,15 @@ fn run<L: FrameLink + Send>(
 const SESSION_POLL_MIN: Duration = Duration::from_millis(2);
 const SESSION_POLL_MAX: Duration = Duration::from_millis(16);
 
-/// The session thread looks every 2 ms while events come and backs off to 16 ms while none do:
-/// a quiet cycle costs it few wake-ups (the event ring holds 4096).
-fn next_idle(idle: Duration, events: usize) -> Duration {
+/// The session thread looks every 2 ms while events come and backs off to 16 ms while none do,
+/// or to the emergency poll's period when that is longer (it wakes for the poll anyway, and
+/// each wake-up costs a quiet cycle CPU time: issue 40): a quiet cycle costs it few wake-ups
+/// (the event ring holds 4096).
+fn next_idle(idle: Duration, events: usize, poll: Option<Duration>) -> Duration {
     if events > 0 {
         SESSION_POLL_MIN
     } else {
-        (idle * 2).min(SESSION_POLL_MAX)
+        (idle * 2).min(poll.map_or(SESSION_POLL_MAX, |p| p.max(SESSION_POLL_MAX)))
     }
 }
 
