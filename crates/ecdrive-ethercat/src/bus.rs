@@ -25,10 +25,12 @@ pub struct Discovery {
     pub frames: u64,
     /// Of them, frames with an SII access.
     pub sii_frames: u64,
+    /// ethercrab's frames answered from the SII read at once (not sent).
+    pub answered: u64,
 }
 
 /// Frames ethercrab may have in flight at once.
-pub const MAX_FRAMES: usize = 16;
+pub const MAX_FRAMES: usize = 64;
 /// Largest number of devices on one segment.
 pub const MAX_SUBDEVICES: usize = 256;
 /// Largest process image (inputs + outputs of every device), bytes.
@@ -63,6 +65,12 @@ pub struct BusOptions {
     /// every drive's clock is measured to be within the threshold
     /// ([`DcSettings`](crate::startup::DcSettings)), however many frames that takes.
     pub dc_static_sync_iterations: u32,
+    /// Answer ethercrab's re-reads during start-up from what ecdrive read or wrote: every
+    /// device's SII read at once before ethercrab's initialisation, the PDO configuration a
+    /// drive acknowledged by SDO while ethercrab builds the process image
+    /// ([`crate::answers`]). On by default; off, every read goes to the wire one frame at a
+    /// time as ethercrab sends it (the two paths compared: docs/guide/startup-time.md).
+    pub answer_rereads: bool,
 }
 
 impl Default for BusOptions {
@@ -76,6 +84,7 @@ impl Default for BusOptions {
             state_transition: Duration::from_secs(10),
             eeprom: Duration::from_millis(500),
             dc_static_sync_iterations: 0,
+            answer_rereads: true,
         }
     }
 }
@@ -118,6 +127,8 @@ pub struct Bus<'sto, L: FrameLink> {
     last_ethercrab_mailbox: Option<u16>,
     /// The last discovery's duration and its SII span, in ms (start-up's time report).
     discovery: Option<Discovery>,
+    /// The answers to ethercrab's re-reads between discovery and the process image.
+    answers: Option<crate::answers::Answers>,
 }
 
 /// How many devices' mailboxes [`Bus::with_coe_each`] works on at once: each has at most one
@@ -155,6 +166,7 @@ pub fn with_bus<L: FrameLink, R>(
         counters: HashMap::new(),
         last_ethercrab_mailbox: None,
         discovery: None,
+        answers: None,
     };
     let r = f(&mut bus);
     let (_, _, link) = bus.pump.into_parts();
@@ -296,6 +308,16 @@ impl<'sto, L: FrameLink> Bus<'sto, L> {
     /// What the last discovery took.
     pub fn discovery(&self) -> Option<Discovery> {
         self.discovery
+    }
+
+    /// Keep the answers to ethercrab's re-reads for later (discovery leaves them here).
+    pub fn stash_answers(&mut self, a: Option<crate::answers::Answers>) {
+        self.answers = a;
+    }
+
+    /// The answers discovery left, if any.
+    pub fn take_answers(&mut self) -> Option<crate::answers::Answers> {
+        self.answers.take()
     }
 
     /// The configured address of the device to which ethercrab sent its last mailbox request

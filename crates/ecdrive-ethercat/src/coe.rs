@@ -445,26 +445,61 @@ impl<'a> CoeClient<'a> {
         Ok(n)
     }
 
+    /// Before a request: both mailbox SyncManagers' status in one read (0x0805–0x080D). What
+    /// waits in SM1 is read out ([`drain`](Self::drain): an emergency is recorded, a stale
+    /// reply must not pass for the next one). Returns whether SM0 was seen free (the request
+    /// can go without another look at it).
+    async fn prepare(&mut self, addr: Option<ObjectAddress>) -> Result<bool, CoeError> {
+        let st = Command::fprd(self.address, register::sm(0) + register::SM_STATUS_OFFSET)
+            .receive::<[u8; 9]>(self.md)
+            .await
+            .map_err(|e| {
+                self.error(
+                    addr,
+                    CoeErrorKind::Bus(format!("reading SM0/SM1 status: {e}")),
+                )
+            })?;
+        if st[8] & MBX_FULL != 0 {
+            self.drain().await?;
+            return Ok(false);
+        }
+        Ok(st[0] & MBX_FULL == 0)
+    }
+
     /// Write one request (already emitted into `req`) into SM0.
     async fn send(&mut self, req: &[u8], addr: Option<ObjectAddress>) -> Result<(), CoeError> {
+        self.send_checked(req, addr, true).await
+    }
+
+    /// One look at SM0: whether it is free; an error once `deadline` has passed.
+    async fn sm0_free(&self, addr: Option<ObjectAddress>, deadline: u64) -> Result<bool, CoeError> {
+        let s = self
+            .sm_status(0)
+            .await
+            .map_err(|e| self.error(addr, CoeErrorKind::Bus(format!("reading SM0 status: {e}"))))?;
+        if s & MBX_FULL == 0 {
+            return Ok(true);
+        }
+        if monotonic_ns() > deadline {
+            return Err(self.error(
+                addr,
+                CoeErrorKind::Protocol("SM0 stays full: the drive does not take requests".into()),
+            ));
+        }
+        Ok(false)
+    }
+
+    /// Write one request into SM0; with `check`, first wait until SM0 is free (the drive has
+    /// taken the previous request).
+    async fn send_checked(
+        &mut self,
+        req: &[u8],
+        addr: Option<ObjectAddress>,
+        check: bool,
+    ) -> Result<(), CoeError> {
         let deadline = monotonic_ns() + self.timeout.as_nanos() as u64;
         // Wait until the drive has taken the previous request.
-        loop {
-            let s = self.sm_status(0).await.map_err(|e| {
-                self.error(addr, CoeErrorKind::Bus(format!("reading SM0 status: {e}")))
-            })?;
-            if s & MBX_FULL == 0 {
-                break;
-            }
-            if monotonic_ns() > deadline {
-                return Err(self.error(
-                    addr,
-                    CoeErrorKind::Protocol(
-                        "SM0 stays full: the drive does not take requests".into(),
-                    ),
-                ));
-            }
-        }
+        while check && !self.sm0_free(addr, deadline).await? {}
         // The whole SM0 buffer is written (request + zero padding): the ESC marks the mailbox
         // full only when its last byte is written.
         let mut out = vec![0u8; self.sms.out_len as usize];
@@ -519,13 +554,13 @@ impl<'a> CoeClient<'a> {
         req: SdoRequest<'_>,
         addr: ObjectAddress,
     ) -> Result<(Vec<u8>, usize), CoeError> {
-        self.drain().await?;
+        let sm0_free = self.prepare(Some(addr)).await?;
         let counter = self.next_counter();
         let mut out = vec![0u8; self.sms.out_len as usize];
         let n = req
             .emit_mailbox(counter, &mut out)
             .map_err(|e| self.error(Some(addr), CoeErrorKind::TooLarge(e.to_string())))?;
-        self.send(&out[..n], Some(addr)).await?;
+        self.send_checked(&out[..n], Some(addr), !sm0_free).await?;
         let len = self
             .receive_reply(Some(addr), |m| {
                 matches!(

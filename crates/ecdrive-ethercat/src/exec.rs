@@ -248,6 +248,21 @@ pub fn exchange<L: FrameLink, F: Future>(
     }
 }
 
+/// Start one cyclic exchange without waiting for it: poll `fut` once (it queues its frame)
+/// and send what is queued. `Some` when the future completed at once (it could not queue its
+/// frame); otherwise finish it later with [`exchange`]. Allocation-free.
+pub fn start<L: FrameLink, F: Future>(
+    pump: &mut Pump<'_, L>,
+    fut: Pin<&mut F>,
+) -> Result<Option<F::Output>, ExchangeError> {
+    let mut cx = Context::from_waker(Waker::noop());
+    if let Poll::Ready(v) = fut.poll(&mut cx) {
+        return Ok(Some(v));
+    }
+    pump.send_pending()?;
+    Ok(None)
+}
+
 /// Convert an executor error, with the drive it concerned.
 pub fn exec_error(drive: Option<&DriveRef>, e: ExecError) -> MasterError {
     let (step, kind, reason) = match e {

@@ -10,6 +10,7 @@
 //! age, retransmitted a bounded number of times, and finally reported so the caller drops the
 //! waiting future (ethercrab releases the frame slot on drop).
 
+use crate::answers::{Answers, Verdict};
 use crate::ec::frame::{EthercatFrame, EthernetFrame};
 use crate::ec::register::FmmuConfig;
 use crate::ec::{command::Command, register};
@@ -42,6 +43,9 @@ pub struct PumpStats {
     /// Our own frames coming back unprocessed (the source address without the bit every
     /// slave controller sets): a loopback or a reflecting switch, no EtherCAT device.
     pub echoes: u64,
+    /// Frames of ethercrab's answered without the wire, from what ecdrive had read or
+    /// written (start-up; see [`crate::answers`]). Not counted in `sent`.
+    pub answered: u64,
 }
 
 #[derive(Clone, Copy)]
@@ -226,6 +230,10 @@ pub struct Pump<'sto, L: FrameLink> {
     drift_writes: bool,
     /// The frame as sent when the pump rewrites it.
     scratch: Box<[u8; MAX_FRAME]>,
+    /// Answers to ethercrab's re-reads, during start-up (see [`crate::answers`]).
+    answers: Option<Answers>,
+    /// The reply an answer made.
+    answer_buf: Box<[u8; MAX_FRAME]>,
 }
 
 /// Datagram commands: FPRD (configured-address read) and FRMW (configured-address read,
@@ -273,6 +281,61 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             logical: LogicalRecord::default(),
             drift_writes: true,
             scratch: Box::new([0u8; MAX_FRAME]),
+            answers: None,
+            answer_buf: Box::new([0u8; MAX_FRAME]),
+        }
+    }
+
+    /// Answer ethercrab's re-reads from `answers` from now on (`None`: every frame goes to
+    /// the wire). See [`crate::answers`].
+    pub fn set_answers(&mut self, answers: Option<Answers>) -> Option<Answers> {
+        std::mem::replace(&mut self.answers, answers)
+    }
+
+    /// The answers in use, if any.
+    pub fn answers_mut(&mut self) -> Option<&mut Answers> {
+        self.answers.as_mut()
+    }
+
+    /// Send a frame ecdrive built itself (its first datagram's index [`crate::answers::RAW_INDEX`],
+    /// outside ethercrab's) and wait until `deadline_ns` for its reply, handing any other
+    /// frame that comes to ethercrab. The reply goes into `reply`; its length, or `None` when
+    /// none came.
+    pub fn exchange_raw(
+        &mut self,
+        frame: &[u8],
+        reply: &mut [u8],
+        deadline_ns: u64,
+    ) -> Result<Option<usize>, LinkError> {
+        if let Err(e) = self.link.send(frame) {
+            self.link_error = Some(e.to_string());
+            return Err(e);
+        }
+        self.stats.sent += 1;
+        // Counted in the SII span whether or not the tap is on (nothing else in these frames).
+        let on = std::mem::replace(&mut self.tap.on, true);
+        self.tap.observe(frame);
+        self.tap.on = on;
+        loop {
+            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(monotonic_ns()));
+            let got = match self.link.recv(&mut self.rx_buf[..], Some(timeout)) {
+                Ok(Some(len)) => len,
+                Ok(None) => return Ok(None),
+                Err(e) => {
+                    self.link_error = Some(e.to_string());
+                    return Err(e);
+                }
+            };
+            let ours = self.rx_buf.get(FIRST_IDX_OFFSET) == Some(&crate::answers::RAW_INDEX)
+                && self.rx_buf.get(6).is_some_and(|b| b & 0x02 != 0);
+            if ours && let (Some(src), Some(dst)) = (self.rx_buf.get(..got), reply.get_mut(..got)) {
+                dst.copy_from_slice(src);
+                self.stats.received += 1;
+                return Ok(Some(got));
+            }
+            if !ours {
+                self.accept(got);
+            }
         }
     }
 
@@ -400,7 +463,23 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             let rewrite = !self.drift_writes;
             let mut record = None;
             let mut err = None;
+            let mut answered = None;
+            let answers = &mut self.answers;
+            let answer_buf = &mut self.answer_buf;
             let res = frame.send_blocking(|sent| {
+                let verdict = match answers.as_mut() {
+                    Some(a) => a.answer(sent, &mut answer_buf[..]),
+                    None => Verdict::Wire,
+                };
+                let sent: &[u8] = match verdict {
+                    // A re-read answered from what ecdrive read: not sent.
+                    Verdict::Answered(n) => {
+                        answered = Some(n);
+                        return Ok(sent.len());
+                    }
+                    Verdict::Rewritten(n) => answer_buf.get(..n).unwrap_or(sent),
+                    Verdict::Wire => sent,
+                };
                 // Without drift compensation, the time distribution as a plain read.
                 let bytes: &[u8] = match scratch.get_mut(..sent.len()) {
                     Some(buf) if rewrite => {
@@ -429,6 +508,20 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             if let Some(e) = err {
                 self.link_error = Some(e.to_string());
                 return Err(e);
+            }
+            if let Some(len) = answered {
+                if res.is_ok()
+                    && let Some(reply) = self.answer_buf.get(..len)
+                    && matches!(
+                        self.rx.receive_frame(reply),
+                        Ok(ethercrab::ReceiveAction::Processed)
+                    )
+                {
+                    self.stats.answered += 1;
+                } else {
+                    self.stats.rejected += 1;
+                }
+                continue;
             }
             if res.is_ok() {
                 n += 1;

@@ -19,6 +19,7 @@ pub(crate) use ecdrive_core::{cia402, drives, ec, link, od, pdo, rt};
 // paths the applications know.
 pub use ecdrive_motion::{app, program, setpoint, stream, telemetry};
 
+pub mod answers;
 pub mod bus;
 pub mod coe;
 pub mod cycle;
@@ -28,13 +29,14 @@ mod history;
 pub mod io;
 mod record;
 pub mod session;
+mod sii_bulk;
 pub mod startup;
 mod supervise;
 
 mod wkc;
 
 pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
-pub use cycle::{CycleEnd, CycleReport, CycleSettings};
+pub use cycle::{CycleEnd, CycleReport, CycleSettings, ReplyWait};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryEvent, HistoryKind, HistoryLog, Resolved, RestartNote};
 pub use program::{ProbeEdge, RunMode, Step, Target};

@@ -133,7 +133,7 @@ pub struct DcSettings {
     /// From reading the reference clock to the first SYNC0. ethercrab computes one start time
     /// for every drive from that reading and then configures the drives one after the other,
     /// so the delay must cover all of them: start-up checks that it did and names the
-    /// setting when not. `None`: \[REC\] 10 ms plus 0.5 ms per drive with DC (a drive's SYNC0
+    /// setting when not. `None`: \[REC\] 5 ms plus 0.5 ms per drive with DC (a drive's SYNC0
     /// set-up is four writes, about 0.2 ms a drive over veth at 64 drives; SOEM and IgH use a
     /// fixed 100 ms).
     pub start_delay: Option<Duration>,
@@ -151,7 +151,7 @@ impl DcSettings {
     /// The start delay for `dc_drives` drives with DC: the configured one or the default.
     pub fn start_delay_for(&self, dc_drives: usize) -> Duration {
         self.start_delay
-            .unwrap_or(Duration::from_micros(10_000 + 500 * dc_drives as u64))
+            .unwrap_or(Duration::from_micros(5_000 + 500 * dc_drives as u64))
     }
 }
 
@@ -435,6 +435,12 @@ pub struct StartupFrames {
     pub dc_settle: u64,
     /// Starting SYNC0 and PRE-OP → SAFE-OP.
     pub safe_op: u64,
+    /// Of ethercrab's frames in discovery, those answered from the SII ecdrive read at once
+    /// (not sent, not counted above; [`crate::answers`]).
+    pub answered_discovery: u64,
+    /// Of ethercrab's frames while it built the process image, those answered from the PDO
+    /// configuration the drives acknowledged (not sent, not counted above).
+    pub answered_image: u64,
 }
 
 impl StartupTimes {
@@ -480,6 +486,7 @@ pub fn discover<L: FrameLink>(
 ) -> Result<(Group<PreOp>, Vec<DeviceInfo>), MasterError> {
     let t0 = crate::rt::monotonic_ns();
     let f0 = bus.pump().stats().sent;
+    let a0 = bus.pump().stats().answered;
     let _ = bus.pump_mut().take_sii_span();
     let link = bus.pump().link_name();
     let lost = |bus: &mut Bus<'_, L>, e: super::exec::ExecError| match e {
@@ -529,6 +536,10 @@ pub fn discover<L: FrameLink>(
                 code: crate::ec::AlStatusCode(u16::from_le_bytes([b[4], b[5]])),
             });
         }
+    }
+    // Every device's SII at once, to answer ethercrab's reads of it (`crate::answers`).
+    if bus.options().answer_rereads && !found.is_empty() {
+        read_sii_at_once(bus, found.len()).map_err(|e| lost(bus, e))?;
     }
     let group = bus
         .block_on(
@@ -603,14 +614,45 @@ pub fn discover<L: FrameLink>(
                 .map(|v| u32::from_le_bytes([v[0], v[1], v[2], v[3]]));
         }
     }
+    // The answers wait for the process image (a tool that reads the SII itself reads the wire).
+    let answers = bus.pump_mut().set_answers(None);
+    bus.stash_answers(answers);
     let sii = bus.pump_mut().take_sii_span();
     bus.set_discovery(Discovery {
+        answered: bus.pump().stats().answered - a0,
         ms: ms_since(t0),
         sii_ms: sii.map_or(0.0, |(a, b, _)| b.saturating_sub(a) as f64 / 1e6),
         frames: bus.pump().stats().sent - f0,
         sii_frames: sii.map_or(0, |(_, _, n)| n),
     });
     Ok((group, devices))
+}
+
+/// Read the SII of the `n` devices at once and answer ethercrab's SII reads from it
+/// ([`crate::sii_bulk`], [`crate::answers`]).
+fn read_sii_at_once<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    n: usize,
+) -> Result<(), super::exec::ExecError> {
+    let link = bus.pump().link_name();
+    let n = u16::try_from(n).unwrap_or(u16::MAX);
+    let t0 = crate::rt::monotonic_ns();
+    let deadline = t0 + T_STEP.as_nanos() as u64;
+    let (words, frames) =
+        crate::sii_bulk::read_sii_all(bus.pump_mut(), n, deadline).map_err(|source| {
+            super::exec::ExecError::Link {
+                what: format!("reading the SII of every device on {link}"),
+                source,
+            }
+        })?;
+    tracing::debug!(
+        "the SII of {n} devices read at once in {frames} frames, {:.1} ms: {:?} words",
+        ms_since(t0),
+        words.iter().map(|w| w.len()).collect::<Vec<_>>()
+    );
+    bus.pump_mut()
+        .set_answers(Some(crate::answers::Answers::new(words)));
+    Ok(())
 }
 
 /// What start-up does with a device.
@@ -1700,6 +1742,7 @@ pub fn configure<L: FrameLink>(
         frames: StartupFrames {
             discovery: found.frames,
             sii: found.sii_frames,
+            answered_discovery: found.answered,
             ..StartupFrames::default()
         },
         ..StartupTimes::default()
@@ -1795,7 +1838,13 @@ pub fn configure<L: FrameLink>(
     times.frames.coe = sent(bus) - f_coe;
     let f_image = sent(bus);
     let t_image = crate::rt::monotonic_ns();
-    let group = build_image(bus, group, &devices)?;
+    let acknowledged = plans.iter().zip(&drives_plan).map(|((_, w), (d, _, _))| {
+        let remap = w.writes.iter().take(w.remap_len);
+        (d.address, remap.map(|(o, b, _)| (*o, b.as_slice())))
+    });
+    let (group, answered) = build_image_answered(bus, group, &devices, acknowledged);
+    times.frames.answered_image = answered;
+    let group = group?;
     let mut drives = resolve_drives(bus, &group, drives_plan, mappings, held_values)?;
     // The I/O devices: their images as ethercrab sized them from their own configuration.
     let mut io = Vec::new();
@@ -2369,6 +2418,33 @@ fn judge_drive(
 }
 
 /// Build the process image (PRE-OP with PDI): ethercrab reads each device's PDO assignment.
+/// [`build_image`], with ethercrab's read-back of the PDO configuration each drive has just
+/// acknowledged writing (`acknowledged`: station address, objects and values) answered from
+/// those writes ([`crate::answers`]), as its SII reads were. Returns the frames answered.
+fn build_image_answered<'a, L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    group: Group<PreOp>,
+    devices: &[DeviceInfo],
+    acknowledged: impl Iterator<Item = (u16, impl Iterator<Item = (ObjectAddress, &'a [u8])>)>,
+) -> (
+    Result<Group<ethercrab::subdevice_group::PreOpPdi>, MasterError>,
+    u64,
+) {
+    if let Some(mut a) = bus.take_answers() {
+        for (station, writes) in acknowledged {
+            for (object, bytes) in writes {
+                a.acknowledged(station, object, bytes);
+            }
+            a.last_counter(station, bus.mailbox_sequence(station).last);
+        }
+        bus.pump_mut().set_answers(Some(a));
+    }
+    let before = bus.pump().stats().answered;
+    let group = build_image(bus, group, devices);
+    let _ = bus.pump_mut().set_answers(None);
+    (group, bus.pump().stats().answered - before)
+}
+
 fn build_image<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     group: Group<PreOp>,
@@ -2581,21 +2657,24 @@ fn to_safe_op<L: FrameLink>(
         group.into_safe_op(md)
     });
     times.frames.safe_op = bus.pump().stats().sent - f;
-    match r {
-        Ok(Ok(g)) => Ok(g),
-        Ok(Err(e)) => Err(explain_transition(
-            bus,
-            &addrs,
-            AlState::SafeOp,
-            bus_error(None, "PRE-OP → SAFE-OP", e),
-        )),
-        Err(e) => Err(explain_transition(
-            bus,
-            &addrs,
-            AlState::SafeOp,
-            exec_error(None, e),
-        )),
+    let fallback = match r {
+        Ok(Ok(g)) => return Ok(g),
+        Ok(Err(e)) => bus_error(None, "PRE-OP → SAFE-OP", e),
+        Err(e) => exec_error(None, e),
+    };
+    let mut e = explain_transition(bus, &addrs, AlState::SafeOp, fallback);
+    // 0x001D–0x0020: the process data SyncManagers do not fit the drive's mapping. The
+    // mapping was not read back (`crate::answers`): say what that means.
+    if bus.options().answer_rereads
+        && matches!(e.kind, ErrorKind::AlState(AlStatusCode(0x001D..=0x0020)))
+    {
+        e.reason.push_str(
+            " (the drive acknowledged the PDO mapping start-up wrote, and its SyncManagers were \
+             sized for it; a drive that does not hold an acknowledged mapping refuses so: \
+             answer_rereads = false reads the mapping back from the drive instead)",
+        );
     }
+    Err(e)
 }
 
 /// Each DC drive's first SYNC0 (0x0990, read back), into [`ConfiguredDrive::sync0_start_ns`];

@@ -29,6 +29,7 @@
 //! | `interpolation-index-read-only` | 0x60C2:02 (interpolation time index) is read-only at its power-on value | the BDHDE as its object table prints it |
 //! | `outputs-only-in-op` | the output SyncManager is enabled with OP only: in SAFE-OP the outputs are not taken and do not count in the working counter | a stack that starts its output handler with OP (what this emulator did until KickCAT showed it) |
 //! | `modes-only-when-disabled` | 0x6060 is taken only outside Operation enabled: a switch asked for while enabled is never shown in 0x6061 | drives whose firmware changes the mode only with the power stage off |
+//! | `pdo-writes-ignored` | writes to the PDO assignment and mapping (0x1C12/0x1C13, 0x1600–0x17FF, 0x1A00–0x1BFF) are acknowledged and not taken: the mapping stays the power-on one | firmware that accepts a remap it does not support; the case ecdrive's answered re-read of the mapping leaves to the drive's own SAFE-OP check |
 //! | `op-needs-sync0` | SAFE-OP → OP is refused with AL status code 0x002D (no sync) while SYNC0 is activated but has not yet fired | slave stacks that check for SYNC0 events before OP; the MR-J4-TM manual §1.4.2 (7) has DC synchronisation established in SAFE-OP before OP |
 
 use core::fmt;
@@ -68,6 +69,8 @@ pub enum Quirk {
     OutputsOnlyInOp,
     /// 0x6060 taken only outside Operation enabled.
     ModesOnlyWhenDisabled,
+    /// PDO assignment and mapping writes acknowledged and not taken.
+    PdoWritesIgnored,
 }
 
 /// The entry whose description [`Quirk::SdoInfoBadEntry`] breaks: every CoE device has it.
@@ -104,7 +107,7 @@ pub struct Capabilities {
 
 impl Quirk {
     /// Every quirk, in the order of the table above.
-    pub const ALL: [Quirk; 16] = [
+    pub const ALL: [Quirk; 17] = [
         Quirk::NoStateSkipping,
         Quirk::CycleTimeReadOnly,
         Quirk::SyncObjectsAbsent,
@@ -121,6 +124,7 @@ impl Quirk {
         Quirk::NoHomeSwitch,
         Quirk::OutputsOnlyInOp,
         Quirk::ModesOnlyWhenDisabled,
+        Quirk::PdoWritesIgnored,
     ];
 
     /// The name after `+` in a device name.
@@ -142,6 +146,7 @@ impl Quirk {
             Quirk::NoHomeSwitch => "no-home-switch",
             Quirk::OutputsOnlyInOp => "outputs-only-in-op",
             Quirk::ModesOnlyWhenDisabled => "modes-only-when-disabled",
+            Quirk::PdoWritesIgnored => "pdo-writes-ignored",
         }
     }
 
@@ -161,6 +166,9 @@ impl Quirk {
             }
             Quirk::SdoInfoShortEntry => "the description of 0x1018:03 cut short",
             Quirk::NoCompleteAccess => "complete access refused although the SII advertises it",
+            Quirk::PdoWritesIgnored => {
+                "PDO assignment and mapping writes acknowledged and not taken (the power-on mapping stays)"
+            }
             Quirk::OddAbort => "SDO aborts as CoE service 2 with command byte 0x9F",
             Quirk::StaleInputsUntilOp => "inputs updated only in OP (zeros before)",
             Quirk::OutputsInSafeOp => "outputs applied already in SAFE-OP",
@@ -202,8 +210,8 @@ impl Quirk {
         Quirk::ALL.into_iter().find(|q| q.name() == name)
     }
 
-    const fn bit(self) -> u16 {
-        1 << self as u16
+    const fn bit(self) -> u32 {
+        1 << self as u32
     }
 }
 
@@ -215,7 +223,7 @@ impl fmt::Display for Quirk {
 
 /// A set of quirks (empty: the device as its profile describes it).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct Quirks(u16);
+pub struct Quirks(u32);
 
 impl Quirks {
     /// No quirk.

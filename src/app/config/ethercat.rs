@@ -47,6 +47,22 @@ pub(super) fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, Co
         .transpose()?;
     if let Some(rt) = &f.rt {
         rt_settings(&cx, rt, &mut master.cycle.rt)?;
+        if let Some(r) = &rt.reply {
+            master.cycle.reply_wait = match r.get_ref().as_str() {
+                "next-wake" => crate::master::ReplyWait::NextWake,
+                "in-cycle" => crate::master::ReplyWait::InCycle,
+                other => {
+                    return Err(cx.err(
+                        r.span(),
+                        "rt.reply",
+                        format!("{other:?} is not a reply wait: \"next-wake\" or \"in-cycle\""),
+                    ));
+                }
+            };
+        }
+    }
+    if let Some(a) = f.answer_rereads {
+        master.bus.answer_rereads = a;
     }
     if let Some(sv) = &f.supervision {
         supervision(&cx, sv, &mut master.cycle)?;

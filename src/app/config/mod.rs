@@ -6,11 +6,13 @@
 //! dc_shift = "0us"           # offset of the master's frame from SYNC0
 //! duration = "10s"           # stop after this long (default: when every program has finished)
 //! reset_faults = false       # clear faults latched before the run (default: refuse, saying how)
+//! answer_rereads = true      # answer ethercrab's start-up re-reads from what ecdrive read (default)
 //!
 //! [rt]                       # real-time set-up of the cycle thread (optional)
 //! priority = 80              # SCHED_FIFO priority 1–99
 //! cpu = 1                    # pin to this CPU
 //! lock_memory = true         # mlockall
+//! reply = "next-wake"        # read the frame's reply at the next wake-up, or "in-cycle" (wait for it)
 //!
 //! [supervision]              # how the cycle reacts to the bus (optional)
 //! lost_before_stop = 3       # consecutive cycles without a reply before the axes are stopped

@@ -22,6 +22,8 @@ pub(super) struct File {
     #[serde(default)]
     pub reset_faults: bool,
     #[serde(default)]
+    pub answer_rereads: Option<bool>,
+    #[serde(default)]
     pub rt: Option<Rt>,
     #[serde(default)]
     pub supervision: Option<Supervision>,
@@ -40,6 +42,8 @@ pub(super) struct Rt {
     pub cpu: Option<Spanned<usize>>,
     #[serde(default)]
     pub lock_memory: bool,
+    #[serde(default)]
+    pub reply: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

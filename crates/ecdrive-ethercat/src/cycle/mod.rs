@@ -34,9 +34,11 @@ use ecdrive_motion::{
     AxisSetup, EventSink, Inputs, MotionAxis, ProbeObjects, Requests, StepContext,
 };
 pub use ecdrive_motion::{DRIVE_FE_STUCK_CYCLES, FEEDBACK_PULSES, SetpointSteps};
+use ethercrab::subdevice_group::CycleInfo;
 use ethercrab::subdevice_group::{HasDc, SafeOp};
 use ethercrab::{Command as EcCommand, MainDevice, SubDeviceState};
-use std::pin::pin;
+use std::future::Future;
+use std::pin::{Pin, pin};
 use std::time::Duration;
 
 pub mod audit;
@@ -48,8 +50,8 @@ use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
 pub use settings::{
-    CycleEnd, CycleHooks, CycleIo, CycleReport, CycleSettings, FrameStats, SupervisorIo, Timing,
-    channels,
+    CycleEnd, CycleHooks, CycleIo, CycleReport, CycleSettings, FrameStats, ReplyWait, SupervisorIo,
+    Timing, channels,
 };
 
 /// Where the drives stand on the way to OP.
@@ -151,10 +153,17 @@ struct Clock {
     next_wake: u64,
     woke: u64,
     latency: u64,
+    /// When the frame in flight went out.
+    t_sent: u64,
+    /// The exchange as recorded: from the send to the reply ([`ReplyWait::InCycle`]), or the
+    /// reading of the reply at the wake-up ([`ReplyWait::NextWake`]).
     t_ex: u64,
     t_ex_done: u64,
-    /// The wait to the next DC-aligned instant, when the reference clock answered.
-    next_wait: Option<u64>,
+    /// The DC-aligned instant after the frame whose reply came, when the reference clock
+    /// answered.
+    next_at: Option<u64>,
+    /// The last frame could not be sent (no frame slot): its cycle counts as lost.
+    unsent: bool,
     dc_time: u64,
 }
 
@@ -255,13 +264,28 @@ pub fn run<L: FrameLink>(
     }
     let mut c = Cycle::new(md, pump, group, drives, others, settings, io, hooks, app);
     c.record = record;
+    // The exchange in flight: ethercrab's future for the cycle's frame, kept here (its type
+    // has no name) and handed to each cycle.
+    let make = || group.tx_rx_dc(md);
+    let mut flight = pin!(None);
     let end = loop {
-        if let Some(end) = c.next_cycle() {
+        if let Some(end) = c.next_cycle(flight.as_mut(), &make) {
             break end;
         }
     };
+    // A frame still in flight is given up (its reply, should it come, is stale).
+    if flight.is_some() {
+        flight.set(None);
+        c.pump.clear_all();
+    }
     c.finish(end, rt)
 }
+
+/// The reply of one cycle's frame, as ethercrab gives it.
+type Reply = Result<
+    ethercrab::subdevice_group::TxRxResponse<{ crate::bus::MAX_SUBDEVICES }, CycleInfo>,
+    ethercrab::error::Error,
+>;
 
 impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     /// Set up a run (allocations allowed): the axes, the initial outputs, the constants.
@@ -410,13 +434,26 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.op == OpState::AllOp
     }
 
-    /// One cycle; `Some` when the run ends. No allocation from here on.
-    fn next_cycle(&mut self) -> Option<CycleEnd> {
+    /// One cycle; `Some` when the run ends. No allocation from here on. `flight` holds the
+    /// exchange in flight between cycles ([`ReplyWait::NextWake`]); `make` makes one.
+    fn next_cycle<F: Future<Output = Reply>>(
+        &mut self,
+        mut flight: Pin<&mut Option<F>>,
+        make: &impl Fn() -> F,
+    ) -> Option<CycleEnd> {
         if self.window == TimingWindow::OpensNext {
             self.window = TimingWindow::Open;
         }
         self.wake();
-        let good = match self.exchange() {
+        let next_wake = self.settings.reply_wait == ReplyWait::NextWake;
+        // In-cycle, and the first cycle of NextWake (no frame before it): send now, wait.
+        let first = flight.is_none() && !self.clock.unsent;
+        if (!next_wake || first)
+            && let Err(end) = self.send_frame(flight.as_mut(), make)
+        {
+            return Some(end);
+        }
+        let good = match self.exchange(flight.as_mut()) {
             Ok(FrameOutcome::Answered) => true,
             Ok(FrameOutcome::Lost) => {
                 if let Some(end) = self.on_lost() {
@@ -444,6 +481,9 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
         if self.window == TimingWindow::ClosesAfter {
             self.window = TimingWindow::Closed;
+        }
+        if next_wake && let Err(end) = self.send_frame(flight, make) {
+            return Some(end);
         }
         self.schedule_next();
         None
@@ -473,20 +513,65 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.ev.cycle = c.cycle;
     }
 
-    /// Exchange the process data (the AL states ride along with the LRW) and look at what came
-    /// back; `Err` when the link failed.
-    fn exchange(&mut self) -> Result<FrameOutcome, CycleEnd> {
+    /// Send the cycle's frame: the process image's outputs as the steps left them, the
+    /// reference clock's time, every device's AL state (ethercrab's `tx_rx_dc`). Its reply is
+    /// read by [`exchange`](Self::exchange).
+    fn send_frame<F: Future<Output = Reply>>(
+        &mut self,
+        mut flight: Pin<&mut Option<F>>,
+        make: &impl Fn() -> F,
+    ) -> Result<(), CycleEnd> {
+        self.pump.clear_logical();
+        self.clock.t_sent = monotonic_ns();
+        flight.set(Some(make()));
+        let Some(fut) = flight.as_mut().as_pin_mut() else {
+            return Ok(());
+        };
+        match exec::start(self.pump, fut) {
+            Ok(None) => Ok(()),
+            // No frame could be had: nothing in flight, the cycle counts as lost.
+            Ok(Some(_)) => {
+                flight.set(None);
+                self.clock.unsent = true;
+                Ok(())
+            }
+            Err(_) => {
+                flight.set(None);
+                Err(CycleEnd::LinkFailed)
+            }
+        }
+    }
+
+    /// Read the reply of the frame in flight and look at what came back (the AL states ride
+    /// along with the LRW); `Err` when the link failed. It waits up to the reply budget (with
+    /// [`ReplyWait::NextWake`] the reply normally came during the sleep).
+    fn exchange<F: Future<Output = Reply>>(
+        &mut self,
+        mut flight: Pin<&mut Option<F>>,
+    ) -> Result<FrameOutcome, CycleEnd> {
+        // With NextWake the reply is normally there at once; an image too large for one frame
+        // goes on in further frames, exchanged now, within the same budget.
         let deadline =
             self.clock.woke + (self.consts.cycle_ns as f64 * self.settings.reply_budget) as u64;
-        self.clock.t_ex = monotonic_ns();
-        let group = self.group;
-        self.pump.clear_logical();
-        let result = {
-            let fut = pin!(group.tx_rx_dc(self.md));
-            exec::exchange(self.pump, fut, deadline)
+        // A frame sent in this cycle: its round trip; one sent in the cycle before: the
+        // reading of its reply.
+        let now = monotonic_ns();
+        self.clock.t_ex = if self.clock.t_sent >= self.clock.woke {
+            self.clock.t_sent
+        } else {
+            now
         };
+        let Some(fut) = flight.as_mut().as_pin_mut() else {
+            // No frame could be sent.
+            self.clock.t_ex_done = now;
+            self.clock.next_at = None;
+            self.clock.unsent = false;
+            return Ok(FrameOutcome::Lost);
+        };
+        let result = exec::exchange(self.pump, fut, deadline);
+        flight.set(None);
         self.clock.t_ex_done = monotonic_ns();
-        self.clock.next_wait = None;
+        self.clock.next_at = None;
         match result {
             Ok(Ok(resp)) => {
                 self.clock.tick += 1;
@@ -503,7 +588,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 self.counts.segment_lost = false;
                 self.clock.dc_time = resp.extra.dc_system_time;
                 self.counts.last_wkc = resp.working_counter;
-                self.clock.next_wait = Some(resp.extra.next_cycle_wait.as_nanos() as u64);
+                self.clock.next_at =
+                    Some(self.clock.t_sent + resp.extra.next_cycle_wait.as_nanos() as u64);
                 // A code still owed from an earlier cycle first (not twice in one cycle).
                 self.retry_left_op_code(false);
                 let mut scan = StateScan::default();
@@ -759,10 +845,21 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 
     /// The next instant: DC-aligned when the reference clock answered, else one cycle on.
     fn schedule_next(&mut self) {
+        let cycle_ns = self.consts.cycle_ns;
         let c = &mut self.clock;
-        c.next_wake = match c.next_wait {
-            Some(w) => c.t_ex + w,
-            None => c.next_wake + self.consts.cycle_ns,
+        c.next_wake = match c.next_at {
+            // The instant after the frame whose reply this was; with the reply read a cycle
+            // after its frame went out, that instant is now or just past: the one after it.
+            Some(at) if self.settings.reply_wait == ReplyWait::NextWake => {
+                let mut at = at;
+                let soon = monotonic_ns() + cycle_ns / 2;
+                while at <= soon {
+                    at += cycle_ns;
+                }
+                at
+            }
+            Some(at) => at,
+            None => c.next_wake + cycle_ns,
         };
         if c.next_wake <= monotonic_ns() {
             // Overrun: skip to the next instant rather than running back-to-back cycles.

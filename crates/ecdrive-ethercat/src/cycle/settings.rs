@@ -32,7 +32,8 @@ pub struct CycleSettings {
     /// Longest a controlled stop may take before the drives are disabled regardless.
     pub stop_timeout: Duration,
     /// How late, as a fraction of the cycle, the reply may arrive before the cycle counts it
-    /// as lost.
+    /// as lost (from the wake-up: with [`ReplyWait::NextWake`] the frame went out a cycle
+    /// before).
     pub reply_budget: f64,
     /// Record the [`Timing`] histograms and the report's lost/overrun counts in steady state
     /// only: from the cycle after every drive reached OP to the cycle that takes the stop
@@ -44,6 +45,32 @@ pub struct CycleSettings {
     /// On by default; off only to show what it does (the frame then reads the reference
     /// clock without writing the others, `crates/ecdrive-ethercat/tests/ethercat/faults_master.rs`).
     pub drift_compensation: bool,
+    /// When the cycle's frame goes out and when its reply is read. [`ReplyWait::NextWake`]
+    /// by default.
+    pub reply_wait: ReplyWait,
+}
+
+/// When the cycle's frame goes out and when its reply is read (see
+/// [`CycleSettings::reply_wait`]).
+///
+/// Both give the drives outputs computed from the inputs of the frame before, so the data is
+/// equally fresh; they differ in where the frame's flight falls and what it costs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ReplyWait {
+    /// Receive, process, send, sleep (the order of IgH's cyclic task): at the wake-up the
+    /// reply of the frame sent at the end of the cycle before is read without waiting; the
+    /// steps compute the outputs; the frame with them goes out; the thread sleeps. The frame
+    /// flies while the thread sleeps: one wake-up per cycle. A reply not there at the wake-up
+    /// is waited for up to [`CycleSettings::reply_budget`], and so are the further frames of a
+    /// process image too large for one. The exchange time recorded is the reading of the reply
+    /// at the wake-up (the flight during the sleep is not measured).
+    #[default]
+    NextWake,
+    /// Send, wait, process, sleep (the order of SOEM's examples): the frame goes out at the
+    /// wake-up with the outputs the steps computed in the cycle before, and the thread waits
+    /// for its reply, up to [`CycleSettings::reply_budget`] of the cycle. Two wake-ups per
+    /// cycle (the sleep and the reply); the exchange time recorded is the frame's round trip.
+    InCycle,
 }
 
 impl CycleSettings {
@@ -63,6 +90,7 @@ impl CycleSettings {
             reply_budget: 0.8,
             steady_timing_only: false,
             drift_compensation: true,
+            reply_wait: ReplyWait::NextWake,
         }
     }
 }

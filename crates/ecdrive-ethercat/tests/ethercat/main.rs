@@ -8,6 +8,7 @@ static ALLOC: ecdrive_core::rt::audit::CountingAlloc = ecdrive_core::rt::audit::
 
 mod support;
 
+mod answers;
 mod app_cycle;
 mod cycle_audit;
 mod esi_errors;

@@ -719,6 +719,8 @@ pub struct OdStore {
     abort_codes: &'static [(SdoAbortCode, SdoAbortCode)],
     /// [`Quirk::InterpolationIndexReadOnly`].
     interpolation_index_read_only: bool,
+    /// [`Quirk::PdoWritesIgnored`].
+    pdo_writes_ignored: bool,
 }
 
 /// How 0x1C32/0x1C33 (the SyncManager parameters) appear to the master.
@@ -750,6 +752,7 @@ impl OdStore {
             sync_objects: SyncObjects::AsDescribed,
             abort_codes: &[],
             interpolation_index_read_only: false,
+            pdo_writes_ignored: false,
         })
     }
 
@@ -763,6 +766,7 @@ impl OdStore {
     /// [`with_quirks`](Self::with_quirks) on a store already built.
     pub fn set_quirks(&mut self, quirks: Quirks) {
         self.interpolation_index_read_only = quirks.has(Quirk::InterpolationIndexReadOnly);
+        self.pdo_writes_ignored = quirks.has(Quirk::PdoWritesIgnored);
         self.sync_objects = if quirks.has(Quirk::SyncObjectsAbsent) {
             SyncObjects::Absent
         } else if quirks.has(Quirk::CycleTimeReadOnly) {
@@ -947,6 +951,10 @@ impl OdStore {
             return Err(SdoAbortCode::DEVICE_STATE);
         }
         check_len(e, data)?;
+        if self.pdo_writes_ignored && pdo_object(index).is_some() {
+            // Acknowledged, not taken.
+            return Ok(());
+        }
         let addr = ObjectAddress::new(index, sub);
         self.hooks.before_write(&self.dict, addr, state, data)?;
         check_range(e, data)?;

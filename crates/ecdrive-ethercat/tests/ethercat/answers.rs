@@ -1,0 +1,216 @@
+//! Start-up with ethercrab's re-reads answered from what ecdrive read and wrote
+//! (`BusOptions::answer_rereads`, the module `answers`) against start-up with every read on the
+//! wire, on one segment of the emulated MR-J4-TM and BDHDE and every device of every file of the
+//! real vendor ESI corpus: the same devices, the same roles, the same process image (every
+//! SyncManager and FMMU as the devices hold them, every drive's layout), with far fewer frames.
+//! And a drive that acknowledges a remap it does not take: both paths refuse it, naming it.
+
+use ecdrive_core::drives::{bdhde, esi_profile, mr_j4_tm};
+use ecdrive_core::esi::EsiFile;
+use ecdrive_ethercat::bus::{BusOptions, with_bus};
+use ecdrive_ethercat::error::{ErrorKind, MasterError};
+use ecdrive_ethercat::startup::{self, DeviceInfo, DriveSetup, Selector, StartupConfig};
+use ecdrive_sim::drives::{EmulatedDrive, spec_for};
+use ecdrive_sim::transport::SegmentLink;
+use ecdrive_sim::{EscConfig, HostClock, Segment};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// What one start-up gave: the devices, each drive's layout and each I/O device's image, the
+/// SyncManager and FMMU registers of every device, and the frames of each phase (sent,
+/// answered).
+#[derive(Debug)]
+struct Outcome {
+    devices: Vec<DeviceInfo>,
+    images: Vec<String>,
+    registers: Vec<Vec<u8>>,
+    frames: startup::StartupFrames,
+}
+
+/// The segment: both emulated drives, then every device of every corpus file (emulated from
+/// its file), in manifest order. Also the profiles the corpus files give.
+fn segment() -> (Segment, StartupConfig, usize) {
+    let mut seg = Segment::new(Arc::new(HostClock));
+    for (i, key) in [mr_j4_tm::PROFILE.key, bdhde::PROFILE.key]
+        .into_iter()
+        .enumerate()
+    {
+        let d = EmulatedDrive::new(spec_for(key).unwrap(), 3000 + i as u32)
+            .unwrap()
+            .without_loss_detection();
+        seg.push(Box::new(d), EscConfig::default()).unwrap();
+    }
+    let mut cfg = StartupConfig::new(Duration::from_millis(1));
+    let mut corpus_devices = 0;
+    if let Some(dir) = ecdrive_testkit::corpus::dir() {
+        let mut vendor_dirs = std::collections::BTreeSet::new();
+        let mut seen: Vec<(u32, u32)> = Vec::new();
+        for row in ecdrive_testkit::corpus::manifest(&dir) {
+            let path = dir.join(&row["path"]);
+            vendor_dirs.insert(path.parent().unwrap().to_path_buf());
+            let file = EsiFile::from_path(&path).unwrap_or_else(|e| panic!("{e}"));
+            for d in &file.devices {
+                seen.push((file.vendor.id, d.type_.product_code));
+                let name = format!("esi:{}@{}", path.display(), d.identity_text());
+                let pos = seg.len();
+                let dev = ecdrive_sim::devices::by_name(&name, pos)
+                    .unwrap_or_else(|e| panic!("{name}: {e}"));
+                seg.push(dev, EscConfig::default()).unwrap();
+                corpus_devices += 1;
+            }
+        }
+        for v in vendor_dirs {
+            let loaded = esi_profile::load_dir(&v).unwrap();
+            cfg.esi_profiles.extend(loaded.profiles);
+            cfg.esi_not_drives.extend(loaded.not_drives);
+        }
+        // Two files of one vendor describe one identity with different default PDOs
+        // (Synapticon's single- and multi-device files, 0x201 rev. 0x0A000002): a folder of
+        // both gives one profile to both devices, and the other file's device does not run on
+        // it. Such identities run here as I/O devices (their own PDO configuration).
+        let id = |p: &ecdrive_core::drives::DriveProfile| {
+            let i = &p.bus.identity;
+            (i.vendor_id, i.product_code)
+        };
+        cfg.esi_profiles
+            .retain(|p| seen.iter().filter(|&&x| x == id(p)).count() == 1);
+    }
+    for i in 0..2 {
+        cfg.drives.push(DriveSetup::new(Selector::Position(i)));
+    }
+    (seg, cfg, corpus_devices)
+}
+
+/// Start-up to SAFE-OP on a fresh segment, answers on or off.
+fn start(answer: bool) -> Result<Outcome, MasterError> {
+    let (seg, cfg, _) = segment();
+    let opts = BusOptions {
+        answer_rereads: answer,
+        ..BusOptions::default()
+    };
+    let (r, _link) = with_bus(SegmentLink::new(seg), opts, move |bus| {
+        let (group, devices) = startup::discover(bus)?;
+        let roles = startup::assign_roles(&devices, &cfg)?;
+        let started = startup::configure(bus, group, devices, roles, &cfg)?;
+        let mut registers = Vec::new();
+        for d in &started.devices {
+            let addr = d.address;
+            let regs = bus
+                .block_on(
+                    &|| "reading SMs and FMMUs".into(),
+                    Duration::from_secs(5),
+                    |md| async move {
+                        let f = ethercrab::Command::fprd(addr, 0x0600)
+                            .receive::<[u8; 48]>(md)
+                            .await?;
+                        let s = ethercrab::Command::fprd(addr, 0x0800)
+                            .receive::<[u8; 32]>(md)
+                            .await?;
+                        Ok::<_, ethercrab::error::Error>((f, s))
+                    },
+                )
+                .unwrap()
+                .unwrap();
+            // FMMUs whole; each SM without its status byte (5) and PDI control (7).
+            let mut r = regs.0.to_vec();
+            for sm in regs.1.chunks(8) {
+                r.extend_from_slice(&sm[..5]);
+                r.push(sm[6]);
+            }
+            registers.push(r);
+        }
+        let images = started
+            .drives
+            .iter()
+            .map(|d| format!("{} {:?} {:?}", d.drive, d.mapping, d.layout))
+            .chain(started.io.iter().map(|o| format!("{o:?}")))
+            .collect();
+        Ok::<_, MasterError>(Outcome {
+            devices: started.devices.clone(),
+            images,
+            registers,
+            frames: started.times.frames,
+        })
+    })
+    .unwrap_or_else(|(e, _)| panic!("{e}"));
+    r
+}
+
+#[test]
+fn answered_rereads_give_the_same_image_as_the_wire_with_fewer_frames() {
+    let (_, _, corpus_devices) = segment();
+    let on = start(true).unwrap_or_else(|e| panic!("answers on: {e}"));
+    let off = start(false).unwrap_or_else(|e| panic!("answers off: {e}"));
+    assert_eq!(on.devices.len(), 2 + corpus_devices);
+    assert_eq!(on.devices, off.devices, "the devices as discovered");
+    assert_eq!(
+        on.images, off.images,
+        "the drives' layouts and the I/O images"
+    );
+    for (i, (a, b)) in on.registers.iter().zip(&off.registers).enumerate() {
+        assert_eq!(
+            a, b,
+            "device {i} ({}): SM and FMMU registers",
+            on.devices[i].name
+        );
+    }
+    let (f1, f0) = (on.frames, off.frames);
+    eprintln!(
+        "{} devices: discovery {} frames (+{} answered) against {}, SII {} against {}; \
+         process image {} (+{} answered) against {}",
+        on.devices.len(),
+        f1.discovery,
+        f1.answered_discovery,
+        f0.discovery,
+        f1.sii,
+        f0.sii,
+        f1.image,
+        f1.answered_image,
+        f0.image
+    );
+    assert_eq!((f0.answered_discovery, f0.answered_image), (0, 0));
+    assert!(f1.answered_discovery > 0 && f1.answered_image > 0, "{f1:?}");
+    // What was answered did not go on the wire: far fewer frames.
+    assert!(f1.discovery * 2 < f0.discovery, "{f1:?} against {f0:?}");
+    assert!(f1.image * 2 < f0.image, "{f1:?} against {f0:?}");
+}
+
+/// A drive that acknowledges the remap and keeps its power-on mapping (`pdo-writes-ignored`):
+/// with answers, its own SAFE-OP check refuses the SyncManagers sized for the acknowledged
+/// mapping (AL status code 0x001D), and the error says what the answered read-back means;
+/// without, the image ethercrab read back does not fit the mapping start-up wrote. Both name
+/// the drive.
+#[test]
+fn a_drive_that_does_not_hold_an_acknowledged_mapping_is_named_either_way() {
+    for answer in [true, false] {
+        let mut seg = Segment::new(Arc::new(HostClock));
+        seg.push(
+            ecdrive_sim::devices::by_name("mr-j4-tm+pdo-writes-ignored", 0).unwrap(),
+            EscConfig::default(),
+        )
+        .unwrap();
+        let mut cfg = StartupConfig::new(Duration::from_millis(1));
+        cfg.drives.push(DriveSetup::new(Selector::Position(0)));
+        let opts = BusOptions {
+            answer_rereads: answer,
+            ..BusOptions::default()
+        };
+        let (r, _) = with_bus(SegmentLink::new(seg), opts, move |bus| {
+            let (group, devices) = startup::discover(bus)?;
+            let roles = startup::assign_roles(&devices, &cfg)?;
+            startup::configure(bus, group, devices, roles, &cfg).map(|_| ())
+        })
+        .unwrap_or_else(|(e, _)| panic!("{e}"));
+        let e = r.expect_err("start-up must fail");
+        assert_eq!(e.drive.as_ref().map(|d| d.position), Some(0), "{e}");
+        if answer {
+            assert!(
+                matches!(e.kind, ErrorKind::AlState(c) if c.0 == 0x001D),
+                "{e}"
+            );
+            assert!(e.reason.contains("answer_rereads = false"), "{e}");
+        } else {
+            assert!(e.to_string().contains("configured mapping"), "{e}");
+        }
+    }
+}
