@@ -49,5 +49,8 @@ frames = sum(medf(k) for k in ["discovery", "coe", "image", "dc_settle", "safe_o
 print(f"  ecdrive                {med('total_ms'):8.1f} ms to OP; {frames:.0f} frames before the cycle")
 for k in ["discovery", "sii", "coe", "image", "dc_settle", "safe_op", "op"]:
     f = f"   {medf(k):6.0f} frames" if k in runs[0]["frames"] else ""
+    a = "answered_" + k
+    if a in runs[0]["frames"] and medf(a) > 0:
+        f += f" (+{medf(a):.0f} of ethercrab's answered, not sent)"
     print(f"    {k:20} {med(k + '_ms'):8.1f} ms{f}")
 PY

@@ -6,6 +6,9 @@
 #
 # CYCLE_MS (default 1) sets the cycle and SYNC0 period of both masters: at 128 drives the
 # emulated segment, one thread answering every frame, needs more than 1 ms a cycle over veth.
+# ANSWER_REREADS=false runs ecdrive with every one of ethercrab's start-up reads on the wire
+# (the run file's `answer_rereads`; by default ecdrive answers ethercrab's re-reads of the SII
+# and of the PDO configuration from what it read and wrote, and says how many it answered).
 #
 # DRIVES emulated drives (MR-J4-TM and BDHDE alternating) are served by `ecdrive sim` in a
 # network namespace of this script's own (ecdrive-su) on one end of a veth pair. Each round:
@@ -26,6 +29,7 @@ cd "$(dirname "$0")/.."
 n="${1:-2}"
 rounds="${2:-5}"
 cycle_ms="${CYCLE_MS:-1}"
+answer="${ANSWER_REREADS:-true}"
 e=target/release/ecdrive
 py="${PYTHON:-python3}"
 [ -x "$py" ] || command -v "$py" >/dev/null || py=python3
@@ -49,6 +53,7 @@ trap cleanup EXIT
   echo 'interface = "ecsu0"'
   echo "cycle = \"${cycle_ms}ms\""
   echo 'duration = "0.1s"'
+  echo "answer_rereads = $answer"
   for i in $(seq 0 $((n - 1))); do printf '[[drive]]\nposition = %d\nmode = "csp"\n' "$i"; done
 } >"$work/run.toml"
 
@@ -101,7 +106,7 @@ ip netns exec "$ns" "$e" sim -i ecsu1 "${devices[@]}" --no-loss-detection >"$wor
 sleep 1
 
 fields="total_ms discovery_ms sii_ms coe_ms image_ms dc_settle_ms safe_op_ms op_ms"
-frames="discovery sii coe image dc_settle safe_op"
+frames="discovery sii coe image dc_settle safe_op answered_discovery answered_image"
 tx() { cat /sys/class/net/ecsu0/statistics/tx_packets; }
 for r in $(seq "$rounds"); do
   if [ "$soem" = 1 ]; then
@@ -119,26 +124,29 @@ s = json.load(open('$work/one.json'))['startup']
 print(' '.join([str(s[k]) for k in '$fields'.split()] + [str(s['frames'][k]) for k in '$frames'.split()]))" >>"$work/ecdrive.txt"
 done
 
-python3 - "$work" "$n" "$rounds" "$fields" "$soem" "$frames" "$cycle_ms" <<'EOF'
+python3 - "$work" "$n" "$rounds" "$fields" "$soem" "$frames" "$cycle_ms" "$answer" <<'EOF'
 import statistics, sys, subprocess
-work, n, rounds, fields, soem, frames, cycle_ms = sys.argv[1:]
+work, n, rounds, fields, soem, frames, cycle_ms, answer = sys.argv[1:]
 med = lambda xs: statistics.median(xs) if xs else float("nan")
 names = fields.split() + ["frames_" + f for f in frames.split()]
 rows = [list(map(float, l.split())) for l in open(f"{work}/ecdrive.txt")]
 cols = dict(zip(names, zip(*rows)))
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
-print(f"start-up to OP over veth, {n} emulated drives, cycle {cycle_ms} ms, median of {rounds} interleaved runs (commit {commit})")
+print(f"start-up to OP over veth, {n} emulated drives, cycle {cycle_ms} ms, median of {rounds} interleaved runs (commit {commit}, answer_rereads = {answer})")
 if soem == "1":
     s = [l.split() for l in open(f"{work}/soem.txt")]
     ok = [list(map(float, x)) for x in s if x[0] != "fail"]
     print(f"  SOEM (pysoem 1.1.13)   {med([x[0] for x in ok]):8.1f} ms to OP, "
           f"{med([x[1] for x in ok]):.1f} ms to 10 SYNC0 cycles; "
           f"{med([x[2] for x in ok]):.0f} frames in all ({len(s) - len(ok)} failed)")
-total = sum(med(cols["frames_" + f]) for f in frames.split() if f != "sii")
+total = sum(med(cols["frames_" + f]) for f in frames.split() if f in ("discovery", "coe", "image", "dc_settle", "safe_op"))
 print(f"  ecdrive                {med(cols['total_ms']):8.1f} ms to OP (after 10 SYNC0 cycles); "
       f"{total:.0f} frames before the cycle")
 for k in fields.split()[1:]:
     f = "frames_" + k[:-3]
     extra = f"   {med(cols[f]):6.0f} frames" if f in cols else ""
+    a = "frames_answered_" + k[:-3]
+    if a in cols and med(cols[a]) > 0:
+        extra += f" (+{med(cols[a]):.0f} of ethercrab's answered, not sent)"
     print(f"    {k[:-3]:20} {med(cols[k]):8.1f} ms{extra}")
 EOF

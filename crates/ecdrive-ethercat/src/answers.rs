@@ -436,3 +436,174 @@ fn upload_response(m: &Mailbox, req: &[u8]) -> Option<Vec<u8>> {
     r[12..12 + value.len()].copy_from_slice(value);
     Some(r)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::ec::frame::{FrameBuilder, MacAddress, physical_address};
+    use crate::ec::mailbox::{MailboxMessage, SdoRequest, SdoResponse};
+
+    const STATION: u16 = 0x1000;
+
+    /// One device at position 0 whose SII has words 0x08–0x0B and a SyncManager category with
+    /// SM0 (mailbox out, 0x1000/128) and SM1 (mailbox in, 0x1080/128); the station address
+    /// learnt from the write ethercrab sends.
+    fn answers() -> Answers {
+        let mut w = SiiWords::default();
+        w.set_status(0x0040 | 0x8000);
+        for (a, v) in [
+            (0x08, 0x1111),
+            (0x09, 0x2222),
+            (0x0A, 0x3333),
+            (0x0B, 0x4444),
+        ] {
+            w.insert(a, v);
+        }
+        // Category 41 at 0x40: 8 words, SM0 then SM1 (start, length, control|status,
+        // enable|type << 8).
+        let cat = [
+            41, 8, 0x1000, 128, 0x0026, 0x0101, 0x1080, 128, 0x0022, 0x0201, 0xFFFF,
+        ];
+        for (i, v) in cat.iter().enumerate() {
+            w.insert(FIRST_CATEGORY + i as u16, *v);
+        }
+        let mut a = Answers::new(vec![w]);
+        let mut buf = [0u8; 128];
+        assert_eq!(
+            a.answer(
+                &frame(
+                    Command::Apwr,
+                    0,
+                    register::STATION_ADDRESS,
+                    &STATION.to_le_bytes()
+                ),
+                &mut buf
+            ),
+            Verdict::Wire,
+            "the station address write goes to the wire"
+        );
+        a
+    }
+
+    fn frame(cmd: Command, adp: u16, ado: u16, data: &[u8]) -> Vec<u8> {
+        let mut buf = [0u8; 256];
+        let mut b = FrameBuilder::new(&mut buf, MacAddress([0x10, 0, 0, 0, 0, 1])).unwrap();
+        b.push(cmd, 3, physical_address(adp, ado), data).unwrap();
+        let n = b.finish();
+        buf[..n].to_vec()
+    }
+
+    /// The data and working counter of the single datagram of `reply`.
+    fn datagram(reply: &[u8]) -> (Vec<u8>, u16) {
+        let eth = EthernetFrame::new_checked(reply).unwrap();
+        let ecat = EthercatFrame::new_checked(eth.payload()).unwrap();
+        let d = ecat.datagrams().next().unwrap().unwrap();
+        (d.data().to_vec(), d.wkc())
+    }
+
+    #[test]
+    fn an_sii_read_of_words_read_in_bulk_is_answered_and_others_go_to_the_wire() {
+        let mut a = answers();
+        let mut buf = [0u8; 256];
+        let cmd = frame(
+            Command::Fpwr,
+            STATION,
+            register::SII_CONTROL,
+            &[0, 1, 8, 0, 0, 0],
+        );
+        assert!(matches!(a.answer(&cmd, &mut buf), Verdict::Answered(_)));
+        assert_eq!(datagram(&buf[..cmd.len()]).1, 1);
+        // The status: idle, 8-byte reads; the data: the four words.
+        let st = frame(Command::Fprd, STATION, register::SII_CONTROL, &[0, 0]);
+        let Verdict::Answered(n) = a.answer(&st, &mut buf) else {
+            panic!()
+        };
+        assert_eq!(datagram(&buf[..n]), (vec![0x40, 0], 1));
+        assert_eq!(
+            buf[6] & MAC_LOCAL_BIT,
+            MAC_LOCAL_BIT,
+            "as a slave controller forwards it"
+        );
+        let data = frame(Command::Fprd, STATION, register::SII_DATA, &[0; 8]);
+        let Verdict::Answered(n) = a.answer(&data, &mut buf) else {
+            panic!()
+        };
+        assert_eq!(
+            datagram(&buf[..n]).0,
+            [0x11, 0x11, 0x22, 0x22, 0x33, 0x33, 0x44, 0x44]
+        );
+        // Word 0x0C was not read: the command and what follows it go to the wire.
+        let other = frame(
+            Command::Fpwr,
+            STATION,
+            register::SII_CONTROL,
+            &[0, 1, 0x0C, 0, 0, 0],
+        );
+        assert_eq!(a.answer(&other, &mut buf), Verdict::Wire);
+        assert_eq!(a.answer(&data, &mut buf), Verdict::Wire);
+        // Another station: nothing known.
+        let cmd2 = frame(
+            Command::Fpwr,
+            STATION + 1,
+            register::SII_CONTROL,
+            &[0, 1, 8, 0, 0, 0],
+        );
+        assert_eq!(a.answer(&cmd2, &mut buf), Verdict::Wire);
+        assert_eq!(a.answered(), 3);
+    }
+
+    #[test]
+    fn an_upload_of_an_acknowledged_object_is_answered_with_its_value() {
+        let mut a = answers();
+        a.acknowledged(
+            STATION,
+            ObjectAddress::new(0x1C12, 1),
+            &0x1601u16.to_le_bytes(),
+        );
+        a.last_counter(STATION, 5);
+        let mut buf = [0u8; 256];
+        let mut req = [0u8; 128];
+        let up = |index, sub| SdoRequest::Upload {
+            index,
+            sub,
+            complete_access: false,
+        };
+        let n = up(0x1C12, 1).emit_mailbox(3, &mut req).unwrap();
+        let _ = n;
+        // Both mailboxes look free, the request is taken, SM1 shows full, the response reads.
+        let sm1 = frame(Command::Fprd, STATION, register::sm(1) + 5, &[0]);
+        assert!(matches!(a.answer(&sm1, &mut buf), Verdict::Answered(_)));
+        let write = frame(Command::Fpwr, STATION, 0x1000, &req);
+        assert!(matches!(a.answer(&write, &mut buf), Verdict::Answered(_)));
+        let Verdict::Answered(n) = a.answer(&sm1, &mut buf) else {
+            panic!()
+        };
+        assert_eq!(datagram(&buf[..n]).0, [SM_MAILBOX_FULL]);
+        let read = frame(Command::Fprd, STATION, 0x1080, &[0; 128]);
+        let Verdict::Answered(n) = a.answer(&read, &mut buf) else {
+            panic!()
+        };
+        let (mbx, wkc) = datagram(&buf[..n]);
+        assert_eq!(wkc, 1);
+        match MailboxMessage::parse(&mbx).unwrap().1 {
+            MailboxMessage::SdoResponse(SdoResponse::UploadExpedited {
+                index, sub, data, ..
+            }) => assert_eq!((index, sub, data), (0x1C12, 1, &[0x01, 0x16][..])),
+            m => panic!("{m:?}"),
+        }
+        // An object not acknowledged goes to the wire; its counter 5, the last the device
+        // saw, is changed to 6.
+        let n = up(0x1A00, 1).emit_mailbox(5, &mut req).unwrap();
+        let _ = n;
+        let write = frame(Command::Fpwr, STATION, 0x1000, &req);
+        let Verdict::Rewritten(n) = a.answer(&write, &mut buf) else {
+            panic!("the counter must change")
+        };
+        let (sent, _) = datagram(&buf[..n]);
+        assert_eq!((sent[5] >> 4) & 7, 6);
+        assert_eq!(sent[..5], req[..5]);
+        assert_eq!(sent[6..], req[6..]);
+        // From then on the mailbox is the wire's.
+        assert_eq!(a.answer(&sm1, &mut buf), Verdict::Wire);
+    }
+}

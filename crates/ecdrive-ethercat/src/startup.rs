@@ -1814,25 +1814,7 @@ pub fn configure<L: FrameLink>(
         }
     }
 
-    // Drain the mailbox of every device with CoE (drives and CoE I/O devices): ethercrab reads
-    // the PDO configuration through its own SDO client, which panics if an emergency is
-    // waiting (ethercrab 0.7.1). Draining only reads what is waiting; a device without a
-    // mailbox gets nothing.
-    for d in devices.iter().filter(|d| d.coe) {
-        let drive = drives_plan
-            .iter()
-            .find(|(x, _, _)| x.position == d.position)
-            .map_or_else(
-                || d.drive_ref(),
-                |(_, _, p)| DriveRef {
-                    position: d.position,
-                    name: p.name.to_string(),
-                },
-            );
-        bus.with_coe(d.address, drive, false, T_STEP, async |c| {
-            c.drain().await.map(|_| ())
-        })?;
-    }
+    drain_mailboxes(bus, &devices, &drives_plan)?;
 
     times.coe_ms = ms_since(t_coe);
     times.frames.coe = sent(bus) - f_coe;
@@ -1882,6 +1864,33 @@ pub fn configure<L: FrameLink>(
         warnings,
         times,
     })
+}
+
+/// Drain the mailbox of every device with CoE (drives and CoE I/O devices): ethercrab reads
+/// the PDO configuration through its own SDO client, which panics if an emergency is waiting
+/// (ethercrab 0.7.1). Draining only reads what is waiting; a device without a mailbox gets
+/// nothing.
+fn drain_mailboxes<L: FrameLink>(
+    bus: &mut Bus<'_, L>,
+    devices: &[DeviceInfo],
+    drives_plan: &[(&DeviceInfo, &DriveSetup, &'static DriveProfile)],
+) -> Result<(), MasterError> {
+    for d in devices.iter().filter(|d| d.coe) {
+        let drive = drives_plan
+            .iter()
+            .find(|(x, _, _)| x.position == d.position)
+            .map_or_else(
+                || d.drive_ref(),
+                |(_, _, p)| DriveRef {
+                    position: d.position,
+                    name: p.name.to_string(),
+                },
+            );
+        bus.with_coe(d.address, drive, false, T_STEP, async |c| {
+            c.drain().await.map(|_| ())
+        })?;
+    }
+    Ok(())
 }
 
 /// What start-up writes to one drive in PRE-OP, in order, and what it reads back.

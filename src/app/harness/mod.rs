@@ -494,14 +494,7 @@ impl Plan<'_> {
             }
         };
         self.drives_of(seg, &mut ecd);
-        ecd.structure.link = match cfg.transport {
-            Transport::InProcess => {
-                "ecdrive-sim's SegmentLink, called by the cycle thread (no TX/RX thread)".into()
-            }
-            _ => {
-                "raw socket, frames sent and received by the cycle thread (no TX/RX thread)".into()
-            }
-        };
+        ecd.structure.link = ecdrive_link(&cfg.transport);
         ecd.structure.slaves = self.slaves("the cycle thread");
 
         let ratios = AllRatios {
@@ -683,4 +676,22 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
         repetitions,
         summary,
     })
+}
+
+/// How ecdrive's run moves its frames, in words. Its default reply wait: the frame flies while
+/// the cycle thread sleeps, so its exchange figure is the reading of the reply at the wake-up,
+/// not the round trip.
+fn ecdrive_link(transport: &Transport) -> String {
+    let reply = "; the frame goes out at the end of the cycle and its reply is read at the next \
+                 wake-up (exchange = that read, not the round trip)";
+    match transport {
+        Transport::InProcess => {
+            format!(
+                "ecdrive-sim's SegmentLink, called by the cycle thread (no TX/RX thread){reply}"
+            )
+        }
+        _ => format!(
+            "raw socket, frames sent and received by the cycle thread (no TX/RX thread){reply}"
+        ),
+    }
 }

@@ -923,21 +923,31 @@ fn cycle_report(c: &CycleSummary) {
     }
 }
 
-/// Where start-up's time went, one line: milliseconds, frames sent in brackets.
+/// Where start-up's time went, one line: milliseconds, frames sent in brackets (and the frames
+/// of ethercrab's answered from what ecdrive read, which were not sent).
 pub fn startup(t: &ecdrive::master::StartupTimes) {
     let f = &t.frames;
+    let answered = |n: u64| {
+        if n > 0 {
+            format!(", {n} answered")
+        } else {
+            String::new()
+        }
+    };
     println!(
-        "Start-up: {:.1} ms to {}: discovery {:.1} [{} frames] (SII {:.1} [{}]), CoE {:.1} [{}], image {:.1} [{}], DC settle {:.1} [{}], SAFE-OP {:.1} [{}]{}",
+        "Start-up: {:.1} ms to {}: discovery {:.1} [{} frames{}] (SII {:.1} [{}]), CoE {:.1} [{}], image {:.1} [{}{}], DC settle {:.1} [{}], SAFE-OP {:.1} [{}]{}",
         t.total_ms,
         if t.op_ms.is_some() { "OP" } else { "SAFE-OP" },
         t.discovery_ms,
         f.discovery,
+        answered(f.answered_discovery),
         t.sii_ms,
         f.sii,
         t.coe_ms,
         f.coe,
         t.image_ms,
         f.image,
+        answered(f.answered_image),
         t.dc_settle_ms,
         f.dc_settle,
         t.safe_op_ms,

@@ -1,12 +1,15 @@
 //! The cycle: one thread, absolute-time sleeps on the DC-aligned cycle, one process-data
 //! exchange, one CiA 402 step per axis, every cycle.
 //!
-//! Per cycle: sleep until the instant (`clock_nanosleep`, absolute), exchange the process data
-//! (`tx_rx_dc`, pumped inline by [`exec::exchange`]: the frame I/O is this thread's own), check
-//! the working counter and every drive's AL state, read each drive's inputs through its
-//! resolved fields, take commands, step each axis of the motion runtime
-//! ([`ecdrive_motion::MotionAxis`]: the program, homing, the profile modes, the probes, the
-//! stops and the CiA 402 engine), write the outputs, publish telemetry and events. After start-up nothing here allocates, locks
+//! Per cycle: sleep until the instant (`clock_nanosleep`, absolute), read the reply of the frame
+//! sent at the end of the cycle before (`tx_rx_dc`, pumped inline by [`exec::exchange`]: the
+//! frame I/O is this thread's own), check the working counter and every drive's AL state, read
+//! each drive's inputs through its resolved fields, take commands, step each axis of the motion
+//! runtime ([`ecdrive_motion::MotionAxis`]: the program, homing, the profile modes, the probes,
+//! the stops and the CiA 402 engine), write the outputs, publish telemetry and events, send the
+//! frame with the new outputs ([`exec::start`]), sleep: the frame flies while the thread sleeps,
+//! one wake-up per cycle ([`ReplyWait::NextWake`]; [`ReplyWait::InCycle`] sends at the wake-up
+//! and waits for the reply instead). After start-up nothing here allocates, locks
 //! anything another thread takes, or makes a syscall other than the frame I/O and the sleep —
 //! `crates/ecdrive-ethercat/tests/ethercat/cycle_audit.rs` proves it with a counting allocator and per-thread syscall counters.
 //!
@@ -849,15 +852,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let c = &mut self.clock;
         c.next_wake = match c.next_at {
             // The instant after the frame whose reply this was; with the reply read a cycle
-            // after its frame went out, that instant is now or just past: the one after it.
-            Some(at) if self.settings.reply_wait == ReplyWait::NextWake => {
-                let mut at = at;
-                let soon = monotonic_ns() + cycle_ns / 2;
-                while at <= soon {
-                    at += cycle_ns;
-                }
-                at
-            }
+            // after its frame went out, that instant is this cycle's: the next is one on.
+            Some(at) if self.settings.reply_wait == ReplyWait::NextWake => at + cycle_ns,
             Some(at) => at,
             None => c.next_wake + cycle_ns,
         };
