@@ -132,9 +132,10 @@ pub struct Bus<'sto, L: FrameLink> {
 }
 
 /// How many devices' mailboxes [`Bus::with_coe_each`] works on at once: each has at most one
-/// frame in flight, and ethercrab's storage holds [`MAX_FRAMES`]; half of it stays free for the
-/// rest (\[REC\]).
-pub const MAILBOXES_AT_ONCE: usize = MAX_FRAMES / 2;
+/// frame in flight, and ethercrab's storage holds [`MAX_FRAMES`]; three quarters of it stay
+/// free for the rest, and a link need not hold more than this many replies waiting (\[REC\]:
+/// 16, the in-process segment holds 32).
+pub const MAILBOXES_AT_ONCE: usize = MAX_FRAMES / 4;
 
 /// What one device's mailbox work gave: the result, the last mailbox counter, its SM0 start.
 type CoeRun<T> = (Result<T, CoeError>, u8, Option<u16>);
