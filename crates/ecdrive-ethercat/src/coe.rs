@@ -178,6 +178,11 @@ pub struct CoeClient<'a> {
     timeout: Duration,
     log: EmergencyLog,
     buf: Vec<u8>,
+    /// The last exchange of this client ended with its reply: the drive took the request out
+    /// of SM0 before it answered, and nothing of an earlier exchange is left to come. The next
+    /// request goes without a look at the SyncManagers first (what arrives meanwhile, an
+    /// emergency, is read and recorded while waiting for the reply).
+    settled: bool,
 }
 
 impl<'a> CoeClient<'a> {
@@ -236,6 +241,7 @@ impl<'a> CoeClient<'a> {
             counter: 0,
             avoid: 0,
             zero_next: false,
+            settled: false,
             complete_access: false,
             timeout: Duration::from_millis(1000),
             log,
@@ -497,6 +503,8 @@ impl<'a> CoeClient<'a> {
         addr: Option<ObjectAddress>,
         check: bool,
     ) -> Result<(), CoeError> {
+        // Settled again only by an exchange that ends with its reply (`sdo`).
+        self.settled = false;
         let deadline = monotonic_ns() + self.timeout.as_nanos() as u64;
         // Wait until the drive has taken the previous request.
         while check && !self.sm0_free(addr, deadline).await? {}
@@ -554,7 +562,7 @@ impl<'a> CoeClient<'a> {
         req: SdoRequest<'_>,
         addr: ObjectAddress,
     ) -> Result<(Vec<u8>, usize), CoeError> {
-        let sm0_free = self.prepare(Some(addr)).await?;
+        let sm0_free = std::mem::take(&mut self.settled) || self.prepare(Some(addr)).await?;
         let counter = self.next_counter();
         let mut out = vec![0u8; self.sms.out_len as usize];
         let n = req
@@ -570,6 +578,7 @@ impl<'a> CoeClient<'a> {
                 )
             })
             .await?;
+        self.settled = true;
         Ok((self.buf[..len].to_vec(), len))
     }
 
