@@ -11,7 +11,7 @@
 //! waiting future (ethercrab releases the frame slot on drop).
 
 use crate::answers::{Answers, Verdict};
-use crate::ec::frame::{EthercatFrame, EthernetFrame};
+use crate::ec::frame::{EthercatFrame, EthernetFrame, MAC_LOCAL_BIT};
 use crate::ec::register::FmmuConfig;
 use crate::ec::{command::Command, register};
 use crate::rt::monotonic_ns;
@@ -327,7 +327,7 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
                 }
             };
             let ours = self.rx_buf.get(FIRST_IDX_OFFSET) == Some(&crate::answers::RAW_INDEX)
-                && self.rx_buf.get(6).is_some_and(|b| b & 0x02 != 0);
+                && self.rx_buf.get(6).is_some_and(|b| b & MAC_LOCAL_BIT != 0);
             if ours && let (Some(src), Some(dst)) = (self.rx_buf.get(..got), reply.get_mut(..got)) {
                 dst.copy_from_slice(src);
                 self.stats.received += 1;

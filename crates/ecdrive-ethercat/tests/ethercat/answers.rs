@@ -81,17 +81,29 @@ fn segment() -> (Segment, StartupConfig, usize) {
     (seg, cfg, corpus_devices)
 }
 
+/// The bus options with answers on or off.
+fn options(answer: bool) -> BusOptions {
+    BusOptions {
+        answer_rereads: answer,
+        ..BusOptions::default()
+    }
+}
+
+/// Start-up as the master runs it: discovery, roles, configuration to SAFE-OP.
+fn start_up<L: ecdrive_core::link::FrameLink>(
+    bus: &mut ecdrive_ethercat::bus::Bus<'_, L>,
+    cfg: &StartupConfig,
+) -> Result<startup::Started, MasterError> {
+    let (group, devices) = startup::discover(bus)?;
+    let roles = startup::assign_roles(&devices, cfg)?;
+    startup::configure(bus, group, devices, roles, cfg)
+}
+
 /// Start-up to SAFE-OP on a fresh segment, answers on or off.
 fn start(answer: bool) -> Result<Outcome, MasterError> {
     let (seg, cfg, _) = segment();
-    let opts = BusOptions {
-        answer_rereads: answer,
-        ..BusOptions::default()
-    };
-    let (r, _link) = with_bus(SegmentLink::new(seg), opts, move |bus| {
-        let (group, devices) = startup::discover(bus)?;
-        let roles = startup::assign_roles(&devices, &cfg)?;
-        let started = startup::configure(bus, group, devices, roles, &cfg)?;
+    let (r, _link) = with_bus(SegmentLink::new(seg), options(answer), move |bus| {
+        let started = start_up(bus, &cfg)?;
         let mut registers = Vec::new();
         for d in &started.devices {
             let addr = d.address;
@@ -191,14 +203,8 @@ fn a_drive_that_does_not_hold_an_acknowledged_mapping_is_named_either_way() {
         .unwrap();
         let mut cfg = StartupConfig::new(Duration::from_millis(1));
         cfg.drives.push(DriveSetup::new(Selector::Position(0)));
-        let opts = BusOptions {
-            answer_rereads: answer,
-            ..BusOptions::default()
-        };
-        let (r, _) = with_bus(SegmentLink::new(seg), opts, move |bus| {
-            let (group, devices) = startup::discover(bus)?;
-            let roles = startup::assign_roles(&devices, &cfg)?;
-            startup::configure(bus, group, devices, roles, &cfg).map(|_| ())
+        let (r, _) = with_bus(SegmentLink::new(seg), options(answer), move |bus| {
+            start_up(bus, &cfg).map(|_| ())
         })
         .unwrap_or_else(|(e, _)| panic!("{e}"));
         let e = r.expect_err("start-up must fail");
