@@ -659,3 +659,28 @@ fn commands_home_arm_a_probe_and_move_in_pp() {
 fn refused(h: &HistoryEntry, what: &str) -> bool {
     matches!(h.cycle_event(), Some(EventKind::CommandRefused { why, .. }) if why.contains(what))
 }
+
+/// The cycle keeps one frame per SYNC0 whatever the shift after SYNC0 it sends at: with the
+/// reply read at the next wake-up (the default), each wake-up is one instant of the SYNC0 grid
+/// after the last. Judged at the drives: the SYNC0 cycles in which a drive found no fresh
+/// outputs. (A schedule that took the grid point from the reply alone woke twice in one SYNC0
+/// period and not at all in the next with a shift under half a cycle: half the cycles.)
+#[test]
+fn every_dc_shift_gives_each_sync0_its_frame() {
+    for shift_us in [100, 500, 850] {
+        let mut cfg = config(SetpointLimits::default());
+        cfg.startup.dc.shift = Some(Duration::from_micros(shift_us));
+        let (r, targets) = run(cfg, 600);
+        assert!(r.shutdown_ok, "shift {shift_us} µs");
+        for (i, t) in targets.iter().enumerate() {
+            let stale = t.iter().filter(|x| !x.fresh).count();
+            // A loaded machine may stall a few cycles; the fault this guards against misses
+            // every other one.
+            assert!(
+                t.len() >= 600 && stale * 20 < t.len(),
+                "shift {shift_us} µs, drive {i}: {stale} of {} SYNC0 cycles without fresh outputs",
+                t.len()
+            );
+        }
+    }
+}
