@@ -19,11 +19,14 @@
 //! - a mailbox exchange (the SyncManager status reads, the request written to the write
 //!   mailbox, the response read from the read mailbox) whose request is an expedited SDO
 //!   upload of an object the drive acknowledged writing in this start-up, with the value
-//!   written.
+//!   written; only for a drive whose every upload at the process image is so covered (the PDO
+//!   assignment and mappings of each of its process data SyncManagers), so that no request of
+//!   ethercrab's goes to the wire after status reads answered "empty".
 //!
-//! Anything else goes to the wire, unchanged: other registers, SII words not read in bulk, any
-//! other mailbox request (from then on the device's mailbox is the wire's until its next
-//! answered request). A drive that acknowledged a mapping and does not hold it is refused at
+//! Anything else goes to the wire, unchanged: other registers, SII words not read in bulk (and
+//! the busy polls after such a command: the device's EEPROM may be busy with it), any other
+//! mailbox request (from then on the device's mailbox is the wire's until its next answered
+//! request). A drive that acknowledged a mapping and does not hold it is refused at
 //! SAFE-OP by the drive itself (its SyncManager lengths are checked against its mapping,
 //! AL status code 0x001D/0x001E), which start-up names. The switch is
 //! [`StartupConfig::answer_rereads`](crate::startup::StartupConfig::answer_rereads); off,
@@ -33,7 +36,7 @@ use crate::ec::command::Command;
 use crate::ec::frame::{DATAGRAM_HEADER_LEN, EthercatFrame, EthernetFrame, MAC_LOCAL_BIT, WKC_LEN};
 use crate::ec::register;
 use crate::od::ObjectAddress;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// The first SII word of the categories (ETG.1000.6 / ETG.2010).
 pub(crate) const FIRST_CATEGORY: u16 = 0x0040;
@@ -41,7 +44,9 @@ pub(crate) const FIRST_CATEGORY: u16 = 0x0040;
 pub const RAW_INDEX: u8 = 0xEC;
 /// SII control/status: busy (bit 15), the error bits (11–14), the command bits (8–10).
 pub(crate) const SII_BUSY: u16 = 0x8000;
-pub(crate) const SII_ERRORS: u16 = 0x7800;
+const SII_ERRORS: u16 = 0x7800;
+/// The error bit of a read that failed: missing EEPROM acknowledge, or an invalid command.
+pub(crate) const SII_ACK_ERROR: u16 = 0x2000;
 const SII_COMMAND: u16 = 0x0700;
 /// A SyncManager's status byte (0x0805 + 8n): mailbox full.
 const SM_MAILBOX_FULL: u8 = 0x08;
@@ -75,27 +80,44 @@ impl SiiWords {
     pub fn set_status(&mut self, status: u16) {
         self.status = status & !(SII_BUSY | SII_ERRORS | SII_COMMAND);
     }
-    /// The (start, length) of the mailbox SyncManagers of `kind` (1: the master writes, 2: the
-    /// master reads) and their number, from the SyncManager category.
-    fn mailbox_sm(&self, kind: u8) -> Option<(u8, u16, u16)> {
+    /// The word `off` words after `base` (None past the 16-bit word addresses, or not read).
+    fn word_after(&self, base: u16, off: u32) -> Option<u16> {
+        self.word(u16::try_from(u32::from(base) + off).ok()?)
+    }
+
+    /// The SyncManagers of the SyncManager category (41): (number, start, length, type), the
+    /// type being 1 (mailbox the master writes), 2 (mailbox it reads), 3 (outputs), 4
+    /// (inputs). An empty list when the SII has no such category; None when a word of it was
+    /// not read.
+    fn sync_managers(&self) -> Option<Vec<(u8, u16, u16, u8)>> {
         let mut at = FIRST_CATEGORY;
-        while let (Some(t), Some(size)) = (self.word(at), self.word(at + 1)) {
+        loop {
+            let (t, size) = (self.word(at)?, self.word_after(at, 1)?);
             if t == 0xFFFF {
-                return None;
+                return Some(Vec::new());
             }
             if t == 41 {
-                for n in 0..size / 4 {
-                    let w = at + 2 + 4 * n;
-                    let (start, len, ty) = (self.word(w)?, self.word(w + 1)?, self.word(w + 3)?);
-                    if (ty >> 8) as u8 == kind {
-                        return Some((u8::try_from(n).ok()?, start, len));
-                    }
+                let mut sms = Vec::new();
+                for n in 0..u32::from(size / 4) {
+                    let w = 2 + 4 * n;
+                    let start = self.word_after(at, w)?;
+                    let len = self.word_after(at, w + 1)?;
+                    let ty = self.word_after(at, w + 3)?;
+                    sms.push((u8::try_from(n).ok()?, start, len, (ty >> 8) as u8));
                 }
-                return None;
+                return Some(sms);
             }
-            at = at.checked_add(2 + size)?;
+            at = u16::try_from(u32::from(at) + 2 + u32::from(size)).ok()?;
         }
-        None
+    }
+
+    /// The (number, start, length) of the mailbox SyncManager of `kind` (1: the master writes,
+    /// 2: the master reads), from the SyncManager category.
+    fn mailbox_sm(&self, kind: u8) -> Option<(u8, u16, u16)> {
+        self.sync_managers()?
+            .into_iter()
+            .find(|s| s.3 == kind)
+            .map(|(n, start, len, _)| (n, start, len))
     }
 }
 
@@ -115,6 +137,41 @@ struct Mailbox {
     wire_counter: u8,
 }
 
+impl Mailbox {
+    /// A value the drive acknowledged, as an unsigned number (little-endian, 1 to 4 bytes).
+    fn value(&self, index: u16, sub: u8) -> Option<u32> {
+        let v = self.values.get(&(index, sub))?;
+        let mut b = [0u8; 4];
+        b.get_mut(..v.len())?.copy_from_slice(v);
+        Some(u32::from_le_bytes(b))
+    }
+
+    /// Whether every upload ethercrab makes when it builds the process image is answered from
+    /// the acknowledged values: for each process data SyncManager n of the SII (`pd_sms`), the
+    /// PDO assignment 0x1C10 + n (its count and entries), and each assigned PDO's mapping (its
+    /// count and entries). Only then are the device's mailbox status reads answered: a request
+    /// going to the wire after status reads answered "empty" could meet an emergency that
+    /// arrived meanwhile, which ethercrab 0.7.1 would take for the response and panic on.
+    fn covers_image_reads(&self, pd_sms: &[u8]) -> bool {
+        pd_sms.iter().all(|&n| {
+            let assign = 0x1C10 + u16::from(n);
+            let Some(count) = self.value(assign, 0) else {
+                return false;
+            };
+            (1..=count.min(255) as u8).all(|i| {
+                let Some(pdo) = self.value(assign, i) else {
+                    return false;
+                };
+                let pdo = pdo as u16;
+                let Some(entries) = self.value(pdo, 0) else {
+                    return false;
+                };
+                (1..=entries.min(255) as u8).all(|j| self.value(pdo, j).is_some())
+            })
+        })
+    }
+}
+
 /// Answers to ethercrab's re-reads; see the [module documentation](self).
 #[derive(Debug, Default)]
 pub struct Answers {
@@ -124,6 +181,9 @@ pub struct Answers {
     stations: HashMap<u16, u16>,
     /// Station address → the SII word a read command asked for, answered here.
     sii_pending: HashMap<u16, u16>,
+    /// Stations whose last SII command went to the wire: their EEPROM interface may be busy,
+    /// so their status reads go to the wire too until a command is answered here again.
+    sii_wire: HashSet<u16>,
     /// Station address → mailbox.
     mailboxes: HashMap<u16, Mailbox>,
     /// Frames answered.
@@ -196,6 +256,21 @@ impl Answers {
             .get(usize::from(*self.stations.get(&station)?))
     }
 
+    /// The mailbox of `station`, when its traffic may be answered here: its last request was
+    /// answered (or none was made yet), and every upload ethercrab will make is covered
+    /// ([`Mailbox::covers_image_reads`]).
+    fn answerable(&self, station: u16) -> Option<&Mailbox> {
+        let m = self.mailboxes.get(&station).filter(|m| !m.wire)?;
+        let pd: Vec<u8> = self
+            .sii_of(station)?
+            .sync_managers()?
+            .into_iter()
+            .filter(|s| s.3 == 3 || s.3 == 4)
+            .map(|s| s.0)
+            .collect();
+        m.covers_image_reads(&pd).then_some(m)
+    }
+
     /// What the datagram `d` (command, ADP, ADO, data) gets, if it can be answered here.
     fn classify(&self, cmd: Option<Command>, adp: u16, ado: u16, data: &[u8]) -> Option<Answer> {
         match cmd? {
@@ -211,9 +286,13 @@ impl Answers {
                 (ctl & SII_COMMAND == 0x0100 && cached).then_some(Answer::SiiCommand(adp, word))
             }
             Command::Fprd if ado == register::SII_CONTROL => {
-                // The status alone (ethercrab's check for errors before it reads) is the
-                // idle status the bulk read ended with; with the address and data, only for
-                // a read answered here.
+                // The status alone (ethercrab's poll of the busy bit) is the idle status the
+                // bulk read ended with, unless a command went to the wire (the device's EEPROM
+                // may be busy with it); with the address and data, only for a read answered
+                // here.
+                if self.sii_wire.contains(&adp) {
+                    return None;
+                }
                 if data.len() > 2 {
                     self.sii_pending.get(&adp)?;
                 }
@@ -240,7 +319,7 @@ impl Answers {
                 Some(Answer::Data(b))
             }
             Command::Fprd if data.len() == 1 => {
-                let m = self.mailboxes.get(&adp).filter(|m| !m.wire)?;
+                let m = self.answerable(adp)?;
                 if ado == register::sm(m.read.0) + 5 {
                     Some(Answer::Data(vec![if m.response.is_some() {
                         SM_MAILBOX_FULL
@@ -254,14 +333,14 @@ impl Answers {
                 }
             }
             Command::Fpwr => {
-                let m = self.mailboxes.get(&adp)?;
+                let m = self.answerable(adp)?;
                 if ado != m.write.1 {
                     return None;
                 }
                 upload_response(m, data).map(|r| Answer::Request(adp, r))
             }
             Command::Fprd => {
-                let m = self.mailboxes.get(&adp).filter(|m| !m.wire)?;
+                let m = self.answerable(adp)?;
                 let r = m.response.as_ref()?;
                 (ado == m.read.1).then(|| {
                     let mut b = vec![0u8; data.len()];
@@ -325,8 +404,10 @@ impl Answers {
                 None => {
                     all = false;
                     if d.command() == Some(Command::Fpwr) && d.ado() == register::SII_CONTROL {
-                        // A read of words not read in bulk: the device's registers answer.
+                        // A read of words not read in bulk (or another command): the device's
+                        // registers answer, its status included.
                         self.sii_pending.remove(&d.adp());
+                        self.sii_wire.insert(d.adp());
                     }
                     if d.command() == Some(Command::Fpwr)
                         && let Some(m) = self.mailboxes.get_mut(&d.adp())
@@ -373,6 +454,7 @@ impl Answers {
             match a {
                 Answer::SiiCommand(station, word) => {
                     self.sii_pending.insert(station, word);
+                    self.sii_wire.remove(&station);
                 }
                 Answer::Data(b) => fill(reply, &b),
                 Answer::Request(station, r) => {
@@ -446,8 +528,8 @@ mod tests {
     const STATION: u16 = 0x1000;
 
     /// One device at position 0 whose SII has words 0x08–0x0B and a SyncManager category with
-    /// SM0 (mailbox out, 0x1000/128) and SM1 (mailbox in, 0x1080/128); the station address
-    /// learnt from the write ethercrab sends.
+    /// SM0 (mailbox out, 0x1000/128), SM1 (mailbox in, 0x1080/128), SM2 (outputs) and SM3
+    /// (inputs); the station address learnt from the write ethercrab sends.
     fn answers() -> Answers {
         let mut w = SiiWords::default();
         w.set_status(0x0040 | 0x8000);
@@ -459,10 +541,11 @@ mod tests {
         ] {
             w.insert(a, v);
         }
-        // Category 41 at 0x40: 8 words, SM0 then SM1 (start, length, control|status,
+        // Category 41 at 0x40: 16 words, SM0 to SM3 (start, length, control|status,
         // enable|type << 8).
         let cat = [
-            41, 8, 0x1000, 128, 0x0026, 0x0101, 0x1080, 128, 0x0022, 0x0201, 0xFFFF,
+            41, 16, 0x1000, 128, 0x0026, 0x0101, 0x1080, 128, 0x0022, 0x0201, 0x1100, 0, 0x0064,
+            0x0301, 0x1400, 0, 0x0020, 0x0401, 0xFFFF,
         ];
         for (i, v) in cat.iter().enumerate() {
             w.insert(FIRST_CATEGORY + i as u16, *v);
@@ -552,14 +635,29 @@ mod tests {
         assert_eq!(a.answered(), 3);
     }
 
+    /// What ecdrive writes for one RxPDO 0x1601 with one entry and one TxPDO 0x1A00 with two,
+    /// each write acknowledged.
+    fn acknowledge_mapping(a: &mut Answers) {
+        let writes: [(u16, u8, &[u8]); 9] = [
+            (0x1C12, 0, &[1]),
+            (0x1C12, 1, &[0x01, 0x16]),
+            (0x1601, 0, &[1]),
+            (0x1601, 1, &[0x10, 0x00, 0x40, 0x60]),
+            (0x1C13, 0, &[1]),
+            (0x1C13, 1, &[0x00, 0x1A]),
+            (0x1A00, 0, &[2]),
+            (0x1A00, 1, &[0x10, 0x00, 0x41, 0x60]),
+            (0x1A00, 2, &[0x20, 0x00, 0x64, 0x60]),
+        ];
+        for (index, sub, v) in writes {
+            a.acknowledged(STATION, ObjectAddress::new(index, sub), v);
+        }
+    }
+
     #[test]
     fn an_upload_of_an_acknowledged_object_is_answered_with_its_value() {
         let mut a = answers();
-        a.acknowledged(
-            STATION,
-            ObjectAddress::new(0x1C12, 1),
-            &0x1601u16.to_le_bytes(),
-        );
+        acknowledge_mapping(&mut a);
         a.last_counter(STATION, 5);
         let mut buf = [0u8; 256];
         let mut req = [0u8; 128];
@@ -593,7 +691,7 @@ mod tests {
         }
         // An object not acknowledged goes to the wire; its counter 5, the last the device
         // saw, is changed to 6.
-        let n = up(0x1A00, 1).emit_mailbox(5, &mut req).unwrap();
+        let n = up(0x1A01, 1).emit_mailbox(5, &mut req).unwrap();
         let _ = n;
         let write = frame(Command::Fpwr, STATION, 0x1000, &req);
         let Verdict::Rewritten(n) = a.answer(&write, &mut buf) else {
@@ -605,5 +703,90 @@ mod tests {
         assert_eq!(sent[6..], req[6..]);
         // From then on the mailbox is the wire's.
         assert_eq!(a.answer(&sm1, &mut buf), Verdict::Wire);
+    }
+
+    #[test]
+    fn a_mailbox_is_answered_only_when_every_upload_of_the_image_is_covered() {
+        let mut a = answers();
+        let mut buf = [0u8; 256];
+        let sm1 = frame(Command::Fprd, STATION, register::sm(1) + 5, &[0]);
+        // Nothing acknowledged: ethercrab's status reads go to the wire.
+        assert_eq!(a.answer(&sm1, &mut buf), Verdict::Wire);
+        // The RxPDO side only (the drive's TxPDO left as it was): still the wire's, from the
+        // first status read on, so ethercrab clears a waiting emergency itself.
+        let rx_only: [(u16, u8, &[u8]); 4] = [
+            (0x1C12, 0, &[1]),
+            (0x1C12, 1, &[0x01, 0x16]),
+            (0x1601, 0, &[1]),
+            (0x1601, 1, &[0x10, 0x00, 0x40, 0x60]),
+        ];
+        for (index, sub, v) in rx_only {
+            a.acknowledged(STATION, ObjectAddress::new(index, sub), v);
+        }
+        assert_eq!(a.answer(&sm1, &mut buf), Verdict::Wire);
+        // A mapping entry missing on the TxPDO side: the same.
+        a.acknowledged(STATION, ObjectAddress::new(0x1C13, 0), &[1]);
+        a.acknowledged(STATION, ObjectAddress::new(0x1C13, 1), &[0x00, 0x1A]);
+        a.acknowledged(STATION, ObjectAddress::new(0x1A00, 0), &[2]);
+        a.acknowledged(
+            STATION,
+            ObjectAddress::new(0x1A00, 1),
+            &[0x10, 0x00, 0x41, 0x60],
+        );
+        assert_eq!(a.answer(&sm1, &mut buf), Verdict::Wire);
+        a.acknowledged(
+            STATION,
+            ObjectAddress::new(0x1A00, 2),
+            &[0x20, 0x00, 0x64, 0x60],
+        );
+        assert!(matches!(a.answer(&sm1, &mut buf), Verdict::Answered(_)));
+    }
+
+    #[test]
+    fn after_an_sii_command_to_the_wire_the_busy_poll_goes_to_the_wire_too() {
+        let mut a = answers();
+        let mut buf = [0u8; 256];
+        let st = frame(Command::Fprd, STATION, register::SII_CONTROL, &[0, 0]);
+        assert!(matches!(a.answer(&st, &mut buf), Verdict::Answered(_)));
+        // Word 0x0C was not read in bulk: the command goes out, and the device's EEPROM may be
+        // busy with it; its status must come from the device.
+        let other = frame(
+            Command::Fpwr,
+            STATION,
+            register::SII_CONTROL,
+            &[0, 1, 0x0C, 0, 0, 0],
+        );
+        assert_eq!(a.answer(&other, &mut buf), Verdict::Wire);
+        assert_eq!(a.answer(&st, &mut buf), Verdict::Wire);
+        // A command answered here again: so is the status.
+        let cached = frame(
+            Command::Fpwr,
+            STATION,
+            register::SII_CONTROL,
+            &[0, 1, 8, 0, 0, 0],
+        );
+        assert!(matches!(a.answer(&cached, &mut buf), Verdict::Answered(_)));
+        assert!(matches!(a.answer(&st, &mut buf), Verdict::Answered(_)));
+    }
+
+    #[test]
+    fn a_category_walk_of_any_sizes_ends_without_overflow() {
+        // Category sizes that run past the 16-bit word addresses.
+        for size in [0xFFFFu16, 0xFFFE, 0xFBFF, 0x8000] {
+            let mut w = SiiWords::default();
+            w.insert(FIRST_CATEGORY, 30);
+            w.insert(FIRST_CATEGORY + 1, size);
+            assert_eq!(w.sync_managers(), None, "size {size:#x}");
+        }
+        // A SyncManager category whose length runs past the end.
+        let mut w = SiiWords::default();
+        w.insert(0xFFF0, 41);
+        w.insert(0xFFF1, 0xFFFF);
+        let mut at = FIRST_CATEGORY;
+        w.insert(at, 1);
+        w.insert(at + 1, 0xFFAE);
+        at += 2 + 0xFFAE;
+        assert_eq!(at, 0xFFF0);
+        assert_eq!(w.sync_managers(), None);
     }
 }

@@ -316,6 +316,17 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         let on = std::mem::replace(&mut self.tap.on, true);
         self.tap.observe(frame);
         self.tap.on = on;
+        self.receive_raw(reply, deadline_ns)
+    }
+
+    /// Wait until `deadline_ns` for the next reply to a frame of ecdrive's own (see
+    /// [`exchange_raw`](Self::exchange_raw)): a later one, when the one that came was a late
+    /// reply to an earlier frame.
+    pub fn receive_raw(
+        &mut self,
+        reply: &mut [u8],
+        deadline_ns: u64,
+    ) -> Result<Option<usize>, LinkError> {
         loop {
             let timeout = Duration::from_nanos(deadline_ns.saturating_sub(monotonic_ns()));
             let got = match self.link.recv(&mut self.rx_buf[..], Some(timeout)) {

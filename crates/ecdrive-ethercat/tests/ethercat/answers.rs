@@ -30,6 +30,11 @@ struct Outcome {
 /// The segment: both emulated drives, then every device of every corpus file (emulated from
 /// its file), in manifest order. Also the profiles the corpus files give.
 fn segment() -> (Segment, StartupConfig, usize) {
+    segment_with(|_| EscConfig::default())
+}
+
+/// [`segment`] with each position's ESC as `esc` makes it.
+fn segment_with(esc: impl Fn(usize) -> EscConfig) -> (Segment, StartupConfig, usize) {
     let mut seg = Segment::new(Arc::new(HostClock));
     for (i, key) in [mr_j4_tm::PROFILE.key, bdhde::PROFILE.key]
         .into_iter()
@@ -38,7 +43,7 @@ fn segment() -> (Segment, StartupConfig, usize) {
         let d = EmulatedDrive::new(spec_for(key).unwrap(), 3000 + i as u32)
             .unwrap()
             .without_loss_detection();
-        seg.push(Box::new(d), EscConfig::default()).unwrap();
+        seg.push(Box::new(d), esc(i)).unwrap();
     }
     let mut cfg = StartupConfig::new(Duration::from_millis(1));
     let mut corpus_devices = 0;
@@ -55,7 +60,7 @@ fn segment() -> (Segment, StartupConfig, usize) {
                 let pos = seg.len();
                 let dev = ecdrive_sim::devices::by_name(&name, pos)
                     .unwrap_or_else(|e| panic!("{name}: {e}"));
-                seg.push(dev, EscConfig::default()).unwrap();
+                seg.push(dev, esc(pos)).unwrap();
                 corpus_devices += 1;
             }
         }
@@ -101,7 +106,14 @@ fn start_up<L: ecdrive_core::link::FrameLink>(
 
 /// Start-up to SAFE-OP on a fresh segment, answers on or off.
 fn start(answer: bool) -> Result<Outcome, MasterError> {
-    let (seg, cfg, _) = segment();
+    start_on(segment(), answer)
+}
+
+/// Start-up to SAFE-OP on `segment`, answers on or off.
+fn start_on(
+    (seg, cfg, _): (Segment, StartupConfig, usize),
+    answer: bool,
+) -> Result<Outcome, MasterError> {
     let (r, _link) = with_bus(SegmentLink::new(seg), options(answer), move |bus| {
         let started = start_up(bus, &cfg)?;
         let mut registers = Vec::new();
@@ -185,6 +197,33 @@ fn answered_rereads_give_the_same_image_as_the_wire_with_fewer_frames() {
     // What was answered did not go on the wire: far fewer frames.
     assert!(f1.discovery * 2 < f0.discovery, "{f1:?} against {f0:?}");
     assert!(f1.image * 2 < f0.image, "{f1:?} against {f0:?}");
+}
+
+/// The same with EEPROMs as real ones are: busy for a few frames after each command, on every
+/// other device, and reading 4 bytes per command on every third (ESC datasheets: 0x0502 bits
+/// 6 and 15). The bulk read polls the busy ones and reads the header in 4-byte steps; ethercrab's
+/// own reads of words not read in bulk (the PDO categories of devices without CoE) wait for the
+/// device's busy bit, never an answered one. Devices, images and registers as on fast EEPROMs.
+#[test]
+fn slow_and_4_byte_eeproms_give_the_same_start_up_either_way() {
+    let slow = |pos: usize| EscConfig {
+        eeprom_busy_frames: if pos % 2 == 0 { 3 } else { 0 },
+        eeprom_reads_4_bytes: pos % 3 == 0,
+        ..EscConfig::default()
+    };
+    let fast = start(true).unwrap_or_else(|e| panic!("fast EEPROMs: {e}"));
+    for answer in [true, false] {
+        let r = start_on(segment_with(slow), answer)
+            .unwrap_or_else(|e| panic!("slow EEPROMs, answers {answer}: {e}"));
+        assert_eq!(r.devices, fast.devices, "answers {answer}");
+        assert_eq!(r.images, fast.images, "answers {answer}");
+        for (i, (a, b)) in r.registers.iter().zip(&fast.registers).enumerate() {
+            assert_eq!(a, b, "answers {answer}: device {i} ({})", r.devices[i].name);
+        }
+        if answer {
+            assert!(r.frames.answered_discovery > 0, "{:?}", r.frames);
+        }
+    }
 }
 
 /// A drive that acknowledges the remap and keeps its power-on mapping (`pdo-writes-ignored`):

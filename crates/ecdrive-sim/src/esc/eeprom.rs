@@ -8,7 +8,7 @@ impl Esc {
         self.set_bits(0x0503, 0x08, !ok);
         // b6: 8-byte reads; b7: 2-byte addressing for EEPROMs above 16 Kbit.
         let big = self.sii.bytes().len() > 2048;
-        self.set_bits(0x0502, 0x40, true);
+        self.set_bits(0x0502, 0x40, !self.cfg.eeprom_reads_4_bytes);
         self.set_bits(0x0502, 0x80, big);
         if ok {
             let w0 = self.sii.word(0);
@@ -29,11 +29,36 @@ impl Esc {
         self.put_u16(0x0110, if ok { dl | 1 } else { dl & !1 });
     }
 
+    /// A command written to 0x0502: done at once, or after
+    /// [`EscConfig::eeprom_busy_frames`] frames, busy until then.
     pub(super) fn sii_command(&mut self) {
+        let cmd = (self.get_u16(0x0502) >> 8) & 0x07;
+        let frames = self.cfg.eeprom_busy_frames;
+        if cmd == 0 || frames == 0 {
+            self.sii_execute();
+            return;
+        }
+        self.sii_busy = frames;
+        // Busy, the command bits showing the command running.
+        self.set_bits(0x0503, 0x80, true);
+        self.pending |= super::pending::SII_BUSY;
+    }
+
+    /// A frame has passed while a command runs.
+    pub(super) fn sii_frame_end(&mut self) {
+        self.sii_busy = self.sii_busy.saturating_sub(1);
+        if self.sii_busy == 0 {
+            self.sii_execute();
+            self.set_bits(0x0503, 0x80, false);
+        } else {
+            self.pending |= super::pending::SII_BUSY;
+        }
+    }
+
+    fn sii_execute(&mut self) {
         let ctl = self.get_u16(0x0502);
         let cmd = (ctl >> 8) & 0x07;
-        // Command field reads back as 0 (done); busy never set: commands complete at once.
-        // A new command clears the error bits.
+        // Command field reads back as 0 (done). A new command clears the error bits.
         let mut status = self.byte(0x0503) & 0x08; // keep checksum error
         match cmd {
             0 => {}
@@ -44,7 +69,8 @@ impl Esc {
                     let w = self.sii.word(addr.wrapping_add(i as u32));
                     chunk.copy_from_slice(&w.to_le_bytes());
                 }
-                self.put(0x0508, &data);
+                let n = if self.cfg.eeprom_reads_4_bytes { 4 } else { 8 };
+                self.put(0x0508, &data[..n]);
             }
             2 => {
                 if ctl & 0x0001 == 0 {
@@ -66,7 +92,7 @@ impl Esc {
             }
             _ => status |= 0x20, // command error
         }
-        self.put(0x0503, &[status]);
+        self.put(0x0503, &[status | (self.byte(0x0503) & 0x80)]);
         // Write enable is self-clearing.
         self.set_bits(0x0502, 0x01, false);
     }

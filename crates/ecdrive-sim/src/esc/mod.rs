@@ -123,6 +123,15 @@ pub struct EscConfig {
     /// The EEPROM's write protection is on (its WP pin tied high): a write command is not
     /// acknowledged (0x0502 bit 13, "acknowledge/command error") and the word keeps its value.
     pub eeprom_write_protected: bool,
+    /// Frames an EEPROM command keeps the interface busy (0x0502 bit 15) before it is done:
+    /// 0, done as the frame passes (an ESC emulating its EEPROM from the PDI's memory); a real
+    /// I²C EEPROM takes some hundred µs per read, several frames at start-up's rates. While
+    /// busy, writes to 0x0502–0x050F are ignored and the data registers keep the previous
+    /// command's data (ESC datasheets, SII EEPROM interface).
+    pub eeprom_busy_frames: u8,
+    /// The EEPROM interface reads 4 bytes per command (0x0502 bit 6 clear), as ESCs with a
+    /// 32-bit data register do; else 8.
+    pub eeprom_reads_4_bytes: bool,
 }
 
 impl Default for EscConfig {
@@ -142,6 +151,8 @@ impl Default for EscConfig {
             clock_offset_ns: 0,
             clock_drift_ppb: 0,
             eeprom_write_protected: false,
+            eeprom_busy_frames: 0,
+            eeprom_reads_4_bytes: false,
         }
     }
 }
@@ -188,6 +199,7 @@ mod pending {
     pub const SM_CHANGED: u8 = 0x10;
     pub const MBX_POLL: u8 = 0x20;
     pub const DEADLINE: u8 = 0x40;
+    pub const SII_BUSY: u8 = 0x80;
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -259,6 +271,9 @@ pub struct Esc {
     wd_deadline: Option<u64>,
     pending: u8,
     reset_step: u8,
+    /// Frame ends left before the running EEPROM command is done
+    /// ([`EscConfig::eeprom_busy_frames`]).
+    sii_busy: u8,
     scratch: Vec<u8>,
     station_address_changed: bool,
     /// Opt-in timing statistics (boxed: most ESCs never enable them).
@@ -321,6 +336,7 @@ impl Esc {
             wd_deadline: None,
             pending: 0,
             reset_step: 0,
+            sii_busy: 0,
             scratch: Vec::new(),
             station_address_changed: false,
             timing: None,
@@ -339,6 +355,7 @@ impl Esc {
     /// SII (as after a power cycle or an ECAT reset).
     fn power_on(&mut self) {
         self.mem.fill(0);
+        self.sii_busy = 0;
         let c = self.cfg.clone();
         self.put(0x0000, &[c.esc_type, c.revision]);
         self.put_u16(0x0002, c.build);
@@ -727,6 +744,10 @@ impl Esc {
 
     fn reg_write(&mut self, a: usize, data: &[u8], hop: Hop, dev: &mut dyn Device) -> bool {
         let b = a + data.len();
+        if self.sii_busy > 0 && overlaps(a, b, 0x0502, 0x0510) {
+            // The EEPROM interface takes no command, address or data while busy.
+            return true;
+        }
         let sm_hi = 0x0800 + 8 * usize::from(self.cfg.sm_count);
         let sm_touched = overlaps(a, b, 0x0800, sm_hi);
         // Old SM activate bytes, to see enable/disable and repeat edges.
@@ -935,6 +956,9 @@ impl Esc {
     /// entered).
     pub fn end_of_frame(&mut self, hop: Hop, dev: &mut dyn Device) -> bool {
         let p = core::mem::take(&mut self.pending);
+        if p & pending::SII_BUSY != 0 {
+            self.sii_frame_end();
+        }
         if p & pending::SM_CHANGED != 0 {
             self.check_sm_change(dev);
         }

@@ -446,6 +446,43 @@ fn sii_reads_identity_and_crc() {
     assert_eq!(p.read_u16(0x1000, 0x0502).unwrap().0 & 0x2000, 0x2000);
 }
 
+/// An EEPROM as slow as an I²C one (`eeprom_busy_frames`): busy, the command bits showing the
+/// read, for that many frames after the command; a command meanwhile is not taken; then the
+/// data is there and the address register names its word. 4-byte reads show bit 6 clear.
+#[test]
+fn a_slow_eeprom_is_busy_for_its_frames_and_takes_no_command_meanwhile() {
+    let devs = vec![Box::new(IoDevice::new(2, 4).with_serial(7)) as Box<dyn Device>];
+    let cfg = EscConfig {
+        sm_watchdog: 0,
+        eeprom_busy_frames: 3,
+        eeprom_reads_4_bytes: true,
+        ..Default::default()
+    };
+    let (mut p, _) = probe_with(devs, cfg);
+    p.assign_addresses(0x1000).unwrap();
+    assert_eq!(
+        p.read_u16(0x1000, 0x0502).unwrap().0 & 0x0040,
+        0,
+        "4-byte reads"
+    );
+    assert_eq!(
+        p.fpwr(0x1000, 0x0502, &[0x00, 0x01, 0x0E, 0, 0, 0])
+            .unwrap()
+            .wkc,
+        1
+    );
+    // Busy for three frames: the command's, then this read's, then another command's, which
+    // is not taken.
+    let st = p.read_u16(0x1000, 0x0502).unwrap().0;
+    assert_eq!(st & 0x8700, 0x8100, "busy, reading");
+    p.fpwr(0x1000, 0x0502, &[0x00, 0x01, 0x08, 0, 0, 0])
+        .unwrap();
+    let d = p.fprd(0x1000, 0x0502, 14).unwrap().data;
+    assert_eq!(u16le(&d[0..2]) & 0x8700, 0, "done");
+    assert_eq!(u32le(&d[2..6]), 0x0E, "the word of the command taken");
+    assert_eq!(u32le(&d[6..10]), 7, "the serial number");
+}
+
 #[test]
 fn sii_write_needs_write_enable_and_reload_applies_alias() {
     let (mut p, _) = io_segment(1);
