@@ -259,3 +259,79 @@ fn a_drive_that_does_not_hold_an_acknowledged_mapping_is_named_either_way() {
         }
     }
 }
+
+/// A link that loses the reply to one frame of ecdrive's SII bulk read (the `lose`-th) and,
+/// if `late`, hands it over after the next frame has gone out, before that frame's reply: a
+/// reply a loaded network delivered after the master had given up on it.
+struct LosesOneReply {
+    inner: SegmentLink,
+    raw: u32,
+    lose: u32,
+    late: bool,
+    swallow: bool,
+    held: Option<Vec<u8>>,
+    delivered_late: bool,
+}
+
+impl ecdrive_core::link::FrameLink for LosesOneReply {
+    fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive_core::link::LinkError> {
+        // The datagram index of ecdrive's own frames.
+        if frame.get(17) == Some(&ecdrive_ethercat::answers::RAW_INDEX) {
+            self.raw += 1;
+            self.swallow = self.raw == self.lose;
+        }
+        self.inner.send(frame)
+    }
+
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Option<Duration>,
+    ) -> Result<Option<usize>, ecdrive_core::link::LinkError> {
+        if self.swallow {
+            self.swallow = false;
+            let n = self.inner.recv(buf, timeout)?.expect("the reply");
+            if self.late {
+                self.held = Some(buf[..n].to_vec());
+            }
+            return Ok(None);
+        }
+        if self.raw > self.lose
+            && let Some(h) = self.held.take()
+        {
+            buf[..h.len()].copy_from_slice(&h);
+            self.delivered_late = true;
+            return Ok(Some(h.len()));
+        }
+        self.inner.recv(buf, timeout)
+    }
+}
+
+/// The bulk read goes on when a frame's reply is lost (it sends the chunk again), and a reply
+/// that comes late, after the next frame went out, is not taken for that frame's: the same
+/// devices and image as without loss, whichever frame of the read it hits.
+#[test]
+fn a_lost_or_late_bulk_read_reply_changes_nothing() {
+    let want = start(true).unwrap_or_else(|e| panic!("{e}"));
+    for (lose, late) in [(2, false), (5, true), (9, true)] {
+        let (seg, cfg, _) = segment();
+        let link = LosesOneReply {
+            inner: SegmentLink::new(seg),
+            raw: 0,
+            lose,
+            late,
+            swallow: false,
+            held: None,
+            delivered_late: false,
+        };
+        let (r, link) = with_bus(link, options(true), move |bus| {
+            start_up(bus, &cfg).map(|s| (s.devices, s.times.frames))
+        })
+        .unwrap_or_else(|(e, _)| panic!("{e}"));
+        let (devices, frames) = r.unwrap_or_else(|e| panic!("frame {lose} lost: {e}"));
+        assert_eq!(devices, want.devices, "frame {lose} lost (late: {late})");
+        assert!(frames.answered_discovery > 0, "{frames:?}");
+        assert!(link.raw > lose, "the read went on after frame {lose}");
+        assert_eq!(link.delivered_late, late, "frame {lose}");
+    }
+}
