@@ -568,6 +568,16 @@ mod tests {
         a
     }
 
+    /// ethercrab's SII read command for `word` to `station`.
+    fn sii_command(station: u16, word: u8) -> Vec<u8> {
+        frame(
+            Command::Fpwr,
+            station,
+            register::SII_CONTROL,
+            &[0, 1, word, 0, 0, 0],
+        )
+    }
+
     fn frame(cmd: Command, adp: u16, ado: u16, data: &[u8]) -> Vec<u8> {
         let mut buf = [0u8; 256];
         let mut b = FrameBuilder::new(&mut buf, MacAddress([0x10, 0, 0, 0, 0, 1])).unwrap();
@@ -588,12 +598,7 @@ mod tests {
     fn an_sii_read_of_words_read_in_bulk_is_answered_and_others_go_to_the_wire() {
         let mut a = answers();
         let mut buf = [0u8; 256];
-        let cmd = frame(
-            Command::Fpwr,
-            STATION,
-            register::SII_CONTROL,
-            &[0, 1, 8, 0, 0, 0],
-        );
+        let cmd = sii_command(STATION, 8);
         assert!(matches!(a.answer(&cmd, &mut buf), Verdict::Answered(_)));
         assert_eq!(datagram(&buf[..cmd.len()]).1, 1);
         // The status: idle, 8-byte reads; the data: the four words.
@@ -616,21 +621,11 @@ mod tests {
             [0x11, 0x11, 0x22, 0x22, 0x33, 0x33, 0x44, 0x44]
         );
         // Word 0x0C was not read: the command and what follows it go to the wire.
-        let other = frame(
-            Command::Fpwr,
-            STATION,
-            register::SII_CONTROL,
-            &[0, 1, 0x0C, 0, 0, 0],
-        );
+        let other = sii_command(STATION, 0x0C);
         assert_eq!(a.answer(&other, &mut buf), Verdict::Wire);
         assert_eq!(a.answer(&data, &mut buf), Verdict::Wire);
         // Another station: nothing known.
-        let cmd2 = frame(
-            Command::Fpwr,
-            STATION + 1,
-            register::SII_CONTROL,
-            &[0, 1, 8, 0, 0, 0],
-        );
+        let cmd2 = sii_command(STATION + 1, 8);
         assert_eq!(a.answer(&cmd2, &mut buf), Verdict::Wire);
         assert_eq!(a.answered(), 3);
     }
@@ -750,21 +745,11 @@ mod tests {
         assert!(matches!(a.answer(&st, &mut buf), Verdict::Answered(_)));
         // Word 0x0C was not read in bulk: the command goes out, and the device's EEPROM may be
         // busy with it; its status must come from the device.
-        let other = frame(
-            Command::Fpwr,
-            STATION,
-            register::SII_CONTROL,
-            &[0, 1, 0x0C, 0, 0, 0],
-        );
+        let other = sii_command(STATION, 0x0C);
         assert_eq!(a.answer(&other, &mut buf), Verdict::Wire);
         assert_eq!(a.answer(&st, &mut buf), Verdict::Wire);
         // A command answered here again: so is the status.
-        let cached = frame(
-            Command::Fpwr,
-            STATION,
-            register::SII_CONTROL,
-            &[0, 1, 8, 0, 0, 0],
-        );
+        let cached = sii_command(STATION, 8);
         assert!(matches!(a.answer(&cached, &mut buf), Verdict::Answered(_)));
         assert!(matches!(a.answer(&st, &mut buf), Verdict::Answered(_)));
     }
