@@ -47,7 +47,6 @@ use std::time::Duration;
 pub mod audit;
 mod axes;
 mod bus;
-mod schedule;
 mod settings;
 
 use axes::{CycleDrive, app_view};
@@ -163,8 +162,8 @@ struct Clock {
     /// reading of the reply at the wake-up ([`ReplyWait::NextWake`]).
     t_ex: u64,
     t_ex_done: u64,
-    /// A point of the SYNC0 grid (SYNC0 plus the shift) from the reply that came, when the
-    /// reference clock answered: the phase [`schedule`] keeps the cycle on.
+    /// The DC-aligned instant after the frame whose reply came, when the reference clock
+    /// answered.
     next_at: Option<u64>,
     /// The last frame could not be sent (no frame slot): its cycle counts as lost.
     unsent: bool,
@@ -847,12 +846,21 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.telemetry.publish();
     }
 
-    /// The next instant: one after this cycle's on the SYNC0 grid when the reference clock
-    /// answered, else one cycle on; missed instants are skipped ([`schedule`]).
+    /// The next instant: DC-aligned when the reference clock answered, else one cycle on.
     fn schedule_next(&mut self) {
+        let cycle_ns = self.consts.cycle_ns;
         let c = &mut self.clock;
-        c.next_wake =
-            schedule::next_instant(c.next_wake, c.next_at, self.consts.cycle_ns, monotonic_ns());
+        c.next_wake = match c.next_at {
+            // The instant after the frame whose reply this was; with the reply read a cycle
+            // after its frame went out, that instant is this cycle's: the next is one on.
+            Some(at) if self.settings.reply_wait == ReplyWait::NextWake => at + cycle_ns,
+            Some(at) => at,
+            None => c.next_wake + cycle_ns,
+        };
+        if c.next_wake <= monotonic_ns() {
+            // Overrun: skip to the next instant rather than running back-to-back cycles.
+            c.next_wake = monotonic_ns() + self.consts.cycle_ns / 2;
+        }
     }
 
     /// The run has ended: say so until the session publishes what comes next (a whole
