@@ -46,6 +46,11 @@ pub struct PumpStats {
     /// Frames of ethercrab's answered without the wire, from what ecdrive had read or
     /// written (start-up; see [`crate::answers`]). Not counted in `sent`.
     pub answered: u64,
+    /// Time spent inside the link's send, ns (the syscall, for a raw socket).
+    pub link_send_ns: u64,
+    /// Time spent inside the link's receive, ns (the syscall, and the wait when nothing had
+    /// arrived yet).
+    pub link_recv_ns: u64,
 }
 
 #[derive(Clone, Copy)]
@@ -328,8 +333,11 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         deadline_ns: u64,
     ) -> Result<Option<usize>, LinkError> {
         loop {
-            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(monotonic_ns()));
-            let got = match self.link.recv(&mut self.rx_buf[..], Some(timeout)) {
+            let t0 = monotonic_ns();
+            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
+            let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
+            self.stats.link_recv_ns += monotonic_ns() - t0;
+            let got = match got {
                 Ok(Some(len)) => len,
                 Ok(None) => return Ok(None),
                 Err(e) => {
@@ -477,6 +485,7 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             let mut answered = None;
             let answers = &mut self.answers;
             let answer_buf = &mut self.answer_buf;
+            let send_ns = &mut self.stats.link_send_ns;
             let res = frame.send_blocking(|sent| {
                 let verdict = match answers.as_mut() {
                     Some(a) => a.answer(sent, &mut answer_buf[..]),
@@ -500,7 +509,10 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
                     }
                     _ => sent,
                 };
-                if let Err(e) = link.send(bytes) {
+                let t0 = monotonic_ns();
+                let sent_ok = link.send(bytes);
+                *send_ns += monotonic_ns() - t0;
+                if let Err(e) = sent_ok {
                     err = Some(e);
                     return Err(ethercrab::error::Error::SendFrame);
                 }
@@ -558,8 +570,11 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     pub fn receive_until(&mut self, deadline_ns: u64) -> Result<usize, LinkError> {
         let mut n = 0;
         while self.outstanding() > 0 {
-            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(monotonic_ns()));
-            let got = match self.link.recv(&mut self.rx_buf[..], Some(timeout)) {
+            let t0 = monotonic_ns();
+            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
+            let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
+            self.stats.link_recv_ns += monotonic_ns() - t0;
+            let got = match got {
                 Ok(Some(len)) => len,
                 Ok(None) => break,
                 Err(e) => {

@@ -16,7 +16,7 @@
 
 use super::HarnessError;
 use super::cpu::{CpuReport, CpuSample, SyscallWindow, apply_syscalls, start_syscalls};
-use super::report::{RunHistograms, RunReport};
+use super::report::{CycleBreakdown, RunHistograms, RunReport};
 use crate::cia402::State;
 use crate::drives::DriveProfile;
 use crate::link::FrameLink;
@@ -229,5 +229,9 @@ pub fn run<L: FrameLink + Send + 'static>(
         notes,
     );
     r.structure.mailbox_poll_ms = mailbox_poll_ms;
+    r.parts = Some(CycleBreakdown::new(
+        t.parts.per_cycle(),
+        r.cpu.cycle_thread_ns,
+    ));
     Ok((r, link))
 }

@@ -100,6 +100,9 @@
 //!                     "arrival_after_sync0": SUMMARY | null, "sync0_pulses",
 //!                     "sync0_without_outputs" } ],
 //!       "wake_latency_histogram": [ { "lo_ns", "hi_ns", "count" } ],
+//!       "parts": null | { "receive_ns", "receive_link_ns", "engine_ns", "supervision_ns",
+//!                "telemetry_ns", "send_ns", "send_link_ns", "sleep_and_wake_ns" }
+//!                (ecdrive's cycle thread per cycle by part),
 //!       "notes": [..]
 //!     },
 //!     "ratios": { "ecdrive_to_sleep" | "ecdrive_to_ethercrab" | "ecdrive_to_soem" (or null): {
@@ -115,7 +118,10 @@
 //! RATIO   = { "p50", "p90", "p99", "p999", "max" }
 //! SPREAD  = { "median", "min", "max", "values": [one per repetition] }
 //! FIGURE  = wake_latency_p50 | _p99 | _p999 | _max, period_error_p50 | _max, exchange_p50 |
-//!           _p99 | _max, busy_p50 | _max, cpu_master_ns, cpu_process_ns, late, missed
+//!           _p99 | _max, busy_p50 | _max, cpu_master_ns, cpu_process_ns, late, missed,
+//!           and ecdrive's parts: part_receive_ns, part_receive_link_ns, part_engine_ns,
+//!           part_supervision_ns, part_telemetry_ns, part_send_ns, part_send_link_ns,
+//!           part_sleep_and_wake_ns
 //!           (ratios: wake_latency_p50 | _p99 | _max, period_error_p50, exchange_p50 | _p99,
 //!           busy_p50, cpu_master, cpu_process, missed)
 //! ```

@@ -142,8 +142,74 @@ pub struct RunReport {
     pub drives: Vec<DriveTiming>,
     /// The wake-up latency histogram in log-spaced bins (for plots).
     pub wake_latency_histogram: Vec<Bucket>,
+    /// Where ecdrive's cycle thread spends a cycle, by part; `None` for the other runs.
+    pub parts: Option<CycleBreakdown>,
     /// Remarks (e.g. figures not available and why).
     pub notes: Vec<String>,
+}
+
+/// ecdrive's cycle thread per cycle by part, ns, averaged over the measured cycles (wall time
+/// on the real-time cycle thread, see `ecdrive_ethercat::cycle::CycleParts`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct CycleBreakdown {
+    /// Reading the frame's reply: the link's receive, ethercrab's PDU handling and process
+    /// image, the working counter and AL-state checks.
+    pub receive_ns: f64,
+    /// Of `receive_ns`: the link's receive call.
+    pub receive_link_ns: f64,
+    /// The CiA 402 engine and motion runtime of every axis, inputs to outputs.
+    pub engine_ns: f64,
+    /// Supervision: commands, OP, fault spreading, stop timeouts, devices leaving OP.
+    pub supervision_ns: f64,
+    /// Telemetry published (and the recording, if any).
+    pub telemetry_ns: f64,
+    /// The next frame: ethercrab builds it, the link sends it.
+    pub send_ns: f64,
+    /// Of `send_ns`: the link's send call.
+    pub send_link_ns: f64,
+    /// The cycle thread's CPU time per cycle minus the parts above: the sleep and the
+    /// wake-up, in the kernel (`None` without the thread's CPU figure).
+    pub sleep_and_wake_ns: Option<f64>,
+}
+
+impl CycleBreakdown {
+    /// The breakdown of `parts`, the rest taken from the cycle thread's CPU time per cycle.
+    pub fn new(per_cycle: [f64; 7], cycle_thread_ns: Option<f64>) -> Self {
+        let [
+            receive,
+            receive_link,
+            engine,
+            supervision,
+            telemetry,
+            send,
+            send_link,
+        ] = per_cycle;
+        let awake = receive + engine + supervision + telemetry + send;
+        Self {
+            receive_ns: receive,
+            receive_link_ns: receive_link,
+            engine_ns: engine,
+            supervision_ns: supervision,
+            telemetry_ns: telemetry,
+            send_ns: send,
+            send_link_ns: send_link,
+            sleep_and_wake_ns: cycle_thread_ns.map(|c| (c - awake).max(0.0)),
+        }
+    }
+
+    /// The figures, named as in the summary across repetitions.
+    pub fn figures(&self) -> [(&'static str, Option<f64>); 8] {
+        [
+            ("part_receive_ns", Some(self.receive_ns)),
+            ("part_receive_link_ns", Some(self.receive_link_ns)),
+            ("part_engine_ns", Some(self.engine_ns)),
+            ("part_supervision_ns", Some(self.supervision_ns)),
+            ("part_telemetry_ns", Some(self.telemetry_ns)),
+            ("part_send_ns", Some(self.send_ns)),
+            ("part_send_link_ns", Some(self.send_link_ns)),
+            ("part_sleep_and_wake_ns", self.sleep_and_wake_ns),
+        ]
+    }
 }
 
 /// Histograms a run records; turned into a [`RunReport`] by [`RunHistograms::report`].
@@ -223,6 +289,7 @@ impl RunHistograms {
             cpu,
             drives,
             wake_latency_histogram: buckets(self.wake_latency.histogram()),
+            parts: None,
             notes,
         }
     }
@@ -427,7 +494,7 @@ impl Spread {
 pub fn run_figures(r: &RunReport) -> Vec<(&'static str, Option<f64>)> {
     let f = |v: u64| Some(v as f64);
     let ex = r.exchange.as_ref();
-    vec![
+    let mut v = vec![
         ("wake_latency_p50", f(r.wake_latency.p50)),
         ("wake_latency_p99", f(r.wake_latency.p99)),
         ("wake_latency_p999", f(r.wake_latency.p999)),
@@ -443,7 +510,11 @@ pub fn run_figures(r: &RunReport) -> Vec<(&'static str, Option<f64>)> {
         ("cpu_process_ns", r.cpu.process_ns),
         ("late", f(r.late)),
         ("missed", r.missed.map(|m| m as f64)),
-    ]
+    ];
+    if let Some(p) = &r.parts {
+        v.extend(p.figures());
+    }
+    v
 }
 
 /// The ratios summarised across repetitions, in table order.
@@ -886,6 +957,24 @@ fn threads_table(s: &mut String, rep: &Repetition) {
                 st.mailbox_poll_ms
                     .map_or("off".into(), |m| format!("every {m} ms")),
                 st.slaves
+            );
+        }
+        if let Some(p) = &r.parts {
+            let _ = writeln!(
+                s,
+                "  {:<10} cycle thread by part: receive {:.2} (link {:.2}), engine {:.2}, \
+                 supervision {:.2}, telemetry {:.2}, send {:.2} (link {:.2}), sleep and \
+                 wake-up {}",
+                "",
+                p.receive_ns / 1000.0,
+                p.receive_link_ns / 1000.0,
+                p.engine_ns / 1000.0,
+                p.supervision_ns / 1000.0,
+                p.telemetry_ns / 1000.0,
+                p.send_ns / 1000.0,
+                p.send_link_ns / 1000.0,
+                p.sleep_and_wake_ns
+                    .map_or("-".into(), |v| format!("{:.2}", v / 1000.0)),
             );
         }
     }

@@ -11,6 +11,7 @@
 
 pub mod netns;
 mod raw;
+mod ring;
 
 pub use raw::RawSocket;
 

@@ -1,5 +1,6 @@
 //! An `AF_PACKET` raw socket for EtherCAT frames on one interface.
 
+use super::ring::{RxRing, Taken};
 use super::{FrameLink, LinkError};
 use crate::ec::ETHERTYPE;
 use crate::ec::frame::ETHERNET_HEADER_LEN;
@@ -15,9 +16,13 @@ const PACKET_IGNORE_OUTGOING: libc::c_int = 23;
 
 /// A raw socket bound to one interface and EtherType 0x88A4, non-blocking, with timed
 /// receive. It never sees frames sent from this host (`PACKET_IGNORE_OUTGOING`), so one socket
-/// serves both directions. Buffers are the caller's: nothing is allocated per frame.
+/// serves both directions. Frames are received through a ring shared with the kernel
+/// (`PACKET_RX_RING`) where the kernel offers one, so taking a frame that has arrived makes no
+/// syscall; otherwise with `recv`. Buffers are the caller's: nothing is allocated per frame.
 #[derive(Debug)]
 pub struct RawSocket {
+    /// Before `fd`: unmapped before the socket closes.
+    ring: Option<RxRing>,
     fd: OwnedFd,
     interface: String,
     ifindex: i32,
@@ -116,7 +121,9 @@ impl RawSocket {
             )
         };
         let mtu = Self::query_mtu(&fd, interface).unwrap_or(1500);
+        let ring = RxRing::new(&fd, mtu + ETHERNET_HEADER_LEN + 4).ok();
         Ok(Self {
+            ring,
             fd,
             interface: interface.to_owned(),
             ifindex,
@@ -187,6 +194,28 @@ impl RawSocket {
         }
     }
 
+    /// Wait for a frame until `deadline` (`None`: forever); `false` once it has passed.
+    fn wait_until(&self, deadline: Option<Instant>) -> Result<bool, LinkError> {
+        let remaining = match deadline {
+            None => None,
+            Some(d) => {
+                let now = Instant::now();
+                if now >= d {
+                    return Ok(false);
+                }
+                Some(d - now)
+            }
+        };
+        self.wait(PollFlags::POLLIN, remaining)?;
+        Ok(true)
+    }
+
+    /// Whether frames are received through the ring shared with the kernel (no syscall for a
+    /// frame that has arrived) rather than with `recv`.
+    pub fn has_rx_ring(&self) -> bool {
+        self.ring.is_some()
+    }
+
     /// Send one frame (a whole Ethernet frame without FCS).
     pub fn send(&self, frame: &[u8]) -> Result<(), LinkError> {
         if frame.len() > self.max_frame_len() {
@@ -238,6 +267,26 @@ impl RawSocket {
     ) -> Result<Option<usize>, LinkError> {
         let deadline = timeout.map(|t| Instant::now() + t);
         loop {
+            if let Some(ring) = &self.ring {
+                match ring.take(buf) {
+                    Taken::Frame(n) => return Ok(Some(n)),
+                    Taken::TooLong(len) => {
+                        return Err(LinkError::Truncated {
+                            interface: self.interface.clone(),
+                            len,
+                            capacity: buf.len(),
+                        });
+                    }
+                    // Too long for its slot: on the socket's queue, taken by recv below.
+                    Taken::Queued => {}
+                    Taken::Empty => {
+                        if !self.wait_until(deadline)? {
+                            return Ok(None);
+                        }
+                        continue;
+                    }
+                }
+            }
             // SAFETY: the pointer and length describe the caller's live, writable slice.
             let n = unsafe {
                 libc::recv(
@@ -261,17 +310,9 @@ impl RawSocket {
             match Errno::last() {
                 Errno::EINTR => continue,
                 Errno::EAGAIN => {
-                    let remaining = match deadline {
-                        None => None,
-                        Some(d) => {
-                            let now = Instant::now();
-                            if now >= d {
-                                return Ok(None);
-                            }
-                            Some(d - now)
-                        }
-                    };
-                    self.wait(PollFlags::POLLIN, remaining)?;
+                    if !self.wait_until(deadline)? {
+                        return Ok(None);
+                    }
                 }
                 e => return Err(self.io_err("receiving a frame", e)),
             }

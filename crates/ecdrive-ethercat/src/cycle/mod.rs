@@ -53,8 +53,8 @@ use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
 pub use settings::{
-    CycleEnd, CycleHooks, CycleIo, CycleReport, CycleSettings, FrameStats, ReplyWait, SupervisorIo,
-    Timing, channels,
+    CycleEnd, CycleHooks, CycleIo, CycleParts, CycleReport, CycleSettings, FrameStats, ReplyWait,
+    SupervisorIo, Timing, channels,
 };
 
 /// Where the drives stand on the way to OP.
@@ -119,6 +119,26 @@ impl EventSink for Emitter<'_> {
             time_ns: monotonic_ns(),
             kind,
         });
+    }
+}
+
+/// The cycle's stopwatch: the time since the last lap, and the pump's counters when the cycle
+/// woke.
+struct Lap {
+    last: u64,
+    stats: crate::io::PumpStats,
+}
+
+impl Lap {
+    fn new(woke: u64, stats: crate::io::PumpStats) -> Self {
+        Self { last: woke, stats }
+    }
+
+    fn lap(&mut self) -> u64 {
+        let now = monotonic_ns();
+        let d = now.saturating_sub(self.last);
+        self.last = now;
+        d
     }
 }
 
@@ -449,6 +469,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
         self.wake();
         let next_wake = self.settings.reply_wait == ReplyWait::NextWake;
+        let mut lap = Lap::new(self.clock.woke, self.pump.stats());
         // In-cycle, and the first cycle of NextWake (no frame before it): send now, wait.
         let first = flight.is_none() && !self.clock.unsent;
         if (!next_wake || first)
@@ -456,6 +477,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         {
             return Some(end);
         }
+        let sent_now = lap.lap();
         let good = match self.exchange(flight.as_mut()) {
             Ok(FrameOutcome::Answered) => true,
             Ok(FrameOutcome::Lost) => {
@@ -466,20 +488,27 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             }
             Err(end) => return Some(end),
         };
+        let receive = lap.lap();
         if let Some(end) = self.request_op() {
             return Some(end);
         }
         self.apply_commands();
+        let mut supervision = lap.lap();
         self.step_axes(good);
+        let engine = lap.lap();
         self.supervise_axes();
+        supervision += lap.lap();
         self.publish(good);
         if good {
             self.record_samples();
         }
+        let telemetry = lap.lap();
         if let Some(end) = self.leave_op() {
             return Some(end);
         }
-        if self.window.recording() {
+        supervision += lap.lap();
+        let recording = self.window.recording();
+        if recording {
             self.timing.busy.record(monotonic_ns() - self.clock.woke);
         }
         if self.window == TimingWindow::ClosesAfter {
@@ -487,6 +516,18 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
         if next_wake && let Err(end) = self.send_frame(flight, make) {
             return Some(end);
+        }
+        let sent_late = lap.lap();
+        if recording {
+            let (link, p) = (self.pump.stats(), &mut self.timing.parts);
+            p.cycles += 1;
+            p.receive_ns += receive;
+            p.engine_ns += engine;
+            p.supervision_ns += supervision;
+            p.telemetry_ns += telemetry;
+            p.send_ns += sent_now + sent_late;
+            p.receive_link_ns += link.link_recv_ns - lap.stats.link_recv_ns;
+            p.send_link_ns += link.link_send_ns - lap.stats.link_send_ns;
         }
         self.schedule_next();
         None

@@ -200,6 +200,53 @@ pub struct Timing {
     pub exchange: LatencyHistogram,
     /// Time the thread was awake per cycle (exchange + computation).
     pub busy: LatencyHistogram,
+    /// Where the awake time went, summed over the recorded cycles.
+    pub parts: CycleParts,
+}
+
+/// The cycle thread's awake time by part, summed over the cycles the histograms cover (ns,
+/// wall time on the cycle thread; at a real-time priority nothing else runs there, so it is
+/// the thread's CPU time in those parts). What a cycle costs besides these parts is the sleep
+/// and the wake-up: the thread's CPU time per cycle minus their sum.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CycleParts {
+    /// Cycles summed.
+    pub cycles: u64,
+    /// Reading the reply of the frame: the link's receive, ethercrab's handling of the frame
+    /// (its PDU bookkeeping, the process image), the working counter and AL-state checks.
+    pub receive_ns: u64,
+    /// Of `receive_ns`: inside the link's receive (the syscall).
+    pub receive_link_ns: u64,
+    /// The CiA 402 engine and motion runtime: every axis's inputs read, step, outputs written
+    /// (and the application's cycle code, if any).
+    pub engine_ns: u64,
+    /// Supervision: commands taken, OP requested, faults spread to the other axes, stop
+    /// timeouts, devices leaving OP.
+    pub supervision_ns: u64,
+    /// Telemetry: the snapshot published and the recording's samples pushed.
+    pub telemetry_ns: u64,
+    /// Sending the next frame: ethercrab builds it (its PDU bookkeeping), the link sends it.
+    pub send_ns: u64,
+    /// Of `send_ns`: inside the link's send (the syscall).
+    pub send_link_ns: u64,
+}
+
+impl CycleParts {
+    /// Per cycle, ns: (receive, receive's link, engine, supervision, telemetry, send, send's
+    /// link); zeros before any cycle was summed.
+    pub fn per_cycle(&self) -> [f64; 7] {
+        let n = self.cycles.max(1) as f64;
+        [
+            self.receive_ns,
+            self.receive_link_ns,
+            self.engine_ns,
+            self.supervision_ns,
+            self.telemetry_ns,
+            self.send_ns,
+            self.send_link_ns,
+        ]
+        .map(|v| if self.cycles == 0 { 0.0 } else { v as f64 / n })
+    }
 }
 
 /// What a cycle run produced.
