@@ -160,9 +160,7 @@ impl RxRing {
         );
         let taken = if status & libc::TP_STATUS_COPY != 0 {
             Taken::Queued
-        } else if len > buf.len() || snap < len {
-            Taken::TooLong(len)
-        } else if mac + snap > self.slot_size {
+        } else if len > buf.len() || snap < len || mac + snap > self.slot_size {
             Taken::TooLong(len)
         } else {
             // SAFETY: `mac + snap` lies within the slot (checked above), the slot within the
