@@ -17,7 +17,9 @@ use crate::ec::{command::Command, register};
 use crate::rt::monotonic_ns;
 use ethercrab::{PduRx, PduTx};
 use std::collections::HashMap;
-use std::task::Waker;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::task::{Wake, Waker};
 use std::time::Duration;
 
 pub use crate::link::{FrameLink, LinkError};
@@ -199,18 +201,21 @@ impl LogicalRecord {
             if !d.command().is_some_and(Command::is_logical) {
                 continue;
             }
-            let seen = LogicalSeen {
+            self.note(LogicalSeen {
                 address: d.logical_address(),
                 len: u16::try_from(d.data_len()).unwrap_or(u16::MAX),
                 wkc: d.wkc(),
-            };
-            match self.seen.get_mut(self.n) {
-                Some(slot) => {
-                    *slot = seen;
-                    self.n += 1;
-                }
-                None => self.overflow = true,
+            });
+        }
+    }
+
+    fn note(&mut self, seen: LogicalSeen) {
+        match self.seen.get_mut(self.n) {
+            Some(slot) => {
+                *slot = seen;
+                self.n += 1;
             }
+            None => self.overflow = true,
         }
     }
 }
@@ -239,7 +244,39 @@ pub struct Pump<'sto, L: FrameLink> {
     answers: Option<Answers>,
     /// The reply an answer made.
     answer_buf: Box<[u8; MAX_FRAME]>,
+    /// Copies of the frames ethercrab sent while capturing (see [`Pump::capture`]).
+    capture: Capture,
+    /// Set by ethercrab when it queues a frame, while watched (see [`Pump::watch_queue`]).
+    queued: Option<Arc<QueuedFlag>>,
 }
+
+/// ethercrab's sender waker, as a flag: ethercrab wakes it after it queued a frame.
+struct QueuedFlag(AtomicBool);
+
+impl Wake for QueuedFlag {
+    fn wake(self: Arc<Self>) {
+        self.0.store(true, Ordering::Release);
+    }
+
+    fn wake_by_ref(self: &Arc<Self>) {
+        self.0.store(true, Ordering::Release);
+    }
+}
+
+/// Copies of the frames sent through ethercrab, as ethercrab made them, while on: buffers
+/// allocated when capturing is first switched on, so capturing in the cycle allocates nothing.
+#[derive(Default)]
+struct Capture {
+    on: bool,
+    frames: Vec<[u8; MAX_FRAME]>,
+    lens: Vec<usize>,
+    /// More frames went out than it keeps.
+    overflow: bool,
+}
+
+/// How many frames one capture keeps (the frames of one cycle's exchange, and the session's
+/// that went out meanwhile).
+const CAPTURE_FRAMES: usize = 32;
 
 /// Datagram commands: FPRD (configured-address read) and FRMW (configured-address read,
 /// multiple write), ETG.1000.4 table 14.
@@ -288,6 +325,125 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             scratch: Box::new([0u8; MAX_FRAME]),
             answers: None,
             answer_buf: Box::new([0u8; MAX_FRAME]),
+            capture: Capture::default(),
+            queued: None,
+        }
+    }
+
+    /// Have ethercrab say when it queues a frame (its sender waker sets a flag), so that
+    /// [`send_queued`](Self::send_queued) looks through its frame slots only then. Allocates
+    /// the flag once.
+    pub fn watch_queue(&mut self) {
+        let flag = self
+            .queued
+            .get_or_insert_with(|| Arc::new(QueuedFlag(AtomicBool::new(true))));
+        // Something may have been queued before the waker was in place.
+        flag.0.store(true, Ordering::Release);
+        self.tx.replace_waker(&Waker::from(flag.clone()));
+    }
+
+    /// [`send_pending`](Self::send_pending), when ethercrab queued something since the last
+    /// look (always, unless [`watch_queue`](Self::watch_queue) is on). ethercrab takes its
+    /// waker when it wakes it: it is put back before the look, so a frame queued after the look
+    /// sets the flag again. No allocation.
+    pub fn send_queued(&mut self) -> Result<usize, LinkError> {
+        if let Some(flag) = &self.queued {
+            if !flag.0.swap(false, Ordering::AcqRel) {
+                return Ok(0);
+            }
+            self.tx.replace_waker(&Waker::from(flag.clone()));
+        }
+        self.send_pending()
+    }
+
+    /// Keep a copy of every frame ethercrab sends from now on, as ethercrab made it (before a
+    /// rewrite or an answer), up to 32; `false` stops and keeps what was taken. Switching
+    /// it on clears what was taken (and allocates the buffers the first time).
+    pub fn capture(&mut self, on: bool) {
+        let c = &mut self.capture;
+        if on {
+            if c.frames.is_empty() {
+                c.frames = vec![[0u8; MAX_FRAME]; CAPTURE_FRAMES];
+                c.lens = Vec::with_capacity(CAPTURE_FRAMES);
+            }
+            c.lens.clear();
+            c.overflow = false;
+        }
+        c.on = on;
+    }
+
+    /// The frames taken by [`capture`](Self::capture), in the order they went out, and
+    /// whether more went out than it keeps.
+    pub fn captured(&self) -> (impl Iterator<Item = &[u8]>, bool) {
+        let c = &self.capture;
+        (
+            c.frames.iter().zip(&c.lens).map(|(f, &n)| &f[..n]),
+            c.overflow,
+        )
+    }
+
+    /// Send a frame ecdrive built itself (no slot of ethercrab's; see [`receive_own`]).
+    ///
+    /// [`receive_own`]: Self::receive_own
+    pub fn send_own(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        let t0 = monotonic_ns();
+        let r = self.link.send(frame);
+        self.stats.link_send_ns += monotonic_ns() - t0;
+        if let Err(e) = r {
+            self.link_error = Some(e.to_string());
+            return Err(e);
+        }
+        self.stats.sent += 1;
+        Ok(())
+    }
+
+    /// Wait until `deadline_ns` for the next frame `ours` says is a reply to a frame ecdrive
+    /// built itself (`Some(true)`), dropping those it says are late replies to earlier ones of
+    /// its own (`Some(false)`: counted stale, never handed to ethercrab, whose frames may use
+    /// the same index) and handing every other frame that comes to ethercrab. The reply goes
+    /// into `reply`; its length, or `None` when none came.
+    pub fn receive_own(
+        &mut self,
+        reply: &mut [u8],
+        deadline_ns: u64,
+        ours: impl Fn(&[u8]) -> Option<bool>,
+    ) -> Result<Option<usize>, LinkError> {
+        loop {
+            let t0 = monotonic_ns();
+            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
+            let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
+            self.stats.link_recv_ns += monotonic_ns() - t0;
+            let got = match got {
+                Ok(Some(len)) => len,
+                Ok(None) => return Ok(None),
+                Err(e) => {
+                    self.link_error = Some(e.to_string());
+                    return Err(e);
+                }
+            };
+            let frame = self.rx_buf.get(..got).unwrap_or(&[]);
+            match ours(frame) {
+                Some(true) => {
+                    if let Some(dst) = reply.get_mut(..got) {
+                        dst.copy_from_slice(frame);
+                        self.stats.received += 1;
+                        return Ok(Some(got));
+                    }
+                    self.stats.rejected += 1;
+                }
+                Some(false) => self.stats.stale += 1,
+                None => {
+                    self.accept(got);
+                }
+            }
+        }
+    }
+
+    /// Record a logical datagram of a reply to a frame of ecdrive's own, as those of the
+    /// replies ethercrab takes are (see [`logical_seen`](Self::logical_seen)).
+    pub fn note_logical(&mut self, seen: LogicalSeen) {
+        if self.logical.on {
+            self.logical.note(seen);
         }
     }
 
@@ -332,30 +488,11 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         reply: &mut [u8],
         deadline_ns: u64,
     ) -> Result<Option<usize>, LinkError> {
-        loop {
-            let t0 = monotonic_ns();
-            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
-            let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
-            self.stats.link_recv_ns += monotonic_ns() - t0;
-            let got = match got {
-                Ok(Some(len)) => len,
-                Ok(None) => return Ok(None),
-                Err(e) => {
-                    self.link_error = Some(e.to_string());
-                    return Err(e);
-                }
-            };
-            let ours = self.rx_buf.get(FIRST_IDX_OFFSET) == Some(&crate::answers::RAW_INDEX)
-                && self.rx_buf.get(6).is_some_and(|b| b & MAC_LOCAL_BIT != 0);
-            if ours && let (Some(src), Some(dst)) = (self.rx_buf.get(..got), reply.get_mut(..got)) {
-                dst.copy_from_slice(src);
-                self.stats.received += 1;
-                return Ok(Some(got));
-            }
-            if !ours {
-                self.accept(got);
-            }
-        }
+        self.receive_own(reply, deadline_ns, |f| {
+            (f.get(FIRST_IDX_OFFSET) == Some(&crate::answers::RAW_INDEX)
+                && f.get(6).is_some_and(|b| b & MAC_LOCAL_BIT != 0))
+            .then_some(true)
+        })
     }
 
     /// Whether the reference clock's time is distributed to the other clocks (on by
@@ -452,7 +589,8 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     }
 
     /// Register the waker ethercrab wakes when it queues a frame.
-    pub fn register_waker(&self, waker: &Waker) {
+    pub fn register_waker(&mut self, waker: &Waker) {
+        self.queued = None;
         self.tx.replace_waker(waker);
     }
 
@@ -486,7 +624,19 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             let answers = &mut self.answers;
             let answer_buf = &mut self.answer_buf;
             let send_ns = &mut self.stats.link_send_ns;
+            let capture = &mut self.capture;
             let res = frame.send_blocking(|sent| {
+                if capture.on {
+                    match capture.frames.get_mut(capture.lens.len()) {
+                        Some(slot) if capture.lens.len() < CAPTURE_FRAMES => {
+                            if let Some(dst) = slot.get_mut(..sent.len()) {
+                                dst.copy_from_slice(sent);
+                                capture.lens.push(sent.len());
+                            }
+                        }
+                        _ => capture.overflow = true,
+                    }
+                }
                 let verdict = match answers.as_mut() {
                     Some(a) => a.answer(sent, &mut answer_buf[..]),
                     None => Verdict::Wire,

@@ -36,7 +36,7 @@ mod supervise;
 mod wkc;
 
 pub use app::{AppAxis, AppCycle, CycleApp, EntryError, SetpointLimits};
-pub use cycle::{CycleEnd, CycleReport, CycleSettings, ReplyWait};
+pub use cycle::{CycleEnd, CycleReport, CycleSettings, FramesBy, ReplyWait};
 pub use error::{DriveRef, ErrorKind, MasterError};
 pub use history::{HistoryEntry, HistoryEvent, HistoryKind, HistoryLog, Resolved, RestartNote};
 pub use program::{ProbeEdge, RunMode, Step, Target};

@@ -1126,15 +1126,15 @@ impl MotionAxis {
         ctx: &StepContext,
         ev: &mut dyn EventSink,
     ) {
-        let st = self.axis.status();
-        let Some(mode) = RunMode::of(st.active_mode).filter(|m| !m.is_cyclic()) else {
+        let Some(mode) = RunMode::of(self.axis.active_mode()).filter(|m| !m.is_cyclic()) else {
             // Outside the profile modes their targets are 0: entering one starts from rest.
             self.pv.set_target(0);
             self.tq.set_target(0);
             return;
         };
         let stopping = self.stopping != Stopping::No;
-        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
+        let streaming = self.axis.is_streaming();
+        let enabled = self.axis.state() == Some(State::OperationEnabled) && streaming;
         if !enabled {
             // Nothing set before a disable, a quick stop or a fault comes back when the axis
             // is enabled again.
@@ -1154,7 +1154,7 @@ impl MotionAxis {
             (RunMode::Pp, DriveRun::Pp { .. }) => self.pp_step(i, sw, actual, ctx, ev),
             (RunMode::Pp, _) => self.app_pp_step(sw, stopping),
             (RunMode::Pv | RunMode::Tq, DriveRun::Profile { index, since }) => {
-                let since = since.or(st.streaming.then_some(ctx.tick));
+                let since = since.or(streaming.then_some(ctx.tick));
                 self.profile_step(i, mode, (index, since), sw, actual, ctx, ev);
             }
             _ => self.hold_profile(mode, sw),
@@ -1333,12 +1333,11 @@ impl MotionAxis {
             }
         }
         let s = self.pp.step(&mut self.axis, sw);
-        let still =
-            if given == n && s.queued == 0 && !s.target_reached && self.axis.status().standstill {
-                still.saturating_add(1)
-            } else {
-                0
-            };
+        let still = if given == n && s.queued == 0 && !s.target_reached && self.axis.standstill() {
+            still.saturating_add(1)
+        } else {
+            0
+        };
         if let Some(why) = pp_failure(&s, ctx, since, still) {
             return self.drive_step_failed(i, why, ctx, ev);
         }
@@ -1576,14 +1575,13 @@ impl MotionAxis {
     /// Set-point steps while enabled, in the mode the drive runs (confirmed by 0x6061): the
     /// other targets only track the actual values.
     fn record_steps(&mut self, out: &Output, enabled: bool, cycle: u64) {
-        let running = self.axis.status();
-        if !(enabled && running.streaming) {
+        if !(enabled && self.axis.is_streaming()) {
             self.last_out = None;
             return;
         }
         if let Some((p, v, t)) = self.last_out {
             let s = &mut self.steps;
-            let step = match RunMode::of(running.active_mode) {
+            let step = match RunMode::of(self.axis.active_mode()) {
                 Some(RunMode::Csp | RunMode::Ip) => Some((
                     i64::from(out.target_position.wrapping_sub(p)).abs(),
                     &mut s.position,
@@ -1760,7 +1758,7 @@ impl MotionAxis {
             self.stopping = Stopping::Disabling;
         }
         if self.stopping == Stopping::Disabling
-            && !self.axis.status().state.is_some_and(State::is_energised)
+            && !self.axis.state().is_some_and(State::is_energised)
             && !ending
         {
             self.stopping = Stopping::No;
@@ -1914,6 +1912,16 @@ impl MotionAxis {
     /// The engine's status.
     pub fn status(&self) -> AxisStatus {
         self.axis.status()
+    }
+
+    /// The CiA 402 state (as [`status`](Self::status) has it, without building the rest).
+    pub fn state(&self) -> Option<State> {
+        self.axis.state()
+    }
+
+    /// A fault is present (as [`status`](Self::status) has it).
+    pub fn faulted(&self) -> bool {
+        self.axis.fault()
     }
 
     /// The axis's telemetry as of its last step.

@@ -60,6 +60,21 @@ pub(super) fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, Co
                 }
             };
         }
+        if let Some(f) = &rt.frames {
+            master.cycle.own_frames = match f.get_ref().as_str() {
+                "ecdrive" => true,
+                "ethercrab" => false,
+                other => {
+                    return Err(cx.err(
+                        f.span(),
+                        "rt.frames",
+                        format!(
+                            "{other:?} is not whose frames carry the image: \"ecdrive\" or \"ethercrab\""
+                        ),
+                    ));
+                }
+            };
+        }
     }
     if let Some(a) = f.answer_rereads {
         master.bus.answer_rereads = a;

@@ -13,6 +13,7 @@
 //! cpu = 1                    # pin to this CPU
 //! lock_memory = true         # mlockall
 //! reply = "next-wake"        # read the frame's reply at the next wake-up, or "in-cycle" (wait for it)
+//! frames = "ecdrive"         # the cycle's frames: ecdrive's own (learnt from ethercrab's first), or "ethercrab"
 //!
 //! [supervision]              # how the cycle reacts to the bus (optional)
 //! lost_before_stop = 3       # consecutive cycles without a reply before the axes are stopped

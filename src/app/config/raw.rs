@@ -44,6 +44,8 @@ pub(super) struct Rt {
     pub lock_memory: bool,
     #[serde(default)]
     pub reply: Option<Spanned<String>>,
+    #[serde(default)]
+    pub frames: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

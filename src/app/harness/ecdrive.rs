@@ -197,6 +197,11 @@ pub fn run<L: FrameLink + Send + 'static>(
     if !enabled {
         notes.push("not every axis reached Operation enabled during the window".into());
     }
+    if let crate::master::FramesBy::Ethercrab { why } = cycle.frames_by {
+        notes.push(format!(
+            "the process image went out in ethercrab's frames (tx_rx_dc), not ecdrive's: {why}"
+        ));
+    }
     notes.extend(short);
     // Errors of the run's history, each text once with how often it came.
     let mut seen: Vec<(String, usize)> = Vec::new();

@@ -689,7 +689,9 @@ pub fn run(cfg: &JitterConfig, progress: &dyn Fn(&str)) -> Result<JitterReport, 
 /// not the round trip.
 fn ecdrive_link(transport: &Transport) -> String {
     let reply = "; the frame goes out at the end of the cycle and its reply is read at the next \
-                 wake-up (exchange = that read, not the round trip)";
+                 wake-up (exchange = that read, not the round trip); the frames are ecdrive's \
+                 own, learnt from ethercrab's tx_rx_dc in the first cycle (a note says so when \
+                 they were not)";
     match transport {
         Transport::InProcess => {
             format!(
@@ -697,7 +699,8 @@ fn ecdrive_link(transport: &Transport) -> String {
             )
         }
         _ => format!(
-            "raw socket, frames sent and received by the cycle thread (no TX/RX thread){reply}"
+            "raw socket (frames received through its ring shared with the kernel), frames sent \
+             and received by the cycle thread (no TX/RX thread){reply}"
         ),
     }
 }

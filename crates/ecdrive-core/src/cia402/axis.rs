@@ -823,6 +823,32 @@ impl Axis {
     }
 
     /// A snapshot.
+    /// The decoded state (as [`status`](Self::status) has it, without building the rest).
+    pub fn state(&self) -> Option<State> {
+        self.state
+    }
+
+    /// A fault is present (as [`status`](Self::status) has it).
+    pub fn fault(&self) -> bool {
+        self.fault
+    }
+
+    /// Set-points are accepted now (as [`status`](Self::status) has it).
+    pub fn is_streaming(&self) -> bool {
+        self.streaming()
+    }
+
+    /// The mode set-points are streamed for (as [`status`](Self::status) has it).
+    pub fn active_mode(&self) -> OperationMode {
+        self.active_mode
+    }
+
+    /// At standstill by the configured rule (as [`status`](Self::status) has it).
+    pub fn standstill(&self) -> bool {
+        self.standstill
+    }
+
+    /// The whole status. The cycle's hot paths use the single accessors above instead.
     pub fn status(&self) -> AxisStatus {
         AxisStatus {
             cycle: self.cycle,

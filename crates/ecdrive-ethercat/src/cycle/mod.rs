@@ -47,14 +47,16 @@ use std::time::Duration;
 pub mod audit;
 mod axes;
 mod bus;
+mod frames;
 mod settings;
 
 use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
+use frames::{Image, OwnFrames, OwnOutcome};
 pub use settings::{
-    CycleEnd, CycleHooks, CycleIo, CycleParts, CycleReport, CycleSettings, FrameStats, ReplyWait,
-    SupervisorIo, Timing, channels,
+    CycleEnd, CycleHooks, CycleIo, CycleParts, CycleReport, CycleSettings, FrameStats, FramesBy,
+    ReplyWait, SupervisorIo, Timing, channels,
 };
 
 /// Where the drives stand on the way to OP.
@@ -122,6 +124,66 @@ impl EventSink for Emitter<'_> {
     }
 }
 
+/// The timing values of the last cycles, folded into the [`Timing`] histograms a batch at a
+/// time: recording a value into a histogram touches its counts far apart (and, after the
+/// sleep, cold), a batch's values sit together.
+#[derive(Clone, Copy)]
+struct TimingBatch {
+    /// wake latency, period, exchange, busy.
+    values: [[u64; TIMING_BATCH]; 4],
+    n: [usize; 4],
+}
+
+const TIMING_BATCH: usize = 64;
+
+impl Default for TimingBatch {
+    fn default() -> Self {
+        Self {
+            values: [[0; TIMING_BATCH]; 4],
+            n: [0; 4],
+        }
+    }
+}
+
+impl TimingBatch {
+    const WAKE: usize = 0;
+    const PERIOD: usize = 1;
+    const EXCHANGE: usize = 2;
+    const BUSY: usize = 3;
+
+    fn histogram(t: &mut Timing, which: usize) -> &mut LatencyHistogram {
+        match which {
+            Self::WAKE => &mut t.wake_latency,
+            Self::PERIOD => &mut t.period,
+            Self::EXCHANGE => &mut t.exchange,
+            _ => &mut t.busy,
+        }
+    }
+
+    fn record(&mut self, t: &mut Timing, which: usize, ns: u64) {
+        let n = self.n[which];
+        self.values[which][n] = ns;
+        self.n[which] = n + 1;
+        if n + 1 == TIMING_BATCH {
+            self.flush(t, which);
+        }
+    }
+
+    fn flush(&mut self, t: &mut Timing, which: usize) {
+        let h = Self::histogram(t, which);
+        for &v in &self.values[which][..self.n[which]] {
+            h.record(v);
+        }
+        self.n[which] = 0;
+    }
+
+    fn flush_all(&mut self, t: &mut Timing) {
+        for which in 0..4 {
+            self.flush(t, which);
+        }
+    }
+}
+
 /// The cycle's stopwatch: the time since the last lap, and the pump's counters when the cycle
 /// woke.
 struct Lap {
@@ -162,6 +224,9 @@ struct RunConstants {
     /// The DC system time from which OP may be requested: [`CycleSettings::safeop_cycles`]
     /// SYNC0 cycles after the last drive's first SYNC0 (0 without DC).
     op_not_before_dc: u64,
+    /// The SYNC0 shift, as ethercrab's first reply shows it (for the own frames' wait to the
+    /// next instant).
+    sync0_shift_ns: u64,
 }
 
 /// The clock of the run and the timing of the current cycle.
@@ -254,6 +319,8 @@ struct Cycle<'a, 'p, L: FrameLink> {
     clock: Clock,
     counts: Counts,
     timing: Timing,
+    /// The timing values not yet in `timing`.
+    batch: TimingBatch,
     window: TimingWindow,
     op: OpState,
     phase: RunPhase,
@@ -264,7 +331,32 @@ struct Cycle<'a, 'p, L: FrameLink> {
     /// tries so far).
     left_op_code: Option<(usize, u8, u8)>,
     last_telemetry: CycleTelemetry,
+    /// Every device's inputs and outputs: what the steps read and write.
+    image: Image,
+    /// Whose frames carry the image.
+    own: OwnPath,
+    /// The FMMU blocks the master configured (station address, block), for learning.
+    fmmus: Vec<(u16, crate::ec::register::FmmuConfig)>,
+    /// The AL state of each device from the last reply, by position (its first `states_n`).
+    states: Vec<u8>,
+    states_n: usize,
+    /// Why the own frames were not taken up, when they were not.
+    not_learnt: Option<&'static str>,
 }
+
+/// Whose frames carry the process image (see [`frames`]).
+enum OwnPath {
+    /// ethercrab's (`tx_rx_dc`), for the whole run.
+    Off,
+    /// ethercrab's, while the frames it sends are learnt; tries left.
+    Learning { tries: u8 },
+    /// ecdrive's own.
+    On(OwnFrames),
+}
+
+/// How many cycles learning ethercrab's frames may take before the cycle stays on its path
+/// (a mailbox frame of the session's between them spoils a try).
+const LEARNING_TRIES: u8 = 5;
 
 /// Run the cycle until it ends. Call on the thread that is to be the cycle thread (the
 /// settings' RT priority, CPU and memory locking are applied to it).
@@ -334,10 +426,28 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             .filter(|d| axes.iter().any(|a| a.sub == usize::from(d.info.position)))
             .map(app_view)
             .collect();
-        for a in &axes {
-            if let Ok(sd) = group.subdevice(md, a.sub) {
-                a.initial_outputs(sd.io_raw_mut().outputs());
+        let n_devices = group.len();
+        let sizes: Vec<(usize, usize)> = (0..n_devices)
+            .map(|p| {
+                group.subdevice(md, p).map_or((0, 0), |sd| {
+                    let io = sd.io_raw();
+                    (io.inputs().len(), io.outputs().len())
+                })
+            })
+            .collect();
+        let mut image = Image::new(&sizes);
+        for p in 0..n_devices {
+            if let Ok(sd) = group.subdevice(md, p) {
+                let io = sd.io_raw();
+                image.set_inputs(p, io.inputs());
+                let (_, out) = image.io_mut(p);
+                if out.len() == io.outputs().len() {
+                    out.copy_from_slice(io.outputs());
+                }
             }
+        }
+        for a in &axes {
+            a.initial_outputs(image.io_mut(a.sub).1);
         }
         let CycleIo {
             commands,
@@ -366,7 +476,6 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             })
             .chain(others.iter().map(|o| wkc(o.outputs, o.inputs)))
             .sum();
-        let n_devices = group.len();
         let mut addresses = vec![0u16; n_devices];
         let placed = drives
             .iter()
@@ -384,6 +493,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         // The plan must account for every device the layout has: otherwise the tap missed a
         // configuration, and the whole-image value is the better check.
         let wkc_plan = (!plan.is_empty() && plan.whole() == wkc_whole).then_some(plan);
+        let fmmus: Vec<(u16, crate::ec::register::FmmuConfig)> =
+            pump.fmmu_configs().map(|(st, _, c)| (st, c)).collect();
         pump.record_logical(wkc_plan.is_some());
         pump.set_drift_compensation(settings.drift_compensation);
         let cycles = |d: Duration| d.as_nanos() as u64 / cycle_ns;
@@ -421,6 +532,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     settings.safeop_cycles,
                     cycle_ns,
                 ),
+                sync0_shift_ns: cycle_ns / 2,
             },
             axes,
             addresses,
@@ -435,6 +547,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 ..Counts::default()
             },
             timing: Timing::default(),
+            batch: TimingBatch::default(),
             window: if settings.steady_timing_only {
                 TimingWindow::NotYet
             } else {
@@ -446,7 +559,37 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             end_reason: None,
             left_op_code: None,
             last_telemetry: CycleTelemetry::default(),
+            image,
+            own: if settings.own_frames {
+                OwnPath::Learning {
+                    tries: LEARNING_TRIES,
+                }
+            } else {
+                OwnPath::Off
+            },
+            fmmus,
+            states: vec![0; n_devices],
+            states_n: 0,
+            not_learnt: None,
         }
+    }
+
+    /// The image's outputs into ethercrab's copy of the process image.
+    fn outputs_to_ethercrab(&self) {
+        for p in 0..self.states.len() {
+            if let Ok(sd) = self.group.subdevice(self.md, p) {
+                let mut io = sd.io_raw_mut();
+                let (src, dst) = (self.image.outputs(p), io.outputs());
+                if src.len() == dst.len() {
+                    dst.copy_from_slice(src);
+                }
+            }
+        }
+    }
+
+    /// Frames of ecdrive's own are out.
+    fn own_in_flight(&self) -> bool {
+        matches!(&self.own, OwnPath::On(f) if f.in_flight())
     }
 
     fn ending(&self) -> bool {
@@ -471,7 +614,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let next_wake = self.settings.reply_wait == ReplyWait::NextWake;
         let mut lap = Lap::new(self.clock.woke, self.pump.stats());
         // In-cycle, and the first cycle of NextWake (no frame before it): send now, wait.
-        let first = flight.is_none() && !self.clock.unsent;
+        let first = flight.is_none() && !self.own_in_flight() && !self.clock.unsent;
         if (!next_wake || first)
             && let Err(end) = self.send_frame(flight.as_mut(), make)
         {
@@ -509,7 +652,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         supervision += lap.lap();
         let recording = self.window.recording();
         if recording {
-            self.timing.busy.record(monotonic_ns() - self.clock.woke);
+            let busy = monotonic_ns() - self.clock.woke;
+            self.batch.record(&mut self.timing, TimingBatch::BUSY, busy);
         }
         if self.window == TimingWindow::ClosesAfter {
             self.window = TimingWindow::Closed;
@@ -541,9 +685,11 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         c.latency = c.woke.saturating_sub(c.next_wake);
         let recording = self.window.recording();
         if recording {
-            self.timing.wake_latency.record(c.latency);
+            let t = &mut self.timing;
+            self.batch.record(t, TimingBatch::WAKE, c.latency);
             if c.last_wake != 0 {
-                self.timing.period.record(c.woke - c.last_wake);
+                self.batch
+                    .record(t, TimingBatch::PERIOD, c.woke - c.last_wake);
             }
         }
         if c.latency > self.consts.cycle_ns {
@@ -567,6 +713,15 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     ) -> Result<(), CycleEnd> {
         self.pump.clear_logical();
         self.clock.t_sent = monotonic_ns();
+        if let OwnPath::On(own) = &mut self.own {
+            return own
+                .send(self.pump, &self.image)
+                .map_err(|_| CycleEnd::LinkFailed);
+        }
+        // ethercrab's frame: the outputs into its copy of the image.
+        self.outputs_to_ethercrab();
+        self.pump
+            .capture(matches!(self.own, OwnPath::Learning { .. }));
         flight.set(Some(make()));
         let Some(fut) = flight.as_mut().as_pin_mut() else {
             return Ok(());
@@ -605,6 +760,29 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         } else {
             now
         };
+        if let OwnPath::On(own) = &mut self.own
+            && own.in_flight()
+        {
+            let result = own.receive(self.pump, &mut self.image, deadline);
+            self.clock.t_ex_done = monotonic_ns();
+            self.clock.next_at = None;
+            return match result {
+                Ok(OwnOutcome::Answered(r)) => {
+                    let n = own.states().len().min(self.states.len());
+                    self.states[..n].copy_from_slice(&own.states()[..n]);
+                    self.states_n = n;
+                    let (period, shift) = (self.consts.cycle_ns, self.consts.sync0_shift_ns);
+                    let wait = (period - r.dc_time % period) + shift;
+                    self.answered(r.wkc, r.dc_time, wait);
+                    Ok(FrameOutcome::Answered)
+                }
+                Ok(OwnOutcome::Late) => {
+                    self.counts.late_total += 1;
+                    Ok(FrameOutcome::Lost)
+                }
+                Err(_) => Err(CycleEnd::LinkFailed),
+            };
+        }
         let Some(fut) = flight.as_mut().as_pin_mut() else {
             // No frame could be sent.
             self.clock.t_ex_done = now;
@@ -618,29 +796,20 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.clock.next_at = None;
         match result {
             Ok(Ok(resp)) => {
-                self.clock.tick += 1;
-                if self.window.recording() {
-                    let took = self.clock.t_ex_done - self.clock.t_ex;
-                    self.timing.exchange.record(took);
+                let n = resp.subdevice_states.len().min(self.states.len());
+                for (d, st) in self.states.iter_mut().zip(resp.subdevice_states.iter()) {
+                    *d = raw_al_state(st);
                 }
-                if self.counts.consecutive_lost > 0 {
-                    self.ev.emit(EventKind::FramesResumed {
-                        lost: self.counts.consecutive_lost,
-                    });
+                self.states_n = n;
+                for p in 0..self.states.len() {
+                    if let Ok(sd) = self.group.subdevice(self.md, p) {
+                        self.image.set_inputs(p, sd.io_raw().inputs());
+                    }
                 }
-                self.counts.consecutive_lost = 0;
-                self.counts.segment_lost = false;
-                self.clock.dc_time = resp.extra.dc_system_time;
-                self.counts.last_wkc = resp.working_counter;
-                self.clock.next_at =
-                    Some(self.clock.t_sent + resp.extra.next_cycle_wait.as_nanos() as u64);
-                // A code still owed from an earlier cycle first (not twice in one cycle).
-                self.retry_left_op_code(false);
-                let mut scan = StateScan::default();
-                for (i, st) in resp.subdevice_states.iter().enumerate() {
-                    self.on_al_state(i, raw_al_state(st), &mut scan);
-                }
-                self.supervise_bus(scan, resp.working_counter);
+                let wait = resp.extra.next_cycle_wait.as_nanos() as u64;
+                let dc = resp.extra.dc_system_time;
+                self.learn(dc, wait);
+                self.answered(resp.working_counter, dc, wait);
                 Ok(FrameOutcome::Answered)
             }
             Err(ExchangeError::Late) => {
@@ -650,6 +819,72 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             Ok(Err(_)) => Ok(FrameOutcome::Lost),
             Err(ExchangeError::Link(_)) => Err(CycleEnd::LinkFailed),
         }
+    }
+
+    /// A reply came: its working counter, the reference clock's time, the wait from the send
+    /// to the next DC-aligned instant; the AL states are in `states`.
+    fn answered(&mut self, wkc: u16, dc_time: u64, next_wait_ns: u64) {
+        self.clock.tick += 1;
+        if self.window.recording() {
+            let took = self.clock.t_ex_done - self.clock.t_ex;
+            self.batch
+                .record(&mut self.timing, TimingBatch::EXCHANGE, took);
+        }
+        if self.counts.consecutive_lost > 0 {
+            self.ev.emit(EventKind::FramesResumed {
+                lost: self.counts.consecutive_lost,
+            });
+        }
+        self.counts.consecutive_lost = 0;
+        self.counts.segment_lost = false;
+        self.clock.dc_time = dc_time;
+        self.counts.last_wkc = wkc;
+        self.clock.next_at = Some(self.clock.t_sent + next_wait_ns);
+        // A code still owed from an earlier cycle first (not twice in one cycle).
+        self.retry_left_op_code(false);
+        let mut scan = StateScan::default();
+        for i in 0..self.states_n {
+            let st = self.states[i];
+            self.on_al_state(i, st, &mut scan);
+        }
+        self.supervise_bus(scan, wkc);
+    }
+
+    /// After an exchange through ethercrab while learning: take its frames over, if they are
+    /// the cycle's and nothing else came between them (see [`frames`]). The SYNC0 shift is
+    /// what ethercrab's wait to the next instant says it is.
+    fn learn(&mut self, dc_time: u64, next_wait_ns: u64) {
+        self.pump.capture(false);
+        let OwnPath::Learning { tries } = self.own else {
+            return;
+        };
+        let period = self.consts.cycle_ns;
+        self.consts.sync0_shift_ns = next_wait_ns.saturating_sub(period - dc_time % period);
+        let learnt = {
+            let (sent, overflow) = self.pump.captured();
+            if overflow {
+                Err("more frames than a capture keeps")
+            } else {
+                OwnFrames::learn(
+                    sent,
+                    &self.image,
+                    &self.addresses,
+                    &self.fmmus,
+                    self.settings.drift_compensation,
+                )
+            }
+        };
+        self.own = match learnt {
+            Ok(f) => {
+                self.pump.watch_queue();
+                OwnPath::On(f)
+            }
+            Err(_) if tries > 1 => OwnPath::Learning { tries: tries - 1 },
+            Err(why) => {
+                self.not_learnt = Some(why);
+                OwnPath::Off
+            }
+        };
     }
 
     /// Begin a ramp stop of every axis not already stopping.
@@ -742,21 +977,17 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             stop_ramp_cycles: self.consts.stop_ramp_cycles,
             stop_timeout_cycles: self.consts.stop_timeout_cycles,
         };
-        let (md, group) = (self.md, self.group);
         let with_app = self.app.is_some();
         // Inputs first, for every axis (and the application's view of it, if there is an
         // application); then the application; then each axis's step.
         for (a, view) in self.axes.iter_mut().zip(self.app_axes.iter_mut()) {
-            let Ok(sd) = group.subdevice(md, a.sub) else {
-                continue;
-            };
             let in_op = good && a.al_state & 0x0F == 8;
-            let io = sd.io_raw();
+            let (inputs, outputs) = (self.image.inputs(a.sub), self.image.outputs(a.sub));
             if in_op {
-                a.fb = Some(a.read_inputs(io.inputs(), ctx.pulse));
+                a.fb = Some(a.read_inputs(inputs, ctx.pulse));
             }
             if with_app {
-                view.refresh(&a.m, in_op, io.inputs(), io.outputs());
+                view.refresh(&a.m, in_op, inputs, outputs);
             }
         }
         if let Some(app) = self.app.as_deref_mut() {
@@ -772,15 +1003,13 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             app.cycle(&mut c);
         }
         for (i, (a, view)) in self.axes.iter_mut().zip(self.app_axes.iter()).enumerate() {
-            let Ok(sd) = group.subdevice(md, a.sub) else {
-                continue;
-            };
+            let outputs = self.image.io_mut(a.sub).1;
             if !good {
-                a.count(sd.io_raw_mut().outputs());
+                a.count(outputs);
                 continue;
             }
             if a.al_state & 0x0F != 8 {
-                a.below_op(sd.io_raw_mut().outputs());
+                a.below_op(outputs);
                 continue;
             }
             let Some(fb) = a.fb.take() else { continue };
@@ -790,10 +1019,10 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 Requests::default()
             };
             let out = a.m.step(i, fb, &ctx, &mut self.ev, req);
-            let mut io = sd.io_raw_mut();
-            a.write_outputs(&out, io.outputs());
+            let outputs = self.image.io_mut(a.sub).1;
+            a.write_outputs(&out, outputs);
             for &(f, raw) in view.writes() {
-                let _ = f.write_raw(io.outputs(), raw);
+                let _ = f.write_raw(outputs, raw);
             }
         }
     }
@@ -803,10 +1032,10 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
     fn supervise_axes(&mut self) {
         let (tick, cycle) = (self.clock.tick, self.clock.cycle);
         let ending = self.ending();
-        if !ending && self.axes.iter().any(|a| a.m.status().fault) {
+        if !ending && self.axes.iter().any(|a| a.m.faulted()) {
             for a in self.axes.iter_mut() {
-                let st = a.m.status();
-                if !st.fault && !a.m.stopping() && st.state == Some(State::OperationEnabled) {
+                if !a.m.faulted() && !a.m.stopping() && a.m.state() == Some(State::OperationEnabled)
+                {
                     a.m.begin_stop(StopKind::Ramp, tick, cycle);
                 }
             }
@@ -875,9 +1104,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             let pos = usize::from(o.info.position);
             last.position = o.info.position;
             last.al_state = self.al_states.get(pos).copied().unwrap_or(0);
-            if good && let Ok(sd) = self.group.subdevice(self.md, pos) {
-                let img = sd.io_raw();
-                let inp = img.inputs();
+            if good {
+                let inp = self.image.inputs(pos);
                 let n = inp.len().min(IO_TELEMETRY_BYTES);
                 last.inputs[..n].copy_from_slice(&inp[..n]);
                 last.input_len = n as u16;
@@ -906,7 +1134,14 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
 
     /// The run has ended: say so until the session publishes what comes next (a whole
     /// snapshot: the input buffer of the triple buffer holds an older one), and report.
-    fn finish(self, end: CycleEnd, rt: RtReport) -> CycleReport {
+    fn finish(mut self, end: CycleEnd, rt: RtReport) -> CycleReport {
+        self.batch.flush_all(&mut self.timing);
+        self.pump.capture(false);
+        if let OwnPath::On(own) = &mut self.own {
+            own.give_up();
+        }
+        // ethercrab's copy of the outputs as the cycle left them, for whatever comes next.
+        self.outputs_to_ethercrab();
         self.pump.record_logical(false);
         self.pump.set_drift_compensation(true);
         let t = self.telemetry.input_buffer_mut();
@@ -954,6 +1189,16 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             probe_latches: axes.iter().map(|a| a.m.latches().to_vec()).collect(),
             max_setpoint_step: axes.iter().map(|a| a.m.setpoint_steps()).collect(),
             states: axes.iter().map(|a| a.m.states().to_vec()).collect(),
+            frames_by: match (&self.own, self.not_learnt) {
+                (OwnPath::On(_), _) => FramesBy::Ecdrive,
+                (_, Some(why)) => FramesBy::Ethercrab { why },
+                _ if self.settings.own_frames => FramesBy::Ethercrab {
+                    why: "the run ended before the frames were learnt",
+                },
+                _ => FramesBy::Ethercrab {
+                    why: "the setting asked for ethercrab's",
+                },
+            },
             frames: {
                 let (now, then) = (self.pump.stats(), self.counts.pump_at_start);
                 FrameStats {

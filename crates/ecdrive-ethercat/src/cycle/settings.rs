@@ -48,6 +48,23 @@ pub struct CycleSettings {
     /// When the cycle's frame goes out and when its reply is read. [`ReplyWait::NextWake`]
     /// by default.
     pub reply_wait: ReplyWait,
+    /// Carry the process image in frames ecdrive builds itself, learnt from the frames
+    /// ethercrab's `tx_rx_dc` sends in the first cycle (the same datagrams on the wire, without
+    /// ethercrab's PDU machinery in the cycle; `cycle::frames`). On by default; off: ethercrab's
+    /// `tx_rx_dc` every cycle. See [`CycleReport::frames_by`].
+    pub own_frames: bool,
+}
+
+/// Whose frames carried the process image in a run (see [`CycleSettings::own_frames`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FramesBy {
+    /// ecdrive's own, learnt from ethercrab's first.
+    Ecdrive,
+    /// ethercrab's `tx_rx_dc`, and why.
+    Ethercrab {
+        /// Why not ecdrive's.
+        why: &'static str,
+    },
 }
 
 /// When the cycle's frame goes out and when its reply is read (see
@@ -91,6 +108,7 @@ impl CycleSettings {
             steady_timing_only: false,
             drift_compensation: true,
             reply_wait: ReplyWait::NextWake,
+            own_frames: true,
         }
     }
 }
@@ -286,6 +304,8 @@ pub struct CycleReport {
     pub max_setpoint_step: Vec<SetpointSteps>,
     /// Per axis: the states it went through, in order (consecutive duplicates removed).
     pub states: Vec<Vec<State>>,
+    /// Whose frames carried the process image.
+    pub frames_by: FramesBy,
     /// The frames of the run (the IgH `master` command's figures).
     pub frames: FrameStats,
 }

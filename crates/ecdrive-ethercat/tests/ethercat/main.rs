@@ -18,4 +18,5 @@ mod master_cycle_generic;
 mod master_drives;
 mod master_segment_lost;
 mod master_veth;
+mod own_frames;
 mod scale;

@@ -245,6 +245,13 @@ fn run<L: FrameLink + Send + 'static>(link: L, drives: usize, cycle: Duration) -
     assert!(t.sii_ms > 0.0 && t.sii_ms <= t.discovery_ms, "{t:?}");
     assert!(t.coe_ms > 0.0 && t.image_ms > 0.0 && op > 0.0, "{t:?}");
     assert_eq!(r.cycle.as_ref().unwrap().end, CycleEnd::Stopped);
+    // The image went out in ecdrive's own frames, learnt from ethercrab's (several at this
+    // size: the learning takes every chunk and every AL-status read).
+    assert_eq!(
+        r.cycle.as_ref().unwrap().frames_by,
+        ecdrive_ethercat::FramesBy::Ecdrive,
+        "{drives} drives"
+    );
     for (i, states) in r.cycle.as_ref().unwrap().states.iter().enumerate() {
         assert!(
             states.contains(&State::OperationEnabled),
