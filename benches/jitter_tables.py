@@ -86,6 +86,47 @@ def drives_table(reports):
     return "\n".join(out)
 
 
+PARTS = [
+    ("part_receive_ns", "receive"),
+    ("part_receive_link_ns", "of which the link"),
+    ("part_engine_ns", "engine"),
+    ("part_supervision_ns", "supervision"),
+    ("part_telemetry_ns", "telemetry"),
+    ("part_send_ns", "send"),
+    ("part_send_link_ns", "of which the link"),
+    ("part_sleep_and_wake_ns", "sleep and wake-up"),
+]
+
+
+def parts_table(reports):
+    """ecdrive's cycle thread by part, µs per cycle, median [min–max] over the repetitions
+    (the harness's `part_*` figures), with the thread's whole CPU figure and SOEM's loop."""
+    out = [
+        "| cycle | " + " | ".join(label for _, label in PARTS) + " | cycle thread | SOEM's loop |",
+        "|---|" + "---|" * (len(PARTS) + 2),
+    ]
+    for c, r in reports:
+        runs = r["summary"]["runs"]
+        e = runs.get("ecdrive") or {}
+        if not any(e.get(k) for k, _ in PARTS):
+            continue
+        thread = [
+            rep["ecdrive"]["cpu"].get("cycle_thread_ns")
+            for rep in r["repetitions"]
+            if rep.get("ecdrive") and rep["ecdrive"]["cpu"].get("cycle_thread_ns") is not None
+        ]
+        th = None
+        if thread:
+            v = sorted(thread)
+            th = {"values": thread, "median": v[len(v) // 2] if len(v) % 2 else (v[len(v) // 2 - 1] + v[len(v) // 2]) / 2, "min": v[0], "max": v[-1]}
+        soem = (runs.get("soem") or {}).get("cpu_master_ns")
+        out.append(
+            f"| {c} µs | " + " | ".join(spread(e.get(k)) for k, _ in PARTS)
+            + f" | {spread(th)} | {spread(soem)} |"
+        )
+    return "\n".join(out)
+
+
 def main():
     d = sys.argv[1]
     commit_file = os.path.join(d, "commit.txt")
@@ -125,6 +166,9 @@ def main():
         print(table(reports))
         print()
         if key == "veth":
+            print("ecdrive's cycle thread by part (µs per cycle; see above):\n")
+            print(parts_table(reports))
+            print()
             print("At the drives (the emulated slave controllers' own records):\n")
             print(drives_table(reports))
             print()

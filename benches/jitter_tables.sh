@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The jitter tables of docs/guide/jitter.md, regenerated: `ecdrive jitter` over veth (the headline, with SOEM
 # when benches/soem/build.sh can build its loop), in-process, and over veth with --stress, at
-# 1000, 500, 250 and 125 µs. Root, from the repository root, after `cargo build --release`.
+# 1000, 500, 250 and 125 µs. Root, from the repository root, after `cargo build --profile rt`
+# (the deployment build: fat LTO, one codegen unit; Cargo.toml).
 #
 #   benches/jitter_tables.sh [OUT_DIR]          (default target/jitter-tables)
 #
@@ -16,9 +17,9 @@ REPEAT=${REPEAT:-5}
 SECS=${SECS:-10}
 VREPEAT=${VREPEAT:-3}
 VSECS=${VSECS:-5}
-ECDRIVE=./target/release/ecdrive
+ECDRIVE=./target/rt/ecdrive
 [ "$(id -u)" = 0 ] || { echo "jitter_tables.sh: needs root (veth, SCHED_FIFO)" >&2; exit 2; }
-[ -x "$ECDRIVE" ] || { echo "jitter_tables.sh: build first: cargo build --release" >&2; exit 2; }
+[ -x "$ECDRIVE" ] || { echo "jitter_tables.sh: build first: cargo build --profile rt" >&2; exit 2; }
 mkdir -p "$OUT"
 commit="$(git rev-parse --short HEAD)"
 if [ -n "$(git status --porcelain --untracked-files=no)" ]; then

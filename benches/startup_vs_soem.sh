@@ -21,7 +21,7 @@
 #           its --json (discovery with the SII, CoE configuration including the PDO remap, the
 #           process image, DC settle, SAFE-OP, OP) and the frames each phase sent, measured
 #           inside the process.
-# Needs root, a release build (`cargo build --release`) and pysoem (PYTHON names the
+# Needs root, the deployment build (`cargo build --profile rt`: fat LTO, one codegen unit) and pysoem (PYTHON names the
 # interpreter that has it; `.ci/run` installs one in target/pysoem-venv). Without pysoem the
 # SOEM column is skipped with a message.
 set -euo pipefail
@@ -30,13 +30,13 @@ n="${1:-2}"
 rounds="${2:-5}"
 cycle_ms="${CYCLE_MS:-1}"
 answer="${ANSWER_REREADS:-true}"
-e=target/release/ecdrive
+e=target/rt/ecdrive
 py="${PYTHON:-python3}"
 [ -x "$py" ] || command -v "$py" >/dev/null || py=python3
 if [ -x target/pysoem-venv/bin/python3 ] && [ -z "${PYTHON:-}" ]; then py=target/pysoem-venv/bin/python3; fi
 soem=1
 "$py" -c "import pysoem" 2>/dev/null || { echo "pysoem not found ($py): SOEM skipped" >&2; soem=0; }
-[ -x "$e" ] || { echo "build first: cargo build --release" >&2; exit 1; }
+[ -x "$e" ] || { echo "build first: cargo build --profile rt" >&2; exit 1; }
 
 work=$(mktemp -d)
 ns=ecdrive-su

@@ -248,6 +248,9 @@ pub struct Pump<'sto, L: FrameLink> {
     capture: Capture,
     /// Set by ethercrab when it queues a frame, while watched (see [`Pump::watch_queue`]).
     queued: Option<Arc<QueuedFlag>>,
+    /// The frames ecdrive builds itself, by length and first datagram (command and address):
+    /// a late reply to one is dropped, never handed to ethercrab (see [`Pump::own_frames`]).
+    own_shapes: Vec<(usize, [u8; 5])>,
 }
 
 /// ethercrab's sender waker, as a flag: ethercrab wakes it after it queued a frame.
@@ -327,7 +330,29 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             answer_buf: Box::new([0u8; MAX_FRAME]),
             capture: Capture::default(),
             queued: None,
+            own_shapes: Vec::new(),
         }
+    }
+
+    /// The frames ecdrive builds itself from now on, each by its length and its first
+    /// datagram's command and address (empty: none). A reply of that shape that reaches the
+    /// pump outside [`receive_own`](Self::receive_own) — late, after its cycle gave it up, or
+    /// after the cycle ended — is counted stale and dropped: its first index is ecdrive's
+    /// sequence number, which ethercrab's own frames may use too, and ethercrab would take it
+    /// for theirs. Kept until replaced (a new cycle clears it before ethercrab's frames of the
+    /// same shape go out again).
+    pub fn own_frames(&mut self, shapes: &[(usize, [u8; 5])]) {
+        self.own_shapes.clear();
+        self.own_shapes.extend_from_slice(shapes);
+    }
+
+    fn is_own_shape(&self, frame: &[u8]) -> bool {
+        let at = FIRST_IDX_OFFSET;
+        self.own_shapes.iter().any(|(len, first)| {
+            frame.len() == *len
+                && frame.get(at - 1) == first.first()
+                && frame.get(at + 1..at + 5) == first.get(1..)
+        })
     }
 
     /// Have ethercrab say when it queues a frame (its sender waker sets a flag), so that
@@ -759,6 +784,10 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
             self.stats.rejected += 1;
             return false;
         };
+        if !self.own_shapes.is_empty() && self.is_own_shape(frame) {
+            self.stats.stale += 1;
+            return false;
+        }
         let slot = self
             .inflight
             .iter()

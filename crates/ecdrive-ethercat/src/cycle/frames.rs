@@ -313,6 +313,17 @@ impl OwnFrames {
         {
             return Err("the image does not sit where the FMMUs put it");
         }
+        // The system time goes out as the drift compensation has it (see `send`).
+        let cmd = if drift_compensation {
+            Command::Frmw
+        } else {
+            Command::Fprd
+        } as u8;
+        for f in frames.iter_mut() {
+            if matches!(f.parts.first(), Some(Part::SystemTime { .. })) {
+                f.first[0] = cmd;
+            }
+        }
         Ok(Self {
             frames,
             states: vec![0; addresses.len()],
@@ -340,6 +351,15 @@ impl OwnFrames {
             Some(Command::Fprd) => ado == AL_STATUS && len == 2,
             _ => false,
         }
+    }
+
+    /// Each frame's length and first datagram (command and address), for
+    /// [`Pump::own_frames`].
+    pub(crate) fn shapes(&self) -> Vec<(usize, [u8; 5])> {
+        self.frames
+            .iter()
+            .map(|f| (f.bytes.len(), f.first))
+            .collect()
     }
 
     /// Whether frames are out whose replies have not been read.

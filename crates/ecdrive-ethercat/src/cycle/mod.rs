@@ -48,7 +48,10 @@ pub mod audit;
 mod axes;
 mod bus;
 mod frames;
+mod publish;
+mod schedule;
 mod settings;
+mod timing;
 
 use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
@@ -58,6 +61,7 @@ pub use settings::{
     CycleEnd, CycleHooks, CycleIo, CycleParts, CycleReport, CycleSettings, FrameStats, FramesBy,
     ReplyWait, SupervisorIo, Timing, channels,
 };
+use timing::{Lap, TimingBatch};
 
 /// Where the drives stand on the way to OP.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -124,86 +128,6 @@ impl EventSink for Emitter<'_> {
     }
 }
 
-/// The timing values of the last cycles, folded into the [`Timing`] histograms a batch at a
-/// time: recording a value into a histogram touches its counts far apart (and, after the
-/// sleep, cold), a batch's values sit together.
-#[derive(Clone, Copy)]
-struct TimingBatch {
-    /// wake latency, period, exchange, busy.
-    values: [[u64; TIMING_BATCH]; 4],
-    n: [usize; 4],
-}
-
-const TIMING_BATCH: usize = 64;
-
-impl Default for TimingBatch {
-    fn default() -> Self {
-        Self {
-            values: [[0; TIMING_BATCH]; 4],
-            n: [0; 4],
-        }
-    }
-}
-
-impl TimingBatch {
-    const WAKE: usize = 0;
-    const PERIOD: usize = 1;
-    const EXCHANGE: usize = 2;
-    const BUSY: usize = 3;
-
-    fn histogram(t: &mut Timing, which: usize) -> &mut LatencyHistogram {
-        match which {
-            Self::WAKE => &mut t.wake_latency,
-            Self::PERIOD => &mut t.period,
-            Self::EXCHANGE => &mut t.exchange,
-            _ => &mut t.busy,
-        }
-    }
-
-    fn record(&mut self, t: &mut Timing, which: usize, ns: u64) {
-        let n = self.n[which];
-        self.values[which][n] = ns;
-        self.n[which] = n + 1;
-        if n + 1 == TIMING_BATCH {
-            self.flush(t, which);
-        }
-    }
-
-    fn flush(&mut self, t: &mut Timing, which: usize) {
-        let h = Self::histogram(t, which);
-        for &v in &self.values[which][..self.n[which]] {
-            h.record(v);
-        }
-        self.n[which] = 0;
-    }
-
-    fn flush_all(&mut self, t: &mut Timing) {
-        for which in 0..4 {
-            self.flush(t, which);
-        }
-    }
-}
-
-/// The cycle's stopwatch: the time since the last lap, and the pump's counters when the cycle
-/// woke.
-struct Lap {
-    last: u64,
-    stats: crate::io::PumpStats,
-}
-
-impl Lap {
-    fn new(woke: u64, stats: crate::io::PumpStats) -> Self {
-        Self { last: woke, stats }
-    }
-
-    fn lap(&mut self) -> u64 {
-        let now = monotonic_ns();
-        let d = now.saturating_sub(self.last);
-        self.last = now;
-        d
-    }
-}
-
 /// How the exchange of one cycle's frame went.
 enum FrameOutcome {
     /// A reply came.
@@ -247,8 +171,8 @@ struct Clock {
     /// reading of the reply at the wake-up ([`ReplyWait::NextWake`]).
     t_ex: u64,
     t_ex_done: u64,
-    /// The DC-aligned instant after the frame whose reply came, when the reference clock
-    /// answered.
+    /// A point of the SYNC0 grid (SYNC0 plus the shift) from the reply that came, when the
+    /// reference clock answered: the phase [`schedule`] keeps the cycle on.
     next_at: Option<u64>,
     /// The last frame could not be sent (no frame slot): its cycle counts as lost.
     unsent: bool,
@@ -396,6 +320,35 @@ pub fn run<L: FrameLink>(
     c.finish(end, rt)
 }
 
+/// The cycle's process image at the start of a run: what ethercrab's copy holds, then every
+/// axis's initial outputs.
+fn first_image(md: &MainDevice<'_>, group: &Group<SafeOp, HasDc>, axes: &[CycleDrive]) -> Image {
+    let n = group.len();
+    let sizes: Vec<(usize, usize)> = (0..n)
+        .map(|p| {
+            group.subdevice(md, p).map_or((0, 0), |sd| {
+                let io = sd.io_raw();
+                (io.inputs().len(), io.outputs().len())
+            })
+        })
+        .collect();
+    let mut image = Image::new(&sizes);
+    for p in 0..n {
+        if let Ok(sd) = group.subdevice(md, p) {
+            let io = sd.io_raw();
+            image.set_inputs(p, io.inputs());
+            let (_, out) = image.io_mut(p);
+            if out.len() == io.outputs().len() {
+                out.copy_from_slice(io.outputs());
+            }
+        }
+    }
+    for a in axes {
+        a.initial_outputs(image.io_mut(a.sub).1);
+    }
+    image
+}
+
 /// The reply of one cycle's frame, as ethercrab gives it.
 type Reply = Result<
     ethercrab::subdevice_group::TxRxResponse<{ crate::bus::MAX_SUBDEVICES }, CycleInfo>,
@@ -427,28 +380,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             .map(app_view)
             .collect();
         let n_devices = group.len();
-        let sizes: Vec<(usize, usize)> = (0..n_devices)
-            .map(|p| {
-                group.subdevice(md, p).map_or((0, 0), |sd| {
-                    let io = sd.io_raw();
-                    (io.inputs().len(), io.outputs().len())
-                })
-            })
-            .collect();
-        let mut image = Image::new(&sizes);
-        for p in 0..n_devices {
-            if let Ok(sd) = group.subdevice(md, p) {
-                let io = sd.io_raw();
-                image.set_inputs(p, io.inputs());
-                let (_, out) = image.io_mut(p);
-                if out.len() == io.outputs().len() {
-                    out.copy_from_slice(io.outputs());
-                }
-            }
-        }
-        for a in &axes {
-            a.initial_outputs(image.io_mut(a.sub).1);
-        }
+        let image = first_image(md, group, &axes);
         let CycleIo {
             commands,
             events,
@@ -496,6 +428,8 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         let fmmus: Vec<(u16, crate::ec::register::FmmuConfig)> =
             pump.fmmu_configs().map(|(st, _, c)| (st, c)).collect();
         pump.record_logical(wkc_plan.is_some());
+        // ethercrab's frames of the shape the last run's own had go out again (learning).
+        pump.own_frames(&[]);
         pump.set_drift_compensation(settings.drift_compensation);
         let cycles = |d: Duration| d.as_nanos() as u64 / cycle_ns;
         let pump_at_start = pump.stats();
@@ -877,6 +811,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         self.own = match learnt {
             Ok(f) => {
                 self.pump.watch_queue();
+                self.pump.own_frames(&f.shapes());
                 OwnPath::On(f)
             }
             Err(_) if tries > 1 => OwnPath::Learning { tries: tries - 1 },
@@ -1045,172 +980,11 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
     }
 
-    /// Publish the telemetry: the cycle, every axis, every I/O device.
-    /// One sample per axis into the recording, if there is one (a full ring drops and counts).
-    fn record_samples(&mut self) {
-        let Some(r) = self.record.as_deref_mut() else {
-            return;
-        };
-        let c = &self.clock;
-        let (latency, exchange) = (
-            u32::try_from(c.latency).unwrap_or(u32::MAX),
-            u32::try_from(c.t_ex_done.saturating_sub(c.t_ex)).unwrap_or(u32::MAX),
-        );
-        for (i, a) in self.axes.iter_mut().enumerate() {
-            let judged = a.m.take_fe_judged();
-            let t = a.m.telemetry();
-            r.push(CycleSample {
-                wake_latency_ns: latency,
-                exchange_ns: exchange,
-                wkc: self.counts.last_wkc,
-                ..CycleSample::of_axis(c.cycle, c.woke, i as u16, t, judged)
-            });
-        }
-    }
-
-    fn publish(&mut self, good: bool) {
-        let c = &self.clock;
-        let t = self.telemetry.input_buffer_mut();
-        t.cycle = CycleTelemetry {
-            cycle: c.cycle,
-            dc_time: c.dc_time,
-            wkc: self.counts.last_wkc,
-            wkc_expected: self.counts.last_wkc_expected,
-            lost: self.counts.lost_total,
-            overruns: self.counts.overruns,
-            wake_latency_ns: c.latency,
-            exchange_ns: c.t_ex_done - c.t_ex,
-            busy_ns: monotonic_ns() - c.woke,
-            all_op: self.op == OpState::AllOp,
-            lost_in_a_row: self.counts.consecutive_lost,
-            phase: if matches!(self.phase, RunPhase::Ending { .. }) {
-                Phase::Stopping
-            } else {
-                Phase::Cycling
-            },
-            restarts: *self.restarts,
-        };
-        self.last_telemetry = t.cycle;
-        for (slot, a) in t.axes.iter_mut().zip(self.axes.iter()) {
-            *slot = *a.m.telemetry();
-        }
-        // Every field of every slot each time: the triple buffer hands out three buffers in
-        // turn.
-        let slots =
-            t.io.iter_mut()
-                .zip(self.io_last.iter_mut())
-                .zip(self.others);
-        for ((slot, last), o) in slots {
-            let pos = usize::from(o.info.position);
-            last.position = o.info.position;
-            last.al_state = self.al_states.get(pos).copied().unwrap_or(0);
-            if good {
-                let inp = self.image.inputs(pos);
-                let n = inp.len().min(IO_TELEMETRY_BYTES);
-                last.inputs[..n].copy_from_slice(&inp[..n]);
-                last.input_len = n as u16;
-            }
-            *slot = *last;
-        }
-        self.telemetry.publish();
-    }
-
-    /// The next instant: DC-aligned when the reference clock answered, else one cycle on.
+    /// The next instant: one after this cycle's on the SYNC0 grid when the reference clock
+    /// answered, else one cycle on; missed instants are skipped ([`schedule`]).
     fn schedule_next(&mut self) {
-        let cycle_ns = self.consts.cycle_ns;
         let c = &mut self.clock;
-        c.next_wake = match c.next_at {
-            // The instant after the frame whose reply this was; with the reply read a cycle
-            // after its frame went out, that instant is this cycle's: the next is one on.
-            Some(at) if self.settings.reply_wait == ReplyWait::NextWake => at + cycle_ns,
-            Some(at) => at,
-            None => c.next_wake + cycle_ns,
-        };
-        if c.next_wake <= monotonic_ns() {
-            // Overrun: skip to the next instant rather than running back-to-back cycles.
-            c.next_wake = monotonic_ns() + self.consts.cycle_ns / 2;
-        }
-    }
-
-    /// The run has ended: say so until the session publishes what comes next (a whole
-    /// snapshot: the input buffer of the triple buffer holds an older one), and report.
-    fn finish(mut self, end: CycleEnd, rt: RtReport) -> CycleReport {
-        self.batch.flush_all(&mut self.timing);
-        self.pump.capture(false);
-        if let OwnPath::On(own) = &mut self.own {
-            own.give_up();
-        }
-        // ethercrab's copy of the outputs as the cycle left them, for whatever comes next.
-        self.outputs_to_ethercrab();
-        self.pump.record_logical(false);
-        self.pump.set_drift_compensation(true);
-        let t = self.telemetry.input_buffer_mut();
-        t.cycle = CycleTelemetry {
-            phase: Phase::Stopping,
-            ..self.last_telemetry
-        };
-        for (slot, a) in t.axes.iter_mut().zip(self.axes.iter()) {
-            *slot = *a.m.telemetry();
-        }
-        self.telemetry.publish();
-        if let Some(h) = self.hooks
-            && self.steady
-        {
-            h.steady_end();
-        }
-        let axes = &self.axes;
-        CycleReport {
-            end,
-            cycles: self.clock.cycle,
-            lost: self.counts.recorded_lost,
-            overruns: self.counts.recorded_overruns,
-            timing: self.timing,
-            rt,
-            first_stop: self.ev.first_stop,
-            max_following_error: axes
-                .iter()
-                .map(|a| a.m.telemetry().max_following_error)
-                .collect(),
-            max_following_error_drive: axes
-                .iter()
-                .map(|a| {
-                    a.fields
-                        .axis
-                        .following_error
-                        .map(|_| a.m.telemetry().max_following_error_drive)
-                })
-                .collect(),
-            following_error_drive_stuck: axes
-                .iter()
-                .map(|a| a.m.telemetry().following_error_drive_stuck)
-                .collect(),
-            modes_run: axes.iter().map(|a| a.m.modes_run().to_vec()).collect(),
-            modes_omitted: axes.iter().map(|a| a.m.modes_omitted()).collect(),
-            probe_latches: axes.iter().map(|a| a.m.latches().to_vec()).collect(),
-            max_setpoint_step: axes.iter().map(|a| a.m.setpoint_steps()).collect(),
-            states: axes.iter().map(|a| a.m.states().to_vec()).collect(),
-            frames_by: match (&self.own, self.not_learnt) {
-                (OwnPath::On(_), _) => FramesBy::Ecdrive,
-                (_, Some(why)) => FramesBy::Ethercrab { why },
-                _ if self.settings.own_frames => FramesBy::Ethercrab {
-                    why: "the run ended before the frames were learnt",
-                },
-                _ => FramesBy::Ethercrab {
-                    why: "the setting asked for ethercrab's",
-                },
-            },
-            frames: {
-                let (now, then) = (self.pump.stats(), self.counts.pump_at_start);
-                FrameStats {
-                    sent: now.sent - then.sent,
-                    answered: now.received - then.received,
-                    retransmitted: now.retransmitted - then.retransmitted,
-                    lost: self.counts.lost_total,
-                    late: self.counts.late_total,
-                    wrong_wkc: self.counts.wkc_wrong_total,
-                    seconds: self.clock.cycle as f64 * self.consts.dt,
-                }
-            },
-        }
+        c.next_wake =
+            schedule::next_instant(c.next_wake, c.next_at, self.consts.cycle_ns, monotonic_ns());
     }
 }

@@ -666,7 +666,6 @@ fn refused(h: &HistoryEntry, what: &str) -> bool {
 /// outputs. (A schedule that took the grid point from the reply alone woke twice in one SYNC0
 /// period and not at all in the next with a shift under half a cycle: half the cycles.)
 #[test]
-#[ignore = "known bug, open in issue 40: with the reply read at the next wake-up, a dc_shift under half a cycle makes the cycle wake twice in one SYNC0 period and not in the next (406 of 812 SYNC0 cycles without fresh outputs at 100 µs); the grid schedule that fixed it made the 128-drive in-process scale test lose the segment in 4 of 8 runs and was taken back"]
 fn every_dc_shift_gives_each_sync0_its_frame() {
     for shift_us in [100, 500, 850] {
         let mut cfg = config(SetpointLimits::default());
