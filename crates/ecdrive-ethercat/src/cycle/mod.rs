@@ -2,12 +2,14 @@
 //! exchange, one CiA 402 step per axis, every cycle.
 //!
 //! Per cycle: sleep until the instant (`clock_nanosleep`, absolute), read the reply of the frame
-//! sent at the end of the cycle before (`tx_rx_dc`, pumped inline by [`exec::exchange`]: the
-//! frame I/O is this thread's own), check the working counter and every drive's AL state, read
+//! sent at the end of the cycle before (the cycle's own frames, learnt from ethercrab's
+//! `tx_rx_dc` in the first cycle, `cycle/frames.rs`; or `tx_rx_dc` itself, pumped inline by
+//! [`exec::exchange`]: either way the frame I/O is this thread's own), check the working
+//! counter and every drive's AL state, read
 //! each drive's inputs through its resolved fields, take commands, step each axis of the motion
 //! runtime ([`ecdrive_motion::MotionAxis`]: the program, homing, the profile modes, the probes,
 //! the stops and the CiA 402 engine), write the outputs, publish telemetry and events, send the
-//! frame with the new outputs ([`exec::start`]), sleep: the frame flies while the thread sleeps,
+//! frame with the new outputs, sleep: the frame flies while the thread sleeps,
 //! one wake-up per cycle ([`ReplyWait::NextWake`]; [`ReplyWait::InCycle`] sends at the wake-up
 //! and waits for the reply instead). After start-up nothing here allocates, locks
 //! anything another thread takes, or makes a syscall other than the frame I/O and the sleep —
