@@ -434,17 +434,8 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         ours: impl Fn(&[u8]) -> Option<bool>,
     ) -> Result<Option<usize>, LinkError> {
         loop {
-            let t0 = monotonic_ns();
-            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
-            let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
-            self.stats.link_recv_ns += monotonic_ns() - t0;
-            let got = match got {
-                Ok(Some(len)) => len,
-                Ok(None) => return Ok(None),
-                Err(e) => {
-                    self.link_error = Some(e.to_string());
-                    return Err(e);
-                }
+            let Some(got) = self.recv_timed(deadline_ns)? else {
+                return Ok(None);
             };
             let frame = self.rx_buf.get(..got).unwrap_or(&[]);
             match ours(frame) {
@@ -740,22 +731,23 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
         Ok(n)
     }
 
+    /// One frame from the link into `rx_buf`, waiting until `deadline_ns`; its length, or
+    /// `None` when none came. The time inside the link is counted; a link error is kept.
+    fn recv_timed(&mut self, deadline_ns: u64) -> Result<Option<usize>, LinkError> {
+        let t0 = monotonic_ns();
+        let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
+        let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
+        self.stats.link_recv_ns += monotonic_ns() - t0;
+        got.inspect_err(|e| self.link_error = Some(e.to_string()))
+    }
+
     /// Receive replies until nothing is outstanding or `deadline_ns` passes, handing each to
     /// ethercrab. Returns the number of replies handed over.
     pub fn receive_until(&mut self, deadline_ns: u64) -> Result<usize, LinkError> {
         let mut n = 0;
         while self.outstanding() > 0 {
-            let t0 = monotonic_ns();
-            let timeout = Duration::from_nanos(deadline_ns.saturating_sub(t0));
-            let got = self.link.recv(&mut self.rx_buf[..], Some(timeout));
-            self.stats.link_recv_ns += monotonic_ns() - t0;
-            let got = match got {
-                Ok(Some(len)) => len,
-                Ok(None) => break,
-                Err(e) => {
-                    self.link_error = Some(e.to_string());
-                    return Err(e);
-                }
+            let Some(got) = self.recv_timed(deadline_ns)? else {
+                break;
             };
             if self.accept(got) {
                 n += 1;
