@@ -34,7 +34,14 @@ ifname, mode = sys.argv[1], sys.argv[2]
 reads = json.loads(sys.argv[3])  # [[index, sub], ...]
 out = {"errors": []}
 link = kickcat.create_link(ifname, "")
-link.set_timeout(0.01)
+# A frame's reply within 30 ms. KickCAT fails its whole init on one late reply (its EEPROM
+# ready check turns a link timeout into "Timeout"), and the emulated segment answers from a
+# thread that a loaded two-core CI host has held off for more than 10 ms. Not longer: without
+# a redundant interface KickCAT waits out the whole timeout after every broadcast (it listens
+# for the frame's return on the other port), several hundred times in init, and once more at the
+# OP request, a pause in the cyclic data: with 100 ms, init took 50 s and the MR-J4-TM's OP
+# request ended in an AL error.
+link.set_timeout(0.03)
 bus = kickcat.Bus(link)
 bus.init(0.1)
 slaves = bus.slaves()
