@@ -43,7 +43,9 @@ pub struct MasterConfig {
     /// Bus timing.
     pub bus: BusOptions,
     /// Poll every drive's mailbox for emergencies this often while the cycle runs (`None`:
-    /// never).
+    /// never). With the cycle's own frames ([`CycleSettings::own_frames`]) a poll reads the
+    /// mailboxes only when the cycle's broadcast read of SM1's status said that one holds
+    /// something (or could not say); with ethercrab's, every time.
     pub emergency_poll: Option<Duration>,
     /// Instrumentation hooks on the cycle thread.
     pub hooks: Option<Arc<dyn CycleHooks + Send>>,
@@ -1311,6 +1313,7 @@ fn run<L: FrameLink + Send>(
     let others = &started.io;
     let group = &started.group;
     let mut mailboxes = mailboxes_of(&started, resolver, log.clone(), cfg.bus.mailbox_timeout);
+    let mail = cycle_io.mail.clone();
     let (md, pump) = bus.split();
     let report = std::thread::scope(|s| {
         let h = std::thread::Builder::new()
@@ -1369,8 +1372,13 @@ fn run<L: FrameLink + Send>(
                 && monotonic_ns() >= next_poll
             {
                 next_poll = monotonic_ns() + every.as_nanos() as u64;
-                mailboxes.poll(md, &|| h.is_finished());
-                drain_emcy(&mut seen_emcy);
+                // Only when a mailbox may hold something: the cycle's own frames read every
+                // device's SM1 status (issue 40: a poll of every drive costs the cycle
+                // frames and the session wake-ups, every period).
+                if mail.may_hold_mail() {
+                    mailboxes.poll(md, &|| h.is_finished());
+                    drain_emcy(&mut seen_emcy);
+                }
             }
             // Sleeps until the next look, or until the application asks for an SDO.
             let pause = session_pause(idle, cfg.emergency_poll, next_poll);

@@ -15,15 +15,60 @@
 //! between. Learning checks each device's part of the image against the FMMUs the master
 //! configured, and every device's AL-status datagram; when anything does not match, the cycle
 //! stays on ethercrab's path.
+//!
+//! To the last frame the cycle adds one datagram of its own, where it fits: a broadcast read
+//! (BRD) of SM1's status byte (0x080D), which every device ORs its own into. Its "mailbox full"
+//! bit says whether any device has something waiting in its mailbox (SM1 is the mailbox
+//! SyncManager from the device to the master, ETG.2000); the session thread reads the drives'
+//! mailboxes for emergencies only when it is set, or when the cycle cannot say
+//! ([`MailWatch`]).
 
 use crate::ec::Command;
 use crate::ec::frame::{
     DATAGRAM_HEADER_LEN, ECAT_HEADER_LEN, ETHERNET_HEADER_LEN, MAC_LOCAL_BIT, WKC_LEN,
 };
-use crate::ec::register::FmmuConfig;
+use crate::ec::register::{self, FmmuConfig};
 use crate::io::{FrameLink, LogicalSeen, MAX_FRAME, Pump};
 use crate::link::LinkError;
 use core::ops::Range;
+use std::sync::atomic::{AtomicU8, Ordering};
+
+/// SM1's status byte (0x080D), read by broadcast: every device ORs its own in.
+const SM1_STATUS: u16 = register::sm(1) + register::SM_STATUS_OFFSET;
+/// The status byte's "mailbox full" bit (bit 3, a SyncManager in mailbox mode).
+const MAILBOX_FULL: u8 = 0x08;
+
+/// What the cycle last saw of the devices' mailboxes (SM1's "mailbox full" bit, ORed over the
+/// segment by a broadcast read in the cycle's own frames), for the session thread: it reads the
+/// drives' mailboxes only when one may hold something. Written by the cycle every answered
+/// cycle, read by the session; one byte, no lock.
+#[derive(Debug, Default)]
+pub struct MailWatch(AtomicU8);
+
+impl MailWatch {
+    /// The cycle cannot say (ethercrab's frames, no reply, the cycle not running): look.
+    const UNKNOWN: u8 = 0;
+    /// No device's mailbox holds anything.
+    const EMPTY: u8 = 1;
+    /// Some device's mailbox holds something.
+    const WAITING: u8 = 2;
+
+    /// Record what a reply said (`None`: nothing to go by).
+    pub(crate) fn set(&self, full: Option<bool>) {
+        let v = match full {
+            None => Self::UNKNOWN,
+            Some(false) => Self::EMPTY,
+            Some(true) => Self::WAITING,
+        };
+        self.0.store(v, Ordering::Relaxed);
+    }
+
+    /// Whether a device's mailbox may hold something: the last reply said so, or the cycle
+    /// could not say.
+    pub fn may_hold_mail(&self) -> bool {
+        self.0.load(Ordering::Relaxed) != Self::EMPTY
+    }
+}
 
 /// The DC system time register (the reference clock's time, 8 bytes).
 const SYSTEM_TIME: u16 = 0x0910;
@@ -157,6 +202,9 @@ enum Part {
     },
     /// A device's AL status: the data offset, its position.
     AlStatus { data: usize, position: usize },
+    /// SM1's status ORed over every device (ecdrive's own, not learnt): the data offset and
+    /// the working counter's.
+    MailFull { data: usize, wkc: usize },
 }
 
 /// One frame of the cycle, as learnt.
@@ -172,6 +220,74 @@ struct Frame {
     answered: bool,
 }
 
+impl Frame {
+    /// Append the broadcast read of SM1's status after the last datagram, when the frame has
+    /// room for it (else the cycle does without, and the session polls as without own frames).
+    fn add_mail_check(&mut self) {
+        let Some(end) = self.parts.iter().map(Part::end).max() else {
+            return;
+        };
+        let added = DATAGRAM_HEADER_LEN + 1 + WKC_LEN;
+        let header = ETHERNET_HEADER_LEN;
+        let (Some(ecat), Some(last_len_at)) = (u16_at(&self.bytes, header), self.last_len_at())
+        else {
+            return;
+        };
+        let datagrams = usize::from(ecat & 0x07FF) + added;
+        if end + added > MAX_FRAME || datagrams > 0x07FF {
+            return;
+        }
+        // ethercrab pads a short frame; the datagram goes before the padding.
+        let padded = self.bytes.len();
+        self.bytes.truncate(end);
+        if let Some(b) = self.bytes.get_mut(last_len_at + 1) {
+            *b |= 0x80; // More datagrams follow.
+        }
+        let ecat = (ecat & !0x07FF) | datagrams as u16;
+        self.bytes[header..header + 2].copy_from_slice(&ecat.to_le_bytes());
+        let at = self.bytes.len();
+        self.bytes.push(Command::Brd as u8);
+        self.bytes.push(0); // Index: not looked at.
+        self.bytes.extend_from_slice(&0u16.to_le_bytes()); // ADP.
+        self.bytes.extend_from_slice(&SM1_STATUS.to_le_bytes()); // ADO.
+        self.bytes.extend_from_slice(&1u16.to_le_bytes()); // Length 1, last datagram.
+        self.bytes.extend_from_slice(&0u16.to_le_bytes()); // IRQ.
+        self.bytes.push(0);
+        self.bytes.extend_from_slice(&0u16.to_le_bytes()); // Working counter.
+        if padded > self.bytes.len() {
+            self.bytes.resize(padded, 0);
+        }
+        let data = at + DATAGRAM_HEADER_LEN;
+        self.parts.push(Part::MailFull {
+            data,
+            wkc: data + 1,
+        });
+    }
+
+    /// Where the last datagram's length field is.
+    fn last_len_at(&self) -> Option<usize> {
+        let mut at = ETHERNET_HEADER_LEN + ECAT_HEADER_LEN;
+        loop {
+            let lf = u16_at(&self.bytes, at + 6)?;
+            if lf & 0x8000 == 0 {
+                return Some(at + 6);
+            }
+            at += DATAGRAM_HEADER_LEN + usize::from(lf & 0x07FF) + WKC_LEN;
+        }
+    }
+}
+
+impl Part {
+    /// Where the datagram this part reads ends (after its working counter).
+    fn end(&self) -> usize {
+        match self {
+            Part::SystemTime { data } => data + 8 + WKC_LEN,
+            Part::Image { wkc, .. } | Part::MailFull { wkc, .. } => wkc + WKC_LEN,
+            Part::AlStatus { data, .. } => data + 2 + WKC_LEN,
+        }
+    }
+}
+
 /// What the replies of one cycle's frames said.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct OwnReply {
@@ -179,6 +295,9 @@ pub(crate) struct OwnReply {
     pub wkc: u16,
     /// The reference clock's system time.
     pub dc_time: u64,
+    /// Whether any device's mailbox holds something (`None`: the frames do not ask, or no
+    /// device answered).
+    pub mail: Option<bool>,
 }
 
 /// How reading the replies went.
@@ -324,6 +443,9 @@ impl OwnFrames {
                 f.first[0] = cmd;
             }
         }
+        if let Some(last) = frames.last_mut() {
+            last.add_mail_check();
+        }
         Ok(Self {
             frames,
             states: vec![0; addresses.len()],
@@ -408,7 +530,7 @@ impl OwnFrames {
                             f.first[0] = cmd;
                         }
                     }
-                    Part::AlStatus { .. } => {}
+                    Part::AlStatus { .. } | Part::MailFull { .. } => {}
                 }
             }
             if let Some(i) = f.bytes.get_mut(f.index_at) {
@@ -502,6 +624,12 @@ impl OwnFrames {
                             *s = b & 0x0F;
                         }
                     }
+                    Part::MailFull { data, wkc } => {
+                        out.mail = match (r.get(*data), u16_at(r, *wkc)) {
+                            (Some(&b), Some(w)) if w > 0 => Some(b & MAILBOX_FULL != 0),
+                            _ => None,
+                        };
+                    }
                 }
             }
         }
@@ -594,8 +722,81 @@ mod tests {
                     data: lrw + 6 + 2 + 10 + 14,
                     position: 1,
                 },
+                // ecdrive's own: SM1's status by broadcast, after the last learnt datagram.
+                Part::MailFull {
+                    data: lrw + 6 + 2 + 10 + 14 + 14,
+                    wkc: lrw + 6 + 2 + 10 + 14 + 14 + 1,
+                },
             ]
         );
+    }
+
+    /// The datagrams of `frame`, read by the wire crate's own parser: command, ADP, ADO, data
+    /// length, whether more follow.
+    fn datagrams(frame: &[u8]) -> Vec<(Option<Command>, u16, u16, usize, bool)> {
+        let e = crate::ec::frame::EthercatFrame::new_checked(&frame[ETHERNET_HEADER_LEN..])
+            .expect("an EtherCAT frame");
+        let summary = e.check().expect("a valid datagram chain");
+        assert_eq!(
+            summary.used_len,
+            e.length(),
+            "header length = the datagrams'"
+        );
+        e.datagrams()
+            .map(|d| {
+                let d = d.expect("datagram");
+                (d.command(), d.adp(), d.ado(), d.data_len(), d.more())
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_mailbox_check_goes_after_the_last_datagram_and_before_any_padding() {
+        let img = Image::new(&[(2, 3), (1, 0)]);
+        let stations = [0x1001, 0x1002];
+        let plain = ethercrab_frame(None);
+        // The same frame padded to Ethernet's minimum and beyond, as a sender may pad it.
+        let mut padded = plain.clone();
+        padded.resize(plain.len() + 20, 0);
+        for sent in [plain.clone(), padded] {
+            let own = OwnFrames::learn([&sent[..]], &img, &stations, &fmmus(), true).unwrap();
+            let f = &own.frames[0].bytes;
+            assert_eq!(f.len(), (plain.len() + 13).max(sent.len()));
+            let d = datagrams(f);
+            assert_eq!(d.len(), 5);
+            assert_eq!(&d[..3].iter().map(|x| x.4).collect::<Vec<_>>(), &[true; 3]);
+            assert_eq!(d[3], (Some(Command::Fprd), 0x1002, AL_STATUS, 2, true));
+            assert_eq!(d[4], (Some(Command::Brd), 0, 0x080D, 1, false));
+            // The reply is told by its length: the shape the pump is given is the new one.
+            assert_eq!(own.shapes()[0].0, f.len());
+        }
+        // Padding to the largest frame is no content: the check still goes in.
+        let mut max = plain.clone();
+        max.resize(MAX_FRAME, 0);
+        let own = OwnFrames::learn([&max[..]], &img, &stations, &fmmus(), true).unwrap();
+        assert_eq!(datagrams(&own.frames[0].bytes).len(), 5);
+        // A frame whose datagrams leave no room goes without it, unchanged.
+        let n = MAX_FRAME - ETHERNET_HEADER_LEN - ECAT_HEADER_LEN - DATAGRAM_HEADER_LEN - WKC_LEN;
+        let mut buf = vec![0u8; MAX_FRAME];
+        let mut b = FrameBuilder::new(&mut buf, MacAddress([0x10; 6])).unwrap();
+        b.push(Command::Lrw, 1, 0x10000, &vec![0; n]).unwrap();
+        let len = b.finish();
+        let mut frame = Frame {
+            bytes: buf[..len].to_vec(),
+            parts: vec![Part::Image {
+                data: len - WKC_LEN - n,
+                pdi: 0..n,
+                wkc: len - WKC_LEN,
+                address: 0x10000,
+            }],
+            index_at: ETHERNET_HEADER_LEN + ECAT_HEADER_LEN + 1,
+            first: [0; 5],
+            answered: false,
+        };
+        let before = frame.bytes.clone();
+        frame.add_mail_check();
+        assert_eq!(frame.bytes, before);
+        assert_eq!(frame.parts.len(), 1);
     }
 
     #[test]

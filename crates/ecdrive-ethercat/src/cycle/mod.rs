@@ -58,6 +58,7 @@ mod timing;
 use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
+pub use frames::MailWatch;
 use frames::{Image, OwnFrames, OwnOutcome};
 pub use settings::{
     CycleEnd, CycleHooks, CycleIo, CycleParts, CycleReport, CycleSettings, FrameStats, FramesBy,
@@ -231,6 +232,8 @@ struct Cycle<'a, 'p, L: FrameLink> {
     telemetry: &'a mut triple_buffer::Input<Telemetry>,
     restarts: &'a mut u32,
     restarting: &'a mut bool,
+    /// What the last reply said of the devices' mailboxes, for the session thread.
+    mail: &'a frames::MailWatch,
     ev: Emitter<'a>,
     consts: RunConstants,
     /// The expected working counter of each logical datagram, from the FMMU configuration the
@@ -314,6 +317,8 @@ pub fn run<L: FrameLink>(
             break end;
         }
     };
+    // The session no longer hears from the cycle: it looks at the mailboxes itself.
+    c.mail.set(None);
     // A frame still in flight is given up (its reply, should it come, is stale).
     if flight.is_some() {
         flight.set(None);
@@ -389,6 +394,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             telemetry,
             restarts,
             restarting,
+            mail,
             ..
         } = io;
         {
@@ -449,6 +455,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             telemetry,
             restarts,
             restarting,
+            mail,
             ev: Emitter {
                 out: events,
                 cycle: 0,
@@ -707,6 +714,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     let n = own.states().len().min(self.states.len());
                     self.states[..n].copy_from_slice(&own.states()[..n]);
                     self.states_n = n;
+                    self.mail.set(r.mail);
                     let (period, shift) = (self.consts.cycle_ns, self.consts.sync0_shift_ns);
                     let wait = (period - r.dc_time % period) + shift;
                     self.answered(r.wkc, r.dc_time, wait);
@@ -714,6 +722,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 }
                 Ok(OwnOutcome::Late) => {
                     self.counts.late_total += 1;
+                    self.mail.set(None);
                     Ok(FrameOutcome::Lost)
                 }
                 Err(_) => Err(CycleEnd::LinkFailed),

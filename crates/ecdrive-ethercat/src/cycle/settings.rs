@@ -136,6 +136,9 @@ pub struct CycleIo {
     pub restarts: u32,
     /// This run is a re-start: [`Self::restarts`] counts up once every drive is in OP.
     pub restarting: bool,
+    /// What the cycle last saw of the devices' mailboxes (shared with the session thread,
+    /// which reads them only when one may hold something).
+    pub mail: std::sync::Arc<super::frames::MailWatch>,
 }
 
 /// The supervisory ends of the channels.
@@ -166,6 +169,7 @@ pub fn channels(axes: usize, io: usize) -> (CycleIo, SupervisorIo) {
             rt_report: None,
             restarts: 0,
             restarting: false,
+            mail: Default::default(),
         },
         SupervisorIo {
             commands: ctx,

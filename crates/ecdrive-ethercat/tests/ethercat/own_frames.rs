@@ -1,6 +1,8 @@
 //! The cycle's own frames (`CycleSettings::own_frames`, `cycle::frames`): learnt from the frames
 //! ethercrab's `tx_rx_dc` sends, they put the same datagrams on the wire, carry the same
-//! outputs, and the cycle reads the same inputs and states from their replies.
+//! outputs, and the cycle reads the same inputs and states from their replies. They add one
+//! datagram of ecdrive's, a broadcast read of SM1's status, and the session reads the drives'
+//! mailboxes only when it says one holds something.
 
 use crate::support;
 use ecdrive_core::ec::Command;
@@ -12,6 +14,7 @@ use ecdrive_ethercat::session::{Master, MasterConfig};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
 use ecdrive_ethercat::telemetry::StopKind;
 use ecdrive_sim::transport::SegmentLink;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use support::generic::{GENERIC_TEST, generic_segment};
@@ -20,11 +23,16 @@ use support::generic::{GENERIC_TEST, generic_segment};
 type Datagram = (u8, u32, usize, Vec<u8>);
 
 /// A link that keeps the cycle's frames (those that begin with the reference clock's time)
-/// as the master sent them.
+/// as the master sent them, and counts the reads of a mailbox SyncManager's status in the
+/// other frames (the session's mailbox polls).
 struct Recording {
     inner: SegmentLink,
     cyclic: Arc<Mutex<Vec<Vec<Datagram>>>>,
+    mailbox_looks: Arc<AtomicUsize>,
 }
+
+/// SM0's and SM1's status registers.
+const SM_STATUS: [u32; 2] = [0x0805, 0x080D];
 
 fn datagrams(frame: &[u8]) -> Vec<Datagram> {
     let Ok(eth) = EthernetFrame::new_checked(frame) else {
@@ -53,6 +61,15 @@ impl FrameLink for Recording {
         let cyclic = d.first().is_some_and(|&(cmd, address, len, _)| {
             cmd == Command::Frmw as u8 && address >> 16 == 0x0910 && len == 8
         });
+        if !cyclic {
+            let looks = d
+                .iter()
+                .filter(|&&(cmd, address, _, _)| {
+                    cmd == Command::Fprd as u8 && SM_STATUS.contains(&(address >> 16))
+                })
+                .count();
+            self.mailbox_looks.fetch_add(looks, Ordering::Relaxed);
+        }
         if cyclic && let Ok(mut c) = self.cyclic.lock() {
             c.push(d);
         }
@@ -68,11 +85,13 @@ impl FrameLink for Recording {
     }
 }
 
-/// Three generic devices in csp for 100 cycles in OP, with ecdrive's frames or ethercrab's:
-/// whose frames carried the image, and the cycle's frames as sent.
-fn run(own_frames: bool) -> (FramesBy, Vec<Vec<Datagram>>) {
+/// Three generic devices in csp for 100 cycles in OP, with ecdrive's frames or ethercrab's, the
+/// mailboxes polled every 2 ms: whose frames carried the image, the cycle's frames as sent, and
+/// how often the session looked at a mailbox in those 100 cycles.
+fn run(own_frames: bool) -> (FramesBy, Vec<Vec<Datagram>>, usize) {
     let mut cfg = MasterConfig::new(Duration::from_millis(1));
     cfg.cycle.own_frames = own_frames;
+    cfg.emergency_poll = Some(Duration::from_millis(2));
     for p in 0..3 {
         cfg.startup.drives.push(DriveSetup {
             profile: Some(&GENERIC_TEST),
@@ -81,32 +100,43 @@ fn run(own_frames: bool) -> (FramesBy, Vec<Vec<Datagram>>) {
         });
     }
     let cyclic = Arc::new(Mutex::new(Vec::new()));
+    let mailbox_looks = Arc::new(AtomicUsize::new(0));
     let link = Recording {
         inner: SegmentLink::new(generic_segment(3)),
         cyclic: cyclic.clone(),
+        mailbox_looks: mailbox_looks.clone(),
     };
     let Ok(mut m) = Master::start(link, cfg) else {
         panic!("start-up failed");
     };
     m.wait_until("OP", Duration::from_secs(10), |t| t.cycle.all_op)
         .unwrap();
+    // Past the first cycles in OP, when the session's first poll (which also reads each
+    // drive's mailbox SyncManagers) may still be under way.
     let c0 = m.telemetry().cycle.cycle;
-    m.wait_until("100 cycles in OP", Duration::from_secs(10), |t| {
-        t.cycle.cycle > c0 + 100
+    m.wait_until("20 cycles in OP", Duration::from_secs(10), |t| {
+        t.cycle.cycle > c0 + 20
     })
     .unwrap();
+    let looks0 = mailbox_looks.load(Ordering::Relaxed);
+    let c1 = m.telemetry().cycle.cycle;
+    m.wait_until("100 cycles more", Duration::from_secs(10), |t| {
+        t.cycle.cycle > c1 + 100
+    })
+    .unwrap();
+    let looks = mailbox_looks.load(Ordering::Relaxed) - looks0;
     let t = m.telemetry().clone();
     assert_eq!((t.cycle.wkc, t.cycle.wkc_expected), (9, 9));
     let (report, _) = m.stop(StopKind::Ramp);
     let cycle = report.unwrap().cycle.unwrap();
     let frames = cyclic.lock().unwrap().clone();
-    (cycle.frames_by, frames)
+    (cycle.frames_by, frames, looks)
 }
 
 #[test]
 fn ecdrives_frames_put_ethercrabs_datagrams_on_the_wire() {
-    let (by_own, own) = run(true);
-    let (by_ethercrab, theirs) = run(false);
+    let (by_own, own, own_looks) = run(true);
+    let (by_ethercrab, theirs, their_looks) = run(false);
     assert_eq!(by_own, FramesBy::Ecdrive);
     assert_eq!(
         by_ethercrab,
@@ -116,19 +146,40 @@ fn ecdrives_frames_put_ethercrabs_datagrams_on_the_wire() {
     );
     // The same datagrams, in the same order: the system time (FRMW to the reference clock),
     // the LRW of the image, each device's AL status; the data the master sends in them is the
-    // system time's zeros, the image and the status's zeros.
+    // system time's zeros, the image and the status's zeros. Then ecdrive's own: a BRD of SM1's
+    // status, one byte.
     let shape = |f: &[Datagram]| f.iter().map(|d| (d.0, d.1, d.2)).collect::<Vec<_>>();
     let last_own = own.last().expect("cyclic frames with ecdrive's");
     let last_theirs = theirs.last().expect("cyclic frames with ethercrab's");
-    assert_eq!(shape(last_own), shape(last_theirs));
-    assert_eq!(shape(last_own).len(), 1 + 1 + 3, "{:?}", shape(last_own));
+    let mut expected = shape(last_theirs);
+    expected.push((Command::Brd as u8, 0x080D << 16, 1));
+    assert_eq!(shape(last_own), expected);
+    assert_eq!(
+        shape(last_theirs).len(),
+        1 + 1 + 3,
+        "{:?}",
+        shape(last_theirs)
+    );
+    // No device had anything in its mailbox: with ecdrive's frames the session did not look,
+    // with ethercrab's it looked at every drive's mailbox every 2 ms.
+    assert_eq!(own_looks, 0);
+    assert!(their_looks >= 3 * 10, "{their_looks}");
     assert!(own.len() > 100 && theirs.len() > 100);
-    for f in &own {
-        assert_eq!(
-            shape(f),
-            shape(last_own),
-            "every cyclic frame has the same datagrams"
-        );
+    // ethercrab's first (the cycle learns from it; a few when a mailbox frame came between),
+    // then ecdrive's, every one with the same datagrams.
+    let learning = own
+        .iter()
+        .take_while(|f| shape(f) == shape(last_theirs))
+        .count();
+    assert!((1..=5).contains(&learning), "{learning}");
+    for (k, f) in own.iter().enumerate() {
+        if k >= learning {
+            assert_eq!(
+                shape(f),
+                shape(last_own),
+                "every cyclic frame has the same datagrams"
+            );
+        }
         assert!(
             f[0].3.iter().all(|&b| b == 0),
             "the system time goes out as zeros"
