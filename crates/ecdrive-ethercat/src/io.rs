@@ -373,7 +373,8 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     /// sets the flag again. No allocation.
     pub fn send_queued(&mut self) -> Result<usize, LinkError> {
         if let Some(flag) = &self.queued {
-            if !flag.0.swap(false, Ordering::AcqRel) {
+            // A plain load first: the usual answer (nothing queued) without taking the line.
+            if !flag.0.load(Ordering::Acquire) || !flag.0.swap(false, Ordering::AcqRel) {
                 return Ok(0);
             }
             self.tx.replace_waker(&Waker::from(flag.clone()));

@@ -49,6 +49,9 @@ pub use crate::ec::DatagramWkc;
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct WkcPlan {
     devices: Vec<DeviceImage>,
+    /// The expected counts of the datagrams that repeat every cycle, found without walking
+    /// the devices ([`remember`](Self::remember)).
+    memo: Vec<(u32, u16, Expected)>,
 }
 
 impl WkcPlan {
@@ -85,7 +88,21 @@ impl WkcPlan {
             .filter(|d| !d.reads.is_empty() || !d.writes.is_empty())
             .collect();
         out.sort_by_key(|d| d.position);
-        Self { devices: out }
+        Self {
+            devices: out,
+            memo: Vec::new(),
+        }
+    }
+
+    /// Remember what the logical datagrams `(address, len)` should come back with: the
+    /// cycle's own, which go out every cycle. [`expected`](Self::expected) then looks them up
+    /// instead of walking every device's ranges.
+    pub fn remember(&mut self, datagrams: impl IntoIterator<Item = (u32, u16)>) {
+        let memo: Vec<(u32, u16, Expected)> = datagrams
+            .into_iter()
+            .map(|(a, l)| (a, l, self.walk(a, l)))
+            .collect();
+        self.memo = memo;
     }
 
     /// Whether any device takes part.
@@ -104,6 +121,14 @@ impl WkcPlan {
 
     /// What an LRW at logical `address` of `len` bytes should come back with. No allocation.
     pub fn expected(&self, address: u32, len: u16) -> Expected {
+        match self.memo.iter().find(|m| m.0 == address && m.1 == len) {
+            Some(&(_, _, e)) => e,
+            None => self.walk(address, len),
+        }
+    }
+
+    /// [`expected`](Self::expected), from every device's ranges.
+    fn walk(&self, address: u32, len: u16) -> Expected {
         let span = address..address.saturating_add(u32::from(len));
         let mut e = Expected::default();
         for d in &self.devices {
@@ -263,6 +288,22 @@ mod tests {
         assert_eq!((w.index, w.of, w.address, w.len), (2, 2, 1466, 118));
         assert_eq!((w.got, w.expected), (18, 20));
         assert_eq!(w.devices, Some((38, 47)));
+    }
+
+    #[test]
+    fn remembered_datagrams_count_as_walked_ones() {
+        let s = mix(48);
+        let walked = plan(&s);
+        let mut remembered = walked.clone();
+        let c = chunks(1584);
+        remembered.remember(c.iter().copied());
+        for &(a, l) in &c {
+            assert_eq!(remembered.expected(a, l), walked.expected(a, l));
+        }
+        // A datagram not remembered is walked.
+        assert_eq!(remembered.expected(0, 34), walked.expected(0, 34));
+        // The inputs of drives 0 (21 bytes) and 1 (19 bytes from byte 21).
+        assert_eq!(remembered.expected(0, 34).wkc, 2);
     }
 
     #[test]

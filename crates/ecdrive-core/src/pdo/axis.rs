@@ -201,6 +201,7 @@ pub fn resolve_mapped(
 }
 
 /// A mapped field's value as an integer (`None`: not mapped, or outside the buffer).
+#[inline]
 pub fn read(field: Option<Field>, image: &[u8]) -> Option<i64> {
     field
         .and_then(|f| f.read_int(image).ok())
@@ -209,6 +210,7 @@ pub fn read(field: Option<Field>, image: &[u8]) -> Option<i64> {
 
 /// Write an integer into a mapped field (nothing when it is not mapped or outside the buffer;
 /// the value wraps to the field's width).
+#[inline]
 pub fn write(field: Option<Field>, image: &mut [u8], value: i64) {
     if let Some(f) = field {
         let _ = f.write_int(image, i128::from(value));

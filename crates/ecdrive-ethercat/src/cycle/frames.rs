@@ -484,6 +484,19 @@ impl OwnFrames {
             .collect()
     }
 
+    /// The logical datagrams of the frames, as `(address, length)`.
+    pub(crate) fn logical(&self) -> impl Iterator<Item = (u32, u16)> + '_ {
+        self.frames
+            .iter()
+            .flat_map(|f| f.parts.iter())
+            .filter_map(|p| match p {
+                Part::Image { address, pdi, .. } => {
+                    Some((*address, u16::try_from(pdi.len()).unwrap_or(u16::MAX)))
+                }
+                _ => None,
+            })
+    }
+
     /// Whether frames are out whose replies have not been read.
     pub(crate) fn in_flight(&self) -> bool {
         self.in_flight

@@ -232,8 +232,11 @@ struct Cycle<'a, 'p, L: FrameLink> {
     telemetry: &'a mut triple_buffer::Input<Telemetry>,
     restarts: &'a mut u32,
     restarting: &'a mut bool,
-    /// What the last reply said of the devices' mailboxes, for the session thread.
+    /// What the last reply said of the devices' mailboxes, for the session thread, and what
+    /// it was last told (it is written only when that changes: the cycle does not touch the
+    /// shared byte every cycle).
     mail: &'a frames::MailWatch,
+    mail_told: Option<bool>,
     ev: Emitter<'a>,
     consts: RunConstants,
     /// The expected working counter of each logical datagram, from the FMMU configuration the
@@ -456,6 +459,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             restarts,
             restarting,
             mail,
+            mail_told: None,
             ev: Emitter {
                 out: events,
                 cycle: 0,
@@ -714,7 +718,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                     let n = own.states().len().min(self.states.len());
                     self.states[..n].copy_from_slice(&own.states()[..n]);
                     self.states_n = n;
-                    self.mail.set(r.mail);
+                    self.tell_mail(r.mail);
                     let (period, shift) = (self.consts.cycle_ns, self.consts.sync0_shift_ns);
                     let wait = (period - r.dc_time % period) + shift;
                     self.answered(r.wkc, r.dc_time, wait);
@@ -722,7 +726,7 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
                 }
                 Ok(OwnOutcome::Late) => {
                     self.counts.late_total += 1;
-                    self.mail.set(None);
+                    self.tell_mail(None);
                     Ok(FrameOutcome::Lost)
                 }
                 Err(_) => Err(CycleEnd::LinkFailed),
@@ -763,6 +767,14 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             }
             Ok(Err(_)) => Ok(FrameOutcome::Lost),
             Err(ExchangeError::Link(_)) => Err(CycleEnd::LinkFailed),
+        }
+    }
+
+    /// Tell the session thread what the last reply said of the mailboxes, if that changed.
+    fn tell_mail(&mut self, full: Option<bool>) {
+        if full != self.mail_told {
+            self.mail_told = full;
+            self.mail.set(full);
         }
     }
 
@@ -823,6 +835,9 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             Ok(f) => {
                 self.pump.watch_queue();
                 self.pump.own_frames(&f.shapes());
+                if let Some(plan) = self.wkc_plan.as_mut() {
+                    plan.remember(f.logical());
+                }
                 OwnPath::On(f)
             }
             Err(_) if tries > 1 => OwnPath::Learning { tries: tries - 1 },

@@ -6,11 +6,12 @@ use crate::rt::{LatencyHistogram, monotonic_ns};
 
 /// The timing values of the last cycles, folded into the [`Timing`] histograms a batch at a
 /// time: recording a value into a histogram touches its counts far apart (and, after the
-/// sleep, cold), a batch's values sit together.
+/// sleep, cold), a batch's values sit together: one cycle's four values side by side, in one
+/// cache line.
 #[derive(Clone, Copy)]
 pub(super) struct TimingBatch {
-    /// wake latency, period, exchange, busy.
-    values: [[u64; TIMING_BATCH]; 4],
+    /// By slot, then wake latency, period, exchange, busy.
+    values: [[u64; 4]; TIMING_BATCH],
     n: [usize; 4],
 }
 
@@ -19,7 +20,7 @@ const TIMING_BATCH: usize = 64;
 impl Default for TimingBatch {
     fn default() -> Self {
         Self {
-            values: [[0; TIMING_BATCH]; 4],
+            values: [[0; 4]; TIMING_BATCH],
             n: [0; 4],
         }
     }
@@ -42,7 +43,7 @@ impl TimingBatch {
 
     pub(super) fn record(&mut self, t: &mut Timing, which: usize, ns: u64) {
         let n = self.n[which];
-        self.values[which][n] = ns;
+        self.values[n][which] = ns;
         self.n[which] = n + 1;
         if n + 1 == TIMING_BATCH {
             self.flush(t, which);
@@ -51,8 +52,8 @@ impl TimingBatch {
 
     fn flush(&mut self, t: &mut Timing, which: usize) {
         let h = Self::histogram(t, which);
-        for &v in &self.values[which][..self.n[which]] {
-            h.record(v);
+        for v in &self.values[..self.n[which]] {
+            h.record(v[which]);
         }
         self.n[which] = 0;
     }
