@@ -5,9 +5,9 @@
 //! times over (identity and name at discovery, the SyncManager and FMMU categories once per
 //! direction when it builds the process image), and, for a device with CoE, the PDO assignment
 //! (0x1C12/0x1C13) and every mapping entry (0x16xx/0x1Axx), each by one expedited SDO upload of
-//! some five frames. ecdrive reads every device's SII at once before ethercrab starts
-//! ([`crate::sii_bulk`]: one frame carries a chunk of every device's EEPROM), and it has just
-//! written each drive's PDO configuration by SDO, each write acknowledged by the drive.
+//! some five frames. ecdrive reads every device's SII at once before ethercrab starts (the
+//! crate's `sii_bulk` module: one frame carries a chunk of every device's EEPROM), and it has
+//! just written each drive's PDO configuration by SDO, each write acknowledged by the drive.
 //!
 //! [`Answers`] answers those frames of ethercrab's from that: the [`Pump`](crate::io::Pump)
 //! asks it about every frame before sending, and a frame whose every datagram it can answer
@@ -29,7 +29,7 @@
 //! request). A drive that acknowledged a mapping and does not hold it is refused at
 //! SAFE-OP by the drive itself (its SyncManager lengths are checked against its mapping,
 //! AL status code 0x001D/0x001E), which start-up names. The switch is
-//! [`StartupConfig::answer_rereads`](crate::startup::StartupConfig::answer_rereads); off,
+//! [`BusOptions::answer_rereads`](crate::bus::BusOptions::answer_rereads); off,
 //! every read goes to the wire as ethercrab sends it.
 
 use crate::ec::command::Command;

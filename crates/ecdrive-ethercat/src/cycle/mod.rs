@@ -50,6 +50,7 @@ pub mod audit;
 mod axes;
 mod bus;
 mod frames;
+mod own;
 mod publish;
 mod schedule;
 mod settings;
@@ -59,7 +60,8 @@ use axes::{CycleDrive, app_view};
 pub use bus::al_state_name;
 use bus::{StateScan, raw_al_state};
 pub use frames::MailWatch;
-use frames::{Image, OwnFrames, OwnOutcome};
+use frames::{Image, OwnOutcome};
+use own::OwnPath;
 pub use settings::{
     CycleEnd, CycleHooks, CycleIo, CycleParts, CycleReport, CycleSettings, FrameStats, FramesBy,
     ReplyWait, SupervisorIo, Timing, channels,
@@ -275,20 +277,6 @@ struct Cycle<'a, 'p, L: FrameLink> {
     /// Why the own frames were not taken up, when they were not.
     not_learnt: Option<&'static str>,
 }
-
-/// Whose frames carry the process image (see [`frames`]).
-enum OwnPath {
-    /// ethercrab's (`tx_rx_dc`), for the whole run.
-    Off,
-    /// ethercrab's, while the frames it sends are learnt; tries left.
-    Learning { tries: u8 },
-    /// ecdrive's own.
-    On(OwnFrames),
-}
-
-/// How many cycles learning ethercrab's frames may take before the cycle stays on its path
-/// (a mailbox frame of the session's between them spoils a try).
-const LEARNING_TRIES: u8 = 5;
 
 /// Run the cycle until it ends. Call on the thread that is to be the cycle thread (the
 /// settings' RT priority, CPU and memory locking are applied to it).
@@ -507,36 +495,12 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             left_op_code: None,
             last_telemetry: CycleTelemetry::default(),
             image,
-            own: if settings.own_frames {
-                OwnPath::Learning {
-                    tries: LEARNING_TRIES,
-                }
-            } else {
-                OwnPath::Off
-            },
+            own: OwnPath::new(settings.own_frames),
             fmmus,
             states: vec![0; n_devices],
             states_n: 0,
             not_learnt: None,
         }
-    }
-
-    /// The image's outputs into ethercrab's copy of the process image.
-    fn outputs_to_ethercrab(&self) {
-        for p in 0..self.states.len() {
-            if let Ok(sd) = self.group.subdevice(self.md, p) {
-                let mut io = sd.io_raw_mut();
-                let (src, dst) = (self.image.outputs(p), io.outputs());
-                if src.len() == dst.len() {
-                    dst.copy_from_slice(src);
-                }
-            }
-        }
-    }
-
-    /// Frames of ecdrive's own are out.
-    fn own_in_flight(&self) -> bool {
-        matches!(&self.own, OwnPath::On(f) if f.in_flight())
     }
 
     fn ending(&self) -> bool {
@@ -770,14 +734,6 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
         }
     }
 
-    /// Tell the session thread what the last reply said of the mailboxes, if that changed.
-    fn tell_mail(&mut self, full: Option<bool>) {
-        if full != self.mail_told {
-            self.mail_told = full;
-            self.mail.set(full);
-        }
-    }
-
     /// A reply came: its working counter, the reference clock's time, the wait from the send
     /// to the next DC-aligned instant; the AL states are in `states`.
     fn answered(&mut self, wkc: u16, dc_time: u64, next_wait_ns: u64) {
@@ -805,47 +761,6 @@ impl<'a, 'p, L: FrameLink> Cycle<'a, 'p, L> {
             self.on_al_state(i, st, &mut scan);
         }
         self.supervise_bus(scan, wkc);
-    }
-
-    /// After an exchange through ethercrab while learning: take its frames over, if they are
-    /// the cycle's and nothing else came between them (see [`frames`]). The SYNC0 shift is
-    /// what ethercrab's wait to the next instant says it is.
-    fn learn(&mut self, dc_time: u64, next_wait_ns: u64) {
-        self.pump.capture(false);
-        let OwnPath::Learning { tries } = self.own else {
-            return;
-        };
-        let period = self.consts.cycle_ns;
-        self.consts.sync0_shift_ns = next_wait_ns.saturating_sub(period - dc_time % period);
-        let learnt = {
-            let (sent, overflow) = self.pump.captured();
-            if overflow {
-                Err("more frames than a capture keeps")
-            } else {
-                OwnFrames::learn(
-                    sent,
-                    &self.image,
-                    &self.addresses,
-                    &self.fmmus,
-                    self.settings.drift_compensation,
-                )
-            }
-        };
-        self.own = match learnt {
-            Ok(f) => {
-                self.pump.watch_queue();
-                self.pump.own_frames(&f.shapes());
-                if let Some(plan) = self.wkc_plan.as_mut() {
-                    plan.remember(f.logical());
-                }
-                OwnPath::On(f)
-            }
-            Err(_) if tries > 1 => OwnPath::Learning { tries: tries - 1 },
-            Err(why) => {
-                self.not_learnt = Some(why);
-                OwnPath::Off
-            }
-        };
     }
 
     /// Begin a ramp stop of every axis not already stopping.
