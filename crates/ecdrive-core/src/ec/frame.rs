@@ -681,6 +681,24 @@ impl<'a> FrameBuilder<'a> {
         })
     }
 
+    /// Go on with a frame already in `buf`, whose first `len` bytes are a valid EtherCAT
+    /// frame: further datagrams go after its last one (whatever follows it, such as padding, is
+    /// overwritten).
+    pub fn resume(buf: &'a mut [u8], len: usize) -> Result<Self, FrameError> {
+        let payload = buf
+            .get(ETHERNET_HEADER_LEN..len)
+            .ok_or(FrameError::TooShortForHeader)?;
+        let summary = EthercatFrame::new_checked(payload)?.check()?;
+        let mut at = ETHERNET_HEADER_LEN + ECAT_HEADER_LEN;
+        let mut last = None;
+        for _ in 0..summary.datagrams {
+            last = Some(at);
+            let lf = usize::from(get_u16(buf, at + 6) & 0x07FF);
+            at += DATAGRAM_HEADER_LEN + lf + WKC_LEN;
+        }
+        Ok(Self { buf, len: at, last })
+    }
+
     /// Append a datagram with the given raw command code, index, address (ADP | ADO << 16, or
     /// a logical address) and data, with working counter 0. Returns the byte offset of its
     /// data in the frame.
@@ -760,6 +778,33 @@ mod tests {
         b.push(Command::Lrw, 8, 0x0001_0000, &[1, 2, 3, 4]).unwrap();
         let len = b.finish();
         (buf, len)
+    }
+
+    #[test]
+    fn a_resumed_frame_is_the_frame_built_at_once() {
+        let (mut buf, len) = sample();
+        // Padding after the last datagram is overwritten.
+        buf[len..len + 8].fill(0xAA);
+        let mut b = FrameBuilder::resume(&mut buf, len + 8).unwrap();
+        let data = b
+            .push(Command::Brd, 9, physical_address(0, 0x080D), &[5])
+            .unwrap();
+        let resumed = b.finish();
+        let mut once = [0u8; 128];
+        let mut b = FrameBuilder::new(&mut once, MacAddress([0x10; 6])).unwrap();
+        b.push(Command::Brd, 7, physical_address(0, 0x0130), &[0, 0])
+            .unwrap();
+        b.push(Command::Lrw, 8, 0x0001_0000, &[1, 2, 3, 4]).unwrap();
+        assert_eq!(
+            b.push(Command::Brd, 9, physical_address(0, 0x080D), &[5]),
+            Ok(data)
+        );
+        let n = b.finish();
+        assert_eq!(resumed, n);
+        assert_eq!(buf[..n], once[..n]);
+        // Not a frame: an error, not a builder.
+        let mut short = [0u8; 10];
+        assert!(FrameBuilder::resume(&mut short, 10).is_err());
     }
 
     #[test]

@@ -25,7 +25,8 @@
 
 use crate::ec::Command;
 use crate::ec::frame::{
-    DATAGRAM_HEADER_LEN, ECAT_HEADER_LEN, ETHERNET_HEADER_LEN, MAC_LOCAL_BIT, WKC_LEN,
+    DATAGRAM_HEADER_LEN, ECAT_HEADER_LEN, ETHERNET_HEADER_LEN, FrameBuilder, MAC_LOCAL_BIT,
+    WKC_LEN, physical_address,
 };
 use crate::ec::register::{self, FmmuConfig};
 use crate::io::{FrameLink, LogicalSeen, MAX_FRAME, Pump};
@@ -40,8 +41,8 @@ const MAILBOX_FULL: u8 = 0x08;
 
 /// What the cycle last saw of the devices' mailboxes (SM1's "mailbox full" bit, ORed over the
 /// segment by a broadcast read in the cycle's own frames), for the session thread: it reads the
-/// drives' mailboxes only when one may hold something. Written by the cycle every answered
-/// cycle, read by the session; one byte, no lock.
+/// drives' mailboxes only when one may hold something. Written by the cycle when what the
+/// replies say changes, read by the session; one byte, no lock.
 #[derive(Debug, Default)]
 pub struct MailWatch(AtomicU8);
 
@@ -227,53 +228,26 @@ impl Frame {
         let Some(end) = self.parts.iter().map(Part::end).max() else {
             return;
         };
-        let added = DATAGRAM_HEADER_LEN + 1 + WKC_LEN;
-        let header = ETHERNET_HEADER_LEN;
-        let (Some(ecat), Some(last_len_at)) = (u16_at(&self.bytes, header), self.last_len_at())
-        else {
+        let mut buf = vec![0u8; MAX_FRAME];
+        let (Some(dst), Some(src)) = (buf.get_mut(..end), self.bytes.get(..end)) else {
             return;
         };
-        let datagrams = usize::from(ecat & 0x07FF) + added;
-        if end + added > MAX_FRAME || datagrams > 0x07FF {
+        dst.copy_from_slice(src);
+        let Ok(mut b) = FrameBuilder::resume(&mut buf, end) else {
             return;
-        }
-        // ethercrab pads a short frame; the datagram goes before the padding.
-        let padded = self.bytes.len();
-        self.bytes.truncate(end);
-        if let Some(b) = self.bytes.get_mut(last_len_at + 1) {
-            *b |= 0x80; // More datagrams follow.
-        }
-        let ecat = (ecat & !0x07FF) | datagrams as u16;
-        self.bytes[header..header + 2].copy_from_slice(&ecat.to_le_bytes());
-        let at = self.bytes.len();
-        self.bytes.push(Command::Brd as u8);
-        self.bytes.push(0); // Index: not looked at.
-        self.bytes.extend_from_slice(&0u16.to_le_bytes()); // ADP.
-        self.bytes.extend_from_slice(&SM1_STATUS.to_le_bytes()); // ADO.
-        self.bytes.extend_from_slice(&1u16.to_le_bytes()); // Length 1, last datagram.
-        self.bytes.extend_from_slice(&0u16.to_le_bytes()); // IRQ.
-        self.bytes.push(0);
-        self.bytes.extend_from_slice(&0u16.to_le_bytes()); // Working counter.
-        if padded > self.bytes.len() {
-            self.bytes.resize(padded, 0);
-        }
-        let data = at + DATAGRAM_HEADER_LEN;
+        };
+        let Ok(data) = b.push(Command::Brd, 0, physical_address(0, SM1_STATUS), &[0]) else {
+            return;
+        };
+        // ethercrab pads a short frame: the frame keeps its length, the datagram goes before
+        // the padding.
+        let len = b.finish().max(self.bytes.len());
+        buf.truncate(len);
+        self.bytes = buf;
         self.parts.push(Part::MailFull {
             data,
             wkc: data + 1,
         });
-    }
-
-    /// Where the last datagram's length field is.
-    fn last_len_at(&self) -> Option<usize> {
-        let mut at = ETHERNET_HEADER_LEN + ECAT_HEADER_LEN;
-        loop {
-            let lf = u16_at(&self.bytes, at + 6)?;
-            if lf & 0x8000 == 0 {
-                return Some(at + 6);
-            }
-            at += DATAGRAM_HEADER_LEN + usize::from(lf & 0x07FF) + WKC_LEN;
-        }
     }
 }
 
@@ -654,7 +628,7 @@ impl OwnFrames {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::ec::frame::{FrameBuilder, MacAddress, physical_address};
+    use crate::ec::frame::MacAddress;
 
     /// A frame as ethercrab's `tx_rx_dc` builds it for two devices (station addresses 0x1001,
     /// 0x1002) whose image is 2 + 1 input bytes and 3 output bytes at logical 0x10000: the
