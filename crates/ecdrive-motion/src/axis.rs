@@ -525,55 +525,53 @@ impl MotionAxis {
         requests: Requests,
     ) -> Output {
         let actual = self.actual();
-        let st = self.axis.status();
-        let enabled = st.state == Some(State::OperationEnabled) && st.streaming;
-        if self.program == ProgramState::Pending && enabled {
-            self.runner.seed(actual);
-            self.program = ProgramState::Running;
-            ev.emit(EventKind::ProgramStep {
-                axis: i as u16,
-                step: self.runner.step_index() as u16,
-            });
-        }
-        let mut sp = self.stop_setpoint(&st, enabled, ctx);
-        if self.stopping == Stopping::No && self.program == ProgramState::Running && enabled {
-            if let Some(s) = self.program_setpoint(i, &st, actual, ctx, ev) {
-                sp = s;
-            }
-        }
+        let active = self.axis.active_mode();
+        let enabled =
+            self.axis.state() == Some(State::OperationEnabled) && self.axis.is_streaming();
         let mut req = requests;
-        req.home = req.home.or(self.home_commanded.take());
-        if let Some(s) = self.app_requests(i, &req, &st, enabled, ctx, ev) {
-            sp = s;
+        if self.home_commanded.is_some() {
+            req.home = req.home.or(self.home_commanded.take());
         }
-        if let Some((probe, edge)) = req.probe
-            && let Err(why) = self.arm_probe(probe, edge)
-        {
-            ev.emit(EventKind::CommandRefused {
-                axis: i as u16,
-                why,
-            });
+        // The steady cycle (no program, stop, homing or request: the axis holds) runs inline,
+        // everything else out of line, so the code every cycle runs stays compact: it comes
+        // cold from memory after each sleep.
+        let quiet = self.program == ProgramState::Idle
+            && self.stopping == Stopping::No
+            && self.home_by_app.is_none()
+            && req.mode.is_none()
+            && req.home.is_none()
+            && req.pp.is_none()
+            && req.setpoint.is_none();
+        let sp = if quiet {
+            self.hold
+        } else {
+            self.setpoint(i, actual, enabled, &req, ctx, ev)
+        };
+        if let Some((probe, edge)) = req.probe {
+            self.command_probe(i, probe, edge, ev);
         }
         if enabled {
-            self.command(sp, &st);
-            let m = st.active_mode;
-            if self.modes_run.last() != Some(&m) {
-                if self.modes_run.len() < MODES_KEPT {
-                    self.modes_run.push(m);
-                } else if let Some(last) = self.modes_run.last_mut() {
-                    *last = m;
-                    self.modes_omitted = self.modes_omitted.saturating_add(1);
-                }
+            self.command(sp, active);
+            if self.modes_run.last() != Some(&active) {
+                self.mode_ran(active);
             }
         } else if self.stopping == Stopping::No {
             // Not enabled: track the actual values so enabling starts without a jump.
             self.hold = actual;
         }
         if matches!(self.home, HomeRun::Running { .. }) {
-            self.homing.step(&mut self.axis, fb.statusword);
+            self.homing_step(fb.statusword);
         }
-        self.profile_mode(i, fb.statusword, actual, ctx, ev);
-        self.probe(i, ev);
+        if RunMode::of(self.axis.active_mode()).is_some_and(RunMode::is_cyclic) {
+            // Outside the profile modes their targets are 0: entering one starts from rest.
+            self.pv.set_target(0);
+            self.tq.set_target(0);
+        } else {
+            self.profile_mode(i, fb.statusword, actual, ctx, ev);
+        }
+        if self.probes != [ProbeArm::Off; 2] {
+            self.probe(i, ev);
+        }
         self.tel.task = self.app_task;
         for (t, p) in self.tel.probes.iter_mut().zip(self.probes) {
             *t = match p {
@@ -583,10 +581,79 @@ impl MotionAxis {
             };
         }
         let out = self.axis.step(&fb);
-        self.engine_events(i, actual, ctx, ev);
+        if self.axis.has_events() {
+            self.engine_events(i, actual, ctx, ev);
+        }
         self.record_steps(&out, enabled, ctx.cycle);
         self.follow(i, &out, ctx, ev);
         out
+    }
+
+    /// This cycle's set-point with a program, a stop, a homing of the application's or a
+    /// request of the application's (out of line; the steady cycle holds): the program's start
+    /// and tick, the stop's ramp, the application's requests.
+    #[inline(never)]
+    fn setpoint(
+        &mut self,
+        i: usize,
+        actual: Sample,
+        enabled: bool,
+        req: &Requests,
+        ctx: &StepContext,
+        ev: &mut dyn EventSink,
+    ) -> Sample {
+        let st = self.axis.status();
+        if self.program == ProgramState::Pending && enabled {
+            self.runner.seed(actual);
+            self.program = ProgramState::Running;
+            ev.emit(EventKind::ProgramStep {
+                axis: i as u16,
+                step: self.runner.step_index() as u16,
+            });
+        }
+        let mut sp = self.stop_setpoint(&st, enabled, ctx);
+        if self.stopping == Stopping::No
+            && self.program == ProgramState::Running
+            && enabled
+            && let Some(s) = self.program_setpoint(i, &st, actual, ctx, ev)
+        {
+            sp = s;
+        }
+        if let Some(s) = self.app_requests(i, req, &st, enabled, ctx, ev) {
+            sp = s;
+        }
+        sp
+    }
+
+    /// A probe the application asked to arm on `edge` (out of line: rare).
+    #[cold]
+    #[inline(never)]
+    fn command_probe(&mut self, i: usize, probe: u8, edge: ProbeEdge, ev: &mut dyn EventSink) {
+        if let Err(why) = self.arm_probe(probe, edge) {
+            ev.emit(EventKind::CommandRefused {
+                axis: i as u16,
+                why,
+            });
+        }
+    }
+
+    /// The axis runs in mode `m`, another than the last of [`MotionAxis::modes_run`] (out of
+    /// line: rare).
+    #[cold]
+    #[inline(never)]
+    fn mode_ran(&mut self, m: OperationMode) {
+        if self.modes_run.len() < MODES_KEPT {
+            self.modes_run.push(m);
+        } else if let Some(last) = self.modes_run.last_mut() {
+            *last = m;
+            self.modes_omitted = self.modes_omitted.saturating_add(1);
+        }
+    }
+
+    /// One cycle of the homing engine (out of line: only while a home step runs).
+    #[inline(never)]
+    fn homing_step(&mut self, sw: StatusWord) {
+        self.homing.step(&mut self.axis, sw);
     }
 
     /// What the application asked of the axis this cycle: a mode switch (through the engine),
@@ -846,6 +913,7 @@ impl MotionAxis {
 
     /// One tick of the running program: its set-point (`None`: hold), a mode switch it asks
     /// for, or its end.
+    #[inline(never)]
     fn program_setpoint(
         &mut self,
         i: usize,
@@ -1118,6 +1186,7 @@ impl MotionAxis {
     /// One cycle in a profile mode (pp, pv, tq): the running step's targets through the mode's
     /// engine (the new-set-point handshake in pp), the step's end, and, with no step running,
     /// what the axis holds (pp: the last target; pv: velocity 0; tq: torque 0).
+    #[inline(never)]
     fn profile_mode(
         &mut self,
         i: usize,
@@ -1389,6 +1458,7 @@ impl MotionAxis {
 
     /// The touch probes: 0x60B8 from what is armed, and a latch in 0x60B9 reported with the
     /// position the drive latched (0x60BA–0x60BD), unwrapped like the actual position.
+    #[inline(never)]
     fn probe(&mut self, i: usize, ev: &mut dyn EventSink) {
         let status = self.probe_status;
         let mut function = 0u16;
@@ -1451,14 +1521,14 @@ impl MotionAxis {
             .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
     }
 
-    /// The set-point into the engine, in the active mode.
-    fn command(&mut self, sp: Sample, st: &AxisStatus) {
-        let mode = RunMode::of(st.active_mode).unwrap_or(self.mode);
+    /// The set-point into the engine, in the active mode (`active`, as the step began).
+    fn command(&mut self, sp: Sample, active: OperationMode) {
+        let mode = RunMode::of(active).unwrap_or(self.mode);
         self.mode = mode;
         let _ = match mode {
             // The drive generates the motion; `profile_mode` gives it its targets.
             RunMode::Pp | RunMode::Pv | RunMode::Tq => Ok(()),
-            RunMode::Csp => self.axis.set_position((sp.pos.round() as i64) as i32),
+            RunMode::Csp => self.axis.set_position(round_i64(sp.pos) as i32),
             RunMode::Ip => {
                 let bits = if self.ip_enable_bit {
                     cia402::interpolated::ENABLE_IP
@@ -1466,14 +1536,17 @@ impl MotionAxis {
                     cia402::ControlWord::empty()
                 };
                 self.axis.set_mode_bits(bits);
-                self.axis.set_position((sp.pos.round() as i64) as i32)
+                self.axis.set_position(round_i64(sp.pos) as i32)
             }
             RunMode::Csv => self.axis.set_velocity(self.drive_velocity(sp.vel)),
             RunMode::Cst => self.axis.set_torque(drive_torque(sp.torque)),
         };
     }
 
-    /// The engine's events of this step: mode switches the program waits for, faults.
+    /// The engine's events of this step: mode switches the program waits for, faults (out of
+    /// line: rare).
+    #[cold]
+    #[inline(never)]
     fn engine_events(
         &mut self,
         i: usize,
@@ -1698,12 +1771,7 @@ impl MotionAxis {
             {
                 self.fe_drive_zero_cycles += 1;
                 if self.fe_drive_zero_cycles >= DRIVE_FE_STUCK_CYCLES {
-                    self.tel.following_error_drive_stuck = true;
-                    ev.emit(EventKind::DriveFollowingErrorStuck {
-                        axis: i as u16,
-                        cycles: self.fe_drive_zero_cycles,
-                        master: self.tel.max_following_error,
-                    });
+                    self.drive_fe_stuck(i, ev);
                 }
             }
         }
@@ -1711,17 +1779,44 @@ impl MotionAxis {
             && fe > i64::from(limit)
             && self.stopping == Stopping::No
         {
-            ev.emit(EventKind::FollowingError {
-                axis: i as u16,
-                value: fe,
-                limit,
-            });
-            ev.emit(EventKind::Stopping {
-                reason: StopReason::FollowingError { axis: i as u16 },
-            });
-            self.stopping = Stopping::Quick { at: cycle };
-            self.axis.request_quick_stop();
+            self.following_error_exceeded(i, fe, limit, cycle, ev);
         }
+    }
+
+    /// 0x60F4 stayed 0 for [`DRIVE_FE_STUCK_CYCLES`] cycles of motion: flagged once (out of
+    /// line: rare).
+    #[cold]
+    #[inline(never)]
+    fn drive_fe_stuck(&mut self, i: usize, ev: &mut dyn EventSink) {
+        self.tel.following_error_drive_stuck = true;
+        ev.emit(EventKind::DriveFollowingErrorStuck {
+            axis: i as u16,
+            cycles: self.fe_drive_zero_cycles,
+            master: self.tel.max_following_error,
+        });
+    }
+
+    /// The following error `fe` went beyond `limit`: a quick stop (out of line: rare).
+    #[cold]
+    #[inline(never)]
+    fn following_error_exceeded(
+        &mut self,
+        i: usize,
+        fe: i64,
+        limit: u32,
+        cycle: u64,
+        ev: &mut dyn EventSink,
+    ) {
+        ev.emit(EventKind::FollowingError {
+            axis: i as u16,
+            value: fe,
+            limit,
+        });
+        ev.emit(EventKind::Stopping {
+            reason: StopReason::FollowingError { axis: i as u16 },
+        });
+        self.stopping = Stopping::Quick { at: cycle };
+        self.axis.request_quick_stop();
     }
 
     /// Begin a controlled stop at good cycle `tick` (the ramp's clock) and cycle `cycle` (the
@@ -2012,6 +2107,20 @@ impl MotionAxis {
 }
 
 /// A torque in the drive's unit as its torque value (0x6071), rounded and held to its range.
+/// `x.round() as i64` (half away from zero, saturating, NaN as 0) without the library call
+/// that `f64::round` is on a CPU without SSE4.1: the csp set-point of every cycle.
+fn round_i64(x: f64) -> i64 {
+    let r = x as i64;
+    let frac = x - r as f64;
+    if frac >= 0.5 {
+        r.saturating_add(1)
+    } else if frac <= -0.5 {
+        r.saturating_sub(1)
+    } else {
+        r
+    }
+}
+
 fn drive_torque(t: f64) -> i16 {
     t.round().clamp(f64::from(i16::MIN), f64::from(i16::MAX)) as i16
 }
@@ -2019,6 +2128,48 @@ fn drive_torque(t: f64) -> i16 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `round_i64` is `f64::round` then `as i64`, halves, signs, large values, infinities and
+    /// NaN included.
+    #[test]
+    fn round_i64_is_round_then_as() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            2.5,
+            -2.5,
+            0.49999999999999994,
+            -0.49999999999999994,
+            4503599627370495.5,
+            -4503599627370495.5,
+            4503599627370497.0,
+            9.2e18,
+            -9.2e18,
+            1e300,
+            -1e300,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MAX,
+            f64::MIN,
+            f64::EPSILON,
+        ];
+        // And a deterministic spread of ordinary set-points.
+        let mut v = 0x9E37_79B9_7F4A_7C15u64;
+        for _ in 0..10_000 {
+            v ^= v << 13;
+            v ^= v >> 7;
+            v ^= v << 17;
+            xs.push((v as i64 as f64) / 4096.0);
+        }
+        for x in xs {
+            assert_eq!(round_i64(x), x.round() as i64, "{x}");
+        }
+    }
 
     fn ctx(tick: u64) -> StepContext {
         StepContext {

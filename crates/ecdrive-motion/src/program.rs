@@ -35,26 +35,30 @@ impl TryFrom<OperationMode> for RunMode {
 /// synchronous ones, where the master streams the set-point every cycle, and the profile ones,
 /// where the drive generates the motion from a target and its profile objects. Homing (hm) is
 /// not one: a `home` step enters it and comes back.
+///
+/// (Each discriminant is the mode's 0x6060 value, as [`OperationMode`]'s are, so the
+/// conversions between the two are a test and a copy: no table for the cycle to fetch.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
+#[repr(u8)]
 pub enum RunMode {
     /// Cyclic synchronous position (0x6060 = 8): the program streams target positions.
-    Csp,
+    Csp = 8,
     /// Cyclic synchronous velocity (0x6060 = 9): the program streams target velocities.
-    Csv,
+    Csv = 9,
     /// Cyclic synchronous torque (0x6060 = 10): the program streams target torques.
-    Cst,
+    Cst = 10,
     /// Profile position (0x6060 = 1): `pp` steps hand targets to the drive with the
     /// new-set-point handshake.
-    Pp,
+    Pp = 1,
     /// Profile velocity (0x6060 = 3): `pv` steps give the drive a target velocity.
-    Pv,
+    Pv = 3,
     /// Profile torque (0x6060 = 4): `tq` steps give the drive a target torque.
-    Tq,
+    Tq = 4,
     /// Interpolated position (0x6060 = 7): the program streams target positions as in csp,
     /// carried in 0x60C1:01 (the cyclic position mode of drives without csp, such as the
     /// CANopen ASDA-A2), with controlword bit 4 where the drive needs it.
-    Ip,
+    Ip = 7,
 }
 
 impl RunMode {

@@ -477,6 +477,10 @@ impl EventQueue {
         }
     }
 
+    // Events are rare (a state change, a fault): out of line, so the steady cycle's code stays
+    // compact (it runs cold from the cache after each sleep).
+    #[cold]
+    #[inline(never)]
     fn push(&mut self, e: Event) {
         if self.len == EVENT_CAPACITY {
             // Drop the oldest.
@@ -822,6 +826,11 @@ impl Axis {
         self.events.pop()
     }
 
+    /// Events are queued ([`Axis::poll_event`] returns one).
+    pub fn has_events(&self) -> bool {
+        self.events.len > 0
+    }
+
     /// A snapshot.
     /// The decoded state (as [`status`](Self::status) has it, without building the rest).
     pub fn state(&self) -> Option<State> {
@@ -1068,9 +1077,19 @@ impl Axis {
         self.standstill = self.still_cycles >= cfg.cycles.max(1);
     }
 
+    #[inline]
     fn observe_fault(&mut self, fb: &Feedback, state: Option<State>) {
         let faulted =
             fb.statusword.contains(StatusWord::FAULT) || state.is_some_and(State::is_fault);
+        if faulted || self.fault {
+            self.fault_changes(fb, state, faulted);
+        }
+    }
+
+    /// [`Axis::observe_fault`] with a fault present or just gone (rare: out of line).
+    #[cold]
+    #[inline(never)]
+    fn fault_changes(&mut self, fb: &Feedback, state: Option<State>, faulted: bool) {
         if faulted {
             if let Some(code) = fb.error_code.filter(|c| !c.is_none()) {
                 self.error = Some(code.describe(self.caps.error_table));
@@ -1114,7 +1133,22 @@ impl Axis {
         self.events.push(Event::ModeSwitchFailed(err));
     }
 
+    #[inline]
     fn run_mode_switch(&mut self, fb: &Feedback) {
+        // The steady case: no switch, the display agreeing.
+        if self.switch == ModeSwitch::Idle && fb.mode_display.is_none_or(|d| d == self.active_mode)
+        {
+            self.mismatch_reported = false;
+            return;
+        }
+        self.mode_switch_progress(fb);
+    }
+
+    /// [`Axis::run_mode_switch`] with a switch under way or the display disagreeing (rare: out
+    /// of line).
+    #[cold]
+    #[inline(never)]
+    fn mode_switch_progress(&mut self, fb: &Feedback) {
         let timeout = self.config.mode_switch_timeout_cycles;
         match self.switch {
             ModeSwitch::Idle => match fb.mode_display {

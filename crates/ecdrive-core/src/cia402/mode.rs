@@ -26,34 +26,39 @@ use core::hash::{Hash, Hasher};
 /// [`OperationMode::Reserved`] and negative values into [`OperationMode::Vendor`], and
 /// [`OperationMode::as_i8`] gives the value back. Equality and hashing compare the `i8` value, so
 /// a hand-built `Vendor(5)` equals `Reserved(5)`.
+///
+/// The discriminant of each CiA 402 mode is its value, so [`OperationMode::as_i8`] and the
+/// comparisons built on it compile to a test and a copy, without a table: the cycle runs them
+/// cold from memory after each sleep.
 #[derive(Debug, Clone, Copy, serde::Serialize)]
+#[repr(u8)]
 pub enum OperationMode {
     /// 0: no mode assigned / no mode change.
-    NoMode,
+    NoMode = 0,
     /// 1: profile position (pp).
-    ProfilePosition,
+    ProfilePosition = 1,
     /// 2: velocity (vl, frequency-converter style).
-    Velocity,
+    Velocity = 2,
     /// 3: profile velocity (pv).
-    ProfileVelocity,
+    ProfileVelocity = 3,
     /// 4: profile torque (tq).
-    ProfileTorque,
+    ProfileTorque = 4,
     /// 6: homing (hm).
-    Homing,
+    Homing = 6,
     /// 7: interpolated position (ip).
-    InterpolatedPosition,
+    InterpolatedPosition = 7,
     /// 8: cyclic synchronous position (csp).
-    CyclicSyncPosition,
+    CyclicSyncPosition = 8,
     /// 9: cyclic synchronous velocity (csv).
-    CyclicSyncVelocity,
+    CyclicSyncVelocity = 9,
     /// 10: cyclic synchronous torque (cst).
-    CyclicSyncTorque,
+    CyclicSyncTorque = 10,
     /// 11: cyclic synchronous torque with commutation angle (cstca).
-    CyclicSyncTorqueCommutation,
+    CyclicSyncTorqueCommutation = 11,
     /// 5 or 12…127: reserved by CiA 402; kept as received.
-    Reserved(i8),
+    Reserved(i8) = 12,
     /// −128…−1: manufacturer-specific; kept as received.
-    Vendor(i8),
+    Vendor(i8) = 13,
 }
 
 impl OperationMode {

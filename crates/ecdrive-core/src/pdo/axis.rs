@@ -114,12 +114,23 @@ impl AxisBinding {
     /// The feedback for [`crate::cia402::Axis::step`] from `inputs`: every mapped object, the
     /// rest `None`.
     pub fn feedback(&self, inputs: &[u8]) -> Feedback {
-        let mut fb = Feedback::new(self.statusword(inputs));
-        fb.mode_display = read(self.mode_display, inputs).map(|v| OperationMode::from_i8(v as i8));
-        fb.position = read(self.position, inputs).map(|v| v as i32);
-        fb.velocity = read(self.velocity, inputs).map(|v| v as i32);
-        fb.torque = read(self.torque, inputs).map(|v| v as i16);
-        fb.error_code = read(self.error_code, inputs).map(|v| ErrorCode(v as u16));
+        let [sw, mode, position, velocity, torque, error_code] = read_each(
+            inputs,
+            [
+                self.statusword,
+                self.mode_display,
+                self.position,
+                self.velocity,
+                self.torque,
+                self.error_code,
+            ],
+        );
+        let mut fb = Feedback::new(StatusWord::from_raw(sw.unwrap_or(0) as u16));
+        fb.mode_display = mode.map(|v| OperationMode::from_i8(v as i8));
+        fb.position = position.map(|v| v as i32);
+        fb.velocity = velocity.map(|v| v as i32);
+        fb.torque = torque.map(|v| v as i16);
+        fb.error_code = error_code.map(|v| ErrorCode(v as u16));
         fb.zero_speed = self.zero_speed.and_then(|(f, bit)| {
             f.read_raw(inputs)
                 .ok()
@@ -141,26 +152,19 @@ impl AxisBinding {
     /// Write `out` into `outputs`: the controlword, the mode, the three targets and the two
     /// offsets, and the target position into 0x60C1:01 too — each where it is mapped.
     pub fn write(&self, out: &Output, outputs: &mut [u8]) {
-        write(self.controlword, outputs, i64::from(out.controlword.raw()));
-        write(self.mode, outputs, i64::from(out.mode.as_i8()));
-        write(
-            self.target_position,
+        write_each(
             outputs,
-            i64::from(out.target_position),
+            [
+                (self.controlword, i64::from(out.controlword.raw())),
+                (self.mode, i64::from(out.mode.as_i8())),
+                (self.target_position, i64::from(out.target_position)),
+                (self.target_velocity, i64::from(out.target_velocity)),
+                (self.target_torque, i64::from(out.target_torque)),
+                (self.velocity_offset, i64::from(out.velocity_offset)),
+                (self.torque_offset, i64::from(out.torque_offset)),
+                (self.ip_position, i64::from(out.target_position)),
+            ],
         );
-        write(
-            self.target_velocity,
-            outputs,
-            i64::from(out.target_velocity),
-        );
-        write(self.target_torque, outputs, i64::from(out.target_torque));
-        write(
-            self.velocity_offset,
-            outputs,
-            i64::from(out.velocity_offset),
-        );
-        write(self.torque_offset, outputs, i64::from(out.torque_offset));
-        write(self.ip_position, outputs, i64::from(out.target_position));
     }
 
     /// Write controlword 0 (Disable voltage) into `outputs`: what a drive gets while it is not
@@ -206,6 +210,31 @@ pub fn read(field: Option<Field>, image: &[u8]) -> Option<i64> {
     field
         .and_then(|f| f.read_int(image).ok())
         .and_then(|v| i64::try_from(v).ok())
+}
+
+/// Each field's value as [`read`] has it, through one copy of the code (not one per field): the
+/// cycle runs it cold from memory after each sleep, so its size is its cost.
+pub fn read_each<const N: usize>(image: &[u8], fields: [Option<Field>; N]) -> [Option<i64>; N] {
+    fields.map(|f| read_one(f, image))
+}
+
+/// Each value written as [`write`] does, through one copy of the code (see [`read_each`]).
+pub fn write_each<const N: usize>(image: &mut [u8], values: [(Option<Field>, i64); N]) {
+    for (f, v) in values {
+        write_one(f, image, v);
+    }
+}
+
+/// [`read`], never inlined (see [`read_each`]).
+#[inline(never)]
+fn read_one(field: Option<Field>, image: &[u8]) -> Option<i64> {
+    read(field, image)
+}
+
+/// [`write`], never inlined (see [`read_each`]).
+#[inline(never)]
+fn write_one(field: Option<Field>, image: &mut [u8], value: i64) {
+    write(field, image, value)
 }
 
 /// Write an integer into a mapped field (nothing when it is not mapped or outside the buffer;

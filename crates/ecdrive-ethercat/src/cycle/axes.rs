@@ -94,13 +94,22 @@ impl CycleDrive {
     pub(super) fn read_inputs(&mut self, inputs: &[u8], pulse: u64) -> Feedback {
         let pf = &self.fields.probe;
         let b = &self.fields.axis;
+        let [status, p0, p1, p2, p3, fe] = pdo::axis::read_each(
+            inputs,
+            [
+                pf.status,
+                pf.positions[0],
+                pf.positions[1],
+                pf.positions[2],
+                pf.positions[3],
+                b.following_error,
+            ],
+        );
         let read = Inputs {
             feedback: b.feedback(inputs),
-            probe_status: pdo::axis::read(pf.status, inputs).unwrap_or(0) as u16,
-            probe_positions: pf
-                .positions
-                .map(|f| pdo::axis::read(f, inputs).unwrap_or(0) as i32),
-            following_error_drive: b.following_error(inputs),
+            probe_status: status.unwrap_or(0) as u16,
+            probe_positions: [p0, p1, p2, p3].map(|p| p.unwrap_or(0) as i32),
+            following_error_drive: fe,
         };
         self.m.read(&read, pulse)
     }
