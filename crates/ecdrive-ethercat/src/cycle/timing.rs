@@ -41,6 +41,9 @@ impl TimingBatch {
         }
     }
 
+    // Out of line (as `Lap::lap`): one copy of the code for the cycle's several calls, which
+    // run cold from memory after each sleep.
+    #[inline(never)]
     pub(super) fn record(&mut self, t: &mut Timing, which: usize, ns: u64) {
         let n = self.n[which];
         self.values[n][which] = ns;
@@ -77,6 +80,7 @@ impl Lap {
         Self { last: woke, stats }
     }
 
+    #[inline(never)]
     pub(super) fn lap(&mut self) -> u64 {
         let now = monotonic_ns();
         let d = now.saturating_sub(self.last);
