@@ -101,7 +101,8 @@ fn reset_faults_clears_a_latched_fault_in_the_run() {
     };
     let dir = Dir::new("resetfaults");
     let f = dir.file("jog.toml", &jog(6.0, ""));
-    assert_eq!(sim.ecdrive(&["run", "-c", &f]).code, Some(5));
+    let r = sim.ecdrive(&["run", "-c", &f]);
+    assert_eq!(r.code, Some(5), "{r:#?}");
     let f = dir.file("reset.toml", &jog(0.5, "reset_faults = true"));
     let j = sim.run_json(&f, &[]);
     assert_eq!(j["outcome"], "completed", "{j:#}");

@@ -87,6 +87,14 @@ impl Default for LossPolicy {
 /// header (2), command (1).
 const FIRST_IDX_OFFSET: usize = 14 + 2 + 1;
 
+/// Whether `frame`'s first datagram has the command and address in `first` (the command byte,
+/// then the four address bytes; the index byte between them, a sequence number, is not
+/// compared): how the cycle's own frames and their replies are told from ethercrab's.
+pub(crate) fn first_datagram_is(frame: &[u8], first: &[u8; 5]) -> bool {
+    frame.get(FIRST_IDX_OFFSET - 1) == first.first()
+        && frame.get(FIRST_IDX_OFFSET + 1..FIRST_IDX_OFFSET + 5) == first.get(1..)
+}
+
 /// Watches the mailbox requests that go out on the wire.
 ///
 /// A device drops a mailbox request whose counter equals the previous request's as a repeat
@@ -347,12 +355,9 @@ impl<'sto, L: FrameLink> Pump<'sto, L> {
     }
 
     fn is_own_shape(&self, frame: &[u8]) -> bool {
-        let at = FIRST_IDX_OFFSET;
-        self.own_shapes.iter().any(|(len, first)| {
-            frame.len() == *len
-                && frame.get(at - 1) == first.first()
-                && frame.get(at + 1..at + 5) == first.get(1..)
-        })
+        self.own_shapes
+            .iter()
+            .any(|(len, first)| frame.len() == *len && first_datagram_is(frame, first))
     }
 
     /// Have ethercrab say when it queues a frame (its sender waker sets a flag), so that

@@ -29,7 +29,7 @@ use crate::ec::frame::{
     WKC_LEN, physical_address,
 };
 use crate::ec::register::{self, FmmuConfig};
-use crate::io::{FrameLink, LogicalSeen, MAX_FRAME, Pump};
+use crate::io::{FrameLink, LogicalSeen, MAX_FRAME, Pump, first_datagram_is};
 use crate::link::LinkError;
 use core::ops::Range;
 use std::sync::atomic::{AtomicU8, Ordering};
@@ -554,11 +554,9 @@ impl OwnFrames {
                 if r.get(6).is_none_or(|b| b & MAC_LOCAL_BIT == 0) {
                     return None;
                 }
-                let f = frames.iter().find(|f| {
-                    r.len() == f.bytes.len()
-                        && r.get(f.index_at - 1) == f.first.first()
-                        && r.get(f.index_at + 1..f.index_at + 5) == f.first.get(1..)
-                })?;
+                let f = frames
+                    .iter()
+                    .find(|f| r.len() == f.bytes.len() && first_datagram_is(r, &f.first))?;
                 Some(!f.answered && r.get(f.index_at) == Some(&seq))
             };
             let Some(len) = pump.receive_own(&mut self.reply[..], deadline_ns, ours)? else {
@@ -566,11 +564,11 @@ impl OwnFrames {
                 return Ok(OwnOutcome::Late);
             };
             let r = &self.reply[..len];
-            let Some(f) = self.frames.iter_mut().find(|f| {
-                !f.answered
-                    && r.get(f.index_at - 1) == f.first.first()
-                    && r.get(f.index_at + 1..f.index_at + 5) == f.first.get(1..)
-            }) else {
+            let Some(f) = self
+                .frames
+                .iter_mut()
+                .find(|f| !f.answered && first_datagram_is(r, &f.first))
+            else {
                 continue;
             };
             f.answered = true;
