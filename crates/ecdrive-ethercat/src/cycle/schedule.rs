@@ -16,35 +16,6 @@
 /// `grid`: a point of the SYNC0 grid from the reply this cycle read (None: no reply, or no
 /// reference clock: one cycle on); `now`: the time the cycle is done.
 pub(super) fn next_instant(target: u64, grid: Option<u64>, cycle_ns: u64, now: u64) -> u64 {
-    narrow(target, grid, cycle_ns, now).unwrap_or_else(|| wide(target, grid, cycle_ns, now))
-}
-
-/// [`next_instant`] in `i64`, which holds every monotonic reading below 292 years (`None`
-/// beyond, or on an overflow): the cycle's path, without the 128-bit division's library call.
-fn narrow(target: u64, grid: Option<u64>, cycle_ns: u64, now: u64) -> Option<u64> {
-    let p = i64::try_from(cycle_ns.max(1)).ok()?;
-    let want = i64::try_from(target).ok()?.checked_add(p)?;
-    let next = match grid {
-        Some(at) => {
-            let at = i64::try_from(at).ok()?;
-            // The grid's point nearest `want`.
-            let k = want.checked_sub(at)?.checked_add(p / 2)?.div_euclid(p);
-            at.checked_add(k.checked_mul(p)?)?
-        }
-        None => want,
-    };
-    let now = i64::try_from(now).ok()?;
-    let next = if next > now {
-        next
-    } else {
-        let k = now.checked_sub(next)? / p + 1;
-        next.checked_add(k.checked_mul(p)?)?
-    };
-    u64::try_from(next).ok()
-}
-
-/// [`next_instant`] in `i128`: every input.
-fn wide(target: u64, grid: Option<u64>, cycle_ns: u64, now: u64) -> u64 {
     let p = i128::from(cycle_ns.max(1));
     let want = i128::from(target) + p;
     let next = match grid {
@@ -66,54 +37,7 @@ fn wide(target: u64, grid: Option<u64>, cycle_ns: u64, now: u64) -> u64 {
 
 #[cfg(test)]
 mod tests {
-    use super::{narrow, next_instant, wide};
-
-    /// The cycle's `i64` path gives what the `i128` one gives wherever it answers, and answers
-    /// for every reading a monotonic clock can have (below 2^62 ns, 146 years).
-    #[test]
-    fn the_narrow_path_agrees_with_the_wide_one() {
-        let values = [
-            0u64,
-            1,
-            999_999,
-            1_000_000,
-            7_654_321_987,
-            123_456_789_012_345,
-            1 << 40,
-            (1 << 62) - 1,
-            1 << 62,
-            (1 << 63) - 1,
-            1 << 63,
-            u64::MAX - 1,
-            u64::MAX,
-        ];
-        let cycles = [0u64, 1, 125_000, 1_000_000, 3_333_333, 1 << 62, u64::MAX];
-        for &target in &values {
-            for &now in &values {
-                for &cycle in &cycles {
-                    for grid in [
-                        None,
-                        Some(0),
-                        Some(target / 2 + 17),
-                        Some(now),
-                        Some(u64::MAX),
-                    ] {
-                        let w = wide(target, grid, cycle, now);
-                        if let Some(n) = narrow(target, grid, cycle, now) {
-                            assert_eq!(n, w, "{target} {grid:?} {cycle} {now}");
-                        } else {
-                            assert!(
-                                target.max(now).max(grid.unwrap_or(0)) >= 1 << 62
-                                    || cycle >= 1 << 62,
-                                "{target} {grid:?} {cycle} {now}"
-                            );
-                        }
-                        assert_eq!(next_instant(target, grid, cycle, now), w);
-                    }
-                }
-            }
-        }
-    }
+    use super::next_instant;
 
     const P: u64 = 1_000_000;
     /// The reference clock's time = the host's + this (any offset: only the phase counts).
