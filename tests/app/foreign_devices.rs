@@ -120,19 +120,20 @@ fn drives_without_state_skipping_enable_in_process() {
 /// Drives that refuse OP (AL status code 0x002D) while SYNC0 is activated but has not fired:
 /// the master requests OP only after the drives have had SYNC0 cycles (the MR-J4-TM manual
 /// §1.4.2 (7): synchronisation in SAFE-OP, then valid command values, then OP). Two cycles of
-/// valid outputs would come well before the first SYNC0 (the start delay is 11 ms here); a
-/// master counting cycles alone would be refused.
+/// valid outputs would come well before the first SYNC0 (the start delay is set to 11 ms
+/// here); a master counting cycles alone would be refused.
 #[test]
 fn drives_that_need_sync0_before_op_reach_op() {
     let _one = one_at_a_time();
-    let r = run_text(&config(
+    let text = config(
         &["mr-j4-tm+op-needs-sync0", "bdhde+op-needs-sync0"],
         &format!(
             "[supervision]\nsafeop_cycles = 2\n{}{}",
             move_at(0),
             move_at(1)
         ),
-    ));
+    );
+    let r = run_text(&format!("dc_start_delay = \"11ms\"\n{text}"));
     completed(&r);
     assert!(
         !r.history.iter().any(|h| matches!(

@@ -131,11 +131,13 @@ pub struct DcSettings {
     /// cycles they miss).
     pub shift: Option<Duration>,
     /// From reading the reference clock to the first SYNC0. ethercrab computes one start time
-    /// for every drive from that reading and then configures the drives one after the other,
-    /// so the delay must cover all of them: start-up checks that it did and names the
-    /// setting when not. `None`: \[REC\] 5 ms plus 0.5 ms per drive with DC (a drive's SYNC0
-    /// set-up is four writes, about 0.2 ms a drive over veth at 64 drives; SOEM and IgH use a
-    /// fixed 100 ms).
+    /// for every drive from that reading and then configures the drives one after the other;
+    /// a drive configured after the start time has passed would wait for its ESC's clock to
+    /// wrap, so start-up arms it again with a later start time on the same grid (up to three
+    /// times, the margin doubled each time) and fails naming this setting only after that.
+    /// `None`: \[REC\] 1 ms plus 0.2 ms per drive with DC (a drive's SYNC0 set-up is four
+    /// writes one after the other, about 0.15 ms a drive over veth at 64 drives; SOEM and IgH
+    /// use a fixed 100 ms).
     pub start_delay: Option<Duration>,
     /// The system-time difference every drive must get below before SYNC0 starts, ns.
     pub settle_threshold_ns: u32,
@@ -151,7 +153,7 @@ impl DcSettings {
     /// The start delay for `dc_drives` drives with DC: the configured one or the default.
     pub fn start_delay_for(&self, dc_drives: usize) -> Duration {
         self.start_delay
-            .unwrap_or(Duration::from_micros(5_000 + 500 * dc_drives as u64))
+            .unwrap_or(Duration::from_micros(1_000 + 200 * dc_drives as u64))
     }
 }
 
@@ -414,6 +416,9 @@ pub struct StartupTimes {
     /// Frames sent in each phase: what the wire had to carry, whatever a frame's round trip
     /// costs on the link at hand.
     pub frames: StartupFrames,
+    /// Drives whose SYNC0 start time had passed before they were configured, armed again with
+    /// a later one on the same grid (counted once per arming).
+    pub sync0_rearmed: usize,
     /// When SAFE-OP was reached (monotonic ns): where `op_ms` counts from.
     #[serde(skip)]
     pub safe_op_at_ns: u64,
@@ -2657,7 +2662,7 @@ fn to_safe_op<L: FrameLink>(
         })
         .map_err(|e| exec_error(None, e))?
         .map_err(|e| bus_error(None, "starting SYNC0", e))?;
-    sync0_starts(bus, drives, start_delay)?;
+    times.sync0_rearmed = sync0_starts(bus, drives, start_delay, cfg.cycle)?;
     let addrs: Vec<(u16, DriveRef)> = drives
         .iter()
         .map(|d| (d.info.address, d.drive.clone()))
@@ -2686,16 +2691,26 @@ fn to_safe_op<L: FrameLink>(
     Err(e)
 }
 
-/// Each DC drive's first SYNC0 (0x0990, read back), into [`ConfiguredDrive::sync0_start_ns`];
-/// then the check that it is still ahead: ethercrab computed one start time from a single
-/// reading of the reference clock and configured the drives one after the other, so a start
-/// delay too short for the segment leaves the last drives with a start time already past
-/// (their SYNC0 would not start until the clock wraps).
+/// Times start-up arms SYNC0 again on drives whose start time passed before they were
+/// configured, each time with twice the margin, before it gives up.
+const SYNC0_REARMS: u32 = 3;
+
+/// Each DC drive's first SYNC0 (0x0990, read back), into [`ConfiguredDrive::sync0_start_ns`],
+/// and SYNC0 armed again where its start time had passed. ethercrab computes one start time
+/// from a single reading of the reference clock and configures the drives one after the
+/// other, so a start delay too short for the segment leaves the last drives with a start time
+/// already past when their Sync Out Unit was activated: the ESC then waits for the system time
+/// to reach it again (the 32-bit wrap, or never with 64 bits; datasheet section II, 0x0981
+/// bit 5). Such a drive still has its first pulse pending (0x0984 bit 0) with a start time at
+/// or before the system time. It is armed again on the same grid (its start time plus whole
+/// cycles, so every drive keeps the phase of the others): 0x0981 = 0, the new start time, the
+/// activation it had. Returns how many drives were armed again.
 fn sync0_starts<L: FrameLink>(
     bus: &mut Bus<'_, L>,
     drives: &mut [ConfiguredDrive],
     start_delay: Duration,
-) -> Result<(), MasterError> {
+    cycle: Duration,
+) -> Result<usize, MasterError> {
     let dc: Vec<(usize, u16)> = drives
         .iter()
         .enumerate()
@@ -2703,49 +2718,109 @@ fn sync0_starts<L: FrameLink>(
         .map(|(i, d)| (i, d.info.address))
         .collect();
     let Some(&(_, probe)) = dc.last() else {
-        return Ok(());
+        return Ok(0);
     };
-    let starts = bus
-        .block_on_each(
-            &|| "reading each drive's SYNC0 start time (0x0990)".into(),
-            T_STEP,
-            dc.iter().map(|&(_, a)| a).collect(),
-            async |md, addr| {
-                Command::fprd(addr, register::DC_START_TIME)
-                    .receive::<u64>(md)
-                    .await
-            },
-        )
-        .map_err(|e| exec_error(None, e))?;
-    // The system time of the drive configured last, read after every start time was written.
-    let now = bus
-        .block_on(
-            &|| "reading the DC system time (0x0910)".into(),
-            T_STEP,
-            |md| Command::fprd(probe, register::DC_SYSTEM_TIME).receive::<u64>(md),
-        )
-        .map_err(|e| exec_error(None, e))?
-        .map_err(|e| bus_error(None, "reading the DC system time (0x0910)", e))?;
-    for (&(i, _), start) in dc.iter().zip(starts) {
-        let d = &mut drives[i];
-        let start = start
-            .map_err(|e| bus_error(Some(&d.drive), "reading the SYNC0 start time (0x0990)", e))?;
-        d.sync0_start_ns = Some(start);
-        if start <= now {
+    let cycle_ns = u64::try_from(cycle.as_nanos()).unwrap_or(u64::MAX).max(1);
+    let mut margin = u64::try_from(start_delay.as_nanos())
+        .unwrap_or(u64::MAX)
+        .max(cycle_ns);
+    let mut todo = dc;
+    let mut rearmed = 0;
+    for attempt in 0..=SYNC0_REARMS {
+        let states = bus
+            .block_on_each(
+                &|| "reading each drive's SYNC0 start time (0x0981, 0x0990)".into(),
+                T_STEP,
+                todo.iter().map(|&(_, a)| a).collect(),
+                async |md, addr| {
+                    // 0x0981 activation, 0x0982 pulse length, 0x0984 activation status.
+                    let act = Command::fprd(addr, register::DC_ACTIVATION)
+                        .receive::<[u8; 4]>(md)
+                        .await?;
+                    let start = Command::fprd(addr, register::DC_START_TIME)
+                        .receive::<u64>(md)
+                        .await?;
+                    Ok::<_, ethercrab::error::Error>((act, start))
+                },
+            )
+            .map_err(|e| exec_error(None, e))?;
+        // The system time of the drive configured last, read after every start time was
+        // written.
+        let now = bus
+            .block_on(
+                &|| "reading the DC system time (0x0910)".into(),
+                T_STEP,
+                |md| Command::fprd(probe, register::DC_SYSTEM_TIME).receive::<u64>(md),
+            )
+            .map_err(|e| exec_error(None, e))?
+            .map_err(|e| bus_error(None, "reading the DC system time (0x0910)", e))?;
+        let mut late = Vec::new();
+        for (&(i, addr), state) in todo.iter().zip(states) {
+            let d = &mut drives[i];
+            let ([act, _, _, status], start) = state.map_err(|e| {
+                bus_error(Some(&d.drive), "reading the SYNC0 start time (0x0990)", e)
+            })?;
+            d.sync0_start_ns = Some(start);
+            // Pending with a start time at or before now: it will not come.
+            if status & 0x01 != 0 && start.wrapping_sub(now) as i64 <= 0 {
+                late.push((i, addr, act, start));
+            }
+        }
+        if late.is_empty() {
+            return Ok(rearmed);
+        }
+        if attempt == SYNC0_REARMS {
+            let d = &drives[late[0].0];
             return Err(MasterError::new(
                 Some(&d.drive),
                 "starting SYNC0",
                 ErrorKind::DcSettle,
                 format!(
-                    "its SYNC0 start time had passed before every drive was configured (start \
-                     delay {} ms for {} drives with DC; set a longer DcSettings::start_delay)",
+                    "its SYNC0 start time had passed before it was configured, {} times \
+                     (start delay {} ms for {} drives with DC; set a longer \
+                     dc_start_delay in the run file, DcSettings::start_delay in the API)",
+                    SYNC0_REARMS + 1,
                     start_delay.as_millis(),
-                    dc.len()
+                    drives.iter().filter(|d| d.info.dc).count(),
                 ),
             ));
         }
+        let at = now.saturating_add(margin);
+        let writes = bus
+            .block_on_each(
+                &|| "arming SYNC0 again (0x0981, 0x0990)".into(),
+                T_STEP,
+                late.iter()
+                    .map(|&(_, addr, act, start)| {
+                        let cycles = at.saturating_sub(start).div_ceil(cycle_ns);
+                        (
+                            addr,
+                            act,
+                            start.saturating_add(cycles.saturating_mul(cycle_ns)),
+                        )
+                    })
+                    .collect(),
+                async |md, (addr, act, new): (u16, u8, u64)| {
+                    Command::fpwr(addr, register::DC_ACTIVATION)
+                        .send(md, 0u8)
+                        .await?;
+                    Command::fpwr(addr, register::DC_START_TIME)
+                        .send(md, new)
+                        .await?;
+                    Command::fpwr(addr, register::DC_ACTIVATION)
+                        .send(md, act)
+                        .await
+                },
+            )
+            .map_err(|e| exec_error(None, e))?;
+        for (&(i, ..), w) in late.iter().zip(writes) {
+            w.map_err(|e| bus_error(Some(&drives[i].drive), "arming SYNC0 again (0x0990)", e))?;
+        }
+        rearmed += late.len();
+        todo = late.iter().map(|&(i, addr, ..)| (i, addr)).collect();
+        margin = margin.saturating_mul(2);
     }
-    Ok(())
+    Ok(rearmed)
 }
 
 /// A read-only cycle time shows the SYNC0 cycle once SYNC0 runs (ETG.1020): check it, from the

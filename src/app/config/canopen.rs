@@ -207,12 +207,17 @@ fn ethercat_only(cx: &Ctx<'_>, f: &raw::File) -> Result<(), ConfigError> {
              interface = \"can-sim\", one per [[drive]] at its node",
         ));
     }
-    if let Some(s) = &f.dc_shift {
-        return Err(cx.err(
-            s.span(),
-            "dc_shift",
-            "distributed clocks are EtherCAT's; a CANopen run is paced by SYNC",
-        ));
+    for (key, s) in [
+        ("dc_shift", &f.dc_shift),
+        ("dc_start_delay", &f.dc_start_delay),
+    ] {
+        if let Some(s) = s {
+            return Err(cx.err(
+                s.span(),
+                key,
+                "distributed clocks are EtherCAT's; a CANopen run is paced by SYNC",
+            ));
+        }
     }
     if f.rt.is_some() {
         return refuse("rt", "[rt]");

@@ -40,6 +40,13 @@ pub(super) fn parse_ethercat(cx: &Ctx<'_>, f: raw::File) -> Result<RunConfig, Co
         }
         master.startup.dc.shift = Some(d);
     }
+    if let Some(s) = &f.dc_start_delay {
+        let d = duration_at(&cx, s, "dc_start_delay")?;
+        if d > Duration::from_secs(10) {
+            return Err(cx.err(s.span(), "dc_start_delay", "must be at most 10 s"));
+        }
+        master.startup.dc.start_delay = Some(d);
+    }
     let duration = f
         .duration
         .as_ref()

@@ -16,6 +16,8 @@ pub(super) struct File {
     #[serde(default)]
     pub dc_shift: Option<Spanned<String>>,
     #[serde(default)]
+    pub dc_start_delay: Option<Spanned<String>>,
+    #[serde(default)]
     pub duration: Option<Spanned<String>>,
     #[serde(default)]
     pub allow_generic: bool,

@@ -684,3 +684,41 @@ fn every_dc_shift_gives_each_sync0_its_frame() {
         }
     }
 }
+
+/// No start delay at all: every drive's SYNC0 start time has passed when its Sync Out Unit is
+/// activated, which a slave controller waits on until its clock wraps (the emulated one, as the
+/// datasheet has it, never starts). Start-up arms each again on the same grid, the run goes on,
+/// every SYNC0 finds fresh outputs, and both drives pulse in phase.
+#[test]
+fn a_sync0_start_time_already_past_is_armed_again_on_the_grid() {
+    let mut cfg = config(SetpointLimits::default());
+    cfg.startup.dc.start_delay = Some(Duration::ZERO);
+    let mut m = Master::start(SegmentLink::new(segment()), cfg)
+        .unwrap_or_else(|f| panic!("start-up: {}", f.error));
+    m.wait_until("OP", T, |t| t.cycle.all_op).unwrap();
+    let c0 = m.telemetry().cycle.cycle;
+    m.wait_until("the cycles", T, |t| t.cycle.cycle >= c0 + 200)
+        .unwrap();
+    let (r, link) = m.stop(StopKind::Ramp);
+    let r = r.unwrap();
+    assert!(r.shutdown_ok);
+    assert_eq!(r.startup.unwrap().sync0_rearmed, KEYS.len(), "{r:#?}");
+    let seg = link.segment();
+    let mut phases = vec![];
+    for i in 0..KEYS.len() {
+        let t = seg
+            .device::<EmulatedDrive>(i)
+            .unwrap()
+            .recorded_targets()
+            .to_vec();
+        let stale = t.iter().filter(|x| !x.fresh).count();
+        assert!(
+            t.len() >= 200 && stale * 20 < t.len(),
+            "drive {i}: {stale} of {} SYNC0 cycles without fresh outputs",
+            t.len()
+        );
+        let s = seg.slave(i).unwrap().esc.sync_state();
+        phases.push(s.next % 1_000_000);
+    }
+    assert!(phases.iter().all(|&p| p == phases[0]), "{phases:?}");
+}

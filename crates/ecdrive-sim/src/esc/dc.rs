@@ -14,7 +14,8 @@
 //! - a write to 0x0930 or 0x0934 resets the loop (trim, rate and filter);
 //! - **SYNC0**: when 0x0981 bits 0 and 1 are set, pulses start at the start time (0x0990) and
 //!   repeat every 0x09A0 ns of system time (0 = a single pulse). A start time in the past
-//!   starts at the next whole cycle after now and sets 0x0984 bit 2.
+//!   starts nothing (64 bits) or waits for the 32-bit wrap, unless the start-time plausibility
+//!   check (0x0981 bit 5) asks for a pulse at once; 0x0984 bit 2 says it was past.
 
 use crate::rec::{
     DC_KI_DIV as KI_DIV, DC_KI_MIN_INTERVAL_NS as KI_MIN_INTERVAL_NS, DC_KP_SHIFT as KP_SHIFT,
@@ -70,6 +71,9 @@ pub struct SyncGen {
     pub cycle: u32,
     /// Pulses delivered since activation.
     pub count: u64,
+    /// The start time had passed at activation and nothing starts the pulses before the
+    /// 64-bit system time reaches it again: none comes (see `Esc::start_sync`).
+    pub waiting: bool,
 }
 
 impl DcUnit {

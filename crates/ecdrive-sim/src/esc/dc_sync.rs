@@ -75,28 +75,56 @@ impl Esc {
         self.put_u64(0x0918, p0);
     }
 
+    /// The Sync Out Unit is activated (0x0981 bits 0 and 1 set): when its first pulse comes,
+    /// as the ESC datasheet (section II, 0x0981, 0x0984, 0x0990) has it. The start time is
+    /// compared with the system time in the DC unit's width (32 or 64 bits):
+    /// - within the near future (0x0981 bit 6 = 0: half the width, 2^31 or 2^63 ns ahead;
+    ///   bit 6 = 1: about 2.1 s, 2^31 ns): the first pulse at the start time;
+    /// - outside it, with the start-time plausibility check on (bit 5): a pulse at once;
+    /// - outside it without the check (what ethercrab, SOEM and KickCAT write, 0x03): "SyncSignal
+    ///   generation if Start Time is reached": a start time already past is reached again only
+    ///   when the system time wraps, after about 4.3 s with 32 bits and never with 64. The first
+    ///   pulse stays pending (0x0984 bit 0) and 0x0990 reads the start time until the master
+    ///   deactivates the unit and writes a new one.
+    ///
+    /// 0x0984 bit 2 holds the check's result (the start time was outside the near future).
     pub(super) fn start_sync(&mut self, hop: Hop) {
+        let flags = self.byte(0x0981);
         let start = self.get_u64(0x0990);
         let cycle = self.get_u32(0x09A0);
         let now = self.system_time(hop.forward_ns);
-        let mut status = 0x01; // SYNC0 activation pending until the first pulse
-        let next = if start > now {
-            start
-        } else if cycle == 0 {
-            status |= 0x04;
-            now
+        let bits64 = matches!(self.cfg.dc, DcSupport::Bits64);
+        // How far ahead the start time is, in the unit's width (a past one is far ahead).
+        let ahead = if bits64 {
+            start.wrapping_sub(now)
         } else {
-            // Start time already passed: start at the next whole cycle and flag it.
+            u64::from((start as u32).wrapping_sub(now as u32))
+        };
+        let near = if flags & 0x40 != 0 || !bits64 {
+            1u64 << 31
+        } else {
+            1u64 << 63
+        };
+        let near_future = ahead > 0 && ahead < near;
+        let mut status = 0x01; // the first SYNC0 pulse is pending
+        if !near_future {
             status |= 0x04;
-            let c = u64::from(cycle);
-            let k = (now - start) / c + 1;
-            start.saturating_add(k.saturating_mul(c))
+        }
+        let (next, waiting) = if near_future {
+            (now + ahead, false)
+        } else if flags & 0x20 != 0 {
+            (now, false)
+        } else if bits64 {
+            (start, true)
+        } else {
+            (now.saturating_add(ahead), false)
         };
         self.dc.sync = SyncGen {
             active: true,
             next,
             cycle,
             count: 0,
+            waiting,
         };
         self.pending |= pending::DEADLINE;
         self.put(0x0984, &[status]);
@@ -124,7 +152,7 @@ impl Esc {
     /// watchdog expiry), conservatively early.
     pub fn next_deadline(&self, host_now: u64) -> Option<u64> {
         let mut d = self.wd_deadline;
-        if self.dc.sync.active {
+        if self.dc.sync.active && !self.dc.sync.waiting {
             let sys_now = self.system_time(host_now);
             let ahead = self.dc.sync.next.saturating_sub(sys_now);
             // System time may run up to 0.2 % faster than the host clock (drift + loop); aim
@@ -142,7 +170,7 @@ impl Esc {
         if self.dc.sync.active {
             let now = self.system_time(host_ns);
             let mut guard = 0u32;
-            while self.dc.sync.active && self.dc.sync.next <= now {
+            while self.dc.sync.active && !self.dc.sync.waiting && self.dc.sync.next <= now {
                 let t = self.dc.sync.next;
                 let cycle = self.dc.sync.cycle;
                 self.put(0x098E, &[0x01]);

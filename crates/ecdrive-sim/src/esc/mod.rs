@@ -789,6 +789,11 @@ impl Esc {
                     continue;
                 }
             }
+            // The start time is writable only while the Sync Out Unit is not activated
+            // (0x0981 bit 0; datasheet section II, 0x0990).
+            if (0x0990..0x0998).contains(&at) && self.byte(0x0981) & 0x01 != 0 {
+                continue;
+            }
             if let Some(m) = self.mem.get_mut(at) {
                 *m = (*m & !mask) | (v & mask);
             }

@@ -1015,15 +1015,55 @@ fn sync0_events_are_delivered_exactly_and_report_missing_outputs() {
     );
 }
 
+/// A start time already past when the Sync Out Unit is activated with 0x03 (what ethercrab,
+/// SOEM and KickCAT write): the ESC waits for the system time to reach it, which a 64-bit one
+/// never does (datasheet section II, 0x0981 bit 5 = 0). The first pulse stays pending, 0x0990
+/// reads the start time, 0x0984 bit 2 says it was outside the near future; the start time
+/// cannot be written while the unit is activated, and deactivating, writing a start time ahead
+/// and activating again starts the pulses there.
 #[test]
-fn sync0_start_time_in_the_past_starts_at_the_next_cycle() {
-    let (mut p, _) = io_segment(1);
+fn sync0_start_time_in_the_past_waits_until_the_master_arms_it_again() {
+    let (mut p, clock) = io_segment(1);
+    let now = u64le(&p.fprd(0x1000, 0x0910, 8).unwrap().data);
+    let past = now - 2_500_000;
+    activate_sync0(&mut p, 0x1000, past, 1_000_000);
+    clock.advance(50_000_000);
+    p.segment.poll();
+    assert_eq!(
+        p.segment.device::<IoDevice>(0).unwrap().seen.sync0_events,
+        0
+    );
+    assert_eq!(u64le(&p.fprd(0x1000, 0x0990, 8).unwrap().data), past);
+    assert_eq!(p.fprd(0x1000, 0x0984, 1).unwrap().data[0], 0x05);
+    // Written while activated: refused.
+    let later = u64le(&p.fprd(0x1000, 0x0910, 8).unwrap().data) + 2_000_000;
+    p.fpwr(0x1000, 0x0990, &later.to_le_bytes()).unwrap();
+    assert_eq!(u64le(&p.fprd(0x1000, 0x0990, 8).unwrap().data), past);
+    // Armed again.
+    activate_sync0(&mut p, 0x1000, later, 1_000_000);
+    assert_eq!(p.fprd(0x1000, 0x0984, 1).unwrap().data[0], 0x01);
+    clock.advance(2_500_000);
+    p.segment.poll();
+    let seen = &p.segment.device::<IoDevice>(0).unwrap().seen;
+    assert_eq!(seen.sync0_events, 1);
+    assert_eq!(seen.last_sync0_ns, Some(later));
+    assert_eq!(p.fprd(0x1000, 0x0984, 1).unwrap().data[0], 0x00);
+}
+
+/// With the start-time plausibility check on (0x0981 bit 5) a past start time gives a pulse
+/// at once (datasheet section II, 0x0981).
+#[test]
+fn sync0_start_time_in_the_past_with_the_plausibility_check_pulses_at_once() {
+    let (mut p, clock) = io_segment(1);
     let now = u64le(&p.fprd(0x1000, 0x0910, 8).unwrap().data);
     activate_sync0(&mut p, 0x1000, now - 2_500_000, 1_000_000);
-    let next = u64le(&p.fprd(0x1000, 0x0990, 8).unwrap().data);
-    assert!(next > now && next <= now + 1_000_000);
-    assert_eq!((next - (now - 2_500_000)) % 1_000_000, 0);
-    assert_eq!(p.fprd(0x1000, 0x0984, 1).unwrap().data[0] & 0x04, 0x04);
+    p.fpwr(0x1000, 0x0981, &[0]).unwrap();
+    p.fpwr(0x1000, 0x0981, &[0x23]).unwrap();
+    clock.advance(10_000);
+    p.segment.poll();
+    let seen = &p.segment.device::<IoDevice>(0).unwrap().seen;
+    assert_eq!(seen.sync0_events, 1);
+    assert_eq!(p.fprd(0x1000, 0x0984, 1).unwrap().data[0], 0x04);
 }
 
 #[test]
