@@ -121,14 +121,14 @@ for r in $(seq "$rounds"); do
   python3 -c "
 import json, sys
 s = json.load(open('$work/one.json'))['startup']
-print(' '.join([str(s[k]) for k in '$fields'.split()] + [str(s['frames'][k]) for k in '$frames'.split()]))" >>"$work/ecdrive.txt"
+print(' '.join([str(s[k]) for k in '$fields'.split()] + [str(s['frames'][k]) for k in '$frames'.split()] + [str(s['sync0_rearmed'])]))" >>"$work/ecdrive.txt"
 done
 
 python3 - "$work" "$n" "$rounds" "$fields" "$soem" "$frames" "$cycle_ms" "$answer" <<'EOF'
 import statistics, sys, subprocess
 work, n, rounds, fields, soem, frames, cycle_ms, answer = sys.argv[1:]
 med = lambda xs: statistics.median(xs) if xs else float("nan")
-names = fields.split() + ["frames_" + f for f in frames.split()]
+names = fields.split() + ["frames_" + f for f in frames.split()] + ["rearmed"]
 rows = [list(map(float, l.split())) for l in open(f"{work}/ecdrive.txt")]
 cols = dict(zip(names, zip(*rows)))
 commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True).stdout.strip()
@@ -148,5 +148,8 @@ for k in fields.split()[1:]:
     a = "frames_answered_" + k[:-3]
     if a in cols and med(cols[a]) > 0:
         extra += f" (+{med(cols[a]):.0f} of ethercrab's answered, not sent)"
+    if k == "safe_op_ms":
+        late = [x for x in cols["rearmed"] if x > 0]
+        extra += f" (SYNC0 armed again on {sum(late):.0f} drives in {len(late)} of {len(rows)} runs)"
     print(f"    {k[:-3]:20} {med(cols[k]):8.1f} ms{extra}")
 EOF

@@ -2695,6 +2695,9 @@ fn to_safe_op<L: FrameLink>(
 /// configured, each time with twice the margin, before it gives up.
 const SYNC0_REARMS: u32 = 3;
 
+/// 0x0981 (activation) to the end of 0x0990 (the start time), read at once.
+const SYNC_REGS: usize = (register::DC_START_TIME - register::DC_ACTIVATION) as usize + 8;
+
 /// Each DC drive's first SYNC0 (0x0990, read back), into [`ConfiguredDrive::sync0_start_ns`],
 /// and SYNC0 armed again where its start time had passed. ethercrab computes one start time
 /// from a single reading of the reference clock and configures the drives one after the
@@ -2733,14 +2736,11 @@ fn sync0_starts<L: FrameLink>(
                 T_STEP,
                 todo.iter().map(|&(_, a)| a).collect(),
                 async |md, addr| {
-                    // 0x0981 activation, 0x0982 pulse length, 0x0984 activation status.
-                    let act = Command::fprd(addr, register::DC_ACTIVATION)
-                        .receive::<[u8; 4]>(md)
-                        .await?;
-                    let start = Command::fprd(addr, register::DC_START_TIME)
-                        .receive::<u64>(md)
-                        .await?;
-                    Ok::<_, ethercrab::error::Error>((act, start))
+                    // 0x0981 activation … 0x0984 activation status … 0x0990 start time, in
+                    // one read.
+                    Command::fprd(addr, register::DC_ACTIVATION)
+                        .receive::<[u8; SYNC_REGS]>(md)
+                        .await
                 },
             )
             .map_err(|e| exec_error(None, e))?;
@@ -2757,9 +2757,13 @@ fn sync0_starts<L: FrameLink>(
         let mut late = Vec::new();
         for (&(i, addr), state) in todo.iter().zip(states) {
             let d = &mut drives[i];
-            let ([act, _, _, status], start) = state.map_err(|e| {
+            let regs = state.map_err(|e| {
                 bus_error(Some(&d.drive), "reading the SYNC0 start time (0x0990)", e)
             })?;
+            let (act, status) = (regs[0], regs[3]);
+            let mut start = [0u8; 8];
+            start.copy_from_slice(&regs[SYNC_REGS - 8..]);
+            let start = u64::from_le_bytes(start);
             d.sync0_start_ns = Some(start);
             // Pending with a start time at or before now: it will not come.
             if status & 0x01 != 0 && start.wrapping_sub(now) as i64 <= 0 {

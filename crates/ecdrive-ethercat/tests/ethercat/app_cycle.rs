@@ -655,6 +655,26 @@ fn commands_home_arm_a_probe_and_move_in_pp() {
     );
 }
 
+/// The tests judged by the SYNC0 cycles the drives found without fresh outputs run one at a
+/// time: each has a cycle at real-time priority whose frame must reach the drives within the
+/// rest of its period, and on this kernel (no preemption of kernel code) a second one starting
+/// up on the other core can hold its wake-ups back by milliseconds.
+static TIMING_JUDGED: Mutex<()> = Mutex::new(());
+
+fn timing_judged() -> std::sync::MutexGuard<'static, ()> {
+    TIMING_JUDGED
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+}
+
+/// Whether `stale` of `n` SYNC0 cycles without fresh outputs is the few a loaded host causes
+/// (its stalls hold the cycle back a few milliseconds at a time: up to 8.5 % of a 0.8 s run
+/// seen with a second real-time test on a two-core host), not the fault these tests guard
+/// against, a schedule missing every other cycle (50 %).
+fn few_stale(stale: usize, n: usize) -> bool {
+    stale * 5 < n
+}
+
 /// Whether `h` is a refused command whose reason says `what`.
 fn refused(h: &HistoryEntry, what: &str) -> bool {
     matches!(h.cycle_event(), Some(EventKind::CommandRefused { why, .. }) if why.contains(what))
@@ -667,6 +687,7 @@ fn refused(h: &HistoryEntry, what: &str) -> bool {
 /// period and not at all in the next with a shift under half a cycle: half the cycles.)
 #[test]
 fn every_dc_shift_gives_each_sync0_its_frame() {
+    let _one = timing_judged();
     for shift_us in [100, 500, 850] {
         let mut cfg = config(SetpointLimits::default());
         cfg.startup.dc.shift = Some(Duration::from_micros(shift_us));
@@ -674,10 +695,8 @@ fn every_dc_shift_gives_each_sync0_its_frame() {
         assert!(r.shutdown_ok, "shift {shift_us} µs");
         for (i, t) in targets.iter().enumerate() {
             let stale = t.iter().filter(|x| !x.fresh).count();
-            // A loaded machine may stall a few cycles; the fault this guards against misses
-            // every other one.
             assert!(
-                t.len() >= 600 && stale * 20 < t.len(),
+                t.len() >= 600 && few_stale(stale, t.len()),
                 "shift {shift_us} µs, drive {i}: {stale} of {} SYNC0 cycles without fresh outputs",
                 t.len()
             );
@@ -691,6 +710,7 @@ fn every_dc_shift_gives_each_sync0_its_frame() {
 /// every SYNC0 finds fresh outputs, and both drives pulse in phase.
 #[test]
 fn a_sync0_start_time_already_past_is_armed_again_on_the_grid() {
+    let _one = timing_judged();
     let mut cfg = config(SetpointLimits::default());
     cfg.startup.dc.start_delay = Some(Duration::ZERO);
     let mut m = Master::start(SegmentLink::new(segment()), cfg)
@@ -713,7 +733,7 @@ fn a_sync0_start_time_already_past_is_armed_again_on_the_grid() {
             .to_vec();
         let stale = t.iter().filter(|x| !x.fresh).count();
         assert!(
-            t.len() >= 200 && stale * 20 < t.len(),
+            t.len() >= 200 && few_stale(stale, t.len()),
             "drive {i}: {stale} of {} SYNC0 cycles without fresh outputs",
             t.len()
         );
