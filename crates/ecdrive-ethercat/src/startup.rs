@@ -135,8 +135,8 @@ pub struct DcSettings {
     /// a drive configured after the start time has passed would wait for its ESC's clock to
     /// wrap, so start-up arms it again with a later start time on the same grid (up to three
     /// times, the margin doubled each time) and fails naming this setting only after that.
-    /// `None`: \[REC\] 1 ms plus 0.2 ms per drive with DC (a drive's SYNC0 set-up is four
-    /// writes one after the other, about 0.15 ms a drive over veth at 64 drives; SOEM and IgH
+    /// `None`: \[REC\] 0.5 ms plus 0.15 ms per drive with DC (a drive's SYNC0 set-up is four
+    /// writes one after the other, about 0.1 ms a drive over veth at 64 drives; SOEM and IgH
     /// use a fixed 100 ms).
     pub start_delay: Option<Duration>,
     /// The system-time difference every drive must get below before SYNC0 starts, ns.
@@ -153,7 +153,7 @@ impl DcSettings {
     /// The start delay for `dc_drives` drives with DC: the configured one or the default.
     pub fn start_delay_for(&self, dc_drives: usize) -> Duration {
         self.start_delay
-            .unwrap_or(Duration::from_micros(1_000 + 200 * dc_drives as u64))
+            .unwrap_or(Duration::from_micros(500 + 150 * dc_drives as u64))
     }
 }
 

@@ -4,7 +4,7 @@
 //! interface = "sim"          # a network interface (raw socket), or "sim": emulated devices in-process
 //! cycle = "1ms"              # cycle time (ns, us, ms, s); default 1 ms
 //! dc_shift = "500us"         # offset of the master's frame from SYNC0 (default half the cycle)
-//! dc_start_delay = "20ms"    # reference clock read to first SYNC0 (default 1 ms + 0.2 ms a DC drive)
+//! dc_start_delay = "20ms"    # reference clock read to first SYNC0 (default 0.5 ms + 0.15 ms a DC drive)
 //! duration = "10s"           # stop after this long (default: when every program has finished)
 //! reset_faults = false       # clear faults latched before the run (default: refuse, saying how)
 //! answer_rereads = true      # answer ethercrab's start-up re-reads from what ecdrive read (default)

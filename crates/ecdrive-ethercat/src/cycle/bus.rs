@@ -290,8 +290,21 @@ impl<L: FrameLink> Cycle<'_, '_, L> {
             (sm.control >> 2) & 0x03 == 0x01 && sm.activation & 1 != 0 && sm.pdi_control & 1 != 0
         })
     }
-    /// Write `state` to every device's AL control register, each within half a cycle.
+    /// Write `state` to every device's AL control register: one broadcast write, which every
+    /// device on the segment must count in its working counter (one round trip, where a write
+    /// to each device one after the other took one a device: 64 of them are more than a 1 ms
+    /// cycle); should a device not count it, a write to each device, each within half a cycle.
     pub(super) fn request_al_state(&mut self, state: u16) {
+        let n = u16::try_from(self.addresses.len()).unwrap_or(u16::MAX);
+        let fut = pin!(
+            EcCommand::bwr(register::AL_CONTROL)
+                .with_wkc(n)
+                .send_receive_slice(self.md, state)
+        );
+        let all = exec::exchange(self.pump, fut, monotonic_ns() + self.consts.cycle_ns / 2);
+        if matches!(all, Ok(Ok(_))) {
+            return;
+        }
         for &addr in &self.addresses {
             let fut = pin!(EcCommand::fpwr(addr, register::AL_CONTROL).send(self.md, state));
             let _ = exec::exchange(self.pump, fut, monotonic_ns() + self.consts.cycle_ns / 2);
