@@ -488,8 +488,8 @@ fn each_vendor_file_reaches_op_and_moves_with_only_its_esi() {
 }
 
 /// A link that keeps, in wire order, every mailbox request the master writes to the first
-/// device's SM0 (station 0x1000, SM0 at 0x1000 in these files) and every AL control write to
-/// it (0x0120), as (register, bytes).
+/// device's SM0 (station 0x1000, SM0 at 0x1000 in these files) and every AL control write
+/// that reaches it (0x0120: to it, or broadcast to every device), as (register, bytes).
 struct MailboxTap<L> {
     inner: L,
     seen: Seen,
@@ -501,15 +501,16 @@ type Seen = std::sync::Arc<std::sync::Mutex<Vec<(u16, Vec<u8>)>>>;
 impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for MailboxTap<L> {
     fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive::link::LinkError> {
         const FPWR: u8 = 5;
+        const BWR: u8 = 8;
         if let Ok(eth) = ecdrive::ec::frame::EthernetFrame::new_checked(frame)
             && let Ok(ecat) = ecdrive::ec::frame::EthercatFrame::new_checked(eth.payload())
             && let Ok(mut seen) = self.seen.lock()
         {
             for d in ecat.datagrams().flatten() {
-                if d.command_raw() == FPWR
+                let to_it = d.command_raw() == FPWR
                     && d.adp() == 0x1000
-                    && matches!(d.ado(), 0x1000 | 0x0120)
-                {
+                    && matches!(d.ado(), 0x1000 | 0x0120);
+                if to_it || (d.command_raw() == BWR && d.ado() == 0x0120) {
                     seen.push((d.ado(), d.data().to_vec()));
                 }
             }
