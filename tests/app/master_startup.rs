@@ -189,14 +189,15 @@ fn a_cycle_time_the_drive_does_not_accept_is_refused() {
 /// Outputs count from SAFE-OP on (ETG.1020: the master checks that the slave updates inputs
 /// and outputs before switching it to OP): a device whose stack takes its outputs only in OP
 /// (`outputs-only-in-op`) is named before OP is requested, with the working counter expected
-/// and seen; the same segment without it runs.
+/// and seen; the same segment without it runs. The drives' loss supervision is off: a stall of
+/// a shared CI machine faulted the MR-J4-TM once (AL.86), which says nothing about SAFE-OP.
 #[test]
 fn a_device_that_takes_no_outputs_in_safe_op_is_named_before_op() {
     use ecdrive_cli::app::ethercat::tools::run::{Outcome, RunOptions, run};
     let config = |second: &str| {
         format!(
             "interface = \"sim\"\ncycle = \"1ms\"\n[sim]\ndevices = [\"mr-j4-tm\", \"{second}\"]\n\
-             [[drive]]\nposition = 0\nmode = \"csp\"\nprogram = [{{ step = \"move\", by = 0.05, \
+             loss_detection = false\n[[drive]]\nposition = 0\nmode = \"csp\"\nprogram = [{{ step = \"move\", by = 0.05, \
              velocity = 1, acceleration = 10 }}]\n[[drive]]\nposition = 1\nmode = \"csp\"\n\
              program = [{{ step = \"move\", by = 0.5, velocity = 10, acceleration = 100 }}]\n"
         )

@@ -98,17 +98,42 @@ fn pp_pv_tq_and_the_touch_probe_run_on_both_drives() {
             last.actual,
         );
 
-        // pv: v rev/s for t s with equal ramps up and down travels v·t rev (BDHDE −2 rev/s
-        // for 0.5 s: −1 rev; MR-J4-TM +2 rev/s for 0.75 s: +1.5 rev); the velocity the drive
-        // reports reaches v on the way. The 0.5 s are the master's cycles with a
-        // reply, the drive runs on its own clock: a cycle lost on a loaded host adds 2 mrev,
-        // so the travel is checked to 5 %.
+        // pv: the master holds the target velocity v for t s of its cycles (BDHDE −2 rev/s for
+        // 0.5 s, MR-J4-TM +2 rev/s for 0.75 s), then sends 0 and waits for standstill before
+        // the next mode. With equal ramps up and down the drive travels v × the time it held
+        // v: v·t rev on an unloaded host (−1 rev, +1.5 rev). The drive runs on its own clock
+        // and the master's cycles are what a stalled host skips (a stall of 29 ms made the
+        // BDHDE's −1.058 rev once), so the time is the wall clock's between the cycle that
+        // first sent v and the one that first sent something else, each as it woke; the
+        // drive takes either at the SYNC0 after it, so the two ends shift alike. The velocity
+        // the drive reports reaches v on the way.
         let pv = stretch(rec, 3, 0);
         let travel = (pv.last().unwrap().actual - pv.first().unwrap().actual) as f64 / cpr;
-        let want_travel = pv_velocity * pv_seconds;
+        let v_sent = pv
+            .iter()
+            .filter_map(|x| x.velocity_demand)
+            .max_by_key(|v| v.abs())
+            .unwrap();
+        let from = pv
+            .iter()
+            .position(|x| x.velocity_demand == Some(v_sent))
+            .unwrap();
+        let to = from
+            + pv[from..]
+                .iter()
+                .position(|x| x.velocity_demand != Some(v_sent))
+                .unwrap();
+        let cycles = (to - from) as f64;
         assert!(
-            (travel - want_travel).abs() < 0.05 * want_travel.abs(),
-            "{name}: pv travelled {travel} rev, not {want_travel} rev"
+            (cycles - pv_seconds * 1000.0).abs() <= 2.0,
+            "{name}: pv held for {cycles} cycles of 1 ms, not {pv_seconds} s"
+        );
+        let held_s = pv[to].time_s - pv[from].time_s;
+        let want_travel = pv_velocity * held_s;
+        assert!(
+            (travel - want_travel).abs() < 0.01 * want_travel.abs(),
+            "{name}: pv travelled {travel} rev in {held_s} s at {pv_velocity} rev/s, not \
+             {want_travel} rev"
         );
         let fastest = pv
             .iter()

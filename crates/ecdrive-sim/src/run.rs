@@ -428,11 +428,7 @@ impl Prepared {
         }
         let mut segment = build_segment(&opts.devices, &esc)?;
         if !opts.loss_detection {
-            for i in 0..segment.len() {
-                if let Some(d) = segment.device_mut::<super::drives::EmulatedDrive>(i) {
-                    d.set_loss_detection(false);
-                }
-            }
+            super::drives::set_loss_detection(&mut segment, false);
         }
         for &p in &opts.eeprom_write_protected {
             let n = segment.len();

@@ -32,6 +32,11 @@ pub struct DemoOptions {
     pub rt: RtSettings,
     /// Write every frame to this pcapng file (`--pcap`, see [`crate::app::capture`]).
     pub pcap: Option<std::path::PathBuf>,
+    /// Whether the emulated drives supervise the cyclic data as the real ones do (fault after
+    /// about 7 ms without it: MR-J4-TM AL.86.1, BDHDE 0x818D); `false` (`--no-loss-detection`)
+    /// is for machines that cannot keep the cycle, as [Pr. PN06]/[Pr. PN02] do on a real
+    /// MR-J4-TM.
+    pub loss_detection: bool,
 }
 
 impl Default for DemoOptions {
@@ -44,6 +49,7 @@ impl Default for DemoOptions {
                 lock_memory: true,
             },
             pcap: None,
+            loss_detection: true,
         }
     }
 }
@@ -233,7 +239,9 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
         });
     }
     let steps: Vec<usize> = profiles.iter().map(|p| program(p).len()).collect();
-    let link = ToolLink::Sim(Box::new(SegmentLink::new(segment()?)));
+    let mut segment = segment()?;
+    crate::sim::drives::set_loss_detection(&mut segment, opts.loss_detection);
+    let link = ToolLink::Sim(Box::new(SegmentLink::new(segment)));
     let (link, capture) = match &opts.pcap {
         Some(path) => {
             let (tap, file) = crate::app::capture::start(path, "in-process (ecdrive demo)")
@@ -255,7 +263,7 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
     m.wait_until("every drive in OP", Duration::from_secs(10), |t| {
         t.cycle.all_op
     })?;
-    let (op, mut unhandled) = operate(&mut m, steps)?;
+    let (op, mut unhandled) = operate(&mut m, steps, opts.loss_detection)?;
     let done = op.programs_completed > 0;
     let (report, link) = m.stop(StopKind::Ramp);
     drop(link);
@@ -319,10 +327,12 @@ pub fn run(opts: &DemoOptions) -> Result<DemoReport, MasterError> {
 /// The operator enables the axes and runs the programs (`steps` each); if the drives stop on
 /// their own (their loss supervision trips when the machine stalls the cycle for 7 ms or more)
 /// it resets, enables and runs the programs again, as an application would, and says so.
-/// Returns the operator and what it could not handle.
+/// Returns the operator and what it could not handle; giving up names the way out when the
+/// drives' `loss_detection` is on.
 fn operate(
     m: &mut Master<ToolLink>,
     steps: Vec<usize>,
+    loss_detection: bool,
 ) -> Result<(Operator, Vec<String>), MasterError> {
     let mut op = Operator::new(steps);
     let mut unhandled = Vec::new();
@@ -340,7 +350,13 @@ fn operate(
         }
         if op.recoveries > MAX_RECOVERIES {
             unhandled.push(format!(
-                "gave up after {MAX_RECOVERIES} recoveries: the drives keep stopping"
+                "gave up after {MAX_RECOVERIES} recoveries: the drives keep stopping{}",
+                if loss_detection {
+                    " (their loss supervision trips when this machine holds the cycle back \
+                     for 7 ms or more; `ecdrive demo --no-loss-detection` runs without it)"
+                } else {
+                    ""
+                }
             ));
             break;
         }

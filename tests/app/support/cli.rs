@@ -205,20 +205,33 @@ impl SimOnVeth {
     /// machine loses over veth now and then: such a run is tried again (at most twice); a run
     /// that ends for any other reason is returned as it is.
     pub fn run_json(&self, file: &str, extra: &[&str]) -> serde_json::Value {
+        self.run_json_attempts(file, extra)
+            .pop()
+            .unwrap_or(serde_json::Value::Null)
+    }
+
+    /// [`SimOnVeth::run_json`], every attempt's report in order (the last is the one that
+    /// counts). A later attempt meets the emulated devices as the one before left them (a
+    /// value written, SYNC0 run), which a test of what the first start-up sees checks on the
+    /// first.
+    pub fn run_json_attempts(&self, file: &str, extra: &[&str]) -> Vec<serde_json::Value> {
         let mut args = vec!["run", "-c", file, "--json"];
         args.extend_from_slice(extra);
-        let mut j = serde_json::Value::Null;
+        let mut all = Vec::new();
         for _ in 0..3 {
             let r = self.ecdrive(&args);
-            j = serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:#?}"));
+            let j: serde_json::Value =
+                serde_json::from_str(&r.stdout).unwrap_or_else(|e| panic!("{e}: {r:#?}"));
             let lost = j["history"]
                 .as_array()
                 .is_some_and(|h| h.iter().any(|e| e["kind"] == "FrameLost"));
-            if j["outcome"] == "completed" || !lost {
+            let done = j["outcome"] == "completed" || !lost;
+            all.push(j);
+            if done {
                 break;
             }
         }
-        j
+        all
     }
 
     /// Take the simulator's end of the pair down or up (`ip link set … down|up` in its

@@ -49,6 +49,10 @@ pub fn run_recorded(
 /// One recorded cycle of one axis (`run --record`).
 #[derive(Debug, Clone, Copy)]
 pub struct Rec {
+    /// When the cycle woke, s from the first recorded cycle (the host's monotonic clock).
+    pub time_s: f64,
+    /// Velocity demand sent (0x60FF), the drive's unit (csv and pv only).
+    pub velocity_demand: Option<i64>,
     /// Demand position, counts (csp only).
     pub demand: Option<i64>,
     /// Actual position, counts.
@@ -71,6 +75,7 @@ pub fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
         .map(str::trim)
         .collect();
     let col = |n: &str| header.iter().position(|h| *h == n).unwrap();
+    let (time, vel_demand) = (col("time_s"), col("velocity_demand_drive_units"));
     let (axis, demand, actual, vel, tq, mode) = (
         col("axis"),
         col("demand_counts"),
@@ -84,6 +89,8 @@ pub fn recording(csv: &str, axes: usize) -> Vec<Vec<Rec>> {
         let f: Vec<&str> = l.split(',').map(str::trim).collect();
         let a: usize = f[axis].parse().unwrap();
         out[a].push(Rec {
+            time_s: f[time].parse().unwrap(),
+            velocity_demand: (!f[vel_demand].is_empty()).then(|| f[vel_demand].parse().unwrap()),
             demand: (!f[demand].is_empty()).then(|| f[demand].parse().unwrap()),
             actual: f[actual].parse().unwrap(),
             velocity: f[vel].parse().unwrap(),

@@ -81,6 +81,16 @@ pub fn spec_for(key: &str) -> Option<&'static DriveSpec> {
     SPECS.iter().copied().find(|s| s.key == key)
 }
 
+/// Switch the loss-of-data supervision of every emulated drive on `segment` on or off
+/// ([`EmulatedDrive::set_loss_detection`]); other devices are left as they are.
+pub fn set_loss_detection(segment: &mut crate::Segment, on: bool) {
+    for i in 0..segment.len() {
+        if let Some(d) = segment.device_mut::<EmulatedDrive>(i) {
+            d.set_loss_detection(on);
+        }
+    }
+}
+
 /// The emulated drive `key` with serial number `serial`, ready to push onto a
 /// [`crate::Segment`].
 pub fn emulated(key: &str, serial: u32) -> Result<Box<dyn Device>, DeviceError> {

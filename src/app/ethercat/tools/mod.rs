@@ -224,12 +224,7 @@ impl Target {
                         )
                     })?;
                 if !sim.loss_detection {
-                    for i in 0..segment.len() {
-                        if let Some(d) = segment.device_mut::<crate::sim::drives::EmulatedDrive>(i)
-                        {
-                            d.set_loss_detection(false);
-                        }
-                    }
+                    crate::sim::drives::set_loss_detection(&mut segment, false);
                 }
                 Ok(ToolLink::Sim(Box::new(SegmentLink::new(segment))))
             }
