@@ -5,6 +5,10 @@
 //! master meant to send.
 
 use ecdrive_core::cia402::State;
+use ecdrive_core::ec::Command as EcCommand;
+use ecdrive_core::ec::al::AlState;
+use ecdrive_core::ec::frame::{EthercatFrame, EthernetFrame};
+use ecdrive_core::link::{FrameLink, LinkError};
 use ecdrive_core::od::ObjectAddress;
 use ecdrive_core::rt::RtSettings;
 use ecdrive_ethercat::HistoryEntry;
@@ -678,6 +682,82 @@ fn few_stale(stale: usize, n: usize) -> bool {
 /// Whether `h` is a refused command whose reason says `what`.
 fn refused(h: &HistoryEntry, what: &str) -> bool {
     matches!(h.cycle_event(), Some(EventKind::CommandRefused { why, .. }) if why.contains(what))
+}
+
+/// A link on which every SYNC0 start time written (FPWR to 0x0990, 8 bytes) arrives 1 s in the
+/// past, as if each write had been held up that long on its way; it counts them.
+struct StartTimesInThePast {
+    inner: SegmentLink,
+    writes: usize,
+    frame: Vec<u8>,
+}
+
+impl FrameLink for StartTimesInThePast {
+    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        self.frame.clear();
+        self.frame.extend_from_slice(frame);
+        if let Ok(mut eth) = EthernetFrame::new_checked(&mut self.frame[..])
+            && let Ok(mut ecat) = EthercatFrame::new_checked(eth.payload_mut())
+        {
+            for mut d in ecat.datagrams_mut().flatten() {
+                if d.command() == Some(EcCommand::Fpwr) && d.ado() == 0x0990 && d.data_len() == 8 {
+                    let data = d.data_mut();
+                    let mut t = [0u8; 8];
+                    t.copy_from_slice(&data[..8]);
+                    let past = u64::from_le_bytes(t).saturating_sub(1_000_000_000);
+                    data[..8].copy_from_slice(&past.to_le_bytes());
+                    self.writes += 1;
+                }
+            }
+        }
+        self.inner.send(&self.frame)
+    }
+
+    fn recv(
+        &mut self,
+        buf: &mut [u8],
+        timeout: Option<Duration>,
+    ) -> Result<Option<usize>, LinkError> {
+        self.inner.recv(buf, timeout)
+    }
+}
+
+/// Start times that have always passed by the time they arrive: start-up arms each drive again
+/// three times (each a start time later on the grid, the margin doubled), then gives up with
+/// one error naming the drive, the step, and the run-file key and API setting that give more
+/// time; no SYNC0 pulse ever came, and no drive went past PRE-OP.
+#[test]
+fn sync0_start_times_that_keep_passing_end_the_start_up_naming_the_setting() {
+    let link = StartTimesInThePast {
+        inner: SegmentLink::new(segment()),
+        writes: 0,
+        frame: Vec::new(),
+    };
+    let Err(f) = Master::start(link, config(SetpointLimits::default())) else {
+        panic!("start-up went on with SYNC0 never started");
+    };
+    let e = f.error.to_string();
+    assert!(
+        e.starts_with("drive 0 (MR-J4-TM): starting SYNC0: its SYNC0 start time had passed before it was configured, 4 times"),
+        "{e}"
+    );
+    assert!(
+        e.contains("dc_start_delay") && e.contains("DcSettings::start_delay"),
+        "{e}"
+    );
+    // The first arming of each drive, then three more of each.
+    assert_eq!(f.link.writes, 2 * KEYS.len() * 2, "{e}");
+    let seg = f.link.inner.segment();
+    for i in 0..KEYS.len() {
+        let esc = &seg.slave(i).unwrap().esc;
+        let sync = esc.sync_state();
+        assert!(sync.waiting && sync.count == 0, "drive {i}: {sync:?}");
+        let al = esc.al_state();
+        assert!(
+            matches!(al, AlState::Init | AlState::PreOp),
+            "drive {i}: {al:?}"
+        );
+    }
 }
 
 /// The cycle keeps one frame per SYNC0 whatever the shift after SYNC0 it sends at: with the
