@@ -14,7 +14,6 @@
 
 use crate::support;
 use ecdrive::cia402::{self, State};
-use ecdrive::link::{FrameLink, LinkError};
 use ecdrive::master::session::{Master, MasterConfig};
 use ecdrive::master::telemetry::{Axes, Command, EventKind, StopKind};
 use ecdrive::master::{HistoryEvent, HistoryKind};
@@ -26,6 +25,7 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use support::cli::{SimOnVeth, ecdrive};
+use support::links::SendTap;
 
 /// The runs share the machine's cores with their own cycle threads: one at a time.
 static ONE_RUN_AT_A_TIME: Mutex<()> = Mutex::new(());
@@ -462,31 +462,17 @@ fn no_complete_access_is_not_needed() {
 /// (command, ADP, ADO, length) of a datagram.
 type Seen = (u8, u16, u16, usize);
 
-/// A link that records every datagram the master sends.
-struct Recording<L> {
-    inner: L,
-    seen: Arc<Mutex<Vec<Seen>>>,
-}
-
-impl<L: FrameLink> FrameLink for Recording<L> {
-    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
-        if let Ok(eth) = ecdrive::ec::frame::EthernetFrame::new_checked(frame)
+/// Records every datagram the master sends.
+fn recording(seen: Arc<Mutex<Vec<Seen>>>) -> impl FnMut(&mut [u8]) + Send {
+    move |frame: &mut [u8]| {
+        if let Ok(eth) = ecdrive::ec::frame::EthernetFrame::new_checked(&*frame)
             && let Ok(ecat) = ecdrive::ec::frame::EthercatFrame::new_checked(eth.payload())
-            && let Ok(mut seen) = self.seen.lock()
+            && let Ok(mut seen) = seen.lock()
         {
             for d in ecat.datagrams().flatten() {
                 seen.push((d.command_raw(), d.adp(), d.ado(), d.data_len()));
             }
         }
-        self.inner.send(frame)
-    }
-
-    fn recv(
-        &mut self,
-        buf: &mut [u8],
-        timeout: Option<Duration>,
-    ) -> Result<Option<usize>, LinkError> {
-        self.inner.recv(buf, timeout)
     }
 }
 
@@ -520,10 +506,10 @@ fn a_mixed_segment_runs_the_drives_and_exchanges_the_io() {
         .map(|s| s.to_string())
         .collect();
     let seen = Arc::new(Mutex::new(Vec::new()));
-    let link = Recording {
-        inner: SegmentLink::new(build_segment(&names, &EscConfig::default()).unwrap()),
-        seen: seen.clone(),
-    };
+    let link = SendTap::new(
+        SegmentLink::new(build_segment(&names, &EscConfig::default()).unwrap()),
+        recording(seen.clone()),
+    );
     let mut m = Master::start(link, cfg).map_err(|f| f.error).unwrap();
     assert_eq!(m.drives().len(), 2);
     assert_eq!(m.io().len(), 1);

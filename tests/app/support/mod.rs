@@ -2,7 +2,7 @@
 
 pub mod cli;
 pub mod runs;
-pub use ecdrive_testkit::{corpus, generic, source_scan};
+pub use ecdrive_testkit::{corpus, generic, links, source_scan};
 
 /// Run the test `name` of this binary (its full path, the test marked `#[ignore]` with the
 /// reason) alone in a process of its own, and fail if it fails. For the few tests whose

@@ -8,7 +8,6 @@ use ecdrive_core::cia402::State;
 use ecdrive_core::ec::Command as EcCommand;
 use ecdrive_core::ec::al::AlState;
 use ecdrive_core::ec::frame::{EthercatFrame, EthernetFrame};
-use ecdrive_core::link::{FrameLink, LinkError};
 use ecdrive_core::od::ObjectAddress;
 use ecdrive_core::rt::RtSettings;
 use ecdrive_ethercat::HistoryEntry;
@@ -22,6 +21,8 @@ use ecdrive_ethercat::{
 use ecdrive_sim::drives::{EmulatedDrive, TargetSample, spec_for};
 use ecdrive_sim::transport::SegmentLink;
 use ecdrive_sim::{EscConfig, HostClock, Segment};
+use ecdrive_testkit::links::SendTap;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
@@ -684,19 +685,11 @@ fn refused(h: &HistoryEntry, what: &str) -> bool {
     matches!(h.cycle_event(), Some(EventKind::CommandRefused { why, .. }) if why.contains(what))
 }
 
-/// A link on which every SYNC0 start time written (FPWR to 0x0990, 8 bytes) arrives 1 s in the
-/// past, as if each write had been held up that long on its way; it counts them.
-struct StartTimesInThePast {
-    inner: SegmentLink,
-    writes: usize,
-    frame: Vec<u8>,
-}
-
-impl FrameLink for StartTimesInThePast {
-    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
-        self.frame.clear();
-        self.frame.extend_from_slice(frame);
-        if let Ok(mut eth) = EthernetFrame::new_checked(&mut self.frame[..])
+/// Sets every SYNC0 start time written (FPWR to 0x0990, 8 bytes) 1 s back, as if each write
+/// had been held up that long on its way, and counts them.
+fn start_times_in_the_past(writes: Arc<AtomicUsize>) -> impl FnMut(&mut [u8]) + Send {
+    move |frame: &mut [u8]| {
+        if let Ok(mut eth) = EthernetFrame::new_checked(frame)
             && let Ok(mut ecat) = EthercatFrame::new_checked(eth.payload_mut())
         {
             for mut d in ecat.datagrams_mut().flatten() {
@@ -706,19 +699,10 @@ impl FrameLink for StartTimesInThePast {
                     t.copy_from_slice(&data[..8]);
                     let past = u64::from_le_bytes(t).saturating_sub(1_000_000_000);
                     data[..8].copy_from_slice(&past.to_le_bytes());
-                    self.writes += 1;
+                    writes.fetch_add(1, Ordering::Relaxed);
                 }
             }
         }
-        self.inner.send(&self.frame)
-    }
-
-    fn recv(
-        &mut self,
-        buf: &mut [u8],
-        timeout: Option<Duration>,
-    ) -> Result<Option<usize>, LinkError> {
-        self.inner.recv(buf, timeout)
     }
 }
 
@@ -728,11 +712,11 @@ impl FrameLink for StartTimesInThePast {
 /// time; no SYNC0 pulse ever came, and no drive went past PRE-OP.
 #[test]
 fn sync0_start_times_that_keep_passing_end_the_start_up_naming_the_setting() {
-    let link = StartTimesInThePast {
-        inner: SegmentLink::new(segment()),
-        writes: 0,
-        frame: Vec::new(),
-    };
+    let writes = Arc::new(AtomicUsize::new(0));
+    let link = SendTap::new(
+        SegmentLink::new(segment()),
+        start_times_in_the_past(writes.clone()),
+    );
     let Err(f) = Master::start(link, config(SetpointLimits::default())) else {
         panic!("start-up went on with SYNC0 never started");
     };
@@ -746,7 +730,7 @@ fn sync0_start_times_that_keep_passing_end_the_start_up_naming_the_setting() {
         "{e}"
     );
     // The first arming of each drive, then three more of each.
-    assert_eq!(f.link.writes, 2 * KEYS.len() * 2, "{e}");
+    assert_eq!(writes.load(Ordering::Relaxed), 2 * KEYS.len() * 2, "{e}");
     let seg = f.link.inner.segment();
     for i in 0..KEYS.len() {
         let esc = &seg.slave(i).unwrap().esc;

@@ -7,13 +7,13 @@
 use crate::support;
 use ecdrive_core::ec::Command;
 use ecdrive_core::ec::frame::{EthercatFrame, EthernetFrame};
-use ecdrive_core::link::{FrameLink, LinkError};
 use ecdrive_ethercat::FramesBy;
 use ecdrive_ethercat::program::RunMode;
 use ecdrive_ethercat::session::{Master, MasterConfig};
 use ecdrive_ethercat::startup::{DriveSetup, Selector};
 use ecdrive_ethercat::telemetry::StopKind;
 use ecdrive_sim::transport::SegmentLink;
+use ecdrive_testkit::links::SendTap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
@@ -21,15 +21,6 @@ use support::generic::{GENERIC_TEST, generic_segment};
 
 /// One datagram as the wire shows it: command, address, length, and the data the master sent.
 type Datagram = (u8, u32, usize, Vec<u8>);
-
-/// A link that keeps the cycle's frames (those that begin with the reference clock's time)
-/// as the master sent them, and counts the reads of a mailbox SyncManager's status in the
-/// other frames (the session's mailbox polls).
-struct Recording {
-    inner: SegmentLink,
-    cyclic: Arc<Mutex<Vec<Vec<Datagram>>>>,
-    mailbox_looks: Arc<AtomicUsize>,
-}
 
 /// SM0's and SM1's status registers.
 const SM_STATUS: [u32; 2] = [0x0805, 0x080D];
@@ -55,33 +46,30 @@ fn datagrams(frame: &[u8]) -> Vec<Datagram> {
         .collect()
 }
 
-impl FrameLink for Recording {
-    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+/// Keeps the cycle's frames (those that begin with the reference clock's time) as the master
+/// sent them, and counts the reads of a mailbox SyncManager's status in the other frames (the
+/// session's mailbox polls).
+fn recording(
+    cyclic: Arc<Mutex<Vec<Vec<Datagram>>>>,
+    mailbox_looks: Arc<AtomicUsize>,
+) -> impl FnMut(&mut [u8]) + Send {
+    move |frame: &mut [u8]| {
         let d = datagrams(frame);
-        let cyclic = d.first().is_some_and(|&(cmd, address, len, _)| {
+        let is_cyclic = d.first().is_some_and(|&(cmd, address, len, _)| {
             cmd == Command::Frmw as u8 && address >> 16 == 0x0910 && len == 8
         });
-        if !cyclic {
+        if !is_cyclic {
             let looks = d
                 .iter()
                 .filter(|&&(cmd, address, _, _)| {
                     cmd == Command::Fprd as u8 && SM_STATUS.contains(&(address >> 16))
                 })
                 .count();
-            self.mailbox_looks.fetch_add(looks, Ordering::Relaxed);
+            mailbox_looks.fetch_add(looks, Ordering::Relaxed);
         }
-        if cyclic && let Ok(mut c) = self.cyclic.lock() {
+        if is_cyclic && let Ok(mut c) = cyclic.lock() {
             c.push(d);
         }
-        self.inner.send(frame)
-    }
-
-    fn recv(
-        &mut self,
-        buf: &mut [u8],
-        timeout: Option<Duration>,
-    ) -> Result<Option<usize>, LinkError> {
-        self.inner.recv(buf, timeout)
     }
 }
 
@@ -101,11 +89,10 @@ fn run(own_frames: bool) -> (FramesBy, Vec<Vec<Datagram>>, usize) {
     }
     let cyclic = Arc::new(Mutex::new(Vec::new()));
     let mailbox_looks = Arc::new(AtomicUsize::new(0));
-    let link = Recording {
-        inner: SegmentLink::new(generic_segment(3)),
-        cyclic: cyclic.clone(),
-        mailbox_looks: mailbox_looks.clone(),
-    };
+    let link = SendTap::new(
+        SegmentLink::new(generic_segment(3)),
+        recording(cyclic.clone(), mailbox_looks.clone()),
+    );
     let Ok(mut m) = Master::start(link, cfg) else {
         panic!("start-up failed");
     };

@@ -28,6 +28,7 @@ use ecdrive_sim::devices::IoDevice;
 use ecdrive_sim::drives::{EmulatedDrive, spec_for};
 use ecdrive_sim::transport::{RawServer, SegmentLink};
 use ecdrive_sim::{EscConfig, HostClock, Segment};
+use ecdrive_testkit::links::SendTap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
@@ -38,13 +39,6 @@ const MRJ4: (u32, u32) = (13, 21);
 const BDHDE: (u32, u32) = (13, 19);
 const IO: (u32, u32) = (2, 2);
 const N_IO: usize = 4;
-
-/// Counts the cyclic frames a link sends: those with the DC system-time FRMW, an LRW or an AL
-/// status read (mailbox traffic, e.g. emergency polling, is not counted).
-struct Counting<L> {
-    inner: L,
-    sent: Arc<AtomicU64>,
-}
 
 fn cyclic(frame: &[u8]) -> bool {
     let Ok(eth) = EthernetFrame::new_checked(frame) else {
@@ -59,23 +53,6 @@ fn cyclic(frame: &[u8]) -> bool {
         Some(EcCommand::Fprd) => d.ado() == 0x0130,
         _ => false,
     })
-}
-
-impl<L: FrameLink> FrameLink for Counting<L> {
-    fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
-        if cyclic(frame) {
-            self.sent.fetch_add(1, Ordering::Relaxed);
-        }
-        self.inner.send(frame)
-    }
-
-    fn recv(
-        &mut self,
-        buf: &mut [u8],
-        timeout: Option<Duration>,
-    ) -> Result<Option<usize>, LinkError> {
-        self.inner.recv(buf, timeout)
-    }
 }
 
 fn sizes(drives: usize) -> Vec<(u32, u32)> {
@@ -175,10 +152,16 @@ fn config(drives: usize, cycle: Duration) -> MasterConfig {
 /// the frames per cycle in steady state, shut down.
 fn run<L: FrameLink + Send + 'static>(link: L, drives: usize, cycle: Duration) -> SessionReport {
     let sent = Arc::new(AtomicU64::new(0));
-    let link = Counting {
-        inner: link,
-        sent: sent.clone(),
-    };
+    // Counts the cyclic frames sent: those with the DC system-time FRMW, an LRW or an AL status
+    // read (mailbox traffic, e.g. emergency polling, is not counted).
+    let link = SendTap::new(link, {
+        let sent = sent.clone();
+        move |frame: &mut [u8]| {
+            if cyclic(frame) {
+                sent.fetch_add(1, Ordering::Relaxed);
+            }
+        }
+    });
     let mut m = Master::start(link, config(drives, cycle))
         .unwrap_or_else(|f| panic!("start-up with {drives} drives: {}", f.error));
     m.wait_until("OP", Duration::from_secs(60), |t| t.cycle.all_op)
