@@ -10,6 +10,7 @@ use crate::support;
 use ecdrive::esi::{CYCLIC_MODES, DrivePlan, EsiFile, MappingSource, mapping_for};
 use ecdrive::od::ObjectAddress;
 use ecdrive::pdo::Direction;
+use support::links::SendTap;
 
 fn path(name: &str) -> String {
     format!("{}/tests/data/esi/{name}", env!("CARGO_MANIFEST_DIR"))
@@ -487,44 +488,36 @@ fn each_vendor_file_reaches_op_and_moves_with_only_its_esi() {
     }
 }
 
-/// A link that keeps, in wire order, every mailbox request the master writes to the first
-/// device's SM0 (station 0x1000, SM0 at 0x1000 in these files) and every AL control write
-/// that reaches it (0x0120: to it, or broadcast to every device), as (register, bytes).
-struct MailboxTap<L> {
-    inner: L,
-    seen: Seen,
-}
-
-/// What a [`MailboxTap`] saw: (register, bytes), in wire order.
+/// What [`mailbox_tap`] saw: (register, bytes), in wire order.
 type Seen = std::sync::Arc<std::sync::Mutex<Vec<(u16, Vec<u8>)>>>;
 
-impl<L: ecdrive::link::FrameLink> ecdrive::link::FrameLink for MailboxTap<L> {
-    fn send(&mut self, frame: &[u8]) -> Result<(), ecdrive::link::LinkError> {
-        const FPWR: u8 = 5;
-        const BWR: u8 = 8;
-        if let Ok(eth) = ecdrive::ec::frame::EthernetFrame::new_checked(frame)
-            && let Ok(ecat) = ecdrive::ec::frame::EthercatFrame::new_checked(eth.payload())
-            && let Ok(mut seen) = self.seen.lock()
-        {
-            for d in ecat.datagrams().flatten() {
-                let to_it = d.command_raw() == FPWR
-                    && d.adp() == 0x1000
-                    && matches!(d.ado(), 0x1000 | 0x0120);
-                if to_it || (d.command_raw() == BWR && d.ado() == 0x0120) {
-                    seen.push((d.ado(), d.data().to_vec()));
+/// The first device's segment link, keeping in wire order every mailbox request the master
+/// writes to its SM0 (station 0x1000, SM0 at 0x1000 in these files) and every AL control write
+/// that reaches it (0x0120: to it, or broadcast to every device), as (register, bytes).
+fn mailbox_tap(
+    seg: ecdrive::sim::Segment,
+    seen: Seen,
+) -> SendTap<ecdrive::sim::transport::SegmentLink, impl FnMut(&mut [u8]) + Send> {
+    const FPWR: u8 = 5;
+    const BWR: u8 = 8;
+    SendTap::new(
+        ecdrive::sim::transport::SegmentLink::new(seg),
+        move |frame: &mut [u8]| {
+            if let Ok(eth) = ecdrive::ec::frame::EthernetFrame::new_checked(&*frame)
+                && let Ok(ecat) = ecdrive::ec::frame::EthercatFrame::new_checked(eth.payload())
+                && let Ok(mut seen) = seen.lock()
+            {
+                for d in ecat.datagrams().flatten() {
+                    let to_it = d.command_raw() == FPWR
+                        && d.adp() == 0x1000
+                        && matches!(d.ado(), 0x1000 | 0x0120);
+                    if to_it || (d.command_raw() == BWR && d.ado() == 0x0120) {
+                        seen.push((d.ado(), d.data().to_vec()));
+                    }
                 }
             }
-        }
-        self.inner.send(frame)
-    }
-
-    fn recv(
-        &mut self,
-        buf: &mut [u8],
-        timeout: Option<std::time::Duration>,
-    ) -> Result<Option<usize>, ecdrive::link::LinkError> {
-        self.inner.recv(buf, timeout)
-    }
+        },
+    )
 }
 
 /// The TX7's InitCmds arrive at the drive in file order, each once, and the drive accepts
@@ -544,10 +537,7 @@ fn init_commands_arrive_in_file_order_at_their_transitions() {
     )
     .unwrap();
     let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-    let link = MailboxTap {
-        inner: ecdrive::sim::transport::SegmentLink::new(seg),
-        seen: seen.clone(),
-    };
+    let link = mailbox_tap(seg, seen.clone());
     let mc: MasterConfig = cfg.master.clone();
     let mut m = Master::start(link, mc).map_err(|f| f.error).unwrap();
     m.wait_until("OP", std::time::Duration::from_secs(10), |t| t.cycle.all_op)
@@ -802,10 +792,7 @@ fn an_edited_profile_file_is_what_the_drive_gets() {
     )
     .unwrap();
     let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-    let link = MailboxTap {
-        inner: ecdrive::sim::transport::SegmentLink::new(seg),
-        seen: seen.clone(),
-    };
+    let link = mailbox_tap(seg, seen.clone());
     let mut m = Master::start(link, MasterConfig::clone(&cfg.master))
         .map_err(|f| f.error)
         .unwrap();

@@ -2695,6 +2695,9 @@ fn to_safe_op<L: FrameLink>(
 /// configured, each time with twice the margin, before it gives up.
 const SYNC0_REARMS: u32 = 3;
 
+/// What the one read of [`SYNC_REGS`] is, in messages.
+const SYNC_STATE: &str = "SYNC0 activation and start time (0x0981–0x0997)";
+
 /// 0x0981 (activation) to the end of 0x0990 (the start time), read at once.
 const SYNC_REGS: usize = (register::DC_START_TIME - register::DC_ACTIVATION) as usize + 8;
 
@@ -2732,7 +2735,7 @@ fn sync0_starts<L: FrameLink>(
     for attempt in 0..=SYNC0_REARMS {
         let states = bus
             .block_on_each(
-                &|| "reading each drive's SYNC0 start time (0x0981, 0x0990)".into(),
+                &|| format!("reading each drive's {SYNC_STATE}"),
                 T_STEP,
                 todo.iter().map(|&(_, a)| a).collect(),
                 async |md, addr| {
@@ -2757,9 +2760,8 @@ fn sync0_starts<L: FrameLink>(
         let mut late = Vec::new();
         for (&(i, addr), state) in todo.iter().zip(states) {
             let d = &mut drives[i];
-            let regs = state.map_err(|e| {
-                bus_error(Some(&d.drive), "reading the SYNC0 start time (0x0990)", e)
-            })?;
+            let regs = state
+                .map_err(|e| bus_error(Some(&d.drive), format!("reading its {SYNC_STATE}"), e))?;
             let (act, status) = (regs[0], regs[3]);
             let mut start = [0u8; 8];
             start.copy_from_slice(&regs[SYNC_REGS - 8..]);
